@@ -1,0 +1,177 @@
+//! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
+
+use crate::{GridPath, MoveModel, Planner, SearchError};
+use skyplan_cspace::{Cell, Grid2};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::f64::consts::SQRT_2;
+
+/// A heap entry: smallest `f` first; on equal `f`, largest `g` first (deepest first, which
+/// expands fewer cells on open grids).
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    f: f64,
+    g: f64,
+    index: u32,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.f.total_cmp(&self.f).then(self.g.total_cmp(&other.g)).then(other.index.cmp(&self.index))
+    }
+}
+
+/// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
+#[derive(Debug, Default)]
+pub struct GridSearch {
+    g: Vec<f64>,
+    parent: Vec<u32>,
+    /// `seen[i] == generation` ⇔ `g[i]` and `parent[i]` belong to the current query.
+    seen: Vec<u32>,
+    /// `closed[i] == generation` ⇔ cell `i` was expanded in the current query.
+    closed: Vec<u32>,
+    generation: u32,
+    heap: BinaryHeap<Entry>,
+}
+
+const NO_PARENT: u32 = u32::MAX;
+
+impl GridSearch {
+    /// An empty workspace; buffers grow on first use.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn reset(&mut self, cells: usize) {
+        if self.seen.len() != cells {
+            self.g = vec![0.0; cells];
+            self.parent = vec![NO_PARENT; cells];
+            self.seen = vec![0; cells];
+            self.closed = vec![0; cells];
+            self.generation = 0;
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.seen.fill(0);
+            self.closed.fill(0);
+            self.generation = 1;
+        }
+        self.heap.clear();
+    }
+
+    /// Finds an optimal path from `start` to `goal` under `model`.
+    ///
+    /// Errors say which endpoint is off the grid or blocked, or that the goal is unreachable.
+    pub fn search(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+        model: MoveModel,
+        planner: Planner,
+    ) -> Result<GridPath, SearchError> {
+        let (rows, cols) = (grid.rows(), grid.cols());
+        if !grid.contains(start) {
+            return Err(SearchError::StartOutside { cell: start, rows, cols });
+        }
+        if !grid.contains(goal) {
+            return Err(SearchError::GoalOutside { cell: goal, rows, cols });
+        }
+        if grid.is_blocked(start) {
+            return Err(SearchError::StartBlocked(start));
+        }
+        if grid.is_blocked(goal) {
+            return Err(SearchError::GoalBlocked(goal));
+        }
+        self.reset(grid.len());
+        let generation = self.generation;
+        let blocked = grid.blocked_cells();
+        let cols_i = cols as i64;
+        let h = |c: Cell| match planner {
+            Planner::AStar => model.heuristic(c, goal),
+            Planner::Dijkstra => 0.0,
+        };
+        let start_i = grid.index(start) as u32;
+        let goal_i = grid.index(goal) as u32;
+        self.g[start_i as usize] = 0.0;
+        self.parent[start_i as usize] = NO_PARENT;
+        self.seen[start_i as usize] = generation;
+        self.heap.push(Entry { f: h(start), g: 0.0, index: start_i });
+
+        // (dr, dc, cost): orthogonal moves first.
+        const MOVES: [(i64, i64, f64); 8] = [
+            (1, 0, 1.0),
+            (-1, 0, 1.0),
+            (0, 1, 1.0),
+            (0, -1, 1.0),
+            (1, 1, SQRT_2),
+            (1, -1, SQRT_2),
+            (-1, 1, SQRT_2),
+            (-1, -1, SQRT_2),
+        ];
+        let moves = if model.has_diagonals() { &MOVES[..] } else { &MOVES[..4] };
+        let corner_cutting = model == MoveModel::OctileCornerCutting;
+        let free = |r: i64, c: i64| -> bool {
+            r >= 0 && c >= 0 && r < i64::from(rows) && c < cols_i && !blocked[(r * cols_i + c) as usize]
+        };
+        let mut expansions = 0u64;
+        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+            let i = index as usize;
+            if self.closed[i] == generation || g > self.g[i] {
+                continue;
+            }
+            self.closed[i] = generation;
+            expansions += 1;
+            if index == goal_i {
+                return Ok(self.reconstruct(grid, goal_i, expansions));
+            }
+            let (r, c) = ((i as i64) / cols_i, (i as i64) % cols_i);
+            for &(dr, dc, step) in moves {
+                let (nr, nc) = (r + dr, c + dc);
+                if !free(nr, nc) {
+                    continue;
+                }
+                if dr != 0 && dc != 0 && !corner_cutting && !(free(r + dr, c) && free(r, c + dc)) {
+                    continue;
+                }
+                let ni = (nr * cols_i + nc) as usize;
+                if self.closed[ni] == generation {
+                    continue;
+                }
+                let ng = g + step;
+                if self.seen[ni] != generation || ng < self.g[ni] {
+                    self.seen[ni] = generation;
+                    self.g[ni] = ng;
+                    self.parent[ni] = index;
+                    let cell = skyplan_cspace::Cell::new(nr as u32, nc as u32);
+                    self.heap.push(Entry { f: ng + h(cell), g: ng, index: ni as u32 });
+                }
+            }
+        }
+        Err(SearchError::Unreachable { expansions })
+    }
+
+    fn reconstruct(&self, grid: &Grid2, goal: u32, expansions: u64) -> GridPath {
+        let mut cells = vec![grid.cell(goal as usize)];
+        let mut at = goal;
+        while self.parent[at as usize] != NO_PARENT {
+            at = self.parent[at as usize];
+            cells.push(grid.cell(at as usize));
+        }
+        cells.reverse();
+        let diagonal_moves = cells.windows(2).filter(|w| w[0].row != w[1].row && w[0].col != w[1].col).count() as u64;
+        let straight_moves = (cells.len() as u64 - 1) - diagonal_moves;
+        GridPath { cells, straight_moves, diagonal_moves, expansions }
+    }
+}

@@ -1,0 +1,76 @@
+//! Every planner against the exact Dijkstra oracle on random grids, for every move model.
+
+use proptest::prelude::*;
+use skyplan_cspace::{Cell, Grid2, GridFrame};
+use skyplan_search::oracle::dijkstra_exact;
+use skyplan_search::{Components, GridSearch, MoveModel, Planner, SearchError, check_path};
+
+const MODELS: [MoveModel; 3] = [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting];
+
+fn grid_strategy() -> impl Strategy<Value = Grid2> {
+    (1u32..26, 1u32..26, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
+        proptest::collection::vec(proptest::bool::weighted(density), (rows * cols) as usize)
+            .prop_map(move |blocked| Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap())
+    })
+}
+
+fn query_strategy() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
+    grid_strategy().prop_flat_map(|g| {
+        let (r, c) = (g.rows(), g.cols());
+        (Just(g), 0..r, 0..c, 0..r, 0..c).prop_map(|(g, a, b, x, y)| (g, Cell::new(a, b), Cell::new(x, y)))
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    #[test]
+    fn planners_are_optimal_valid_and_agree_on_reachability((grid, start, goal) in query_strategy()) {
+        let mut search = GridSearch::new();
+        for model in MODELS {
+            let truth = dijkstra_exact(&grid, start, goal, model);
+            let components = Components::new(&grid, model);
+            prop_assert_eq!(components.connected(start, goal), truth.is_some());
+            for planner in [Planner::AStar, Planner::Dijkstra] {
+                match (search.search(&grid, start, goal, model, planner), truth) {
+                    (Ok(path), Some(cost)) => {
+                        prop_assert_eq!((path.straight_moves, path.diagonal_moves), (cost.straight, cost.diagonal));
+                        prop_assert_eq!(path.cost_cells(), cost.to_f64());
+                        prop_assert_eq!(path.cells.first(), Some(&start));
+                        prop_assert_eq!(path.cells.last(), Some(&goal));
+                        prop_assert_eq!(check_path(&grid, &path.cells, model), Ok(()));
+                    }
+                    (Err(e), None) => {
+                        let expected = grid.is_blocked(start) || grid.is_blocked(goal)
+                            || matches!(e, SearchError::Unreachable { .. });
+                        prop_assert!(expected, "unexpected error {e:?}");
+                    }
+                    (got, want) => prop_assert!(false, "{model:?} {planner:?}: got {got:?}, oracle {want:?}"),
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn endpoint_errors_say_which() {
+    let grid = Grid2::from_ascii("..#\n...").unwrap();
+    let mut s = GridSearch::new();
+    let m = MoveModel::Octile;
+    let p = Planner::AStar;
+    assert!(matches!(s.search(&grid, Cell::new(5, 0), Cell::new(0, 0), m, p), Err(SearchError::StartOutside { .. })));
+    assert!(matches!(s.search(&grid, Cell::new(0, 0), Cell::new(0, 9), m, p), Err(SearchError::GoalOutside { .. })));
+    assert_eq!(s.search(&grid, Cell::new(0, 2), Cell::new(0, 0), m, p), Err(SearchError::StartBlocked(Cell::new(0, 2))));
+    assert_eq!(s.search(&grid, Cell::new(0, 0), Cell::new(0, 2), m, p), Err(SearchError::GoalBlocked(Cell::new(0, 2))));
+}
+
+#[test]
+fn corner_rule_changes_the_answer() {
+    // The only way from bottom-left to top-right squeezes between two blocked corners.
+    let grid = Grid2::from_ascii(".#\n#.").unwrap();
+    let mut s = GridSearch::new();
+    let (a, b) = (Cell::new(0, 0), Cell::new(1, 1));
+    assert!(matches!(s.search(&grid, a, b, MoveModel::Octile, Planner::AStar), Err(SearchError::Unreachable { .. })));
+    let cut = s.search(&grid, a, b, MoveModel::OctileCornerCutting, Planner::AStar).unwrap();
+    assert_eq!(cut.diagonal_moves, 1);
+}
