@@ -16,8 +16,10 @@
 #![warn(missing_docs)]
 
 mod colliders_grid;
+mod line_of_sight;
 
 pub use colliders_grid::GridSpec;
+pub use line_of_sight::Touch;
 
 /// Largest grid skyplan builds, in cells (a 20 000 × 20 000 grid).
 pub const MAX_CELLS: usize = 400_000_000;

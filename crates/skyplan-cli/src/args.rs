@@ -1,0 +1,144 @@
+//! What the user typed, validated by clap without I/O.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "skyplan",
+    version,
+    about = "Plan collision-free flight paths through real maps",
+    long_about = "Plan collision-free flight paths through real maps.\n\n\
+        Exit codes: 0 success, 1 runtime error (files, checks), 2 bad input, 3 no path."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Plan on an FCND colliders map: grid at altitude → optimal path → pruned, geo-referenced waypoints.
+    Plan(PlanArgs),
+    /// Replay MovingAI scenarios and check every cost against the published optimal length.
+    Scen(ScenArgs),
+}
+
+/// A pair of numbers typed as `A,B`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pair(pub f64, pub f64);
+
+fn parse_pair(s: &str) -> Result<Pair, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [a, b] = parts[..] else {
+        return Err(format!("expected two comma-separated numbers like `12.5,-40`, found {s:?}"));
+    };
+    let num = |t: &str| match t.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("expected a finite number, found {t:?} in {s:?}")),
+    };
+    Ok(Pair(num(a)?, num(b)?))
+}
+
+fn parse_finite(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("expected a finite number, found {s:?}")),
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlannerArg {
+    /// A* with the octile (8-connected) or Manhattan (4-connected) heuristic.
+    Astar,
+    /// Dijkstra (no heuristic).
+    Dijkstra,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PruneArg {
+    /// Exact collinearity on grid cells.
+    Collinear,
+    /// Keep every cell of the grid path.
+    None,
+}
+
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// Map file (FCND colliders.csv format); default: the bundled FCND city map.
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// TOML file with default values for these options (command-line options win).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Flight altitude above home, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub alt_m: Option<f64>,
+    /// Safety margin around obstacles, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub safety_m: Option<f64>,
+    /// Grid cell size, metres [default: 1].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub cell_m: Option<f64>,
+    /// Start as local metres north,east of home [default: 0,0, the home].
+    #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "start_lla", allow_hyphen_values = true)]
+    pub start_ne: Option<Pair>,
+    /// Start as latitude,longitude in degrees (the vehicle's current global position).
+    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub start_lla: Option<Pair>,
+    /// Goal as local metres north,east of home.
+    #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "goal_lla", allow_hyphen_values = true)]
+    pub goal_ne: Option<Pair>,
+    /// Goal as latitude,longitude in degrees.
+    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub goal_lla: Option<Pair>,
+    /// Heading of the first waypoint, degrees clockwise from north [default: 0].
+    #[arg(long, value_name = "DEG", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub start_heading_deg: Option<f64>,
+    /// Grid connectivity: 8 (diagonals cost √2) or 4 [default: 8].
+    #[arg(long, value_name = "4|8", value_parser = clap::value_parser!(u8).range(4..=8))]
+    pub connectivity: Option<u8>,
+    /// Let diagonal moves pass between two blocked cells (the FCND move model).
+    #[arg(long)]
+    pub corner_cutting: bool,
+    /// Search algorithm [default: astar].
+    #[arg(long, value_enum)]
+    pub planner: Option<PlannerArg>,
+    /// Collinearity pruning [default: collinear].
+    #[arg(long, value_enum)]
+    pub prune: Option<PruneArg>,
+    /// Use the FCND determinant collinearity test with this tolerance (cells²) instead of exact pruning.
+    #[arg(long, value_name = "EPS", value_parser = parse_finite)]
+    pub epsilon: Option<f64>,
+    /// Skip line-of-sight shortcutting.
+    #[arg(long)]
+    pub no_shortcut: bool,
+    /// Waypoint file; the format follows the extension (.json .csv .h5 .geojson .plan) [default: waypoints.json].
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Waypoint file format, overriding the extension: json, csv, hdf5, geojson, plan.
+    #[arg(long, value_name = "FORMAT")]
+    pub format: Option<String>,
+    /// Also draw the map, path and waypoints to this picture (.png or .svg).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Print one JSON object on stdout instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct ScenArgs {
+    /// MovingAI map (.map).
+    pub map: PathBuf,
+    /// MovingAI scenarios (.map.scen).
+    pub scen: PathBuf,
+    /// Print one JSON object per scenario (then a summary object) instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Search algorithm.
+    #[arg(long, value_enum, default_value = "astar")]
+    pub planner: PlannerArg,
+}

@@ -1,0 +1,171 @@
+//! QGroundControl `.plan` files.
+//!
+//! Layout as documented in QGroundControl's developer guide, "Plan File Format"
+//! (`docs/en/qgc-dev-guide/file_formats/plan.md` in mavlink/qgroundcontrol).
+
+use serde_json::{Value, json};
+use skyplan_mission::{Mission, Waypoint};
+
+use crate::{ExportError, Format, check_finite, check_len};
+
+/// MAVLink numbers used in `.plan` files.
+pub mod mavlink {
+    /// `MAV_CMD_NAV_WAYPOINT`: fly to a position.
+    pub const MAV_CMD_NAV_WAYPOINT: u16 = 16;
+    /// `MAV_CMD_NAV_LAND`: land at a position.
+    pub const MAV_CMD_NAV_LAND: u16 = 21;
+    /// `MAV_CMD_NAV_TAKEOFF`: take off to an altitude.
+    pub const MAV_CMD_NAV_TAKEOFF: u16 = 22;
+    /// `MAV_FRAME_GLOBAL_RELATIVE_ALT`: lat/lon, altitude above home.
+    pub const MAV_FRAME_GLOBAL_RELATIVE_ALT: u8 = 3;
+    /// `MAV_AUTOPILOT_ARDUPILOTMEGA`.
+    pub const MAV_AUTOPILOT_ARDUPILOTMEGA: u8 = 3;
+    /// `MAV_AUTOPILOT_PX4`.
+    pub const MAV_AUTOPILOT_PX4: u8 = 12;
+    /// `MAV_TYPE_QUADROTOR`.
+    pub const MAV_TYPE_QUADROTOR: u8 = 2;
+    /// QGroundControl's `AltitudeMode` "Relative" (altitude above home).
+    pub const QGC_ALTITUDE_MODE_RELATIVE: u8 = 1;
+}
+
+use mavlink::*;
+
+/// Mission-wide settings of a `.plan` file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QgcPlanOptions {
+    /// `cruiseSpeed`, m/s: the default speed of fixed-wing and VTOL vehicles. Default 15.
+    pub cruise_speed_m_s: f64,
+    /// `hoverSpeed`, m/s: the default speed of multirotors. Default 5.
+    pub hover_speed_m_s: f64,
+    /// `firmwareType`, a `MAV_AUTOPILOT` value. Default [`mavlink::MAV_AUTOPILOT_PX4`].
+    pub firmware_type: u8,
+    /// `vehicleType`, a `MAV_TYPE` value. Default [`mavlink::MAV_TYPE_QUADROTOR`].
+    pub vehicle_type: u8,
+}
+
+impl Default for QgcPlanOptions {
+    fn default() -> Self {
+        Self {
+            cruise_speed_m_s: 15.0,
+            hover_speed_m_s: 5.0,
+            firmware_type: MAV_AUTOPILOT_PX4,
+            vehicle_type: MAV_TYPE_QUADROTOR,
+        }
+    }
+}
+
+impl QgcPlanOptions {
+    fn validate(&self) -> Result<(), ExportError> {
+        for (name, value) in [
+            ("cruise_speed_m_s", self.cruise_speed_m_s),
+            ("hover_speed_m_s", self.hover_speed_m_s),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ExportError::InvalidOption {
+                    name,
+                    value,
+                    reason: "must be finite and positive",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Heading in degrees clockwise from north, in `[0, 360)`.
+fn yaw_deg(heading_rad: f64) -> f64 {
+    let deg = heading_rad.to_degrees().rem_euclid(360.0);
+    // rem_euclid of a tiny negative number rounds up to 360.
+    if deg >= 360.0 { 0.0 } else { deg }
+}
+
+/// One `SimpleItem` in `MAV_FRAME_GLOBAL_RELATIVE_ALT`.
+fn simple_item(do_jump_id: usize, command: u16, altitude_m: f64, params: Value) -> Value {
+    json!({
+        "AMSLAltAboveTerrain": null,
+        "Altitude": altitude_m,
+        "AltitudeMode": QGC_ALTITUDE_MODE_RELATIVE,
+        "autoContinue": true,
+        "command": command,
+        "doJumpId": do_jump_id,
+        "frame": MAV_FRAME_GLOBAL_RELATIVE_ALT,
+        "params": params,
+        "type": "SimpleItem",
+    })
+}
+
+/// The mission items: takeoff at the first waypoint, a waypoint for each later one, land at the
+/// last. `doJumpId`s count from 1.
+fn items(wps: &[Waypoint]) -> Vec<Value> {
+    let mut items = Vec::with_capacity(wps.len() + 1);
+    let (Some(first), Some(last)) = (wps.first(), wps.last()) else {
+        return items;
+    };
+    items.push(simple_item(
+        1,
+        MAV_CMD_NAV_TAKEOFF,
+        first.alt_m,
+        json!([0, 0, 0, null, first.lat_deg, first.lon_deg, first.alt_m]),
+    ));
+    for w in &wps[1..] {
+        // hold time s, acceptance radius m, pass radius m, yaw deg, lat, lon, alt.
+        let params = json!([
+            0,
+            0,
+            0,
+            yaw_deg(w.heading_rad),
+            w.lat_deg,
+            w.lon_deg,
+            w.alt_m
+        ]);
+        items.push(simple_item(
+            items.len() + 1,
+            MAV_CMD_NAV_WAYPOINT,
+            w.alt_m,
+            params,
+        ));
+    }
+    let params = json!([0, 0, 0, null, last.lat_deg, last.lon_deg, 0]);
+    items.push(simple_item(items.len() + 1, MAV_CMD_NAV_LAND, 0.0, params));
+    items
+}
+
+/// Encodes a mission as a QGroundControl `.plan` file (pretty JSON, trailing newline).
+///
+/// The mission items, all `SimpleItem`s in `MAV_FRAME_GLOBAL_RELATIVE_ALT` (frame 3,
+/// `AltitudeMode` 1, altitudes above home), are:
+/// 1. `MAV_CMD_NAV_TAKEOFF` (22) at the first waypoint, to its altitude;
+/// 2. `MAV_CMD_NAV_WAYPOINT` (16) for every later waypoint, with its heading as the yaw
+///    (param 4, degrees clockwise from north in `[0, 360)`) and zero hold time and radii;
+/// 3. `MAV_CMD_NAV_LAND` (21) at the last waypoint.
+///
+/// So an `n`-waypoint mission gives `n + 1` items. `plannedHomePosition` is the mission home
+/// `[lat, lon, alt]`; geofence and rally points are empty. An empty mission is an error
+/// ([`ExportError::TooFewWaypoints`]), as are non-positive speeds
+/// ([`ExportError::InvalidOption`]).
+pub fn to_qgc_plan(mission: &Mission, options: &QgcPlanOptions) -> Result<String, ExportError> {
+    check_finite(mission)?;
+    check_len(Format::QgcPlan, mission, 1)?;
+    options.validate()?;
+    let home = &mission.home;
+    let plan = json!({
+        "fileType": "Plan",
+        "geoFence": { "circles": [], "polygons": [], "version": 2 },
+        "groundStation": "QGroundControl",
+        "mission": {
+            "cruiseSpeed": options.cruise_speed_m_s,
+            "firmwareType": options.firmware_type,
+            "globalPlanAltitudeMode": QGC_ALTITUDE_MODE_RELATIVE,
+            "hoverSpeed": options.hover_speed_m_s,
+            "items": items(&mission.waypoints),
+            "plannedHomePosition": [home.lat_deg, home.lon_deg, home.alt_m],
+            "vehicleType": options.vehicle_type,
+            "version": 2,
+        },
+        "rallyPoints": { "points": [], "version": 2 },
+        "version": 1,
+    });
+    let mut text = serde_json::to_string_pretty(&plan)?;
+    text.push('\n');
+    Ok(text)
+}

@@ -1,0 +1,132 @@
+//! Reads `to_hdf5` output back with h5py, the way FCND code does.
+
+mod common;
+
+use std::io::Write;
+use std::path::Path;
+use std::process::Command;
+
+use skyplan_export::{HDF5_DATASET, to_hdf5};
+use skyplan_mission::Mission;
+
+/// Prints the `data` dataset's shape, dtype and values (also as IEEE bit patterns, since
+/// serde_json's default float parsing may be off by an ULP), plus the home attributes.
+const READER: &str = r#"
+import h5py, json, struct, sys
+f = h5py.File(sys.argv[1], 'r')
+d = f['data']
+rows = d[:].tolist()
+bits = [[struct.unpack('<Q', struct.pack('<d', x))[0] for x in row] for row in rows]
+print(json.dumps({
+    'shape': list(d.shape),
+    'dtype': str(d.dtype),
+    'byteorder': d.dtype.byteorder,
+    'data': rows,
+    'bits': bits,
+    'keys': list(f.keys()),
+    'home': [float(f.attrs[k]) for k in ('home_lat_deg', 'home_lon_deg', 'home_alt_m')],
+}))
+"#;
+
+/// Whether h5py can be used. Without it the test fails under CI (which installs h5py) and is
+/// skipped elsewhere.
+fn h5py_available() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import h5py"])
+        .output()
+        .is_ok_and(|out| out.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "python3 with h5py is required when CI is set (pip install h5py)"
+        );
+        eprintln!(
+            "skipping h5py check: `python3 -c \"import h5py\"` failed (set CI to make this an error)"
+        );
+    }
+    ok
+}
+
+/// Writes the HDF5 bytes to a temp file and reads them with h5py.
+fn read_with_h5py(bytes: &[u8]) -> serde_json::Value {
+    let mut file = tempfile::Builder::new().suffix(".h5").tempfile().unwrap();
+    file.write_all(bytes).unwrap();
+    file.flush().unwrap();
+    run_reader(file.path())
+}
+
+fn run_reader(path: &Path) -> serde_json::Value {
+    let out = Command::new("python3")
+        .args(["-c", READER])
+        .arg(path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "h5py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn check(mission: &Mission) {
+    let bytes = to_hdf5(mission).unwrap();
+    assert_eq!(&bytes[..8], b"\x89HDF\r\n\x1a\n");
+    if !h5py_available() {
+        return;
+    }
+    let got = read_with_h5py(&bytes);
+    let n = mission.waypoints.len();
+    assert_eq!(got["shape"], serde_json::json!([n, 4]));
+    assert_eq!(got["dtype"], "float64");
+    assert!(
+        matches!(got["byteorder"].as_str(), Some("<" | "=")),
+        "little-endian: {}",
+        got["byteorder"]
+    );
+    assert_eq!(got["keys"], serde_json::json!([HDF5_DATASET]));
+
+    let rows = mission.rows();
+    let want_bits: Vec<Vec<u64>> = rows
+        .iter()
+        .map(|r| r.iter().map(|x| x.to_bits()).collect())
+        .collect();
+    assert_eq!(
+        got["bits"],
+        serde_json::json!(want_bits),
+        "values bit-for-bit"
+    );
+    let data = got["data"].as_array().unwrap();
+    assert_eq!(data.len(), n);
+    for (row, want) in data.iter().zip(&rows) {
+        for (x, want) in row.as_array().unwrap().iter().zip(want) {
+            common::assert_close(common::num(x), *want);
+        }
+    }
+    let home = common::home();
+    let got_home: Vec<u64> = got["home"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| common::num(x).to_bits())
+        .collect();
+    assert_eq!(got_home.len(), 3);
+    common::assert_close(f64::from_bits(got_home[0]), home.lat_deg);
+    common::assert_close(f64::from_bits(got_home[1]), home.lon_deg);
+    common::assert_close(f64::from_bits(got_home[2]), home.alt_m);
+}
+
+#[test]
+fn h5py_reads_the_fcnd_layout() {
+    check(&common::sample());
+}
+
+#[test]
+fn h5py_reads_a_single_waypoint() {
+    check(&common::single());
+}
+
+#[test]
+fn empty_mission_gives_a_0_by_4_dataset() {
+    check(&common::empty());
+}

@@ -1,0 +1,142 @@
+mod common;
+
+use common::{assert_close, num, parse};
+use serde_json::json;
+use skyplan_export::{QgcPlanOptions, mavlink, to_qgc_plan};
+
+fn plan(mission: &skyplan_mission::Mission) -> serde_json::Value {
+    parse(&to_qgc_plan(mission, &QgcPlanOptions::default()).unwrap())
+}
+
+#[test]
+fn plan_top_level_fields() {
+    let doc = plan(&common::sample());
+    assert_eq!(doc["fileType"], "Plan");
+    assert_eq!(doc["version"], 1);
+    assert_eq!(doc["groundStation"], "QGroundControl");
+    assert_eq!(
+        doc["geoFence"],
+        json!({ "circles": [], "polygons": [], "version": 2 })
+    );
+    assert_eq!(doc["rallyPoints"], json!({ "points": [], "version": 2 }));
+
+    let m = &doc["mission"];
+    assert_eq!(m["version"], 2);
+    assert_eq!(m["firmwareType"], 12);
+    assert_eq!(m["vehicleType"], 2);
+    assert_eq!(m["globalPlanAltitudeMode"], 1);
+    assert_eq!(num(&m["cruiseSpeed"]), 15.0);
+    assert_eq!(num(&m["hoverSpeed"]), 5.0);
+    let home = common::home();
+    let planned = m["plannedHomePosition"].as_array().unwrap();
+    assert_eq!(planned.len(), 3);
+    assert_close(num(&planned[0]), home.lat_deg);
+    assert_close(num(&planned[1]), home.lon_deg);
+    assert_close(num(&planned[2]), home.alt_m);
+}
+
+#[test]
+fn plan_items_takeoff_waypoints_land() {
+    let mission = common::sample();
+    let wps = &mission.waypoints;
+    let doc = plan(&mission);
+    let items = doc["mission"]["items"].as_array().unwrap();
+    assert_eq!(items.len(), wps.len() + 1);
+
+    let commands: Vec<u64> = items
+        .iter()
+        .map(|i| i["command"].as_u64().unwrap())
+        .collect();
+    assert_eq!(commands, [22, 16, 16, 16, 21]);
+
+    for (k, item) in items.iter().enumerate() {
+        assert_eq!(item["type"], "SimpleItem");
+        assert_eq!(item["doJumpId"], k + 1);
+        assert_eq!(item["frame"], 3);
+        assert_eq!(item["autoContinue"], true);
+        assert_eq!(item["AltitudeMode"], 1);
+        assert!(item["AMSLAltAboveTerrain"].is_null());
+        assert!(
+            item.as_object()
+                .unwrap()
+                .contains_key("AMSLAltAboveTerrain")
+        );
+        assert_eq!(item["params"].as_array().unwrap().len(), 7);
+    }
+
+    // Takeoff at the first waypoint, to its altitude; yaw param null.
+    let takeoff = items[0]["params"].as_array().unwrap();
+    assert_eq!(
+        takeoff[0..4],
+        [json!(0), json!(0), json!(0), json!(null)][..]
+    );
+    assert_close(num(&takeoff[4]), wps[0].lat_deg);
+    assert_close(num(&takeoff[5]), wps[0].lon_deg);
+    assert_eq!(num(&takeoff[6]), 5.0);
+    assert_eq!(num(&items[0]["Altitude"]), 5.0);
+
+    // Waypoints 1.. with yaw in degrees in [0, 360).
+    let want_yaw = [0.0, 90.0, wps[3].heading_rad.to_degrees() + 360.0];
+    for (k, yaw) in (1..wps.len()).zip(want_yaw) {
+        let p = items[k]["params"].as_array().unwrap();
+        assert_eq!(p[0..3], [json!(0), json!(0), json!(0)]);
+        assert_close(num(&p[3]), yaw);
+        assert!((0.0..360.0).contains(&num(&p[3])));
+        assert_close(num(&p[4]), wps[k].lat_deg);
+        assert_close(num(&p[5]), wps[k].lon_deg);
+        assert_eq!(num(&p[6]), wps[k].alt_m);
+        assert_eq!(num(&items[k]["Altitude"]), wps[k].alt_m);
+    }
+    // The last heading is about −155°, so about 205° once wrapped.
+    assert!(
+        (num(&items[3]["params"][3]) - 204.65).abs() < 0.01,
+        "{}",
+        items[3]["params"][3]
+    );
+
+    // Land at the last waypoint.
+    let land = items[4]["params"].as_array().unwrap();
+    assert_eq!(land[0..4], [json!(0), json!(0), json!(0), json!(null)][..]);
+    assert_close(num(&land[4]), wps[3].lat_deg);
+    assert_close(num(&land[5]), wps[3].lon_deg);
+    assert_eq!(num(&land[6]), 0.0);
+}
+
+#[test]
+fn plan_lat_lon_order() {
+    // Latitude (param 5) and longitude (param 6) differ obviously: 37.8 vs −122.4.
+    let doc = plan(&common::sample());
+    let p = &doc["mission"]["items"][1]["params"];
+    assert!(num(&p[4]) > 37.0 && num(&p[5]) < -122.0);
+}
+
+#[test]
+fn plan_single_waypoint_is_takeoff_then_land() {
+    let doc = plan(&common::single());
+    let items = doc["mission"]["items"].as_array().unwrap();
+    let commands: Vec<u64> = items
+        .iter()
+        .map(|i| i["command"].as_u64().unwrap())
+        .collect();
+    assert_eq!(
+        commands,
+        [
+            u64::from(mavlink::MAV_CMD_NAV_TAKEOFF),
+            u64::from(mavlink::MAV_CMD_NAV_LAND)
+        ]
+    );
+}
+
+#[test]
+fn plan_options_are_written() {
+    let options = QgcPlanOptions {
+        cruise_speed_m_s: 8.5,
+        hover_speed_m_s: 3.0,
+        firmware_type: mavlink::MAV_AUTOPILOT_ARDUPILOTMEGA,
+        vehicle_type: mavlink::MAV_TYPE_QUADROTOR,
+    };
+    let doc = parse(&to_qgc_plan(&common::sample(), &options).unwrap());
+    assert_eq!(num(&doc["mission"]["cruiseSpeed"]), 8.5);
+    assert_eq!(num(&doc["mission"]["hoverSpeed"]), 3.0);
+    assert_eq!(doc["mission"]["firmwareType"], 3);
+}
