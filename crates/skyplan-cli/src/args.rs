@@ -31,7 +31,9 @@ pub struct Pair(pub f64, pub f64);
 fn parse_pair(s: &str) -> Result<Pair, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let [a, b] = parts[..] else {
-        return Err(format!("expected two comma-separated numbers like `12.5,-40`, found {s:?}"));
+        return Err(format!(
+            "expected two comma-separated numbers like `12.5,-40`, found {s:?}"
+        ));
     };
     let num = |t: &str| match t.parse::<f64>() {
         Ok(x) if x.is_finite() => Ok(x),

@@ -49,7 +49,10 @@ impl Config {
             .with_context(|| format!("{}: invalid config", path.display()))
             .or_exit(Kind::BadInput)?;
         let base = path.parent().unwrap_or(Path::new(""));
-        for p in [&mut config.map, &mut config.out, &mut config.plot].into_iter().flatten() {
+        for p in [&mut config.map, &mut config.out, &mut config.plot]
+            .into_iter()
+            .flatten()
+        {
             if p.is_relative() {
                 *p = base.join(&*p);
             }

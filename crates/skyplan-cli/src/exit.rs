@@ -38,11 +38,17 @@ pub trait Classify<T> {
 
 impl<T, E: Into<anyhow::Error>> Classify<T> for std::result::Result<T, E> {
     fn or_exit(self, kind: Kind) -> Result<T> {
-        self.map_err(|e| Failure { kind, error: e.into() })
+        self.map_err(|e| Failure {
+            kind,
+            error: e.into(),
+        })
     }
 }
 
 /// A bad-input failure from a message.
 pub fn bad_input(message: impl std::fmt::Display) -> Failure {
-    Failure { kind: Kind::BadInput, error: anyhow::anyhow!("{message}") }
+    Failure {
+        kind: Kind::BadInput,
+        error: anyhow::anyhow!("{message}"),
+    }
 }

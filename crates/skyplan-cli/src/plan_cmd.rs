@@ -26,9 +26,20 @@ struct Options {
     json: bool,
 }
 
-fn position(ne: Option<Pair>, lla: Option<Pair>, cfg_ne: Option<[f64; 2]>, cfg_lla: Option<[f64; 2]>) -> Option<Position> {
-    let from_ne = |p: Pair| Position::Ne { north_m: p.0, east_m: p.1 };
-    let from_lla = |p: Pair| Position::Lla { lat_deg: p.0, lon_deg: p.1 };
+fn position(
+    ne: Option<Pair>,
+    lla: Option<Pair>,
+    cfg_ne: Option<[f64; 2]>,
+    cfg_lla: Option<[f64; 2]>,
+) -> Option<Position> {
+    let from_ne = |p: Pair| Position::Ne {
+        north_m: p.0,
+        east_m: p.1,
+    };
+    let from_lla = |p: Pair| Position::Lla {
+        lat_deg: p.0,
+        lon_deg: p.1,
+    };
     ne.map(from_ne)
         .or(lla.map(from_lla))
         .or(cfg_ne.map(|[a, b]| from_ne(Pair(a, b))))
@@ -41,10 +52,14 @@ fn resolve(args: PlanArgs) -> Result<Options> {
         None => Config::default(),
     };
     if cfg.start_ne.is_some() && cfg.start_lla.is_some() {
-        return Err(bad_input("config: give either start_ne or start_lla, not both"));
+        return Err(bad_input(
+            "config: give either start_ne or start_lla, not both",
+        ));
     }
     if cfg.goal_ne.is_some() && cfg.goal_lla.is_some() {
-        return Err(bad_input("config: give either goal_ne or goal_lla, not both"));
+        return Err(bad_input(
+            "config: give either goal_ne or goal_lla, not both",
+        ));
     }
     let connectivity = args.connectivity.or(cfg.connectivity).unwrap_or(8);
     let corner_cutting = args.corner_cutting || cfg.corner_cutting.unwrap_or(false);
@@ -52,31 +67,61 @@ fn resolve(args: PlanArgs) -> Result<Options> {
         (8, false) => MoveModel::Octile,
         (8, true) => MoveModel::OctileCornerCutting,
         (4, false) => MoveModel::FourConnected,
-        (4, true) => return Err(bad_input("--corner-cutting needs diagonal moves: use it with --connectivity 8")),
-        (other, _) => return Err(bad_input(format!("--connectivity: expected 4 or 8, found {other}"))),
+        (4, true) => {
+            return Err(bad_input(
+                "--corner-cutting needs diagonal moves: use it with --connectivity 8",
+            ));
+        }
+        (other, _) => {
+            return Err(bad_input(format!(
+                "--connectivity: expected 4 or 8, found {other}"
+            )));
+        }
     };
     let planner = match args.planner.or(cfg.planner).unwrap_or(PlannerArg::Astar) {
         PlannerArg::Astar => Planner::AStar,
         PlannerArg::Dijkstra => Planner::Dijkstra,
     };
     let prune = match (args.epsilon.or(cfg.epsilon), args.prune.or(cfg.prune)) {
-        (Some(eps), _) if eps < 0.0 => return Err(bad_input(format!("--epsilon: expected a tolerance ≥ 0, found {eps}"))),
-        (Some(_), Some(PruneArg::None)) => return Err(bad_input("--epsilon asks for pruning, --prune none forbids it")),
+        (Some(eps), _) if eps < 0.0 => {
+            return Err(bad_input(format!(
+                "--epsilon: expected a tolerance ≥ 0, found {eps}"
+            )));
+        }
+        (Some(_), Some(PruneArg::None)) => {
+            return Err(bad_input(
+                "--epsilon asks for pruning, --prune none forbids it",
+            ));
+        }
         (Some(eps), _) => Prune::Epsilon(eps),
         (None, Some(PruneArg::None)) => Prune::None,
         (None, _) => Prune::Collinear,
     };
-    let start = position(args.start_ne, args.start_lla, cfg.start_ne, cfg.start_lla)
-        .unwrap_or(Position::Ne { north_m: 0.0, east_m: 0.0 });
-    let goal = position(args.goal_ne, args.goal_lla, cfg.goal_ne, cfg.goal_lla)
-        .unwrap_or(Position::Ne { north_m: DEFAULT_GOAL_NE.0, east_m: DEFAULT_GOAL_NE.1 });
+    let start = position(args.start_ne, args.start_lla, cfg.start_ne, cfg.start_lla).unwrap_or(
+        Position::Ne {
+            north_m: 0.0,
+            east_m: 0.0,
+        },
+    );
+    let goal =
+        position(args.goal_ne, args.goal_lla, cfg.goal_ne, cfg.goal_lla).unwrap_or(Position::Ne {
+            north_m: DEFAULT_GOAL_NE.0,
+            east_m: DEFAULT_GOAL_NE.1,
+        });
     let spec = GridSpec {
         alt_m: args.alt_m.or(cfg.alt_m).unwrap_or(5.0),
         safety_m: args.safety_m.or(cfg.safety_m).unwrap_or(5.0),
         cell_m: args.cell_m.or(cfg.cell_m).unwrap_or(1.0),
     };
-    let start_heading_rad = args.start_heading_deg.or(cfg.start_heading_deg).unwrap_or(0.0).to_radians();
-    let out = args.out.or(cfg.out).unwrap_or_else(|| PathBuf::from("waypoints.json"));
+    let start_heading_rad = args
+        .start_heading_deg
+        .or(cfg.start_heading_deg)
+        .unwrap_or(0.0)
+        .to_radians();
+    let out = args
+        .out
+        .or(cfg.out)
+        .unwrap_or_else(|| PathBuf::from("waypoints.json"));
     let format = match args.format.or(cfg.format) {
         Some(name) => Format::from_name(&name)
             .ok_or_else(|| bad_input(format!("--format: expected json, csv, hdf5, geojson or plan, found {name:?}")))?,
@@ -91,7 +136,10 @@ fn resolve(args: PlanArgs) -> Result<Options> {
     if let Some(p) = &plot
         && skyplan_plot::PlotFormat::from_path(p).is_none()
     {
-        return Err(bad_input(format!("--plot {}: expected a .png or .svg file name", p.display())));
+        return Err(bad_input(format!(
+            "--plot {}: expected a .png or .svg file name",
+            p.display()
+        )));
     }
     Ok(Options {
         map: args.map.or(cfg.map),
@@ -136,7 +184,10 @@ pub fn run(args: PlanArgs) -> Result<()> {
             Kind::BadInput => "bad_input",
             Kind::Runtime => "error",
         };
-        println!("{}", json!({ "status": status, "error": format!("{:#}", f.error) }));
+        println!(
+            "{}",
+            json!({ "status": status, "error": format!("{:#}", f.error) })
+        );
     }
     result
 }
@@ -158,11 +209,15 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         } else {
             Kind::BadInput
         };
-        Failure { kind, error: anyhow!(e) }
+        Failure {
+            kind,
+            error: anyhow!(e),
+        }
     })?;
 
     let summary = summary_json(&map_name, map.boxes.len(), &opts, &outcome);
-    let bytes = skyplan_export::encode(opts.format, &outcome.mission, &summary).or_exit(Kind::Runtime)?;
+    let bytes =
+        skyplan_export::encode(opts.format, &outcome.mission, &summary).or_exit(Kind::Runtime)?;
     write_atomic(&opts.out, &bytes)?;
     if let Some(plot_path) = &opts.plot {
         write_plot(plot_path, &map_name, &opts, &outcome)?;
@@ -171,8 +226,14 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         let mut full = summary;
         full["status"] = json!("ok");
         full["waypoints"] = json!(outcome.mission.rows());
-        full["waypoints_lla"] =
-            json!(outcome.mission.waypoints.iter().map(|w| [w.lat_deg, w.lon_deg]).collect::<Vec<_>>());
+        full["waypoints_lla"] = json!(
+            outcome
+                .mission
+                .waypoints
+                .iter()
+                .map(|w| [w.lat_deg, w.lon_deg])
+                .collect::<Vec<_>>()
+        );
         full["wall_time_us"] = json!(t0.elapsed().as_micros() as u64);
         println!("{full}");
     } else {
@@ -181,11 +242,21 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     Ok(())
 }
 
-fn write_plot(path: &std::path::Path, map_name: &str, opts: &Options, o: &PlanOutcome) -> Result<()> {
+fn write_plot(
+    path: &std::path::Path,
+    map_name: &str,
+    opts: &Options,
+    o: &PlanOutcome,
+) -> Result<()> {
     let format = skyplan_plot::PlotFormat::from_path(path)
         .ok_or_else(|| bad_input(format!("--plot {}: expected .png or .svg", path.display())))?;
     let raw: Vec<(f64, f64)> = o.path.cells.iter().map(|&c| o.grid.center_ne(c)).collect();
-    let waypoints: Vec<(f64, f64)> = o.mission.waypoints.iter().map(|w| (w.north_m, w.east_m)).collect();
+    let waypoints: Vec<(f64, f64)> = o
+        .mission
+        .waypoints
+        .iter()
+        .map(|w| (w.north_m, w.east_m))
+        .collect();
     let spec = opts.request.spec;
     let scene = skyplan_plot::Scene {
         title: format!(
@@ -211,15 +282,16 @@ fn short_name(map_name: &str) -> &str {
     if map_name == BUNDLED_NAME {
         return "FCND city map";
     }
-    std::path::Path::new(map_name).file_name().and_then(|n| n.to_str()).unwrap_or(map_name)
+    std::path::Path::new(map_name)
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or(map_name)
 }
 
 fn summary_json(map_name: &str, obstacles: usize, opts: &Options, o: &PlanOutcome) -> Value {
     let spec = opts.request.spec;
     let f = o.grid.frame();
-    let place = |p: &skyplan_pipeline::Place, c: skyplan_cspace::Cell| {
-        json!({ "north_m": p.north_m, "east_m": p.east_m, "lat_deg": p.lat_deg, "lon_deg": p.lon_deg, "cell": [c.row, c.col] })
-    };
+    let place = |p: &skyplan_pipeline::Place, c: skyplan_cspace::Cell| json!({ "north_m": p.north_m, "east_m": p.east_m, "lat_deg": p.lat_deg, "lon_deg": p.lon_deg, "cell": [c.row, c.col] });
     json!({
         "map": map_name,
         "obstacles": obstacles,
@@ -262,7 +334,10 @@ fn print_summary(map_name: &str, obstacles: usize, opts: &Options, o: &PlanOutco
     let blocked = o.grid.blocked_count();
     let ms = |us: u64| us as f64 / 1000.0;
     let home = o.frame.home();
-    println!("map        {map_name}: {obstacles} obstacles, home lat {:.6}, lon {:.6}", home.lat_deg, home.lon_deg);
+    println!(
+        "map        {map_name}: {obstacles} obstacles, home lat {:.6}, lon {:.6}",
+        home.lat_deg, home.lon_deg
+    );
     println!(
         "grid       {} × {} cells of {} m at {} m altitude, {} m margin: {} blocked ({:.1} %), built in {:.2} ms",
         o.grid.rows(),
@@ -299,7 +374,18 @@ fn print_summary(map_name: &str, obstacles: usize, opts: &Options, o: &PlanOutco
         o.mission.waypoints.len(),
         o.mission.length_m()
     );
-    let plot = opts.plot.as_ref().map(|p| format!(", {}", p.display())).unwrap_or_default();
-    println!("wrote      {} ({}){plot}", opts.out.display(), opts.format.name());
-    println!("time       {:.2} ms in all", t0.elapsed().as_secs_f64() * 1000.0);
+    let plot = opts
+        .plot
+        .as_ref()
+        .map(|p| format!(", {}", p.display()))
+        .unwrap_or_default();
+    println!(
+        "wrote      {} ({}){plot}",
+        opts.out.display(),
+        opts.format.name()
+    );
+    println!(
+        "time       {:.2} ms in all",
+        t0.elapsed().as_secs_f64() * 1000.0
+    );
 }

@@ -28,10 +28,18 @@ pub fn run(args: ScenArgs) -> Result<()> {
     let scenarios = skyplan_map::movingai::parse_scen(&scen_text)
         .map_err(|e| bad_input(format!("{}: {e}", args.scen.display())))?;
     let blocked: Vec<bool> = map.passable.iter().map(|&p| !p).collect();
-    let grid = Grid2::new(map.height as u32, map.width as u32, blocked, GridFrame::default())
-        .map_err(|e| bad_input(format!("{}: {e}", args.map.display())))?;
+    let grid = Grid2::new(
+        map.height as u32,
+        map.width as u32,
+        blocked,
+        GridFrame::default(),
+    )
+    .map_err(|e| bad_input(format!("{}: {e}", args.map.display())))?;
     for s in &scenarios {
-        for (what, x, y) in [("start", s.start_x, s.start_y), ("goal", s.goal_x, s.goal_y)] {
+        for (what, x, y) in [
+            ("start", s.start_x, s.start_y),
+            ("goal", s.goal_x, s.goal_y),
+        ] {
             if x >= map.width || y >= map.height {
                 return Err(bad_input(format!(
                     "{}: line {}: {what} ({x}, {y}) is outside the {} × {} map",
@@ -65,13 +73,17 @@ pub fn run(args: ScenArgs) -> Result<()> {
             Ok(p) => (Some(p.cost_cells()), p.expansions),
             Err(_) => (None, 0),
         };
-        let ok = cost.is_some_and(|c| (c - s.optimal_length).abs() <= REL_TOL * s.optimal_length.max(1.0));
+        let ok = cost
+            .is_some_and(|c| (c - s.optimal_length).abs() <= REL_TOL * s.optimal_length.max(1.0));
         let b = buckets.entry(s.bucket).or_default();
         b.count += 1;
         b.matched += u64::from(ok);
         b.total_us += time_us;
         if !ok {
-            failures.push(format!("line {}: cost {cost:?}, optimal {}", s.line, s.optimal_length));
+            failures.push(format!(
+                "line {}: cost {cost:?}, optimal {}",
+                s.line, s.optimal_length
+            ));
         }
         if args.json {
             println!(
@@ -95,12 +107,30 @@ pub fn run(args: ScenArgs) -> Result<()> {
                     "mean_time_us": total_us / total.max(1) as f64 })
         );
     } else {
-        println!("{}: {} × {} grid, {} scenarios", args.map.display(), map.width, map.height, total);
-        println!("{:>6} {:>9} {:>9} {:>14}", "bucket", "scenarios", "matched", "mean time µs");
+        println!(
+            "{}: {} × {} grid, {} scenarios",
+            args.map.display(),
+            map.width,
+            map.height,
+            total
+        );
+        println!(
+            "{:>6} {:>9} {:>9} {:>14}",
+            "bucket", "scenarios", "matched", "mean time µs"
+        );
         for (bucket, b) in &buckets {
-            println!("{bucket:>6} {:>9} {:>9} {:>14.1}", b.count, b.matched, b.total_us / b.count as f64);
+            println!(
+                "{bucket:>6} {:>9} {:>9} {:>14.1}",
+                b.count,
+                b.matched,
+                b.total_us / b.count as f64
+            );
         }
-        println!("{:>6} {total:>9} {matched:>9} {:>14.1}", "all", total_us / total.max(1) as f64);
+        println!(
+            "{:>6} {total:>9} {matched:>9} {:>14.1}",
+            "all",
+            total_us / total.max(1) as f64
+        );
     }
     if matched == total {
         Ok(())

@@ -16,7 +16,11 @@ pub struct GridSpec {
 
 impl Default for GridSpec {
     fn default() -> Self {
-        Self { alt_m: 5.0, safety_m: 5.0, cell_m: 1.0 }
+        Self {
+            alt_m: 5.0,
+            safety_m: 5.0,
+            cell_m: 1.0,
+        }
     }
 }
 
@@ -42,17 +46,35 @@ impl Grid2 {
     /// # Ok::<(), skyplan_cspace::GridError>(())
     /// ```
     pub fn from_colliders(map: &CollidersMap, spec: GridSpec) -> Result<Self, GridError> {
-        let GridSpec { alt_m, safety_m, cell_m } = spec;
+        let GridSpec {
+            alt_m,
+            safety_m,
+            cell_m,
+        } = spec;
         if !alt_m.is_finite() {
-            return Err(GridError::BadParameter { name: "alt_m", value: alt_m, expected: "a finite altitude" });
+            return Err(GridError::BadParameter {
+                name: "alt_m",
+                value: alt_m,
+                expected: "a finite altitude",
+            });
         }
         if !(safety_m.is_finite() && safety_m >= 0.0) {
-            return Err(GridError::BadParameter { name: "safety_m", value: safety_m, expected: "a finite margin ≥ 0" });
+            return Err(GridError::BadParameter {
+                name: "safety_m",
+                value: safety_m,
+                expected: "a finite margin ≥ 0",
+            });
         }
         if !(cell_m.is_finite() && cell_m > 0.0) {
-            return Err(GridError::BadParameter { name: "cell_m", value: cell_m, expected: "a finite cell size > 0" });
+            return Err(GridError::BadParameter {
+                name: "cell_m",
+                value: cell_m,
+                expected: "a finite cell size > 0",
+            });
         }
-        let fold = |f: fn(f64, f64) -> f64, init: f64, g: &dyn Fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
+        let fold = |f: fn(f64, f64) -> f64,
+                    init: f64,
+                    g: &dyn Fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
             map.boxes.iter().map(g).fold(init, f)
         };
         let north_min = fold(f64::min, f64::INFINITY, &|b| b.north_m - b.half_north_m).floor();
@@ -61,8 +83,12 @@ impl Grid2 {
         let east_max = fold(f64::max, f64::NEG_INFINITY, &|b| b.east_m + b.half_east_m);
         let rows_f = ((north_max - north_min) / cell_m).ceil().max(1.0);
         let cols_f = ((east_max - east_min) / cell_m).ceil().max(1.0);
-        if !(rows_f.is_finite() && cols_f.is_finite()) || rows_f * cols_f > crate::MAX_CELLS as f64 {
-            return Err(GridError::TooLarge { rows: rows_f as u64, cols: cols_f as u64 });
+        if !(rows_f.is_finite() && cols_f.is_finite()) || rows_f * cols_f > crate::MAX_CELLS as f64
+        {
+            return Err(GridError::TooLarge {
+                rows: rows_f as u64,
+                cols: cols_f as u64,
+            });
         }
         let (rows, cols) = (rows_f as u32, cols_f as u32);
         check_size(u64::from(rows), u64::from(cols))?;
@@ -82,7 +108,8 @@ impl Grid2 {
             let north_hi = (b.north_m + b.half_north_m + safety_m - north_min) / cell_m;
             let east_lo = (b.east_m - b.half_east_m - safety_m - east_min) / cell_m;
             let east_hi = (b.east_m + b.half_east_m + safety_m - east_min) / cell_m;
-            let (Some((r0, r1)), Some((c0, c1))) = (span(north_lo, north_hi, rows), span(east_lo, east_hi, cols))
+            let (Some((r0, r1)), Some((c0, c1))) =
+                (span(north_lo, north_hi, rows), span(east_lo, east_hi, cols))
             else {
                 continue;
             };
@@ -91,6 +118,15 @@ impl Grid2 {
                 blocked[start + c0..=start + c1].fill(true);
             }
         }
-        Grid2::new(rows, cols, blocked, GridFrame { origin_north_m: north_min, origin_east_m: east_min, cell_m })
+        Grid2::new(
+            rows,
+            cols,
+            blocked,
+            GridFrame {
+                origin_north_m: north_min,
+                origin_east_m: east_min,
+                cell_m,
+            },
+        )
     }
 }

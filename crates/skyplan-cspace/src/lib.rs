@@ -53,7 +53,11 @@ pub struct GridFrame {
 
 impl Default for GridFrame {
     fn default() -> Self {
-        Self { origin_north_m: 0.0, origin_east_m: 0.0, cell_m: 1.0 }
+        Self {
+            origin_north_m: 0.0,
+            origin_east_m: 0.0,
+            cell_m: 1.0,
+        }
     }
 }
 
@@ -107,17 +111,35 @@ pub struct Grid2 {
 
 impl Grid2 {
     /// A grid from row-major occupancy (`true` = blocked) and its frame.
-    pub fn new(rows: u32, cols: u32, blocked: Vec<bool>, frame: GridFrame) -> Result<Self, GridError> {
+    pub fn new(
+        rows: u32,
+        cols: u32,
+        blocked: Vec<bool>,
+        frame: GridFrame,
+    ) -> Result<Self, GridError> {
         check_size(u64::from(rows), u64::from(cols))?;
         if blocked.len() != rows as usize * cols as usize {
-            return Err(GridError::SizeMismatch { rows, cols, found: blocked.len() });
+            return Err(GridError::SizeMismatch {
+                rows,
+                cols,
+                found: blocked.len(),
+            });
         }
-        Ok(Self { rows, cols, blocked, frame })
+        Ok(Self {
+            rows,
+            cols,
+            blocked,
+            frame,
+        })
     }
 
     /// A grid from text: `#` blocked, anything else `.` free; the first line is row 0.
     pub fn from_ascii(text: &str) -> Result<Self, GridError> {
-        let lines: Vec<&str> = text.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
+        let lines: Vec<&str> = text
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect();
         let cols = lines.first().map_or(0, |l| l.len());
         let mut blocked = Vec::with_capacity(lines.len() * cols);
         for (row, line) in lines.iter().enumerate() {
@@ -126,8 +148,14 @@ impl Grid2 {
             }
             blocked.extend(line.bytes().map(|b| b == b'#'));
         }
-        let rows = u32::try_from(lines.len()).map_err(|_| GridError::TooLarge { rows: lines.len() as u64, cols: cols as u64 })?;
-        let cols = u32::try_from(cols).map_err(|_| GridError::TooLarge { rows: u64::from(rows), cols: cols as u64 })?;
+        let rows = u32::try_from(lines.len()).map_err(|_| GridError::TooLarge {
+            rows: lines.len() as u64,
+            cols: cols as u64,
+        })?;
+        let cols = u32::try_from(cols).map_err(|_| GridError::TooLarge {
+            rows: u64::from(rows),
+            cols: cols as u64,
+        })?;
         Self::new(rows, cols, blocked, GridFrame::default())
     }
 
@@ -189,7 +217,8 @@ impl Grid2 {
     /// True if signed coordinates are inside the grid and free.
     #[inline]
     pub fn is_free_at(&self, row: i64, col: i64) -> bool {
-        self.checked_cell(row, col).is_some_and(|c| !self.blocked[self.index(c)])
+        self.checked_cell(row, col)
+            .is_some_and(|c| !self.blocked[self.index(c)])
     }
     /// Sets a cell's occupancy (ignored outside the grid).
     pub fn set_blocked(&mut self, cell: Cell, blocked: bool) {
@@ -228,7 +257,10 @@ impl Grid2 {
 
     fn fractional_rc(&self, north_m: f64, east_m: f64) -> (f64, f64) {
         let f = self.frame;
-        ((north_m - f.origin_north_m) / f.cell_m, (east_m - f.origin_east_m) / f.cell_m)
+        (
+            (north_m - f.origin_north_m) / f.cell_m,
+            (east_m - f.origin_east_m) / f.cell_m,
+        )
     }
 
     /// The free cell whose centre is nearest (Euclidean) to a local point, on or off the grid.
@@ -258,7 +290,8 @@ impl Grid2 {
             }
             let mut consider = |row: i64, col: i64| {
                 if self.is_free_at(row, col) {
-                    let d = ((fr - (row as f64 + 0.5)).powi(2) + (fc - (col as f64 + 0.5)).powi(2)).sqrt();
+                    let d = ((fr - (row as f64 + 0.5)).powi(2) + (fc - (col as f64 + 0.5)).powi(2))
+                        .sqrt();
                     let cell = Cell::new(row as u32, col as u32);
                     if best.is_none_or(|(bd, bc)| d < bd || (d == bd && cell < bc)) {
                         best = Some((d, cell));
@@ -283,7 +316,10 @@ impl Grid2 {
 }
 
 fn check_size(rows: u64, cols: u64) -> Result<(), GridError> {
-    if rows.saturating_mul(cols) > MAX_CELLS as u64 || rows > u64::from(u32::MAX) || cols > u64::from(u32::MAX) {
+    if rows.saturating_mul(cols) > MAX_CELLS as u64
+        || rows > u64::from(u32::MAX)
+        || cols > u64::from(u32::MAX)
+    {
         return Err(GridError::TooLarge { rows, cols });
     }
     Ok(())
@@ -311,6 +347,11 @@ mod tests {
                 .unwrap();
             assert_eq!(got, brute, "point {n},{e}");
         }
-        assert_eq!(Grid2::from_ascii("##\n##").unwrap().nearest_free_ne(0.0, 0.0), None);
+        assert_eq!(
+            Grid2::from_ascii("##\n##")
+                .unwrap()
+                .nearest_free_ne(0.0, 0.0),
+            None
+        );
     }
 }

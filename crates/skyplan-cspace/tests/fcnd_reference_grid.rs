@@ -12,7 +12,15 @@ fn city() -> skyplan_map::colliders::CollidersMap {
 
 #[test]
 fn city_grid_at_5m_with_5m_margin_is_the_fcnd_reference() {
-    let grid = Grid2::from_colliders(&city(), GridSpec { alt_m: 5.0, safety_m: 5.0, cell_m: 1.0 }).unwrap();
+    let grid = Grid2::from_colliders(
+        &city(),
+        GridSpec {
+            alt_m: 5.0,
+            safety_m: 5.0,
+            cell_m: 1.0,
+        },
+    )
+    .unwrap();
     assert_eq!((grid.rows(), grid.cols()), (921, 921));
     assert_eq!(grid.blocked_count(), 519_210);
     let f = grid.frame();
@@ -24,10 +32,33 @@ fn higher_altitudes_block_fewer_cells_and_coarser_cells_cover_the_same_area() {
     let map = city();
     let counts: Vec<usize> = [5.0, 20.0, 50.0, 100.0, 250.0]
         .iter()
-        .map(|&alt_m| Grid2::from_colliders(&map, GridSpec { alt_m, safety_m: 5.0, cell_m: 1.0 }).unwrap().blocked_count())
+        .map(|&alt_m| {
+            Grid2::from_colliders(
+                &map,
+                GridSpec {
+                    alt_m,
+                    safety_m: 5.0,
+                    cell_m: 1.0,
+                },
+            )
+            .unwrap()
+            .blocked_count()
+        })
         .collect();
     assert!(counts.windows(2).all(|w| w[0] >= w[1]), "{counts:?}");
-    assert_eq!(*counts.last().unwrap(), 0, "nothing in the city is 245 m tall");
-    let coarse = Grid2::from_colliders(&map, GridSpec { alt_m: 5.0, safety_m: 5.0, cell_m: 5.0 }).unwrap();
+    assert_eq!(
+        *counts.last().unwrap(),
+        0,
+        "nothing in the city is 245 m tall"
+    );
+    let coarse = Grid2::from_colliders(
+        &map,
+        GridSpec {
+            alt_m: 5.0,
+            safety_m: 5.0,
+            cell_m: 5.0,
+        },
+    )
+    .unwrap();
     assert_eq!((coarse.rows(), coarse.cols()), (185, 185));
 }

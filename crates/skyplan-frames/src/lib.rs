@@ -65,7 +65,9 @@ pub const MAX_ZONE_OVERREACH_DEG: f64 = 3.0;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FrameError {
     /// A latitude/longitude outside the valid ranges or not finite.
-    #[error("invalid position: latitude {lat_deg}° must be within ±84° (UTM) and longitude {lon_deg}° within ±180°")]
+    #[error(
+        "invalid position: latitude {lat_deg}° must be within ±84° (UTM) and longitude {lon_deg}° within ±180°"
+    )]
     InvalidPosition {
         /// Latitude given, degrees.
         lat_deg: f64,
@@ -91,7 +93,9 @@ pub enum FrameError {
         home_hemisphere: char,
     },
     /// A local offset that leaves the valid UTM range.
-    #[error("local position ({north_m:.1} m N, {east_m:.1} m E) is outside the home's UTM zone range")]
+    #[error(
+        "local position ({north_m:.1} m N, {east_m:.1} m E) is outside the home's UTM zone range"
+    )]
     OutOfRange {
         /// North offset given, metres.
         north_m: f64,
@@ -101,7 +105,8 @@ pub enum FrameError {
 }
 
 fn check_lla(lat_deg: f64, lon_deg: f64) -> Result<(), FrameError> {
-    if lat_deg.is_finite() && lon_deg.is_finite() && lat_deg.abs() <= 84.0 && lon_deg.abs() <= 180.0 {
+    if lat_deg.is_finite() && lon_deg.is_finite() && lat_deg.abs() <= 84.0 && lon_deg.abs() <= 180.0
+    {
         Ok(())
     } else {
         Err(FrameError::InvalidPosition { lat_deg, lon_deg })
@@ -125,7 +130,12 @@ pub fn utm_from_lla(lat_deg: f64, lon_deg: f64) -> Result<Utm, FrameError> {
 
 fn utm_in_zone(lat_deg: f64, lon_deg: f64, zone: u8) -> Utm {
     let (northing_m, easting_m, _convergence) = utm::to_utm_wgs84(lat_deg, lon_deg, zone);
-    Utm { easting_m, northing_m, zone, north: lat_deg >= 0.0 }
+    Utm {
+        easting_m,
+        northing_m,
+        zone,
+        north: lat_deg >= 0.0,
+    }
 }
 
 /// Longitude of a zone's central meridian, degrees.
@@ -188,12 +198,16 @@ impl LocalFrame {
         let northing = self.home_utm.northing_m + ned.north_m;
         // Any letter of the right hemisphere works: the crate only uses it to pick N or S.
         let letter = if self.home_utm.north { 'N' } else { 'M' };
-        let out_of_range = FrameError::OutOfRange { north_m: ned.north_m, east_m: ned.east_m };
+        let out_of_range = FrameError::OutOfRange {
+            north_m: ned.north_m,
+            east_m: ned.east_m,
+        };
         if !(easting.is_finite() && northing.is_finite()) {
             return Err(out_of_range);
         }
         let (mut lat_deg, mut lon_deg) =
-            utm::wsg84_utm_to_lat_lon(easting, northing, self.home_utm.zone, letter).map_err(|_| out_of_range)?;
+            utm::wsg84_utm_to_lat_lon(easting, northing, self.home_utm.zone, letter)
+                .map_err(|_| out_of_range)?;
         // The crate's inverse series is off by up to a few millimetres, while its forward
         // projection matches Python `utm` to 0.1 mm. Refine with Newton steps on the forward
         // projection, using the local metres-per-degree as the Jacobian (the residual shrinks by
@@ -206,7 +220,11 @@ impl LocalFrame {
             lat_deg += d_north_m / m_per_deg_lat;
             lon_deg += d_east_m / m_per_deg_lon;
         }
-        Ok(Lla { lat_deg, lon_deg, alt_m: self.home.alt_m - ned.down_m })
+        Ok(Lla {
+            lat_deg,
+            lon_deg,
+            alt_m: self.home.alt_m - ned.down_m,
+        })
     }
 }
 
@@ -216,12 +234,39 @@ mod tests {
 
     #[test]
     fn refuses_far_zones_and_other_hemisphere() {
-        let frame = LocalFrame::new(Lla { lat_deg: 37.79248, lon_deg: -122.39745, alt_m: 0.0 }).unwrap();
-        let far = frame.ned_from_lla(Lla { lat_deg: 37.0, lon_deg: -110.0, alt_m: 0.0 });
-        assert!(matches!(far, Err(FrameError::OtherZone { point_zone: 12, home_zone: 10, .. })), "{far:?}");
-        let south = frame.ned_from_lla(Lla { lat_deg: -1.0, lon_deg: -122.0, alt_m: 0.0 });
+        let frame = LocalFrame::new(Lla {
+            lat_deg: 37.79248,
+            lon_deg: -122.39745,
+            alt_m: 0.0,
+        })
+        .unwrap();
+        let far = frame.ned_from_lla(Lla {
+            lat_deg: 37.0,
+            lon_deg: -110.0,
+            alt_m: 0.0,
+        });
+        assert!(
+            matches!(
+                far,
+                Err(FrameError::OtherZone {
+                    point_zone: 12,
+                    home_zone: 10,
+                    ..
+                })
+            ),
+            "{far:?}"
+        );
+        let south = frame.ned_from_lla(Lla {
+            lat_deg: -1.0,
+            lon_deg: -122.0,
+            alt_m: 0.0,
+        });
         assert!(matches!(south, Err(FrameError::OtherZone { .. })));
-        let bad = frame.ned_from_lla(Lla { lat_deg: f64::NAN, lon_deg: 0.0, alt_m: 0.0 });
+        let bad = frame.ned_from_lla(Lla {
+            lat_deg: f64::NAN,
+            lon_deg: 0.0,
+            alt_m: 0.0,
+        });
         assert!(matches!(bad, Err(FrameError::InvalidPosition { .. })));
     }
 

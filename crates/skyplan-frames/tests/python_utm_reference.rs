@@ -9,12 +9,17 @@
 //! ```
 //! The FCND convention is north = Δnorthing, east = Δeasting; the issue asks for ≤ 1 mm.
 
-use skyplan_frames::{LocalFrame, Lla, Ned};
+use skyplan_frames::{Lla, LocalFrame, Ned};
 
 const TOL_M: f64 = 1e-3;
 
 fn fcnd_home() -> LocalFrame {
-    LocalFrame::new(Lla { lat_deg: 37.792480, lon_deg: -122.397450, alt_m: 0.0 }).unwrap()
+    LocalFrame::new(Lla {
+        lat_deg: 37.792480,
+        lon_deg: -122.397450,
+        alt_m: 0.0,
+    })
+    .unwrap()
 }
 
 #[test]
@@ -38,9 +43,21 @@ fn ned_from_lla_matches_python_utm() {
     ];
     let frame = fcnd_home();
     for (lat_deg, lon_deg, north_m, east_m) in reference {
-        let ned = frame.ned_from_lla(Lla { lat_deg, lon_deg, alt_m: 7.5 }).unwrap();
-        assert!((ned.north_m - north_m).abs() < TOL_M, "north at {lat_deg},{lon_deg}: {ned:?}");
-        assert!((ned.east_m - east_m).abs() < TOL_M, "east at {lat_deg},{lon_deg}: {ned:?}");
+        let ned = frame
+            .ned_from_lla(Lla {
+                lat_deg,
+                lon_deg,
+                alt_m: 7.5,
+            })
+            .unwrap();
+        assert!(
+            (ned.north_m - north_m).abs() < TOL_M,
+            "north at {lat_deg},{lon_deg}: {ned:?}"
+        );
+        assert!(
+            (ned.east_m - east_m).abs() < TOL_M,
+            "east at {lat_deg},{lon_deg}: {ned:?}"
+        );
         assert_eq!(ned.down_m, -7.5);
     }
 }
@@ -55,7 +72,13 @@ fn lla_from_ned_matches_python_utm() {
     ];
     let frame = fcnd_home();
     for (north_m, east_m, lat_deg, lon_deg) in reference {
-        let lla = frame.lla_from_ned(Ned { north_m, east_m, down_m: -5.0 }).unwrap();
+        let lla = frame
+            .lla_from_ned(Ned {
+                north_m,
+                east_m,
+                down_m: -5.0,
+            })
+            .unwrap();
         // 1e-8 degrees is about 1.1 mm of latitude.
         assert!((lla.lat_deg - lat_deg).abs() < 1e-8, "{lla:?}");
         assert!((lla.lon_deg - lon_deg).abs() < 1e-8, "{lla:?}");
@@ -66,11 +89,23 @@ fn lla_from_ned_matches_python_utm() {
 #[test]
 fn neighbouring_zone_is_projected_into_the_home_zone_like_python_force_zone() {
     // Home in zone 10 just west of the 10/11 border at -120°; points in zone 11.
-    let frame = LocalFrame::new(Lla { lat_deg: 37.5, lon_deg: -120.01, alt_m: 0.0 }).unwrap();
-    for (lat_deg, lon_deg, north_m, east_m) in
-        [(37.5, -119.99, 56.420240, 1768.433968), (37.52, -119.95, 2390.068093, 5233.311713)]
-    {
-        let ned = frame.ned_from_lla(Lla { lat_deg, lon_deg, alt_m: 0.0 }).unwrap();
+    let frame = LocalFrame::new(Lla {
+        lat_deg: 37.5,
+        lon_deg: -120.01,
+        alt_m: 0.0,
+    })
+    .unwrap();
+    for (lat_deg, lon_deg, north_m, east_m) in [
+        (37.5, -119.99, 56.420240, 1768.433968),
+        (37.52, -119.95, 2390.068093, 5233.311713),
+    ] {
+        let ned = frame
+            .ned_from_lla(Lla {
+                lat_deg,
+                lon_deg,
+                alt_m: 0.0,
+            })
+            .unwrap();
         assert!((ned.north_m - north_m).abs() < TOL_M, "{ned:?}");
         assert!((ned.east_m - east_m).abs() < TOL_M, "{ned:?}");
     }

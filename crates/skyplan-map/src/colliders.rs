@@ -57,7 +57,14 @@ pub struct CollidersMap {
 }
 
 /// The column names of a colliders file, in order.
-pub const COLUMNS: [&str; 6] = ["posX", "posY", "posZ", "halfSizeX", "halfSizeY", "halfSizeZ"];
+pub const COLUMNS: [&str; 6] = [
+    "posX",
+    "posY",
+    "posZ",
+    "halfSizeX",
+    "halfSizeY",
+    "halfSizeZ",
+];
 
 /// Parses the text of a `colliders.csv` file.
 ///
@@ -71,7 +78,10 @@ pub const COLUMNS: [&str; 6] = ["posX", "posY", "posZ", "halfSizeX", "halfSizeY"
 /// assert!(err.to_string().contains("halfSizeY"));
 /// ```
 pub fn parse_colliders(text: &str) -> Result<CollidersMap, ParseError> {
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
     let home = match lines.next() {
         Some((_, first)) => parse_home(first)?,
         None => {
@@ -140,7 +150,12 @@ fn parse_home_field(part: &str, key: &str, column: usize, limit: f64) -> Result<
         ));
     }
     let deg = parse_finite(value).map_err(|what| {
-        ParseError::new(1, Some(column), key, format!("expected {what} degrees, found {}", shown(value)))
+        ParseError::new(
+            1,
+            Some(column),
+            key,
+            format!("expected {what} degrees, found {}", shown(value)),
+        )
     })?;
     if deg.abs() > limit {
         return Err(ParseError::new(
@@ -167,7 +182,12 @@ fn check_header(line: &str) -> Result<(), ParseError> {
                 2,
                 Some(i + 1),
                 "header",
-                format!("expected the header `{}`; column {} should be `{want}`, found {}", COLUMNS.join(","), i + 1, shown(found)),
+                format!(
+                    "expected the header `{}`; column {} should be `{want}`, found {}",
+                    COLUMNS.join(","),
+                    i + 1,
+                    shown(found)
+                ),
             ));
         }
     }
@@ -201,7 +221,12 @@ fn parse_box(line_no: usize, line: &str) -> Result<ObstacleBox, ParseError> {
     for (i, (field, name)) in fields.iter().zip(COLUMNS).enumerate() {
         let token = field.trim();
         v[i] = parse_finite(token).map_err(|what| {
-            ParseError::new(line_no, Some(i + 1), name, format!("expected {what} metres, found {}", shown(token)))
+            ParseError::new(
+                line_no,
+                Some(i + 1),
+                name,
+                format!("expected {what} metres, found {}", shown(token)),
+            )
         })?;
         if i >= 3 && v[i] < 0.0 {
             return Err(ParseError::new(
@@ -246,7 +271,13 @@ mod tests {
     fn parses_home_header_and_boxes_with_crlf() {
         let text = format!("{HOME}{HEADER}1,2,3,4,5,6\r\n\r\n-1.5,2e1,0,0,0,0\r\n");
         let map = parse_colliders(&text).unwrap();
-        assert_eq!(map.home, GeodeticHome { lat_deg: 37.79248, lon_deg: -122.39745 });
+        assert_eq!(
+            map.home,
+            GeodeticHome {
+                lat_deg: 37.79248,
+                lon_deg: -122.39745
+            }
+        );
         assert_eq!(map.boxes.len(), 2);
         assert_eq!(map.boxes[1].east_m, 20.0);
         assert_eq!(map.boxes[0].bottom_m(), -3.0);
@@ -262,23 +293,71 @@ mod tests {
     fn rejects_each_kind_of_bad_input_at_the_right_place() {
         let cases: Vec<(String, usize, Option<usize>, &str)> = vec![
             (String::new(), 1, None, "empty"),
-            ("latitude 37, lon0 -122\n1,2,3,4,5,6\n".into(), 1, Some(1), "lat0"),
-            ("lat0 37\n1,2,3,4,5,6\n".into(), 1, None, "lat0 <deg>, lon0 <deg>"),
-            ("lat0 95, lon0 -122\n1,2,3,4,5,6\n".into(), 1, Some(1), "±90"),
-            ("lat0 37, lon0 abc\n1,2,3,4,5,6\n".into(), 1, Some(2), "a number"),
-            (format!("{HOME}posX,posY,posZ,halfSizeX,halfSizeY\n1,2,3,4,5,6\n"), 2, Some(6), "should be `halfSizeZ`"),
-            (format!("{HOME}{HEADER}1,2,3,4,5\n"), 3, Some(5), "6 comma-separated"),
-            (format!("{HOME}{HEADER}1,2,3,4,5,6,7\n"), 3, Some(7), "found 7"),
+            (
+                "latitude 37, lon0 -122\n1,2,3,4,5,6\n".into(),
+                1,
+                Some(1),
+                "lat0",
+            ),
+            (
+                "lat0 37\n1,2,3,4,5,6\n".into(),
+                1,
+                None,
+                "lat0 <deg>, lon0 <deg>",
+            ),
+            (
+                "lat0 95, lon0 -122\n1,2,3,4,5,6\n".into(),
+                1,
+                Some(1),
+                "±90",
+            ),
+            (
+                "lat0 37, lon0 abc\n1,2,3,4,5,6\n".into(),
+                1,
+                Some(2),
+                "a number",
+            ),
+            (
+                format!("{HOME}posX,posY,posZ,halfSizeX,halfSizeY\n1,2,3,4,5,6\n"),
+                2,
+                Some(6),
+                "should be `halfSizeZ`",
+            ),
+            (
+                format!("{HOME}{HEADER}1,2,3,4,5\n"),
+                3,
+                Some(5),
+                "6 comma-separated",
+            ),
+            (
+                format!("{HOME}{HEADER}1,2,3,4,5,6,7\n"),
+                3,
+                Some(7),
+                "found 7",
+            ),
             (format!("{HOME}{HEADER}1,2,x,4,5,6\n"), 3, Some(3), "posZ"),
-            (format!("{HOME}{HEADER}1,2,3,NaN,5,6\n"), 3, Some(4), "finite"),
-            (format!("{HOME}{HEADER}1,inf,3,4,5,6\n"), 3, Some(2), "finite"),
+            (
+                format!("{HOME}{HEADER}1,2,3,NaN,5,6\n"),
+                3,
+                Some(4),
+                "finite",
+            ),
+            (
+                format!("{HOME}{HEADER}1,inf,3,4,5,6\n"),
+                3,
+                Some(2),
+                "finite",
+            ),
             (format!("{HOME}{HEADER}1,2,3,4,5,-6\n"), 3, Some(6), "≥ 0"),
             (format!("{HOME}{HEADER}"), 0, None, "no obstacle boxes"),
         ];
         for (text, line, column, needle) in cases {
             let e = err(&text);
             assert_eq!((e.line, e.column), (line, column), "{text:?} -> {e}");
-            assert!(e.to_string().contains(needle), "{text:?} -> {e} should mention {needle}");
+            assert!(
+                e.to_string().contains(needle),
+                "{text:?} -> {e} should mention {needle}"
+            );
         }
     }
 

@@ -46,7 +46,12 @@ impl ParseError {
         field: impl Into<String>,
         message: impl Into<String>,
     ) -> Self {
-        Self { line, column, field: field.into(), message: message.into() }
+        Self {
+            line,
+            column,
+            field: field.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -55,7 +60,11 @@ impl fmt::Display for ParseError {
         match (self.line, self.column) {
             (0, _) => write!(f, "{}: {}", self.field, self.message),
             (line, Some(col)) => {
-                write!(f, "line {line}, column {col} ({}): {}", self.field, self.message)
+                write!(
+                    f,
+                    "line {line}, column {col} ({}): {}",
+                    self.field, self.message
+                )
             }
             (line, None) => write!(f, "line {line} ({}): {}", self.field, self.message),
         }

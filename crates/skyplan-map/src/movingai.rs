@@ -51,36 +51,61 @@ const HEADER_KEYS: [&str; 4] = ["type", "height", "width", "map"];
 /// # Ok::<(), skyplan_map::ParseError>(())
 /// ```
 pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
     let mut width = 0usize;
     let mut height = 0usize;
     for key in HEADER_KEYS {
         let Some((no, line)) = lines.next() else {
-            return Err(ParseError::new(0, None, key, format!("the file ends before the `{key}` header line")));
+            return Err(ParseError::new(
+                0,
+                None,
+                key,
+                format!("the file ends before the `{key}` header line"),
+            ));
         };
         let mut words = line.split_whitespace();
         let found = words.next().unwrap_or("");
         if found != key {
-            return Err(ParseError::new(no, Some(1), key, format!("expected the header `{key}`, found {}", shown(line))));
+            return Err(ParseError::new(
+                no,
+                Some(1),
+                key,
+                format!("expected the header `{key}`, found {}", shown(line)),
+            ));
         }
         let value = words.next();
         match key {
-            "type" => {
-                if value != Some("octile") {
-                    return Err(ParseError::new(no, Some(6), key, format!("expected `type octile`, found {}", shown(line))));
-                }
+            "type" if value != Some("octile") => {
+                return Err(ParseError::new(
+                    no,
+                    Some(6),
+                    key,
+                    format!("expected `type octile`, found {}", shown(line)),
+                ));
             }
             "height" | "width" => {
-                let n = value.and_then(|v| v.parse::<usize>().ok()).filter(|&n| n > 0 && n <= 1 << 15);
+                let n = value
+                    .and_then(|v| v.parse::<usize>().ok())
+                    .filter(|&n| n > 0 && n <= 1 << 15);
                 let Some(n) = n else {
                     return Err(ParseError::new(
                         no,
                         Some(key.len() + 2),
                         key,
-                        format!("expected a whole number of cells in 1..=32768, found {}", shown(line)),
+                        format!(
+                            "expected a whole number of cells in 1..=32768, found {}",
+                            shown(line)
+                        ),
                     ));
                 };
-                if key == "height" { height = n } else { width = n }
+                if key == "height" {
+                    height = n
+                } else {
+                    width = n
+                }
             }
             _ => {}
         }
@@ -89,7 +114,12 @@ pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
     let mut passable = Vec::with_capacity((width * height).min(text.len()));
     for y in 0..height {
         let Some((no, row)) = lines.next() else {
-            return Err(ParseError::new(0, None, "map rows", format!("expected {height} rows, found {y}")));
+            return Err(ParseError::new(
+                0,
+                None,
+                "map rows",
+                format!("expected {height} rows, found {y}"),
+            ));
         };
         if row.chars().count() != width {
             return Err(ParseError::new(
@@ -114,7 +144,11 @@ pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
             });
         }
     }
-    Ok(MovingAiMap { width, height, passable })
+    Ok(MovingAiMap {
+        width,
+        height,
+        passable,
+    })
 }
 
 /// Parses a MovingAI `.scen` file (version 1).
@@ -126,16 +160,42 @@ pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
 /// # Ok::<(), skyplan_map::ParseError>(())
 /// ```
 pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, ParseError> {
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
     match lines.next() {
-        Some((_, l)) if l.split_whitespace().eq(["version", "1"]) || l.split_whitespace().eq(["version", "1.0"]) => {}
+        Some((_, l))
+            if l.split_whitespace().eq(["version", "1"])
+                || l.split_whitespace().eq(["version", "1.0"]) => {}
         Some((_, l)) => {
-            return Err(ParseError::new(1, Some(1), "version", format!("expected `version 1`, found {}", shown(l))));
+            return Err(ParseError::new(
+                1,
+                Some(1),
+                "version",
+                format!("expected `version 1`, found {}", shown(l)),
+            ));
         }
-        None => return Err(ParseError::new(1, None, "version", "the file is empty; expected `version 1`")),
+        None => {
+            return Err(ParseError::new(
+                1,
+                None,
+                "version",
+                "the file is empty; expected `version 1`",
+            ));
+        }
     }
-    const NAMES: [&str; 9] =
-        ["bucket", "map", "width", "height", "start_x", "start_y", "goal_x", "goal_y", "optimal_length"];
+    const NAMES: [&str; 9] = [
+        "bucket",
+        "map",
+        "width",
+        "height",
+        "start_x",
+        "start_y",
+        "goal_x",
+        "goal_y",
+        "optimal_length",
+    ];
     let mut out = Vec::new();
     for (no, line) in lines {
         if line.trim().is_empty() {
@@ -147,18 +207,33 @@ pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, ParseError> {
                 no,
                 None,
                 "scenario",
-                format!("expected {} tab-separated fields ({}), found {}", NAMES.len(), NAMES.join(" "), f.len()),
+                format!(
+                    "expected {} tab-separated fields ({}), found {}",
+                    NAMES.len(),
+                    NAMES.join(" "),
+                    f.len()
+                ),
             ));
         }
         let int = |i: usize| {
             f[i].parse::<usize>().map_err(|_| {
-                ParseError::new(no, Some(i + 1), NAMES[i], format!("expected a whole number, found {}", shown(f[i])))
+                ParseError::new(
+                    no,
+                    Some(i + 1),
+                    NAMES[i],
+                    format!("expected a whole number, found {}", shown(f[i])),
+                )
             })
         };
         let bucket = int(0)?;
         let (sx, sy, gx, gy) = (int(4)?, int(5)?, int(6)?, int(7)?);
         let optimal_length = parse_finite(f[8]).map_err(|what| {
-            ParseError::new(no, Some(9), NAMES[8], format!("expected {what} cells, found {}", shown(f[8])))
+            ParseError::new(
+                no,
+                Some(9),
+                NAMES[8],
+                format!("expected {what} cells, found {}", shown(f[8])),
+            )
         })?;
         out.push(Scenario {
             line: no,

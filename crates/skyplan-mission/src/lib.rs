@@ -19,7 +19,7 @@
 #![warn(missing_docs)]
 
 use serde::Serialize;
-use skyplan_frames::{FrameError, LocalFrame, Lla, Ned};
+use skyplan_frames::{FrameError, Lla, LocalFrame, Ned};
 
 /// One waypoint of a mission.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -76,19 +76,39 @@ impl Mission {
                     heading = heading_rad(prev, (north_m, east_m));
                 }
             }
-            let lla = frame.lla_from_ned(Ned { north_m, east_m, down_m: -alt_m })?;
-            waypoints.push(Waypoint { north_m, east_m, alt_m, heading_rad: heading, lat_deg: lla.lat_deg, lon_deg: lla.lon_deg });
+            let lla = frame.lla_from_ned(Ned {
+                north_m,
+                east_m,
+                down_m: -alt_m,
+            })?;
+            waypoints.push(Waypoint {
+                north_m,
+                east_m,
+                alt_m,
+                heading_rad: heading,
+                lat_deg: lla.lat_deg,
+                lon_deg: lla.lon_deg,
+            });
         }
-        Ok(Self { home: frame.home(), waypoints })
+        Ok(Self {
+            home: frame.home(),
+            waypoints,
+        })
     }
 
     /// The FCND rows `[north, east, altitude, heading]`.
     pub fn rows(&self) -> Vec<[f64; 4]> {
-        self.waypoints.iter().map(|w| [w.north_m, w.east_m, w.alt_m, w.heading_rad]).collect()
+        self.waypoints
+            .iter()
+            .map(|w| [w.north_m, w.east_m, w.alt_m, w.heading_rad])
+            .collect()
     }
 
     /// Horizontal length of the route, metres.
     pub fn length_m(&self) -> f64 {
-        self.waypoints.windows(2).map(|w| (w[1].north_m - w[0].north_m).hypot(w[1].east_m - w[0].east_m)).sum()
+        self.waypoints
+            .windows(2)
+            .map(|w| (w[1].north_m - w[0].north_m).hypot(w[1].east_m - w[0].east_m))
+            .sum()
     }
 }

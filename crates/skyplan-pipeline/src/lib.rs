@@ -27,7 +27,7 @@
 
 use serde::Serialize;
 use skyplan_cspace::{Cell, Grid2, GridError, GridSpec};
-use skyplan_frames::{FrameError, LocalFrame, Lla, Ned};
+use skyplan_frames::{FrameError, Lla, LocalFrame, Ned};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
 use skyplan_mission::Mission;
 use skyplan_postprocess::{prune_collinear, prune_collinear_eps, shortcut, touch_for};
@@ -91,8 +91,14 @@ impl Default for PlanRequest {
     fn default() -> Self {
         Self {
             spec: GridSpec::default(),
-            start: Position::Ne { north_m: 0.0, east_m: 0.0 },
-            goal: Position::Ne { north_m: 0.0, east_m: 0.0 },
+            start: Position::Ne {
+                north_m: 0.0,
+                east_m: 0.0,
+            },
+            goal: Position::Ne {
+                north_m: 0.0,
+                east_m: 0.0,
+            },
             model: MoveModel::Octile,
             planner: Planner::AStar,
             prune: Prune::Collinear,
@@ -135,7 +141,11 @@ pub struct Place {
 
 impl fmt::Display for Place {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "N {:.2} m, E {:.2} m (lat {:.7}, lon {:.7})", self.north_m, self.east_m, self.lat_deg, self.lon_deg)
+        write!(
+            f,
+            "N {:.2} m, E {:.2} m (lat {:.7}, lon {:.7})",
+            self.north_m, self.east_m, self.lat_deg, self.lon_deg
+        )
     }
 }
 
@@ -273,25 +283,50 @@ fn micros(d: Duration) -> u64 {
 /// Plans a route on a colliders map (see the crate docs for the stages).
 pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, PlanError> {
     let t_start = Instant::now();
-    let frame = LocalFrame::new(Lla { lat_deg: map.home.lat_deg, lon_deg: map.home.lon_deg, alt_m: 0.0 })
-        .map_err(|source| PlanError::Frame { which: Endpoint::Start, source })?;
+    let frame = LocalFrame::new(Lla {
+        lat_deg: map.home.lat_deg,
+        lon_deg: map.home.lon_deg,
+        alt_m: 0.0,
+    })
+    .map_err(|source| PlanError::Frame {
+        which: Endpoint::Start,
+        source,
+    })?;
     let grid = Grid2::from_colliders(map, request.spec)?;
     let grid_build_us = micros(t_start.elapsed());
     let spec = request.spec;
     let place = |north_m: f64, east_m: f64, which: Endpoint| -> Result<Place, PlanError> {
         let lla = frame
-            .lla_from_ned(Ned { north_m, east_m, down_m: -spec.alt_m })
+            .lla_from_ned(Ned {
+                north_m,
+                east_m,
+                down_m: -spec.alt_m,
+            })
             .map_err(|source| PlanError::Frame { which, source })?;
-        Ok(Place { north_m, east_m, lat_deg: lla.lat_deg, lon_deg: lla.lon_deg })
+        Ok(Place {
+            north_m,
+            east_m,
+            lat_deg: lla.lat_deg,
+            lon_deg: lla.lon_deg,
+        })
     };
     let resolve = |pos: Position, which: Endpoint| -> Result<(Place, Cell), PlanError> {
         let at = match pos {
             Position::Ne { north_m, east_m } => place(north_m, east_m, which)?,
             Position::Lla { lat_deg, lon_deg } => {
                 let ned = frame
-                    .ned_from_lla(Lla { lat_deg, lon_deg, alt_m: spec.alt_m })
+                    .ned_from_lla(Lla {
+                        lat_deg,
+                        lon_deg,
+                        alt_m: spec.alt_m,
+                    })
                     .map_err(|source| PlanError::Frame { which, source })?;
-                Place { north_m: ned.north_m, east_m: ned.east_m, lat_deg, lon_deg }
+                Place {
+                    north_m: ned.north_m,
+                    east_m: ned.east_m,
+                    lat_deg,
+                    lon_deg,
+                }
             }
         };
         let nearest_free = || -> Result<Option<Place>, PlanError> {
@@ -329,14 +364,21 @@ pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, Pl
     let (goal, goal_cell) = resolve(request.goal, Endpoint::Goal)?;
 
     let t_search = Instant::now();
-    let searched = GridSearch::new().search(&grid, start_cell, goal_cell, request.model, request.planner);
+    let searched =
+        GridSearch::new().search(&grid, start_cell, goal_cell, request.model, request.planner);
     let search_us = micros(t_search.elapsed());
     let path = match searched {
         Ok(path) => path,
         Err(SearchError::Unreachable { expansions }) => {
-            return Err(explain_unreachable(&grid, request, start_cell, goal_cell, expansions, &place));
+            return Err(explain_unreachable(
+                &grid, request, start_cell, goal_cell, expansions, &place,
+            ));
         }
-        Err(other) => return Err(PlanError::Internal(format!("search refused checked endpoints: {other}"))),
+        Err(other) => {
+            return Err(PlanError::Internal(format!(
+                "search refused checked endpoints: {other}"
+            )));
+        }
     };
 
     let t_post = Instant::now();
@@ -346,20 +388,35 @@ pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, Pl
         Prune::Collinear => prune_collinear(&path.cells),
         Prune::Epsilon(eps) => prune_collinear_eps(&grid, &path.cells, eps, touch),
     };
-    let shortcut_cells = if request.shortcut { shortcut(&grid, &pruned, touch) } else { pruned.clone() };
+    let shortcut_cells = if request.shortcut {
+        shortcut(&grid, &pruned, touch)
+    } else {
+        pruned.clone()
+    };
     let points = waypoint_points(&grid, &shortcut_cells, &start, &goal, touch);
     let postprocess_us = micros(t_post.elapsed());
 
     // Never hand out a route through an obstacle: re-check every segment independently.
-    if let Some(w) = points.windows(2).find(|w| !grid.segment_is_free_ne(w[0], w[1], touch)) {
-        return Err(PlanError::Internal(format!("segment {:?} → {:?} meets a blocked cell", w[0], w[1])));
+    if let Some(w) = points
+        .windows(2)
+        .find(|w| !grid.segment_is_free_ne(w[0], w[1], touch))
+    {
+        return Err(PlanError::Internal(format!(
+            "segment {:?} → {:?} meets a blocked cell",
+            w[0], w[1]
+        )));
     }
     let mission = Mission::from_points_ne(&frame, &points, spec.alt_m, request.start_heading_rad)
-        .map_err(|source| PlanError::Frame { which: Endpoint::Goal, source })?;
+        .map_err(|source| PlanError::Frame {
+        which: Endpoint::Goal,
+        source,
+    })?;
     let active_obstacles = map
         .boxes
         .iter()
-        .filter(|b| b.top_m() + spec.safety_m > spec.alt_m && b.bottom_m() - spec.safety_m < spec.alt_m)
+        .filter(|b| {
+            b.top_m() + spec.safety_m > spec.alt_m && b.bottom_m() - spec.safety_m < spec.alt_m
+        })
         .copied()
         .collect();
     let cost_m = path.cost_cells() * spec.cell_m;
@@ -374,7 +431,12 @@ pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, Pl
         pruned,
         shortcut: shortcut_cells,
         mission,
-        timings: Timings { grid_build_us, search_us, postprocess_us, total_us: micros(t_start.elapsed()) },
+        timings: Timings {
+            grid_build_us,
+            search_us,
+            postprocess_us,
+            total_us: micros(t_start.elapsed()),
+        },
         path,
         grid,
     })
@@ -383,7 +445,13 @@ pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, Pl
 /// Local points of the mission: the exact start, the centres of the kept cells, the exact goal.
 /// The exact start replaces its cell's centre when the first segment stays free from there
 /// (likewise the goal); otherwise it is added as a short hop inside its own free cell.
-fn waypoint_points(grid: &Grid2, cells: &[Cell], start: &Place, goal: &Place, touch: skyplan_cspace::Touch) -> Vec<(f64, f64)> {
+fn waypoint_points(
+    grid: &Grid2,
+    cells: &[Cell],
+    start: &Place,
+    goal: &Place,
+    touch: skyplan_cspace::Touch,
+) -> Vec<(f64, f64)> {
     let mut points: Vec<(f64, f64)> = cells.iter().map(|&c| grid.center_ne(c)).collect();
     let exact_start = (start.north_m, start.east_m);
     let exact_goal = (goal.north_m, goal.east_m);

@@ -10,7 +10,10 @@ use skyplan_map::colliders::parse_colliders;
 use skyplan_plot::{Scene, render_png, render_svg};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<u32> = std::env::args().skip(1).map(|a| a.parse()).collect::<Result<_, _>>()?;
+    let args: Vec<u32> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse())
+        .collect::<Result<_, _>>()?;
     let (width, height) = match args[..] {
         [w, h] => (w, h),
         [] => (1200, 1000),
@@ -24,25 +27,45 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .boxes
         .iter()
         .copied()
-        .filter(|b| b.top_m() + spec.safety_m > spec.alt_m && b.bottom_m() - spec.safety_m < spec.alt_m)
-        .collect();
-
-    // A made-up path: a staircase of grid steps along the straight line from start to goal.
-    let start = grid.center_ne(grid.nearest_free_ne(0.0, 0.0).ok_or("no free cell")?);
-    let goal = grid.center_ne(grid.nearest_free_ne(250.0, 300.0).ok_or("no free cell")?);
-    let steps = ((goal.0 - start.0).abs().max((goal.1 - start.1).abs()) / spec.cell_m).ceil() as usize;
-    let cell = spec.cell_m;
-    let raw: Vec<(f64, f64)> = (0..=steps)
-        .map(|i| {
-            let t = i as f64 / steps as f64;
-            let n = start.0 + t * (goal.0 - start.0);
-            let e = start.1 + t * (goal.1 - start.1);
-            (((n - start.0) / cell).round() * cell + start.0, ((e - start.1) / cell).round() * cell + start.1)
+        .filter(|b| {
+            b.top_m() + spec.safety_m > spec.alt_m && b.bottom_m() - spec.safety_m < spec.alt_m
         })
         .collect();
-    let pruned = vec![start, raw[raw.len() / 3], raw[2 * raw.len() / 3], goal];
+
+    // A made-up path: grid steps (8-connected) through a few corners, and a pruned version that
+    // keeps every other corner.
+    let corners = [
+        (0.0, 0.0),
+        (120.0, -40.0),
+        (170.0, 60.0),
+        (160.0, 180.0),
+        (250.0, 300.0),
+    ];
+    let corners: Vec<(f64, f64)> = corners
+        .iter()
+        .map(|&(n, e)| {
+            grid.nearest_free_ne(n, e)
+                .map(|c| grid.center_ne(c))
+                .ok_or("no free cell")
+        })
+        .collect::<Result<_, _>>()?;
+    let mut raw = vec![corners[0]];
+    for pair in corners.windows(2) {
+        let (mut n, mut e) = pair[0];
+        let (gn, ge) = pair[1];
+        while (n, e) != (gn, ge) {
+            n += (gn - n).clamp(-spec.cell_m, spec.cell_m);
+            e += (ge - e).clamp(-spec.cell_m, spec.cell_m);
+            raw.push((n, e));
+        }
+    }
+    let pruned: Vec<(f64, f64)> = corners.iter().copied().step_by(2).collect();
+    let (start, goal) = (corners[0], corners[corners.len() - 1]);
     let scene = Scene {
-        title: format!("colliders.csv at {} m, margin {} m", spec.alt_m, spec.safety_m),
+        title: format!(
+            "colliders.csv at {} m, margin {} m",
+            spec.alt_m, spec.safety_m
+        ),
         grid: &grid,
         obstacles: &obstacles,
         raw_path_ne: &raw,
@@ -67,7 +90,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         skyplan_plot::blocked_rects(&grid).len(),
         obstacles.len()
     );
-    println!("PNG {width}x{height}: {:.1} ms, {} bytes -> /tmp/city.png", png_time.as_secs_f64() * 1e3, png.len());
-    println!("SVG {width}x{height}: {:.1} ms, {} bytes -> /tmp/city.svg", svg_time.as_secs_f64() * 1e3, svg.len());
+    println!(
+        "PNG {width}x{height}: {:.1} ms, {} bytes -> /tmp/city.png",
+        png_time.as_secs_f64() * 1e3,
+        png.len()
+    );
+    println!(
+        "SVG {width}x{height}: {:.1} ms, {} bytes -> /tmp/city.svg",
+        svg_time.as_secs_f64() * 1e3,
+        svg.len()
+    );
     Ok(())
 }

@@ -32,7 +32,10 @@ pub fn touch_for(model: MoveModel) -> Touch {
 }
 
 fn delta(a: Cell, b: Cell) -> (i64, i64) {
-    (i64::from(b.row) - i64::from(a.row), i64::from(b.col) - i64::from(a.col))
+    (
+        i64::from(b.row) - i64::from(a.row),
+        i64::from(b.col) - i64::from(a.col),
+    )
 }
 
 /// Removes every cell that lies on the straight line between its neighbours, continuing in the
@@ -90,7 +93,9 @@ pub fn prune_collinear_eps(grid: &Grid2, cells: &[Cell], epsilon: f64, touch: To
 /// meets only free cells under `touch`, and by the triangle inequality the result is never
 /// longer than the input.
 pub fn shortcut(grid: &Grid2, cells: &[Cell], touch: Touch) -> Vec<Cell> {
-    let Some(&first) = cells.first() else { return Vec::new() };
+    let Some(&first) = cells.first() else {
+        return Vec::new();
+    };
     let mut out = vec![first];
     let mut i = 0;
     while i + 1 < cells.len() {

@@ -3,7 +3,9 @@
 
 use proptest::prelude::*;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
-use skyplan_postprocess::{polyline_length_cells, prune_collinear, prune_collinear_eps, shortcut, touch_for};
+use skyplan_postprocess::{
+    polyline_length_cells, prune_collinear, prune_collinear_eps, shortcut, touch_for,
+};
 use skyplan_search::{GridSearch, MoveModel, Planner};
 
 fn query() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
@@ -16,14 +18,24 @@ fn query() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
             0..cols,
         )
             .prop_map(move |(blocked, a, b, c, d)| {
-                let frame = GridFrame { origin_north_m: 10.0, origin_east_m: -4.0, cell_m: 1.5 };
-                (Grid2::new(rows, cols, blocked, frame).unwrap(), Cell::new(a, b), Cell::new(c, d))
+                let frame = GridFrame {
+                    origin_north_m: 10.0,
+                    origin_east_m: -4.0,
+                    cell_m: 1.5,
+                };
+                (
+                    Grid2::new(rows, cols, blocked, frame).unwrap(),
+                    Cell::new(a, b),
+                    Cell::new(c, d),
+                )
             })
     })
 }
 
 fn all_segments_free(grid: &Grid2, cells: &[Cell], model: MoveModel) -> bool {
-    cells.windows(2).all(|w| grid.segment_is_free_ne(grid.center_ne(w[0]), grid.center_ne(w[1]), touch_for(model)))
+    cells.windows(2).all(|w| {
+        grid.segment_is_free_ne(grid.center_ne(w[0]), grid.center_ne(w[1]), touch_for(model))
+    })
 }
 
 proptest! {

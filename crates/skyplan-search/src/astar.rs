@@ -28,7 +28,11 @@ impl PartialOrd for Entry {
 }
 impl Ord for Entry {
     fn cmp(&self, other: &Self) -> Ordering {
-        other.f.total_cmp(&self.f).then(self.g.total_cmp(&other.g)).then(other.index.cmp(&self.index))
+        other
+            .f
+            .total_cmp(&self.f)
+            .then(self.g.total_cmp(&other.g))
+            .then(other.index.cmp(&self.index))
     }
 }
 
@@ -83,10 +87,18 @@ impl GridSearch {
     ) -> Result<GridPath, SearchError> {
         let (rows, cols) = (grid.rows(), grid.cols());
         if !grid.contains(start) {
-            return Err(SearchError::StartOutside { cell: start, rows, cols });
+            return Err(SearchError::StartOutside {
+                cell: start,
+                rows,
+                cols,
+            });
         }
         if !grid.contains(goal) {
-            return Err(SearchError::GoalOutside { cell: goal, rows, cols });
+            return Err(SearchError::GoalOutside {
+                cell: goal,
+                rows,
+                cols,
+            });
         }
         if grid.is_blocked(start) {
             return Err(SearchError::StartBlocked(start));
@@ -107,7 +119,11 @@ impl GridSearch {
         self.g[start_i as usize] = 0.0;
         self.parent[start_i as usize] = NO_PARENT;
         self.seen[start_i as usize] = generation;
-        self.heap.push(Entry { f: h(start), g: 0.0, index: start_i });
+        self.heap.push(Entry {
+            f: h(start),
+            g: 0.0,
+            index: start_i,
+        });
 
         // (dr, dc, cost): orthogonal moves first.
         const MOVES: [(i64, i64, f64); 8] = [
@@ -120,10 +136,18 @@ impl GridSearch {
             (-1, 1, SQRT_2),
             (-1, -1, SQRT_2),
         ];
-        let moves = if model.has_diagonals() { &MOVES[..] } else { &MOVES[..4] };
+        let moves = if model.has_diagonals() {
+            &MOVES[..]
+        } else {
+            &MOVES[..4]
+        };
         let corner_cutting = model == MoveModel::OctileCornerCutting;
         let free = |r: i64, c: i64| -> bool {
-            r >= 0 && c >= 0 && r < i64::from(rows) && c < cols_i && !blocked[(r * cols_i + c) as usize]
+            r >= 0
+                && c >= 0
+                && r < i64::from(rows)
+                && c < cols_i
+                && !blocked[(r * cols_i + c) as usize]
         };
         let mut expansions = 0u64;
         while let Some(Entry { g, index, .. }) = self.heap.pop() {
@@ -155,7 +179,11 @@ impl GridSearch {
                     self.g[ni] = ng;
                     self.parent[ni] = index;
                     let cell = skyplan_cspace::Cell::new(nr as u32, nc as u32);
-                    self.heap.push(Entry { f: ng + h(cell), g: ng, index: ni as u32 });
+                    self.heap.push(Entry {
+                        f: ng + h(cell),
+                        g: ng,
+                        index: ni as u32,
+                    });
                 }
             }
         }
@@ -170,8 +198,16 @@ impl GridSearch {
             cells.push(grid.cell(at as usize));
         }
         cells.reverse();
-        let diagonal_moves = cells.windows(2).filter(|w| w[0].row != w[1].row && w[0].col != w[1].col).count() as u64;
+        let diagonal_moves = cells
+            .windows(2)
+            .filter(|w| w[0].row != w[1].row && w[0].col != w[1].col)
+            .count() as u64;
         let straight_moves = (cells.len() as u64 - 1) - diagonal_moves;
-        GridPath { cells, straight_moves, diagonal_moves, expansions }
+        GridPath {
+            cells,
+            straight_moves,
+            diagonal_moves,
+            expansions,
+        }
     }
 }

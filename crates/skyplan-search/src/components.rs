@@ -65,7 +65,12 @@ impl Components {
             }
             sizes.push(size);
         }
-        Self { labels, sizes, rows: grid.rows(), cols: grid.cols() }
+        Self {
+            labels,
+            sizes,
+            rows: grid.rows(),
+            cols: grid.cols(),
+        }
     }
 
     /// Number of free regions.

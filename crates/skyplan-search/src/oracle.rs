@@ -65,7 +65,12 @@ impl PartialOrd for OctileCost {
 /// assert_eq!(cost, Some(OctileCost { straight: 4, diagonal: 0 }));
 /// # Ok::<(), skyplan_cspace::GridError>(())
 /// ```
-pub fn dijkstra_exact(grid: &Grid2, start: Cell, goal: Cell, model: MoveModel) -> Option<OctileCost> {
+pub fn dijkstra_exact(
+    grid: &Grid2,
+    start: Cell,
+    goal: Cell,
+    model: MoveModel,
+) -> Option<OctileCost> {
     if grid.is_blocked(start) || grid.is_blocked(goal) {
         return None;
     }
@@ -87,7 +92,9 @@ pub fn dijkstra_exact(grid: &Grid2, start: Cell, goal: Cell, model: MoveModel) -
                     continue;
                 }
                 let (r, c) = (i64::from(cell.row), i64::from(cell.col));
-                let Some(next) = grid.checked_cell(r + dr, c + dc) else { continue };
+                let Some(next) = grid.checked_cell(r + dr, c + dc) else {
+                    continue;
+                };
                 if grid.is_blocked(next) {
                     continue;
                 }

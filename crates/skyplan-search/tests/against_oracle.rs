@@ -5,7 +5,11 @@ use skyplan_cspace::{Cell, Grid2, GridFrame};
 use skyplan_search::oracle::dijkstra_exact;
 use skyplan_search::{Components, GridSearch, MoveModel, Planner, SearchError, check_path};
 
-const MODELS: [MoveModel; 3] = [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting];
+const MODELS: [MoveModel; 3] = [
+    MoveModel::FourConnected,
+    MoveModel::Octile,
+    MoveModel::OctileCornerCutting,
+];
 
 fn grid_strategy() -> impl Strategy<Value = Grid2> {
     (1u32..26, 1u32..26, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
@@ -17,7 +21,8 @@ fn grid_strategy() -> impl Strategy<Value = Grid2> {
 fn query_strategy() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
     grid_strategy().prop_flat_map(|g| {
         let (r, c) = (g.rows(), g.cols());
-        (Just(g), 0..r, 0..c, 0..r, 0..c).prop_map(|(g, a, b, x, y)| (g, Cell::new(a, b), Cell::new(x, y)))
+        (Just(g), 0..r, 0..c, 0..r, 0..c)
+            .prop_map(|(g, a, b, x, y)| (g, Cell::new(a, b), Cell::new(x, y)))
     })
 }
 
@@ -58,10 +63,22 @@ fn endpoint_errors_say_which() {
     let mut s = GridSearch::new();
     let m = MoveModel::Octile;
     let p = Planner::AStar;
-    assert!(matches!(s.search(&grid, Cell::new(5, 0), Cell::new(0, 0), m, p), Err(SearchError::StartOutside { .. })));
-    assert!(matches!(s.search(&grid, Cell::new(0, 0), Cell::new(0, 9), m, p), Err(SearchError::GoalOutside { .. })));
-    assert_eq!(s.search(&grid, Cell::new(0, 2), Cell::new(0, 0), m, p), Err(SearchError::StartBlocked(Cell::new(0, 2))));
-    assert_eq!(s.search(&grid, Cell::new(0, 0), Cell::new(0, 2), m, p), Err(SearchError::GoalBlocked(Cell::new(0, 2))));
+    assert!(matches!(
+        s.search(&grid, Cell::new(5, 0), Cell::new(0, 0), m, p),
+        Err(SearchError::StartOutside { .. })
+    ));
+    assert!(matches!(
+        s.search(&grid, Cell::new(0, 0), Cell::new(0, 9), m, p),
+        Err(SearchError::GoalOutside { .. })
+    ));
+    assert_eq!(
+        s.search(&grid, Cell::new(0, 2), Cell::new(0, 0), m, p),
+        Err(SearchError::StartBlocked(Cell::new(0, 2)))
+    );
+    assert_eq!(
+        s.search(&grid, Cell::new(0, 0), Cell::new(0, 2), m, p),
+        Err(SearchError::GoalBlocked(Cell::new(0, 2)))
+    );
 }
 
 #[test]
@@ -70,7 +87,12 @@ fn corner_rule_changes_the_answer() {
     let grid = Grid2::from_ascii(".#\n#.").unwrap();
     let mut s = GridSearch::new();
     let (a, b) = (Cell::new(0, 0), Cell::new(1, 1));
-    assert!(matches!(s.search(&grid, a, b, MoveModel::Octile, Planner::AStar), Err(SearchError::Unreachable { .. })));
-    let cut = s.search(&grid, a, b, MoveModel::OctileCornerCutting, Planner::AStar).unwrap();
+    assert!(matches!(
+        s.search(&grid, a, b, MoveModel::Octile, Planner::AStar),
+        Err(SearchError::Unreachable { .. })
+    ));
+    let cut = s
+        .search(&grid, a, b, MoveModel::OctileCornerCutting, Planner::AStar)
+        .unwrap();
     assert_eq!(cut.diagonal_moves, 1);
 }

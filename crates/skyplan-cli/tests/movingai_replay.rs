@@ -1,0 +1,102 @@
+//! MovingAI replay against the published optimal lengths (`../shared/data/movingai`).
+//! A fast subset here; `.ci/run` replays every scenario of every map with the release binary.
+
+use assert_cmd::Command;
+use serde_json::Value;
+use std::path::PathBuf;
+
+fn movingai_dir() -> Option<PathBuf> {
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/movingai"
+    ));
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have ../shared/data/movingai beside the checkout"
+    );
+    eprintln!("skipping: {} not found", dir.display());
+    None
+}
+
+/// Writes the first `n` scenarios of a scenario file to a temporary file.
+fn head(scen: &std::path::Path, n: usize, dir: &std::path::Path) -> PathBuf {
+    let text = std::fs::read_to_string(scen).unwrap();
+    let out = dir.join(scen.file_name().unwrap());
+    std::fs::write(
+        &out,
+        text.lines().take(n + 1).collect::<Vec<_>>().join("\n"),
+    )
+    .unwrap();
+    out
+}
+
+#[test]
+fn scenarios_match_published_optimal_lengths() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    for (map, n) in [
+        ("den312d", usize::MAX),
+        ("Paris_1_256", 300),
+        ("Boston_0_512", 150),
+        ("maze512-32-9", 60),
+        ("random512-40-5", 150),
+    ] {
+        let map_path = data.join(format!("{map}.map"));
+        let scen = head(&data.join(format!("{map}.map.scen")), n, tmp.path());
+        let out = Command::cargo_bin("skyplan")
+            .unwrap()
+            .arg("scen")
+            .arg(&map_path)
+            .arg(&scen)
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{map}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let lines: Vec<Value> = String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let (records, summary) = lines.split_at(lines.len() - 1);
+        assert!(!records.is_empty());
+        for r in records {
+            assert_eq!(r["ok"], true, "{map}: {r}");
+            let (cost, opt) = (
+                r["cost"].as_f64().unwrap(),
+                r["optimal_length"].as_f64().unwrap(),
+            );
+            assert!((cost - opt).abs() <= 1e-6 * opt.max(1.0), "{map}: {r}");
+            assert!(r["bucket"].is_u64() && r["time_us"].is_f64());
+        }
+        assert_eq!(summary[0]["matched"].as_u64(), Some(records.len() as u64));
+    }
+}
+
+#[test]
+fn a_wrong_optimal_length_is_caught() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let scen = tmp.path().join("bad.scen");
+    // den312d's first scenario with its optimal length changed.
+    let text = std::fs::read_to_string(data.join("den312d.map.scen")).unwrap();
+    let mut lines: Vec<String> = text.lines().take(3).map(str::to_string).collect();
+    let mut fields: Vec<String> = lines[1].split('\t').map(str::to_string).collect();
+    fields[8] = "1.5".into();
+    lines[1] = fields.join("\t");
+    std::fs::write(&scen, lines.join("\n")).unwrap();
+    Command::cargo_bin("skyplan")
+        .unwrap()
+        .arg("scen")
+        .arg(data.join("den312d.map"))
+        .arg(&scen)
+        .assert()
+        .code(1)
+        .stderr(predicates::str::contains("1 of 2 scenarios do not match"));
+}

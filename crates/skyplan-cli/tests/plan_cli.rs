@@ -1,0 +1,400 @@
+//! The real `skyplan` binary in temporary directories, on the bundled map and small fixtures.
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+use serde_json::Value;
+use skyplan_cspace::{Grid2, GridSpec, Touch};
+use skyplan_search::MoveModel;
+use skyplan_search::oracle::dijkstra_exact;
+use std::path::Path;
+
+const CITY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/colliders.csv");
+
+fn skyplan(dir: &Path) -> Command {
+    let mut cmd = Command::cargo_bin("skyplan").unwrap();
+    cmd.current_dir(dir);
+    cmd
+}
+
+fn run_json(dir: &Path, args: &[&str]) -> Value {
+    let out = skyplan(dir)
+        .arg("plan")
+        .arg("--json")
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn city_grid(spec: GridSpec) -> Grid2 {
+    let map =
+        skyplan_map::colliders::parse_colliders(&std::fs::read_to_string(CITY).unwrap()).unwrap();
+    Grid2::from_colliders(&map, spec).unwrap()
+}
+
+fn rows(v: &Value) -> Vec<[f64; 4]> {
+    serde_json::from_value(v["waypoints"].clone()).unwrap()
+}
+
+/// The default job: optimal against the exact oracle, every flown segment free, FCND headings.
+#[test]
+fn default_plan_is_optimal_free_and_headed() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = run_json(dir.path(), &[]);
+    assert_eq!(v["status"], "ok");
+    assert_eq!(v["grid"]["rows"], 921);
+    assert_eq!(v["grid"]["blocked_cells"], 519_210);
+    let grid = city_grid(GridSpec::default());
+    let cell = |p: &Value| {
+        skyplan_cspace::Cell::new(
+            p["cell"][0].as_u64().unwrap() as u32,
+            p["cell"][1].as_u64().unwrap() as u32,
+        )
+    };
+    let truth = dijkstra_exact(
+        &grid,
+        cell(&v["start"]),
+        cell(&v["goal"]),
+        MoveModel::Octile,
+    )
+    .unwrap();
+    assert_eq!(v["cost_m"].as_f64().unwrap(), truth.to_f64());
+
+    let wps = rows(&v);
+    assert!(wps.len() >= 2);
+    assert_eq!(
+        (wps[0][0], wps[0][1]),
+        (0.0, 0.0),
+        "the mission starts where the vehicle is"
+    );
+    let last = wps[wps.len() - 1];
+    assert_eq!((last[0], last[1]), (420.0, 390.0));
+    assert_eq!(wps[0][3], 0.0);
+    for w in wps.windows(2) {
+        assert!(
+            grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed),
+            "{w:?}"
+        );
+        assert_eq!(w[1][2], 5.0);
+        let heading = (w[1][1] - w[0][1]).atan2(w[1][0] - w[0][0]);
+        assert!((w[1][3] - heading).abs() < 1e-12);
+    }
+    let counts = &v["waypoint_counts"];
+    assert!(counts["after_shortcut"].as_u64() <= counts["after_pruning"].as_u64());
+    assert!(counts["after_pruning"].as_u64() < counts["grid_path"].as_u64());
+    assert!(v["search_time_us"].as_u64().is_some());
+    let file: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("waypoints.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        rows(&file),
+        wps,
+        "the file holds the same waypoints as stdout"
+    );
+}
+
+#[test]
+fn lat_lon_goal_and_start_give_the_same_plan_as_local_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let local = run_json(
+        dir.path(),
+        &["--start-ne", "-100,-50", "--goal-ne", "199.5,-298.5"],
+    );
+    let geo = |p: &Value| {
+        format!(
+            "{},{}",
+            p["lat_deg"].as_f64().unwrap(),
+            p["lon_deg"].as_f64().unwrap()
+        )
+    };
+    let global = run_json(
+        dir.path(),
+        &[
+            "--start-lla",
+            &geo(&local["start"]),
+            "--goal-lla",
+            &geo(&local["goal"]),
+        ],
+    );
+    assert_eq!(local["start"]["cell"], global["start"]["cell"]);
+    assert_eq!(local["goal"]["cell"], global["goal"]["cell"]);
+    assert_eq!(local["cost_m"], global["cost_m"]);
+    let (a, b) = (rows(&local), rows(&global));
+    assert!(
+        (a[0][0] - b[0][0]).abs() < 1e-3 && (a[0][1] - b[0][1]).abs() < 1e-3,
+        "round trip within 1 mm"
+    );
+}
+
+#[test]
+fn move_models_and_planners_agree_with_the_oracle() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = city_grid(GridSpec {
+        alt_m: 20.0,
+        safety_m: 3.0,
+        cell_m: 2.0,
+    });
+    let common = [
+        "--alt-m",
+        "20",
+        "--safety-m",
+        "3",
+        "--cell-m",
+        "2",
+        "--start-ne",
+        "-251,-370",
+        "--goal-ne",
+        "550,420",
+    ];
+    for (extra, model) in [
+        (vec!["--connectivity", "4"], MoveModel::FourConnected),
+        (vec!["--corner-cutting"], MoveModel::OctileCornerCutting),
+        (vec!["--planner", "dijkstra"], MoveModel::Octile),
+    ] {
+        let v = run_json(dir.path(), &[&common[..], &extra[..]].concat());
+        let cell = |p: &Value| {
+            skyplan_cspace::Cell::new(
+                p["cell"][0].as_u64().unwrap() as u32,
+                p["cell"][1].as_u64().unwrap() as u32,
+            )
+        };
+        let truth = dijkstra_exact(&grid, cell(&v["start"]), cell(&v["goal"]), model).unwrap();
+        assert_eq!(
+            v["cost_m"].as_f64().unwrap(),
+            truth.to_f64() * 2.0,
+            "{extra:?}"
+        );
+        let touch = if model == MoveModel::OctileCornerCutting {
+            Touch::Open
+        } else {
+            Touch::Closed
+        };
+        for w in rows(&v).windows(2) {
+            assert!(grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch));
+        }
+    }
+}
+
+#[test]
+fn every_output_format_is_written_by_extension_and_by_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["w.json", "w.csv", "w.h5", "w.geojson", "w.plan"] {
+        skyplan(dir.path())
+            .args(["plan", "--out", name])
+            .assert()
+            .success();
+        assert!(
+            dir.path().join(name).metadata().unwrap().len() > 0,
+            "{name}"
+        );
+    }
+    skyplan(dir.path())
+        .args(["plan", "--out", "route.txt", "--format", "csv"])
+        .assert()
+        .success();
+    let csv = std::fs::read_to_string(dir.path().join("route.txt")).unwrap();
+    assert!(csv.starts_with("north_m,east_m,alt_m,heading_rad,lat_deg,lon_deg"));
+    let geo: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("w.geojson")).unwrap())
+            .unwrap();
+    let first = &geo["features"][0]["geometry"]["coordinates"][0];
+    assert!(
+        (first[0].as_f64().unwrap() + 122.39745).abs() < 1e-9,
+        "GeoJSON is lon, lat: {first}"
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(
+        leftovers.is_empty(),
+        "temporary files left behind: {leftovers:?}"
+    );
+}
+
+#[test]
+fn plots_are_real_png_and_svg_files() {
+    let dir = tempfile::tempdir().unwrap();
+    skyplan(dir.path())
+        .args(["plan", "--plot", "p.png"])
+        .assert()
+        .success();
+    let png = std::fs::read(dir.path().join("p.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    skyplan(dir.path())
+        .args(["plan", "--plot", "p.svg"])
+        .assert()
+        .success();
+    let svg = std::fs::read_to_string(dir.path().join("p.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("NORTH") && svg.contains("EAST"));
+    skyplan(dir.path())
+        .args(["plan", "--plot", "p.gif"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(".png or .svg"));
+}
+
+#[test]
+fn config_file_supplies_defaults_and_flags_win() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("fcnd.toml"),
+        "target_altitude = 10.0\nsafety_distance = 3.0\ngoal_ne = [99.5, 0.5]\nmethod = \"dijkstra\"\nout = \"cfg.csv\"\n",
+    )
+    .unwrap();
+    let v = run_json(dir.path(), &["--config", "fcnd.toml", "--safety-m", "4"]);
+    assert_eq!(v["grid"]["alt_m"], 10.0);
+    assert_eq!(v["grid"]["safety_m"], 4.0);
+    assert_eq!(v["planner"], "Dijkstra");
+    assert_eq!(v["goal"]["north_m"], 99.5);
+    assert!(dir.path().join("cfg.csv").exists());
+    std::fs::write(dir.path().join("bad.toml"), "alt_m = 5\nsafty_m = 3\n").unwrap();
+    skyplan(dir.path())
+        .args(["plan", "--config", "bad.toml"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("bad.toml").and(predicate::str::contains("safty_m")));
+}
+
+#[test]
+fn bad_map_input_names_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "nohome.csv",
+            "posX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n1,2,3,4,5,6\n",
+            "nohome.csv: line 1",
+        ),
+        (
+            "cols.csv",
+            "lat0 37.79, lon0 -122.39\n1,2,3,4,5\n",
+            "nohome",
+        ),
+        (
+            "nan.csv",
+            "lat0 37.79, lon0 -122.39\n1,2,3,4,5,6\n1,2,NaN,4,5,6\n",
+            "nan.csv: line 3, column 3 (posZ)",
+        ),
+        (
+            "neg.csv",
+            "lat0 37.79, lon0 -122.39\n1,2,3,-4,5,6\n",
+            "line 2, column 4 (halfSizeX)",
+        ),
+        ("empty.csv", "", "line 1"),
+        (
+            "nobox.csv",
+            "lat0 37.79, lon0 -122.39\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n",
+            "no obstacle boxes",
+        ),
+    ];
+    for (name, text, needle) in cases {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        let needle = if needle == "nohome" {
+            "cols.csv: line 2, column 5"
+        } else {
+            needle
+        };
+        skyplan(dir.path())
+            .args(["plan", "--map", name])
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(needle))
+            .stderr(predicate::str::contains("panicked").not());
+    }
+    skyplan(dir.path())
+        .args(["plan", "--map", "missing.csv"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("missing.csv"));
+    assert!(
+        !dir.path().join("waypoints.json").exists(),
+        "no output after bad input"
+    );
+}
+
+#[test]
+fn bad_positions_say_which_where_and_the_nearest_free_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    // (0, -310) lies inside the first building of the map plus its margin.
+    skyplan(dir.path())
+        .args(["plan", "--goal-ne", "-310.2,-439.2"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("goal N -310.20 m, E -439.20 m"))
+        .stderr(predicate::str::contains("inside an obstacle"))
+        .stderr(predicate::str::contains("nearest free cell centre is N"))
+        .stderr(predicate::str::contains("lat 37."));
+    skyplan(dir.path())
+        .args(["plan", "--start-ne", "5000,0"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("start N 5000.00 m, E 0.00 m"))
+        .stderr(predicate::str::contains("off the map"));
+    skyplan(dir.path())
+        .args(["plan", "--goal-lla", "37.79,-110.0"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("UTM zone 12"));
+    skyplan(dir.path())
+        .args(["plan", "--alt-m", "nan"])
+        .assert()
+        .code(2);
+    skyplan(dir.path())
+        .args(["plan", "--connectivity", "6"])
+        .assert()
+        .code(2);
+    skyplan(dir.path())
+        .args(["plan", "--out", "w.xyz"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("extension"));
+}
+
+#[test]
+fn an_enclosed_goal_is_reported_unreachable_with_exit_3() {
+    let dir = tempfile::tempdir().unwrap();
+    // A courtyard: four walls around (0, 0); the start is outside.
+    let map = "lat0 37.79, lon0 -122.39\n\
+               10,0,5,1,11,5\n-10,0,5,1,11,5\n0,10,5,11,1,5\n0,-10,5,11,1,5\n40,40,1,1,1,1\n-40,-40,1,1,1,1\n";
+    std::fs::write(dir.path().join("yard.csv"), map).unwrap();
+    let out = skyplan(dir.path())
+        .args([
+            "plan",
+            "--json",
+            "--map",
+            "yard.csv",
+            "--safety-m",
+            "1",
+            "--start-ne",
+            "30,30",
+            "--goal-ne",
+            "0,0",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["status"], "no_path");
+    let msg = v["error"].as_str().unwrap();
+    assert!(
+        msg.contains("unreachable") && msg.contains("goal's") && msg.contains("cells"),
+        "{msg}"
+    );
+    assert!(!dir.path().join("waypoints.json").exists());
+}
+
+#[test]
+fn unwritable_output_fails_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    skyplan(dir.path())
+        .args(["plan", "--out", "no/such/dir/w.json"])
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains("no/such/dir/w.json"));
+}

@@ -1,0 +1,308 @@
+//! The drawing itself, written once for every plotters backend.
+
+use plotters::coord::Shift;
+use plotters::element::ComposedElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::HPos;
+
+use crate::layout::{LegendKind, PlotLayout};
+use crate::rects::blocked_rects;
+use crate::text::{Label, TextMode, VAlign, draw_label};
+use crate::{PlotError, Scene};
+
+const CSPACE_COLOR: RGBColor = RGBColor(204, 207, 212);
+const OBSTACLE_COLOR: RGBColor = RGBColor(92, 95, 102);
+const RAW_COLOR: RGBColor = RGBColor(255, 127, 14);
+const PRUNED_COLOR: RGBColor = RGBColor(31, 96, 196);
+const START_COLOR: RGBColor = RGBColor(0, 170, 60);
+const GOAL_COLOR: RGBColor = RGBColor(222, 30, 30);
+const GRID_LINE_COLOR: RGBColor = RGBColor(230, 230, 230);
+const FRAME_COLOR: RGBColor = RGBColor(40, 40, 40);
+const LEGEND_BORDER_COLOR: RGBColor = RGBColor(175, 175, 175);
+
+fn err<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
+}
+
+fn px(v: f64) -> u32 {
+    v.round().max(1.0) as u32
+}
+
+/// Draws the scene on the whole picture `root`.
+pub(crate) fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene,
+    l: &PlotLayout,
+    mode: TextMode,
+) -> Result<(), PlotError> {
+    root.fill(&WHITE).map_err(err)?;
+    let (x0, y0, w, h) = l.plot;
+    let (x1, y1) = (x0 + w as i32 - 1, y0 + h as i32 - 1);
+    let k = l.fonts.k;
+
+    // Light grid lines at the ticks, under everything else.
+    for &e in &l.x_ticks {
+        let x = l.pixel_of_ne(l.north_m.0, e).0;
+        root.draw(&PathElement::new(vec![(x, y0), (x, y1)], GRID_LINE_COLOR))
+            .map_err(err)?;
+    }
+    for &n in &l.y_ticks {
+        let y = l.pixel_of_ne(n, l.east_m.0).1;
+        root.draw(&PathElement::new(vec![(x0, y), (x1, y)], GRID_LINE_COLOR))
+            .map_err(err)?;
+    }
+
+    let area = root.clone().shrink((x0, y0), (w, h));
+    let mut chart = ChartBuilder::on(&area)
+        .build_cartesian_2d(l.east_m.0..l.east_m.1, l.north_m.0..l.north_m.1)
+        .map_err(err)?;
+
+    // Configuration space, then the obstacles themselves.
+    let f = scene.grid.frame();
+    chart
+        .draw_series(blocked_rects(scene.grid).into_iter().map(|r| {
+            let e0 = f.origin_east_m + f64::from(r.col) * f.cell_m;
+            let n0 = f.origin_north_m + f64::from(r.row) * f.cell_m;
+            let e1 = e0 + f64::from(r.cols) * f.cell_m;
+            let n1 = n0 + f64::from(r.rows) * f.cell_m;
+            Rectangle::new([(e0, n1), (e1, n0)], CSPACE_COLOR.filled())
+        }))
+        .map_err(err)?;
+    chart
+        .draw_series(scene.obstacles.iter().map(|o| {
+            let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
+            let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
+            Rectangle::new([nw, se], OBSTACLE_COLOR.filled())
+        }))
+        .map_err(err)?;
+
+    // Paths: the raw grid path thin, the pruned one thick with a circle at each waypoint.
+    let en = |&(n, e): &(f64, f64)| (e, n);
+    let raw_style = RAW_COLOR.stroke_width(px(1.6 * k));
+    let pruned_style = PRUNED_COLOR.stroke_width(px(3.0 * k));
+    let (r_wp, r_end) = (px(4.5 * k), px(8.0 * k));
+    if scene.raw_path_ne.len() > 1 {
+        chart
+            .draw_series(LineSeries::new(scene.raw_path_ne.iter().map(en), raw_style))
+            .map_err(err)?;
+    }
+    if scene.pruned_path_ne.len() > 1 {
+        chart
+            .draw_series(LineSeries::new(
+                scene.pruned_path_ne.iter().map(en),
+                pruned_style,
+            ))
+            .map_err(err)?;
+    }
+    chart
+        .draw_series(
+            scene
+                .pruned_path_ne
+                .iter()
+                .map(|p| waypoint_marker(en(p), r_wp)),
+        )
+        .map_err(err)?;
+    if let Some(p) = scene.start_ne {
+        chart
+            .draw_series(std::iter::once(start_marker(en(&p), r_end)))
+            .map_err(err)?;
+    }
+    if let Some(p) = scene.goal_ne {
+        chart
+            .draw_series(std::iter::once(goal_marker(en(&p), r_end)))
+            .map_err(err)?;
+    }
+
+    // Frame, outward ticks and their labels.
+    root.draw(&Rectangle::new(
+        [(x0, y0), (x1, y1)],
+        FRAME_COLOR.stroke_width(1),
+    ))
+    .map_err(err)?;
+    let tick_size = l.fonts.tick;
+    for &e in &l.x_ticks {
+        let x = l.pixel_of_ne(l.north_m.0, e).0;
+        root.draw(&PathElement::new(
+            vec![(x, y1), (x, y1 + l.tick_len)],
+            FRAME_COLOR,
+        ))
+        .map_err(err)?;
+        let text = l.tick_label(e);
+        let at = (x, y1 + l.tick_len + l.tick_gap);
+        draw_label(
+            root,
+            mode,
+            &Label {
+                text: &text,
+                size: tick_size,
+                at,
+                h: HPos::Center,
+                v: VAlign::Top,
+                vertical: false,
+            },
+        )?;
+    }
+    for &n in &l.y_ticks {
+        let y = l.pixel_of_ne(n, l.east_m.0).1;
+        root.draw(&PathElement::new(
+            vec![(x0 - l.tick_len, y), (x0, y)],
+            FRAME_COLOR,
+        ))
+        .map_err(err)?;
+        let text = l.tick_label(n);
+        let at = (x0 - l.tick_len - l.tick_gap, y);
+        draw_label(
+            root,
+            mode,
+            &Label {
+                text: &text,
+                size: tick_size,
+                at,
+                h: HPos::Right,
+                v: VAlign::Middle,
+                vertical: false,
+            },
+        )?;
+    }
+
+    // Axis titles and the picture's title.
+    let desc = l.fonts.desc;
+    let x_mid = x0 + w as i32 / 2;
+    let at = (x_mid, l.x_desc_baseline);
+    draw_label(
+        root,
+        mode,
+        &Label {
+            text: "EAST (m)",
+            size: desc,
+            at,
+            h: HPos::Center,
+            v: VAlign::Baseline,
+            vertical: false,
+        },
+    )?;
+    let at = (l.y_desc_baseline, y0 + h as i32 / 2);
+    draw_label(
+        root,
+        mode,
+        &Label {
+            text: "NORTH (m)",
+            size: desc,
+            at,
+            h: HPos::Center,
+            v: VAlign::Baseline,
+            vertical: true,
+        },
+    )?;
+    if !scene.title.is_empty() {
+        let at = (x_mid, l.title_top);
+        draw_label(
+            root,
+            mode,
+            &Label {
+                text: &scene.title,
+                size: l.fonts.title,
+                at,
+                h: HPos::Center,
+                v: VAlign::Top,
+                vertical: false,
+            },
+        )?;
+    }
+    draw_legend(root, l, mode, (raw_style, pruned_style), (r_wp, r_end))
+}
+
+fn draw_legend<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    l: &PlotLayout,
+    mode: TextMode,
+    (raw_style, pruned_style): (ShapeStyle, ShapeStyle),
+    (r_wp, r_end): (u32, u32),
+) -> Result<(), PlotError> {
+    let legend = &l.legend;
+    if legend.entries.is_empty() {
+        return Ok(());
+    }
+    let (lx, ly, lw, lh) = legend.frame;
+    let corner = (lx + lw as i32 - 1, ly + lh as i32 - 1);
+    root.draw(&Rectangle::new([(lx, ly), corner], WHITE.filled()))
+        .map_err(err)?;
+    root.draw(&Rectangle::new(
+        [(lx, ly), corner],
+        LEGEND_BORDER_COLOR.stroke_width(1),
+    ))
+    .map_err(err)?;
+    let sw = legend.sample_w;
+    for (entry, &(x, cy)) in legend.entries.iter().zip(&legend.origins) {
+        let cx = x + sw / 2;
+        let swatch = |color: RGBColor| {
+            let hs = (0.45 * l.fonts.legend).round() as i32;
+            Rectangle::new([(x + 1, cy - hs), (x + sw - 1, cy + hs)], color.filled())
+        };
+        let line = |style: ShapeStyle| PathElement::new(vec![(x, cy), (x + sw, cy)], style);
+        match entry.kind {
+            LegendKind::CSpace => root.draw(&swatch(CSPACE_COLOR)),
+            LegendKind::Obstacle => root.draw(&swatch(OBSTACLE_COLOR)),
+            LegendKind::Raw => root.draw(&line(raw_style)),
+            LegendKind::Pruned => root
+                .draw(&line(pruned_style))
+                .and_then(|()| root.draw(&waypoint_marker((cx, cy), r_wp))),
+            LegendKind::Start => root.draw(&start_marker((cx, cy), r_end)),
+            LegendKind::Goal => root.draw(&goal_marker((cx, cy), r_end)),
+        }
+        .map_err(err)?;
+        let at = (x + sw + legend.text_gap, cy);
+        let label = Label {
+            text: &entry.text,
+            size: l.fonts.legend,
+            at,
+            h: HPos::Left,
+            v: VAlign::Middle,
+            vertical: false,
+        };
+        draw_label(root, mode, &label)?;
+    }
+    Ok(())
+}
+
+type Dot = Circle<(i32, i32), u32>;
+type TwoDots<C, DB> = ComposedElement<C, DB, Dot, Dot>;
+
+/// A waypoint: a white disc ringed in the pruned path's blue.
+fn waypoint_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
+    let inner = r - (f64::from(r) * 0.45).round().max(1.0) as u32;
+    EmptyElement::at(at)
+        + Circle::new((0, 0), r, PRUNED_COLOR.filled())
+        + Circle::new((0, 0), inner.max(1), WHITE.filled())
+}
+
+/// The start: a green disc with a dark rim.
+fn start_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
+    EmptyElement::at(at)
+        + Circle::new((0, 0), r, FRAME_COLOR.filled())
+        + Circle::new((0, 0), r - 1, START_COLOR.filled())
+}
+
+/// The goal: a red five-pointed star with a dark outline.
+fn goal_marker<C, DB: DrawingBackend>(
+    at: C,
+    r: u32,
+) -> ComposedElement<C, DB, Polygon<(i32, i32)>, PathElement<(i32, i32)>> {
+    let r_out = f64::from(r) * 1.35;
+    let r_in = r_out * 0.45;
+    let points: Vec<(i32, i32)> = (0..10)
+        .map(|i| {
+            let a = std::f64::consts::PI * (f64::from(i) / 5.0 - 0.5);
+            let rr = if i % 2 == 0 { r_out } else { r_in };
+            (
+                (rr * a.cos()).round() as i32,
+                (rr * a.sin()).round() as i32 + 1,
+            )
+        })
+        .collect();
+    let mut outline = points.clone();
+    outline.push(points[0]);
+    EmptyElement::at(at)
+        + Polygon::new(points, GOAL_COLOR.filled())
+        + PathElement::new(outline, FRAME_COLOR.stroke_width(1))
+}
