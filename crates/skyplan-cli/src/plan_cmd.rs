@@ -81,6 +81,7 @@ fn resolve(args: PlanArgs) -> Result<Options> {
     let planner = match args.planner.or(cfg.planner).unwrap_or(PlannerArg::Astar) {
         PlannerArg::Astar => Planner::AStar,
         PlannerArg::Dijkstra => Planner::Dijkstra,
+        PlannerArg::Jps => Planner::Jps,
     };
     let prune = match (args.epsilon.or(cfg.epsilon), args.prune.or(cfg.prune)) {
         (Some(eps), _) if eps < 0.0 => {
@@ -172,6 +173,7 @@ fn planner_name(planner: Planner) -> &'static str {
     match planner {
         Planner::AStar => "A*",
         Planner::Dijkstra => "Dijkstra",
+        Planner::Jps => "JPS",
     }
 }
 

@@ -54,6 +54,7 @@ pub fn run(args: ScenArgs) -> Result<()> {
     let planner = match args.planner {
         PlannerArg::Astar => Planner::AStar,
         PlannerArg::Dijkstra => Planner::Dijkstra,
+        PlannerArg::Jps => Planner::Jps,
     };
     let progress = indicatif::ProgressBar::new(scenarios.len() as u64);
     if args.json {

@@ -27,7 +27,10 @@ fn head(scen: &std::path::Path, n: usize, dir: &std::path::Path) -> PathBuf {
     let out = dir.join(scen.file_name().unwrap());
     std::fs::write(
         &out,
-        text.lines().take(n + 1).collect::<Vec<_>>().join("\n"),
+        text.lines()
+            .take(n.saturating_add(1))
+            .collect::<Vec<_>>()
+            .join("\n"),
     )
     .unwrap();
     out

@@ -194,13 +194,13 @@ pub(crate) fn draw<DB: DrawingBackend>(
             vertical: true,
         },
     )?;
-    if !scene.title.is_empty() {
-        let at = (x_mid, l.title_top);
+    if !l.title.is_empty() {
+        let at = (l.title_x, l.title_top);
         draw_label(
             root,
             mode,
             &Label {
-                text: &scene.title,
+                text: &l.title,
                 size: l.fonts.title,
                 at,
                 h: HPos::Center,

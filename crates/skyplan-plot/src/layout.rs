@@ -27,6 +27,10 @@ pub struct PlotLayout {
     pub(crate) y_desc_baseline: i32,
     /// Top of the capitals of the title, pixels.
     pub(crate) title_top: i32,
+    /// Centre of the title, pixels.
+    pub(crate) title_x: i32,
+    /// The title as drawn (shortened when the picture is too narrow for it).
+    pub(crate) title: String,
     pub(crate) legend: LegendLayout,
 }
 
@@ -177,8 +181,15 @@ fn ticks(lo: f64, hi: f64, min_m: f64) -> (Vec<f64>, f64) {
 /// World extent of a scene: the grid and everything drawn, (east min, east max, north min, north max).
 fn world_bounds(scene: &Scene) -> Result<(f64, f64, f64, f64), PlotError> {
     let f = scene.grid.frame();
-    if !(f.origin_north_m.is_finite() && f.origin_east_m.is_finite() && f.cell_m.is_finite()) {
-        return Err(PlotError::NonFinite { what: "grid frame" });
+    if !(f.origin_north_m.is_finite() && f.origin_east_m.is_finite()) {
+        return Err(PlotError::BadScene {
+            what: "the grid's origin is not finite",
+        });
+    }
+    if !(f.cell_m.is_finite() && f.cell_m > 0.0) {
+        return Err(PlotError::BadScene {
+            what: "the grid's cell size is not a positive finite number",
+        });
     }
     let add = |b: &mut (f64, f64, f64, f64), n: f64, e: f64| {
         *b = (b.0.min(e), b.1.max(e), b.2.min(n), b.3.max(n));
@@ -200,8 +211,8 @@ fn world_bounds(scene: &Scene) -> Result<(f64, f64, f64, f64), PlotError> {
     let mut outside = false;
     for (n, e) in scene.points() {
         if !(n.is_finite() && e.is_finite()) {
-            return Err(PlotError::NonFinite {
-                what: "path, start or goal",
+            return Err(PlotError::BadScene {
+                what: "a path point, the start or the goal is not finite",
             });
         }
         outside |= b.0.is_finite() && (e < b.0 || e > b.1 || n < b.2 || n > b.3);
@@ -212,7 +223,9 @@ fn world_bounds(scene: &Scene) -> Result<(f64, f64, f64, f64), PlotError> {
             .iter()
             .all(|x| x.is_finite())
         {
-            return Err(PlotError::NonFinite { what: "obstacle" });
+            return Err(PlotError::BadScene {
+                what: "an obstacle's position or size is not finite",
+            });
         }
         if scene.grid.is_empty() {
             add(&mut b, o.north_m - o.half_north_m, o.east_m - o.half_east_m);
@@ -295,13 +308,15 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
     ensure_font()?;
     let (e0, e1, n0, n1) = world_bounds(scene)?;
     let (wi, hi) = (width_px as i32, height_px as i32);
-    let k = (f64::from(width_px.min(height_px)) / 800.0).clamp(0.6, 4.0);
-    let fonts = Fonts {
+    let k = (f64::from(width_px.min(height_px)) / 800.0).clamp(0.75, 4.0);
+    // Even sizes: plotters' rasteriser then puts every glyph on the same baseline.
+    let even = |v: f64| 2.0 * (v / 2.0).round();
+    let mut fonts = Fonts {
         k,
-        title: 21.0 * k,
-        desc: 16.0 * k,
-        tick: 13.5 * k,
-        legend: 13.5 * k,
+        title: even(21.0 * k),
+        desc: even(16.0 * k),
+        tick: even(13.5 * k),
+        legend: even(13.5 * k),
     };
     let px = |v: f64| v.round() as i32;
 
@@ -322,6 +337,21 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
         f64::from(tick_len + tick_gap) + CAP * fonts.tick + 0.8 * fonts.desc + CAP * fonts.desc;
     let x_label_h = px(x_desc_off + DESCENT * fonts.desc);
     let outer = px(14.0 * k);
+    // A title wider than the picture is set smaller, down to 10 px, then shortened.
+    let room = f64::from(wi - 2 * outer);
+    let mut title = scene.title.clone();
+    let fitted = even(fonts.title * room / text_width(&title, fonts.title).max(1.0) - 1.0);
+    fonts.title = fonts.title.min(fitted).max(10.0);
+    while !title.is_empty() && text_width(&title, fonts.title) > room {
+        title.pop();
+        while title.ends_with(' ') {
+            title.pop();
+        }
+        if text_width(&format!("{title}…"), fonts.title) <= room {
+            title.push('…');
+            break;
+        }
+    }
     let title_h = if scene.title.is_empty() {
         px(0.5 * fonts.tick)
     } else {
@@ -344,11 +374,22 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
         2 * pad + entry_w.iter().copied().max().unwrap_or(0),
         2 * pad + n * row_h - row_h / 3,
     );
+    // Under the plot: as many columns as fit across the picture.
     let entry_sep = px(20.0 * k);
-    let row = (
-        2 * pad + entry_w.iter().sum::<i32>() + entry_sep * (n - 1).max(0),
-        2 * pad + row_h - row_h / 3,
-    );
+    let grid_of = |cols: usize| -> (Vec<i32>, i32, i32) {
+        let mut widths = vec![0; cols];
+        for (i, w) in entry_w.iter().enumerate() {
+            widths[i % cols] = widths[i % cols].max(*w);
+        }
+        let rows = entry_w.len().div_ceil(cols) as i32;
+        let width = 2 * pad + widths.iter().sum::<i32>() + entry_sep * (cols as i32 - 1);
+        (widths, width, 2 * pad + rows * row_h - row_h / 3)
+    };
+    // The fewest rows that fit, then as few columns as those rows need.
+    let below = (1..=entries.len())
+        .rev()
+        .find(|&c| grid_of(c).1 <= wi - 2 * outer)
+        .map(|c| grid_of(entries.len().div_ceil(entries.len().div_ceil(c))));
     let legend_gap = px(16.0 * k);
 
     // The scale each placement allows; keep the best.
@@ -371,15 +412,24 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
             base_w + right_pad - legend_gap.max(right_pad) - column.0 - outer,
             base_h,
         ));
-        if row.0 <= wi - 2 * outer {
-            candidates.push((Place::Below, base_w, base_h - legend_gap - row.1));
+        if let Some((_, _, h)) = below {
+            candidates.push((Place::Below, base_w, base_h - legend_gap - h));
         }
     }
-    let (place, aw, ah) = candidates
+    let best = candidates
         .iter()
         .copied()
-        .max_by(|a, b| fit(a.1, a.2).total_cmp(&fit(b.1, b.2)))
-        .unwrap_or((Place::Nowhere, base_w, base_h));
+        .max_by(|a, b| fit(a.1, a.2).total_cmp(&fit(b.1, b.2)));
+    // A picture too small for a legend beside or under the plot goes without.
+    let (place, aw, ah) = match best {
+        Some(c) if fit(c.1, c.2) >= 0.5 * fit(base_w, base_h) => c,
+        _ => (Place::Nowhere, base_w, base_h),
+    };
+    let entries = if place == Place::Nowhere {
+        Vec::new()
+    } else {
+        entries
+    };
     let s = fit(aw, ah);
     if s <= 0.0 {
         return Err(PlotError::BadSize {
@@ -404,14 +454,14 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
     let group_h = title_h
         + ph
         + x_label_h
-        + if place == Place::Below {
-            legend_gap + row.1
-        } else {
-            0
+        + match (place, &below) {
+            (Place::Below, Some((_, _, h))) => legend_gap + h,
+            _ => 0,
         };
     let gx = ((wi - group_w) / 2).max(outer);
     let gy = ((hi - group_h) / 2).max(outer);
     let (plot_x, plot_y) = (gx + y_label_w, gy + title_h);
+    let title_half_w = (0.5 * text_width(&title, fonts.title)).ceil() as i32;
 
     let mut origins = Vec::new();
     let frame = match place {
@@ -422,14 +472,20 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
             (lx, ly, column.0 as u32, column.1 as u32)
         }
         Place::Below => {
-            let lx = (plot_x + (pw - row.0) / 2).clamp(outer, (wi - outer - row.0).max(outer));
+            let (widths, gw, gh) = below.unwrap_or_default();
+            let lx = (plot_x + (pw - gw) / 2).clamp(outer, (wi - outer - gw).max(outer));
             let ly = plot_y + ph + x_label_h + legend_gap;
-            let mut x = lx + pad;
-            for w in &entry_w {
-                origins.push((x, ly + pad + row_h / 3));
-                x += w + entry_sep;
+            let cols = widths.len().max(1);
+            for i in 0..entries.len() {
+                let x = lx
+                    + pad
+                    + widths[..i % cols]
+                        .iter()
+                        .map(|w| w + entry_sep)
+                        .sum::<i32>();
+                origins.push((x, ly + pad + (i / cols) as i32 * row_h + row_h / 3));
             }
-            (lx, ly, row.0 as u32, row.1 as u32)
+            (lx, ly, gw as u32, gh as u32)
         }
     };
 
@@ -459,6 +515,11 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
         x_desc_baseline: plot_y + ph + px(x_desc_off),
         y_desc_baseline: plot_x - px(y_desc_off),
         title_top: gy,
+        title_x: (plot_x + pw / 2).clamp(
+            outer + title_half_w,
+            (wi - outer - title_half_w).max(outer + title_half_w),
+        ),
+        title,
         legend: LegendLayout {
             entries,
             origins,

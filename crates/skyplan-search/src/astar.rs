@@ -9,10 +9,10 @@ use std::f64::consts::SQRT_2;
 /// A heap entry: smallest `f` first; on equal `f`, largest `g` first (deepest first, which
 /// expands fewer cells on open grids).
 #[derive(Debug, Clone, Copy)]
-struct Entry {
-    f: f64,
-    g: f64,
-    index: u32,
+pub(crate) struct Entry {
+    pub(crate) f: f64,
+    pub(crate) g: f64,
+    pub(crate) index: u32,
 }
 
 impl PartialEq for Entry {
@@ -39,17 +39,17 @@ impl Ord for Entry {
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
 pub struct GridSearch {
-    g: Vec<f64>,
-    parent: Vec<u32>,
+    pub(crate) g: Vec<f64>,
+    pub(crate) parent: Vec<u32>,
     /// `seen[i] == generation` ⇔ `g[i]` and `parent[i]` belong to the current query.
-    seen: Vec<u32>,
+    pub(crate) seen: Vec<u32>,
     /// `closed[i] == generation` ⇔ cell `i` was expanded in the current query.
-    closed: Vec<u32>,
-    generation: u32,
-    heap: BinaryHeap<Entry>,
+    pub(crate) closed: Vec<u32>,
+    pub(crate) generation: u32,
+    pub(crate) heap: BinaryHeap<Entry>,
 }
 
-const NO_PARENT: u32 = u32::MAX;
+pub(crate) const NO_PARENT: u32 = u32::MAX;
 
 impl GridSearch {
     /// An empty workspace; buffers grow on first use.
@@ -57,7 +57,7 @@ impl GridSearch {
         Self::default()
     }
 
-    fn reset(&mut self, cells: usize) {
+    pub(crate) fn reset(&mut self, cells: usize) {
         if self.seen.len() != cells {
             self.g = vec![0.0; cells];
             self.parent = vec![NO_PARENT; cells];
@@ -106,13 +106,16 @@ impl GridSearch {
         if grid.is_blocked(goal) {
             return Err(SearchError::GoalBlocked(goal));
         }
+        if planner == Planner::Jps && model.has_diagonals() {
+            return self.search_jps(grid, start, goal, model);
+        }
         self.reset(grid.len());
         let generation = self.generation;
         let blocked = grid.blocked_cells();
         let cols_i = cols as i64;
         let h = |c: Cell| match planner {
-            Planner::AStar => model.heuristic(c, goal),
             Planner::Dijkstra => 0.0,
+            Planner::AStar | Planner::Jps => model.heuristic(c, goal),
         };
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
@@ -190,7 +193,7 @@ impl GridSearch {
         Err(SearchError::Unreachable { expansions })
     }
 
-    fn reconstruct(&self, grid: &Grid2, goal: u32, expansions: u64) -> GridPath {
+    pub(crate) fn reconstruct(&self, grid: &Grid2, goal: u32, expansions: u64) -> GridPath {
         let mut cells = vec![grid.cell(goal as usize)];
         let mut at = goal;
         while self.parent[at as usize] != NO_PARENT {

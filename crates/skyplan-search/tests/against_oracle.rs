@@ -27,7 +27,7 @@ fn query_strategy() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(400))]
+    #![proptest_config(ProptestConfig::with_cases(1500))]
 
     #[test]
     fn planners_are_optimal_valid_and_agree_on_reachability((grid, start, goal) in query_strategy()) {
@@ -36,7 +36,7 @@ proptest! {
             let truth = dijkstra_exact(&grid, start, goal, model);
             let components = Components::new(&grid, model);
             prop_assert_eq!(components.connected(start, goal), truth.is_some());
-            for planner in [Planner::AStar, Planner::Dijkstra] {
+            for planner in [Planner::AStar, Planner::Dijkstra, Planner::Jps] {
                 match (search.search(&grid, start, goal, model, planner), truth) {
                     (Ok(path), Some(cost)) => {
                         prop_assert_eq!((path.straight_moves, path.diagonal_moves), (cost.straight, cost.diagonal));

@@ -1,0 +1,302 @@
+//! Jump Point Search (Harabor & Grastien 2011) for uniform-cost octile grids, in both corner
+//! rules: without corner cutting (a diagonal needs both orthogonal cells free; the MovingAI rule)
+//! and with it (the diagonal target alone must be free; the FCND rule).
+//!
+//! JPS skips the symmetric paths of uniform-cost grids: from each expanded node it scans in the
+//! pruned directions until it meets a cell with a forced neighbour (a *jump point*) and only
+//! pushes those. Costs are exactly those of A\*; the tests compare both with the exact oracle.
+
+use crate::astar::{Entry, NO_PARENT};
+use crate::{GridPath, GridSearch, MoveModel, SearchError};
+use skyplan_cspace::{Cell, Grid2};
+use std::f64::consts::SQRT_2;
+
+/// Read-only view of the grid with signed, bounds-checked access.
+struct View<'a> {
+    blocked: &'a [bool],
+    rows: i64,
+    cols: i64,
+    goal: (i64, i64),
+    corner_cutting: bool,
+}
+
+impl View<'_> {
+    #[inline(always)]
+    fn free(&self, r: i64, c: i64) -> bool {
+        r >= 0
+            && c >= 0
+            && r < self.rows
+            && c < self.cols
+            && !self.blocked[(r * self.cols + c) as usize]
+    }
+
+    /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`.
+    #[inline]
+    fn jump_straight(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
+        loop {
+            if !self.free(r, c) {
+                return None;
+            }
+            if (r, c) == self.goal {
+                return Some((r, c));
+            }
+            let forced = if dc != 0 {
+                if self.corner_cutting {
+                    (self.free(r + 1, c + dc) && !self.free(r + 1, c))
+                        || (self.free(r - 1, c + dc) && !self.free(r - 1, c))
+                } else {
+                    (self.free(r + 1, c) && !self.free(r + 1, c - dc))
+                        || (self.free(r - 1, c) && !self.free(r - 1, c - dc))
+                }
+            } else if self.corner_cutting {
+                (self.free(r + dr, c + 1) && !self.free(r, c + 1))
+                    || (self.free(r + dr, c - 1) && !self.free(r, c - 1))
+            } else {
+                (self.free(r, c + 1) && !self.free(r - dr, c + 1))
+                    || (self.free(r, c - 1) && !self.free(r - dr, c - 1))
+            };
+            if forced {
+                return Some((r, c));
+            }
+            r += dr;
+            c += dc;
+        }
+    }
+
+    /// Scans from `(r, c)` along `(dr, dc)`, diagonal or straight.
+    #[inline]
+    fn jump(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
+        if dr == 0 || dc == 0 {
+            return self.jump_straight(r, c, dr, dc);
+        }
+        loop {
+            if !self.free(r, c) {
+                return None;
+            }
+            if (r, c) == self.goal {
+                return Some((r, c));
+            }
+            if self.corner_cutting
+                && ((self.free(r - dr, c + dc) && !self.free(r - dr, c))
+                    || (self.free(r + dr, c - dc) && !self.free(r, c - dc)))
+            {
+                return Some((r, c));
+            }
+            if self.jump_straight(r + dr, c, dr, 0).is_some()
+                || self.jump_straight(r, c + dc, 0, dc).is_some()
+            {
+                return Some((r, c));
+            }
+            if !self.corner_cutting && !(self.free(r + dr, c) && self.free(r, c + dc)) {
+                return None;
+            }
+            r += dr;
+            c += dc;
+        }
+    }
+
+    /// The pruned neighbour directions of `(r, c)` reached from its parent along `(dr, dc)`
+    /// (`(0, 0)` for the start: every legal move).
+    fn directions(&self, r: i64, c: i64, dr: i64, dc: i64, out: &mut Vec<(i64, i64)>) {
+        out.clear();
+        let f = |a: i64, b: i64| self.free(r + a, c + b);
+        if dr == 0 && dc == 0 {
+            for (a, b) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+                if f(a, b) {
+                    out.push((a, b));
+                }
+            }
+            for (a, b) in [(1, 1), (1, -1), (-1, 1), (-1, -1)] {
+                if f(a, b) && (self.corner_cutting || (f(a, 0) && f(0, b))) {
+                    out.push((a, b));
+                }
+            }
+            return;
+        }
+        if self.corner_cutting {
+            if dr != 0 && dc != 0 {
+                for (a, b, ok) in [
+                    (dr, 0, f(dr, 0)),
+                    (0, dc, f(0, dc)),
+                    (dr, dc, f(dr, dc)),
+                    (dr, -dc, !f(0, -dc) && f(dr, -dc)),
+                    (-dr, dc, !f(-dr, 0) && f(-dr, dc)),
+                ] {
+                    if ok {
+                        out.push((a, b));
+                    }
+                }
+            } else if dc != 0 {
+                for (a, b, ok) in [
+                    (0, dc, f(0, dc)),
+                    (1, dc, !f(1, 0) && f(1, dc)),
+                    (-1, dc, !f(-1, 0) && f(-1, dc)),
+                ] {
+                    if ok {
+                        out.push((a, b));
+                    }
+                }
+            } else {
+                for (a, b, ok) in [
+                    (dr, 0, f(dr, 0)),
+                    (dr, 1, !f(0, 1) && f(dr, 1)),
+                    (dr, -1, !f(0, -1) && f(dr, -1)),
+                ] {
+                    if ok {
+                        out.push((a, b));
+                    }
+                }
+            }
+            return;
+        }
+        if dr != 0 && dc != 0 {
+            let (vert, horiz) = (f(dr, 0), f(0, dc));
+            if vert {
+                out.push((dr, 0));
+            }
+            if horiz {
+                out.push((0, dc));
+            }
+            if vert && horiz && f(dr, dc) {
+                out.push((dr, dc));
+            }
+        } else {
+            // Straight along (dr, dc); the two sides are perpendicular to it.
+            let (s1, s2) = if dc != 0 {
+                ((1, 0), (-1, 0))
+            } else {
+                ((0, 1), (0, -1))
+            };
+            let next = f(dr, dc);
+            let side1 = f(s1.0, s1.1);
+            let side2 = f(s2.0, s2.1);
+            if next {
+                out.push((dr, dc));
+                if side1 && f(dr + s1.0, dc + s1.1) {
+                    out.push((dr + s1.0, dc + s1.1));
+                }
+                if side2 && f(dr + s2.0, dc + s2.1) {
+                    out.push((dr + s2.0, dc + s2.1));
+                }
+            }
+            if side1 {
+                out.push(s1);
+            }
+            if side2 {
+                out.push(s2);
+            }
+        }
+    }
+}
+
+/// Octile distance in cells between two cells of a straight or diagonal segment.
+#[inline]
+fn octile(dr: i64, dc: i64) -> f64 {
+    let (a, b) = (dr.unsigned_abs(), dc.unsigned_abs());
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    (hi - lo) as f64 + lo as f64 * SQRT_2
+}
+
+impl GridSearch {
+    pub(crate) fn search_jps(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+        model: MoveModel,
+    ) -> Result<GridPath, SearchError> {
+        self.reset(grid.len());
+        let generation = self.generation;
+        let cols = i64::from(grid.cols());
+        let view = View {
+            blocked: grid.blocked_cells(),
+            rows: i64::from(grid.rows()),
+            cols,
+            goal: (i64::from(goal.row), i64::from(goal.col)),
+            corner_cutting: model == MoveModel::OctileCornerCutting,
+        };
+        let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
+        let start_i = grid.index(start) as u32;
+        let goal_i = grid.index(goal) as u32;
+        self.g[start_i as usize] = 0.0;
+        self.parent[start_i as usize] = NO_PARENT;
+        self.seen[start_i as usize] = generation;
+        self.heap.push(Entry {
+            f: h(i64::from(start.row), i64::from(start.col)),
+            g: 0.0,
+            index: start_i,
+        });
+        let mut dirs = Vec::with_capacity(8);
+        let mut expansions = 0u64;
+        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+            let i = index as usize;
+            if self.closed[i] == generation || g > self.g[i] {
+                continue;
+            }
+            self.closed[i] = generation;
+            expansions += 1;
+            if index == goal_i {
+                let jump_points = self.reconstruct(grid, goal_i, expansions);
+                return Ok(interpolate(jump_points));
+            }
+            let (r, c) = ((i as i64) / cols, (i as i64) % cols);
+            let (dr, dc) = match self.parent[i] {
+                NO_PARENT => (0, 0),
+                p => {
+                    let (pr, pc) = (i64::from(p) / cols, i64::from(p) % cols);
+                    ((r - pr).signum(), (c - pc).signum())
+                }
+            };
+            view.directions(r, c, dr, dc, &mut dirs);
+            for &(a, b) in &dirs {
+                let Some((jr, jc)) = view.jump(r + a, c + b, a, b) else {
+                    continue;
+                };
+                let ji = (jr * cols + jc) as usize;
+                if self.closed[ji] == generation {
+                    continue;
+                }
+                let ng = g + octile(jr - r, jc - c);
+                if self.seen[ji] != generation || ng < self.g[ji] {
+                    self.seen[ji] = generation;
+                    self.g[ji] = ng;
+                    self.parent[ji] = index;
+                    self.heap.push(Entry {
+                        f: ng + h(jr, jc),
+                        g: ng,
+                        index: ji as u32,
+                    });
+                }
+            }
+        }
+        Err(SearchError::Unreachable { expansions })
+    }
+}
+
+/// Expands a path of jump points (each segment straight or diagonal) into every cell.
+fn interpolate(jumps: GridPath) -> GridPath {
+    let mut cells = Vec::with_capacity(jumps.cells.len() * 8);
+    if let Some(&first) = jumps.cells.first() {
+        cells.push(first);
+    }
+    for w in jumps.cells.windows(2) {
+        let (mut r, mut c) = (i64::from(w[0].row), i64::from(w[0].col));
+        let (tr, tc) = (i64::from(w[1].row), i64::from(w[1].col));
+        while (r, c) != (tr, tc) {
+            r += (tr - r).signum();
+            c += (tc - c).signum();
+            cells.push(Cell::new(r as u32, c as u32));
+        }
+    }
+    let diagonal_moves = cells
+        .windows(2)
+        .filter(|w| w[0].row != w[1].row && w[0].col != w[1].col)
+        .count() as u64;
+    let straight_moves = cells.len() as u64 - 1 - diagonal_moves;
+    GridPath {
+        cells,
+        straight_moves,
+        diagonal_moves,
+        expansions: jumps.expansions,
+    }
+}
