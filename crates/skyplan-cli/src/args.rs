@@ -107,7 +107,7 @@ pub struct PlanArgs {
     /// Let diagonal moves pass between two blocked cells (the FCND move model).
     #[arg(long)]
     pub corner_cutting: bool,
-    /// Search algorithm [default: astar].
+    /// Search algorithm [default: jps; 4-connected grids use astar].
     #[arg(long, value_enum)]
     pub planner: Option<PlannerArg>,
     /// Collinearity pruning [default: collinear].
@@ -143,6 +143,6 @@ pub struct ScenArgs {
     #[arg(long)]
     pub json: bool,
     /// Search algorithm.
-    #[arg(long, value_enum, default_value = "astar")]
+    #[arg(long, value_enum, default_value = "jps")]
     pub planner: PlannerArg,
 }

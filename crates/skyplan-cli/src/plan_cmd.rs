@@ -78,7 +78,7 @@ fn resolve(args: PlanArgs) -> Result<Options> {
             )));
         }
     };
-    let planner = match args.planner.or(cfg.planner).unwrap_or(PlannerArg::Astar) {
+    let planner = match args.planner.or(cfg.planner).unwrap_or(PlannerArg::Jps) {
         PlannerArg::Astar => Planner::AStar,
         PlannerArg::Dijkstra => Planner::Dijkstra,
         PlannerArg::Jps => Planner::Jps,

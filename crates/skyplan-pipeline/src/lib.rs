@@ -100,7 +100,7 @@ impl Default for PlanRequest {
                 east_m: 0.0,
             },
             model: MoveModel::Octile,
-            planner: Planner::AStar,
+            planner: Planner::Jps,
             prune: Prune::Collinear,
             shortcut: true,
             start_heading_rad: 0.0,

@@ -267,6 +267,7 @@ fn draw_legend<DB: DrawingBackend>(
 
 type Dot = Circle<(i32, i32), u32>;
 type TwoDots<C, DB> = ComposedElement<C, DB, Dot, Dot>;
+type Star<C, DB> = ComposedElement<C, DB, Polygon<(i32, i32)>, PathElement<(i32, i32)>>;
 
 /// A waypoint: a white disc ringed in the pruned path's blue.
 fn waypoint_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
@@ -284,10 +285,7 @@ fn start_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
 }
 
 /// The goal: a red five-pointed star with a dark outline.
-fn goal_marker<C, DB: DrawingBackend>(
-    at: C,
-    r: u32,
-) -> ComposedElement<C, DB, Polygon<(i32, i32)>, PathElement<(i32, i32)>> {
+fn goal_marker<C, DB: DrawingBackend>(at: C, r: u32) -> Star<C, DB> {
     let r_out = f64::from(r) * 1.35;
     let r_in = r_out * 0.45;
     let points: Vec<(i32, i32)> = (0..10)

@@ -331,7 +331,8 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
     let (widest_x, widest_y) = (widest(e0, e1), widest(n0, n1));
     let tick_len = px(5.0 * k);
     let tick_gap = px(4.0 * k);
-    let y_desc_off = f64::from(tick_len + tick_gap) + widest_y + 0.6 * fonts.desc; // plot edge to baseline
+    // From the plot's edge to the baseline of the axis title.
+    let y_desc_off = f64::from(tick_len + tick_gap) + widest_y + 0.6 * fonts.desc;
     let y_label_w = px(y_desc_off + 0.8 * fonts.desc);
     let x_desc_off =
         f64::from(tick_len + tick_gap) + CAP * fonts.tick + 0.8 * fonts.desc + CAP * fonts.desc;
@@ -352,7 +353,7 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
             break;
         }
     }
-    let title_h = if scene.title.is_empty() {
+    let title_h = if title.is_empty() {
         px(0.5 * fonts.tick)
     } else {
         px((CAP + 0.85) * fonts.title)

@@ -87,7 +87,9 @@ impl View<'_> {
             {
                 return Some((r, c));
             }
-            if !self.corner_cutting && !(self.free(r + dr, c) && self.free(r, c + dc)) {
+            let diagonal_step_ok =
+                self.corner_cutting || (self.free(r + dr, c) && self.free(r, c + dc));
+            if !diagonal_step_ok {
                 return None;
             }
             r += dr;
