@@ -19,7 +19,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Plan on an FCND colliders map: grid at altitude → optimal path → pruned, geo-referenced waypoints.
-    Plan(PlanArgs),
+    Plan(Box<PlanArgs>),
     /// Replay MovingAI scenarios and check every cost against the published optimal length.
     Scen(ScenArgs),
 }

@@ -15,7 +15,7 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     let cli = args::Cli::parse();
     let result = match cli.command {
-        args::Command::Plan(a) => plan_cmd::run(a),
+        args::Command::Plan(a) => plan_cmd::run(*a),
         args::Command::Scen(a) => scen_cmd::run(a),
     };
     match result {
