@@ -58,6 +58,10 @@ pub enum PlannerArg {
     Dijkstra,
     /// Jump Point Search: A*'s optimal costs, far fewer expansions (octile grids).
     Jps,
+    /// JPS+: JPS with precomputed jumps; pays off over many queries on one grid.
+    #[value(name = "jps-plus")]
+    #[serde(rename = "jps-plus")]
+    JpsPlus,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
@@ -143,6 +147,6 @@ pub struct ScenArgs {
     #[arg(long)]
     pub json: bool,
     /// Search algorithm.
-    #[arg(long, value_enum, default_value = "jps")]
+    #[arg(long, value_enum, default_value = "jps-plus")]
     pub planner: PlannerArg,
 }

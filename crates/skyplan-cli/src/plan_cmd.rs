@@ -82,6 +82,7 @@ fn resolve(args: PlanArgs) -> Result<Options> {
         PlannerArg::Astar => Planner::AStar,
         PlannerArg::Dijkstra => Planner::Dijkstra,
         PlannerArg::Jps => Planner::Jps,
+        PlannerArg::JpsPlus => Planner::JpsPlus,
     };
     let prune = match (args.epsilon.or(cfg.epsilon), args.prune.or(cfg.prune)) {
         (Some(eps), _) if eps < 0.0 => {
@@ -174,6 +175,7 @@ fn planner_name(planner: Planner) -> &'static str {
         Planner::AStar => "A*",
         Planner::Dijkstra => "Dijkstra",
         Planner::Jps => "JPS",
+        Planner::JpsPlus => "JPS+",
     }
 }
 

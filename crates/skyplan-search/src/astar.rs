@@ -51,6 +51,32 @@ pub struct GridSearch {
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
 
+/// The endpoint checks every planner makes first.
+pub(crate) fn check_endpoints(grid: &Grid2, start: Cell, goal: Cell) -> Result<(), SearchError> {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    if !grid.contains(start) {
+        return Err(SearchError::StartOutside {
+            cell: start,
+            rows,
+            cols,
+        });
+    }
+    if !grid.contains(goal) {
+        return Err(SearchError::GoalOutside {
+            cell: goal,
+            rows,
+            cols,
+        });
+    }
+    if grid.is_blocked(start) {
+        return Err(SearchError::StartBlocked(start));
+    }
+    if grid.is_blocked(goal) {
+        return Err(SearchError::GoalBlocked(goal));
+    }
+    Ok(())
+}
+
 impl GridSearch {
     /// An empty workspace; buffers grow on first use.
     pub fn new() -> Self {
@@ -85,29 +111,14 @@ impl GridSearch {
         model: MoveModel,
         planner: Planner,
     ) -> Result<GridPath, SearchError> {
+        check_endpoints(grid, start, goal)?;
         let (rows, cols) = (grid.rows(), grid.cols());
-        if !grid.contains(start) {
-            return Err(SearchError::StartOutside {
-                cell: start,
-                rows,
-                cols,
-            });
-        }
-        if !grid.contains(goal) {
-            return Err(SearchError::GoalOutside {
-                cell: goal,
-                rows,
-                cols,
-            });
-        }
-        if grid.is_blocked(start) {
-            return Err(SearchError::StartBlocked(start));
-        }
-        if grid.is_blocked(goal) {
-            return Err(SearchError::GoalBlocked(goal));
-        }
-        if planner == Planner::Jps && model.has_diagonals() {
-            return self.search_jps(grid, start, goal, model);
+        if model.has_diagonals() {
+            match planner {
+                Planner::Jps => return self.search_jps(grid, start, goal, model),
+                Planner::JpsPlus => return crate::JpsPlus::new(grid, model).search(start, goal),
+                Planner::AStar | Planner::Dijkstra => {}
+            }
         }
         self.reset(grid.len());
         let generation = self.generation;
@@ -115,7 +126,7 @@ impl GridSearch {
         let cols_i = cols as i64;
         let h = |c: Cell| match planner {
             Planner::Dijkstra => 0.0,
-            Planner::AStar | Planner::Jps => model.heuristic(c, goal),
+            Planner::AStar | Planner::Jps | Planner::JpsPlus => model.heuristic(c, goal),
         };
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;

@@ -12,22 +12,68 @@ use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;
 
 /// Read-only view of the grid with signed, bounds-checked access.
-struct View<'a> {
-    blocked: &'a [bool],
-    rows: i64,
-    cols: i64,
-    goal: (i64, i64),
-    corner_cutting: bool,
+pub(crate) struct View<'a> {
+    pub(crate) blocked: &'a [bool],
+    pub(crate) rows: i64,
+    pub(crate) cols: i64,
+    pub(crate) goal: (i64, i64),
+    pub(crate) corner_cutting: bool,
 }
 
-impl View<'_> {
+impl<'a> View<'a> {
+    pub(crate) fn new(grid: &'a Grid2, goal: Cell, model: MoveModel) -> Self {
+        View {
+            blocked: grid.blocked_cells(),
+            rows: i64::from(grid.rows()),
+            cols: i64::from(grid.cols()),
+            goal: (i64::from(goal.row), i64::from(goal.col)),
+            corner_cutting: model == MoveModel::OctileCornerCutting,
+        }
+    }
+
     #[inline(always)]
-    fn free(&self, r: i64, c: i64) -> bool {
+    pub(crate) fn free(&self, r: i64, c: i64) -> bool {
         r >= 0
             && c >= 0
             && r < self.rows
             && c < self.cols
             && !self.blocked[(r * self.cols + c) as usize]
+    }
+
+    /// True if a straight scan along `(dr, dc)` must stop at the free cell `(r, c)`: it has a
+    /// neighbour that only a turn here reaches optimally.
+    #[inline]
+    pub(crate) fn forced_straight(&self, r: i64, c: i64, dr: i64, dc: i64) -> bool {
+        if dc != 0 {
+            if self.corner_cutting {
+                (self.free(r + 1, c + dc) && !self.free(r + 1, c))
+                    || (self.free(r - 1, c + dc) && !self.free(r - 1, c))
+            } else {
+                (self.free(r + 1, c) && !self.free(r + 1, c - dc))
+                    || (self.free(r - 1, c) && !self.free(r - 1, c - dc))
+            }
+        } else if self.corner_cutting {
+            (self.free(r + dr, c + 1) && !self.free(r, c + 1))
+                || (self.free(r + dr, c - 1) && !self.free(r, c - 1))
+        } else {
+            (self.free(r, c + 1) && !self.free(r - dr, c + 1))
+                || (self.free(r, c - 1) && !self.free(r - dr, c - 1))
+        }
+    }
+
+    /// With corner cutting, true if a diagonal scan must stop at `(r, c)` for a forced neighbour
+    /// (never without corner cutting, where only the straight sub-scans stop it).
+    #[inline]
+    pub(crate) fn forced_diagonal(&self, r: i64, c: i64, dr: i64, dc: i64) -> bool {
+        self.corner_cutting
+            && ((self.free(r - dr, c + dc) && !self.free(r - dr, c))
+                || (self.free(r + dr, c - dc) && !self.free(r, c - dc)))
+    }
+
+    /// True if a diagonal scan standing on `(r, c)` may take its next step.
+    #[inline]
+    pub(crate) fn diagonal_continues(&self, r: i64, c: i64, dr: i64, dc: i64) -> bool {
+        self.corner_cutting || (self.free(r + dr, c) && self.free(r, c + dc))
     }
 
     /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`.
@@ -40,21 +86,7 @@ impl View<'_> {
             if (r, c) == self.goal {
                 return Some((r, c));
             }
-            let forced = if dc != 0 {
-                if self.corner_cutting {
-                    (self.free(r + 1, c + dc) && !self.free(r + 1, c))
-                        || (self.free(r - 1, c + dc) && !self.free(r - 1, c))
-                } else {
-                    (self.free(r + 1, c) && !self.free(r + 1, c - dc))
-                        || (self.free(r - 1, c) && !self.free(r - 1, c - dc))
-                }
-            } else if self.corner_cutting {
-                (self.free(r + dr, c + 1) && !self.free(r, c + 1))
-                    || (self.free(r + dr, c - 1) && !self.free(r, c - 1))
-            } else {
-                (self.free(r, c + 1) && !self.free(r - dr, c + 1))
-                    || (self.free(r, c - 1) && !self.free(r - dr, c - 1))
-            };
+            let forced = self.forced_straight(r, c, dr, dc);
             if forced {
                 return Some((r, c));
             }
@@ -76,20 +108,13 @@ impl View<'_> {
             if (r, c) == self.goal {
                 return Some((r, c));
             }
-            if self.corner_cutting
-                && ((self.free(r - dr, c + dc) && !self.free(r - dr, c))
-                    || (self.free(r + dr, c - dc) && !self.free(r, c - dc)))
-            {
-                return Some((r, c));
-            }
-            if self.jump_straight(r + dr, c, dr, 0).is_some()
+            if self.forced_diagonal(r, c, dr, dc)
+                || self.jump_straight(r + dr, c, dr, 0).is_some()
                 || self.jump_straight(r, c + dc, 0, dc).is_some()
             {
                 return Some((r, c));
             }
-            let diagonal_step_ok =
-                self.corner_cutting || (self.free(r + dr, c) && self.free(r, c + dc));
-            if !diagonal_step_ok {
+            if !self.diagonal_continues(r, c, dr, dc) {
                 return None;
             }
             r += dr;
@@ -99,7 +124,7 @@ impl View<'_> {
 
     /// The pruned neighbour directions of `(r, c)` reached from its parent along `(dr, dc)`
     /// (`(0, 0)` for the start: every legal move).
-    fn directions(&self, r: i64, c: i64, dr: i64, dc: i64, out: &mut Vec<(i64, i64)>) {
+    pub(crate) fn directions(&self, r: i64, c: i64, dr: i64, dc: i64, out: &mut Vec<(i64, i64)>) {
         out.clear();
         let f = |a: i64, b: i64| self.free(r + a, c + b);
         if dr == 0 && dc == 0 {
@@ -163,29 +188,23 @@ impl View<'_> {
                 out.push((dr, dc));
             }
         } else {
-            // Straight along (dr, dc); the two sides are perpendicular to it.
-            let (s1, s2) = if dc != 0 {
-                ((1, 0), (-1, 0))
-            } else {
-                ((0, 1), (0, -1))
-            };
-            let next = f(dr, dc);
-            let side1 = f(s1.0, s1.1);
-            let side2 = f(s2.0, s2.1);
-            if next {
+            // Straight along (dr, dc): the natural neighbour ahead, plus a side (and the diagonal
+            // towards it) only when the cell behind that side is blocked, i.e. the side is forced.
+            if f(dr, dc) {
                 out.push((dr, dc));
-                if side1 && f(dr + s1.0, dc + s1.1) {
-                    out.push((dr + s1.0, dc + s1.1));
-                }
-                if side2 && f(dr + s2.0, dc + s2.1) {
-                    out.push((dr + s2.0, dc + s2.1));
-                }
             }
-            if side1 {
-                out.push(s1);
-            }
-            if side2 {
-                out.push(s2);
+            let sides = if dc != 0 {
+                [(1, 0), (-1, 0)]
+            } else {
+                [(0, 1), (0, -1)]
+            };
+            for (sr, sc) in sides {
+                if f(sr, sc) && !f(sr - dr, sc - dc) {
+                    out.push((sr, sc));
+                    if f(dr, dc) && f(dr + sr, dc + sc) {
+                        out.push((dr + sr, dc + sc));
+                    }
+                }
             }
         }
     }
@@ -193,7 +212,7 @@ impl View<'_> {
 
 /// Octile distance in cells between two cells of a straight or diagonal segment.
 #[inline]
-fn octile(dr: i64, dc: i64) -> f64 {
+pub(crate) fn octile(dr: i64, dc: i64) -> f64 {
     let (a, b) = (dr.unsigned_abs(), dc.unsigned_abs());
     let (lo, hi) = if a < b { (a, b) } else { (b, a) };
     (hi - lo) as f64 + lo as f64 * SQRT_2
@@ -207,16 +226,25 @@ impl GridSearch {
         goal: Cell,
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
+        let view = View::new(grid, goal, model);
+        self.jump_point_search(grid, start, goal, &view, |r, c, a, b| {
+            view.jump(r + a, c + b, a, b)
+        })
+    }
+
+    /// The best-first loop shared by JPS and JPS+: `jump(r, c, dr, dc)` returns the next jump
+    /// point from the expanded cell `(r, c)` along `(dr, dc)`. Endpoints are already checked.
+    pub(crate) fn jump_point_search(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+        view: &View<'_>,
+        jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
+    ) -> Result<GridPath, SearchError> {
         self.reset(grid.len());
         let generation = self.generation;
-        let cols = i64::from(grid.cols());
-        let view = View {
-            blocked: grid.blocked_cells(),
-            rows: i64::from(grid.rows()),
-            cols,
-            goal: (i64::from(goal.row), i64::from(goal.col)),
-            corner_cutting: model == MoveModel::OctileCornerCutting,
-        };
+        let cols = view.cols;
         let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
@@ -251,7 +279,7 @@ impl GridSearch {
             };
             view.directions(r, c, dr, dc, &mut dirs);
             for &(a, b) in &dirs {
-                let Some((jr, jc)) = view.jump(r + a, c + b, a, b) else {
+                let Some((jr, jc)) = jump(r, c, a, b) else {
                     continue;
                 };
                 let ji = (jr * cols + jc) as usize;

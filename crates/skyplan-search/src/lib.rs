@@ -25,10 +25,12 @@
 mod astar;
 mod components;
 mod jps;
+mod jps_plus;
 pub mod oracle;
 
 pub use astar::GridSearch;
 pub use components::Components;
+pub use jps_plus::JpsPlus;
 
 use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;
@@ -91,6 +93,9 @@ pub enum Planner {
     /// Jump Point Search: A\*'s costs with far fewer expansions on octile grids
     /// (4-connected grids fall back to A\*).
     Jps,
+    /// JPS+ : JPS with every scan precomputed. Through [`GridSearch::search`] the table is
+    /// rebuilt per query; build a [`JpsPlus`] once to answer many queries on one grid.
+    JpsPlus,
 }
 
 /// A path of grid cells from start to goal, both included.

@@ -3,7 +3,9 @@
 use proptest::prelude::*;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
 use skyplan_search::oracle::dijkstra_exact;
-use skyplan_search::{Components, GridSearch, MoveModel, Planner, SearchError, check_path};
+use skyplan_search::{
+    Components, GridSearch, JpsPlus, MoveModel, Planner, SearchError, check_path,
+};
 
 const MODELS: [MoveModel; 3] = [
     MoveModel::FourConnected,
@@ -36,7 +38,7 @@ proptest! {
             let truth = dijkstra_exact(&grid, start, goal, model);
             let components = Components::new(&grid, model);
             prop_assert_eq!(components.connected(start, goal), truth.is_some());
-            for planner in [Planner::AStar, Planner::Dijkstra, Planner::Jps] {
+            for planner in [Planner::AStar, Planner::Dijkstra, Planner::Jps, Planner::JpsPlus] {
                 match (search.search(&grid, start, goal, model, planner), truth) {
                     (Ok(path), Some(cost)) => {
                         prop_assert_eq!((path.straight_moves, path.diagonal_moves), (cost.straight, cost.diagonal));
@@ -53,6 +55,19 @@ proptest! {
                     (got, want) => prop_assert!(false, "{model:?} {planner:?}: got {got:?}, oracle {want:?}"),
                 }
             }
+        }
+    }
+
+    /// JPS+ replaces every scan of JPS by a table lookup: same paths, same expansions.
+    #[test]
+    fn jps_plus_returns_exactly_what_jps_returns((grid, start, goal) in query_strategy()) {
+        let mut search = GridSearch::new();
+        for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
+            let mut plus = JpsPlus::new(&grid, model);
+            let online = search.search(&grid, start, goal, model, Planner::Jps);
+            prop_assert_eq!(plus.search(start, goal), online, "{:?}", model);
+            // And again on the same table (buffers are reused between queries).
+            prop_assert_eq!(plus.search(goal, start), search.search(&grid, goal, start, model, Planner::Jps));
         }
     }
 }
