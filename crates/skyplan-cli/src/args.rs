@@ -22,6 +22,8 @@ pub enum Command {
     Plan(Box<PlanArgs>),
     /// Replay MovingAI scenarios and check every cost against the published optimal length.
     Scen(ScenArgs),
+    /// Time every planner (and, with --peers, the tools people use instead) on the same queries.
+    Bench(BenchArgs),
 }
 
 /// A pair of numbers typed as `A,B`.
@@ -149,4 +151,50 @@ pub struct ScenArgs {
     /// Search algorithm.
     #[arg(long, value_enum, default_value = "jps-plus")]
     pub planner: PlannerArg,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Map: FCND colliders .csv (default: the bundled city map) or MovingAI .map.
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// Flight altitude for colliders maps, metres.
+    #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
+    pub alt_m: f64,
+    /// Safety margin for colliders maps, metres.
+    #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
+    pub safety_m: f64,
+    /// Cell size for colliders maps, metres.
+    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
+    pub cell_m: f64,
+    /// Number of random far-apart queries (with --scen: at most this many scenarios) [default: 26].
+    #[arg(long, value_name = "N")]
+    pub random: Option<usize>,
+    /// Seed of the random queries.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Minimum start-goal distance of random queries, metres [default: half the grid diagonal].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub min_distance_m: Option<f64>,
+    /// Take the queries from a MovingAI .scen file instead.
+    #[arg(long, value_name = "FILE")]
+    pub scen: Option<PathBuf>,
+    /// Comma-separated planners: jps-plus, jps, astar, dijkstra, rust-pathfinding-astar [default: jps-plus,jps,astar].
+    #[arg(long, value_name = "LIST")]
+    pub planners: Option<String>,
+    /// Use the corner-cutting move model (FCND) instead of no corner cutting.
+    #[arg(long)]
+    pub corner_cutting: bool,
+    /// Also run the peers: the Rust `pathfinding` crate, and Python A*s (set up with bench/setup-peers.sh).
+    #[arg(long)]
+    pub peers: bool,
+    /// Time budget of each Python peer, seconds (a slow peer runs fewer queries).
+    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = parse_finite)]
+    pub peer_budget_s: f64,
+    /// Write every record (planner, query, time, expansions, cost) to a .csv or .json file.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Print the table as one JSON object.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -2,6 +2,7 @@
 //! calls the pipeline, writes outputs atomically and maps errors to exit codes.
 
 mod args;
+mod bench_cmd;
 mod config;
 mod exit;
 mod files;
@@ -17,6 +18,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         args::Command::Plan(a) => plan_cmd::run(*a),
         args::Command::Scen(a) => scen_cmd::run(a),
+        args::Command::Bench(a) => bench_cmd::run_bench(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

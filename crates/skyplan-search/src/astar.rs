@@ -39,14 +39,19 @@ impl Ord for Entry {
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
 pub struct GridSearch {
-    pub(crate) g: Vec<f64>,
-    pub(crate) parent: Vec<u32>,
-    /// `seen[i] == generation` ⇔ `g[i]` and `parent[i]` belong to the current query.
-    pub(crate) seen: Vec<u32>,
-    /// `closed[i] == generation` ⇔ cell `i` was expanded in the current query.
-    pub(crate) closed: Vec<u32>,
-    pub(crate) generation: u32,
+    /// Per-cell search state, one cache line for all of it.
+    nodes: Vec<Node>,
+    /// `2 × query number`: a node's `stamp` is `open_stamp` (reached) or `open_stamp + 1`
+    /// (expanded) in the current query; anything older is stale and means "unseen".
+    open_stamp: u32,
     pub(crate) heap: BinaryHeap<Entry>,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct Node {
+    g: f64,
+    parent: u32,
+    stamp: u32,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
@@ -84,20 +89,61 @@ impl GridSearch {
     }
 
     pub(crate) fn reset(&mut self, cells: usize) {
-        if self.seen.len() != cells {
-            self.g = vec![0.0; cells];
-            self.parent = vec![NO_PARENT; cells];
-            self.seen = vec![0; cells];
-            self.closed = vec![0; cells];
-            self.generation = 0;
+        if self.nodes.len() != cells {
+            self.nodes = vec![Node::default(); cells];
+            self.open_stamp = 0;
         }
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.seen.fill(0);
-            self.closed.fill(0);
-            self.generation = 1;
+        if self.open_stamp >= u32::MAX - 3 {
+            self.nodes.fill(Node::default());
+            self.open_stamp = 0;
         }
+        self.open_stamp += 2;
         self.heap.clear();
+    }
+
+    /// True if cell `i` was expanded in the current query.
+    #[inline(always)]
+    pub(crate) fn is_closed(&self, i: usize) -> bool {
+        self.nodes[i].stamp == self.open_stamp + 1
+    }
+
+    /// Marks cell `i` expanded.
+    #[inline(always)]
+    pub(crate) fn close(&mut self, i: usize) {
+        self.nodes[i].stamp = self.open_stamp + 1;
+    }
+
+    /// The best cost found so far to cell `i` (infinite if unseen in this query).
+    #[inline(always)]
+    pub(crate) fn g(&self, i: usize) -> f64 {
+        let n = self.nodes[i];
+        if n.stamp >= self.open_stamp {
+            n.g
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The parent of cell `i` on its best path ([`NO_PARENT`] for the start).
+    #[inline(always)]
+    pub(crate) fn parent(&self, i: usize) -> u32 {
+        self.nodes[i].parent
+    }
+
+    /// Records a better path to the not yet expanded cell `i`; returns false if it is not better.
+    #[inline(always)]
+    pub(crate) fn relax(&mut self, i: usize, g: f64, parent: u32) -> bool {
+        let open_stamp = self.open_stamp;
+        let n = &mut self.nodes[i];
+        if n.stamp >= open_stamp && g >= n.g {
+            return false;
+        }
+        *n = Node {
+            g,
+            parent,
+            stamp: open_stamp,
+        };
+        true
     }
 
     /// Finds an optimal path from `start` to `goal` under `model`.
@@ -121,7 +167,6 @@ impl GridSearch {
             }
         }
         self.reset(grid.len());
-        let generation = self.generation;
         let blocked = grid.blocked_cells();
         let cols_i = cols as i64;
         let h = |c: Cell| match planner {
@@ -130,9 +175,7 @@ impl GridSearch {
         };
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
-        self.g[start_i as usize] = 0.0;
-        self.parent[start_i as usize] = NO_PARENT;
-        self.seen[start_i as usize] = generation;
+        self.relax(start_i as usize, 0.0, NO_PARENT);
         self.heap.push(Entry {
             f: h(start),
             g: 0.0,
@@ -166,10 +209,10 @@ impl GridSearch {
         let mut expansions = 0u64;
         while let Some(Entry { g, index, .. }) = self.heap.pop() {
             let i = index as usize;
-            if self.closed[i] == generation || g > self.g[i] {
+            if self.is_closed(i) || g > self.g(i) {
                 continue;
             }
-            self.closed[i] = generation;
+            self.close(i);
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
@@ -184,14 +227,11 @@ impl GridSearch {
                     continue;
                 }
                 let ni = (nr * cols_i + nc) as usize;
-                if self.closed[ni] == generation {
+                if self.is_closed(ni) {
                     continue;
                 }
                 let ng = g + step;
-                if self.seen[ni] != generation || ng < self.g[ni] {
-                    self.seen[ni] = generation;
-                    self.g[ni] = ng;
-                    self.parent[ni] = index;
+                if self.relax(ni, ng, index) {
                     let cell = skyplan_cspace::Cell::new(nr as u32, nc as u32);
                     self.heap.push(Entry {
                         f: ng + h(cell),
@@ -207,8 +247,8 @@ impl GridSearch {
     pub(crate) fn reconstruct(&self, grid: &Grid2, goal: u32, expansions: u64) -> GridPath {
         let mut cells = vec![grid.cell(goal as usize)];
         let mut at = goal;
-        while self.parent[at as usize] != NO_PARENT {
-            at = self.parent[at as usize];
+        while self.parent(at as usize) != NO_PARENT {
+            at = self.parent(at as usize);
             cells.push(grid.cell(at as usize));
         }
         cells.reverse();

@@ -243,14 +243,11 @@ impl GridSearch {
         jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
     ) -> Result<GridPath, SearchError> {
         self.reset(grid.len());
-        let generation = self.generation;
         let cols = view.cols;
         let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
-        self.g[start_i as usize] = 0.0;
-        self.parent[start_i as usize] = NO_PARENT;
-        self.seen[start_i as usize] = generation;
+        self.relax(start_i as usize, 0.0, NO_PARENT);
         self.heap.push(Entry {
             f: h(i64::from(start.row), i64::from(start.col)),
             g: 0.0,
@@ -260,17 +257,17 @@ impl GridSearch {
         let mut expansions = 0u64;
         while let Some(Entry { g, index, .. }) = self.heap.pop() {
             let i = index as usize;
-            if self.closed[i] == generation || g > self.g[i] {
+            if self.is_closed(i) || g > self.g(i) {
                 continue;
             }
-            self.closed[i] = generation;
+            self.close(i);
             expansions += 1;
             if index == goal_i {
                 let jump_points = self.reconstruct(grid, goal_i, expansions);
                 return Ok(interpolate(jump_points));
             }
             let (r, c) = ((i as i64) / cols, (i as i64) % cols);
-            let (dr, dc) = match self.parent[i] {
+            let (dr, dc) = match self.parent(i) {
                 NO_PARENT => (0, 0),
                 p => {
                     let (pr, pc) = (i64::from(p) / cols, i64::from(p) % cols);
@@ -283,14 +280,11 @@ impl GridSearch {
                     continue;
                 };
                 let ji = (jr * cols + jc) as usize;
-                if self.closed[ji] == generation {
+                if self.is_closed(ji) {
                     continue;
                 }
                 let ng = g + octile(jr - r, jc - c);
-                if self.seen[ji] != generation || ng < self.g[ji] {
-                    self.seen[ji] = generation;
-                    self.g[ji] = ng;
-                    self.parent[ji] = index;
+                if self.relax(ji, ng, index) {
                     self.heap.push(Entry {
                         f: ng + h(jr, jc),
                         g: ng,

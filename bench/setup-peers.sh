@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Sets up the Python peers of `skyplan bench --peers` in bench/.venv (numpy, pyastar2d, pathfinding).
+# `skyplan bench --peers` finds bench/.venv/bin/python from the repository root, or the Python
+# named by SKYPLAN_PYTHON.
+set -euo pipefail
+cd "$(dirname "$0")"
+python3 -m venv .venv
+.venv/bin/pip install --quiet --disable-pip-version-check numpy pyastar2d pathfinding
+.venv/bin/python -c "import numpy, pyastar2d, pathfinding; print('peers ready: numpy', numpy.__version__)"

@@ -1,0 +1,265 @@
+//! Benchmark core for skyplan (no I/O): reproducible query sets, timed runs of every planner on
+//! the same queries, statistics, and the Rust peer (the `pathfinding` crate's A\*).
+//!
+//! ```
+//! use skyplan_bench::{random_far_queries, run, BenchPlanner};
+//! use skyplan_cspace::Grid2;
+//! use skyplan_search::MoveModel;
+//! let grid = Grid2::from_ascii(&"..........\n".repeat(10))?;
+//! let queries = random_far_queries(&grid, MoveModel::Octile, 5, 42, 6.0);
+//! assert_eq!(queries.len(), 5);
+//! let jps = run(&grid, MoveModel::Octile, BenchPlanner::JpsPlus, &queries, |_| {});
+//! let astar = run(&grid, MoveModel::Octile, BenchPlanner::AStar, &queries, |_| {});
+//! for (a, b) in jps.records.iter().zip(&astar.records) {
+//!     assert_eq!(a.cost, b.cost);
+//! }
+//! # Ok::<(), skyplan_cspace::GridError>(())
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod peer_pathfinding;
+
+use rand::{RngExt, SeedableRng};
+use serde::Serialize;
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_search::{Components, GridSearch, JpsPlus, MoveModel, Planner};
+use std::time::Instant;
+
+/// A planner the benchmark can run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+pub enum BenchPlanner {
+    /// skyplan JPS+ (table built once per grid; build time reported apart).
+    JpsPlus,
+    /// skyplan online Jump Point Search.
+    Jps,
+    /// skyplan A\* (the reference implementation).
+    AStar,
+    /// skyplan Dijkstra.
+    Dijkstra,
+    /// The Rust `pathfinding` crate's A\* with exact octile costs (a peer).
+    PathfindingCrateAStar,
+}
+
+impl BenchPlanner {
+    /// Every planner, skyplan's first.
+    pub const ALL: [BenchPlanner; 5] = [
+        BenchPlanner::JpsPlus,
+        BenchPlanner::Jps,
+        BenchPlanner::AStar,
+        BenchPlanner::Dijkstra,
+        BenchPlanner::PathfindingCrateAStar,
+    ];
+
+    /// Short name for tables and `--planners`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BenchPlanner::JpsPlus => "jps-plus",
+            BenchPlanner::Jps => "jps",
+            BenchPlanner::AStar => "astar",
+            BenchPlanner::Dijkstra => "dijkstra",
+            BenchPlanner::PathfindingCrateAStar => "rust-pathfinding-astar",
+        }
+    }
+
+    /// Parses a [`BenchPlanner::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// True for skyplan's own planners (false for peers).
+    pub fn is_skyplan(self) -> bool {
+        self != BenchPlanner::PathfindingCrateAStar
+    }
+}
+
+/// One timed query.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Record {
+    /// Planner name.
+    pub planner: String,
+    /// Query number.
+    pub query: usize,
+    /// Search time, microseconds (the search alone).
+    pub time_us: f64,
+    /// Expanded nodes (`None` when the planner does not report it).
+    pub expansions: Option<u64>,
+    /// Path cost in cells (`None`: no path found).
+    pub cost: Option<f64>,
+}
+
+/// All queries of one planner.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Run {
+    /// Planner name.
+    pub planner: String,
+    /// One record per query, in query order.
+    pub records: Vec<Record>,
+    /// One-off preparation time (JPS+ table), microseconds.
+    pub precompute_us: f64,
+}
+
+/// `count` reproducible queries between free cells of the largest connected region, at least
+/// `min_distance_cells` apart (relaxed by 10 % after every 10 000 failed draws).
+pub fn random_far_queries(
+    grid: &Grid2,
+    model: MoveModel,
+    count: usize,
+    seed: u64,
+    min_distance_cells: f64,
+) -> Vec<(Cell, Cell)> {
+    let components = Components::new(grid, model);
+    let largest =
+        (0..components.count() as u32).max_by_key(|&l| (components.size(l), std::cmp::Reverse(l)));
+    let Some(largest) = largest else {
+        return Vec::new();
+    };
+    let cells: Vec<Cell> = (0..grid.len())
+        .map(|i| grid.cell(i))
+        .filter(|&c| components.label(c) == Some(largest))
+        .collect();
+    if cells.len() < 2 {
+        return Vec::new();
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut min_d = min_distance_cells;
+    let mut queries = Vec::with_capacity(count);
+    let mut failures = 0u32;
+    while queries.len() < count {
+        let a = cells[rng.random_range(0..cells.len())];
+        let b = cells[rng.random_range(0..cells.len())];
+        let d = (f64::from(a.row) - f64::from(b.row)).hypot(f64::from(a.col) - f64::from(b.col));
+        if d >= min_d && a != b {
+            queries.push((a, b));
+        } else {
+            failures += 1;
+            if failures.is_multiple_of(10_000) {
+                min_d *= 0.9;
+            }
+        }
+    }
+    queries
+}
+
+/// Runs one planner on every query (after one untimed warm-up query), calling `progress(k)`
+/// after query `k`.
+pub fn run(
+    grid: &Grid2,
+    model: MoveModel,
+    planner: BenchPlanner,
+    queries: &[(Cell, Cell)],
+    mut progress: impl FnMut(usize),
+) -> Run {
+    let t_pre = Instant::now();
+    let mut jps_plus = (planner == BenchPlanner::JpsPlus).then(|| JpsPlus::new(grid, model));
+    let precompute_us = t_pre.elapsed().as_secs_f64() * 1e6;
+    let mut search = GridSearch::new();
+    // One untimed warm-up query, so that no planner's first timed query pays for allocating and
+    // faulting in its buffers.
+    if let Some(&(start, goal)) = queries.first() {
+        match (&mut jps_plus, planner) {
+            (Some(plus), _) => drop(plus.search(start, goal)),
+            (None, BenchPlanner::PathfindingCrateAStar) => {
+                drop(peer_pathfinding::astar_cost(grid, model, start, goal))
+            }
+            (None, _) => drop(search.search(grid, start, goal, model, Planner::AStar)),
+        }
+    }
+    let mut records = Vec::with_capacity(queries.len());
+    for (query, &(start, goal)) in queries.iter().enumerate() {
+        let t = Instant::now();
+        let (cost, expansions) = match planner {
+            BenchPlanner::PathfindingCrateAStar => {
+                (peer_pathfinding::astar_cost(grid, model, start, goal), None)
+            }
+            _ => {
+                let result = match (&mut jps_plus, planner) {
+                    (Some(plus), _) => plus.search(start, goal),
+                    (None, BenchPlanner::Jps) => {
+                        search.search(grid, start, goal, model, Planner::Jps)
+                    }
+                    (None, BenchPlanner::Dijkstra) => {
+                        search.search(grid, start, goal, model, Planner::Dijkstra)
+                    }
+                    _ => search.search(grid, start, goal, model, Planner::AStar),
+                };
+                match result {
+                    Ok(p) => (Some(p.cost_cells()), Some(p.expansions)),
+                    Err(_) => (None, None),
+                }
+            }
+        };
+        let time_us = t.elapsed().as_secs_f64() * 1e6;
+        records.push(Record {
+            planner: planner.name().to_string(),
+            query,
+            time_us,
+            expansions,
+            cost,
+        });
+        progress(query);
+    }
+    Run {
+        planner: planner.name().to_string(),
+        records,
+        precompute_us,
+    }
+}
+
+/// Order statistics of a set of times.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Stats {
+    /// Number of samples.
+    pub n: usize,
+    /// Median.
+    pub median: f64,
+    /// 95th percentile (nearest rank).
+    pub p95: f64,
+    /// Maximum.
+    pub max: f64,
+    /// Mean.
+    pub mean: f64,
+}
+
+impl Stats {
+    /// Statistics of `values` (`None` when empty).
+    ///
+    /// ```
+    /// let s = skyplan_bench::Stats::of(&[4.0, 1.0, 3.0, 2.0]).unwrap();
+    /// assert_eq!((s.median, s.max, s.mean), (2.5, 4.0, 2.5));
+    /// ```
+    pub fn of(values: &[f64]) -> Option<Self> {
+        if values.is_empty() {
+            return None;
+        }
+        let mut v = values.to_vec();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let median = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            (v[n / 2 - 1] + v[n / 2]) / 2.0
+        };
+        let rank = ((0.95 * n as f64).ceil() as usize).clamp(1, n);
+        Some(Self {
+            n,
+            median,
+            p95: v[rank - 1],
+            max: v[n - 1],
+            mean: v.iter().sum::<f64>() / n as f64,
+        })
+    }
+}
+
+/// Ratio of a run's total cost to the best total over the queries every run solved
+/// (1.0 = as short as the best; optimal planners all give exactly 1.0).
+pub fn cost_ratio(run: &[Option<f64>], best: &[Option<f64>]) -> Option<f64> {
+    let (mut mine, mut theirs) = (0.0, 0.0);
+    for (a, b) in run.iter().zip(best) {
+        if let (Some(a), Some(b)) = (a, b) {
+            mine += a;
+            theirs += b;
+        }
+    }
+    (theirs > 0.0).then(|| mine / theirs)
+}

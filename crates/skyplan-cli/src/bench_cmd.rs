@@ -1,0 +1,436 @@
+//! `skyplan bench`: every planner on the same queries, a table of times and costs, and the
+//! peers people use instead (the Rust `pathfinding` crate; Python A\*s with `--peers`).
+
+use crate::args::BenchArgs;
+use crate::exit::{Classify, Kind, Result, bad_input};
+use crate::files::{BUNDLED_COLLIDERS, read_text, write_atomic};
+use anyhow::Context;
+use serde_json::{Value, json};
+use skyplan_bench::{BenchPlanner, Record, Run, Stats, cost_ratio, random_far_queries, run};
+use skyplan_cspace::{Cell, Grid2, GridFrame, GridSpec};
+use skyplan_search::MoveModel;
+use std::path::PathBuf;
+use std::process::Command;
+
+/// The Python peers script, compiled in so that `bench --peers` works from any directory.
+const PEERS_PY: &str = include_str!("../../../bench/peers.py");
+
+struct Source {
+    name: String,
+    grid: Grid2,
+}
+
+fn load(args: &BenchArgs) -> Result<Source> {
+    let spec = GridSpec {
+        alt_m: args.alt_m,
+        safety_m: args.safety_m,
+        cell_m: args.cell_m,
+    };
+    match &args.map {
+        Some(path) if path.extension().is_some_and(|e| e == "map") => {
+            let text = read_text(path)?;
+            let map = skyplan_map::movingai::parse_map(&text)
+                .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+            let blocked = map.passable.iter().map(|&p| !p).collect();
+            let grid = Grid2::new(
+                map.height as u32,
+                map.width as u32,
+                blocked,
+                GridFrame::default(),
+            )
+            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+            Ok(Source {
+                name: path.display().to_string(),
+                grid,
+            })
+        }
+        other => {
+            let (name, text) = match other {
+                Some(path) => (path.display().to_string(), read_text(path)?),
+                None => (
+                    "FCND city map (bundled)".to_string(),
+                    BUNDLED_COLLIDERS.to_string(),
+                ),
+            };
+            let map = skyplan_map::colliders::parse_colliders(&text)
+                .map_err(|e| bad_input(format!("{name}: {e}")))?;
+            let grid =
+                Grid2::from_colliders(&map, spec).map_err(|e| bad_input(format!("{name}: {e}")))?;
+            Ok(Source {
+                name: format!("{name} at {} m, {} m margin", spec.alt_m, spec.safety_m),
+                grid,
+            })
+        }
+    }
+}
+
+fn queries(
+    args: &BenchArgs,
+    grid: &Grid2,
+    model: MoveModel,
+) -> Result<(Vec<(Cell, Cell)>, String)> {
+    if let Some(scen) = &args.scen {
+        let text = read_text(scen)?;
+        let list = skyplan_map::movingai::parse_scen(&text)
+            .map_err(|e| bad_input(format!("{}: {e}", scen.display())))?;
+        let mut out = Vec::new();
+        for s in list.iter().take(args.random.unwrap_or(usize::MAX)) {
+            let (a, b) = (
+                Cell::new(s.start_y as u32, s.start_x as u32),
+                Cell::new(s.goal_y as u32, s.goal_x as u32),
+            );
+            if !grid.contains(a) || !grid.contains(b) {
+                return Err(bad_input(format!(
+                    "{}: line {}: a scenario endpoint is off the map",
+                    scen.display(),
+                    s.line
+                )));
+            }
+            out.push((a, b));
+        }
+        return Ok((out, format!("scenarios of {}", scen.display())));
+    }
+    let count = args.random.unwrap_or(26);
+    let diagonal = f64::from(grid.rows()).hypot(f64::from(grid.cols()));
+    let min_cells = args
+        .min_distance_m
+        .map_or(0.5 * diagonal, |m| m / grid.frame().cell_m);
+    let q = random_far_queries(grid, model, count, args.seed, min_cells);
+    if q.len() < count {
+        return Err(bad_input(
+            "the map has fewer than two connected free cells to draw queries from",
+        ));
+    }
+    Ok((
+        q,
+        format!(
+            "{count} random queries (seed {}) ≥ {min_cells:.0} cells apart",
+            args.seed
+        ),
+    ))
+}
+
+fn python() -> PathBuf {
+    if let Some(p) = std::env::var_os("SKYPLAN_PYTHON") {
+        return PathBuf::from(p);
+    }
+    let candidates = [
+        PathBuf::from("bench/.venv/bin/python"),
+        PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../bench/.venv/bin/python"
+        )),
+    ];
+    candidates
+        .into_iter()
+        .find(|p| p.exists())
+        .unwrap_or_else(|| PathBuf::from("python3"))
+}
+
+/// Runs the Python peers on the same grid and queries; returns their runs and any notes.
+fn python_peers(
+    grid: &Grid2,
+    queries: &[(Cell, Cell)],
+    model: MoveModel,
+    budget_s: f64,
+) -> (Vec<Run>, Vec<String>) {
+    let mut notes = Vec::new();
+    let dir = match tempfile_dir() {
+        Ok(d) => d,
+        Err(e) => return (Vec::new(), vec![format!("python peers skipped: {e:#}")]),
+    };
+    let grid_bytes: Vec<u8> = grid.blocked_cells().iter().map(|&b| u8::from(b)).collect();
+    let q: Vec<[u32; 4]> = queries
+        .iter()
+        .map(|(a, b)| [a.row, a.col, b.row, b.col])
+        .collect();
+    let written = std::fs::write(dir.join("grid.bin"), grid_bytes)
+        .and_then(|_| std::fs::write(dir.join("queries.json"), json!(q).to_string()))
+        .and_then(|_| std::fs::write(dir.join("peers.py"), PEERS_PY));
+    if let Err(e) = written {
+        return (Vec::new(), vec![format!("python peers skipped: {e}")]);
+    }
+    let py = python();
+    let model_name = if model == MoveModel::OctileCornerCutting {
+        "octile-cc"
+    } else {
+        "octile"
+    };
+    let output = Command::new(&py)
+        .arg(dir.join("peers.py"))
+        .arg(dir.join("grid.bin"))
+        .arg(grid.rows().to_string())
+        .arg(grid.cols().to_string())
+        .arg(dir.join("queries.json"))
+        .arg(model_name)
+        .arg(budget_s.to_string())
+        .output();
+    let _ = std::fs::remove_dir_all(&dir);
+    let output = match output {
+        Ok(o) if o.status.success() => o,
+        Ok(o) => {
+            let err = String::from_utf8_lossy(&o.stderr);
+            return (
+                Vec::new(),
+                vec![format!(
+                    "python peers failed ({}): {}",
+                    py.display(),
+                    err.trim()
+                )],
+            );
+        }
+        Err(e) => {
+            return (
+                Vec::new(),
+                vec![format!(
+                    "python peers skipped: cannot run {}: {e}",
+                    py.display()
+                )],
+            );
+        }
+    };
+    let mut runs: Vec<Run> = Vec::new();
+    for line in String::from_utf8_lossy(&output.stdout).lines() {
+        let Ok(v) = serde_json::from_str::<Value>(line) else {
+            continue;
+        };
+        let peer = v["peer"].as_str().unwrap_or("?").to_string();
+        if let Some(why) = v["unavailable"].as_str() {
+            notes.push(format!(
+                "{peer} unavailable ({why}); run bench/setup-peers.sh"
+            ));
+            continue;
+        }
+        let record = Record {
+            planner: peer.clone(),
+            query: v["query"].as_u64().unwrap_or(0) as usize,
+            time_us: v["time_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
+            expansions: None,
+            cost: v["cost"].as_f64(),
+        };
+        match runs.iter_mut().find(|r| r.planner == peer) {
+            Some(r) => r.records.push(record),
+            None => runs.push(Run {
+                planner: peer,
+                records: vec![record],
+                precompute_us: 0.0,
+            }),
+        }
+    }
+    (runs, notes)
+}
+
+fn tempfile_dir() -> anyhow::Result<PathBuf> {
+    let dir = std::env::temp_dir().join(format!("skyplan-peers-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    Ok(dir)
+}
+
+struct Row {
+    planner: String,
+    stats: Stats,
+    expansions: Option<f64>,
+    mean_cost_m: Option<f64>,
+    cost_ratio: Option<f64>,
+    vs_fastest: f64,
+    precompute_ms: f64,
+}
+
+pub fn run_bench(args: BenchArgs) -> Result<()> {
+    let model = if args.corner_cutting {
+        MoveModel::OctileCornerCutting
+    } else {
+        MoveModel::Octile
+    };
+    let planners: Vec<BenchPlanner> = match &args.planners {
+        Some(list) => list
+            .split(',')
+            .map(|n| {
+                BenchPlanner::from_name(n.trim()).ok_or_else(|| {
+                    let all: Vec<&str> = BenchPlanner::ALL.iter().map(|p| p.name()).collect();
+                    bad_input(format!(
+                        "--planners: unknown planner {n:?}; expected some of {}",
+                        all.join(", ")
+                    ))
+                })
+            })
+            .collect::<Result<_>>()?,
+        None => {
+            let mut v = vec![
+                BenchPlanner::JpsPlus,
+                BenchPlanner::Jps,
+                BenchPlanner::AStar,
+            ];
+            if args.peers {
+                v.push(BenchPlanner::PathfindingCrateAStar);
+            }
+            v
+        }
+    };
+    let source = load(&args)?;
+    let grid = &source.grid;
+    let (queries, described) = queries(&args, grid, model)?;
+    let cell_m = grid.frame().cell_m;
+
+    let progress = indicatif::ProgressBar::new((planners.len() * queries.len()) as u64);
+    progress.set_style(
+        indicatif::ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} queries")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    if args.json {
+        progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let mut runs: Vec<Run> = Vec::new();
+    for &planner in &planners {
+        progress.set_message(planner.name());
+        runs.push(run(grid, model, planner, &queries, |_| progress.inc(1)));
+    }
+    progress.finish_and_clear();
+    let mut notes = Vec::new();
+    if args.peers {
+        if !args.json {
+            eprintln!(
+                "running the Python peers (budget {} s each)…",
+                args.peer_budget_s
+            );
+        }
+        let (py_runs, py_notes) = python_peers(grid, &queries, model, args.peer_budget_s);
+        runs.extend(py_runs);
+        notes.extend(py_notes);
+    }
+
+    // Best cost per query over every run (the optimal planners all agree on it).
+    let best: Vec<Option<f64>> = (0..queries.len())
+        .map(|q| {
+            runs.iter()
+                .filter_map(|r| {
+                    r.records
+                        .get(q)
+                        .filter(|rec| rec.query == q)
+                        .and_then(|rec| rec.cost)
+                })
+                .min_by(f64::total_cmp)
+        })
+        .collect();
+    let medians: Vec<f64> = runs
+        .iter()
+        .filter(|r| BenchPlanner::from_name(&r.planner).is_some_and(BenchPlanner::is_skyplan))
+        .filter_map(|r| {
+            Stats::of(&r.records.iter().map(|x| x.time_us).collect::<Vec<_>>()).map(|s| s.median)
+        })
+        .collect();
+    let fastest = medians.iter().copied().fold(f64::INFINITY, f64::min);
+    let rows: Vec<Row> = runs
+        .iter()
+        .filter_map(|r| {
+            let stats = Stats::of(&r.records.iter().map(|x| x.time_us).collect::<Vec<_>>())?;
+            let exp: Vec<f64> = r
+                .records
+                .iter()
+                .filter_map(|x| x.expansions.map(|e| e as f64))
+                .collect();
+            let costs: Vec<Option<f64>> = r.records.iter().map(|x| x.cost).collect();
+            let best_same: Vec<Option<f64>> = r
+                .records
+                .iter()
+                .map(|x| best.get(x.query).copied().flatten())
+                .collect();
+            let solved: Vec<f64> = costs.iter().flatten().copied().collect();
+            Some(Row {
+                planner: r.planner.clone(),
+                stats,
+                expansions: (!exp.is_empty()).then(|| exp.iter().sum::<f64>() / exp.len() as f64),
+                mean_cost_m: (!solved.is_empty())
+                    .then(|| solved.iter().sum::<f64>() / solved.len() as f64 * cell_m),
+                cost_ratio: cost_ratio(&costs, &best_same),
+                vs_fastest: stats.median / fastest,
+                precompute_ms: r.precompute_us / 1e3,
+            })
+        })
+        .collect();
+
+    if let Some(out) = &args.out {
+        let records: Vec<&Record> = runs.iter().flat_map(|r| &r.records).collect();
+        let bytes = if out.extension().is_some_and(|e| e == "json") {
+            serde_json::to_vec_pretty(
+                &json!({ "map": source.name, "queries": described, "records": records }),
+            )
+            .or_exit(Kind::Runtime)?
+        } else {
+            let mut w = csv::Writer::from_writer(Vec::new());
+            for r in &records {
+                w.serialize(r).or_exit(Kind::Runtime)?;
+            }
+            w.into_inner()
+                .map_err(|e| anyhow::anyhow!("{e}"))
+                .or_exit(Kind::Runtime)?
+        };
+        write_atomic(out, &bytes)?;
+    }
+
+    if args.json {
+        let table: Vec<Value> = rows
+            .iter()
+            .map(|r| {
+                json!({
+                    "planner": r.planner, "queries": r.stats.n, "median_us": r.stats.median, "p95_us": r.stats.p95,
+                    "max_us": r.stats.max, "mean_us": r.stats.mean, "mean_expansions": r.expansions,
+                    "mean_cost_m": r.mean_cost_m, "cost_over_best": r.cost_ratio, "median_over_fastest": r.vs_fastest,
+                    "precompute_ms": r.precompute_ms,
+                })
+            })
+            .collect();
+        println!(
+            "{}",
+            json!({ "map": source.name, "grid": [grid.rows(), grid.cols()], "queries": described, "rows": table, "notes": notes })
+        );
+        return Ok(());
+    }
+    println!(
+        "map      {}: {} × {} cells of {} m",
+        source.name,
+        grid.rows(),
+        grid.cols(),
+        cell_m
+    );
+    println!("queries  {described}; move model {model:?}");
+    println!();
+    println!(
+        "{:<34} {:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>10} {:>10}",
+        "planner",
+        "queries",
+        "median ms",
+        "p95 ms",
+        "max ms",
+        "expansions",
+        "mean cost m",
+        "cost/best",
+        "×fastest"
+    );
+    for r in &rows {
+        let name = if r.planner == BenchPlanner::JpsPlus.name() {
+            format!("{} (+{:.0} ms table)", r.planner, r.precompute_ms)
+        } else {
+            r.planner.clone()
+        };
+        println!(
+            "{:<34} {:>7} {:>10.3} {:>10.3} {:>10.3} {:>10} {:>11} {:>10} {:>10.1}",
+            name,
+            r.stats.n,
+            r.stats.median / 1e3,
+            r.stats.p95 / 1e3,
+            r.stats.max / 1e3,
+            r.expansions.map_or("-".to_string(), |e| format!("{e:.0}")),
+            r.mean_cost_m.map_or("-".to_string(), |c| format!("{c:.2}")),
+            r.cost_ratio.map_or("-".to_string(), |c| format!("{c:.6}")),
+            r.vs_fastest
+        );
+    }
+    for n in &notes {
+        println!("note     {n}");
+    }
+    if let Some(out) = &args.out {
+        println!("wrote    {}", out.display());
+    }
+    Ok(())
+}
