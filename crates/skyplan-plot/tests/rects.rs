@@ -48,7 +48,7 @@ fn random_grids_are_covered_exactly_once() {
         // Some grids with stacked identical runs, as buildings make.
         if case % 3 == 0 {
             for r in 1..rows as usize {
-                if rng.next() % 2 == 0 {
+                if rng.next().is_multiple_of(2) {
                     let (prev, this) = blocked.split_at_mut(r * cols as usize);
                     this[..cols as usize].copy_from_slice(&prev[(r - 1) * cols as usize..]);
                 }
