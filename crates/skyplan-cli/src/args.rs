@@ -60,6 +60,8 @@ pub enum PlannerArg {
     Dijkstra,
     /// Jump Point Search: A*'s optimal costs, far fewer expansions (octile grids).
     Jps,
+    /// Theta*: any-angle paths through cell centres, shorter than any grid path.
+    Theta,
     /// JPS+: JPS with precomputed jumps; pays off over many queries on one grid.
     #[value(name = "jps-plus")]
     #[serde(rename = "jps-plus")]

@@ -83,6 +83,7 @@ fn resolve(args: PlanArgs) -> Result<Options> {
         PlannerArg::Dijkstra => Planner::Dijkstra,
         PlannerArg::Jps => Planner::Jps,
         PlannerArg::JpsPlus => Planner::JpsPlus,
+        PlannerArg::Theta => Planner::ThetaStar,
     };
     let prune = match (args.epsilon.or(cfg.epsilon), args.prune.or(cfg.prune)) {
         (Some(eps), _) if eps < 0.0 => {
@@ -176,6 +177,7 @@ fn planner_name(planner: Planner) -> &'static str {
         Planner::Dijkstra => "Dijkstra",
         Planner::Jps => "JPS",
         Planner::JpsPlus => "JPS+",
+        Planner::ThetaStar => "Theta*",
     }
 }
 
@@ -312,6 +314,8 @@ fn summary_json(map_name: &str, obstacles: usize, opts: &Options, o: &PlanOutcom
         "prune": opts.request.prune,
         "shortcut": opts.request.shortcut,
         "cost_m": o.cost_m,
+        "octile_optimum_m": o.octile_optimum_m,
+        "straight_line_m": o.straight_line_m,
         "path_cells": o.path.cells.len(),
         "straight_moves": o.path.straight_moves,
         "diagonal_moves": o.path.diagonal_moves,
@@ -355,17 +359,32 @@ fn print_summary(map_name: &str, obstacles: usize, opts: &Options, o: &PlanOutco
     );
     println!("start      {}", o.start);
     println!("goal       {}", o.goal);
+    let shape = if o.path.any_angle_cells.is_some() {
+        format!("{} turning points", o.path.cells.len())
+    } else {
+        format!(
+            "{} cells ({} straight, {} diagonal)",
+            o.path.cells.len(),
+            o.path.straight_moves,
+            o.path.diagonal_moves
+        )
+    };
     println!(
-        "path       {} {}: {:.2} m, {} cells ({} straight, {} diagonal), {} expansions, {:.2} ms",
+        "path       {} {}: {:.2} m, {shape}, {} expansions, {:.2} ms",
         planner_name(opts.request.planner),
         model_name(opts.request.model),
         o.cost_m,
-        o.path.cells.len(),
-        o.path.straight_moves,
-        o.path.diagonal_moves,
         o.path.expansions,
         ms(o.timings.search_us)
     );
+    if let Some(octile_m) = o.octile_optimum_m {
+        println!(
+            "any-angle  {:.2} m: {:.1} % shorter than the octile optimum {octile_m:.2} m; straight line {:.2} m",
+            o.cost_m,
+            100.0 * (1.0 - o.cost_m / octile_m),
+            o.straight_line_m
+        );
+    }
     let shortcut = if opts.request.shortcut {
         format!(" → {} after line-of-sight shortcut", o.shortcut.len())
     } else {

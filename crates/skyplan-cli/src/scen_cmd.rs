@@ -56,6 +56,11 @@ pub fn run(args: ScenArgs) -> Result<()> {
         PlannerArg::Dijkstra => Planner::Dijkstra,
         PlannerArg::Jps => Planner::Jps,
         PlannerArg::JpsPlus => Planner::JpsPlus,
+        PlannerArg::Theta => {
+            return Err(bad_input(
+                "--planner theta finds any-angle paths; MovingAI lengths are octile: use jps-plus, jps, astar or dijkstra",
+            ));
+        }
     };
     // JPS+ builds its table once for all scenarios (reported, not counted per query).
     let t_table = Instant::now();

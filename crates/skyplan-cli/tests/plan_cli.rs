@@ -398,3 +398,25 @@ fn unwritable_output_fails_cleanly() {
         .code(1)
         .stderr(predicate::str::contains("no/such/dir/w.json"));
 }
+
+#[test]
+fn theta_star_is_shorter_than_the_octile_optimum_and_still_free() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = run_json(dir.path(), &["--planner", "theta"]);
+    let (cost, octile, straight) = (
+        v["cost_m"].as_f64().unwrap(),
+        v["octile_optimum_m"].as_f64().unwrap(),
+        v["straight_line_m"].as_f64().unwrap(),
+    );
+    assert!(
+        straight <= cost && cost < octile,
+        "{straight} ≤ {cost} < {octile}"
+    );
+    let grid = city_grid(GridSpec::default());
+    for w in rows(&v).windows(2) {
+        assert!(
+            grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed),
+            "{w:?}"
+        );
+    }
+}

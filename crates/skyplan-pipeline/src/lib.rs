@@ -264,8 +264,13 @@ pub struct PlanOutcome {
     pub goal_cell: Cell,
     /// The optimal grid path.
     pub path: GridPath,
-    /// Cost of the grid path, metres (`cost_cells × cell_m`).
+    /// Cost of the path, metres (`cost_cells × cell_m`): the octile cost of a grid path, the
+    /// Euclidean length of an any-angle (Theta\*) path.
     pub cost_m: f64,
+    /// For any-angle planners: the octile optimum between the same cells, metres, for comparison.
+    pub octile_optimum_m: Option<f64>,
+    /// Straight-line distance between the start and goal cell centres, metres (a lower bound).
+    pub straight_line_m: f64,
     /// Cells after collinearity pruning.
     pub pruned: Vec<Cell>,
     /// Cells after shortcutting (equal to `pruned` when shortcutting is off).
@@ -420,6 +425,17 @@ pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, Pl
         .copied()
         .collect();
     let cost_m = path.cost_cells() * spec.cell_m;
+    let octile_optimum_m = match request.planner {
+        Planner::ThetaStar => GridSearch::new()
+            .search(&grid, start_cell, goal_cell, request.model, Planner::Jps)
+            .ok()
+            .map(|p| p.cost_cells() * spec.cell_m),
+        _ => None,
+    };
+    let straight_line_m = {
+        let ((a_n, a_e), (b_n, b_e)) = (grid.center_ne(start_cell), grid.center_ne(goal_cell));
+        (a_n - b_n).hypot(a_e - b_e)
+    };
     Ok(PlanOutcome {
         active_obstacles,
         frame,
@@ -428,6 +444,8 @@ pub fn plan(map: &CollidersMap, request: &PlanRequest) -> Result<PlanOutcome, Pl
         start_cell,
         goal_cell,
         cost_m,
+        octile_optimum_m,
+        straight_line_m,
         pruned,
         shortcut: shortcut_cells,
         mission,

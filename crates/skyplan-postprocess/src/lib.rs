@@ -25,10 +25,7 @@ use skyplan_search::MoveModel;
 /// The line-of-sight rule that respects a move model's corner rule: only the corner-cutting
 /// model may pass between two diagonally adjacent blocked cells.
 pub fn touch_for(model: MoveModel) -> Touch {
-    match model {
-        MoveModel::OctileCornerCutting => Touch::Open,
-        MoveModel::FourConnected | MoveModel::Octile => Touch::Closed,
-    }
+    model.touch()
 }
 
 fn delta(a: Cell, b: Cell) -> (i64, i64) {

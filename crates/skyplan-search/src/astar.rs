@@ -159,11 +159,14 @@ impl GridSearch {
     ) -> Result<GridPath, SearchError> {
         check_endpoints(grid, start, goal)?;
         let (rows, cols) = (grid.rows(), grid.cols());
+        if planner == Planner::ThetaStar {
+            return self.theta_star(grid, start, goal, model);
+        }
         if model.has_diagonals() {
             match planner {
                 Planner::Jps => return self.search_jps(grid, start, goal, model),
                 Planner::JpsPlus => return crate::JpsPlus::new(grid, model).search(start, goal),
-                Planner::AStar | Planner::Dijkstra => {}
+                Planner::AStar | Planner::Dijkstra | Planner::ThetaStar => {}
             }
         }
         self.reset(grid.len());
@@ -171,7 +174,9 @@ impl GridSearch {
         let cols_i = cols as i64;
         let h = |c: Cell| match planner {
             Planner::Dijkstra => 0.0,
-            Planner::AStar | Planner::Jps | Planner::JpsPlus => model.heuristic(c, goal),
+            Planner::AStar | Planner::Jps | Planner::JpsPlus | Planner::ThetaStar => {
+                model.heuristic(c, goal)
+            }
         };
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
@@ -262,6 +267,7 @@ impl GridSearch {
             straight_moves,
             diagonal_moves,
             expansions,
+            any_angle_cells: None,
         }
     }
 }

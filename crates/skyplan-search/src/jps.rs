@@ -322,5 +322,6 @@ fn interpolate(jumps: GridPath) -> GridPath {
         straight_moves,
         diagonal_moves,
         expansions: jumps.expansions,
+        any_angle_cells: None,
     }
 }

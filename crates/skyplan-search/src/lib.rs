@@ -27,6 +27,7 @@ mod components;
 mod jps;
 mod jps_plus;
 pub mod oracle;
+mod theta;
 
 pub use astar::GridSearch;
 pub use components::Components;
@@ -67,6 +68,15 @@ impl MoveModel {
         }
     }
 
+    /// The line-of-sight rule that respects the model's corner rule: only the corner-cutting
+    /// model may pass between two diagonally adjacent blocked cells.
+    pub fn touch(self) -> skyplan_cspace::Touch {
+        match self {
+            MoveModel::OctileCornerCutting => skyplan_cspace::Touch::Open,
+            MoveModel::FourConnected | MoveModel::Octile => skyplan_cspace::Touch::Closed,
+        }
+    }
+
     /// An admissible, consistent heuristic in cells between two cells.
     #[inline]
     pub fn heuristic(self, a: Cell, b: Cell) -> f64 {
@@ -93,13 +103,16 @@ pub enum Planner {
     /// Jump Point Search: A\*'s costs with far fewer expansions on octile grids
     /// (4-connected grids fall back to A\*).
     Jps,
+    /// Theta\*: any-angle paths (turning only at obstacle corners), shorter than the octile
+    /// optimum; not optimal among any-angle paths.
+    ThetaStar,
     /// JPS+ : JPS with every scan precomputed. Through [`GridSearch::search`] the table is
     /// rebuilt per query; build a [`JpsPlus`] once to answer many queries on one grid.
     JpsPlus,
 }
 
 /// A path of grid cells from start to goal, both included.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct GridPath {
     /// The cells, start first.
     pub cells: Vec<Cell>,
@@ -109,12 +122,17 @@ pub struct GridPath {
     pub diagonal_moves: u64,
     /// Number of cells expanded by the search.
     pub expansions: u64,
+    /// For any-angle paths (Theta\*), whose consecutive cells need not be neighbours: the
+    /// Euclidean length in cells. `None` for grid paths.
+    pub any_angle_cells: Option<f64>,
 }
 
 impl GridPath {
-    /// Cost in cells: `straight + √2 · diagonal`.
+    /// Cost in cells: `straight + √2 · diagonal` for grid paths, the Euclidean length for
+    /// any-angle paths.
     pub fn cost_cells(&self) -> f64 {
-        octile_cost(self.straight_moves, self.diagonal_moves)
+        self.any_angle_cells
+            .unwrap_or_else(|| octile_cost(self.straight_moves, self.diagonal_moves))
     }
 }
 

@@ -111,3 +111,31 @@ fn corner_rule_changes_the_answer() {
         .unwrap();
     assert_eq!(cut.diagonal_moves, 1);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(600))]
+
+    /// Theta*: reachability as the oracle, every segment in sight under the corner rule, and a
+    /// length between the straight line and the octile optimum.
+    #[test]
+    fn theta_star_is_valid_and_between_the_bounds((grid, start, goal) in query_strategy()) {
+        let mut search = GridSearch::new();
+        for model in MODELS {
+            let truth = dijkstra_exact(&grid, start, goal, model);
+            match (search.theta_star(&grid, start, goal, model), truth) {
+                (Ok(path), Some(octile)) => {
+                    prop_assert_eq!(path.cells.first(), Some(&start));
+                    prop_assert_eq!(path.cells.last(), Some(&goal));
+                    for w in path.cells.windows(2) {
+                        prop_assert!(grid.segment_is_free_ne(grid.center_ne(w[0]), grid.center_ne(w[1]), model.touch()));
+                    }
+                    let straight = (f64::from(start.row) - f64::from(goal.row)).hypot(f64::from(start.col) - f64::from(goal.col));
+                    prop_assert!(path.cost_cells() >= straight - 1e-9);
+                    prop_assert!(path.cost_cells() <= octile.to_f64() + 1e-9, "{} > {}", path.cost_cells(), octile.to_f64());
+                }
+                (Err(_), None) => {}
+                (got, want) => prop_assert!(false, "{model:?}: got {got:?}, oracle {want:?}"),
+            }
+        }
+    }
+}
