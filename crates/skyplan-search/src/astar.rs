@@ -27,11 +27,16 @@ impl PartialOrd for Entry {
     }
 }
 impl Ord for Entry {
+    /// `f` and `g` are never negative or NaN, and for such floats the IEEE-754 bit patterns,
+    /// read as integers, are ordered exactly like the numbers: integer compares are cheaper.
+    #[inline]
     fn cmp(&self, other: &Self) -> Ordering {
+        debug_assert!(self.f >= 0.0 && self.g >= 0.0 && other.f >= 0.0 && other.g >= 0.0);
         other
             .f
-            .total_cmp(&self.f)
-            .then(self.g.total_cmp(&other.g))
+            .to_bits()
+            .cmp(&self.f.to_bits())
+            .then(self.g.to_bits().cmp(&other.g.to_bits()))
             .then(other.index.cmp(&self.index))
     }
 }

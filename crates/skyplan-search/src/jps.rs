@@ -76,6 +76,18 @@ impl<'a> View<'a> {
         self.corner_cutting || (self.free(r + dr, c) && self.free(r, c + dc))
     }
 
+    /// Bit `k` set iff the neighbour `DIRS[k]` of `(r, c)` is free.
+    #[inline]
+    pub(crate) fn neighbour_mask(&self, r: i64, c: i64) -> u8 {
+        DIRS.iter().enumerate().fold(0u8, |m, (k, &(a, b))| {
+            if self.free(r + a, c + b) {
+                m | (1 << k)
+            } else {
+                m
+            }
+        })
+    }
+
     /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`.
     #[inline]
     fn jump_straight(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
@@ -210,6 +222,72 @@ impl<'a> View<'a> {
     }
 }
 
+/// The 8 directions as `(dr, dc)`, straight first; bit `k` of a direction set is `DIRS[k]`.
+pub(crate) const DIRS: [(i64, i64); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (1, -1),
+    (-1, 1),
+    (-1, -1),
+];
+
+/// Index of a direction in [`DIRS`].
+#[inline(always)]
+pub(crate) fn dir_index(dr: i64, dc: i64) -> usize {
+    // (dr + 1) * 3 + (dc + 1) → index in DIRS.
+    const LUT: [usize; 9] = [7, 1, 6, 3, usize::MAX, 2, 5, 0, 4];
+    LUT[((dr + 1) * 3 + (dc + 1)) as usize]
+}
+
+/// Pruned directions (a bit set over [`DIRS`]) for every corner rule, incoming direction
+/// (`(0, 0)` for the start) and 3 × 3 neighbourhood: [`View::directions`] evaluated once on each
+/// of the 2 × 9 × 256 cases, so that the search pays one lookup per expansion.
+type DirectionTable = [[[u8; 256]; 9]; 2];
+
+fn direction_table() -> &'static DirectionTable {
+    static TABLE: std::sync::OnceLock<Box<DirectionTable>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut table = Box::new([[[0u8; 256]; 9]; 2]);
+        let mut out = Vec::with_capacity(8);
+        for (cc, per_rule) in table.iter_mut().enumerate() {
+            for (incoming, per_dir) in per_rule.iter_mut().enumerate() {
+                let (dr, dc) = (incoming as i64 / 3 - 1, incoming as i64 % 3 - 1);
+                for (mask, slot) in per_dir.iter_mut().enumerate() {
+                    let mut blocked = [true; 9];
+                    blocked[4] = false;
+                    for (k, &(a, b)) in DIRS.iter().enumerate() {
+                        if mask & (1 << k) != 0 {
+                            blocked[((a + 1) * 3 + (b + 1)) as usize] = false;
+                        }
+                    }
+                    let view = View {
+                        blocked: &blocked,
+                        rows: 3,
+                        cols: 3,
+                        goal: (-9, -9),
+                        corner_cutting: cc == 1,
+                    };
+                    view.directions(1, 1, dr, dc, &mut out);
+                    *slot = out
+                        .iter()
+                        .fold(0u8, |set, &(a, b)| set | (1 << dir_index(a, b)));
+                }
+            }
+        }
+        table
+    })
+}
+
+/// The pruned directions of a cell with free-neighbour `mask`, entered along `(dr, dc)`.
+#[inline(always)]
+pub(crate) fn pruned_directions(corner_cutting: bool, dr: i64, dc: i64, mask: u8) -> u8 {
+    direction_table()[usize::from(corner_cutting)][((dr + 1) * 3 + (dc + 1)) as usize]
+        [usize::from(mask)]
+}
+
 /// Octile distance in cells between two cells of a straight or diagonal segment.
 #[inline]
 pub(crate) fn octile(dr: i64, dc: i64) -> f64 {
@@ -227,9 +305,14 @@ impl GridSearch {
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
         let view = View::new(grid, goal, model);
-        self.jump_point_search(grid, start, goal, &view, |r, c, a, b| {
-            view.jump(r + a, c + b, a, b)
-        })
+        self.jump_point_search(
+            grid,
+            start,
+            goal,
+            &view,
+            |r, c, _| view.neighbour_mask(r, c),
+            |r, c, a, b| view.jump(r + a, c + b, a, b),
+        )
     }
 
     /// The best-first loop shared by JPS and JPS+: `jump(r, c, dr, dc)` returns the next jump
@@ -240,6 +323,7 @@ impl GridSearch {
         start: Cell,
         goal: Cell,
         view: &View<'_>,
+        neighbour_mask: impl Fn(i64, i64, usize) -> u8,
         jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
     ) -> Result<GridPath, SearchError> {
         self.reset(grid.len());
@@ -253,7 +337,6 @@ impl GridSearch {
             g: 0.0,
             index: start_i,
         });
-        let mut dirs = Vec::with_capacity(8);
         let mut expansions = 0u64;
         while let Some(Entry { g, index, .. }) = self.heap.pop() {
             let i = index as usize;
@@ -274,8 +357,10 @@ impl GridSearch {
                     ((r - pr).signum(), (c - pc).signum())
                 }
             };
-            view.directions(r, c, dr, dc, &mut dirs);
-            for &(a, b) in &dirs {
+            let mut set = pruned_directions(view.corner_cutting, dr, dc, neighbour_mask(r, c, i));
+            while set != 0 {
+                let (a, b) = DIRS[set.trailing_zeros() as usize];
+                set &= set - 1;
                 let Some((jr, jc)) = jump(r, c, a, b) else {
                     continue;
                 };

@@ -7,28 +7,9 @@
 //! returns (the tests compare both, path for path) in a fraction of the time. Building the table
 //! is linear in the grid size; build it once per grid and reuse it for many queries.
 
-use crate::jps::View;
+use crate::jps::{DIRS, View, dir_index};
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
-
-/// The 8 directions, straight first; the table's column order.
-const DIRS: [(i64, i64); 8] = [
-    (1, 0),
-    (-1, 0),
-    (0, 1),
-    (0, -1),
-    (1, 1),
-    (1, -1),
-    (-1, 1),
-    (-1, -1),
-];
-
-#[inline(always)]
-fn dir_index(dr: i64, dc: i64) -> usize {
-    // (dr + 1) * 3 + (dc + 1) → index in DIRS.
-    const LUT: [usize; 9] = [7, 1, 6, 3, usize::MAX, 2, 5, 0, 4];
-    LUT[((dr + 1) * 3 + (dc + 1)) as usize]
-}
 
 /// A JPS+ planner bound to one grid and one corner rule.
 #[derive(Debug)]
@@ -36,6 +17,8 @@ pub struct JpsPlus<'g> {
     grid: &'g Grid2,
     model: MoveModel,
     table: Vec<[i32; 8]>,
+    /// Free-neighbour bit set of every cell (bit `k`: `DIRS[k]`).
+    masks: Vec<u8>,
     search: GridSearch,
 }
 
@@ -101,10 +84,14 @@ impl<'g> JpsPlus<'g> {
                 }
             }
         }
+        let masks = (0..grid.len() as i64)
+            .map(|i| view.neighbour_mask(i / cols, i % cols))
+            .collect();
         Self {
             grid,
             model,
             table,
+            masks,
             search: GridSearch::new(),
         }
     }
@@ -116,7 +103,7 @@ impl<'g> JpsPlus<'g> {
 
     /// Bytes held by the jump table.
     pub fn table_bytes(&self) -> usize {
-        self.table.len() * std::mem::size_of::<[i32; 8]>()
+        self.table.len() * std::mem::size_of::<[i32; 8]>() + self.masks.len()
     }
 
     /// An optimal path from `start` to `goal` (the same path [`crate::Planner::Jps`] returns).
@@ -173,7 +160,8 @@ impl<'g> JpsPlus<'g> {
             }
             best.map(|i| (r + i * dr, c + i * dc))
         };
+        let masks = &self.masks;
         self.search
-            .jump_point_search(grid, start, goal, &view, jump)
+            .jump_point_search(grid, start, goal, &view, |_, _, i| masks[i], jump)
     }
 }
