@@ -1,0 +1,56 @@
+//! `skyplan bench`: every skyplan planner and the Rust peer agree on every cost; the Python
+//! textbook A* (an independent implementation) agrees too; records are written.
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn bench(args: &[&str]) -> Value {
+    let out = Command::cargo_bin("skyplan").unwrap().arg("bench").arg("--json").args(args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn all_optimal_planners_agree_on_the_city_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let records = dir.path().join("records.csv");
+    let v = bench(&[
+        "--random",
+        "4",
+        "--seed",
+        "7",
+        "--planners",
+        "jps-plus,jps,astar,dijkstra,rust-pathfinding-astar",
+        "--out",
+        records.to_str().unwrap(),
+    ]);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 5);
+    for r in rows {
+        assert_eq!(r["queries"], 4, "{r}");
+        assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
+        assert!(r["median_us"].as_f64().unwrap() > 0.0);
+    }
+    let csv = std::fs::read_to_string(records).unwrap();
+    assert!(csv.starts_with("planner,query,time_us,expansions,cost"));
+    assert_eq!(csv.lines().count(), 1 + 5 * 4);
+}
+
+#[test]
+fn python_textbook_astar_agrees_when_python_is_there() {
+    let map = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/movingai/den312d.map");
+    if !std::path::Path::new(map).exists() || std::process::Command::new("python3").arg("--version").output().is_err() {
+        assert!(std::env::var_os("CI").is_none(), "CI needs python3 and ../shared");
+        eprintln!("skipping: no python3 or no MovingAI data");
+        return;
+    }
+    let scen = format!("{map}.scen");
+    let v = bench(&["--map", map, "--scen", &scen, "--random", "5", "--planners", "jps-plus", "--peers", "--peer-budget-s", "20"]);
+    let rows = v["rows"].as_array().unwrap();
+    let textbook = rows.iter().find(|r| r["planner"] == "python-heapq-astar").expect("python peer ran");
+    assert_eq!(textbook["cost_over_best"].as_f64(), Some(1.0), "{textbook}");
+    let fcnd = rows.iter().find(|r| r["planner"] == "fcnd-astar").expect("FCND peer ran");
+    assert!(fcnd["cost_over_best"].as_f64().unwrap() >= 1.0);
+    let ours = rows.iter().find(|r| r["planner"] == "jps-plus").unwrap();
+    assert_eq!(ours["cost_over_best"].as_f64(), Some(1.0));
+}
