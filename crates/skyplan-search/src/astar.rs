@@ -135,6 +135,34 @@ impl GridSearch {
         self.nodes[i].parent
     }
 
+    /// Offers a path of cost `g` to cell `i` through `parent`, with heuristic `h`: queued if the
+    /// cell is not expanded yet and the path is better than any found before.
+    #[inline(always)]
+    pub(crate) fn offer(&mut self, i: usize, g: f64, h: f64, parent: u32) {
+        if !self.is_closed(i) && self.relax(i, g, parent) {
+            self.heap.push(Entry {
+                f: g + h,
+                g,
+                index: i as u32,
+            });
+        }
+    }
+
+    /// Pops the best queued cell that is still current (skipping stale entries), marks it
+    /// expanded and returns its cost and index.
+    #[inline(always)]
+    pub(crate) fn expand_next(&mut self) -> Option<(f64, u32)> {
+        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+            let i = index as usize;
+            if self.is_closed(i) || g > self.g(i) {
+                continue;
+            }
+            self.close(i);
+            return Some((g, index));
+        }
+        None
+    }
+
     /// Records a better path to the not yet expanded cell `i`; returns false if it is not better.
     #[inline(always)]
     pub(crate) fn relax(&mut self, i: usize, g: f64, parent: u32) -> bool {
@@ -185,12 +213,7 @@ impl GridSearch {
         };
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
-        self.relax(start_i as usize, 0.0, NO_PARENT);
-        self.heap.push(Entry {
-            f: h(start),
-            g: 0.0,
-            index: start_i,
-        });
+        self.offer(start_i as usize, 0.0, h(start), NO_PARENT);
 
         // (dr, dc, cost): orthogonal moves first.
         const MOVES: [(i64, i64, f64); 8] = [
@@ -217,12 +240,8 @@ impl GridSearch {
                 && !blocked[(r * cols_i + c) as usize]
         };
         let mut expansions = 0u64;
-        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+        while let Some((g, index)) = self.expand_next() {
             let i = index as usize;
-            if self.is_closed(i) || g > self.g(i) {
-                continue;
-            }
-            self.close(i);
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
@@ -237,18 +256,7 @@ impl GridSearch {
                     continue;
                 }
                 let ni = (nr * cols_i + nc) as usize;
-                if self.is_closed(ni) {
-                    continue;
-                }
-                let ng = g + step;
-                if self.relax(ni, ng, index) {
-                    let cell = skyplan_cspace::Cell::new(nr as u32, nc as u32);
-                    self.heap.push(Entry {
-                        f: ng + h(cell),
-                        g: ng,
-                        index: ni as u32,
-                    });
-                }
+                self.offer(ni, g + step, h(Cell::new(nr as u32, nc as u32)), index);
             }
         }
         Err(SearchError::Unreachable { expansions })

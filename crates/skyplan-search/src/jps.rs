@@ -6,7 +6,7 @@
 //! pruned directions until it meets a cell with a forced neighbour (a *jump point*) and only
 //! pushes those. Costs are exactly those of A\*; the tests compare both with the exact oracle.
 
-use crate::astar::{Entry, NO_PARENT};
+use crate::astar::NO_PARENT;
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;
@@ -331,19 +331,15 @@ impl GridSearch {
         let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
-        self.relax(start_i as usize, 0.0, NO_PARENT);
-        self.heap.push(Entry {
-            f: h(i64::from(start.row), i64::from(start.col)),
-            g: 0.0,
-            index: start_i,
-        });
+        self.offer(
+            start_i as usize,
+            0.0,
+            h(i64::from(start.row), i64::from(start.col)),
+            NO_PARENT,
+        );
         let mut expansions = 0u64;
-        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+        while let Some((g, index)) = self.expand_next() {
             let i = index as usize;
-            if self.is_closed(i) || g > self.g(i) {
-                continue;
-            }
-            self.close(i);
             expansions += 1;
             if index == goal_i {
                 let jump_points = self.reconstruct(grid, goal_i, expansions);
@@ -365,17 +361,7 @@ impl GridSearch {
                     continue;
                 };
                 let ji = (jr * cols + jc) as usize;
-                if self.is_closed(ji) {
-                    continue;
-                }
-                let ng = g + octile(jr - r, jc - c);
-                if self.relax(ji, ng, index) {
-                    self.heap.push(Entry {
-                        f: ng + h(jr, jc),
-                        g: ng,
-                        index: ji as u32,
-                    });
-                }
+                self.offer(ji, g + octile(jr - r, jc - c), h(jr, jc), index);
             }
         }
         Err(SearchError::Unreachable { expansions })

@@ -6,7 +6,7 @@
 //! line). Theta\* is not guaranteed to find the shortest any-angle path; its length lies between
 //! the Euclidean distance and the octile optimum, and the pipeline reports both.
 
-use crate::astar::{Entry, NO_PARENT};
+use crate::astar::NO_PARENT;
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 
@@ -41,12 +41,7 @@ impl GridSearch {
         let touch = model.touch();
         let cols = i64::from(grid.cols());
         let start_i = grid.index(start);
-        self.relax(start_i, 0.0, NO_PARENT);
-        self.heap.push(Entry {
-            f: euclid(start, goal),
-            g: 0.0,
-            index: start_i as u32,
-        });
+        self.offer(start_i, 0.0, euclid(start, goal), NO_PARENT);
         let moves: &[(i64, i64)] = if model.has_diagonals() {
             &[
                 (1, 0),
@@ -62,12 +57,8 @@ impl GridSearch {
             &[(1, 0), (-1, 0), (0, 1), (0, -1)]
         };
         let mut expansions = 0u64;
-        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+        while let Some((g, index)) = self.expand_next() {
             let i = index as usize;
-            if self.is_closed(i) || g > self.g(i) {
-                continue;
-            }
-            self.close(i);
             expansions += 1;
             let cell = grid.cell(i);
             if cell == goal {
@@ -103,13 +94,7 @@ impl GridSearch {
                     (index, g)
                 };
                 let ng = via_g + euclid(grid.cell(via as usize), next);
-                if self.relax(ni, ng, via) {
-                    self.heap.push(Entry {
-                        f: ng + euclid(next, goal),
-                        g: ng,
-                        index: ni as u32,
-                    });
-                }
+                self.offer(ni, ng, euclid(next, goal), via);
             }
         }
         Err(SearchError::Unreachable { expansions })
