@@ -5,8 +5,18 @@ use assert_cmd::Command;
 use serde_json::Value;
 
 fn bench(args: &[&str]) -> Value {
-    let out = Command::cargo_bin("skyplan").unwrap().arg("bench").arg("--json").args(args).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .arg("bench")
+        .arg("--json")
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
@@ -38,18 +48,47 @@ fn all_optimal_planners_agree_on_the_city_map() {
 
 #[test]
 fn python_textbook_astar_agrees_when_python_is_there() {
-    let map = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/movingai/den312d.map");
-    if !std::path::Path::new(map).exists() || std::process::Command::new("python3").arg("--version").output().is_err() {
-        assert!(std::env::var_os("CI").is_none(), "CI needs python3 and ../shared");
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/movingai/den312d.map"
+    );
+    if !std::path::Path::new(map).exists()
+        || std::process::Command::new("python3")
+            .arg("--version")
+            .output()
+            .is_err()
+    {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs python3 and ../shared"
+        );
         eprintln!("skipping: no python3 or no MovingAI data");
         return;
     }
     let scen = format!("{map}.scen");
-    let v = bench(&["--map", map, "--scen", &scen, "--random", "5", "--planners", "jps-plus", "--peers", "--peer-budget-s", "20"]);
+    let v = bench(&[
+        "--map",
+        map,
+        "--scen",
+        &scen,
+        "--random",
+        "5",
+        "--planners",
+        "jps-plus",
+        "--peers",
+        "--peer-budget-s",
+        "20",
+    ]);
     let rows = v["rows"].as_array().unwrap();
-    let textbook = rows.iter().find(|r| r["planner"] == "python-heapq-astar").expect("python peer ran");
+    let textbook = rows
+        .iter()
+        .find(|r| r["planner"] == "python-heapq-astar")
+        .expect("python peer ran");
     assert_eq!(textbook["cost_over_best"].as_f64(), Some(1.0), "{textbook}");
-    let fcnd = rows.iter().find(|r| r["planner"] == "fcnd-astar").expect("FCND peer ran");
+    let fcnd = rows
+        .iter()
+        .find(|r| r["planner"] == "fcnd-astar")
+        .expect("FCND peer ran");
     assert!(fcnd["cost_over_best"].as_f64().unwrap() >= 1.0);
     let ours = rows.iter().find(|r| r["planner"] == "jps-plus").unwrap();
     assert_eq!(ours["cost_over_best"].as_f64(), Some(1.0));
