@@ -24,13 +24,19 @@ pub enum Command {
     Scen(ScenArgs),
     /// Time every planner (and, with --peers, the tools people use instead) on the same queries.
     Bench(BenchArgs),
+    /// Follow the cost map's gradient from a start through targets, which may change mid-ride.
+    Navigate(Box<crate::grid_args::NavigateArgs>),
+    /// Plan from the vehicle's position and fly it over MAVLink (--sim: a built-in simulated vehicle).
+    Fly(Box<FlyArgs>),
+    /// Run the built-in simulated multicopter as a MAVLink vehicle (for `fly`, pymavlink, QGroundControl).
+    Sim(SimArgs),
 }
 
 /// A pair of numbers typed as `A,B`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pair(pub f64, pub f64);
 
-fn parse_pair(s: &str) -> Result<Pair, String> {
+pub(crate) fn parse_pair(s: &str) -> Result<Pair, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let [a, b] = parts[..] else {
         return Err(format!(
@@ -44,7 +50,7 @@ fn parse_pair(s: &str) -> Result<Pair, String> {
     Ok(Pair(num(a)?, num(b)?))
 }
 
-fn parse_finite(s: &str) -> Result<f64, String> {
+pub(crate) fn parse_finite(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() => Ok(x),
         _ => Err(format!("expected a finite number, found {s:?}")),
@@ -66,6 +72,20 @@ pub enum PlannerArg {
     #[value(name = "jps-plus")]
     #[serde(rename = "jps-plus")]
     JpsPlus,
+    /// Wavefront navigation function: distance field from the goal, then gradient descent.
+    Wavefront,
+    /// Inflated cost map: A* minimising length + weight · cost (Nav2-style inflation).
+    Costmap,
+    /// 3D probabilistic roadmap among the boxes (grown until start and goal connect), graph A*.
+    Prm,
+    /// 3D RRT-Connect: bidirectional trees, stops at the first path.
+    #[value(name = "rrt-connect")]
+    #[serde(rename = "rrt-connect")]
+    RrtConnect,
+    /// 3D Informed RRT*: improves the path until --time-limit-ms.
+    #[value(name = "rrt-star")]
+    #[serde(rename = "rrt-star")]
+    RrtStar,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
@@ -79,7 +99,8 @@ pub enum PruneArg {
 
 #[derive(Debug, Args)]
 pub struct PlanArgs {
-    /// Map file (FCND colliders.csv format); default: the bundled FCND city map.
+    /// Map file, by extension: .csv FCND colliders, .yaml map_server, .png/.pgm (with
+    /// --resolution), .map MovingAI; default: the bundled FCND city map.
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
     /// TOML file with default values for these options (command-line options win).
@@ -139,6 +160,10 @@ pub struct PlanArgs {
     /// Print one JSON object on stdout instead of the human summary.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub grid: crate::grid_args::GridMapArgs,
+    #[command(flatten)]
+    pub plan3d: crate::plan3d_cmd::Plan3dArgs,
 }
 
 #[derive(Debug, Args)]
@@ -199,4 +224,59 @@ pub struct BenchArgs {
     /// Print the table as one JSON object.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct FlyArgs {
+    /// The vehicle: tcp:HOST:PORT (client), tcpout:, udpin:HOST:PORT (listen, e.g. 0.0.0.0:14550), udpout:.
+    #[arg(long, value_name = "ADDRESS", default_value = "tcp:127.0.0.1:5760")]
+    pub connect: String,
+    /// Start the built-in simulated vehicle in-process (at the plan's start) and fly it; ignores --connect.
+    #[arg(long)]
+    pub sim: bool,
+    /// Vehicle seconds per wall second: the simulator's speed with --sim, or `skyplan sim --speedup`.
+    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = parse_finite)]
+    pub speedup: f64,
+    /// Write the flight log (time, state, position, target) as CSV.
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
+    /// Wall-clock budget of the flight, seconds: past it the vehicle is told to land, and the exit is non-zero.
+    #[arg(long, value_name = "T", value_parser = parse_finite)]
+    pub timeout_s: Option<f64>,
+    /// A vehicle silent this long (no heartbeat, wall seconds) has lost the link.
+    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = parse_finite)]
+    pub link_timeout_s: f64,
+    /// How long to wait for the vehicle's heartbeat and position, wall seconds.
+    #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = parse_finite)]
+    pub wait_s: f64,
+    /// Waypoint deadband, horizontal metres.
+    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
+    pub deadband_m: f64,
+    /// Fault injection for tests: the simulated vehicle goes silent after this many simulated seconds.
+    #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim")]
+    pub sim_drop_link_after_s: Option<f64>,
+    #[command(flatten)]
+    pub plan: PlanArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct SimArgs {
+    /// Where to listen: tcp:HOST:PORT (TCP server; port 0 picks one), tcpin:, udpin:HOST:PORT.
+    #[arg(long, value_name = "ADDRESS", default_value = "tcp:127.0.0.1:5760")]
+    pub listen: String,
+    /// Home (start position) as latitude,longitude; default: the map's home.
+    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub home: Option<Pair>,
+    /// Map whose obstacles the flown track is checked against (default: the bundled city map).
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// Simulated seconds per wall second.
+    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = parse_finite)]
+    pub speedup: f64,
+    /// Stop after this many wall seconds (default: run until killed).
+    #[arg(long, value_name = "S", value_parser = parse_finite)]
+    pub duration_s: Option<f64>,
+    /// Fault injection for tests: go silent after this many simulated seconds.
+    #[arg(long, value_name = "S", value_parser = parse_finite, hide = true)]
+    pub drop_link_after_s: Option<f64>,
 }

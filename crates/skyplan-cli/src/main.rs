@@ -6,8 +6,13 @@ mod bench_cmd;
 mod config;
 mod exit;
 mod files;
+mod fly_cmd;
+mod grid_args;
+mod grid_cmd;
+mod plan3d_cmd;
 mod plan_cmd;
 mod scen_cmd;
+mod sim_cmd;
 
 use clap::Parser;
 use exit::Failure;
@@ -19,6 +24,9 @@ fn main() -> ExitCode {
         args::Command::Plan(a) => plan_cmd::run(*a),
         args::Command::Scen(a) => scen_cmd::run(a),
         args::Command::Bench(a) => bench_cmd::run_bench(a),
+        args::Command::Navigate(a) => grid_cmd::run_navigate(*a),
+        args::Command::Fly(a) => fly_cmd::run(*a),
+        args::Command::Sim(a) => sim_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

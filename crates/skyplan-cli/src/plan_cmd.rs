@@ -17,13 +17,13 @@ use std::time::Instant;
 pub const DEFAULT_GOAL_NE: (f64, f64) = (420.0, 390.0);
 
 /// The resolved options: command line over config file over defaults.
-struct Options {
-    map: Option<PathBuf>,
-    request: PlanRequest,
-    out: PathBuf,
-    format: Format,
-    plot: Option<PathBuf>,
-    json: bool,
+pub(crate) struct Options {
+    pub(crate) map: Option<PathBuf>,
+    pub(crate) request: PlanRequest,
+    pub(crate) out: PathBuf,
+    pub(crate) format: Format,
+    pub(crate) plot: Option<PathBuf>,
+    pub(crate) json: bool,
 }
 
 fn position(
@@ -46,7 +46,7 @@ fn position(
         .or(cfg_lla.map(|[a, b]| from_lla(Pair(a, b))))
 }
 
-fn resolve(args: PlanArgs) -> Result<Options> {
+pub(crate) fn resolve(args: PlanArgs) -> Result<Options> {
     let cfg = match &args.config {
         Some(path) => Config::load(path)?,
         None => Config::default(),
@@ -84,6 +84,16 @@ fn resolve(args: PlanArgs) -> Result<Options> {
         PlannerArg::Jps => Planner::Jps,
         PlannerArg::JpsPlus => Planner::JpsPlus,
         PlannerArg::Theta => Planner::ThetaStar,
+        PlannerArg::Wavefront | PlannerArg::Costmap => {
+            return Err(bad_input(
+                "planner wavefront/costmap from a config file: give it as --planner on the command line",
+            ));
+        }
+        PlannerArg::Prm | PlannerArg::RrtConnect | PlannerArg::RrtStar => {
+            return Err(bad_input(
+                "planner prm/rrt-connect/rrt-star from a config file: give it as --planner on the command line",
+            ));
+        }
     };
     let prune = match (args.epsilon.or(cfg.epsilon), args.prune.or(cfg.prune)) {
         (Some(eps), _) if eps < 0.0 => {
@@ -199,6 +209,12 @@ pub fn run(args: PlanArgs) -> Result<()> {
 }
 
 fn run_inner(args: PlanArgs) -> Result<()> {
+    if crate::plan3d_cmd::handles(&args)? {
+        return crate::plan3d_cmd::run(args);
+    }
+    if crate::grid_cmd::handles(&args) {
+        return crate::grid_cmd::run_plan(args);
+    }
     let t0 = Instant::now();
     let opts = resolve(args)?;
     let (map_name, text) = match &opts.map {

@@ -61,6 +61,16 @@ pub fn run(args: ScenArgs) -> Result<()> {
                 "--planner theta finds any-angle paths; MovingAI lengths are octile: use jps-plus, jps, astar or dijkstra",
             ));
         }
+        PlannerArg::Prm | PlannerArg::RrtConnect | PlannerArg::RrtStar => {
+            return Err(bad_input(
+                "scen replays grid scenarios: prm, rrt-connect and rrt-star are 3D planners for `skyplan plan`",
+            ));
+        }
+        PlannerArg::Wavefront | PlannerArg::Costmap => {
+            return Err(bad_input(
+                "scen replays A*-family planners: use jps-plus, jps, astar or dijkstra (wavefront and costmap are for `skyplan plan`)",
+            ));
+        }
     };
     // JPS+ builds its table once for all scenarios (reported, not counted per query).
     let t_table = Instant::now();

@@ -96,6 +96,70 @@ impl Mission {
         })
     }
 
+    /// Builds a mission from local `[north_m, east_m, alt_m]` points, each with its own
+    /// altitude (3D routes).
+    ///
+    /// Headings follow the horizontal motion; a waypoint straight above or below its
+    /// predecessor keeps the predecessor's heading.
+    ///
+    /// ```
+    /// use skyplan_frames::{LocalFrame, Lla};
+    /// use skyplan_mission::Mission;
+    /// let frame = LocalFrame::new(Lla { lat_deg: 37.792480, lon_deg: -122.397450, alt_m: 0.0 })?;
+    /// let m = Mission::from_points_nea(&frame, &[[0.0, 0.0, 5.0], [0.0, 10.0, 5.0], [0.0, 10.0, 40.0]], 0.0)?;
+    /// assert_eq!(m.rows()[2], [0.0, 10.0, 40.0, std::f64::consts::FRAC_PI_2]); // climbing keeps east
+    /// assert!((m.length_3d_m() - 45.0).abs() < 1e-12);
+    /// # Ok::<(), skyplan_frames::FrameError>(())
+    /// ```
+    pub fn from_points_nea(
+        frame: &LocalFrame,
+        points_nea: &[[f64; 3]],
+        start_heading_rad: f64,
+    ) -> Result<Self, FrameError> {
+        let mut waypoints = Vec::with_capacity(points_nea.len());
+        let mut heading = start_heading_rad;
+        for (k, &[north_m, east_m, alt_m]) in points_nea.iter().enumerate() {
+            if k > 0 {
+                let [pn, pe, _] = points_nea[k - 1];
+                if (pn, pe) != (north_m, east_m) {
+                    heading = heading_rad((pn, pe), (north_m, east_m));
+                }
+            }
+            let lla = frame.lla_from_ned(Ned {
+                north_m,
+                east_m,
+                down_m: -alt_m,
+            })?;
+            waypoints.push(Waypoint {
+                north_m,
+                east_m,
+                alt_m,
+                heading_rad: heading,
+                lat_deg: lla.lat_deg,
+                lon_deg: lla.lon_deg,
+            });
+        }
+        Ok(Self {
+            home: frame.home(),
+            waypoints,
+        })
+    }
+
+    /// Length of the route in 3D (climbs included), metres.
+    pub fn length_3d_m(&self) -> f64 {
+        self.waypoints
+            .windows(2)
+            .map(|w| {
+                let (dn, de, da) = (
+                    w[1].north_m - w[0].north_m,
+                    w[1].east_m - w[0].east_m,
+                    w[1].alt_m - w[0].alt_m,
+                );
+                (dn * dn + de * de + da * da).sqrt()
+            })
+            .sum()
+    }
+
     /// The FCND rows `[north, east, altitude, heading]`.
     pub fn rows(&self) -> Vec<[f64; 4]> {
         self.waypoints

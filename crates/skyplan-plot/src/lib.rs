@@ -42,6 +42,7 @@
 #![warn(missing_docs)]
 
 mod draw;
+mod heatmap;
 mod layout;
 mod rects;
 mod text;
@@ -54,6 +55,7 @@ use skyplan_cspace::Grid2;
 use skyplan_map::colliders::ObstacleBox;
 
 use crate::draw::draw;
+pub use crate::heatmap::{Heatmap, normalise_0_255, render_heatmap_png};
 pub use crate::layout::{PlotLayout, layout};
 pub use crate::rects::{CellRect, blocked_rects};
 use crate::text::TextMode;

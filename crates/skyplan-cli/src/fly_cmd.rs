@@ -1,0 +1,477 @@
+//! `skyplan fly`: connect (or start the simulator), wait for the vehicle, plan from where it is,
+//! fly the FCND state machine, write the flight log, exit 0 only after landing and disarming with
+//! every waypoint reached.
+
+use crate::args::FlyArgs;
+use crate::exit::{Classify, Failure, Kind, Result, bad_input};
+use crate::files::{BUNDLED_COLLIDERS, BUNDLED_NAME, read_text, write_atomic};
+use crate::plan_cmd::resolve;
+use anyhow::anyhow;
+use skyplan_flight::collision::BoxWorld;
+use skyplan_flight::executor::{
+    ExecutorConfig, FlightState, MissionExecutor, Note, Outcome, Target,
+};
+use skyplan_frames::{Lla, LocalFrame, Ned};
+use skyplan_link::ground::{GroundConfig, GroundStation, LogRow, Update};
+use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
+use skyplan_link::{Address, Role};
+use skyplan_pipeline::{PlanError, Position, plan};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// The in-process simulator: its thread, stop flag and notes.
+struct InProcessSim {
+    stop: Arc<AtomicBool>,
+    thread: std::thread::JoinHandle<SimReport>,
+    notes: mpsc::Receiver<SimNote>,
+}
+
+impl InProcessSim {
+    fn print_notes(&self) {
+        while let Ok(n) = self.notes.try_recv() {
+            if let Some(line) = sim_note_line(&n) {
+                println!("sim        {line}");
+            }
+        }
+    }
+
+    fn finish(self) -> Option<SimReport> {
+        self.stop.store(true, Ordering::Relaxed);
+        let InProcessSim { thread, notes, .. } = self;
+        let report = thread.join().ok();
+        while let Ok(n) = notes.try_recv() {
+            if let Some(line) = sim_note_line(&n) {
+                println!("sim        {line}");
+            }
+        }
+        report
+    }
+}
+
+/// How the CLI shows a simulator note (`None`: not worth a line).
+pub(crate) fn sim_note_line(n: &SimNote) -> Option<String> {
+    Some(match n {
+        SimNote::Connected(p) => format!("ground station connected from {p}"),
+        SimNote::Disconnected(why) => format!("ground station left ({why})"),
+        SimNote::Mode(m) => format!("mode {m}"),
+        SimNote::Armed(true) => "armed".into(),
+        SimNote::Armed(false) => "disarmed".into(),
+        SimNote::Refused(why) => format!("refused: {why}"),
+        SimNote::Takeoff(alt) => format!("taking off to {alt:.1} m"),
+        SimNote::Landed => "touched down".into(),
+        SimNote::MissionUploaded(n) => format!("mission of {n} items received"),
+        SimNote::MissionItemReached(s) => format!("mission item {s} reached"),
+        SimNote::Collision(c) => format!(
+            "COLLISION at {:.1} s: N {:.2} E {:.2} alt {:.2} m inside obstacle #{}",
+            c.time_s, c.point_ned_m[0], c.point_ned_m[1], -c.point_ned_m[2], c.box_index
+        ),
+        SimNote::Failsafe(why) => format!("failsafe: {why}"),
+        SimNote::LinkDropped => "injected fault: the vehicle stops talking".into(),
+    })
+}
+
+fn plan_failure(e: PlanError) -> Failure {
+    let kind = if e.is_no_path() {
+        Kind::NoPath
+    } else if matches!(e, PlanError::Internal(_)) {
+        Kind::Runtime
+    } else {
+        Kind::BadInput
+    };
+    Failure {
+        kind,
+        error: anyhow!(e),
+    }
+}
+
+fn runtime(message: impl std::fmt::Display) -> Failure {
+    Failure {
+        kind: Kind::Runtime,
+        error: anyhow!("{message}"),
+    }
+}
+
+pub fn run(args: FlyArgs) -> Result<()> {
+    let t0 = Instant::now();
+    if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
+        return Err(bad_input(format!(
+            "--speedup: expected 0.1 to 1000, found {}",
+            args.speedup
+        )));
+    }
+    for (name, v) in [
+        ("--link-timeout-s", args.link_timeout_s),
+        ("--wait-s", args.wait_s),
+        ("--deadband-m", args.deadband_m),
+    ] {
+        if v <= 0.0 {
+            return Err(bad_input(format!(
+                "{name}: expected a positive number, found {v}"
+            )));
+        }
+    }
+    if let Some(t) = args.timeout_s
+        && t <= 0.0
+    {
+        return Err(bad_input(format!(
+            "--timeout-s: expected a positive number, found {t}"
+        )));
+    }
+    let user_start = args.plan.start_ne.is_some() || args.plan.start_lla.is_some();
+    let write_waypoints = args.plan.out.is_some();
+    let view = args_view(&args);
+    let log_path = args.log.clone();
+    let opts = resolve(args.plan)?;
+    let (map_name, text) = match &opts.map {
+        Some(path) => (path.display().to_string(), read_text(path)?),
+        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
+    };
+    let map = skyplan_map::colliders::parse_colliders(&text)
+        .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
+    let frame = LocalFrame::new(Lla {
+        lat_deg: map.home.lat_deg,
+        lon_deg: map.home.lon_deg,
+        alt_m: 0.0,
+    })
+    .map_err(|e| bad_input(format!("{map_name}: home: {e}")))?;
+    println!(
+        "map        {map_name}: {} obstacles, home lat {:.6}, lon {:.6}",
+        map.boxes.len(),
+        map.home.lat_deg,
+        map.home.lon_deg
+    );
+
+    // The vehicle: the built-in simulator on a free loopback port, or the given address.
+    let (address, sim) = if args.sim {
+        let home = match opts.request.start {
+            _ if !user_start => frame.home(),
+            Position::Lla { lat_deg, lon_deg } => Lla {
+                lat_deg,
+                lon_deg,
+                alt_m: 0.0,
+            },
+            Position::Ne { north_m, east_m } => frame
+                .lla_from_ned(Ned {
+                    north_m,
+                    east_m,
+                    down_m: 0.0,
+                })
+                .map_err(|e| bad_input(format!("start: {e}")))?,
+        };
+        let config = SimServerConfig {
+            speedup: args.speedup,
+            drop_link_after_s: args.sim_drop_link_after_s,
+            ..SimServerConfig::at(home)
+        };
+        let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config)
+            .or_exit(Kind::Runtime)?;
+        let port = server
+            .local_addr()
+            .map(|a| a.port())
+            .ok_or_else(|| runtime("the simulator has no local address"))?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, notes) = mpsc::channel();
+        let world = BoxWorld::new(&map.boxes);
+        let thread_stop = Arc::clone(&stop);
+        let thread = std::thread::spawn(move || {
+            server.run(Some(&world), &thread_stop, |n| {
+                let _ = tx.send(n);
+            })
+        });
+        println!(
+            "sim        simulated multicopter on tcp:127.0.0.1:{port}, {}× real time, at lat {:.7}, lon {:.7}",
+            args.speedup, home.lat_deg, home.lon_deg
+        );
+        (
+            Address::TcpOut(format!("127.0.0.1:{port}")),
+            Some(InProcessSim {
+                stop,
+                thread,
+                notes,
+            }),
+        )
+    } else {
+        (
+            Address::parse(&args.connect, Role::Client).map_err(bad_input)?,
+            None,
+        )
+    };
+    let result = fly(
+        &view,
+        &address,
+        &map,
+        &frame,
+        opts,
+        user_start,
+        write_waypoints,
+        sim.as_ref(),
+    );
+    let report = sim.and_then(InProcessSim::finish);
+    let (log, outcome) = result?;
+    if let Some(path) = &log_path {
+        write_atomic(path, &log_csv(&log)?)?;
+        println!(
+            "wrote      flight log {} ({} rows)",
+            path.display(),
+            log.len()
+        );
+    }
+    if let Some(r) = &report {
+        let clearance = r
+            .track
+            .min_clearance_m()
+            .map_or("no obstacle within 20 m".to_string(), |c| {
+                format!("closest obstacle {c:.2} m")
+            });
+        match r.track.collision() {
+            Some(c) => println!(
+                "track      COLLISION: {} samples inside obstacles, first at {:.1} s (obstacle #{})",
+                r.track.colliding_samples(),
+                c.time_s,
+                c.box_index
+            ),
+            None => println!(
+                "track      flown {:.1} m, max altitude {:.2} m, no collision with the map's obstacles ({clearance})",
+                r.distance_m, r.max_alt_m
+            ),
+        }
+    }
+    println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
+    match outcome {
+        Some(Outcome::Completed) => {
+            if let Some(r) = &report
+                && let Some(c) = r.track.collision()
+            {
+                return Err(runtime(format!(
+                    "the flight completed but the simulated vehicle hit obstacle #{} at {:.1} s",
+                    c.box_index, c.time_s
+                )));
+            }
+            Ok(())
+        }
+        Some(Outcome::Failed(f)) => Err(runtime(format!("flight failed: {f}"))),
+        None => Err(runtime(
+            "flight aborted and the vehicle did not land in time: check it",
+        )),
+    }
+}
+
+/// The flight options that `fly` needs after `args.plan` is consumed.
+struct FlyView {
+    speedup: f64,
+    link_timeout_s: f64,
+    wait_s: f64,
+    timeout_s: Option<f64>,
+    deadband_m: f64,
+}
+
+fn args_view(a: &FlyArgs) -> FlyView {
+    FlyView {
+        speedup: a.speedup,
+        link_timeout_s: a.link_timeout_s,
+        wait_s: a.wait_s,
+        timeout_s: a.timeout_s,
+        deadband_m: a.deadband_m,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn fly(
+    a: &FlyView,
+    address: &Address,
+    map: &skyplan_map::colliders::CollidersMap,
+    frame: &LocalFrame,
+    mut opts: crate::plan_cmd::Options,
+    user_start: bool,
+    write_waypoints: bool,
+    sim: Option<&InProcessSim>,
+) -> Result<(Vec<LogRow>, Option<Outcome>)> {
+    let ground = GroundConfig {
+        speedup: a.speedup,
+        link_timeout_s: a.link_timeout_s,
+        timeout_s: a.timeout_s,
+        ..GroundConfig::default()
+    };
+    let mut gcs = GroundStation::connect(address, ground).or_exit(Kind::Runtime)?;
+    println!("link       {address}: connected, sending heartbeats at 1 Hz");
+    let info = gcs
+        .wait_for_vehicle(Duration::from_secs_f64(a.wait_s))
+        .or_exit(Kind::Runtime)?;
+    if let Some(s) = sim {
+        s.print_notes();
+    }
+    println!(
+        "vehicle    system {} ({:?}) at lat {:.7}, lon {:.7}, {:.2} m above home",
+        info.system_id,
+        info.autopilot,
+        info.position.lat_deg,
+        info.position.lon_deg,
+        info.position.alt_m
+    );
+
+    // PLANNING: the heartbeat thread keeps the link alive meanwhile.
+    println!("state      PLANNING");
+    if !user_start {
+        opts.request.start = Position::Lla {
+            lat_deg: info.position.lat_deg,
+            lon_deg: info.position.lon_deg,
+        };
+    }
+    let t_plan = Instant::now();
+    let outcome = plan(map, &opts.request).map_err(plan_failure)?;
+    let mission = &outcome.mission;
+    println!(
+        "plan       {} → {}: {} waypoints, {:.1} m at {} m altitude, planned in {:.1} ms",
+        outcome.start,
+        outcome.goal,
+        mission.waypoints.len(),
+        mission.length_m(),
+        opts.request.spec.alt_m,
+        t_plan.elapsed().as_secs_f64() * 1000.0
+    );
+    if write_waypoints {
+        let summary = serde_json::json!({ "map_home": [map.home.lat_deg, map.home.lon_deg] });
+        let bytes =
+            skyplan_export::encode(opts.format, mission, &summary).or_exit(Kind::Runtime)?;
+        write_atomic(&opts.out, &bytes)?;
+        println!("wrote      {} ({})", opts.out.display(), opts.format.name());
+    }
+    let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
+    let config = ExecutorConfig {
+        deadband_m: a.deadband_m,
+        ..ExecutorConfig::default()
+    };
+    let mut ex = MissionExecutor::new(&targets, config).map_err(bad_input)?;
+    let n = targets.len();
+    let summary = gcs
+        .fly(&mut ex, frame, |u| {
+            if let Some(s) = sim {
+                s.print_notes();
+            }
+            match u {
+                Update::Notes(t, notes) => {
+                    for note in notes {
+                        match note {
+                            Note::State { from, to } => {
+                                println!("state      {t:7.1} s  {from} → {to}")
+                            }
+                            Note::Reached(r) => println!(
+                                "waypoint   {:7.1} s  {} of {n} reached: {:.2} m off, heading off {:.1}°",
+                                r.time_s,
+                                r.index + 1,
+                                r.horizontal_error_m,
+                                r.heading_error_rad.to_degrees()
+                            ),
+                            Note::Refused { command, reason } => {
+                                println!("refused    {t:7.1} s  {command}: {reason}")
+                            }
+                            Note::Finished => {}
+                        }
+                    }
+                }
+                Update::StatusText(text) => println!("vehicle    says: {text}"),
+                Update::LinkClosed(why) => println!("link       closed: {why}"),
+                Update::TimedOut(limit) => {
+                    println!("timeout    {limit} s wall exceeded: landing")
+                }
+            }
+        })
+        .or_exit(Kind::Runtime)?;
+    let reached = ex.reached();
+    let worst_h = reached
+        .iter()
+        .map(|r| r.horizontal_error_m)
+        .fold(0.0, f64::max);
+    let worst_yaw = reached
+        .iter()
+        .map(|r| r.heading_error_rad.to_degrees())
+        .fold(0.0, f64::max);
+    let last = ex.last_telemetry();
+    println!(
+        "flight     {:.1} s simulated/vehicle time, {:.2} s wall; {} of {n} waypoints reached (worst {:.2} m, {:.1}°); {} position targets sent, {} vehicle heartbeats",
+        summary.time_s,
+        summary.wall_time_s,
+        reached.len(),
+        worst_h,
+        worst_yaw,
+        summary.position_targets_sent,
+        summary.heartbeats_received
+    );
+    if let Some(t) = last {
+        println!(
+            "vehicle    at N {:.2} m, E {:.2} m, {:.2} m above home, {}, state {}",
+            t.north_m,
+            t.east_m,
+            tidy(t.alt_m()),
+            if t.armed { "ARMED" } else { "disarmed" },
+            ex.state()
+        );
+    }
+    let outcome = ex.outcome().cloned();
+    match &outcome {
+        Some(Outcome::Completed) => {
+            println!("result     landed and disarmed after reaching all {n} waypoints")
+        }
+        Some(Outcome::Failed(f)) => println!("result     FAILED: {f}"),
+        None => println!("result     FAILED: gave up waiting for the landing"),
+    }
+    Ok((summary.log, outcome))
+}
+
+/// Shows values that round to zero as 0.000, not -0.000.
+fn tidy(x: f64) -> f64 {
+    if x.abs() < 0.0005 { 0.0 } else { x }
+}
+
+fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let write =
+        |w: &mut csv::Writer<Vec<u8>>, rec: Vec<String>| w.write_record(rec).or_exit(Kind::Runtime);
+    write(
+        &mut w,
+        [
+            "time_s",
+            "state",
+            "north_m",
+            "east_m",
+            "alt_m",
+            "heading_deg",
+            "ground_speed_m_s",
+            "target_index",
+            "target_north_m",
+            "target_east_m",
+            "target_alt_m",
+            "target_heading_deg",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+    )?;
+    for r in log {
+        let mut rec = vec![
+            format!("{:.3}", r.time_s),
+            FlightState::name(r.state).to_string(),
+            format!("{:.3}", r.north_m),
+            format!("{:.3}", r.east_m),
+            format!("{:.3}", tidy(r.alt_m)),
+            format!("{:.2}", r.yaw_rad.to_degrees()),
+            format!("{:.3}", r.speed_m_s),
+        ];
+        match r.target {
+            Some((i, t)) => rec.extend([
+                (i + 1).to_string(),
+                format!("{:.3}", t.north_m),
+                format!("{:.3}", t.east_m),
+                format!("{:.3}", t.alt_m),
+                format!("{:.2}", t.heading_rad.to_degrees()),
+            ]),
+            None => rec.extend(std::iter::repeat_n(String::new(), 5)),
+        }
+        write(&mut w, rec)?;
+    }
+    w.into_inner()
+        .map_err(|e| anyhow!("flight log: {e}"))
+        .or_exit(Kind::Runtime)
+}

@@ -1,0 +1,318 @@
+//! `skyplan plan --planner prm|rrt-connect|rrt-star`: sampling planners in 3D among the map's
+//! boxes (grown by the margin in all three axes), with per-end altitudes. Every segment of the
+//! result is re-checked against every box before anything is written.
+
+use crate::args::{Pair, PlanArgs, PlannerArg, parse_finite};
+use crate::config::Config;
+use crate::exit::{Classify, Failure, Kind, Result, bad_input};
+use crate::files::{BUNDLED_COLLIDERS, BUNDLED_NAME, read_text, write_atomic};
+use anyhow::anyhow;
+use clap::Args;
+use serde_json::json;
+use skyplan_export::Format;
+use skyplan_frames::{Lla, LocalFrame};
+use skyplan_mission::Mission;
+use skyplan_sampling::{Budget, PlannerKind, Request, Status};
+use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, WorldSpec, distance_m};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// Options of the 3D planners (flattened into `plan`; `--seed` is shared with random maps).
+#[derive(Debug, Args)]
+#[command(next_help_heading = "3D planners (prm, rrt-connect, rrt-star)")]
+pub struct Plan3dArgs {
+    /// Start altitude above home, metres [default: --alt-m].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub start_alt_m: Option<f64>,
+    /// Goal altitude above home, metres [default: --alt-m].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub goal_alt_m: Option<f64>,
+    /// Time budget, milliseconds (rrt-star uses all of it; the others stop at the first path) [default: 1000].
+    #[arg(long, value_name = "MS")]
+    pub time_limit_ms: Option<u64>,
+    /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub max_alt_m: Option<f64>,
+}
+
+fn kind_of(planner: Option<PlannerArg>) -> Option<PlannerKind> {
+    match planner? {
+        PlannerArg::Prm => Some(PlannerKind::Prm),
+        PlannerArg::RrtConnect => Some(PlannerKind::RrtConnect),
+        PlannerArg::RrtStar => Some(PlannerKind::RrtStar),
+        _ => None,
+    }
+}
+
+/// True if `plan` runs here; refuses the 3D-only options with other planners.
+pub fn handles(args: &PlanArgs) -> Result<bool> {
+    if kind_of(args.planner).is_some() {
+        return Ok(true);
+    }
+    let a = &args.plan3d;
+    if a.start_alt_m.is_some()
+        || a.goal_alt_m.is_some()
+        || a.time_limit_ms.is_some()
+        || a.max_alt_m.is_some()
+    {
+        return Err(bad_input(
+            "--start-alt-m, --goal-alt-m, --time-limit-ms and --max-alt-m need a 3D planner: --planner prm, rrt-connect or rrt-star",
+        ));
+    }
+    Ok(false)
+}
+
+fn ne_of(
+    frame: &LocalFrame,
+    ne: Option<Pair>,
+    lla: Option<Pair>,
+    what: &str,
+) -> Result<Option<(f64, f64)>> {
+    if let Some(p) = ne {
+        return Ok(Some((p.0, p.1)));
+    }
+    let Some(p) = lla else {
+        return Ok(None);
+    };
+    let ned = frame
+        .ned_from_lla(Lla {
+            lat_deg: p.0,
+            lon_deg: p.1,
+            alt_m: 0.0,
+        })
+        .map_err(|e| bad_input(format!("--{what}-lla: {e}")))?;
+    Ok(Some((ned.north_m, ned.east_m)))
+}
+
+/// Runs a 3D planner.
+pub fn run(args: PlanArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let kind = kind_of(args.planner).ok_or_else(|| bad_input("not a 3D planner"))?;
+    if args.grid.random.is_some() {
+        return Err(bad_input(
+            "--random makes a grid; 3D planners need an FCND colliders map (--map FILE.csv)",
+        ));
+    }
+    if args.plot.is_some() {
+        return Err(bad_input(
+            "--plot: pictures of 3D routes are not available yet; omit --plot",
+        ));
+    }
+    let cfg = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => Config::default(),
+    };
+    let map_path = args.map.clone().or(cfg.map.clone());
+    let (map_name, text) = match &map_path {
+        Some(path) => (path.display().to_string(), read_text(path)?),
+        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
+    };
+    let map = skyplan_map::colliders::parse_colliders(&text)
+        .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
+    let frame = LocalFrame::new(Lla {
+        lat_deg: map.home.lat_deg,
+        lon_deg: map.home.lon_deg,
+        alt_m: 0.0,
+    })
+    .map_err(|e| bad_input(format!("{map_name}: home: {e}")))?;
+
+    let alt_m = args.alt_m.or(cfg.alt_m).unwrap_or(5.0);
+    let safety_m = args.safety_m.or(cfg.safety_m).unwrap_or(5.0);
+    let start_ne = ne_of(&frame, args.start_ne, args.start_lla, "start")?
+        .or(cfg.start_ne.map(|[n, e]| (n, e)))
+        .unwrap_or((0.0, 0.0));
+    let goal_ne = ne_of(&frame, args.goal_ne, args.goal_lla, "goal")?
+        .or(cfg.goal_ne.map(|[n, e]| (n, e)))
+        .unwrap_or(crate::plan_cmd::DEFAULT_GOAL_NE);
+    let start: Neu = [
+        start_ne.0,
+        start_ne.1,
+        args.plan3d.start_alt_m.unwrap_or(alt_m),
+    ];
+    let goal: Neu = [
+        goal_ne.0,
+        goal_ne.1,
+        args.plan3d.goal_alt_m.unwrap_or(alt_m),
+    ];
+    let max_alt_m = args
+        .plan3d
+        .max_alt_m
+        .unwrap_or_else(|| 120f64.max(start[2] + 10.0).max(goal[2] + 10.0));
+    let time_limit_ms = args.plan3d.time_limit_ms.unwrap_or(1000);
+    if time_limit_ms == 0 {
+        return Err(bad_input("--time-limit-ms: expected at least 1"));
+    }
+    let seed = args.grid.seed;
+    let start_heading_rad = args
+        .start_heading_deg
+        .or(cfg.start_heading_deg)
+        .unwrap_or(0.0)
+        .to_radians();
+    let out = args
+        .out
+        .clone()
+        .or(cfg.out.clone())
+        .unwrap_or_else(|| PathBuf::from("waypoints.json"));
+    let format = match args.format.clone().or(cfg.format.clone()) {
+        Some(name) => Format::from_name(&name).ok_or_else(|| {
+            bad_input(format!(
+                "--format: expected json, csv, hdf5, geojson or plan, found {name:?}"
+            ))
+        })?,
+        None => Format::from_path(&out).ok_or_else(|| {
+            bad_input(format!(
+                "--out {}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or --format",
+                out.display()
+            ))
+        })?,
+    };
+
+    let spec = WorldSpec {
+        safety_m,
+        min_alt_m: 0.0,
+        max_alt_m,
+        margin_bounds_m: 0.0,
+    };
+    let t_world = Instant::now();
+    let world = BoxWorld3::new(&map.boxes, &spec).map_err(|e| bad_input(format!("{e}")))?;
+    let world_us = t_world.elapsed().as_micros() as u64;
+    let request = Request {
+        start,
+        goal,
+        seed,
+        budget: Budget::time(Duration::from_millis(time_limit_ms)),
+        range_m: None,
+        simplify: true,
+    };
+    let solution = skyplan_sampling::plan(&world, kind, &request);
+    let where_ = |p: Neu| format!("N {:.2} m, E {:.2} m, altitude {:.2} m", p[0], p[1], p[2]);
+    let why_invalid = |p: Neu| {
+        let b = world.bounds();
+        if p[2] < b.min[2] {
+            "below the ground".to_string()
+        } else if !b.contains(p) {
+            format!(
+                "outside the flight volume N {:.1}..{:.1}, E {:.1}..{:.1}, altitude {:.1}..{:.1} m",
+                b.min[0], b.max[0], b.min[1], b.max[1], b.min[2], b.max[2]
+            )
+        } else {
+            format!("within {safety_m} m of an obstacle")
+        }
+    };
+    match solution.status {
+        Status::Exact => {}
+        Status::InvalidStart => {
+            return Err(bad_input(format!(
+                "start {} is {}",
+                where_(start),
+                why_invalid(start)
+            )));
+        }
+        Status::InvalidGoal => {
+            return Err(bad_input(format!(
+                "goal {} is {}",
+                where_(goal),
+                why_invalid(goal)
+            )));
+        }
+        Status::Timeout | Status::Approximate => {
+            let nearest = match solution.status {
+                Status::Approximate => format!(
+                    "; the nearest point reached is {:.2} m from the goal",
+                    solution.goal_gap_m
+                ),
+                _ => String::new(),
+            };
+            return Err(Failure {
+                kind: Kind::NoPath,
+                error: anyhow!(
+                    "{}: no path from {} to {} within {time_limit_ms} ms ({} samples, {} vertices, status {}){nearest}",
+                    kind.name(),
+                    where_(start),
+                    where_(goal),
+                    solution.iterations,
+                    solution.vertices,
+                    solution.status.name()
+                ),
+            });
+        }
+    }
+    // The independent final check: every segment against every box.
+    if let Some(k) = skyplan_world3::first_blocked_segment(&world.brute_force(), &solution.path) {
+        return Err(Failure {
+            kind: Kind::Runtime,
+            error: anyhow!("internal error: segment {k} of the path failed the exact re-check"),
+        });
+    }
+    let mission = Mission::from_points_nea(&frame, &solution.path, start_heading_rad)
+        .or_exit(Kind::BadInput)?;
+    let straight_line_m = distance_m(start, goal);
+    let summary = json!({
+        "map": map_name,
+        "obstacles": map.boxes.len(),
+        "home": { "lat_deg": map.home.lat_deg, "lon_deg": map.home.lon_deg },
+        "planner": kind.name(),
+        "planner_status": solution.status.name(),
+        "seed": seed,
+        "time_limit_ms": time_limit_ms,
+        "safety_m": safety_m,
+        "flight_volume": { "min": world.bounds().min, "max": world.bounds().max },
+        "start": { "north_m": start[0], "east_m": start[1], "alt_m": start[2] },
+        "goal": { "north_m": goal[0], "east_m": goal[1], "alt_m": goal[2] },
+        "cost_m": solution.cost_m,
+        "straight_line_m": straight_line_m,
+        "iterations": solution.iterations,
+        "vertices": solution.vertices,
+        "first_solution_us": solution.first_solution_us,
+        "search_time_us": solution.elapsed_us,
+        "world_build_us": world_us,
+        "mission_length_m": mission.length_3d_m(),
+        "outputs": { "waypoints": out.display().to_string(), "format": format.name() },
+    });
+    let bytes = skyplan_export::encode(format, &mission, &summary).or_exit(Kind::Runtime)?;
+    write_atomic(&out, &bytes)?;
+    if args.json {
+        let mut full = summary;
+        full["status"] = json!("ok");
+        full["waypoints"] = json!(mission.rows());
+        full["waypoints_lla"] = json!(
+            mission
+                .waypoints
+                .iter()
+                .map(|w| [w.lat_deg, w.lon_deg])
+                .collect::<Vec<_>>()
+        );
+        full["wall_time_us"] = json!(t0.elapsed().as_micros() as u64);
+        println!("{full}");
+    } else {
+        let ms = |us: u64| us as f64 / 1000.0;
+        println!(
+            "map        {map_name}: {} obstacles, boxes grown by {safety_m} m in all three axes, indexed in {:.2} ms",
+            map.boxes.len(),
+            ms(world_us)
+        );
+        println!("start      {}", where_(start));
+        println!("goal       {}", where_(goal));
+        println!(
+            "path       {} (seed {seed}): {:.2} m ({:.3} × the straight line), first solution after {:.2} ms, {} samples, {} vertices, {:.2} ms",
+            kind.name(),
+            solution.cost_m,
+            solution.cost_m / straight_line_m.max(f64::MIN_POSITIVE),
+            ms(solution.first_solution_us.unwrap_or(0)),
+            solution.iterations,
+            solution.vertices,
+            ms(solution.elapsed_us)
+        );
+        println!(
+            "waypoints  {} after exactly re-checked shortcutting; every segment re-checked against all {} boxes",
+            mission.waypoints.len(),
+            map.boxes.len()
+        );
+        println!("wrote      {} ({})", out.display(), format.name());
+        println!(
+            "time       {:.2} ms in all",
+            t0.elapsed().as_secs_f64() * 1000.0
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,354 @@
+//! `skyplan fly` and `skyplan sim` end to end: the real binary, the built-in simulator over
+//! loopback TCP, and an independent MAVLink peer (Python pymavlink).
+
+use assert_cmd::Command;
+use std::collections::BTreeSet;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+fn skyplan(dir: &Path) -> Command {
+    let mut cmd = Command::cargo_bin("skyplan").unwrap();
+    cmd.current_dir(dir);
+    cmd
+}
+
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+fn run(dir: &Path, args: &[&str]) -> Run {
+    let out = skyplan(dir)
+        .args(args)
+        .timeout(Duration::from_secs(120))
+        .output()
+        .unwrap();
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// The flight log as (header, rows).
+fn read_log(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|rec| rec.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn fly_sim_flies_the_fcnd_route_on_the_bundled_map() {
+    let dir = tempfile::tempdir().unwrap();
+    // Home → the default goal across the city (the README route), 50× real time.
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "50",
+            "--log",
+            "flight.csv",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    let n: usize = r
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("result     landed and disarmed after reaching all "))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no result line:\n{}", r.stdout));
+    assert!(n >= 2);
+    for state in [
+        "MANUAL → ARMING",
+        "ARMING → TAKEOFF",
+        "TAKEOFF → WAYPOINT",
+        "WAYPOINT → LANDING",
+        "LANDING → DISARMING",
+        "DISARMING → MANUAL",
+    ] {
+        assert!(r.stdout.contains(state), "missing {state}:\n{}", r.stdout);
+    }
+    for k in 1..=n {
+        assert!(
+            r.stdout.contains(&format!(" {k} of {n} reached")),
+            "waypoint {k}:\n{}",
+            r.stdout
+        );
+    }
+    assert!(
+        r.stdout.contains("no collision with the map's obstacles"),
+        "{}",
+        r.stdout
+    );
+
+    // The log: every state, every waypoint targeted, ends on the ground at the goal.
+    let (header, rows) = read_log(&dir.path().join("flight.csv"));
+    assert_eq!(
+        header[..5],
+        ["time_s", "state", "north_m", "east_m", "alt_m"]
+    );
+    assert!(rows.len() > 100);
+    let states: BTreeSet<&str> = rows.iter().map(|r| r[1].as_str()).collect();
+    for s in ["TAKEOFF", "WAYPOINT", "LANDING"] {
+        assert!(states.contains(s), "{states:?}");
+    }
+    // Waypoint 1 is the start, reached the moment take-off ends; every other one is flown to.
+    let targeted: BTreeSet<usize> = rows.iter().filter_map(|r| r[7].parse().ok()).collect();
+    assert_eq!(targeted, (2..=n).collect());
+    let f = |s: &str| s.parse::<f64>().unwrap();
+    let last = rows.last().unwrap();
+    assert!(
+        (f(&last[2]) - 420.0).abs() < 1.5 && (f(&last[3]) - 390.0).abs() < 1.5,
+        "{last:?}"
+    );
+    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+    let times: Vec<f64> = rows.iter().map(|r| f(&r[0])).collect();
+    assert!(times.windows(2).all(|w| w[0] <= w[1]));
+    let max_alt = rows.iter().map(|r| f(&r[4])).fold(0.0, f64::max);
+    assert!((4.75..5.5).contains(&max_alt), "{max_alt}");
+}
+
+#[test]
+fn a_link_lost_mid_flight_is_reported_with_a_nonzero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "20",
+            "--goal-ne",
+            "60,30",
+            "--sim-drop-link-after-s",
+            "12",
+            "--link-timeout-s",
+            "1",
+            "--log",
+            "flight.csv",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(
+        r.stdout
+            .contains("injected fault: the vehicle stops talking"),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stderr
+            .contains("flight failed: link lost in WAYPOINT: no heartbeat from the vehicle for"),
+        "{}",
+        r.stderr
+    );
+    // The log of what was flown is still written.
+    let (_, rows) = read_log(&dir.path().join("flight.csv"));
+    assert!(rows.iter().any(|r| r[1] == "WAYPOINT"));
+}
+
+#[test]
+fn the_overall_timeout_lands_the_vehicle_and_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &["fly", "--sim", "--speedup", "20", "--timeout-s", "1.5"],
+    );
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(
+        r.stdout.contains("timeout    1.5 s wall exceeded: landing"),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stdout.contains("→ LANDING") && r.stdout.contains("DISARMING → MANUAL"),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stderr
+            .contains("aborted (--timeout-s 1.5 exceeded); the vehicle landed"),
+        "{}",
+        r.stderr
+    );
+}
+
+#[test]
+fn bad_addresses_and_missing_vehicles_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &["fly", "--connect", "serial:/dev/ttyUSB0:57600"],
+    );
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("serial ports are not built in"),
+        "{}",
+        r.stderr
+    );
+    let r = run(dir.path(), &["fly", "--connect", "tcp:127.0.0.1"]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    // Nothing listens on port 1.
+    let r = run(dir.path(), &["fly", "--connect", "tcp:127.0.0.1:1"]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("cannot open tcpout:127.0.0.1:1"),
+        "{}",
+        r.stderr
+    );
+    let r = run(dir.path(), &["fly", "--sim", "--speedup", "0"]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    let r = run(dir.path(), &["sim", "--listen", "tcpout:127.0.0.1:5760"]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.stderr.contains("the simulator listens"), "{}", r.stderr);
+}
+
+/// `skyplan sim` on a free port, with its address read from its first line.
+struct SimProcess {
+    child: std::process::Child,
+    address: String,
+}
+
+impl SimProcess {
+    fn start(speedup: &str) -> Self {
+        let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
+            .args([
+                "sim",
+                "--listen",
+                "tcp:127.0.0.1:0",
+                "--speedup",
+                speedup,
+                "--duration-s",
+                "120",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let mut lines = BufReader::new(stdout).lines();
+        let first = lines.next().unwrap().unwrap();
+        let address = first
+            .split_whitespace()
+            .find(|w| w.starts_with("tcp:"))
+            .unwrap_or_else(|| panic!("no address in {first:?}"))
+            .trim_end_matches(',')
+            .to_string();
+        // Keep draining its output so that it never blocks on a full pipe.
+        std::thread::spawn(move || for _ in lines {});
+        Self { child, address }
+    }
+}
+
+impl Drop for SimProcess {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn fly_connects_to_a_separate_sim_process() {
+    let sim = SimProcess::start("20");
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--connect",
+            &sim.address,
+            "--speedup",
+            "20",
+            "--goal-ne",
+            "60,30",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(
+        r.stdout
+            .contains("result     landed and disarmed after reaching all"),
+        "{}",
+        r.stdout
+    );
+}
+
+fn python_has_pymavlink() -> bool {
+    std::process::Command::new("python3")
+        .args(["-c", "import pymavlink"])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+#[test]
+fn pymavlink_drives_skyplan_sim() {
+    if !python_has_pymavlink() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but Python's pymavlink is missing: .ci/run installs it"
+        );
+        eprintln!("skipping: python3 -m pip install pymavlink to run this peer test");
+        return;
+    }
+    let sim = SimProcess::start("10");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fly/pymavlink_peer.py");
+    let t0 = Instant::now();
+    let out = std::process::Command::new("python3")
+        .args([script, &sim.address])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "pymavlink peer failed after {:.1} s:\n{stdout}\n{}",
+        t0.elapsed().as_secs_f64(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for expected in [
+        "refusal reason: Takeoff: vehicle not armed",
+        "mission upload accepted after 4 items",
+        "took off to 95 % of 5 m",
+        "position target reached",
+        "landed and disarmed",
+        "mission items reached: [1, 2, 3]",
+        "OK",
+    ] {
+        assert!(stdout.contains(expected), "missing {expected:?}:\n{stdout}");
+    }
+}

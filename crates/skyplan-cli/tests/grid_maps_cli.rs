@@ -1,0 +1,405 @@
+//! `skyplan plan --planner wavefront|costmap` and `skyplan navigate` on image, MovingAI and
+//! random maps: the CLI contract (maps by extension, north = up the image, JSON fields, exit codes).
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+use serde_json::Value;
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_search::MoveModel;
+use skyplan_search::oracle::dijkstra_exact;
+use std::path::Path;
+
+fn skyplan(dir: &Path) -> Command {
+    let mut cmd = Command::cargo_bin("skyplan").unwrap();
+    cmd.current_dir(dir);
+    cmd
+}
+
+/// A picture, top line = north, `#` black (occupied), `.` white (free), as a plain PGM.
+fn write_pgm(dir: &Path, name: &str, picture: &str) {
+    let lines: Vec<&str> = picture
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    let mut text = format!("P2\n{} {}\n255\n", lines[0].len(), lines.len());
+    for line in &lines {
+        let px: Vec<&str> = line
+            .chars()
+            .map(|c| if c == '#' { "0" } else { "255" })
+            .collect();
+        text.push_str(&px.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(dir.join(name), text).unwrap();
+}
+
+/// The same picture as a grid, independently of the crate: row 0 = the LAST line.
+fn grid_of(picture: &str) -> Grid2 {
+    let lines: Vec<&str> = picture
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    let flipped: Vec<&str> = lines.into_iter().rev().collect();
+    Grid2::from_ascii(&flipped.join("\n")).unwrap()
+}
+
+const U_WALL: &str = "
+    ..........
+    .#......#.
+    .#......#.
+    .#......#.
+    .########.
+    ..........
+    ..........";
+
+fn json_of(out: &std::process::Output) -> Value {
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{e}: stdout {:?} stderr {:?}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+#[test]
+fn wavefront_cost_equals_the_astar_optimum_on_an_image_map() {
+    let dir = tempfile::tempdir().unwrap();
+    write_pgm(dir.path(), "u.pgm", U_WALL);
+    std::fs::write(
+        dir.path().join("u.yaml"),
+        "image: u.pgm\nresolution: 2.0\norigin: [100.0, 50.0, 0.0]\nnegate: 0\n\
+         occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    // Source south of the U's bottom (image row 6, x 4), destination inside it (row 2, x 4):
+    // north = 50 + (6 − 1 − y + 0.5)·2, east = 100 + (x + 0.5)·2.
+    let (start, goal) = ("51,109", "59,109");
+    let grid = grid_of(U_WALL);
+    for (connectivity, model) in [("8", MoveModel::Octile), ("4", MoveModel::FourConnected)] {
+        let truth = dijkstra_exact(&grid, Cell::new(0, 4), Cell::new(4, 4), model).unwrap();
+        let mut costs = Vec::new();
+        for planner in ["wavefront", "astar", "jps"] {
+            let out = skyplan(dir.path())
+                .args(["plan", "--map", "u.yaml", "--planner", planner, "--json"])
+                .args([
+                    "--start-ne",
+                    start,
+                    "--goal-ne",
+                    goal,
+                    "--connectivity",
+                    connectivity,
+                ])
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{planner}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let v = json_of(&out);
+            assert_eq!(v["status"], "ok");
+            assert_eq!(v["start"]["cell"], serde_json::json!([0, 4]));
+            assert_eq!(v["goal"]["cell"], serde_json::json!([4, 4]));
+            costs.push(v["cost_m"].as_f64().unwrap());
+            assert_eq!(v["waypoints_lla"], Value::Null); // no --home: no lat/lon
+        }
+        assert_eq!(
+            costs[0],
+            truth.to_f64() * 2.0,
+            "connectivity {connectivity}"
+        );
+        assert!(costs.iter().all(|&c| c == costs[0]), "{costs:?}");
+    }
+}
+
+#[test]
+fn image_axes_north_is_up_east_is_right() {
+    // An obstacle only in the top-left (north-west) corner of a 6 × 4 image of 1 m pixels.
+    let dir = tempfile::tempdir().unwrap();
+    write_pgm(dir.path(), "corner.pgm", "##....\n#.....\n......\n......");
+    let plan = |start: &str| {
+        skyplan(dir.path())
+            .args([
+                "plan",
+                "--map",
+                "corner.pgm",
+                "--resolution",
+                "1",
+                "--planner",
+                "wavefront",
+            ])
+            .args(["--start-ne", start, "--goal-ne", "0.5,5.5"])
+            .output()
+            .unwrap()
+    };
+    // North 3.5 m, east 0.5 m is the top-left pixel: an obstacle.
+    let out = plan("3.5,0.5");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("the source N 3.5 m, E 0.5 m (row 3, col 0) is at an obstacle"),
+        "{err}"
+    );
+    // The bottom-left pixel (north 0.5) is free; so is the top-right (east 5.5).
+    assert!(plan("0.5,0.5").status.success());
+    assert!(plan("3.5,5.5").status.success());
+    // Off the map.
+    let out = plan("4.5,0.5");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("off the map (north 0.00..4.00 m, east 0.00..6.00 m)")
+    );
+}
+
+#[test]
+fn enclosed_destination_exits_3_and_show_marks_unreachable_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    write_pgm(
+        dir.path(),
+        "box.pgm",
+        ".......\n.#####.\n.#...#.\n.#####.\n.......",
+    );
+    skyplan(dir.path())
+        .args(["plan", "--map", "box.pgm", "--resolution", "1", "--planner", "wavefront", "--show"])
+        .args(["--start-ne", "0.5,0.5", "--goal-ne", "2.5,3.5"])
+        .assert()
+        .code(3)
+        .stderr(predicate::str::contains(
+            "path could not be found: the destination (row 2, col 3) is unreachable from the source (row 0, col 0)",
+        ))
+        .stdout(predicate::str::contains(" 2 x#.D.#x").and(predicate::str::contains(" 0 Sxxxxxx")));
+    skyplan(dir.path())
+        .args([
+            "plan",
+            "--map",
+            "box.pgm",
+            "--resolution",
+            "1",
+            "--planner",
+            "costmap",
+            "--json",
+        ])
+        .args(["--start-ne", "0.5,0.5", "--goal-ne", "2.5,3.5"])
+        .assert()
+        .code(3)
+        .stdout(predicate::str::contains("\"status\":\"no_path\""));
+}
+
+#[test]
+fn workshop_show_prints_workspace_matrix_and_path() {
+    let dir = tempfile::tempdir().unwrap();
+    write_pgm(
+        dir.path(),
+        "corridor.pgm",
+        "....#....\n....#....\n.........\n....#....\n....#....",
+    );
+    let out = skyplan(dir.path())
+        .args([
+            "plan",
+            "--map",
+            "corridor.pgm",
+            "--resolution",
+            "1",
+            "--planner",
+            "wavefront",
+        ])
+        .args(["--connectivity", "4", "--field", "steps", "--show"])
+        .args(["--start-ne", "2.5,0.5", "--goal-ne", "2.5,8.5"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(" 2 S*******D"), "{text}");
+    assert!(text.contains("distance matrix"));
+    assert!(text.contains(" 2   S  7  6  5  4  3  2  1  D"), "{text}");
+    assert!(text.contains("8.00 m"));
+}
+
+#[test]
+fn costmap_keeps_clearance_and_plots_a_heat_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = skyplan(dir.path())
+        .args([
+            "plan",
+            "--random",
+            "60x40",
+            "--density",
+            "0.08",
+            "--seed",
+            "4",
+            "--planner",
+            "costmap",
+        ])
+        .args(["--json", "--plot", "heat.png", "--home", "37.79,-122.39"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert!(v["costmap"]["objective_m"].as_f64().unwrap() >= v["cost_m"].as_f64().unwrap());
+    assert!(v["costmap"]["min_clearance_m"].as_f64().unwrap() >= 1.0);
+    assert_eq!(
+        v["waypoints"].as_array().unwrap().len(),
+        v["waypoints_lla"].as_array().unwrap().len()
+    );
+    let png = std::fs::read(dir.path().join("heat.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    // Reproducible: the same seed gives the same answer.
+    let again = skyplan(dir.path())
+        .args([
+            "plan",
+            "--random",
+            "60x40",
+            "--density",
+            "0.08",
+            "--seed",
+            "4",
+            "--planner",
+            "costmap",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(json_of(&again)["waypoints"], v["waypoints"]);
+}
+
+#[test]
+fn navigate_reports_reached_steps_distance_and_clearance() {
+    let dir = tempfile::tempdir().unwrap();
+    write_pgm(
+        dir.path(),
+        "open.pgm",
+        "..........\n..........\n....##....\n..........\n..........",
+    );
+    let out = skyplan(dir.path())
+        .args([
+            "navigate",
+            "--map",
+            "open.pgm",
+            "--resolution",
+            "1",
+            "--json",
+        ])
+        .args(["--start-ne", "0.5,0.5", "--targets", "4.5,9.5;0.5,9.5"])
+        .args(["--change-target-at", "3:4.5,0.5"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert_eq!(v["reached"], true);
+    let legs = v["legs"].as_array().unwrap();
+    assert_eq!(legs.len(), 3);
+    assert_eq!(legs[0]["replaced"], true);
+    assert_eq!(legs[0]["to_step"], 3);
+    assert!(v["steps"].as_u64().unwrap() >= 3 + 4 + 9);
+    assert!(v["distance_m"].as_f64().unwrap() >= v["steps"].as_f64().unwrap());
+    assert!(v["min_clearance_m"].as_f64().unwrap() >= 1.0);
+    // A target inside an obstacle is bad input; an enclosed one is "no path".
+    skyplan(dir.path())
+        .args(["navigate", "--map", "open.pgm", "--resolution", "1"])
+        .args(["--start-ne", "0.5,0.5", "--targets", "2.5,4.5"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "target 1 N 2.5 m, E 4.5 m (row 2, col 4) is at an obstacle",
+        ));
+}
+
+#[test]
+fn bad_maps_name_the_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    write_pgm(dir.path(), "a.pgm", "..\n..");
+    std::fs::write(
+        dir.path().join("bad.yaml"),
+        "image: a.pgm\nresolution: -2\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("missing.yaml"),
+        "image: nope.png\nresolution: 1\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("empty.png"), b"").unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["--map", "a.pgm"],
+            "a.pgm: a bare image needs --resolution",
+        ),
+        (
+            &["--map", "bad.yaml"],
+            "bad.yaml: resolution: expected metres per pixel > 0, found -2",
+        ),
+        (
+            &["--map", "missing.yaml"],
+            "missing.yaml: field image: cannot read",
+        ),
+        (
+            &["--map", "empty.png", "--resolution", "1"],
+            "empty.png: not a PNG or PGM image",
+        ),
+        (&["--map", "x.tif"], "x.tif: unknown map type"),
+    ];
+    for (args, expected) in cases {
+        skyplan(dir.path())
+            .arg("plan")
+            .args(args)
+            .args(["--start-ne", "0.5,0.5", "--goal-ne", "1.5,1.5"])
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(expected));
+    }
+}
+
+#[test]
+fn movingai_maps_are_north_up() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("m.map"),
+        "type octile\nheight 3\nwidth 4\nmap\n@...\n.@..\n....\n",
+    )
+    .unwrap();
+    // MovingAI (x 0, y 0) — the first line's first character — is the north-west cell (row 2).
+    skyplan(dir.path())
+        .args([
+            "plan",
+            "--map",
+            "m.map",
+            "--planner",
+            "wavefront",
+            "--start-ne",
+            "2.5,0.5",
+            "--goal-ne",
+            "0.5,3.5",
+        ])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("(row 2, col 0) is at an obstacle"));
+    let out = skyplan(dir.path())
+        .args([
+            "plan",
+            "--map",
+            "m.map",
+            "--planner",
+            "wavefront",
+            "--json",
+            "--start-ne",
+            "0.5,0.5",
+            "--goal-ne",
+            "2.5,3.5",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(json_of(&out)["cost_m"], 2.0 + 2f64.sqrt() + 1.0);
+}

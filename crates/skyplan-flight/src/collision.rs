@@ -1,0 +1,194 @@
+//! Checking a flown track against the map's obstacle boxes (the real boxes, no margin).
+//!
+//! ```
+//! use skyplan_flight::collision::{BoxWorld, TrackCheck};
+//! use skyplan_map::colliders::ObstacleBox;
+//! let tower = ObstacleBox { north_m: 10.0, east_m: 0.0, up_m: 15.0, half_north_m: 2.0, half_east_m: 2.0, half_up_m: 15.0 };
+//! let world = BoxWorld::new(&[tower]);
+//! assert!(world.hit([10.0, 1.0, -5.0]).is_some());      // NED: 5 m up, inside
+//! assert!(world.hit([10.0, 1.0, -31.0]).is_none());     // above the roof
+//! let mut check = TrackCheck::default();
+//! check.add(&world, 0.0, [0.0, 0.0, -5.0]);
+//! check.add(&world, 1.0, [10.0, 0.0, -5.0]);
+//! assert_eq!(check.collision().map(|c| c.box_index), Some(0));
+//! ```
+
+use skyplan_map::colliders::ObstacleBox;
+use std::collections::HashMap;
+
+/// Size of the buckets of the spatial index, metres.
+const BUCKET_M: f64 = 20.0;
+
+/// The obstacle boxes with a coarse horizontal bucket index.
+#[derive(Debug, Clone)]
+pub struct BoxWorld {
+    boxes: Vec<ObstacleBox>,
+    buckets: HashMap<(i64, i64), Vec<u32>>,
+}
+
+fn bucket(x_m: f64) -> i64 {
+    (x_m / BUCKET_M).floor() as i64
+}
+
+impl BoxWorld {
+    /// Indexes the boxes.
+    pub fn new(boxes: &[ObstacleBox]) -> Self {
+        let mut buckets: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
+        for (i, b) in boxes.iter().enumerate() {
+            let (n0, n1) = (
+                bucket(b.north_m - b.half_north_m),
+                bucket(b.north_m + b.half_north_m),
+            );
+            let (e0, e1) = (
+                bucket(b.east_m - b.half_east_m),
+                bucket(b.east_m + b.half_east_m),
+            );
+            for n in n0..=n1 {
+                for e in e0..=e1 {
+                    buckets.entry((n, e)).or_default().push(i as u32);
+                }
+            }
+        }
+        Self {
+            boxes: boxes.to_vec(),
+            buckets,
+        }
+    }
+
+    /// The boxes.
+    pub fn boxes(&self) -> &[ObstacleBox] {
+        &self.boxes
+    }
+
+    /// The first box containing a NED point (faces included), if any.
+    pub fn hit(&self, point_ned_m: [f64; 3]) -> Option<usize> {
+        let [n, e, d] = point_ned_m;
+        let up = -d;
+        self.buckets
+            .get(&(bucket(n), bucket(e)))?
+            .iter()
+            .find_map(|&i| {
+                let b = &self.boxes[i as usize];
+                ((n - b.north_m).abs() <= b.half_north_m
+                    && (e - b.east_m).abs() <= b.half_east_m
+                    && (up - b.up_m).abs() <= b.half_up_m)
+                    .then_some(i as usize)
+            })
+    }
+
+    /// Distance from a NED point to the nearest box, metres, if one is within `max_m`
+    /// (`max_m` ≤ 20 m; farther boxes may be missed).
+    pub fn clearance_m(&self, point_ned_m: [f64; 3], max_m: f64) -> Option<f64> {
+        let [n, e, d] = point_ned_m;
+        let up = -d;
+        let mut best: Option<f64> = None;
+        let mut seen = std::collections::HashSet::new();
+        for bn in bucket(n - max_m)..=bucket(n + max_m) {
+            for be in bucket(e - max_m)..=bucket(e + max_m) {
+                let Some(list) = self.buckets.get(&(bn, be)) else {
+                    continue;
+                };
+                for &i in list {
+                    if !seen.insert(i) {
+                        continue;
+                    }
+                    let b = &self.boxes[i as usize];
+                    let dn = ((n - b.north_m).abs() - b.half_north_m).max(0.0);
+                    let de = ((e - b.east_m).abs() - b.half_east_m).max(0.0);
+                    let du = ((up - b.up_m).abs() - b.half_up_m).max(0.0);
+                    let dist = (dn * dn + de * de + du * du).sqrt();
+                    if dist <= max_m && best.is_none_or(|x| dist < x) {
+                        best = Some(dist);
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// A collision of the track with a box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Collision {
+    /// When, seconds (the time given with the point).
+    pub time_s: f64,
+    /// Where, NED metres.
+    pub point_ned_m: [f64; 3],
+    /// Index of the box in the map.
+    pub box_index: usize,
+}
+
+/// Accumulates a track's collisions and its closest approach to the boxes.
+#[derive(Debug, Clone, Default)]
+pub struct TrackCheck {
+    last: Option<[f64; 3]>,
+    first_collision: Option<Collision>,
+    collisions: usize,
+    min_clearance_m: Option<f64>,
+    samples: usize,
+}
+
+/// The track is checked every this many metres along it.
+const SAMPLE_M: f64 = 0.25;
+/// Clearance is measured up to this distance.
+const CLEARANCE_MAX_M: f64 = 20.0;
+
+impl TrackCheck {
+    /// Adds the next point of the track; the segment from the previous point is sampled every
+    /// 0.25 m.
+    pub fn add(&mut self, world: &BoxWorld, time_s: f64, point_ned_m: [f64; 3]) {
+        if point_ned_m.iter().any(|x| !x.is_finite()) {
+            return;
+        }
+        let from = self.last.unwrap_or(point_ned_m);
+        let len = ((0..3)
+            .map(|i| (point_ned_m[i] - from[i]).powi(2))
+            .sum::<f64>())
+        .sqrt();
+        let steps = ((len / SAMPLE_M).ceil() as usize).clamp(1, 100_000);
+        for k in 1..=steps {
+            let f = k as f64 / steps as f64;
+            let p = [
+                from[0] + f * (point_ned_m[0] - from[0]),
+                from[1] + f * (point_ned_m[1] - from[1]),
+                from[2] + f * (point_ned_m[2] - from[2]),
+            ];
+            self.samples += 1;
+            // On the ground (the take-off and landing spot) the floor is not an obstacle.
+            if -p[2] < 0.05 {
+                continue;
+            }
+            if let Some(box_index) = world.hit(p) {
+                self.collisions += 1;
+                if self.first_collision.is_none() {
+                    self.first_collision = Some(Collision {
+                        time_s,
+                        point_ned_m: p,
+                        box_index,
+                    });
+                }
+            }
+        }
+        if -point_ned_m[2] >= 0.05
+            && let Some(c) = world.clearance_m(point_ned_m, CLEARANCE_MAX_M)
+        {
+            self.min_clearance_m = Some(self.min_clearance_m.map_or(c, |m| m.min(c)));
+        }
+        self.last = Some(point_ned_m);
+    }
+
+    /// The first collision, if any.
+    pub fn collision(&self) -> Option<Collision> {
+        self.first_collision
+    }
+
+    /// How many sampled points were inside a box.
+    pub fn colliding_samples(&self) -> usize {
+        self.collisions
+    }
+
+    /// Smallest distance of an airborne track point to a box, metres (`None`: never within 20 m).
+    pub fn min_clearance_m(&self) -> Option<f64> {
+        self.min_clearance_m
+    }
+}

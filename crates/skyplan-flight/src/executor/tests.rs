@@ -1,0 +1,420 @@
+use super::*;
+use crate::sim::{SimConfig, SimMode, SimVehicle};
+
+fn wp(n: f64, e: f64, heading_deg: f64) -> Target {
+    Target {
+        north_m: n,
+        east_m: e,
+        alt_m: 5.0,
+        heading_rad: heading_deg.to_radians(),
+    }
+}
+
+fn route() -> Vec<Target> {
+    vec![
+        wp(0.0, 0.0, 0.0),
+        wp(20.0, 0.0, 0.0),
+        wp(20.0, 20.0, 90.0),
+        wp(0.0, 20.0, 180.0),
+    ]
+}
+
+fn telemetry(v: &SimVehicle) -> Telemetry {
+    let s = v.state();
+    Telemetry {
+        north_m: s.position_ned_m[0],
+        east_m: s.position_ned_m[1],
+        down_m: s.position_ned_m[2],
+        velocity_ned_m_s: s.velocity_ned_m_s,
+        yaw_rad: s.yaw_rad,
+        armed: s.armed,
+        guided: s.mode == SimMode::Guided,
+        on_ground: Some(s.on_ground),
+    }
+}
+
+/// Applies a command to the simulated vehicle the way the link does, returning the ack.
+fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
+    let ack = |command, r: Result<(), crate::sim::SimRefusal>| Event::Ack {
+        command,
+        accepted: r.map_err(|e| format!("DENIED: {e}")),
+    };
+    match c {
+        Command::TakeControl => {
+            v.set_mode(SimMode::Guided);
+            Some(ack(CommandKind::TakeControl, Ok(())))
+        }
+        Command::Arm => Some(ack(CommandKind::Arm, v.arm())),
+        Command::Takeoff { alt_m } => Some(ack(CommandKind::Takeoff, v.takeoff(alt_m))),
+        Command::GoTo {
+            north_m,
+            east_m,
+            down_m,
+            yaw_rad,
+        } => {
+            let _ = v.set_position_target([north_m, east_m, down_m], yaw_rad);
+            None
+        }
+        Command::Land => {
+            v.land();
+            Some(ack(CommandKind::Land, Ok(())))
+        }
+        Command::Disarm => Some(ack(CommandKind::Disarm, v.disarm())),
+    }
+}
+
+struct Flight {
+    states: Vec<FlightState>,
+    commands: Vec<Command>,
+    end_s: f64,
+}
+
+/// Flies the executor against the simulated vehicle, telemetry at 10 Hz, until it finishes.
+/// `fault(t, vehicle) -> Some(event)` can inject an event.
+fn fly(
+    ex: &mut MissionExecutor,
+    v: &mut SimVehicle,
+    limit_s: f64,
+    mut fault: impl FnMut(f64, &mut SimVehicle) -> Option<Event>,
+) -> Flight {
+    let mut f = Flight {
+        states: vec![ex.state()],
+        commands: Vec::new(),
+        end_s: 0.0,
+    };
+    let mut t = 0.0;
+    let mut pending = Vec::new();
+    while ex.outcome().is_none() && t < limit_s {
+        for _ in 0..5 {
+            v.step(0.02);
+        }
+        t += 0.1;
+        let mut events = std::mem::take(&mut pending);
+        events.extend(fault(t, v));
+        events.push(Event::Telemetry(telemetry(v)));
+        for e in events {
+            let out = ex.handle(t, e);
+            for n in &out.notes {
+                if let Note::State { to, .. } = n {
+                    f.states.push(*to);
+                }
+            }
+            for c in out.commands {
+                f.commands.push(c);
+                pending.extend(apply(v, c));
+            }
+        }
+    }
+    f.end_s = t;
+    f
+}
+
+#[test]
+fn flies_the_fcnd_sequence_against_the_simulated_vehicle() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let f = fly(&mut ex, &mut v, 300.0, |_, _| None);
+    assert_eq!(
+        ex.outcome(),
+        Some(&Outcome::Completed),
+        "{:?}",
+        ex.outcome()
+    );
+    use FlightState::*;
+    assert_eq!(
+        f.states,
+        vec![
+            Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+        ]
+    );
+    assert_eq!(ex.reached().len(), 4);
+    for (i, r) in ex.reached().iter().enumerate() {
+        assert_eq!(r.index, i);
+        assert!(r.horizontal_error_m <= 1.0 && r.heading_error_rad <= 10f64.to_radians());
+    }
+    let s = v.state();
+    assert!(s.on_ground && !s.armed);
+    assert!((s.position_ned_m[0]).abs() < 1.5 && (s.position_ned_m[1] - 20.0).abs() < 1.5);
+    // Position targets were streamed at ≥ 2 Hz: about one per 0.2 s of WAYPOINT.
+    let gotos = f
+        .commands
+        .iter()
+        .filter(|c| matches!(c, Command::GoTo { .. }))
+        .count();
+    assert!(
+        gotos as f64 > 2.0 * 20.0,
+        "{gotos} position targets in {} s",
+        f.end_s
+    );
+    assert!(f.end_s < 80.0, "{}", f.end_s);
+}
+
+#[test]
+fn takeoff_ends_at_95_percent_of_the_altitude() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut t = Telemetry {
+        armed: true,
+        guided: true,
+        on_ground: Some(true),
+        ..Telemetry::default()
+    };
+    let out = ex.handle(0.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Takeoff);
+    assert_eq!(out.commands, vec![Command::Takeoff { alt_m: 5.0 }]);
+    t.on_ground = Some(false);
+    t.down_m = -4.74;
+    ex.handle(0.5, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Takeoff);
+    t.down_m = -4.76;
+    let out = ex.handle(0.6, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Waypoint);
+    // The first waypoint is right here, facing north: reached at once; the second is commanded.
+    assert_eq!(ex.reached().len(), 1);
+    assert!(out.commands.contains(&Command::GoTo {
+        north_m: 20.0,
+        east_m: 0.0,
+        down_m: -5.0,
+        yaw_rad: 0.0
+    }));
+}
+
+fn at_waypoint_state() -> (MissionExecutor, Telemetry) {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let t = Telemetry {
+        armed: true,
+        guided: true,
+        down_m: -5.0,
+        on_ground: Some(false),
+        ..Telemetry::default()
+    };
+    ex.handle(0.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Waypoint);
+    assert_eq!(ex.reached().len(), 1);
+    (ex, t)
+}
+
+#[test]
+fn waypoint_needs_the_deadband_the_altitude_and_the_heading() {
+    let (mut ex, mut t) = at_waypoint_state();
+    t.north_m = 18.9; // 1.1 m short
+    ex.handle(1.0, Event::Telemetry(t));
+    assert_eq!(ex.reached().len(), 1);
+    t.north_m = 19.1;
+    t.yaw_rad = 30f64.to_radians(); // within the deadband, heading off
+    ex.handle(2.0, Event::Telemetry(t));
+    assert_eq!(ex.reached().len(), 1);
+    t.yaw_rad = 0.0;
+    t.down_m = -6.5; // 1.5 m too high
+    ex.handle(3.0, Event::Telemetry(t));
+    assert_eq!(ex.reached().len(), 1);
+    t.down_m = -5.2;
+    let out = ex.handle(4.0, Event::Telemetry(t));
+    assert_eq!(ex.reached().len(), 2);
+    let r = ex.reached()[1];
+    assert!((r.horizontal_error_m - 0.9).abs() < 1e-9 && r.index == 1 && r.time_s == 4.0);
+    assert!(matches!(out.notes[0], Note::Reached(_)));
+    assert_eq!(ex.current_target().map(|(i, _)| i), Some(2));
+}
+
+#[test]
+fn deadband_can_grow_with_speed() {
+    let config = ExecutorConfig {
+        deadband_per_speed_s: 0.5,
+        ..ExecutorConfig::default()
+    };
+    let mut ex = MissionExecutor::new(&route(), config).unwrap();
+    let mut t = Telemetry {
+        armed: true,
+        guided: true,
+        down_m: -5.0,
+        on_ground: Some(false),
+        ..Telemetry::default()
+    };
+    ex.handle(0.0, Event::Telemetry(t));
+    t.north_m = 17.5; // 2.5 m short, at 4 m/s: deadband 1 + 2 = 3 m
+    t.velocity_ned_m_s = [4.0, 0.0, 0.0];
+    ex.handle(1.0, Event::Telemetry(t));
+    assert_eq!(ex.reached().len(), 2);
+}
+
+#[test]
+fn lands_only_when_the_last_waypoint_is_reached_and_slow() {
+    let targets = [wp(0.0, 0.0, 0.0)];
+    let mut ex = MissionExecutor::new(&targets, ExecutorConfig::default()).unwrap();
+    let mut t = Telemetry {
+        armed: true,
+        guided: true,
+        down_m: -5.0,
+        velocity_ned_m_s: [1.0, 0.0, 0.0],
+        on_ground: Some(false),
+        ..Telemetry::default()
+    };
+    ex.handle(0.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Waypoint);
+    assert_eq!(ex.reached().len(), 1);
+    t.velocity_ned_m_s = [0.3, 0.0, 0.0];
+    let out = ex.handle(1.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Landing);
+    assert_eq!(out.commands, vec![Command::Land]);
+    // Without the vehicle's landed flag: low and not descending means on the ground.
+    t.on_ground = None;
+    t.down_m = -0.1;
+    t.velocity_ned_m_s = [0.0, 0.0, 0.5];
+    ex.handle(5.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Landing);
+    t.velocity_ned_m_s = [0.0; 3];
+    let out = ex.handle(6.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Disarming);
+    assert_eq!(out.commands, vec![Command::Disarm]);
+    t.armed = false;
+    let out = ex.handle(7.0, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Manual);
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed));
+    assert!(out.notes.contains(&Note::Finished));
+}
+
+#[test]
+fn arming_refusal_is_shown_and_times_out_with_the_vehicle_reason() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let t = Telemetry {
+        guided: true,
+        on_ground: Some(true),
+        ..Telemetry::default()
+    };
+    let out = ex.handle(0.0, Event::Telemetry(t));
+    assert_eq!(out.commands, vec![Command::Arm]);
+    ex.handle(0.1, Event::StatusText("Arm: Accels inconsistent".into()));
+    let out = ex.handle(
+        0.2,
+        Event::Ack {
+            command: CommandKind::Arm,
+            accepted: Err("DENIED".into()),
+        },
+    );
+    assert_eq!(
+        out.notes,
+        vec![Note::Refused {
+            command: CommandKind::Arm,
+            reason: "DENIED: Arm: Accels inconsistent".into()
+        }]
+    );
+    // Retried once a second.
+    assert!(ex.handle(0.5, Event::Tick).commands.is_empty());
+    assert_eq!(ex.handle(1.0, Event::Tick).commands, vec![Command::Arm]);
+    let out = ex.handle(61.0, Event::Tick);
+    assert!(out.commands.is_empty());
+    let Some(Outcome::Failed(failure)) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    let text = failure.to_string();
+    assert!(
+        text.contains("ARMING timed out") && text.contains("Accels inconsistent"),
+        "{text}"
+    );
+}
+
+#[test]
+fn link_loss_ends_the_flight_without_commands() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let f = fly(&mut ex, &mut v, 300.0, |t, _| {
+        (t > 15.0).then_some(Event::LinkLost { silent_s: 5.0 })
+    });
+    let Some(Outcome::Failed(failure)) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert_eq!(
+        failure,
+        &Failure::LinkLost {
+            state: FlightState::Waypoint,
+            silent_s: 5.0
+        }
+    );
+    assert!(failure.to_string().contains("link lost in WAYPOINT"));
+    assert!(f.end_s < 15.2);
+    // Nothing more is sent after the end.
+    assert!(ex.handle(16.0, Event::Tick).commands.is_empty());
+}
+
+#[test]
+fn abort_lands_and_reports() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut sent = false;
+    let f = fly(&mut ex, &mut v, 300.0, |t, _| {
+        (t > 12.0 && !std::mem::replace(&mut sent, true)).then(|| Event::Abort("Ctrl-C".into()))
+    });
+    use FlightState::*;
+    assert_eq!(
+        f.states,
+        vec![
+            Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+        ]
+    );
+    assert_eq!(
+        ex.outcome(),
+        Some(&Outcome::Failed(Failure::Aborted {
+            reason: "Ctrl-C".into()
+        }))
+    );
+    assert!(v.state().on_ground && !v.state().armed);
+}
+
+#[test]
+fn stuck_leg_times_out_and_lands() {
+    let (mut ex, t) = at_waypoint_state();
+    // Leg 1 is 20 m: budget 30 + 20 s.
+    assert!(ex.handle(49.0, Event::Telemetry(t)).notes.is_empty());
+    let out = ex.handle(51.0, Event::Telemetry(t));
+    assert_eq!(out.commands, vec![Command::Land]);
+    let Some(Outcome::Failed(Failure::Timeout { state, detail, .. })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert_eq!(*state, FlightState::Waypoint);
+    assert!(
+        detail.contains("waypoint 2 of 4 not reached: 20.0 m away"),
+        "{detail}"
+    );
+}
+
+#[test]
+fn disarm_or_mode_change_in_flight_fails() {
+    let (mut ex, mut t) = at_waypoint_state();
+    t.guided = false;
+    ex.handle(1.0, Event::Telemetry(t));
+    assert_eq!(
+        ex.outcome(),
+        Some(&Outcome::Failed(Failure::ControlLost {
+            state: FlightState::Waypoint
+        }))
+    );
+    let (mut ex, mut t) = at_waypoint_state();
+    t.armed = false;
+    ex.handle(1.0, Event::Telemetry(t));
+    assert!(matches!(
+        ex.outcome(),
+        Some(Outcome::Failed(Failure::DisarmedInFlight { .. }))
+    ));
+}
+
+#[test]
+fn bad_missions_are_refused() {
+    assert!(MissionExecutor::new(&[], ExecutorConfig::default()).is_err());
+    let low = [Target {
+        alt_m: 0.0,
+        ..wp(0.0, 0.0, 0.0)
+    }];
+    assert!(MissionExecutor::new(&low, ExecutorConfig::default()).is_err());
+    let nan = [Target {
+        north_m: f64::NAN,
+        ..wp(0.0, 0.0, 0.0)
+    }];
+    assert!(MissionExecutor::new(&nan, ExecutorConfig::default()).is_err());
+}
+
+#[test]
+fn wraps_angles() {
+    assert!((wrap_angle_rad(3.0 * PI) - PI).abs() < 1e-12);
+    assert!((wrap_angle_rad(-PI) - PI).abs() < 1e-12);
+    assert!((wrap_angle_rad(0.1 - 2.0 * PI) - 0.1).abs() < 1e-12);
+}

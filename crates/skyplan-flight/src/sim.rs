@@ -1,0 +1,656 @@
+//! A simulated multicopter: simple but honest dynamics, no I/O.
+//!
+//! A position controller (proportional, with the square-root braking law so that it stops at the
+//! target within the acceleration limit) asks for a velocity within the horizontal, climb and
+//! descent limits; the velocity follows it as a first-order lag with time constant
+//! [`SimConfig::velocity_tau_s`], its change clamped to the acceleration limit; the heading turns
+//! toward the target heading at most at the yaw-rate limit. The ground stops descent.
+//!
+//! Modes follow ArduCopter: GUIDED obeys position targets and NAV_TAKEOFF, LAND descends where it
+//! is, AUTO flies the uploaded mission, LOITER holds. Positions are NED metres about the home.
+//!
+//! ```
+//! use skyplan_flight::sim::{SimConfig, SimMode, SimVehicle};
+//! let mut v = SimVehicle::new(SimConfig::default());
+//! v.set_mode(SimMode::Guided);
+//! v.arm().unwrap();
+//! v.takeoff(10.0).unwrap();
+//! for _ in 0..1000 { v.step(0.02); } // 20 s
+//! assert!((v.state().position_ned_m[2] + 10.0).abs() < 0.1);
+//! ```
+
+use crate::executor::wrap_angle_rad;
+use std::fmt;
+
+/// Flight modes (ArduCopter numbering in [`SimMode::arducopter_custom_mode`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SimMode {
+    /// Manual flight; the simulated pilot holds the vehicle where it is.
+    Stabilize,
+    /// Obeys position targets and take-off commands.
+    Guided,
+    /// Flies the uploaded mission.
+    Auto,
+    /// Holds its position.
+    Loiter,
+    /// Descends where it is and disarms on the ground.
+    Land,
+}
+
+impl SimMode {
+    /// ArduCopter's `custom_mode` number of this mode.
+    pub fn arducopter_custom_mode(self) -> u32 {
+        match self {
+            SimMode::Stabilize => 0,
+            SimMode::Auto => 3,
+            SimMode::Guided => 4,
+            SimMode::Loiter => 5,
+            SimMode::Land => 9,
+        }
+    }
+
+    /// The mode of an ArduCopter `custom_mode` number, if simulated.
+    pub fn from_arducopter_custom_mode(mode: u32) -> Option<Self> {
+        Some(match mode {
+            0 => SimMode::Stabilize,
+            3 => SimMode::Auto,
+            4 => SimMode::Guided,
+            5 => SimMode::Loiter,
+            9 => SimMode::Land,
+            _ => return None,
+        })
+    }
+}
+
+impl fmt::Display for SimMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            SimMode::Stabilize => "STABILIZE",
+            SimMode::Guided => "GUIDED",
+            SimMode::Auto => "AUTO",
+            SimMode::Loiter => "LOITER",
+            SimMode::Land => "LAND",
+        })
+    }
+}
+
+/// Limits and time constants of the simulated vehicle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimConfig {
+    /// Horizontal speed limit, m/s.
+    pub max_ground_speed_m_s: f64,
+    /// Climb rate limit, m/s.
+    pub max_climb_m_s: f64,
+    /// Descent rate limit, m/s.
+    pub max_descent_m_s: f64,
+    /// Acceleration limit, m/s².
+    pub max_accel_m_s2: f64,
+    /// Time constant of the velocity response, seconds.
+    pub velocity_tau_s: f64,
+    /// Position controller gain, 1/s.
+    pub position_gain_per_s: f64,
+    /// Yaw rate limit, rad/s.
+    pub max_yaw_rate_rad_s: f64,
+    /// Descent rate in LAND, m/s.
+    pub land_speed_m_s: f64,
+    /// A mission waypoint is reached within this distance, metres.
+    pub acceptance_radius_m: f64,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            max_ground_speed_m_s: 5.0,
+            max_climb_m_s: 2.5,
+            max_descent_m_s: 1.5,
+            max_accel_m_s2: 3.0,
+            velocity_tau_s: 0.3,
+            position_gain_per_s: 1.0,
+            max_yaw_rate_rad_s: 90f64.to_radians(),
+            land_speed_m_s: 1.0,
+            acceptance_radius_m: 1.0,
+        }
+    }
+}
+
+/// One item of an uploaded mission, in the local frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SimMissionItem {
+    /// Climb to this altitude where the vehicle is.
+    Takeoff {
+        /// Metres above home.
+        alt_m: f64,
+    },
+    /// Fly to a point, facing `yaw_rad` (NaN: keep the heading).
+    Waypoint {
+        /// Metres north of home.
+        north_m: f64,
+        /// Metres east of home.
+        east_m: f64,
+        /// Metres above home.
+        alt_m: f64,
+        /// Heading, radians clockwise from north.
+        yaw_rad: f64,
+    },
+    /// Land where the vehicle is (then disarm).
+    Land,
+    /// An item the simulator does not fly (skipped).
+    Unsupported,
+}
+
+/// Why the simulated vehicle refused a command.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SimRefusal(pub String);
+
+impl fmt::Display for SimRefusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SimRefusal {}
+
+/// What happened during a step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SimEvent {
+    /// A mission item was reached (MISSION_ITEM_REACHED).
+    MissionItemReached(u16),
+    /// The vehicle touched down.
+    Landed,
+    /// The vehicle disarmed itself after landing.
+    AutoDisarmed,
+}
+
+/// The vehicle's state, as its telemetry reports it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimState {
+    /// Simulated time since boot, seconds.
+    pub time_s: f64,
+    /// Position, metres north, east, down of home.
+    pub position_ned_m: [f64; 3],
+    /// Velocity, m/s north, east, down.
+    pub velocity_ned_m_s: [f64; 3],
+    /// Heading, radians clockwise from north, in (−π, π].
+    pub yaw_rad: f64,
+    /// Yaw rate, rad/s.
+    pub yaw_rate_rad_s: f64,
+    /// Motors armed.
+    pub armed: bool,
+    /// Flight mode.
+    pub mode: SimMode,
+    /// On the ground.
+    pub on_ground: bool,
+    /// Index of the mission item being flown (AUTO).
+    pub mission_current: u16,
+}
+
+/// The simulated vehicle.
+#[derive(Debug, Clone)]
+pub struct SimVehicle {
+    config: SimConfig,
+    time_s: f64,
+    position: [f64; 3],
+    velocity: [f64; 3],
+    yaw_rad: f64,
+    yaw_rate_rad_s: f64,
+    armed: bool,
+    mode: SimMode,
+    on_ground: bool,
+    /// Position and heading target (NED, yaw) of GUIDED, LOITER and AUTO.
+    target: Option<([f64; 3], f64)>,
+    mission: Vec<SimMissionItem>,
+    mission_current: usize,
+}
+
+fn norm2(v: [f64; 2]) -> f64 {
+    v[0].hypot(v[1])
+}
+
+impl SimVehicle {
+    /// A disarmed vehicle on the ground at home, facing north, in STABILIZE.
+    pub fn new(config: SimConfig) -> Self {
+        Self {
+            config,
+            time_s: 0.0,
+            position: [0.0; 3],
+            velocity: [0.0; 3],
+            yaw_rad: 0.0,
+            yaw_rate_rad_s: 0.0,
+            armed: false,
+            mode: SimMode::Stabilize,
+            on_ground: true,
+            target: None,
+            mission: Vec::new(),
+            mission_current: 0,
+        }
+    }
+
+    /// The current state.
+    pub fn state(&self) -> SimState {
+        SimState {
+            time_s: self.time_s,
+            position_ned_m: self.position,
+            velocity_ned_m_s: self.velocity,
+            yaw_rad: self.yaw_rad,
+            yaw_rate_rad_s: self.yaw_rate_rad_s,
+            armed: self.armed,
+            mode: self.mode,
+            on_ground: self.on_ground,
+            mission_current: self.mission_current.min(u16::MAX as usize) as u16,
+        }
+    }
+
+    /// The uploaded mission.
+    pub fn mission(&self) -> &[SimMissionItem] {
+        &self.mission
+    }
+
+    /// Arms the motors (on the ground only).
+    pub fn arm(&mut self) -> Result<(), SimRefusal> {
+        if self.armed {
+            return Ok(());
+        }
+        if !self.on_ground {
+            return Err(SimRefusal("Arm: vehicle is not on the ground".into()));
+        }
+        if self.mode == SimMode::Land {
+            return Err(SimRefusal("Arm: mode not armable (LAND)".into()));
+        }
+        self.armed = true;
+        Ok(())
+    }
+
+    /// Disarms the motors (on the ground only: a multicopter would fall).
+    pub fn disarm(&mut self) -> Result<(), SimRefusal> {
+        if !self.armed {
+            return Ok(());
+        }
+        if !self.on_ground {
+            return Err(SimRefusal("Disarm: vehicle is flying".into()));
+        }
+        self.armed = false;
+        Ok(())
+    }
+
+    /// Changes the flight mode; entering GUIDED, LOITER or AUTO holds the current position first.
+    pub fn set_mode(&mut self, mode: SimMode) {
+        if mode == self.mode {
+            return;
+        }
+        self.mode = mode;
+        match mode {
+            SimMode::Guided | SimMode::Loiter | SimMode::Stabilize => {
+                self.target = (!self.on_ground).then_some((self.position, self.yaw_rad));
+            }
+            SimMode::Auto => {
+                self.mission_current = 0;
+                self.target = None;
+            }
+            SimMode::Land => self.target = None,
+        }
+    }
+
+    /// NAV_TAKEOFF: climb to `alt_m` above home where the vehicle is (GUIDED, armed, on the ground).
+    pub fn takeoff(&mut self, alt_m: f64) -> Result<(), SimRefusal> {
+        if self.mode != SimMode::Guided {
+            return Err(SimRefusal(format!(
+                "Takeoff: not in GUIDED mode ({})",
+                self.mode
+            )));
+        }
+        if !self.armed {
+            return Err(SimRefusal("Takeoff: vehicle not armed".into()));
+        }
+        if !alt_m.is_finite() || alt_m <= 0.0 {
+            return Err(SimRefusal(format!("Takeoff: bad altitude {alt_m}")));
+        }
+        if !self.on_ground {
+            return Err(SimRefusal("Takeoff: already flying".into()));
+        }
+        self.target = Some(([self.position[0], self.position[1], -alt_m], self.yaw_rad));
+        Ok(())
+    }
+
+    /// NAV_LAND: switch to LAND.
+    pub fn land(&mut self) {
+        self.set_mode(SimMode::Land);
+    }
+
+    /// A position target with heading (GUIDED only, and only once flying).
+    pub fn set_position_target(
+        &mut self,
+        position_ned_m: [f64; 3],
+        yaw_rad: f64,
+    ) -> Result<(), SimRefusal> {
+        if self.mode != SimMode::Guided {
+            return Err(SimRefusal(format!(
+                "position target ignored: not in GUIDED mode ({})",
+                self.mode
+            )));
+        }
+        if position_ned_m.iter().any(|x| !x.is_finite()) {
+            return Err(SimRefusal("position target is not finite".into()));
+        }
+        if self.on_ground && self.target.is_none() {
+            return Err(SimRefusal("position target ignored: take off first".into()));
+        }
+        let yaw = if yaw_rad.is_finite() {
+            yaw_rad
+        } else {
+            self.yaw_rad
+        };
+        self.target = Some((position_ned_m, yaw));
+        Ok(())
+    }
+
+    /// Replaces the mission (AUTO restarts from its first item).
+    pub fn set_mission(&mut self, items: Vec<SimMissionItem>) {
+        self.mission = items;
+        self.mission_current = 0;
+    }
+
+    /// Advances the simulation by `dt_s` seconds (use ≤ 0.02 s steps) and tells what happened.
+    pub fn step(&mut self, dt_s: f64) -> Vec<SimEvent> {
+        let mut events = Vec::new();
+        if dt_s.is_nan() || dt_s <= 0.0 {
+            return events;
+        }
+        self.time_s += dt_s;
+        if self.mode == SimMode::Auto && self.armed {
+            self.advance_mission(&mut events);
+        }
+        let c = self.config;
+        let mut v_cmd = [0.0; 3];
+        let mut yaw_target = self.yaw_rad;
+        if self.armed {
+            match self.mode {
+                SimMode::Land => {
+                    let hold = self.target.map_or(self.position, |(p, _)| p);
+                    let h = self.horizontal_command([hold[0], hold[1]]);
+                    v_cmd = [h[0], h[1], c.land_speed_m_s];
+                    self.target = Some(([hold[0], hold[1], 0.0], self.yaw_rad));
+                }
+                _ => {
+                    if let Some((p, yaw)) = self.target {
+                        let h = self.horizontal_command([p[0], p[1]]);
+                        let dz = p[2] - self.position[2];
+                        let brake = (2.0 * c.max_accel_m_s2 * dz.abs()).sqrt();
+                        let vz = (c.position_gain_per_s * dz.abs()).min(brake);
+                        let vz = if dz > 0.0 {
+                            vz.min(c.max_descent_m_s)
+                        } else {
+                            -vz.min(c.max_climb_m_s)
+                        };
+                        v_cmd = [h[0], h[1], vz];
+                        yaw_target = yaw;
+                    }
+                }
+            }
+        }
+        // First-order velocity response, within the acceleration limit.
+        let k = (dt_s / c.velocity_tau_s).min(1.0);
+        let mut dv: [f64; 3] = std::array::from_fn(|i| (v_cmd[i] - self.velocity[i]) * k);
+        let dv_norm = (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]).sqrt();
+        let dv_max = c.max_accel_m_s2 * dt_s;
+        if dv_norm > dv_max {
+            for x in &mut dv {
+                *x *= dv_max / dv_norm;
+            }
+        }
+        for ((v, p), dv) in self.velocity.iter_mut().zip(&mut self.position).zip(dv) {
+            *v += dv;
+            *p += *v * dt_s;
+        }
+        // The ground.
+        let was_on_ground = self.on_ground;
+        if self.position[2] >= 0.0 {
+            self.position[2] = 0.0;
+            if self.velocity[2] > 0.0 {
+                self.velocity[2] = 0.0;
+            }
+        }
+        let climbing = self.velocity[2] < -0.05 || v_cmd[2] < 0.0;
+        self.on_ground = self.position[2] > -0.05 && !climbing;
+        if self.on_ground {
+            self.position[2] = 0.0;
+            self.velocity[2] = 0.0;
+            self.velocity[0] *= 0.5;
+            self.velocity[1] *= 0.5;
+        }
+        if self.on_ground && !was_on_ground {
+            events.push(SimEvent::Landed);
+            if self.mode == SimMode::Land && self.armed {
+                self.armed = false;
+                self.target = None;
+                events.push(SimEvent::AutoDisarmed);
+            }
+        }
+        // Heading, within the yaw-rate limit (only when flying).
+        if self.armed && !self.on_ground {
+            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
+            let max = c.max_yaw_rate_rad_s * dt_s;
+            let turn = err.clamp(-max, max);
+            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
+            self.yaw_rate_rad_s = turn / dt_s;
+        } else {
+            self.yaw_rate_rad_s = 0.0;
+        }
+        if !self.armed && self.on_ground {
+            self.velocity = [0.0; 3];
+        }
+        events
+    }
+
+    /// Horizontal velocity command toward a point: proportional, braking, speed-limited.
+    fn horizontal_command(&self, to: [f64; 2]) -> [f64; 2] {
+        let c = self.config;
+        let e = [to[0] - self.position[0], to[1] - self.position[1]];
+        let d = norm2(e);
+        if d < 1e-9 {
+            return [0.0, 0.0];
+        }
+        let speed = (c.position_gain_per_s * d)
+            .min((2.0 * c.max_accel_m_s2 * d).sqrt())
+            .min(c.max_ground_speed_m_s);
+        [e[0] / d * speed, e[1] / d * speed]
+    }
+
+    fn advance_mission(&mut self, events: &mut Vec<SimEvent>) {
+        let c = self.config;
+        while let Some(item) = self.mission.get(self.mission_current).copied() {
+            let seq = self.mission_current.min(u16::MAX as usize) as u16;
+            match item {
+                SimMissionItem::Takeoff { alt_m } => {
+                    let target = [self.position[0], self.position[1], -alt_m];
+                    if self.target.is_none_or(|(p, _)| p[2] != -alt_m) {
+                        self.target = Some((target, self.yaw_rad));
+                    }
+                    if -self.position[2] >= 0.95 * alt_m {
+                        events.push(SimEvent::MissionItemReached(seq));
+                        self.mission_current += 1;
+                        continue;
+                    }
+                    return;
+                }
+                SimMissionItem::Waypoint {
+                    north_m,
+                    east_m,
+                    alt_m,
+                    yaw_rad,
+                } => {
+                    let yaw = if yaw_rad.is_finite() {
+                        yaw_rad
+                    } else {
+                        self.yaw_rad
+                    };
+                    let p = [north_m, east_m, -alt_m];
+                    self.target = Some((p, yaw));
+                    let d = ((p[0] - self.position[0]).powi(2)
+                        + (p[1] - self.position[1]).powi(2)
+                        + (p[2] - self.position[2]).powi(2))
+                    .sqrt();
+                    if d <= c.acceptance_radius_m {
+                        events.push(SimEvent::MissionItemReached(seq));
+                        self.mission_current += 1;
+                        continue;
+                    }
+                    return;
+                }
+                SimMissionItem::Land => {
+                    events.push(SimEvent::MissionItemReached(seq));
+                    self.mission_current += 1;
+                    self.target = Some((self.position, self.yaw_rad));
+                    self.mode = SimMode::Land;
+                    return;
+                }
+                SimMissionItem::Unsupported => {
+                    self.mission_current += 1;
+                }
+            }
+        }
+        // Mission done: hold.
+        if self.mode == SimMode::Auto {
+            self.mode = SimMode::Loiter;
+            self.target = Some((self.position, self.yaw_rad));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(v: &mut SimVehicle, seconds: f64) -> Vec<SimEvent> {
+        let mut all = Vec::new();
+        let steps = (seconds / 0.02).round() as usize;
+        for _ in 0..steps {
+            all.extend(v.step(0.02));
+        }
+        all
+    }
+
+    fn flying(alt_m: f64) -> SimVehicle {
+        let mut v = SimVehicle::new(SimConfig::default());
+        v.set_mode(SimMode::Guided);
+        v.arm().unwrap();
+        v.takeoff(alt_m).unwrap();
+        run(&mut v, 15.0);
+        v
+    }
+
+    #[test]
+    fn takeoff_needs_guided_and_armed() {
+        let mut v = SimVehicle::new(SimConfig::default());
+        assert!(v.takeoff(5.0).is_err());
+        v.set_mode(SimMode::Guided);
+        assert!(v.takeoff(5.0).unwrap_err().0.contains("not armed"));
+        v.arm().unwrap();
+        v.takeoff(5.0).unwrap();
+    }
+
+    #[test]
+    fn respects_speed_acceleration_and_yaw_rate_limits() {
+        let c = SimConfig::default();
+        let mut v = flying(5.0);
+        v.set_position_target([200.0, 0.0, -5.0], std::f64::consts::PI)
+            .unwrap();
+        let mut prev = v.state();
+        for _ in 0..3000 {
+            v.step(0.02);
+            let s = v.state();
+            let speed = s.velocity_ned_m_s[0].hypot(s.velocity_ned_m_s[1]);
+            assert!(speed <= c.max_ground_speed_m_s + 1e-9, "speed {speed}");
+            let dv: f64 = (0..3)
+                .map(|i| (s.velocity_ned_m_s[i] - prev.velocity_ned_m_s[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(dv <= c.max_accel_m_s2 * 0.02 + 1e-9, "accel {}", dv / 0.02);
+            let dyaw = wrap_angle_rad(s.yaw_rad - prev.yaw_rad).abs();
+            assert!(dyaw <= c.max_yaw_rate_rad_s * 0.02 + 1e-9);
+            prev = s;
+        }
+        let s = v.state();
+        // 60 s is enough for 200 m at 5 m/s with braking; no overshoot beyond 0.1 m.
+        assert!(
+            (s.position_ned_m[0] - 200.0).abs() < 0.1,
+            "{:?}",
+            s.position_ned_m
+        );
+        assert!((s.yaw_rad.abs() - std::f64::consts::PI).abs() < 1e-6);
+    }
+
+    #[test]
+    fn first_order_response_reaches_63_percent_in_one_time_constant() {
+        // Without the acceleration limit, a step in commanded velocity is followed exponentially.
+        let cfg = SimConfig {
+            max_accel_m_s2: 1e9,
+            position_gain_per_s: 1e9,
+            ..SimConfig::default()
+        };
+        let mut v = SimVehicle::new(cfg);
+        v.set_mode(SimMode::Guided);
+        v.arm().unwrap();
+        v.takeoff(5.0).unwrap();
+        run(&mut v, 10.0);
+        v.set_position_target([1000.0, 0.0, -5.0], 0.0).unwrap();
+        let steps = (cfg.velocity_tau_s / 0.001).round() as usize;
+        for _ in 0..steps {
+            v.step(0.001);
+        }
+        let vn = v.state().velocity_ned_m_s[0];
+        let expected = cfg.max_ground_speed_m_s * (1.0 - (-1.0f64).exp());
+        assert!((vn - expected).abs() < 0.05, "{vn} vs {expected}");
+    }
+
+    #[test]
+    fn land_descends_and_auto_disarms_and_disarm_refused_in_flight() {
+        let mut v = flying(5.0);
+        assert!(v.disarm().is_err());
+        v.land();
+        let events = run(&mut v, 10.0);
+        assert!(events.contains(&SimEvent::Landed));
+        assert!(events.contains(&SimEvent::AutoDisarmed));
+        let s = v.state();
+        assert!(
+            s.on_ground && !s.armed && s.position_ned_m[2] == 0.0,
+            "{s:?}"
+        );
+    }
+
+    #[test]
+    fn auto_flies_the_mission_and_reports_each_item() {
+        let mut v = SimVehicle::new(SimConfig::default());
+        v.set_mission(vec![
+            SimMissionItem::Takeoff { alt_m: 5.0 },
+            SimMissionItem::Waypoint {
+                north_m: 10.0,
+                east_m: 0.0,
+                alt_m: 5.0,
+                yaw_rad: 0.0,
+            },
+            SimMissionItem::Waypoint {
+                north_m: 10.0,
+                east_m: 10.0,
+                alt_m: 5.0,
+                yaw_rad: std::f64::consts::FRAC_PI_2,
+            },
+            SimMissionItem::Land,
+        ]);
+        v.arm().unwrap();
+        v.set_mode(SimMode::Auto);
+        let events = run(&mut v, 40.0);
+        let reached: Vec<u16> = events
+            .iter()
+            .filter_map(|e| match e {
+                SimEvent::MissionItemReached(s) => Some(*s),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(reached, vec![0, 1, 2, 3]);
+        let s = v.state();
+        assert!(s.on_ground && !s.armed);
+        assert!(
+            (s.position_ned_m[0] - 10.0).abs() < 1.0 && (s.position_ned_m[1] - 10.0).abs() < 1.0
+        );
+    }
+}

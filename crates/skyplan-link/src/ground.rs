@@ -1,0 +1,551 @@
+//! The ground side: `skyplan fly` connects to a vehicle and drives the mission state machine.
+//!
+//! Vehicle messages become [`Event`]s of the executor (HEARTBEAT → armed and mode,
+//! LOCAL_POSITION_NED + ATTITUDE + EXTENDED_SYS_STATE → telemetry, COMMAND_ACK → acks,
+//! STATUSTEXT → reasons), its [`Command`]s become COMMAND_LONG (DO_SET_MODE GUIDED,
+//! COMPONENT_ARM_DISARM, NAV_TAKEOFF, NAV_LAND) and SET_POSITION_TARGET_LOCAL_NED with
+//! `type_mask` 0x9F8 (position + yaw). Heartbeats go out at 1 Hz from their own thread; a vehicle
+//! silent for [`GroundConfig::link_timeout_s`] is a lost link.
+//!
+//! The vehicle's local frame (its EKF origin) and the mission's frame (the map's home) differ in
+//! general: the offset is measured once on the ground from GLOBAL_POSITION_INT and
+//! LOCAL_POSITION_NED, and applied to every position both ways.
+
+use crate::{Address, Link, LinkError, Received};
+use mavlink::dialects::common::*;
+use skyplan_flight::executor::{
+    Command, CommandKind, Event, FlightState, MissionExecutor, Note, Target, Telemetry,
+};
+use skyplan_frames::{Lla, LocalFrame};
+use std::time::{Duration, Instant};
+
+/// Our MAVLink system id (a ground station).
+pub const SYSTEM_ID: u8 = 255;
+/// Our component id (MAV_COMP_ID_MISSIONPLANNER).
+pub const COMPONENT_ID: u8 = 190;
+
+/// ArduCopter's GUIDED custom mode.
+const ARDUCOPTER_GUIDED: u32 = 4;
+/// PX4's OFFBOARD main mode, in `custom_mode` bits 16–23.
+const PX4_OFFBOARD: u32 = 6 << 16;
+
+/// Timing of the ground station.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundConfig {
+    /// Vehicle seconds per wall-clock second (the simulator's `--speedup`; 1 for real vehicles).
+    pub speedup: f64,
+    /// A vehicle silent this long (wall seconds) has lost the link.
+    pub link_timeout_s: f64,
+    /// Overall wall-clock budget of the flight: past it, the executor is told to land.
+    pub timeout_s: Option<f64>,
+    /// After an abort, wall seconds to wait for the landing before giving up.
+    pub abort_grace_s: f64,
+}
+
+impl Default for GroundConfig {
+    fn default() -> Self {
+        Self {
+            speedup: 1.0,
+            link_timeout_s: 5.0,
+            timeout_s: None,
+            abort_grace_s: 120.0,
+        }
+    }
+}
+
+/// Ground-side errors before the flight starts.
+#[derive(Debug, thiserror::Error)]
+pub enum GroundError {
+    /// The link failed.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The vehicle did not show up.
+    #[error("no vehicle: {0}")]
+    NoVehicle(String),
+    /// The vehicle's position is not usable in the map's frame.
+    #[error("vehicle position: {0}")]
+    Position(String),
+}
+
+/// Which autopilot the vehicle runs (decides the mode numbers).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Autopilot {
+    /// ArduPilot (and skyplan's simulator).
+    ArduPilot,
+    /// PX4.
+    Px4,
+    /// Anything else (treated as ArduPilot).
+    Other,
+}
+
+/// What the ground station knows of the vehicle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VehicleInfo {
+    /// Its system id.
+    pub system_id: u8,
+    /// Its component id.
+    pub component_id: u8,
+    /// Its autopilot.
+    pub autopilot: Autopilot,
+    /// Its global position (altitude: relative to home).
+    pub position: Lla,
+}
+
+/// One row of the flight log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogRow {
+    /// Vehicle time since the flight started, seconds (wall time × speedup).
+    pub time_s: f64,
+    /// The executor's state.
+    pub state: FlightState,
+    /// Position in the mission frame: metres north, east of home, altitude above home.
+    pub north_m: f64,
+    /// See `north_m`.
+    pub east_m: f64,
+    /// See `north_m`.
+    pub alt_m: f64,
+    /// Heading, radians.
+    pub yaw_rad: f64,
+    /// Ground speed, m/s.
+    pub speed_m_s: f64,
+    /// The waypoint being flown to, with its index.
+    pub target: Option<(usize, Target)>,
+}
+
+/// What happens during the flight, for the caller to print.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Update {
+    /// Executor notes (transitions, reached waypoints, refusals) at this vehicle time.
+    Notes(f64, Vec<Note>),
+    /// A STATUSTEXT from the vehicle.
+    StatusText(String),
+    /// The connection closed (the link-loss timeout follows).
+    LinkClosed(String),
+    /// The flight's wall-clock budget ran out: landing.
+    TimedOut(f64),
+}
+
+/// The flight's account.
+#[derive(Debug, Clone)]
+pub struct FlightSummary {
+    /// The log, one row per telemetry update.
+    pub log: Vec<LogRow>,
+    /// Vehicle time of the flight, seconds.
+    pub time_s: f64,
+    /// Wall time of the flight, seconds.
+    pub wall_time_s: f64,
+    /// Position targets sent.
+    pub position_targets_sent: usize,
+    /// Heartbeats received from the vehicle.
+    pub heartbeats_received: usize,
+}
+
+/// A connection to one vehicle.
+pub struct GroundStation {
+    link: Link,
+    config: GroundConfig,
+    vehicle: Option<(u8, u8)>,
+    autopilot: Autopilot,
+    last_heartbeat: Option<Instant>,
+    heartbeats: usize,
+    armed: bool,
+    custom_mode: u32,
+    global: Option<GLOBAL_POSITION_INT_DATA>,
+    local: Option<LOCAL_POSITION_NED_DATA>,
+    yaw_rad: f64,
+    on_ground: Option<bool>,
+    last_arm_request: CommandKind,
+}
+
+fn gcs_heartbeat() -> MavMessage {
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_GCS,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+        base_mode: MavModeFlag::empty(),
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    })
+}
+
+impl GroundStation {
+    /// Connects and starts sending heartbeats at 1 Hz (from their own thread, so planning or
+    /// waiting never starves them).
+    pub fn connect(address: &Address, config: GroundConfig) -> Result<Self, GroundError> {
+        let link = Link::open(address, SYSTEM_ID, COMPONENT_ID)?;
+        link.start_heartbeat(gcs_heartbeat(), Duration::from_secs(1));
+        Ok(Self {
+            link,
+            config,
+            vehicle: None,
+            autopilot: Autopilot::Other,
+            last_heartbeat: None,
+            heartbeats: 0,
+            armed: false,
+            custom_mode: 0,
+            global: None,
+            local: None,
+            yaw_rad: 0.0,
+            on_ground: None,
+            last_arm_request: CommandKind::Arm,
+        })
+    }
+
+    /// Waits for the vehicle's heartbeat and positions, asking it to stream them at 10 Hz.
+    pub fn wait_for_vehicle(&mut self, timeout: Duration) -> Result<VehicleInfo, GroundError> {
+        let start = Instant::now();
+        let mut asked = None::<Instant>;
+        loop {
+            if let Some(r) = self.link.recv_timeout(Duration::from_millis(20)) {
+                let _ = self.absorb(&r);
+            }
+            if let Some(why) = self.link.closed() {
+                return Err(GroundError::NoVehicle(format!(
+                    "the connection closed: {why}"
+                )));
+            }
+            if self.vehicle.is_some() && asked.is_none_or(|t| t.elapsed() > Duration::from_secs(1))
+            {
+                self.request_streams();
+                asked = Some(Instant::now());
+            }
+            if let (Some((sys, comp)), Some(g), Some(_)) =
+                (self.vehicle, self.global.clone(), self.local.clone())
+            {
+                return Ok(VehicleInfo {
+                    system_id: sys,
+                    component_id: comp,
+                    autopilot: self.autopilot,
+                    position: Lla {
+                        lat_deg: f64::from(g.lat) * 1e-7,
+                        lon_deg: f64::from(g.lon) * 1e-7,
+                        alt_m: f64::from(g.relative_alt) * 1e-3,
+                    },
+                });
+            }
+            if start.elapsed() > timeout {
+                let what = match (self.vehicle, self.global.is_some()) {
+                    (None, _) => "no heartbeat from an autopilot",
+                    (Some(_), false) => {
+                        "a heartbeat but no GLOBAL_POSITION_INT (no position fix yet?)"
+                    }
+                    _ => "no LOCAL_POSITION_NED (EKF origin not set yet?)",
+                };
+                return Err(GroundError::NoVehicle(format!(
+                    "{what} within {:.1} s",
+                    timeout.as_secs_f64()
+                )));
+            }
+        }
+    }
+
+    fn request_streams(&self) {
+        for (id, hz) in [(32u32, 10.0), (33, 10.0), (30, 10.0), (245, 2.0)] {
+            let _ = self.send_command(
+                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+                [id as f32, (1e6 / hz) as f32, 0.0, 0.0, 0.0, 0.0, 0.0],
+            );
+        }
+    }
+
+    fn send_command(&self, command: MavCmd, p: [f32; 7]) -> Result<(), LinkError> {
+        let (sys, comp) = self.vehicle.unwrap_or((1, 1));
+        self.link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: p[0],
+            param2: p[1],
+            param3: p[2],
+            param4: p[3],
+            param5: p[4],
+            param6: p[5],
+            param7: p[6],
+            command,
+            target_system: sys,
+            target_component: comp,
+            confirmation: 0,
+        }))
+    }
+
+    /// Updates what we know from one message; returns an executor event for acks and texts.
+    fn absorb(&mut self, r: &Received) -> Option<Event> {
+        let from_vehicle = self
+            .vehicle
+            .is_none_or(|(sys, _)| u32::from(sys) == r.header.system_id);
+        match &r.message {
+            MavMessage::HEARTBEAT(h) => {
+                if h.mavtype == MavType::MAV_TYPE_GCS
+                    || h.autopilot == MavAutopilot::MAV_AUTOPILOT_INVALID
+                {
+                    return None;
+                }
+                if self.vehicle.is_none() {
+                    self.vehicle = Some((r.header.system_id as u8, r.header.component_id));
+                    self.autopilot = match h.autopilot {
+                        MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA => Autopilot::ArduPilot,
+                        MavAutopilot::MAV_AUTOPILOT_PX4 => Autopilot::Px4,
+                        _ => Autopilot::Other,
+                    };
+                } else if !from_vehicle {
+                    return None;
+                }
+                self.last_heartbeat = Some(Instant::now());
+                self.heartbeats += 1;
+                self.armed = h
+                    .base_mode
+                    .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+                self.custom_mode = h.custom_mode;
+                None
+            }
+            _ if !from_vehicle => None,
+            MavMessage::GLOBAL_POSITION_INT(g) => {
+                self.global = Some(g.clone());
+                None
+            }
+            MavMessage::LOCAL_POSITION_NED(l) => {
+                self.local = Some(l.clone());
+                None
+            }
+            MavMessage::ATTITUDE(a) => {
+                self.yaw_rad = f64::from(a.yaw);
+                None
+            }
+            MavMessage::EXTENDED_SYS_STATE(s) => {
+                self.on_ground = match s.landed_state {
+                    MavLandedState::MAV_LANDED_STATE_ON_GROUND => Some(true),
+                    MavLandedState::MAV_LANDED_STATE_UNDEFINED => None,
+                    _ => Some(false),
+                };
+                None
+            }
+            MavMessage::COMMAND_ACK(a) => {
+                let command = match a.command {
+                    MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => self.last_arm_request,
+                    MavCmd::MAV_CMD_DO_SET_MODE => CommandKind::TakeControl,
+                    MavCmd::MAV_CMD_NAV_TAKEOFF => CommandKind::Takeoff,
+                    MavCmd::MAV_CMD_NAV_LAND => CommandKind::Land,
+                    _ => return None,
+                };
+                let accepted = match a.result {
+                    MavResult::MAV_RESULT_ACCEPTED | MavResult::MAV_RESULT_IN_PROGRESS => Ok(()),
+                    other => Err(format!("{other:?}")
+                        .trim_start_matches("MAV_RESULT_")
+                        .to_string()),
+                };
+                Some(Event::Ack { command, accepted })
+            }
+            MavMessage::STATUSTEXT(t) => {
+                let text = t
+                    .text
+                    .to_str()
+                    .unwrap_or("")
+                    .trim_end_matches('\0')
+                    .to_string();
+                Some(Event::StatusText(text))
+            }
+            _ => None,
+        }
+    }
+
+    fn guided(&self) -> bool {
+        match self.autopilot {
+            Autopilot::Px4 => self.custom_mode & 0x00ff_0000 == PX4_OFFBOARD,
+            _ => self.custom_mode == ARDUCOPTER_GUIDED,
+        }
+    }
+
+    /// Flies the mission: `frame` is the mission's frame (the map's home). Returns when the
+    /// executor has an outcome, or when an aborted flight does not land in time.
+    pub fn fly(
+        &mut self,
+        ex: &mut MissionExecutor,
+        frame: &LocalFrame,
+        mut on_update: impl FnMut(Update),
+    ) -> Result<FlightSummary, GroundError> {
+        // Catch up with what arrived while planning, so that the offset and the first
+        // telemetry are fresh.
+        while let Some(r) = self.link.recv_timeout(Duration::ZERO) {
+            let _ = self.absorb(&r);
+        }
+        let (Some(g), Some(l)) = (self.global.clone(), self.local.clone()) else {
+            return Err(GroundError::NoVehicle(
+                "call wait_for_vehicle first: no position yet".into(),
+            ));
+        };
+        let vehicle_ned = frame
+            .ned_from_lla(Lla {
+                lat_deg: f64::from(g.lat) * 1e-7,
+                lon_deg: f64::from(g.lon) * 1e-7,
+                alt_m: 0.0,
+            })
+            .map_err(|e| GroundError::Position(e.to_string()))?;
+        // mission = local + offset.
+        let offset = [
+            vehicle_ned.north_m - f64::from(l.x),
+            vehicle_ned.east_m - f64::from(l.y),
+            -f64::from(l.z),
+        ];
+        let speedup = self.config.speedup.max(0.1);
+        let start = Instant::now();
+        let now = |start: Instant| start.elapsed().as_secs_f64() * speedup;
+        let mut log = Vec::new();
+        let mut last_tick = Instant::now();
+        let mut aborted_at: Option<Instant> = None;
+        let mut closed_reported = false;
+        let mut sent_targets = 0usize;
+        let mut last_local_ms = None;
+        // The silence clock starts now: planning may have taken a while.
+        self.last_heartbeat = Some(Instant::now());
+        while ex.outcome().is_none() {
+            let mut events = Vec::new();
+            if let Some(r) = self.link.recv_timeout(Duration::from_millis(5)) {
+                if let Some(e) = self.absorb(&r) {
+                    if let Event::StatusText(t) = &e {
+                        on_update(Update::StatusText(t.clone()));
+                    }
+                    events.push(e);
+                }
+                if let MavMessage::LOCAL_POSITION_NED(p) = &r.message
+                    && last_local_ms != Some(p.time_boot_ms)
+                {
+                    last_local_ms = Some(p.time_boot_ms);
+                    events.push(Event::Telemetry(Telemetry {
+                        north_m: f64::from(p.x) + offset[0],
+                        east_m: f64::from(p.y) + offset[1],
+                        down_m: f64::from(p.z) + offset[2],
+                        velocity_ned_m_s: [f64::from(p.vx), f64::from(p.vy), f64::from(p.vz)],
+                        yaw_rad: self.yaw_rad,
+                        armed: self.armed,
+                        guided: self.guided(),
+                        on_ground: self.on_ground,
+                    }));
+                }
+            }
+            if !closed_reported && let Some(why) = self.link.closed() {
+                closed_reported = true;
+                on_update(Update::LinkClosed(why.to_string()));
+            }
+            if last_tick.elapsed() >= Duration::from_millis(50) {
+                last_tick = Instant::now();
+                events.push(Event::Tick);
+            }
+            let silent_s = self
+                .last_heartbeat
+                .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64());
+            if silent_s > self.config.link_timeout_s {
+                events.push(Event::LinkLost { silent_s });
+            }
+            if let Some(limit) = self.config.timeout_s
+                && aborted_at.is_none()
+                && start.elapsed().as_secs_f64() > limit
+            {
+                aborted_at = Some(Instant::now());
+                on_update(Update::TimedOut(limit));
+                events.push(Event::Abort(format!("--timeout-s {limit} exceeded")));
+            }
+            if let Some(t) = aborted_at
+                && t.elapsed().as_secs_f64() > self.config.abort_grace_s
+            {
+                break;
+            }
+            for e in events {
+                let t = now(start);
+                let is_telemetry = matches!(e, Event::Telemetry(_));
+                let out = ex.handle(t, e);
+                for c in &out.commands {
+                    if matches!(c, Command::GoTo { .. }) {
+                        sent_targets += 1;
+                    }
+                    // A failed send shows up as a lost link; nothing else to do here.
+                    let _ = self.send(*c, offset);
+                }
+                if !out.notes.is_empty() {
+                    on_update(Update::Notes(t, out.notes));
+                }
+                if is_telemetry && let Some(tel) = ex.last_telemetry() {
+                    log.push(LogRow {
+                        time_s: t,
+                        state: ex.state(),
+                        north_m: tel.north_m,
+                        east_m: tel.east_m,
+                        alt_m: tel.alt_m(),
+                        yaw_rad: tel.yaw_rad,
+                        speed_m_s: tel.ground_speed_m_s(),
+                        target: ex.current_target(),
+                    });
+                }
+            }
+        }
+        Ok(FlightSummary {
+            log,
+            time_s: now(start),
+            wall_time_s: start.elapsed().as_secs_f64(),
+            position_targets_sent: sent_targets,
+            heartbeats_received: self.heartbeats,
+        })
+    }
+
+    fn send(&mut self, c: Command, offset: [f64; 3]) -> Result<(), LinkError> {
+        match c {
+            Command::TakeControl => {
+                let (mode, sub) = match self.autopilot {
+                    Autopilot::Px4 => (6.0, 0.0),
+                    _ => (ARDUCOPTER_GUIDED as f32, 0.0),
+                };
+                self.send_command(
+                    MavCmd::MAV_CMD_DO_SET_MODE,
+                    [1.0, mode, sub, 0.0, 0.0, 0.0, 0.0],
+                )
+            }
+            Command::Arm | Command::Disarm => {
+                let arm = matches!(c, Command::Arm);
+                self.last_arm_request = if arm {
+                    CommandKind::Arm
+                } else {
+                    CommandKind::Disarm
+                };
+                self.send_command(
+                    MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                    [if arm { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                )
+            }
+            Command::Takeoff { alt_m } => self.send_command(
+                MavCmd::MAV_CMD_NAV_TAKEOFF,
+                [0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, alt_m as f32],
+            ),
+            Command::Land => self.send_command(
+                MavCmd::MAV_CMD_NAV_LAND,
+                [0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0],
+            ),
+            Command::GoTo {
+                north_m,
+                east_m,
+                down_m,
+                yaw_rad,
+            } => {
+                let (sys, comp) = self.vehicle.unwrap_or((1, 1));
+                self.link.send(&MavMessage::SET_POSITION_TARGET_LOCAL_NED(
+                    SET_POSITION_TARGET_LOCAL_NED_DATA {
+                        time_boot_ms: 0,
+                        x: (north_m - offset[0]) as f32,
+                        y: (east_m - offset[1]) as f32,
+                        z: (down_m - offset[2]) as f32,
+                        vx: 0.0,
+                        vy: 0.0,
+                        vz: 0.0,
+                        afx: 0.0,
+                        afy: 0.0,
+                        afz: 0.0,
+                        yaw: yaw_rad as f32,
+                        yaw_rate: 0.0,
+                        type_mask: PositionTargetTypemask::from_bits_truncate(POSITION_AND_YAW),
+                        target_system: sys,
+                        target_component: comp,
+                        coordinate_frame: MavFrame::MAV_FRAME_LOCAL_NED,
+                    },
+                ))
+            }
+        }
+    }
+}
+
+/// `type_mask` of a position + yaw target: ignore velocity, acceleration and yaw rate.
+pub const POSITION_AND_YAW: u16 = 0x9F8;

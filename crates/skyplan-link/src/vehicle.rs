@@ -1,0 +1,696 @@
+//! The vehicle side: `skyplan sim`'s simulated multicopter behind a MAVLink server.
+//!
+//! It behaves like ArduCopter where it matters to a ground station: system 1, component 1,
+//! `MAV_AUTOPILOT_ARDUPILOTMEGA` with ArduCopter's custom mode numbers; answers COMMAND_LONG
+//! (ARM_DISARM, NAV_TAKEOFF, NAV_LAND, DO_SET_MODE, MISSION_START, SET_MESSAGE_INTERVAL), SET_MODE,
+//! SET_POSITION_TARGET_LOCAL_NED (position, optional yaw), the mission upload (MISSION_COUNT →
+//! MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0 is the home, as on
+//! ArduPilot) and MISSION_CLEAR_ALL; streams HEARTBEAT (1 Hz), LOCAL_POSITION_NED,
+//! GLOBAL_POSITION_INT, ATTITUDE (10 Hz), EXTENDED_SYS_STATE (2 Hz), MISSION_CURRENT and
+//! MISSION_ITEM_REACHED, and STATUSTEXT with the reason of every refusal. Rates are in simulated
+//! time; with `speedup` K the simulation runs K× faster than the wall clock, and heartbeats are
+//! also sent at least once a wall-clock second.
+//!
+//! Like ArduCopter's GCS failsafe, a flying vehicle in GUIDED lands when it has heard no ground
+//! station heartbeat for [`SimServerConfig::gcs_failsafe_s`] wall-clock seconds.
+
+use crate::{Address, Link, LinkError};
+use mavlink::dialects::common::*;
+use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
+use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimVehicle};
+use skyplan_frames::{Lla, LocalFrame, Ned};
+use std::net::{SocketAddr, TcpListener};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// The simulated vehicle's MAVLink system id.
+pub const SYSTEM_ID: u8 = 1;
+/// Its component id (the autopilot).
+pub const COMPONENT_ID: u8 = 1;
+
+/// How the simulator runs.
+#[derive(Debug, Clone)]
+pub struct SimServerConfig {
+    /// Where the vehicle starts (home), also the origin of LOCAL_POSITION_NED.
+    pub home: Lla,
+    /// Vehicle limits.
+    pub sim: SimConfig,
+    /// Simulated seconds per wall-clock second (≥ 0.1).
+    pub speedup: f64,
+    /// Fault injection: after this much simulated time the vehicle goes silent and deaf.
+    pub drop_link_after_s: Option<f64>,
+    /// Land when flying in GUIDED without a ground station heartbeat for this many wall seconds.
+    pub gcs_failsafe_s: Option<f64>,
+    /// Physics step, simulated seconds.
+    pub step_s: f64,
+}
+
+impl SimServerConfig {
+    /// Defaults at a home: real time, no fault, 5 s GCS failsafe, 20 ms steps.
+    pub fn at(home: Lla) -> Self {
+        Self {
+            home,
+            sim: SimConfig::default(),
+            speedup: 1.0,
+            drop_link_after_s: None,
+            gcs_failsafe_s: Some(5.0),
+            step_s: 0.02,
+        }
+    }
+}
+
+/// What the simulator reports while it runs (the CLI prints these).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimNote {
+    /// A ground station connected.
+    Connected(String),
+    /// The connection closed.
+    Disconnected(String),
+    /// Mode changed.
+    Mode(SimMode),
+    /// Armed (`true`) or disarmed.
+    Armed(bool),
+    /// A command was refused, with the reason sent as STATUSTEXT.
+    Refused(String),
+    /// Taking off to this altitude.
+    Takeoff(f64),
+    /// Touched down.
+    Landed,
+    /// A mission of this many items was uploaded.
+    MissionUploaded(usize),
+    /// A mission item was reached.
+    MissionItemReached(u16),
+    /// The flown track hit an obstacle.
+    Collision(Collision),
+    /// The GCS failsafe triggered a landing.
+    Failsafe(String),
+    /// The injected link fault: the vehicle stopped talking.
+    LinkDropped,
+}
+
+/// The simulator's account at the end.
+#[derive(Debug, Clone)]
+pub struct SimReport {
+    /// Simulated time, seconds.
+    pub sim_time_s: f64,
+    /// Wall-clock time, seconds.
+    pub wall_time_s: f64,
+    /// The vehicle at the end.
+    pub final_state: SimState,
+    /// The track's collision check (empty if no map was given).
+    pub track: TrackCheck,
+    /// Highest altitude above home, metres.
+    pub max_alt_m: f64,
+    /// Horizontal distance flown, metres.
+    pub distance_m: f64,
+}
+
+enum Listener {
+    Tcp(TcpListener),
+    Udp(Option<Link>),
+}
+
+/// A bound simulator, ready to [`run`](SimServer::run).
+pub struct SimServer {
+    listener: Listener,
+    local: Option<SocketAddr>,
+    config: SimServerConfig,
+    frame: LocalFrame,
+}
+
+struct Upload {
+    count: u16,
+    items: Vec<SimMissionItem>,
+    last_request: Instant,
+    retries: u32,
+}
+
+fn heartbeat_of(s: &SimState) -> MavMessage {
+    let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        | MavModeFlag::MAV_MODE_FLAG_STABILIZE_ENABLED;
+    if matches!(s.mode, SimMode::Guided | SimMode::Auto) {
+        base |= MavModeFlag::MAV_MODE_FLAG_GUIDED_ENABLED;
+    }
+    if s.armed {
+        base |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
+    }
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: s.mode.arducopter_custom_mode(),
+        mavtype: MavType::MAV_TYPE_QUADROTOR,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+        base_mode: base,
+        system_status: if s.armed {
+            MavState::MAV_STATE_ACTIVE
+        } else {
+            MavState::MAV_STATE_STANDBY
+        },
+        mavlink_version: 3,
+    })
+}
+
+fn status_text(severity: MavSeverity, text: &str) -> MavMessage {
+    let mut bytes = [0u8; 50];
+    for (b, c) in bytes.iter_mut().zip(text.bytes()) {
+        *b = c;
+    }
+    MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+        severity,
+        text: bytes.into(),
+    })
+}
+
+impl SimServer {
+    /// Binds a TCP listener (`tcpin:`; port 0 picks a free port) or a UDP socket (`udpin:`).
+    pub fn bind(address: &Address, config: SimServerConfig) -> Result<Self, LinkError> {
+        let frame = LocalFrame::new(config.home).map_err(|e| LinkError::Address {
+            address: format!("{:?}", config.home),
+            message: format!("the home is not usable: {e}"),
+        })?;
+        let (listener, local) = match address {
+            Address::TcpIn(hp) => {
+                let l = TcpListener::bind(hp.as_str()).map_err(|source| LinkError::Open {
+                    address: address.to_string(),
+                    source,
+                })?;
+                l.set_nonblocking(true).map_err(|source| LinkError::Open {
+                    address: address.to_string(),
+                    source,
+                })?;
+                let local = l.local_addr().ok();
+                (Listener::Tcp(l), local)
+            }
+            Address::UdpIn(_) => {
+                let link = Link::open(address, SYSTEM_ID, COMPONENT_ID)?;
+                (Listener::Udp(Some(link)), None)
+            }
+            other => {
+                return Err(LinkError::Address {
+                    address: other.to_string(),
+                    message: "the simulator listens: use tcp:HOST:PORT, tcpin: or udpin:".into(),
+                });
+            }
+        };
+        Ok(Self {
+            listener,
+            local,
+            config,
+            frame,
+        })
+    }
+
+    /// The bound TCP address (with the port chosen for port 0).
+    pub fn local_addr(&self) -> Option<SocketAddr> {
+        self.local
+    }
+
+    /// Runs until `stop` is set. `world` enables the collision check of the flown track.
+    pub fn run(
+        mut self,
+        world: Option<&BoxWorld>,
+        stop: &AtomicBool,
+        mut note: impl FnMut(SimNote),
+    ) -> SimReport {
+        let cfg = self.config.clone();
+        let speedup = cfg.speedup.max(0.1);
+        let step_s = cfg.step_s.clamp(0.001, 0.05);
+        let mut vehicle = SimVehicle::new(cfg.sim);
+        let mut track = TrackCheck::default();
+        let mut link: Option<Link> = match &mut self.listener {
+            Listener::Udp(l) => l.take(),
+            Listener::Tcp(_) => None,
+        };
+        let wall0 = Instant::now();
+        let mut last_hb_sim = f64::NEG_INFINITY;
+        let mut last_hb_wall = wall0 - Duration::from_secs(10);
+        let mut last_fast = f64::NEG_INFINITY;
+        let mut last_slow = f64::NEG_INFINITY;
+        let mut last_gcs = Instant::now();
+        let mut upload: Option<Upload> = None;
+        let mut dropped = false;
+        let mut collided = false;
+        let mut max_alt_m: f64 = 0.0;
+        let mut distance_m = 0.0;
+        let mut last_mode = vehicle.state().mode;
+        let mut last_armed = false;
+        let mut failsafe_done = false;
+        while !stop.load(Ordering::Relaxed) {
+            // A ground station connects (TCP: one at a time, again after it leaves).
+            if link.is_none()
+                && let Listener::Tcp(l) = &self.listener
+                && let Ok((stream, peer)) = l.accept()
+            {
+                match Link::from_tcp_stream(stream, SYSTEM_ID, COMPONENT_ID) {
+                    Ok(new) => {
+                        note(SimNote::Connected(peer.to_string()));
+                        last_gcs = Instant::now();
+                        link = Some(new);
+                    }
+                    Err(e) => note(SimNote::Disconnected(e.to_string())),
+                }
+            }
+            // Physics up to the scaled wall clock.
+            let target_s = wall0.elapsed().as_secs_f64() * speedup;
+            while vehicle.state().time_s + step_s <= target_s {
+                let before = vehicle.state();
+                for e in vehicle.step(step_s) {
+                    match e {
+                        skyplan_flight::sim::SimEvent::MissionItemReached(seq) => {
+                            note(SimNote::MissionItemReached(seq));
+                            if !dropped && let Some(l) = &link {
+                                let _ = l.send(&MavMessage::MISSION_ITEM_REACHED(
+                                    MISSION_ITEM_REACHED_DATA { seq },
+                                ));
+                            }
+                        }
+                        skyplan_flight::sim::SimEvent::Landed => note(SimNote::Landed),
+                        skyplan_flight::sim::SimEvent::AutoDisarmed => {}
+                    }
+                }
+                let s = vehicle.state();
+                max_alt_m = max_alt_m.max(-s.position_ned_m[2]);
+                distance_m += (s.position_ned_m[0] - before.position_ned_m[0])
+                    .hypot(s.position_ned_m[1] - before.position_ned_m[1]);
+                if let Some(w) = world {
+                    track.add(w, s.time_s, s.position_ned_m);
+                    if !collided && let Some(c) = track.collision() {
+                        collided = true;
+                        note(SimNote::Collision(c));
+                    }
+                }
+            }
+            let s = vehicle.state();
+            if s.mode != last_mode {
+                note(SimNote::Mode(s.mode));
+                last_mode = s.mode;
+            }
+            if s.armed != last_armed {
+                note(SimNote::Armed(s.armed));
+                last_armed = s.armed;
+            }
+            // The injected fault.
+            if !dropped
+                && let Some(after) = cfg.drop_link_after_s
+                && s.time_s >= after
+            {
+                dropped = true;
+                note(SimNote::LinkDropped);
+            }
+            // GCS failsafe.
+            if let Some(fs) = cfg.gcs_failsafe_s
+                && !failsafe_done
+                && s.armed
+                && !s.on_ground
+                && s.mode == SimMode::Guided
+                && last_gcs.elapsed().as_secs_f64() > fs
+            {
+                failsafe_done = true;
+                vehicle.land();
+                note(SimNote::Failsafe(format!(
+                    "no ground station heartbeat for {fs:.1} s: LAND"
+                )));
+            }
+            let Some(l) = link.as_mut() else {
+                std::thread::sleep(Duration::from_millis(5));
+                continue;
+            };
+            // Inbound, waiting a little for the first message.
+            let mut first = true;
+            loop {
+                let wait = if first {
+                    Duration::from_millis(4)
+                } else {
+                    Duration::ZERO
+                };
+                first = false;
+                let Some(r) = l.recv_timeout(wait) else {
+                    break;
+                };
+                if dropped {
+                    continue;
+                }
+                let replies = handle_message(
+                    &mut vehicle,
+                    &self.frame,
+                    &mut upload,
+                    &mut last_gcs,
+                    r.message,
+                    &mut note,
+                );
+                for m in replies {
+                    let _ = l.send(&m);
+                }
+            }
+            if let Some(why) = l.closed() {
+                note(SimNote::Disconnected(why.to_string()));
+                link = None;
+                upload = None;
+                continue;
+            }
+            if dropped {
+                continue;
+            }
+            // Mission upload retries: re-request the awaited item.
+            if let Some(u) = &mut upload
+                && u.last_request.elapsed() > Duration::from_millis(500)
+            {
+                if u.retries >= 5 {
+                    let _ = l.send(&MavMessage::MISSION_ACK(MISSION_ACK_DATA {
+                        target_system: 0,
+                        target_component: 0,
+                        mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
+                    }));
+                    upload = None;
+                } else {
+                    u.retries += 1;
+                    u.last_request = Instant::now();
+                    let seq = u.items.len() as u16;
+                    let _ = l.send(&request_int(seq));
+                }
+            }
+            // Outbound telemetry.
+            let s = vehicle.state();
+            if s.time_s - last_hb_sim >= 1.0 || last_hb_wall.elapsed() >= Duration::from_secs(1) {
+                last_hb_sim = s.time_s;
+                last_hb_wall = Instant::now();
+                let _ = l.send(&heartbeat_of(&s));
+            }
+            if s.time_s - last_fast >= 0.1 {
+                last_fast = s.time_s;
+                for m in telemetry(&s, &self.frame, cfg.home) {
+                    let _ = l.send(&m);
+                }
+            }
+            if s.time_s - last_slow >= 0.5 {
+                last_slow = s.time_s;
+                let landed = if s.on_ground {
+                    MavLandedState::MAV_LANDED_STATE_ON_GROUND
+                } else {
+                    MavLandedState::MAV_LANDED_STATE_IN_AIR
+                };
+                let _ = l.send(&MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
+                    vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+                    landed_state: landed,
+                }));
+                if s.mode == SimMode::Auto {
+                    let _ = l.send(&MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
+                        seq: s.mission_current,
+                    }));
+                }
+            }
+        }
+        SimReport {
+            sim_time_s: vehicle.state().time_s,
+            wall_time_s: wall0.elapsed().as_secs_f64(),
+            final_state: vehicle.state(),
+            track,
+            max_alt_m,
+            distance_m,
+        }
+    }
+}
+
+fn request_int(seq: u16) -> MavMessage {
+    MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
+        seq,
+        target_system: 255,
+        target_component: 0,
+    })
+}
+
+fn telemetry(s: &SimState, frame: &LocalFrame, home: Lla) -> Vec<MavMessage> {
+    let time_boot_ms = (s.time_s * 1000.0) as u32;
+    let [n, e, d] = s.position_ned_m;
+    let [vn, ve, vd] = s.velocity_ned_m_s;
+    let mut out = vec![
+        MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+            time_boot_ms,
+            x: n as f32,
+            y: e as f32,
+            z: d as f32,
+            vx: vn as f32,
+            vy: ve as f32,
+            vz: vd as f32,
+        }),
+        MavMessage::ATTITUDE(ATTITUDE_DATA {
+            time_boot_ms,
+            roll: 0.0,
+            pitch: 0.0,
+            yaw: s.yaw_rad as f32,
+            rollspeed: 0.0,
+            pitchspeed: 0.0,
+            yawspeed: s.yaw_rate_rad_s as f32,
+        }),
+    ];
+    if let Ok(lla) = frame.lla_from_ned(Ned {
+        north_m: n,
+        east_m: e,
+        down_m: d,
+    }) {
+        let hdg = (s.yaw_rad.to_degrees().rem_euclid(360.0) * 100.0).round() as u16 % 36000;
+        out.push(MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+            time_boot_ms,
+            lat: (lla.lat_deg * 1e7).round() as i32,
+            lon: (lla.lon_deg * 1e7).round() as i32,
+            alt: ((home.alt_m - d) * 1000.0).round() as i32,
+            relative_alt: (-d * 1000.0).round() as i32,
+            vx: (vn * 100.0).round().clamp(-32768.0, 32767.0) as i16,
+            vy: (ve * 100.0).round().clamp(-32768.0, 32767.0) as i16,
+            vz: (vd * 100.0).round().clamp(-32768.0, 32767.0) as i16,
+            hdg,
+        }));
+    }
+    out
+}
+
+fn ack(command: MavCmd, result: MavResult) -> MavMessage {
+    MavMessage::COMMAND_ACK(COMMAND_ACK_DATA { command, result })
+}
+
+/// A mission item in the local frame (the deprecated `_INT` frame is what ArduPilot sends).
+#[allow(deprecated)]
+fn item_to_sim(
+    frame: &LocalFrame,
+    command: MavCmd,
+    mav_frame: MavFrame,
+    lat_deg: f64,
+    lon_deg: f64,
+    z: f64,
+    yaw_deg: f64,
+) -> SimMissionItem {
+    let relative = matches!(
+        mav_frame,
+        MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+    );
+    let alt_m = if relative { z } else { z - frame.home().alt_m };
+    match command {
+        MavCmd::MAV_CMD_NAV_TAKEOFF => SimMissionItem::Takeoff { alt_m },
+        MavCmd::MAV_CMD_NAV_LAND => SimMissionItem::Land,
+        MavCmd::MAV_CMD_NAV_WAYPOINT => match frame.ned_from_lla(Lla {
+            lat_deg,
+            lon_deg,
+            alt_m: 0.0,
+        }) {
+            Ok(ned) => SimMissionItem::Waypoint {
+                north_m: ned.north_m,
+                east_m: ned.east_m,
+                alt_m,
+                yaw_rad: yaw_deg.to_radians(),
+            },
+            Err(_) => SimMissionItem::Unsupported,
+        },
+        _ => SimMissionItem::Unsupported,
+    }
+}
+
+// SET_MODE and MISSION_ITEM are deprecated but still sent by ground stations: answer them.
+#[allow(deprecated)]
+fn handle_message(
+    v: &mut SimVehicle,
+    frame: &LocalFrame,
+    upload: &mut Option<Upload>,
+    last_gcs: &mut Instant,
+    message: MavMessage,
+    note: &mut impl FnMut(SimNote),
+) -> Vec<MavMessage> {
+    let mut out = Vec::new();
+    let mut refuse = |out: &mut Vec<MavMessage>, text: String| {
+        out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
+        note(SimNote::Refused(text));
+    };
+    match message {
+        MavMessage::HEARTBEAT(h)
+            if h.mavtype == MavType::MAV_TYPE_GCS
+                || h.autopilot == MavAutopilot::MAV_AUTOPILOT_INVALID =>
+        {
+            *last_gcs = Instant::now();
+        }
+        MavMessage::COMMAND_LONG(c) => {
+            if c.target_system != 0 && c.target_system != SYSTEM_ID {
+                return out;
+            }
+            let result = match c.command {
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+                    let r = if c.param1 >= 0.5 { v.arm() } else { v.disarm() };
+                    match r {
+                        Ok(()) => MavResult::MAV_RESULT_ACCEPTED,
+                        Err(e) => {
+                            refuse(&mut out, e.0);
+                            MavResult::MAV_RESULT_DENIED
+                        }
+                    }
+                }
+                MavCmd::MAV_CMD_NAV_TAKEOFF => match v.takeoff(f64::from(c.param7)) {
+                    Ok(()) => {
+                        note(SimNote::Takeoff(f64::from(c.param7)));
+                        MavResult::MAV_RESULT_ACCEPTED
+                    }
+                    Err(e) => {
+                        refuse(&mut out, e.0);
+                        MavResult::MAV_RESULT_FAILED
+                    }
+                },
+                MavCmd::MAV_CMD_NAV_LAND => {
+                    v.land();
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                MavCmd::MAV_CMD_DO_SET_MODE => {
+                    match SimMode::from_arducopter_custom_mode(c.param2 as u32) {
+                        Some(m) if (c.param1 as u32) & 1 == 1 => {
+                            v.set_mode(m);
+                            MavResult::MAV_RESULT_ACCEPTED
+                        }
+                        _ => {
+                            refuse(
+                                &mut out,
+                                format!("Mode change to {} not supported", c.param2),
+                            );
+                            MavResult::MAV_RESULT_UNSUPPORTED
+                        }
+                    }
+                }
+                MavCmd::MAV_CMD_MISSION_START => {
+                    if v.mission().len() <= 1 {
+                        refuse(&mut out, "Mission: no items".into());
+                        MavResult::MAV_RESULT_DENIED
+                    } else {
+                        v.set_mode(SimMode::Auto);
+                        MavResult::MAV_RESULT_ACCEPTED
+                    }
+                }
+                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL | MavCmd::MAV_CMD_REQUEST_MESSAGE => {
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                _ => MavResult::MAV_RESULT_UNSUPPORTED,
+            };
+            out.push(ack(c.command, result));
+        }
+        MavMessage::SET_MODE(m) => {
+            if let Some(mode) = SimMode::from_arducopter_custom_mode(m.custom_mode) {
+                v.set_mode(mode);
+            }
+        }
+        MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) => {
+            let mask = t.type_mask.bits();
+            let position_ignored = mask & 0x7 != 0;
+            let local = matches!(t.coordinate_frame, MavFrame::MAV_FRAME_LOCAL_NED);
+            if !position_ignored && local {
+                let yaw = if mask & 0x400 != 0 {
+                    f64::NAN
+                } else {
+                    f64::from(t.yaw)
+                };
+                // Ignored outside GUIDED, as ArduPilot does.
+                let _ =
+                    v.set_position_target([f64::from(t.x), f64::from(t.y), f64::from(t.z)], yaw);
+            }
+        }
+        MavMessage::MISSION_COUNT(c) => {
+            if c.count == 0 {
+                v.set_mission(Vec::new());
+                out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED));
+            } else {
+                *upload = Some(Upload {
+                    count: c.count,
+                    items: Vec::new(),
+                    last_request: Instant::now(),
+                    retries: 0,
+                });
+                out.push(request_int(0));
+            }
+        }
+        MavMessage::MISSION_ITEM_INT(i) => {
+            let item = item_to_sim(
+                frame,
+                i.command,
+                i.frame,
+                f64::from(i.x) * 1e-7,
+                f64::from(i.y) * 1e-7,
+                f64::from(i.z),
+                f64::from(i.param4),
+            );
+            accept_item(v, upload, i.seq, item, &mut out, note);
+        }
+        MavMessage::MISSION_ITEM(i) => {
+            let item = item_to_sim(
+                frame,
+                i.command,
+                i.frame,
+                f64::from(i.x),
+                f64::from(i.y),
+                f64::from(i.z),
+                f64::from(i.param4),
+            );
+            accept_item(v, upload, i.seq, item, &mut out, note);
+        }
+        MavMessage::MISSION_CLEAR_ALL(_) => {
+            v.set_mission(Vec::new());
+            out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED));
+        }
+        _ => {}
+    }
+    out
+}
+
+fn mission_ack(result: MavMissionResult) -> MavMessage {
+    MavMessage::MISSION_ACK(MISSION_ACK_DATA {
+        target_system: 255,
+        target_component: 0,
+        mavtype: result,
+    })
+}
+
+fn accept_item(
+    v: &mut SimVehicle,
+    upload: &mut Option<Upload>,
+    seq: u16,
+    item: SimMissionItem,
+    out: &mut Vec<MavMessage>,
+    note: &mut impl FnMut(SimNote),
+) {
+    let Some(u) = upload else {
+        out.push(mission_ack(MavMissionResult::MAV_MISSION_DENIED));
+        return;
+    };
+    let expected = u.items.len() as u16;
+    if seq != expected {
+        out.push(request_int(expected));
+        return;
+    }
+    // Item 0 is the home on ArduPilot: kept in the list, never flown.
+    u.items.push(if seq == 0 {
+        SimMissionItem::Unsupported
+    } else {
+        item
+    });
+    u.retries = 0;
+    u.last_request = Instant::now();
+    if u.items.len() as u16 == u.count {
+        let items = std::mem::take(&mut u.items);
+        note(SimNote::MissionUploaded(items.len()));
+        v.set_mission(items);
+        *upload = None;
+        out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED));
+    } else {
+        out.push(request_int(expected + 1));
+    }
+}

@@ -1,0 +1,117 @@
+//! The ground station flies the simulator over a real loopback TCP socket.
+
+use skyplan_flight::executor::{
+    ExecutorConfig, FlightState, MissionExecutor, Note, Outcome, Target,
+};
+use skyplan_frames::{Lla, LocalFrame};
+use skyplan_link::ground::{GroundConfig, GroundStation, Update};
+use skyplan_link::vehicle::{SimNote, SimServer, SimServerConfig};
+use skyplan_link::{Address, Role};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+const HOME: Lla = Lla {
+    lat_deg: 37.792480,
+    lon_deg: -122.397450,
+    alt_m: 0.0,
+};
+
+fn route() -> Vec<Target> {
+    let wp = |n: f64, e: f64, h: f64| Target {
+        north_m: n,
+        east_m: e,
+        alt_m: 5.0,
+        heading_rad: h.to_radians(),
+    };
+    vec![wp(0.0, 0.0, 0.0), wp(20.0, 0.0, 0.0), wp(20.0, 15.0, 90.0)]
+}
+
+struct Run {
+    outcome: Option<Outcome>,
+    states: Vec<FlightState>,
+    sim_notes: Vec<SimNote>,
+    reached: usize,
+}
+
+fn fly(config: SimServerConfig, ground: GroundConfig) -> Run {
+    let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).unwrap();
+    let port = server.local_addr().unwrap().port();
+    let stop = Arc::new(AtomicBool::new(false));
+    let notes = Arc::new(Mutex::new(Vec::new()));
+    let (s2, n2) = (Arc::clone(&stop), Arc::clone(&notes));
+    let sim = std::thread::spawn(move || server.run(None, &s2, |n| n2.lock().unwrap().push(n)));
+    let address = Address::parse(&format!("tcp:127.0.0.1:{port}"), Role::Client).unwrap();
+    let mut gcs = GroundStation::connect(&address, ground).unwrap();
+    let info = gcs.wait_for_vehicle(Duration::from_secs(10)).unwrap();
+    assert!((info.position.lat_deg - HOME.lat_deg).abs() < 1e-6);
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let frame = LocalFrame::new(HOME).unwrap();
+    let mut states = vec![FlightState::Manual];
+    gcs.fly(&mut ex, &frame, |u| {
+        if let Update::Notes(_, notes) = u {
+            for n in notes {
+                if let Note::State { to, .. } = n {
+                    states.push(to);
+                }
+            }
+        }
+    })
+    .unwrap();
+    stop.store(true, Ordering::Relaxed);
+    let report = sim.join().unwrap();
+    assert!(report.sim_time_s > 0.0);
+    let sim_notes = notes.lock().unwrap().clone();
+    Run {
+        outcome: ex.outcome().cloned(),
+        states,
+        sim_notes,
+        reached: ex.reached().len(),
+    }
+}
+
+#[test]
+fn flies_a_short_mission_over_tcp() {
+    let config = SimServerConfig {
+        speedup: 20.0,
+        ..SimServerConfig::at(HOME)
+    };
+    let ground = GroundConfig {
+        speedup: 20.0,
+        timeout_s: Some(60.0),
+        ..GroundConfig::default()
+    };
+    let run = fly(config, ground);
+    assert_eq!(run.outcome, Some(Outcome::Completed), "{:?}", run.sim_notes);
+    use FlightState::*;
+    assert_eq!(
+        run.states,
+        vec![
+            Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+        ]
+    );
+    assert_eq!(run.reached, 3);
+    assert!(run.sim_notes.contains(&SimNote::Landed));
+    assert!(run.sim_notes.contains(&SimNote::Armed(false)));
+}
+
+#[test]
+fn a_silent_vehicle_is_a_lost_link() {
+    let config = SimServerConfig {
+        speedup: 20.0,
+        drop_link_after_s: Some(8.0),
+        ..SimServerConfig::at(HOME)
+    };
+    let ground = GroundConfig {
+        speedup: 20.0,
+        link_timeout_s: 1.0,
+        timeout_s: Some(60.0),
+        ..GroundConfig::default()
+    };
+    let run = fly(config, ground);
+    let Some(Outcome::Failed(f)) = &run.outcome else {
+        panic!("{:?}", run.outcome)
+    };
+    assert!(f.to_string().contains("link lost"), "{f}");
+    assert!(run.sim_notes.contains(&SimNote::LinkDropped));
+}
