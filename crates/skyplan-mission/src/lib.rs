@@ -67,33 +67,11 @@ impl Mission {
         alt_m: f64,
         start_heading_rad: f64,
     ) -> Result<Self, FrameError> {
-        let mut waypoints = Vec::with_capacity(points_ne.len());
-        let mut heading = start_heading_rad;
-        for (k, &(north_m, east_m)) in points_ne.iter().enumerate() {
-            if k > 0 {
-                let prev = points_ne[k - 1];
-                if prev != (north_m, east_m) {
-                    heading = heading_rad(prev, (north_m, east_m));
-                }
-            }
-            let lla = frame.lla_from_ned(Ned {
-                north_m,
-                east_m,
-                down_m: -alt_m,
-            })?;
-            waypoints.push(Waypoint {
-                north_m,
-                east_m,
-                alt_m,
-                heading_rad: heading,
-                lat_deg: lla.lat_deg,
-                lon_deg: lla.lon_deg,
-            });
-        }
-        Ok(Self {
-            home: frame.home(),
-            waypoints,
-        })
+        let points: Vec<[f64; 3]> = points_ne
+            .iter()
+            .map(|&(north_m, east_m)| [north_m, east_m, alt_m])
+            .collect();
+        Self::from_points_nea(frame, &points, start_heading_rad)
     }
 
     /// Builds a mission from local `[north_m, east_m, alt_m]` points, each with its own
