@@ -118,12 +118,17 @@ pub fn run(args: PlanArgs) -> Result<()> {
 
     let alt_m = args.alt_m.or(cfg.alt_m).unwrap_or(5.0);
     let safety_m = args.safety_m.or(cfg.safety_m).unwrap_or(5.0);
-    let start_ne = ne_of(&frame, args.start_ne, args.start_lla, "start")?
-        .or(cfg.start_ne.map(|[n, e]| (n, e)))
-        .unwrap_or((0.0, 0.0));
-    let goal_ne = ne_of(&frame, args.goal_ne, args.goal_lla, "goal")?
-        .or(cfg.goal_ne.map(|[n, e]| (n, e)))
-        .unwrap_or(crate::plan_cmd::DEFAULT_GOAL_NE);
+    let pair = |p: Option<[f64; 2]>| p.map(|[a, b]| Pair(a, b));
+    let start_ne = match ne_of(&frame, args.start_ne, args.start_lla, "start")? {
+        Some(ne) => Some(ne),
+        None => ne_of(&frame, pair(cfg.start_ne), pair(cfg.start_lla), "start")?,
+    }
+    .unwrap_or((0.0, 0.0));
+    let goal_ne = match ne_of(&frame, args.goal_ne, args.goal_lla, "goal")? {
+        Some(ne) => Some(ne),
+        None => ne_of(&frame, pair(cfg.goal_ne), pair(cfg.goal_lla), "goal")?,
+    }
+    .unwrap_or(crate::plan_cmd::DEFAULT_GOAL_NE);
     let start: Neu = [
         start_ne.0,
         start_ne.1,

@@ -26,10 +26,11 @@ fn main() {
     let alt_hi: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(5.0);
     let text = include_str!("../../../data/colliders.csv");
     let map = skyplan_map::colliders::parse_colliders(text).expect("bundled map");
+    let max_alt_m: f64 = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(100.0);
     let spec = WorldSpec {
         safety_m: 5.0,
         min_alt_m: 0.0,
-        max_alt_m: 100.0,
+        max_alt_m,
         margin_bounds_m: 0.0,
     };
     let t = Instant::now();
