@@ -252,6 +252,12 @@ pub struct FlyArgs {
     /// Waypoint deadband, horizontal metres.
     #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
     pub deadband_m: f64,
+    /// Upload the plan as a mission (take-off, waypoints with headings, land) and fly it in AUTO.
+    #[arg(long)]
+    pub upload: bool,
+    /// Upload the mission and exit without flying (interop tests).
+    #[arg(long, hide = true)]
+    pub upload_only: bool,
     /// Fault injection for tests: the simulated vehicle goes silent after this many simulated seconds.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim")]
     pub sim_drop_link_after_s: Option<f64>,

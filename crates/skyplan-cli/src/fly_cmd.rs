@@ -7,12 +7,14 @@ use crate::exit::{Classify, Failure, Kind, Result, bad_input};
 use crate::files::{BUNDLED_COLLIDERS, BUNDLED_NAME, read_text, write_atomic};
 use crate::plan_cmd::resolve;
 use anyhow::anyhow;
+use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FlightState, MissionExecutor, Note, Outcome, Target,
+    ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, Target,
 };
+use skyplan_flight::upload::{GlobalWaypoint, UploadConfig, mission_items};
 use skyplan_frames::{Lla, LocalFrame, Ned};
-use skyplan_link::ground::{GroundConfig, GroundStation, LogRow, Update};
+use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Update};
 use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
 use skyplan_link::{Address, Role};
 use skyplan_pipeline::{PlanError, Position, plan};
@@ -209,7 +211,14 @@ pub fn run(args: FlyArgs) -> Result<()> {
         sim.as_ref(),
     );
     let report = sim.and_then(InProcessSim::finish);
-    let (log, outcome) = result?;
+    let (log, ended) = result?;
+    let outcome = match ended {
+        Ended::Uploaded => {
+            println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
+            return Ok(());
+        }
+        Ended::Flight(outcome) => outcome,
+    };
     if let Some(path) = &log_path {
         write_atomic(path, &log_csv(&log)?)?;
         println!(
@@ -265,6 +274,15 @@ struct FlyView {
     wait_s: f64,
     timeout_s: Option<f64>,
     deadband_m: f64,
+    upload: bool,
+    upload_only: bool,
+}
+
+/// How `fly` ended: a flight (with its outcome, `None` if an aborted flight did not land in
+/// time), or an upload without a flight (`--upload-only`).
+enum Ended {
+    Flight(Option<Outcome>),
+    Uploaded,
 }
 
 fn args_view(a: &FlyArgs) -> FlyView {
@@ -274,6 +292,8 @@ fn args_view(a: &FlyArgs) -> FlyView {
         wait_s: a.wait_s,
         timeout_s: a.timeout_s,
         deadband_m: a.deadband_m,
+        upload: a.upload || a.upload_only,
+        upload_only: a.upload_only,
     }
 }
 
@@ -287,7 +307,7 @@ fn fly(
     user_start: bool,
     write_waypoints: bool,
     sim: Option<&InProcessSim>,
-) -> Result<(Vec<LogRow>, Option<Outcome>)> {
+) -> Result<(Vec<LogRow>, Ended)> {
     let ground = GroundConfig {
         speedup: a.speedup,
         link_timeout_s: a.link_timeout_s,
@@ -343,10 +363,51 @@ fn fly(
         deadband_m: a.deadband_m,
         ..ExecutorConfig::default()
     };
-    let mut ex = MissionExecutor::new(&targets, config).map_err(bad_input)?;
-    let n = targets.len();
+    if !a.upload {
+        let mut ex = MissionExecutor::new(&targets, config).map_err(bad_input)?;
+        return fly_with(&mut gcs, &mut ex, frame, sim).map(|(log, o)| (log, Ended::Flight(o)));
+    }
+    // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
+    let waypoints: Vec<GlobalWaypoint> =
+        mission.waypoints.iter().map(GlobalWaypoint::from).collect();
+    let home = match info.autopilot {
+        Autopilot::Px4 => None,
+        _ => Some((info.position.lat_deg, info.position.lon_deg)),
+    };
+    let items = mission_items(&waypoints, home).map_err(bad_input)?;
+    println!(
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        items.items.len(),
+        if home.is_some() { "home, " } else { "" },
+        opts.request.spec.alt_m,
+        targets.len()
+    );
+    let report = gcs
+        .upload_mission(&items, UploadConfig::default())
+        .or_exit(Kind::Runtime)?;
+    println!(
+        "upload     accepted: {} items in {:.3} s wall ({} requests answered, {} resends)",
+        report.items, report.wall_time_s, report.requests, report.resends
+    );
+    if a.upload_only {
+        println!("result     mission uploaded (--upload-only: not flown)");
+        return Ok((Vec::new(), Ended::Uploaded));
+    }
+    let mut ex =
+        AutoExecutor::new(&targets, MissionLayout::from(&items), config).map_err(bad_input)?;
+    fly_with(&mut gcs, &mut ex, frame, sim).map(|(log, o)| (log, Ended::Flight(o)))
+}
+
+/// Flies with either executor, printing as it goes, and sums the flight up.
+fn fly_with<E: FlightExecutor>(
+    gcs: &mut GroundStation,
+    ex: &mut E,
+    frame: &LocalFrame,
+    sim: Option<&InProcessSim>,
+) -> Result<(Vec<LogRow>, Option<Outcome>)> {
+    let n = ex.targets().len();
     let summary = gcs
-        .fly(&mut ex, frame, |u| {
+        .fly(ex, frame, |u| {
             if let Some(s) = sim {
                 s.print_notes();
             }
@@ -376,6 +437,8 @@ fn fly(
                 Update::TimedOut(limit) => {
                     println!("timeout    {limit} s wall exceeded: landing")
                 }
+                Update::Interrupted => println!("interrupt  Ctrl-C: landing"),
+                Update::Mode(m) => println!("mode       {m}"),
             }
         })
         .or_exit(Kind::Runtime)?;

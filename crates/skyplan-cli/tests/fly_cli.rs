@@ -127,6 +127,117 @@ fn fly_sim_flies_the_fcnd_route_on_the_bundled_map() {
 }
 
 #[test]
+fn fly_sim_upload_flies_the_mission_in_auto() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--upload",
+            "--speedup",
+            "50",
+            "--log",
+            "flight.csv",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    let n: usize = r
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("result     landed and disarmed after reaching all "))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no result line:\n{}", r.stdout));
+    assert!(n >= 2);
+    // Home, take-off, the waypoints, land: every item requested once and acknowledged.
+    let items = n + 3;
+    assert!(
+        r.stdout
+            .contains(&format!("upload     accepted: {items} items in"))
+            && r.stdout
+                .contains(&format!("({items} requests answered, 0 resends)")),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stdout
+            .contains(&format!("sim        mission of {items} items received")),
+        "{}",
+        r.stdout
+    );
+    for line in [
+        "MANUAL → ARMING",
+        "ARMING → TAKEOFF",
+        "TAKEOFF → WAYPOINT",
+        "WAYPOINT → LANDING",
+        "LANDING → DISARMING",
+        "DISARMING → MANUAL",
+        "sim        mode AUTO",
+        // The vehicle flew it: no position target was streamed.
+        "0 position targets sent",
+        "no collision with the map's obstacles",
+    ] {
+        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
+    }
+    for k in 1..=n {
+        assert!(
+            r.stdout.contains(&format!(" {k} of {n} reached")),
+            "waypoint {k}:\n{}",
+            r.stdout
+        );
+    }
+    let (_, rows) = read_log(&dir.path().join("flight.csv"));
+    let f = |s: &str| s.parse::<f64>().unwrap();
+    let last = rows.last().unwrap();
+    assert!(
+        (f(&last[2]) - 420.0).abs() < 1.5 && (f(&last[3]) - 390.0).abs() < 1.5,
+        "{last:?}"
+    );
+    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+}
+
+#[test]
+fn upload_only_uploads_to_a_separate_sim_and_exits() {
+    let sim = SimProcess::start("20");
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--connect",
+            &sim.address,
+            "--upload-only",
+            "--goal-ne",
+            "60,30",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(r.stdout.contains("upload     accepted:"), "{}", r.stdout);
+    assert!(
+        r.stdout
+            .contains("result     mission uploaded (--upload-only: not flown)"),
+        "{}",
+        r.stdout
+    );
+    assert!(!r.stdout.contains("→ ARMING"), "{}", r.stdout);
+}
+
+#[test]
 fn a_link_lost_mid_flight_is_reported_with_a_nonzero_exit() {
     let dir = tempfile::tempdir().unwrap();
     let r = run(
@@ -351,4 +462,78 @@ fn pymavlink_drives_skyplan_sim() {
     ] {
         assert!(stdout.contains(expected), "missing {expected:?}:\n{stdout}");
     }
+}
+
+fn python_has_mavsdk() -> bool {
+    std::process::Command::new("python3")
+        .args(["-c", "import mavsdk"])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+#[test]
+fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
+    if !python_has_mavsdk() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but Python's mavsdk is missing: .ci/run installs it"
+        );
+        eprintln!("skipping: python3 -m pip install mavsdk to run this peer test");
+        return;
+    }
+    // A free UDP port for MAVSDK to listen on.
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("plan.json");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fly/mavsdk_autopilot.py");
+    let mut peer = std::process::Command::new("python3")
+        .args([
+            script,
+            &port.to_string(),
+            "37.792480",
+            "-122.397450",
+            plan.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(peer.stdout.take().unwrap()).lines();
+    let first = lines.next().unwrap().unwrap();
+    assert!(first.starts_with("listening"), "{first}");
+    let reader = std::thread::spawn(move || lines.map_while(|l| l.ok()).collect::<Vec<_>>());
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--connect",
+            &format!("udpout:127.0.0.1:{port}"),
+            "--upload-only",
+            "--out",
+            "plan.json",
+            "--wait-s",
+            "20",
+        ],
+    );
+    let status = peer.wait().unwrap();
+    let peer_out = reader.join().unwrap().join("\n");
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}\nMAVSDK peer:\n{peer_out}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(
+        status.success() && peer_out.lines().any(|l| l == "OK"),
+        "MAVSDK peer failed:\n{peer_out}\nskyplan:\n{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("upload     accepted:"), "{}", r.stdout);
+    let n_items = peer_out.lines().filter(|l| l.starts_with("item ")).count();
+    assert!(n_items >= 5, "{peer_out}");
 }

@@ -128,6 +128,12 @@ pub enum CommandKind {
     Land,
     /// Disarm the motors.
     Disarm,
+    /// Start the uploaded mission (AUTO, MISSION_START).
+    StartMission,
+    /// Hold position (LOITER / PX4 HOLD).
+    Hold,
+    /// Return to launch (RTL).
+    ReturnToLaunch,
 }
 
 impl fmt::Display for CommandKind {
@@ -138,6 +144,9 @@ impl fmt::Display for CommandKind {
             CommandKind::Takeoff => "takeoff",
             CommandKind::Land => "landing",
             CommandKind::Disarm => "disarming",
+            CommandKind::StartMission => "mission start",
+            CommandKind::Hold => "hold",
+            CommandKind::ReturnToLaunch => "return to launch",
         })
     }
 }
@@ -169,6 +178,42 @@ pub enum Command {
     Land,
     /// Disarm.
     Disarm,
+    /// Fly the uploaded mission: AUTO mode, then MISSION_START.
+    StartMission,
+    /// Hold the position (ArduCopter LOITER, PX4 AUTO.LOITER).
+    Hold,
+    /// Return to launch and land there (RTL).
+    ReturnToLaunch,
+}
+
+/// The vehicle's flight mode, as far as the executors care.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VehicleMode {
+    /// Obeys position targets (ArduCopter GUIDED, PX4 OFFBOARD).
+    Guided,
+    /// Flies the uploaded mission (ArduCopter AUTO, PX4 AUTO.MISSION).
+    Auto,
+    /// Landing (LAND).
+    Land,
+    /// Holding position (LOITER, BRAKE, PX4 AUTO.LOITER).
+    Hold,
+    /// Returning to launch (RTL).
+    ReturnToLaunch,
+    /// Anything else (a pilot mode such as STABILIZE); the number is the custom mode.
+    Other(u32),
+}
+
+impl fmt::Display for VehicleMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            VehicleMode::Guided => f.write_str("GUIDED"),
+            VehicleMode::Auto => f.write_str("AUTO"),
+            VehicleMode::Land => f.write_str("LAND"),
+            VehicleMode::Hold => f.write_str("HOLD"),
+            VehicleMode::ReturnToLaunch => f.write_str("RTL"),
+            VehicleMode::Other(m) => write!(f, "custom mode {m}"),
+        }
+    }
 }
 
 /// What happened to the executor since the last event, for printing and logging.
@@ -243,6 +288,13 @@ pub enum Failure {
         /// Why.
         reason: String,
     },
+    /// The vehicle left AUTO while flying the uploaded mission (a pilot or failsafe took over).
+    LeftMission {
+        /// The state.
+        state: FlightState,
+        /// The mode it entered.
+        mode: VehicleMode,
+    },
 }
 
 impl fmt::Display for Failure {
@@ -265,6 +317,10 @@ impl fmt::Display for Failure {
                 "the vehicle left guided mode during {state} (pilot or failsafe took over)"
             ),
             Failure::Aborted { reason } => write!(f, "aborted ({reason}); the vehicle landed"),
+            Failure::LeftMission { state, mode } => write!(
+                f,
+                "the vehicle left AUTO for {mode} during {state} (pilot or failsafe took over)"
+            ),
         }
     }
 }
@@ -538,7 +594,10 @@ impl MissionExecutor {
                     }
                 }
             }
-            Event::Tick => {}
+            Event::Mode(_)
+            | Event::MissionItemReached(_)
+            | Event::MissionCurrent(_)
+            | Event::Tick => {}
         }
         self.step(now_s, &mut out);
         out
@@ -815,8 +874,62 @@ pub enum Event {
     },
     /// Stop the flight: land if in the air (Ctrl-C, overall timeout).
     Abort(String),
+    /// The vehicle's mode, from each of its heartbeats.
+    Mode(VehicleMode),
+    /// MISSION_ITEM_REACHED: the vehicle reached this item of the uploaded mission.
+    MissionItemReached(u16),
+    /// MISSION_CURRENT: the vehicle is flying to this item of the uploaded mission.
+    MissionCurrent(u16),
     /// Time passes.
     Tick,
+}
+
+/// What the link layer needs from an executor: [`MissionExecutor`] (position targets in GUIDED)
+/// and [`crate::auto::AutoExecutor`] (the uploaded mission in AUTO) both fly through it.
+pub trait FlightExecutor {
+    /// Feeds one event at executor time `now_s` (seconds, monotonic) and returns what to send.
+    fn handle(&mut self, now_s: f64, event: Event) -> Output;
+    /// The current state.
+    fn state(&self) -> FlightState;
+    /// How the flight ended, once it has.
+    fn outcome(&self) -> Option<&Outcome>;
+    /// The last telemetry seen.
+    fn last_telemetry(&self) -> Option<&Telemetry>;
+    /// The waypoint being flown to (in WAYPOINT), with its index.
+    fn current_target(&self) -> Option<(usize, Target)>;
+    /// The waypoints reached so far, in order.
+    fn reached(&self) -> &[Reached];
+    /// The waypoints.
+    fn targets(&self) -> &[Target];
+    /// Horizontal distance still to fly along the route, metres.
+    fn distance_left_m(&self) -> f64;
+}
+
+impl FlightExecutor for MissionExecutor {
+    fn handle(&mut self, now_s: f64, event: Event) -> Output {
+        MissionExecutor::handle(self, now_s, event)
+    }
+    fn state(&self) -> FlightState {
+        MissionExecutor::state(self)
+    }
+    fn outcome(&self) -> Option<&Outcome> {
+        MissionExecutor::outcome(self)
+    }
+    fn last_telemetry(&self) -> Option<&Telemetry> {
+        MissionExecutor::last_telemetry(self)
+    }
+    fn current_target(&self) -> Option<(usize, Target)> {
+        MissionExecutor::current_target(self)
+    }
+    fn reached(&self) -> &[Reached] {
+        MissionExecutor::reached(self)
+    }
+    fn targets(&self) -> &[Target] {
+        MissionExecutor::targets(self)
+    }
+    fn distance_left_m(&self) -> f64 {
+        MissionExecutor::distance_left_m(self)
+    }
 }
 
 #[cfg(test)]

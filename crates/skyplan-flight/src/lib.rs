@@ -5,12 +5,17 @@
 //! - [`sim`]: a simulated multicopter (first-order velocity response, speed, acceleration and
 //!   yaw-rate limits, ArduCopter-like modes, take-off, landing, position targets, missions).
 //! - [`collision`]: the flown track checked against the map's obstacle boxes.
+//! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
+//! - [`auto`]: flying the uploaded mission in AUTO (`skyplan fly --upload`), same states and
+//!   outcomes as [`executor`].
 //!
 //! The MAVLink link that connects these to sockets is `skyplan-link`; this crate never touches
 //! the network, a clock or the terminal, so everything here is tested deterministically.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod auto;
 pub mod collision;
 pub mod executor;
 pub mod sim;
+pub mod upload;

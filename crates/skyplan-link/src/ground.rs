@@ -14,9 +14,15 @@
 use crate::{Address, Link, LinkError, Received};
 use mavlink::dialects::common::*;
 use skyplan_flight::executor::{
-    Command, CommandKind, Event, FlightState, MissionExecutor, Note, Target, Telemetry,
+    Command, CommandKind, Event, FlightExecutor, FlightState, Note, Target, Telemetry, VehicleMode,
+};
+use skyplan_flight::upload::{
+    ItemCommand, MissionItem, MissionPlan, MissionUpload, UploadConfig, UploadEvent, UploadSend,
+    UploadStatus,
 };
 use skyplan_frames::{Lla, LocalFrame};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Our MAVLink system id (a ground station).
@@ -26,6 +32,10 @@ pub const COMPONENT_ID: u8 = 190;
 
 /// ArduCopter's GUIDED custom mode.
 const ARDUCOPTER_GUIDED: u32 = 4;
+/// ArduCopter's AUTO, LOITER and RTL custom modes.
+const ARDUCOPTER_AUTO: u32 = 3;
+const ARDUCOPTER_LOITER: u32 = 5;
+const ARDUCOPTER_RTL: u32 = 6;
 /// PX4's OFFBOARD main mode, in `custom_mode` bits 16–23.
 const PX4_OFFBOARD: u32 = 6 << 16;
 
@@ -65,6 +75,22 @@ pub enum GroundError {
     /// The vehicle's position is not usable in the map's frame.
     #[error("vehicle position: {0}")]
     Position(String),
+    /// The mission upload failed.
+    #[error("mission upload failed: {0}")]
+    Upload(String),
+}
+
+/// How a mission upload went.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UploadReport {
+    /// Items sent (the vehicle acknowledged them all).
+    pub items: usize,
+    /// Item requests answered (re-requests included).
+    pub requests: u32,
+    /// Messages resent after the vehicle went quiet.
+    pub resends: u32,
+    /// Wall time from MISSION_COUNT to MISSION_ACK, seconds.
+    pub wall_time_s: f64,
 }
 
 /// Which autopilot the vehicle runs (decides the mode numbers).
@@ -123,6 +149,10 @@ pub enum Update {
     LinkClosed(String),
     /// The flight's wall-clock budget ran out: landing.
     TimedOut(f64),
+    /// The operator interrupted (Ctrl-C): landing.
+    Interrupted,
+    /// The vehicle changed mode.
+    Mode(VehicleMode),
 }
 
 /// The flight's account.
@@ -155,6 +185,8 @@ pub struct GroundStation {
     yaw_rad: f64,
     on_ground: Option<bool>,
     last_arm_request: CommandKind,
+    last_mode_request: CommandKind,
+    interrupt: Option<Arc<AtomicBool>>,
 }
 
 fn gcs_heartbeat() -> MavMessage {
@@ -188,7 +220,133 @@ impl GroundStation {
             yaw_rad: 0.0,
             on_ground: None,
             last_arm_request: CommandKind::Arm,
+            last_mode_request: CommandKind::TakeControl,
+            interrupt: None,
         })
+    }
+
+    /// A flag that, once set (by a Ctrl-C handler), aborts the flight: the executor lands.
+    pub fn set_interrupt(&mut self, flag: Arc<AtomicBool>) {
+        self.interrupt = Some(flag);
+    }
+
+    /// The vehicle's mode from its last heartbeat.
+    pub fn mode(&self) -> VehicleMode {
+        match self.autopilot {
+            Autopilot::Px4 => {
+                let main = (self.custom_mode >> 16) & 0xff;
+                let sub = (self.custom_mode >> 24) & 0xff;
+                match (main, sub) {
+                    (6, _) => VehicleMode::Guided,
+                    (4, 4) => VehicleMode::Auto,
+                    (4, 3) => VehicleMode::Hold,
+                    (4, 5) => VehicleMode::ReturnToLaunch,
+                    (4, 6) => VehicleMode::Land,
+                    _ => VehicleMode::Other(self.custom_mode),
+                }
+            }
+            _ => match self.custom_mode {
+                ARDUCOPTER_GUIDED => VehicleMode::Guided,
+                ARDUCOPTER_AUTO => VehicleMode::Auto,
+                9 => VehicleMode::Land,
+                ARDUCOPTER_LOITER | 17 => VehicleMode::Hold,
+                ARDUCOPTER_RTL | 21 => VehicleMode::ReturnToLaunch,
+                m => VehicleMode::Other(m),
+            },
+        }
+    }
+
+    /// Uploads a mission (see [`skyplan_flight::upload`]): MISSION_COUNT, each requested item
+    /// as MISSION_ITEM_INT (MISSION_REQUEST_INT and MISSION_REQUEST are answered alike), until
+    /// the vehicle's MISSION_ACK; silences are retried as `config` says. Call after
+    /// [`GroundStation::wait_for_vehicle`].
+    pub fn upload_mission(
+        &mut self,
+        plan: &MissionPlan,
+        config: UploadConfig,
+    ) -> Result<UploadReport, GroundError> {
+        let Ok(count) = u16::try_from(plan.items.len()) else {
+            return Err(GroundError::Upload(format!(
+                "{} items do not fit in a mission",
+                plan.items.len()
+            )));
+        };
+        let mut up = MissionUpload::new(count, config);
+        let start = Instant::now();
+        let sends = up.start(0.0);
+        self.send_upload(plan, &sends)?;
+        loop {
+            match up.status() {
+                UploadStatus::Done => {
+                    return Ok(UploadReport {
+                        items: plan.items.len(),
+                        requests: up.requests(),
+                        resends: up.resends(),
+                        wall_time_s: start.elapsed().as_secs_f64(),
+                    });
+                }
+                UploadStatus::Failed(why) => return Err(GroundError::Upload(why.clone())),
+                UploadStatus::InProgress => {}
+            }
+            if let Some(why) = self.link.closed() {
+                return Err(GroundError::Upload(format!("the connection closed: {why}")));
+            }
+            let event = match self.link.recv_timeout(Duration::from_millis(10)) {
+                Some(r) => {
+                    let from_vehicle = self
+                        .vehicle
+                        .is_none_or(|(sys, _)| u32::from(sys) == r.header.system_id);
+                    let to_us = |target: u8| target == 0 || target == SYSTEM_ID;
+                    let _ = self.absorb(&r);
+                    match &r.message {
+                        MavMessage::MISSION_REQUEST_INT(q)
+                            if from_vehicle && to_us(q.target_system) =>
+                        {
+                            UploadEvent::Request { seq: q.seq }
+                        }
+                        #[allow(deprecated)]
+                        MavMessage::MISSION_REQUEST(q)
+                            if from_vehicle && to_us(q.target_system) =>
+                        {
+                            UploadEvent::Request { seq: q.seq }
+                        }
+                        MavMessage::MISSION_ACK(a) if from_vehicle && to_us(a.target_system) => {
+                            UploadEvent::Ack(match a.mavtype {
+                                MavMissionResult::MAV_MISSION_ACCEPTED => Ok(()),
+                                other => Err(format!("{other:?}")
+                                    .trim_start_matches("MAV_MISSION_")
+                                    .to_string()),
+                            })
+                        }
+                        _ => UploadEvent::Tick,
+                    }
+                }
+                None => UploadEvent::Tick,
+            };
+            let sends = up.handle(start.elapsed().as_secs_f64(), event);
+            self.send_upload(plan, &sends)?;
+        }
+    }
+
+    fn send_upload(&self, plan: &MissionPlan, sends: &[UploadSend]) -> Result<(), GroundError> {
+        let (sys, comp) = self.vehicle.unwrap_or((1, 1));
+        for s in sends {
+            let message = match *s {
+                UploadSend::Count(count) => MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+                    count,
+                    target_system: sys,
+                    target_component: comp,
+                }),
+                UploadSend::Item(seq) => {
+                    let Some(item) = plan.items.get(usize::from(seq)) else {
+                        continue;
+                    };
+                    mission_item_int(item, sys, comp)
+                }
+            };
+            self.link.send(&message)?;
+        }
+        Ok(())
     }
 
     /// Waits for the vehicle's heartbeat and positions, asking it to stream them at 10 Hz.
@@ -293,7 +451,7 @@ impl GroundStation {
                     .base_mode
                     .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
                 self.custom_mode = h.custom_mode;
-                None
+                Some(Event::Mode(self.mode()))
             }
             _ if !from_vehicle => None,
             MavMessage::GLOBAL_POSITION_INT(g) => {
@@ -319,7 +477,8 @@ impl GroundStation {
             MavMessage::COMMAND_ACK(a) => {
                 let command = match a.command {
                     MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => self.last_arm_request,
-                    MavCmd::MAV_CMD_DO_SET_MODE => CommandKind::TakeControl,
+                    MavCmd::MAV_CMD_DO_SET_MODE => self.last_mode_request,
+                    MavCmd::MAV_CMD_MISSION_START => CommandKind::StartMission,
                     MavCmd::MAV_CMD_NAV_TAKEOFF => CommandKind::Takeoff,
                     MavCmd::MAV_CMD_NAV_LAND => CommandKind::Land,
                     _ => return None,
@@ -332,6 +491,8 @@ impl GroundStation {
                 };
                 Some(Event::Ack { command, accepted })
             }
+            MavMessage::MISSION_ITEM_REACHED(m) => Some(Event::MissionItemReached(m.seq)),
+            MavMessage::MISSION_CURRENT(m) => Some(Event::MissionCurrent(m.seq)),
             MavMessage::STATUSTEXT(t) => {
                 let text = t
                     .text
@@ -354,9 +515,9 @@ impl GroundStation {
 
     /// Flies the mission: `frame` is the mission's frame (the map's home). Returns when the
     /// executor has an outcome, or when an aborted flight does not land in time.
-    pub fn fly(
+    pub fn fly<E: FlightExecutor>(
         &mut self,
-        ex: &mut MissionExecutor,
+        ex: &mut E,
         frame: &LocalFrame,
         mut on_update: impl FnMut(Update),
     ) -> Result<FlightSummary, GroundError> {
@@ -392,6 +553,7 @@ impl GroundStation {
         let mut closed_reported = false;
         let mut sent_targets = 0usize;
         let mut last_local_ms = None;
+        let mut last_mode = None;
         // The silence clock starts now: planning may have taken a while.
         self.last_heartbeat = Some(Instant::now());
         while ex.outcome().is_none() {
@@ -400,6 +562,12 @@ impl GroundStation {
                 if let Some(e) = self.absorb(&r) {
                     if let Event::StatusText(t) = &e {
                         on_update(Update::StatusText(t.clone()));
+                    }
+                    if let Event::Mode(m) = e
+                        && last_mode != Some(m)
+                    {
+                        last_mode = Some(m);
+                        on_update(Update::Mode(m));
                     }
                     events.push(e);
                 }
@@ -440,6 +608,16 @@ impl GroundStation {
                 aborted_at = Some(Instant::now());
                 on_update(Update::TimedOut(limit));
                 events.push(Event::Abort(format!("--timeout-s {limit} exceeded")));
+            }
+            if aborted_at.is_none()
+                && self
+                    .interrupt
+                    .as_ref()
+                    .is_some_and(|f| f.load(Ordering::Relaxed))
+            {
+                aborted_at = Some(Instant::now());
+                on_update(Update::Interrupted);
+                events.push(Event::Abort("interrupted by Ctrl-C".into()));
             }
             if let Some(t) = aborted_at
                 && t.elapsed().as_secs_f64() > self.config.abort_grace_s
@@ -485,14 +663,38 @@ impl GroundStation {
 
     fn send(&mut self, c: Command, offset: [f64; 3]) -> Result<(), LinkError> {
         match c {
-            Command::TakeControl => {
-                let (mode, sub) = match self.autopilot {
-                    Autopilot::Px4 => (6.0, 0.0),
-                    _ => (ARDUCOPTER_GUIDED as f32, 0.0),
+            Command::TakeControl | Command::Hold | Command::ReturnToLaunch => {
+                // PX4: main mode in param2, sub mode in param3 (AUTO = 4: LOITER 3, RTL 5).
+                let (kind, mode, sub) = match (c, self.autopilot) {
+                    (Command::TakeControl, Autopilot::Px4) => (CommandKind::TakeControl, 6.0, 0.0),
+                    (Command::TakeControl, _) => {
+                        (CommandKind::TakeControl, ARDUCOPTER_GUIDED as f32, 0.0)
+                    }
+                    (Command::Hold, Autopilot::Px4) => (CommandKind::Hold, 4.0, 3.0),
+                    (Command::Hold, _) => (CommandKind::Hold, ARDUCOPTER_LOITER as f32, 0.0),
+                    (_, Autopilot::Px4) => (CommandKind::ReturnToLaunch, 4.0, 5.0),
+                    _ => (CommandKind::ReturnToLaunch, ARDUCOPTER_RTL as f32, 0.0),
                 };
+                self.last_mode_request = kind;
                 self.send_command(
                     MavCmd::MAV_CMD_DO_SET_MODE,
                     [1.0, mode, sub, 0.0, 0.0, 0.0, 0.0],
+                )
+            }
+            Command::StartMission => {
+                // AUTO first (ArduCopter starts a mission on the ground only with MISSION_START).
+                let (mode, sub) = match self.autopilot {
+                    Autopilot::Px4 => (4.0, 4.0),
+                    _ => (ARDUCOPTER_AUTO as f32, 0.0),
+                };
+                self.last_mode_request = CommandKind::StartMission;
+                self.send_command(
+                    MavCmd::MAV_CMD_DO_SET_MODE,
+                    [1.0, mode, sub, 0.0, 0.0, 0.0, 0.0],
+                )?;
+                self.send_command(
+                    MavCmd::MAV_CMD_MISSION_START,
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 )
             }
             Command::Arm | Command::Disarm => {
@@ -545,6 +747,31 @@ impl GroundStation {
             }
         }
     }
+}
+
+/// An item as MISSION_ITEM_INT (relative-altitude frame, auto-continue).
+#[allow(deprecated)] // MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: what ArduPilot and PX4 expect here.
+pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component: u8) -> MavMessage {
+    MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
+        param1: 0.0,
+        param2: 0.0,
+        param3: 0.0,
+        param4: item.yaw_deg,
+        x: item.lat_e7,
+        y: item.lon_e7,
+        z: item.alt_m,
+        seq: item.seq,
+        command: match item.command {
+            ItemCommand::Waypoint => MavCmd::MAV_CMD_NAV_WAYPOINT,
+            ItemCommand::Takeoff => MavCmd::MAV_CMD_NAV_TAKEOFF,
+            ItemCommand::Land => MavCmd::MAV_CMD_NAV_LAND,
+        },
+        target_system,
+        target_component,
+        frame: MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        current: 0,
+        autocontinue: 1,
+    })
 }
 
 /// `type_mask` of a position + yaw target: ignore velocity, acceleration and yaw rate.

@@ -6,8 +6,8 @@
 //! SET_POSITION_TARGET_LOCAL_NED (position, optional yaw), the mission upload (MISSION_COUNT →
 //! MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0 is the home, as on
 //! ArduPilot) and MISSION_CLEAR_ALL; streams HEARTBEAT (1 Hz), LOCAL_POSITION_NED,
-//! GLOBAL_POSITION_INT, ATTITUDE (10 Hz), EXTENDED_SYS_STATE (2 Hz), MISSION_CURRENT and
-//! MISSION_ITEM_REACHED, and STATUSTEXT with the reason of every refusal. Rates are in simulated
+//! GLOBAL_POSITION_INT, ATTITUDE (10 Hz), EXTENDED_SYS_STATE (2 Hz), MISSION_CURRENT (2 Hz, once
+//! a mission is loaded) and MISSION_ITEM_REACHED, and STATUSTEXT with the reason of every refusal. Rates are in simulated
 //! time; with `speedup` K the simulation runs K× faster than the wall clock, and heartbeats are
 //! also sent at least once a wall-clock second.
 //!
@@ -391,7 +391,8 @@ impl SimServer {
                     vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
                     landed_state: landed,
                 }));
-                if s.mode == SimMode::Auto {
+                // As ArduPilot: in every mode, once there is a mission.
+                if vehicle.mission().len() > 1 {
                     let _ = l.send(&MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
                         seq: s.mission_current,
                     }));

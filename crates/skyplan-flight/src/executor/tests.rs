@@ -60,6 +60,18 @@ fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
             Some(ack(CommandKind::Land, Ok(())))
         }
         Command::Disarm => Some(ack(CommandKind::Disarm, v.disarm())),
+        Command::StartMission => {
+            v.set_mode(SimMode::Auto);
+            Some(ack(CommandKind::StartMission, Ok(())))
+        }
+        Command::Hold => {
+            v.set_mode(SimMode::Loiter);
+            Some(ack(CommandKind::Hold, Ok(())))
+        }
+        Command::ReturnToLaunch => Some(Event::Ack {
+            command: CommandKind::ReturnToLaunch,
+            accepted: Err("UNSUPPORTED".into()),
+        }),
     }
 }
 

@@ -1,0 +1,138 @@
+"""MAVSDK as the AUTOPILOT side: skyplan uploads its mission to MAVSDK's MissionRawServer.
+
+Usage: python3 mavsdk_autopilot.py PORT HOME_LAT HOME_LON PLAN.json
+Listens on udpin://127.0.0.1:PORT as an autopilot component (MAVSDK's C++ core, `pip install
+mavsdk`), publishes a position with TelemetryServer (skyplan waits for one before planning),
+prints "listening PORT", then waits for one mission upload, prints its items and checks them
+against skyplan's plan (PLAN.json, written by `skyplan fly --out` before it uploads): the home,
+NAV_TAKEOFF to the altitude, one NAV_WAYPOINT per waypoint (lat/lon within 1e-7°, altitude, yaw
+in param4), NAV_LAND at the last one, all in MAV_FRAME_GLOBAL_RELATIVE_ALT_INT. Prints "OK" at the
+end, or "FAIL ..." and exits 1.
+"""
+import json
+import math
+import sys
+import threading
+import time
+
+from mavsdk import ComponentType, Configuration, ConnectionResult, Mavsdk
+from mavsdk.plugins.mission_raw_server import MissionRawServer, MissionRawServerResult
+from mavsdk.plugins.telemetry_server import (
+    Heading,
+    Position,
+    PositionNed,
+    PositionVelocityNed,
+    TelemetryServer,
+    VelocityNed,
+)
+
+
+def fail(msg):
+    print("FAIL", msg, flush=True)
+    sys.exit(1)
+
+
+port = int(sys.argv[1])
+home_lat, home_lon = float(sys.argv[2]), float(sys.argv[3])
+plan_path = sys.argv[4]
+
+mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.AUTOPILOT))
+result = mavsdk.add_any_connection(f"udpin://127.0.0.1:{port}")
+if result != ConnectionResult.SUCCESS:
+    fail(f"cannot listen on udp port {port}: {result!r}")
+component = mavsdk.server_component()
+mission_server = MissionRawServer(component)
+telemetry = TelemetryServer(component)
+
+received = []
+done = threading.Event()
+
+
+def on_mission(result, plan, _user_data):
+    received.append((result, plan))
+    done.set()
+
+
+mission_server.subscribe_incoming_mission(on_mission)
+print("listening", port, "mavsdk", mavsdk.version(), flush=True)
+
+deadline = time.time() + 60
+while not done.is_set() and time.time() < deadline:
+    zero = VelocityNed(0.0, 0.0, 0.0)
+    try:
+        telemetry.publish_position(Position(home_lat, home_lon, 0.0, 0.0), zero, Heading(0.0))
+        telemetry.publish_position_velocity_ned(
+            PositionVelocityNed(PositionNed(0.0, 0.0, 0.0), zero)
+        )
+    except Exception as e:  # not connected yet: MAVSDK has no ground station address
+        if "NO_SYSTEM" not in repr(e) and "NoSystem" not in repr(e):
+            print("publish:", repr(e), flush=True)
+    time.sleep(0.2)
+if not done.is_set():
+    fail("no mission upload within 60 s")
+
+result, plan = received[0]
+if result != MissionRawServerResult.SUCCESS:
+    fail(f"the upload ended with {result!r}")
+for it in plan.mission_items:
+    print(
+        "item",
+        json.dumps(
+            {
+                "seq": it.seq,
+                "frame": it.frame,
+                "command": it.command,
+                "autocontinue": it.autocontinue,
+                "param4": None if it.param4 != it.param4 else it.param4,  # NaN → null
+                "x": it.x,
+                "y": it.y,
+                "z": it.z,
+                "mission_type": it.mission_type,
+            }
+        ),
+        flush=True,
+    )
+items = plan.mission_items
+print("received", len(items), "items", flush=True)
+# Let MAVSDK's MISSION_ACK go out before checking and tearing down.
+time.sleep(0.5)
+mavsdk.destroy()
+
+with open(plan_path) as f:
+    wps = json.load(f)["waypoints_lla"]
+n = len(wps)
+NAV_WAYPOINT, NAV_LAND, NAV_TAKEOFF = 16, 21, 22
+GLOBAL_RELATIVE_ALT_INT = 6
+
+
+def check(cond, msg):
+    if not cond:
+        fail(msg)
+
+
+def near_deg(e7, deg, what):
+    check(abs(e7 * 1e-7 - deg) <= 1e-7, f"{what}: {e7} vs {deg}")
+
+
+check(len(items) == n + 3, f"{len(items)} items for {n} waypoints (expected home + takeoff + {n} + land)")
+check([it.seq for it in items] == list(range(len(items))), "sequence numbers")
+check(all(it.frame == GLOBAL_RELATIVE_ALT_INT for it in items), f"frames {[it.frame for it in items]}")
+check(all(it.autocontinue == 1 for it in items), "autocontinue")
+check(all(it.mission_type == 0 for it in items), "mission_type MISSION")
+commands = [it.command for it in items]
+check(commands == [NAV_WAYPOINT, NAV_TAKEOFF] + [NAV_WAYPOINT] * n + [NAV_LAND], f"commands {commands}")
+near_deg(items[0].x, home_lat, "home latitude")
+near_deg(items[0].y, home_lon, "home longitude")
+check(abs(items[1].z - wps[0]["alt_m"]) < 1e-4, f"takeoff altitude {items[1].z}")
+for k, (it, w) in enumerate(zip(items[2:-1], wps)):
+    near_deg(it.x, w["lat_deg"], f"waypoint {k + 1} latitude")
+    near_deg(it.y, w["lon_deg"], f"waypoint {k + 1} longitude")
+    check(abs(it.z - w["alt_m"]) < 1e-4, f"waypoint {k + 1} altitude {it.z} vs {w['alt_m']}")
+    want = w["heading_deg"] % 360.0
+    diff = abs((it.param4 - want + 180.0) % 360.0 - 180.0)
+    check(not math.isnan(it.param4) and diff < 1e-3, f"waypoint {k + 1} yaw {it.param4} vs {want}")
+land = items[-1]
+near_deg(land.x, wps[-1]["lat_deg"], "land latitude")
+near_deg(land.y, wps[-1]["lon_deg"], "land longitude")
+print(f"checked home, takeoff to {items[1].z} m, {n} waypoints (lat/lon within 1e-7 deg, altitude, yaw), land", flush=True)
+print("OK", flush=True)

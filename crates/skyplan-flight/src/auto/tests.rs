@@ -1,0 +1,295 @@
+use super::*;
+use crate::sim::{SimConfig, SimEvent, SimMissionItem, SimMode, SimVehicle};
+
+fn wp(n: f64, e: f64, heading_deg: f64) -> Target {
+    Target {
+        north_m: n,
+        east_m: e,
+        alt_m: 5.0,
+        heading_rad: heading_deg.to_radians(),
+    }
+}
+
+fn route() -> Vec<Target> {
+    vec![
+        wp(0.0, 0.0, 0.0),
+        wp(20.0, 0.0, 0.0),
+        wp(20.0, 20.0, 90.0),
+        wp(0.0, 20.0, 180.0),
+    ]
+}
+
+/// ArduPilot's layout: item 0 home, 1 take-off, the waypoints, land.
+fn layout(n: usize) -> MissionLayout {
+    MissionLayout {
+        takeoff_seq: 1,
+        first_waypoint_seq: 2,
+        land_seq: 2 + n as u16,
+    }
+}
+
+fn sim_mission(targets: &[Target]) -> Vec<SimMissionItem> {
+    let mut items = vec![
+        SimMissionItem::Unsupported,
+        SimMissionItem::Takeoff {
+            alt_m: targets[0].alt_m,
+        },
+    ];
+    items.extend(targets.iter().map(|t| SimMissionItem::Waypoint {
+        north_m: t.north_m,
+        east_m: t.east_m,
+        alt_m: t.alt_m,
+        yaw_rad: t.heading_rad,
+    }));
+    items.push(SimMissionItem::Land);
+    items
+}
+
+fn mode_of(m: SimMode) -> VehicleMode {
+    match m {
+        SimMode::Guided => VehicleMode::Guided,
+        SimMode::Auto => VehicleMode::Auto,
+        SimMode::Land => VehicleMode::Land,
+        SimMode::Loiter => VehicleMode::Hold,
+        other => VehicleMode::Other(other.arducopter_custom_mode()),
+    }
+}
+
+fn telemetry(v: &SimVehicle) -> Telemetry {
+    let s = v.state();
+    Telemetry {
+        north_m: s.position_ned_m[0],
+        east_m: s.position_ned_m[1],
+        down_m: s.position_ned_m[2],
+        velocity_ned_m_s: s.velocity_ned_m_s,
+        yaw_rad: s.yaw_rad,
+        armed: s.armed,
+        guided: s.mode == SimMode::Guided,
+        on_ground: Some(s.on_ground),
+    }
+}
+
+fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
+    let ack = |command, r: Result<(), crate::sim::SimRefusal>| Event::Ack {
+        command,
+        accepted: r.map_err(|e| format!("DENIED: {e}")),
+    };
+    Some(match c {
+        Command::TakeControl => {
+            v.set_mode(SimMode::Guided);
+            ack(CommandKind::TakeControl, Ok(()))
+        }
+        Command::Arm => ack(CommandKind::Arm, v.arm()),
+        Command::Disarm => ack(CommandKind::Disarm, v.disarm()),
+        Command::StartMission => {
+            v.set_mode(SimMode::Auto);
+            ack(CommandKind::StartMission, Ok(()))
+        }
+        Command::Land => {
+            v.land();
+            ack(CommandKind::Land, Ok(()))
+        }
+        Command::Hold => {
+            v.set_mode(SimMode::Loiter);
+            ack(CommandKind::Hold, Ok(()))
+        }
+        other => panic!("the AUTO executor sent {other:?}"),
+    })
+}
+
+struct Flight {
+    states: Vec<FlightState>,
+    commands: Vec<Command>,
+    end_s: f64,
+}
+
+/// Closed loop in simulated time; `lose_reached` drops every MISSION_ITEM_REACHED (progress then
+/// comes from MISSION_CURRENT alone); `interfere` may change the vehicle at a time.
+fn fly(
+    ex: &mut AutoExecutor,
+    v: &mut SimVehicle,
+    lose_reached: bool,
+    mut interfere: impl FnMut(f64, &mut SimVehicle, &mut AutoExecutor) -> Option<Event>,
+) -> Flight {
+    let mut states = vec![ex.state()];
+    let mut commands = Vec::new();
+    let mut t = 0.0;
+    let mut pending: Vec<Event> = Vec::new();
+    let feed = |ex: &mut AutoExecutor,
+                t: f64,
+                e: Event,
+                pending: &mut Vec<Event>,
+                v: &mut SimVehicle,
+                states: &mut Vec<FlightState>,
+                commands: &mut Vec<Command>| {
+        let out = ex.handle(t, e);
+        for n in &out.notes {
+            if let Note::State { to, .. } = n {
+                states.push(*to);
+            }
+        }
+        for c in out.commands {
+            commands.push(c);
+            pending.extend(apply(v, c));
+        }
+    };
+    while ex.outcome().is_none() && t < 600.0 {
+        for _ in 0..5 {
+            for e in v.step(0.02) {
+                if let SimEvent::MissionItemReached(seq) = e
+                    && !lose_reached
+                {
+                    pending.push(Event::MissionItemReached(seq));
+                }
+            }
+        }
+        t += 0.1;
+        if let Some(e) = interfere(t, v, ex) {
+            pending.push(e);
+        }
+        let s = v.state();
+        pending.push(Event::Mode(mode_of(s.mode)));
+        // As ArduPilot (and `skyplan sim`): MISSION_CURRENT in every mode once there is a mission.
+        pending.push(Event::MissionCurrent(s.mission_current));
+        pending.push(Event::Telemetry(telemetry(v)));
+        while !pending.is_empty() {
+            let batch: Vec<Event> = std::mem::take(&mut pending);
+            for e in batch {
+                feed(ex, t, e, &mut pending, v, &mut states, &mut commands);
+            }
+        }
+    }
+    Flight {
+        states,
+        commands,
+        end_s: t,
+    }
+}
+
+fn ready(targets: &[Target]) -> (AutoExecutor, SimVehicle) {
+    let ex = AutoExecutor::new(targets, layout(targets.len()), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    v.set_mission(sim_mission(targets));
+    (ex, v)
+}
+
+#[test]
+fn the_uploaded_mission_is_flown_in_auto_with_every_waypoint_reported() {
+    let targets = route();
+    let (mut ex, mut v) = ready(&targets);
+    let f = fly(&mut ex, &mut v, false, |_, _, _| None);
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    use FlightState::*;
+    assert_eq!(
+        f.states,
+        [
+            Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+        ]
+    );
+    assert_eq!(ex.reached().len(), 4);
+    assert!(ex.reached().iter().enumerate().all(|(i, r)| r.index == i));
+    // Reported within the simulator's 1 m acceptance radius (3D).
+    for r in &ex.reached()[1..] {
+        assert!(r.horizontal_error_m <= 1.6, "{r:?}");
+    }
+    assert!(ex.reached().windows(2).all(|w| w[0].time_s <= w[1].time_s));
+    // GUIDED, arm, start — and nothing after: the vehicle flies, lands and disarms by itself.
+    assert_eq!(
+        f.commands,
+        [Command::TakeControl, Command::Arm, Command::StartMission]
+    );
+    let s = v.state();
+    assert!(!s.armed && s.on_ground);
+    assert!((s.position_ned_m[0]).abs() < 1.0 && (s.position_ned_m[1] - 20.0).abs() < 1.0);
+    assert!(f.end_s < 120.0, "{}", f.end_s);
+    assert_eq!(ex.distance_left_m(), 0.0);
+}
+
+#[test]
+fn progress_from_mission_current_alone_when_item_reached_is_lost() {
+    let targets = route();
+    let (mut ex, mut v) = ready(&targets);
+    let f = fly(&mut ex, &mut v, true, |_, _, _| None);
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    assert_eq!(ex.reached().len(), 4);
+}
+
+#[test]
+fn a_pilot_taking_over_mid_mission_fails_with_the_mode() {
+    let targets = route();
+    let (mut ex, mut v) = ready(&targets);
+    fly(&mut ex, &mut v, false, |t, v, _| {
+        if t > 12.0 && v.state().mode == SimMode::Auto {
+            v.set_mode(SimMode::Loiter);
+        }
+        None
+    });
+    let Some(Outcome::Failed(f)) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert_eq!(
+        f,
+        &Failure::LeftMission {
+            state: FlightState::Waypoint,
+            mode: VehicleMode::Hold
+        }
+    );
+    assert!(f.to_string().contains("left AUTO for HOLD during WAYPOINT"));
+}
+
+#[test]
+fn an_abort_lands_and_fails_and_a_lost_link_ends_the_flight() {
+    let targets = route();
+    let (mut ex, mut v) = ready(&targets);
+    let f = fly(&mut ex, &mut v, false, |t, _, _| {
+        (t > 15.0 && t < 15.15).then(|| Event::Abort("Ctrl-C".into()))
+    });
+    assert!(f.commands.contains(&Command::Land));
+    assert_eq!(
+        ex.outcome(),
+        Some(&Outcome::Failed(Failure::Aborted {
+            reason: "Ctrl-C".into()
+        }))
+    );
+    assert!(!v.state().armed && v.state().on_ground);
+
+    let (mut ex, mut v) = ready(&targets);
+    fly(&mut ex, &mut v, false, |t, _, _| {
+        (t > 10.0).then_some(Event::LinkLost { silent_s: 5.0 })
+    });
+    assert!(matches!(
+        ex.outcome(),
+        Some(Outcome::Failed(Failure::LinkLost { .. }))
+    ));
+}
+
+#[test]
+fn a_vehicle_that_never_enters_auto_times_out_and_is_told_to_land() {
+    let targets = route();
+    let (mut ex, mut v) = ready(&targets);
+    let mut starts = 0;
+    fly(&mut ex, &mut v, false, |_, v, _| {
+        // Refuse AUTO: fall back to GUIDED at once.
+        if v.state().mode == SimMode::Auto {
+            starts += 1;
+            v.set_mode(SimMode::Guided);
+        }
+        None
+    });
+    let Some(Outcome::Failed(Failure::Timeout { state, detail, .. })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert_eq!(*state, FlightState::Takeoff);
+    assert!(detail.contains("did not enter AUTO"), "{detail}");
+    assert!(starts > 10, "StartMission is retried: {starts}");
+}
+
+#[test]
+fn bad_layouts_are_refused() {
+    let targets = route();
+    assert!(AutoExecutor::new(&targets, layout(3), ExecutorConfig::default()).is_err());
+    assert!(AutoExecutor::new(&[], layout(0), ExecutorConfig::default()).is_err());
+    let mut low = route();
+    low[0].alt_m = 0.0;
+    assert!(AutoExecutor::new(&low, layout(4), ExecutorConfig::default()).is_err());
+}
