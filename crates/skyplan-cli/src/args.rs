@@ -86,6 +86,10 @@ pub enum PlannerArg {
     #[value(name = "rrt-star")]
     #[serde(rename = "rrt-star")]
     RrtStar,
+    /// 3D voxel A* (26-connected, altitude layers): may climb over low buildings; --climb-weight.
+    Voxel,
+    /// 2D Voronoi roadmap of the obstacles' grown footprints at --alt-m: exactly free edges, graph A*, grid fallback.
+    Voronoi,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
@@ -182,6 +186,10 @@ pub struct ScenArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
+    /// 3D mode: skyplan's PRM, RRT-Connect and RRT* (and OMPL's with --peers) on random free 3D
+    /// queries plus the FCND route, among the boxes grown by --safety-m.
+    #[arg(long = "3d")]
+    pub three_d: bool,
     /// Map: FCND colliders .csv (default: the bundled city map) or MovingAI .map.
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
@@ -258,9 +266,18 @@ pub struct FlyArgs {
     /// Upload the mission and exit without flying (interop tests).
     #[arg(long, hide = true)]
     pub upload_only: bool,
+    /// What Ctrl-C commands in flight: land, or hold the position (LOITER) and leave the vehicle to the pilot.
+    #[arg(long, value_enum, value_name = "ACTION", default_value = "land")]
+    pub on_interrupt: crate::fly_cmd::InterruptArg,
+    /// What to command when a lost link comes back within 6 × --link-timeout-s: land, rtl or hold [default: none, a lost link ends the flight at once].
+    #[arg(long, value_enum, value_name = "ACTION")]
+    pub failsafe: Option<crate::fly_cmd::FailsafeArg>,
     /// Fault injection for tests: the simulated vehicle goes silent after this many simulated seconds.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim")]
     pub sim_drop_link_after_s: Option<f64>,
+    /// Fault injection for tests: the silence lasts this many simulated seconds, then the link comes back.
+    #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim_drop_link_after_s")]
+    pub sim_link_gap_s: Option<f64>,
     #[command(flatten)]
     pub plan: PlanArgs,
 }

@@ -110,7 +110,7 @@ fn queries(
     ))
 }
 
-fn python() -> PathBuf {
+pub(crate) fn python() -> PathBuf {
     if let Some(p) = std::env::var_os("SKYPLAN_PYTHON") {
         return PathBuf::from(p);
     }
@@ -237,6 +237,9 @@ struct Row {
 }
 
 pub fn run_bench(args: BenchArgs) -> Result<()> {
+    if args.three_d {
+        return crate::bench3d_cmd::run(args);
+    }
     let model = if args.corner_cutting {
         MoveModel::OctileCornerCutting
     } else {

@@ -45,6 +45,22 @@ impl<T, E: Into<anyhow::Error>> Classify<T> for std::result::Result<T, E> {
     }
 }
 
+/// With `--json`, scripts get one JSON object on stdout for failures too:
+/// `{"status": "bad_input" | "no_path" | "error", "error": "…"}`.
+pub fn print_json_failure<T>(result: &Result<T>) {
+    if let Err(f) = result {
+        let status = match f.kind {
+            Kind::NoPath => "no_path",
+            Kind::BadInput => "bad_input",
+            Kind::Runtime => "error",
+        };
+        println!(
+            "{}",
+            serde_json::json!({ "status": status, "error": format!("{:#}", f.error) })
+        );
+    }
+}
+
 /// A bad-input failure from a message.
 pub fn bad_input(message: impl std::fmt::Display) -> Failure {
     Failure {

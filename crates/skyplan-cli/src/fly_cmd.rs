@@ -10,18 +10,97 @@ use anyhow::anyhow;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, Target,
+    ExecutorConfig, FailsafeAction, FlightExecutor, FlightState, MissionExecutor, Note, Outcome,
+    Target,
 };
 use skyplan_flight::upload::{GlobalWaypoint, UploadConfig, mission_items};
 use skyplan_frames::{Lla, LocalFrame, Ned};
-use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Update};
+use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update};
 use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
 use skyplan_link::{Address, Role};
 use skyplan_pipeline::{PlanError, Position, plan};
+use std::io::IsTerminal;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
+
+/// `--on-interrupt`: what Ctrl-C commands in flight.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum InterruptArg {
+    /// Land where the vehicle is, wait for the touchdown and the disarm.
+    Land,
+    /// Hold the position (LOITER) and exit once the vehicle confirms: a pilot takes over.
+    Hold,
+}
+
+/// `--failsafe`: what to command when a lost link comes back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FailsafeArg {
+    /// Land where the vehicle is.
+    Land,
+    /// Return to launch (RTL) and land there.
+    Rtl,
+    /// Hold the position (LOITER) and leave the vehicle to the pilot.
+    Hold,
+}
+
+impl From<InterruptArg> for FailsafeAction {
+    fn from(a: InterruptArg) -> Self {
+        match a {
+            InterruptArg::Land => FailsafeAction::Land,
+            InterruptArg::Hold => FailsafeAction::Hold,
+        }
+    }
+}
+
+impl From<FailsafeArg> for FailsafeAction {
+    fn from(a: FailsafeArg) -> Self {
+        match a {
+            FailsafeArg::Land => FailsafeAction::Land,
+            FailsafeArg::Rtl => FailsafeAction::ReturnToLaunch,
+            FailsafeArg::Hold => FailsafeAction::Hold,
+        }
+    }
+}
+
+/// A lost link is waited for this many times `--link-timeout-s` when `--failsafe` is set.
+pub const LINK_REGAIN_FACTOR: f64 = 6.0;
+
+/// The Ctrl-C handler's view: `in_flight` while the executor flies (a Ctrl-C then sets
+/// `interrupt`, which the ground station turns into a landing or a hold; a second one exits at
+/// once); outside the flight a Ctrl-C exits at once, nothing having been commanded to fly.
+#[derive(Clone)]
+struct CtrlC {
+    interrupt: Arc<AtomicBool>,
+    in_flight: Arc<AtomicBool>,
+}
+
+impl CtrlC {
+    fn install() -> Self {
+        let c = CtrlC {
+            interrupt: Arc::new(AtomicBool::new(false)),
+            in_flight: Arc::new(AtomicBool::new(false)),
+        };
+        let h = c.clone();
+        // Without a handler (another one installed first), Ctrl-C kills the process as usual.
+        let _ = ctrlc::set_handler(move || {
+            if !h.in_flight.load(Ordering::SeqCst) {
+                eprintln!(
+                    "error: interrupted (Ctrl-C) outside the flight: nothing was commanded to fly"
+                );
+                std::process::exit(130);
+            }
+            if h.interrupt.swap(true, Ordering::SeqCst) {
+                eprintln!(
+                    "error: second Ctrl-C: exiting without waiting for the vehicle, which was told to stop: check it"
+                );
+                std::process::exit(130);
+            }
+        });
+        c
+    }
+}
 
 /// The in-process simulator: its thread, stop flag and notes.
 struct InProcessSim {
@@ -34,7 +113,7 @@ impl InProcessSim {
     fn print_notes(&self) {
         while let Ok(n) = self.notes.try_recv() {
             if let Some(line) = sim_note_line(&n) {
-                println!("sim        {line}");
+                say(&format!("sim        {line}"));
             }
         }
     }
@@ -71,6 +150,7 @@ pub(crate) fn sim_note_line(n: &SimNote) -> Option<String> {
         ),
         SimNote::Failsafe(why) => format!("failsafe: {why}"),
         SimNote::LinkDropped => "injected fault: the vehicle stops talking".into(),
+        SimNote::LinkRestored => "injected fault over: the vehicle talks again".into(),
     })
 }
 
@@ -121,6 +201,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
             "--timeout-s: expected a positive number, found {t}"
         )));
     }
+    let ctrl_c = CtrlC::install();
     let user_start = args.plan.start_ne.is_some() || args.plan.start_lla.is_some();
     let write_waypoints = args.plan.out.is_some();
     let view = args_view(&args);
@@ -165,6 +246,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         let config = SimServerConfig {
             speedup: args.speedup,
             drop_link_after_s: args.sim_drop_link_after_s,
+            link_gap_s: args.sim_link_gap_s,
             ..SimServerConfig::at(home)
         };
         let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config)
@@ -209,6 +291,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         user_start,
         write_waypoints,
         sim.as_ref(),
+        &ctrl_c,
     );
     let report = sim.and_then(InProcessSim::finish);
     let (log, ended) = result?;
@@ -276,6 +359,8 @@ struct FlyView {
     deadband_m: f64,
     upload: bool,
     upload_only: bool,
+    on_interrupt: FailsafeAction,
+    failsafe: Option<FailsafeAction>,
 }
 
 /// How `fly` ended: a flight (with its outcome, `None` if an aborted flight did not land in
@@ -294,6 +379,8 @@ fn args_view(a: &FlyArgs) -> FlyView {
         deadband_m: a.deadband_m,
         upload: a.upload || a.upload_only,
         upload_only: a.upload_only,
+        on_interrupt: a.on_interrupt.into(),
+        failsafe: a.failsafe.map(FailsafeAction::from),
     }
 }
 
@@ -307,14 +394,17 @@ fn fly(
     user_start: bool,
     write_waypoints: bool,
     sim: Option<&InProcessSim>,
+    ctrl_c: &CtrlC,
 ) -> Result<(Vec<LogRow>, Ended)> {
     let ground = GroundConfig {
         speedup: a.speedup,
         link_timeout_s: a.link_timeout_s,
         timeout_s: a.timeout_s,
+        on_interrupt: a.on_interrupt,
         ..GroundConfig::default()
     };
     let mut gcs = GroundStation::connect(address, ground).or_exit(Kind::Runtime)?;
+    gcs.set_interrupt(Arc::clone(&ctrl_c.interrupt));
     println!("link       {address}: connected, sending heartbeats at 1 Hz");
     let info = gcs
         .wait_for_vehicle(Duration::from_secs_f64(a.wait_s))
@@ -361,11 +451,14 @@ fn fly(
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
     let config = ExecutorConfig {
         deadband_m: a.deadband_m,
+        failsafe: a.failsafe,
+        link_regain_wait_s: LINK_REGAIN_FACTOR * a.link_timeout_s,
         ..ExecutorConfig::default()
     };
     if !a.upload {
         let mut ex = MissionExecutor::new(&targets, config).map_err(bad_input)?;
-        return fly_with(&mut gcs, &mut ex, frame, sim).map(|(log, o)| (log, Ended::Flight(o)));
+        return fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c)
+            .map(|(log, o)| (log, Ended::Flight(o)));
     }
     // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
     let waypoints: Vec<GlobalWaypoint> =
@@ -395,7 +488,52 @@ fn fly(
     }
     let mut ex =
         AutoExecutor::new(&targets, MissionLayout::from(&items), config).map_err(bad_input)?;
-    fly_with(&mut gcs, &mut ex, frame, sim).map(|(log, o)| (log, Ended::Flight(o)))
+    fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c).map(|(log, o)| (log, Ended::Flight(o)))
+}
+
+/// Prints a line, above the progress bar when there is one.
+fn say(line: &str) {
+    match PROGRESS.get() {
+        Some(bar) if !bar.is_hidden() => bar.println(line),
+        _ => println!("{line}"),
+    }
+}
+
+/// The flight's progress bar, drawn only when stdout is a terminal.
+static PROGRESS: std::sync::OnceLock<indicatif::ProgressBar> = std::sync::OnceLock::new();
+
+fn progress_bar(waypoints: usize) -> indicatif::ProgressBar {
+    let bar = PROGRESS
+        .get_or_init(|| {
+            let bar = indicatif::ProgressBar::with_draw_target(
+                Some(waypoints as u64),
+                if std::io::stdout().is_terminal() {
+                    indicatif::ProgressDrawTarget::stdout()
+                } else {
+                    indicatif::ProgressDrawTarget::hidden()
+                },
+            );
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{prefix:>9} [{bar:30}] waypoint {pos}/{len}  {msg}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+            );
+            bar
+        })
+        .clone();
+    bar.set_length(waypoints as u64);
+    bar
+}
+
+/// The progress bar's message: vehicle time and distance left.
+pub(crate) fn progress_message(p: &Progress) -> String {
+    format!(
+        "{:.1} m left  t {:.1} s",
+        p.distance_left_m.max(0.0),
+        p.time_s
+    )
 }
 
 /// Flies with either executor, printing as it goes, and sums the flight up.
@@ -404,44 +542,49 @@ fn fly_with<E: FlightExecutor>(
     ex: &mut E,
     frame: &LocalFrame,
     sim: Option<&InProcessSim>,
+    ctrl_c: &CtrlC,
 ) -> Result<(Vec<LogRow>, Option<Outcome>)> {
     let n = ex.targets().len();
-    let summary = gcs
-        .fly(ex, frame, |u| {
-            if let Some(s) = sim {
-                s.print_notes();
-            }
-            match u {
-                Update::Notes(t, notes) => {
-                    for note in notes {
-                        match note {
-                            Note::State { from, to } => {
-                                println!("state      {t:7.1} s  {from} → {to}")
-                            }
-                            Note::Reached(r) => println!(
-                                "waypoint   {:7.1} s  {} of {n} reached: {:.2} m off, heading off {:.1}°",
-                                r.time_s,
-                                r.index + 1,
-                                r.horizontal_error_m,
-                                r.heading_error_rad.to_degrees()
-                            ),
-                            Note::Refused { command, reason } => {
-                                println!("refused    {t:7.1} s  {command}: {reason}")
-                            }
-                            Note::Finished => {}
-                        }
+    let bar = progress_bar(n);
+    ctrl_c.in_flight.store(true, Ordering::SeqCst);
+    let flown = gcs.fly(ex, frame, |u| {
+        if let Some(s) = sim {
+            s.print_notes();
+        }
+        match u {
+            Update::Notes(t, notes) => {
+                for note in notes {
+                    if let Some(line) = note_line(t, n, &note) {
+                        say(&line);
+                    }
+                    if let Note::Reached(r) = note {
+                        bar.set_position((r.index + 1) as u64);
                     }
                 }
-                Update::StatusText(text) => println!("vehicle    says: {text}"),
-                Update::LinkClosed(why) => println!("link       closed: {why}"),
-                Update::TimedOut(limit) => {
-                    println!("timeout    {limit} s wall exceeded: landing")
-                }
-                Update::Interrupted => println!("interrupt  Ctrl-C: landing"),
-                Update::Mode(m) => println!("mode       {m}"),
             }
-        })
-        .or_exit(Kind::Runtime)?;
+            Update::StatusText(text) => say(&format!("vehicle    says: {text}")),
+            Update::LinkClosed(why) => say(&format!("link       closed: {why}")),
+            Update::TimedOut(limit) => say(&format!("timeout    {limit} s wall exceeded: landing")),
+            Update::Interrupted(action) => say(&format!(
+                "interrupt  Ctrl-C: {}",
+                match action {
+                    FailsafeAction::Land => "landing",
+                    FailsafeAction::ReturnToLaunch => "returning to launch",
+                    FailsafeAction::Hold =>
+                        "holding position (LOITER), then leaving it to the pilot",
+                }
+            )),
+            Update::Mode(m) => say(&format!("mode       {m}")),
+            Update::Progress(p) => {
+                bar.set_prefix(p.state.name());
+                bar.set_position(p.reached as u64);
+                bar.set_message(progress_message(&p));
+            }
+        }
+    });
+    ctrl_c.in_flight.store(false, Ordering::SeqCst);
+    bar.finish_and_clear();
+    let summary = flown.or_exit(Kind::Runtime)?;
     let reached = ex.reached();
     let worst_h = reached
         .iter()
@@ -481,6 +624,38 @@ fn fly_with<E: FlightExecutor>(
         None => println!("result     FAILED: gave up waiting for the landing"),
     }
     Ok((summary.log, outcome))
+}
+
+/// How the CLI shows an executor note (`None`: not worth a line).
+pub(crate) fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
+    Some(match note {
+        Note::State { from, to } => format!("state      {t:7.1} s  {from} → {to}"),
+        Note::Reached(r) => format!(
+            "waypoint   {:7.1} s  {} of {n} reached: {:.2} m off, heading off {:.1}°",
+            r.time_s,
+            r.index + 1,
+            r.horizontal_error_m,
+            r.heading_error_rad.to_degrees()
+        ),
+        Note::Refused { command, reason } => format!("refused    {t:7.1} s  {command}: {reason}"),
+        Note::LinkLost {
+            state,
+            silent_s,
+            wait_s,
+            action,
+        } => format!(
+            "link       {t:7.1} s  lost in {state}: no heartbeat for {silent_s:.1} s; sending nothing, waiting up to {wait_s:.1} s for it to return (--failsafe {action})"
+        ),
+        Note::LinkRegained { silent_s, action } => format!(
+            "link       {t:7.1} s  back after {silent_s:.1} s: commanding {}",
+            match action {
+                FailsafeAction::Land => "LAND (--failsafe land)",
+                FailsafeAction::ReturnToLaunch => "RTL (--failsafe rtl)",
+                FailsafeAction::Hold => "LOITER (--failsafe hold)",
+            }
+        ),
+        Note::Finished => return None,
+    })
 }
 
 /// Shows values that round to zero as 0.000, not -0.000.
@@ -537,4 +712,50 @@ fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
     w.into_inner()
         .map_err(|e| anyhow!("flight log: {e}"))
         .or_exit(Kind::Runtime)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use skyplan_flight::executor::FlightState;
+
+    #[test]
+    fn fault_notes_and_progress_read_plainly() {
+        let lost = Note::LinkLost {
+            state: FlightState::Waypoint,
+            silent_s: 1.04,
+            wait_s: 6.0,
+            action: FailsafeAction::ReturnToLaunch,
+        };
+        assert_eq!(
+            note_line(31.4, 3, &lost).unwrap(),
+            "link          31.4 s  lost in WAYPOINT: no heartbeat for 1.0 s; sending nothing, waiting up to 6.0 s for it to return (--failsafe rtl)"
+        );
+        let back = Note::LinkRegained {
+            silent_s: 2.0,
+            action: FailsafeAction::Hold,
+        };
+        assert!(
+            note_line(40.0, 3, &back)
+                .unwrap()
+                .ends_with("back after 2.0 s: commanding LOITER (--failsafe hold)")
+        );
+        assert_eq!(note_line(1.0, 3, &Note::Finished), None);
+        let p = Progress {
+            time_s: 12.34,
+            state: FlightState::Waypoint,
+            reached: 2,
+            waypoints: 5,
+            distance_left_m: 123.45,
+        };
+        assert_eq!(progress_message(&p), "123.5 m left  t 12.3 s");
+        assert_eq!(
+            FailsafeAction::from(FailsafeArg::Rtl),
+            FailsafeAction::ReturnToLaunch
+        );
+        assert_eq!(
+            FailsafeAction::from(InterruptArg::Hold),
+            FailsafeAction::Hold
+        );
+    }
 }

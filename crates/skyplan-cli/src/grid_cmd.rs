@@ -717,16 +717,8 @@ fn read_targets_file(path: &Path) -> Result<Vec<Pair>> {
 pub fn run_navigate(args: NavigateArgs) -> Result<()> {
     let json_mode = args.json;
     let result = navigate_inner(args);
-    if json_mode && let Err(f) = &result {
-        let status = match f.kind {
-            Kind::NoPath => "no_path",
-            Kind::BadInput => "bad_input",
-            Kind::Runtime => "error",
-        };
-        println!(
-            "{}",
-            json!({ "status": status, "error": format!("{:#}", f.error) })
-        );
+    if json_mode {
+        crate::exit::print_json_failure(&result);
     }
     match result? {
         Some(stopped_short) => Err(stopped_short),

@@ -2,6 +2,7 @@
 //! calls the pipeline, writes outputs atomically and maps errors to exit codes.
 
 mod args;
+mod bench3d_cmd;
 mod bench_cmd;
 mod config;
 mod exit;
@@ -13,6 +14,7 @@ mod plan3d_cmd;
 mod plan_cmd;
 mod scen_cmd;
 mod sim_cmd;
+mod voronoi_cmd;
 
 use clap::Parser;
 use exit::Failure;

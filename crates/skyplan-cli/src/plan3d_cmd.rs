@@ -1,6 +1,7 @@
-//! `skyplan plan --planner prm|rrt-connect|rrt-star`: sampling planners in 3D among the map's
-//! boxes (grown by the margin in all three axes), with per-end altitudes. Every segment of the
-//! result is re-checked against every box before anything is written.
+//! `skyplan plan --planner prm|rrt-connect|rrt-star|voxel`: 3D planners among the map's boxes
+//! (grown by the margin in all three axes), with per-end altitudes: the sampling planners and the
+//! voxel A* (altitude layers, climb cost). Every segment of the result is re-checked against every
+//! box before anything is written.
 
 use crate::args::{Pair, PlanArgs, PlannerArg, parse_finite};
 use crate::config::Config;
@@ -33,6 +34,18 @@ pub struct Plan3dArgs {
     /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].
     #[arg(long, value_name = "M", value_parser = parse_finite)]
     pub max_alt_m: Option<f64>,
+    /// Floor of the flight volume: nothing flies lower, metres [default: 0, the ground].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub min_alt_m: Option<f64>,
+    /// voxel: extra cost per metre climbed (0: shortest path) [default: 1].
+    #[arg(long, value_name = "W", value_parser = parse_finite)]
+    pub climb_weight: Option<f64>,
+    /// voxel: horizontal pitch of the voxel lattice, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub voxel_m: Option<f64>,
+    /// voxel: vertical pitch between altitude layers, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub layer_m: Option<f64>,
 }
 
 fn kind_of(planner: Option<PlannerArg>) -> Option<PlannerKind> {
@@ -46,17 +59,24 @@ fn kind_of(planner: Option<PlannerArg>) -> Option<PlannerKind> {
 
 /// True if `plan` runs here; refuses the 3D-only options with other planners.
 pub fn handles(args: &PlanArgs) -> Result<bool> {
-    if kind_of(args.planner).is_some() {
+    let a = &args.plan3d;
+    let voxel = args.planner == Some(PlannerArg::Voxel);
+    if !voxel && (a.climb_weight.is_some() || a.voxel_m.is_some() || a.layer_m.is_some()) {
+        return Err(bad_input(
+            "--climb-weight, --voxel-m and --layer-m need --planner voxel",
+        ));
+    }
+    if voxel || kind_of(args.planner).is_some() {
         return Ok(true);
     }
-    let a = &args.plan3d;
     if a.start_alt_m.is_some()
         || a.goal_alt_m.is_some()
         || a.time_limit_ms.is_some()
         || a.max_alt_m.is_some()
+        || a.min_alt_m.is_some()
     {
         return Err(bad_input(
-            "--start-alt-m, --goal-alt-m, --time-limit-ms and --max-alt-m need a 3D planner: --planner prm, rrt-connect or rrt-star",
+            "--start-alt-m, --goal-alt-m, --time-limit-ms, --min-alt-m and --max-alt-m need a 3D planner: --planner prm, rrt-connect, rrt-star or voxel",
         ));
     }
     Ok(false)
@@ -87,16 +107,24 @@ fn ne_of(
 /// Runs a 3D planner.
 pub fn run(args: PlanArgs) -> Result<()> {
     let t0 = Instant::now();
-    let kind = kind_of(args.planner).ok_or_else(|| bad_input("not a 3D planner"))?;
+    let voxel = args.planner == Some(PlannerArg::Voxel);
+    let kind = kind_of(args.planner);
+    if kind.is_none() && !voxel {
+        return Err(bad_input("not a 3D planner"));
+    }
+    let planner_name = kind.map_or("voxel", PlannerKind::name);
     if args.grid.random.is_some() {
         return Err(bad_input(
             "--random makes a grid; 3D planners need an FCND colliders map (--map FILE.csv)",
         ));
     }
-    if args.plot.is_some() {
-        return Err(bad_input(
-            "--plot: pictures of 3D routes are not available yet; omit --plot",
-        ));
+    if let Some(p) = &args.plot
+        && skyplan_plot::PlotFormat::from_path(p).is_none()
+    {
+        return Err(bad_input(format!(
+            "--plot {}: expected a .png or .svg file name",
+            p.display()
+        )));
     }
     let cfg = match &args.config {
         Some(path) => Config::load(path)?,
@@ -172,9 +200,15 @@ pub fn run(args: PlanArgs) -> Result<()> {
         })?,
     };
 
+    let min_alt_m = args.plan3d.min_alt_m.unwrap_or(0.0);
+    if min_alt_m >= max_alt_m {
+        return Err(bad_input(format!(
+            "--min-alt-m {min_alt_m}: expected below the ceiling {max_alt_m} m"
+        )));
+    }
     let spec = WorldSpec {
         safety_m,
-        min_alt_m: 0.0,
+        min_alt_m,
         max_alt_m,
         margin_bounds_m: 0.0,
     };
@@ -189,11 +223,48 @@ pub fn run(args: PlanArgs) -> Result<()> {
         range_m: None,
         simplify: true,
     };
-    let solution = skyplan_sampling::plan(&world, kind, &request);
+    let mut plot_edges: Vec<(Neu, Neu)> = Vec::new();
+    let mut voxel_json = serde_json::Value::Null;
+    let mut raw_path: Vec<Neu> = Vec::new();
+    let solution = match kind {
+        Some(PlannerKind::Prm) if args.plot.is_some() => {
+            // The same run as `skyplan_sampling::plan`, keeping the roadmap for the picture.
+            let config = skyplan_sampling::prm::PrmConfig {
+                seed,
+                ..Default::default()
+            };
+            let (roadmap, mut solution) =
+                skyplan_sampling::prm::solve(&world, start, goal, &config, request.budget);
+            let points = roadmap.vertices();
+            plot_edges = roadmap
+                .edge_list()
+                .into_iter()
+                .map(|(a, b)| (points[a as usize], points[b as usize]))
+                .collect();
+            if solution.status == Status::Exact {
+                use rand::SeedableRng;
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed);
+                raw_path = solution.path.clone();
+                solution.path =
+                    skyplan_sampling::shortcut::simplify(&world, &solution.path, &mut rng, 200);
+                solution.cost_m = skyplan_world3::path_length_m(&solution.path);
+            }
+            solution
+        }
+        Some(kind) => skyplan_sampling::plan(&world, kind, &request),
+        None => {
+            let (solution, raw, info) = run_voxel(&args.plan3d, &world, start, goal, safety_m)?;
+            raw_path = raw;
+            voxel_json = info;
+            solution
+        }
+    };
     let where_ = |p: Neu| format!("N {:.2} m, E {:.2} m, altitude {:.2} m", p[0], p[1], p[2]);
     let why_invalid = |p: Neu| {
         let b = world.bounds();
-        if p[2] < b.min[2] {
+        if p[2] < b.min[2] && b.min[2] > 0.0 {
+            format!("below --min-alt-m {} m", b.min[2])
+        } else if p[2] < b.min[2] {
             "below the ground".to_string()
         } else if !b.contains(p) {
             format!(
@@ -232,7 +303,7 @@ pub fn run(args: PlanArgs) -> Result<()> {
                 kind: Kind::NoPath,
                 error: anyhow!(
                     "{}: no path from {} to {} within {time_limit_ms} ms ({} samples, {} vertices, status {}){nearest}",
-                    kind.name(),
+                    planner_name,
                     where_(start),
                     where_(goal),
                     solution.iterations,
@@ -252,11 +323,11 @@ pub fn run(args: PlanArgs) -> Result<()> {
     let mission = Mission::from_points_nea(&frame, &solution.path, start_heading_rad)
         .or_exit(Kind::BadInput)?;
     let straight_line_m = distance_m(start, goal);
-    let summary = json!({
+    let mut summary = json!({
         "map": map_name,
         "obstacles": map.boxes.len(),
         "home": { "lat_deg": map.home.lat_deg, "lon_deg": map.home.lon_deg },
-        "planner": kind.name(),
+        "planner": planner_name,
         "planner_status": solution.status.name(),
         "seed": seed,
         "time_limit_ms": time_limit_ms,
@@ -274,8 +345,43 @@ pub fn run(args: PlanArgs) -> Result<()> {
         "mission_length_m": mission.length_3d_m(),
         "outputs": { "waypoints": out.display().to_string(), "format": format.name() },
     });
+    if !voxel_json.is_null() {
+        summary["voxel"] = voxel_json.clone();
+    }
+    if let Some(p) = &args.plot {
+        summary["outputs"]["plot"] = json!(p.display().to_string());
+    }
     let bytes = skyplan_export::encode(format, &mission, &summary).or_exit(Kind::Runtime)?;
     write_atomic(&out, &bytes)?;
+    if let Some(plot_path) = &args.plot {
+        let title = format!(
+            "{map_name}: {planner_name}, {:.0} m, margin {safety_m} m",
+            solution.cost_m
+        );
+        let edges_label = match kind {
+            Some(PlannerKind::Prm) => "PRM roadmap",
+            _ => "",
+        };
+        let scene = skyplan_plot::Scene3d {
+            title,
+            obstacles: &map.boxes,
+            safety_m,
+            path: &solution.path,
+            raw_path: &raw_path,
+            raw_label: if voxel {
+                "voxel path"
+            } else {
+                "before shortcutting"
+            },
+            edges: &plot_edges,
+            edges_label,
+        };
+        let plot_format = skyplan_plot::PlotFormat::from_path(plot_path)
+            .ok_or_else(|| bad_input("--plot: expected .png or .svg"))?;
+        let bytes =
+            skyplan_plot::render_plan3d(&scene, plot_format, 1500, 900).or_exit(Kind::Runtime)?;
+        write_atomic(plot_path, &bytes)?;
+    }
     if args.json {
         let mut full = summary;
         full["status"] = json!("ok");
@@ -298,26 +404,148 @@ pub fn run(args: PlanArgs) -> Result<()> {
         );
         println!("start      {}", where_(start));
         println!("goal       {}", where_(goal));
-        println!(
-            "path       {} (seed {seed}): {:.2} m ({:.3} × the straight line), first solution after {:.2} ms, {} samples, {} vertices, {:.2} ms",
-            kind.name(),
-            solution.cost_m,
-            solution.cost_m / straight_line_m.max(f64::MIN_POSITIVE),
-            ms(solution.first_solution_us.unwrap_or(0)),
-            solution.iterations,
-            solution.vertices,
-            ms(solution.elapsed_us)
-        );
+        if voxel {
+            let v = &voxel_json;
+            println!(
+                "voxels     {} × {} × {} lattice ({} m, layers every {} m): {} voxels, {} blocked, built in {:.2} ms",
+                v["dims"][0],
+                v["dims"][1],
+                v["dims"][2],
+                v["cell_m"],
+                v["layer_m"],
+                v["voxels"],
+                v["blocked"],
+                ms(v["build_us"].as_u64().unwrap_or(0))
+            );
+            println!(
+                "path       voxel A* (climb weight {}): {:.2} m ({:.3} × the straight line), climbs {:.1} m, cost {:.2} (lattice optimum {:.2}), {} expansions, {} segment tests, {:.2} ms",
+                v["climb_weight"],
+                solution.cost_m,
+                solution.cost_m / straight_line_m.max(f64::MIN_POSITIVE),
+                v["climb_m"].as_f64().unwrap_or(0.0),
+                v["objective"].as_f64().unwrap_or(0.0),
+                v["lattice_objective"].as_f64().unwrap_or(0.0),
+                solution.iterations,
+                v["edge_checks"],
+                ms(solution.elapsed_us)
+            );
+        } else {
+            println!(
+                "path       {} (seed {seed}): {:.2} m ({:.3} × the straight line), first solution after {:.2} ms, {} samples, {} vertices, {:.2} ms",
+                planner_name,
+                solution.cost_m,
+                solution.cost_m / straight_line_m.max(f64::MIN_POSITIVE),
+                ms(solution.first_solution_us.unwrap_or(0)),
+                solution.iterations,
+                solution.vertices,
+                ms(solution.elapsed_us)
+            );
+        }
         println!(
             "waypoints  {} after exactly re-checked shortcutting; every segment re-checked against all {} boxes",
             mission.waypoints.len(),
             map.boxes.len()
         );
-        println!("wrote      {} ({})", out.display(), format.name());
+        let plot = args
+            .plot
+            .as_ref()
+            .map(|p| format!(", {}", p.display()))
+            .unwrap_or_default();
+        println!("wrote      {} ({}){plot}", out.display(), format.name());
         println!(
             "time       {:.2} ms in all",
             t0.elapsed().as_secs_f64() * 1000.0
         );
     }
     Ok(())
+}
+
+/// `--planner voxel`: the voxel grid over the world, one query; the result as a sampling
+/// [`skyplan_sampling::Solution`] (iterations = expansions, vertices = voxels), the lattice path,
+/// and the voxel details for the JSON summary.
+fn run_voxel(
+    a: &Plan3dArgs,
+    world: &BoxWorld3,
+    start: Neu,
+    goal: Neu,
+    safety_m: f64,
+) -> Result<(skyplan_sampling::Solution, Vec<Neu>, serde_json::Value)> {
+    use skyplan_voxel::{End, Query, VoxelError, VoxelGrid, VoxelSpec};
+    let spec = VoxelSpec {
+        cell_m: a.voxel_m.unwrap_or(5.0),
+        layer_m: a.layer_m.unwrap_or(5.0),
+    };
+    let climb_weight = a.climb_weight.unwrap_or(1.0);
+    if climb_weight < 0.0 {
+        return Err(bad_input(format!(
+            "--climb-weight {climb_weight}: expected a number ≥ 0"
+        )));
+    }
+    let grid = VoxelGrid::build(world, &spec)
+        .map_err(|e| bad_input(format!("--voxel-m/--layer-m: {e}")))?;
+    let query = Query {
+        start,
+        goal,
+        climb_weight,
+        shortcut: true,
+    };
+    let at = |p: Neu| format!("N {:.2} m, E {:.2} m, altitude {:.2} m", p[0], p[1], p[2]);
+    let route = match grid.plan(&query) {
+        Ok(r) => r,
+        Err(VoxelError::Invalid(end)) => {
+            let p = if end == End::Start { start } else { goal };
+            let b = world.bounds();
+            let why = if p[2] < b.min[2] {
+                format!("below the floor of the flight volume ({} m)", b.min[2])
+            } else if !b.contains(p) {
+                format!(
+                    "outside the flight volume N {:.1}..{:.1}, E {:.1}..{:.1}, altitude {:.1}..{:.1} m",
+                    b.min[0], b.max[0], b.min[1], b.max[1], b.min[2], b.max[2]
+                )
+            } else {
+                format!("within {safety_m} m of an obstacle")
+            };
+            return Err(bad_input(format!("{} {} is {why}", end.name(), at(p))));
+        }
+        Err(e @ (VoxelError::NoConnector(_) | VoxelError::NoPath { .. })) => {
+            return Err(Failure {
+                kind: Kind::NoPath,
+                error: anyhow!("voxel: no path from {} to {}: {e}", at(start), at(goal)),
+            });
+        }
+        Err(e @ VoxelError::InvalidSpec(_)) => return Err(bad_input(format!("{e}"))),
+        Err(e @ VoxelError::Internal(_)) => {
+            return Err(Failure {
+                kind: Kind::Runtime,
+                error: anyhow!("{e}"),
+            });
+        }
+    };
+    let dims = grid.dims();
+    let info = json!({
+        "cell_m": spec.cell_m,
+        "layer_m": spec.layer_m,
+        "dims": dims,
+        "voxels": grid.len(),
+        "blocked": grid.blocked_count(),
+        "build_us": grid.build_us(),
+        "climb_weight": climb_weight,
+        "climb_m": route.climb_m,
+        "objective": route.cost,
+        "lattice_objective": route.raw_cost,
+        "lattice_waypoints": route.raw.len(),
+        "expansions": route.expansions,
+        "edge_checks": route.edge_checks,
+    });
+    let solution = skyplan_sampling::Solution {
+        status: Status::Exact,
+        cost_m: route.length_m,
+        goal_gap_m: 0.0,
+        iterations: route.expansions,
+        vertices: grid.len(),
+        first_solution_us: Some(route.search_us),
+        elapsed_us: route.search_us,
+        path: route.path,
+    };
+    Ok((solution, route.raw, info))
 }

@@ -89,9 +89,13 @@ pub(crate) fn resolve(args: PlanArgs) -> Result<Options> {
                 "planner wavefront/costmap from a config file: give it as --planner on the command line",
             ));
         }
-        PlannerArg::Prm | PlannerArg::RrtConnect | PlannerArg::RrtStar => {
+        PlannerArg::Prm
+        | PlannerArg::RrtConnect
+        | PlannerArg::RrtStar
+        | PlannerArg::Voxel
+        | PlannerArg::Voronoi => {
             return Err(bad_input(
-                "planner prm/rrt-connect/rrt-star from a config file: give it as --planner on the command line",
+                "planner prm/rrt-connect/rrt-star/voxel/voronoi from a config file: give it as --planner on the command line",
             ));
         }
     };
@@ -194,21 +198,16 @@ fn planner_name(planner: Planner) -> &'static str {
 pub fn run(args: PlanArgs) -> Result<()> {
     let json_mode = args.json;
     let result = run_inner(args);
-    if json_mode && let Err(f) = &result {
-        let status = match f.kind {
-            Kind::NoPath => "no_path",
-            Kind::BadInput => "bad_input",
-            Kind::Runtime => "error",
-        };
-        println!(
-            "{}",
-            json!({ "status": status, "error": format!("{:#}", f.error) })
-        );
+    if json_mode {
+        crate::exit::print_json_failure(&result);
     }
     result
 }
 
 fn run_inner(args: PlanArgs) -> Result<()> {
+    if crate::voronoi_cmd::handles(&args) {
+        return crate::voronoi_cmd::run(args);
+    }
     if crate::plan3d_cmd::handles(&args)? {
         return crate::plan3d_cmd::run(args);
     }

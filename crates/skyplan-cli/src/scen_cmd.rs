@@ -61,9 +61,14 @@ pub fn run(args: ScenArgs) -> Result<()> {
                 "--planner theta finds any-angle paths; MovingAI lengths are octile: use jps-plus, jps, astar or dijkstra",
             ));
         }
-        PlannerArg::Prm | PlannerArg::RrtConnect | PlannerArg::RrtStar => {
+        PlannerArg::Prm | PlannerArg::RrtConnect | PlannerArg::RrtStar | PlannerArg::Voxel => {
             return Err(bad_input(
-                "scen replays grid scenarios: prm, rrt-connect and rrt-star are 3D planners for `skyplan plan`",
+                "scen replays grid scenarios: prm, rrt-connect, rrt-star and voxel are 3D planners for `skyplan plan`",
+            ));
+        }
+        PlannerArg::Voronoi => {
+            return Err(bad_input(
+                "scen replays grid scenarios: voronoi is a roadmap planner for `skyplan plan` on colliders maps",
             ));
         }
         PlannerArg::Wavefront | PlannerArg::Costmap => {

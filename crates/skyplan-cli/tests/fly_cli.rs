@@ -537,3 +537,204 @@ fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
     let n_items = peer_out.lines().filter(|l| l.starts_with("item ")).count();
     assert!(n_items >= 5, "{peer_out}");
 }
+
+/// Starts `skyplan fly` with `args`, sends it SIGINT (`kill -INT`, as a terminal's Ctrl-C
+/// does) once its output shows `trigger`, and returns how it ended.
+fn fly_and_interrupt(args: &[&str], trigger: &str) -> Run {
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
+        .current_dir(dir.path())
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id().to_string();
+    let (tx, rx) = std::sync::mpsc::channel::<String>();
+    let stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in BufReader::new(stdout).lines().map_while(|l| l.ok()) {
+            all.push_str(&line);
+            all.push('\n');
+            let _ = tx.send(line);
+        }
+        all
+    });
+    let mut stderr = child.stderr.take().unwrap();
+    let err_reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = std::io::Read::read_to_string(&mut stderr, &mut s);
+        s
+    });
+    let start = Instant::now();
+    let mut sent = false;
+    while start.elapsed() < Duration::from_secs(60) {
+        match rx.recv_timeout(Duration::from_millis(100)) {
+            Ok(line) if line.contains(trigger) => {
+                let status = std::process::Command::new("kill")
+                    .args(["-INT", &pid])
+                    .status()
+                    .unwrap();
+                assert!(status.success());
+                sent = true;
+                break;
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+            _ => {}
+        }
+    }
+    // Then it must end on its own.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code();
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("skyplan fly did not end after SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let stdout = reader.join().unwrap();
+    let stderr = err_reader.join().unwrap();
+    assert!(sent, "never saw {trigger:?}:\n{stdout}\n{stderr}");
+    Run {
+        code,
+        stdout,
+        stderr,
+    }
+}
+
+#[test]
+fn ctrl_c_in_flight_lands_reports_and_fails() {
+    let r = fly_and_interrupt(&["fly", "--sim", "--speedup", "20"], "TAKEOFF → WAYPOINT");
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    for line in [
+        "interrupt  Ctrl-C: landing",
+        "WAYPOINT → LANDING",
+        "LANDING → DISARMING",
+        "DISARMING → MANUAL",
+        "result     FAILED: aborted (interrupted by Ctrl-C); the vehicle landed",
+        "sim        touched down",
+    ] {
+        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
+    }
+    assert!(
+        r.stderr
+            .contains("flight failed: aborted (interrupted by Ctrl-C); the vehicle landed"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("result     landed and disarmed"));
+}
+
+#[test]
+fn ctrl_c_with_on_interrupt_hold_leaves_the_vehicle_loitering() {
+    let r = fly_and_interrupt(
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "20",
+            "--upload",
+            "--on-interrupt",
+            "hold",
+        ],
+        "TAKEOFF → WAYPOINT",
+    );
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    for line in [
+        "interrupt  Ctrl-C: holding position (LOITER)",
+        "sim        mode LOITER",
+        "ARMED, state WAYPOINT",
+    ] {
+        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
+    }
+    assert!(
+        r.stderr.contains(
+            "stopped in WAYPOINT (interrupted by Ctrl-C); the vehicle is holding its position in the air: take over"
+        ),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("→ LANDING"), "{}", r.stdout);
+}
+
+#[test]
+fn failsafe_rtl_is_commanded_when_a_lost_link_comes_back() {
+    let dir = tempfile::tempdir().unwrap();
+    // Silent from 12 s to 52 s of vehicle time (2 s wall at 20×): lost after 1 s, back after ~2 s.
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "20",
+            "--goal-ne",
+            "60,30",
+            "--sim-drop-link-after-s",
+            "12",
+            "--sim-link-gap-s",
+            "40",
+            "--link-timeout-s",
+            "1",
+            "--failsafe",
+            "rtl",
+            "--log",
+            "flight.csv",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    for line in [
+        "injected fault: the vehicle stops talking",
+        "lost in WAYPOINT: no heartbeat for",
+        "waiting up to 6.0 s for it to return (--failsafe rtl)",
+        "injected fault over: the vehicle talks again",
+        "commanding RTL (--failsafe rtl)",
+        "sim        mode RTL",
+        "WAYPOINT → LANDING",
+        "DISARMING → MANUAL",
+        "sim        touched down",
+        "no collision with the map's obstacles",
+    ] {
+        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
+    }
+    assert!(
+        r.stderr
+            .contains("flight failed: aborted (link lost in WAYPOINT for")
+            && r.stderr
+                .contains("--failsafe rtl on its return); the vehicle landed"),
+        "{}",
+        r.stderr
+    );
+    // It landed back where it took off.
+    let (_, rows) = read_log(&dir.path().join("flight.csv"));
+    let f = |s: &str| s.parse::<f64>().unwrap();
+    let first = &rows[0];
+    let last = rows.last().unwrap();
+    assert!(
+        (f(&last[2]) - f(&first[2])).hypot(f(&last[3]) - f(&first[3])) < 1.5,
+        "{first:?} → {last:?}"
+    );
+    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+}

@@ -10,8 +10,9 @@
 //! flight, the vehicle leaving AUTO (a pilot or failsafe took over), and lands on an abort.
 
 use crate::executor::{
-    Command, CommandKind, ConfigError, Event, ExecutorConfig, Failure, FlightExecutor, FlightState,
-    Note, Outcome, Output, Reached, Target, Telemetry, VehicleMode, wrap_angle_rad,
+    Command, CommandKind, ConfigError, Event, ExecutorConfig, FailsafeAction, Failure, Faults,
+    FlightExecutor, FlightState, Note, Outcome, Output, PendingHold, Reached, Target, Telemetry,
+    VehicleMode, wrap_angle_rad,
 };
 use crate::upload::MissionPlan;
 
@@ -67,6 +68,7 @@ pub struct AutoExecutor {
     abort: Option<String>,
     outcome: Option<Outcome>,
     started: bool,
+    faults: Faults,
 }
 
 impl AutoExecutor {
@@ -121,6 +123,7 @@ impl AutoExecutor {
             abort: None,
             outcome: None,
             started: false,
+            faults: Faults::default(),
         })
     }
 
@@ -213,6 +216,60 @@ impl AutoExecutor {
             self.reached.push(r);
             out.notes.push(Note::Reached(r));
             self.leg_since_s = now_s;
+        }
+    }
+
+    /// Stops the flight early with `action`; `true` when the caller should return at once.
+    fn stop(
+        &mut self,
+        now_s: f64,
+        reason: String,
+        action: FailsafeAction,
+        out: &mut Output,
+    ) -> bool {
+        if self.abort.is_some() || self.faults.hold.is_some() {
+            return false;
+        }
+        match self.state {
+            FlightState::Manual | FlightState::Arming => {
+                self.abort = Some(reason.clone());
+                self.finish(Outcome::Failed(Failure::Aborted { reason }), out);
+                if self.last.is_some_and(|t| t.armed) {
+                    out.commands.push(Command::Disarm);
+                }
+                true
+            }
+            FlightState::Takeoff | FlightState::Waypoint => {
+                match action {
+                    FailsafeAction::Hold => {
+                        self.faults.hold = Some(PendingHold {
+                            reason,
+                            state: self.state,
+                            since_s: now_s,
+                            last_send_s: now_s,
+                            confirmed: false,
+                        });
+                        out.commands.push(Command::Hold);
+                        return true;
+                    }
+                    FailsafeAction::Land => {
+                        self.enter(FlightState::Landing, now_s, out);
+                        out.commands.push(Command::Land);
+                    }
+                    FailsafeAction::ReturnToLaunch => {
+                        self.faults
+                            .start_rtl(&self.config, self.last.as_ref(), &self.targets[0]);
+                        self.enter(FlightState::Landing, now_s, out);
+                        out.commands.push(Command::ReturnToLaunch);
+                    }
+                }
+                self.abort = Some(reason);
+                true
+            }
+            FlightState::Landing | FlightState::Disarming => {
+                self.abort = Some(reason);
+                false
+            }
         }
     }
 
@@ -370,12 +427,13 @@ impl AutoExecutor {
                 }
             }
             FlightState::Landing => {
+                let budget_s = self.faults.landing_budget_s(&c);
                 if self.on_ground(&t) || !t.armed {
                     self.enter(FlightState::Disarming, now_s, out);
                     self.step(now_s, out);
-                } else if in_state_s > c.landing_timeout_s {
+                } else if in_state_s > budget_s {
                     let awaited = format!("still {:.1} m above home", t.alt_m());
-                    self.time_out(c.landing_timeout_s, &awaited, out);
+                    self.time_out(budget_s, &awaited, out);
                 }
             }
             FlightState::Disarming => {
@@ -405,6 +463,7 @@ impl FlightExecutor for AutoExecutor {
         if self.outcome.is_some() {
             return out;
         }
+        self.faults.observe(&event);
         match event {
             Event::Telemetry(t) => self.last = Some(t),
             Event::Mode(m) => {
@@ -440,34 +499,49 @@ impl FlightExecutor for AutoExecutor {
             }
             Event::StatusText(text) => self.last_text = Some(text),
             Event::LinkLost { silent_s } => {
-                let state = self.state;
-                self.finish(
-                    Outcome::Failed(Failure::LinkLost { state, silent_s }),
-                    &mut out,
-                );
+                if let Some(failure) =
+                    self.faults
+                        .link_lost(self.state, silent_s, &self.config, &mut out)
+                {
+                    self.finish(Outcome::Failed(failure), &mut out);
+                }
                 return out;
             }
+            Event::LinkRegained { silent_s } => {
+                if let Some((reason, action)) =
+                    self.faults.link_regained(silent_s, &self.config, &mut out)
+                    && matches!(self.state, FlightState::Takeoff | FlightState::Waypoint)
+                    && self.stop(now_s, reason, action, &mut out)
+                {
+                    return out;
+                }
+            }
             Event::Abort(reason) => {
-                if self.abort.is_none() {
-                    self.abort = Some(reason.clone());
-                    match self.state {
-                        FlightState::Manual | FlightState::Arming => {
-                            self.finish(Outcome::Failed(Failure::Aborted { reason }), &mut out);
-                            if self.last.is_some_and(|t| t.armed) {
-                                out.commands.push(Command::Disarm);
-                            }
-                            return out;
-                        }
-                        FlightState::Takeoff | FlightState::Waypoint => {
-                            self.enter(FlightState::Landing, now_s, &mut out);
-                            out.commands.push(Command::Land);
-                            return out;
-                        }
-                        FlightState::Landing | FlightState::Disarming => {}
-                    }
+                if self.stop(now_s, reason, FailsafeAction::Land, &mut out) {
+                    return out;
+                }
+            }
+            Event::Stop { reason, action } => {
+                if self.stop(now_s, reason, action, &mut out) {
+                    return out;
                 }
             }
             Event::Tick => {}
+        }
+        if self.faults.lost.is_some() {
+            return out;
+        }
+        if self.faults.hold.is_some() {
+            match self.faults.step_hold(now_s, &self.config, &mut out) {
+                Some(Ok(failure)) => self.finish(Outcome::Failed(failure), &mut out),
+                Some(Err(reason)) => {
+                    self.abort = Some(reason);
+                    self.enter(FlightState::Landing, now_s, &mut out);
+                    out.commands.push(Command::Land);
+                }
+                None => {}
+            }
+            return out;
         }
         self.step(now_s, &mut out);
         out

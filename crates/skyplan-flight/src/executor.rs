@@ -216,6 +216,29 @@ impl fmt::Display for VehicleMode {
     }
 }
 
+/// What the executor tells the vehicle to do when it stops a flight early: on a Ctrl-C
+/// ([`Event::Stop`]) or when a lost link comes back ([`ExecutorConfig::failsafe`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FailsafeAction {
+    /// Land where it is (NAV_LAND), then disarm.
+    Land,
+    /// Return to the launch point and land there (RTL), then disarm.
+    ReturnToLaunch,
+    /// Hold the position in the air (LOITER / PX4 HOLD); the flight ends once the vehicle
+    /// confirms, leaving it to the pilot.
+    Hold,
+}
+
+impl fmt::Display for FailsafeAction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            FailsafeAction::Land => "land",
+            FailsafeAction::ReturnToLaunch => "rtl",
+            FailsafeAction::Hold => "hold",
+        })
+    }
+}
+
 /// What happened to the executor since the last event, for printing and logging.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Note {
@@ -234,6 +257,26 @@ pub enum Note {
         command: CommandKind,
         /// The vehicle's answer and its last status text.
         reason: String,
+    },
+    /// The link was lost and the executor waits for it to come back (with
+    /// [`ExecutorConfig::failsafe`] set); it sends nothing meanwhile.
+    LinkLost {
+        /// The state when the link was lost.
+        state: FlightState,
+        /// Seconds without a heartbeat so far.
+        silent_s: f64,
+        /// How long it waits for the link ([`ExecutorConfig::link_regain_wait_s`]).
+        wait_s: f64,
+        /// What it will command when the link returns.
+        action: FailsafeAction,
+    },
+    /// The lost link came back after this many seconds; the failsafe action is commanded (or,
+    /// when the vehicle was already landing, the landing goes on).
+    LinkRegained {
+        /// Seconds without a heartbeat.
+        silent_s: f64,
+        /// The action commanded.
+        action: FailsafeAction,
     },
     /// The flight ended; see [`MissionExecutor::outcome`].
     Finished,
@@ -288,6 +331,14 @@ pub enum Failure {
         /// Why.
         reason: String,
     },
+    /// The operator (or a failsafe) stopped the flight and the vehicle confirmed it holds its
+    /// position in the air: a pilot must take over.
+    Held {
+        /// Why.
+        reason: String,
+        /// The state when the hold was commanded.
+        state: FlightState,
+    },
     /// The vehicle left AUTO while flying the uploaded mission (a pilot or failsafe took over).
     LeftMission {
         /// The state.
@@ -317,6 +368,10 @@ impl fmt::Display for Failure {
                 "the vehicle left guided mode during {state} (pilot or failsafe took over)"
             ),
             Failure::Aborted { reason } => write!(f, "aborted ({reason}); the vehicle landed"),
+            Failure::Held { reason, state } => write!(
+                f,
+                "stopped in {state} ({reason}); the vehicle is holding its position in the air: take over"
+            ),
             Failure::LeftMission { state, mode } => write!(
                 f,
                 "the vehicle left AUTO for {mode} during {state} (pilot or failsafe took over)"
@@ -378,6 +433,16 @@ pub struct ExecutorConfig {
     pub landing_timeout_s: f64,
     /// Budget of DISARMING, seconds.
     pub disarming_timeout_s: f64,
+    /// What to command when a lost link comes back; `None`: a lost link ends the flight at once
+    /// (nothing more can be commanded). Only in the air (TAKEOFF, WAYPOINT; LANDING and
+    /// DISARMING resume): on the ground a lost link always ends the flight.
+    pub failsafe: Option<FailsafeAction>,
+    /// With `failsafe`: how long to wait for the link to come back, in the clock of
+    /// [`Event::LinkLost`]'s `silent_s` (the link layer's wall clock) before giving up.
+    pub link_regain_wait_s: f64,
+    /// A commanded hold not confirmed (acknowledged, or the mode reported) within this many
+    /// seconds becomes a landing.
+    pub hold_confirm_s: f64,
 }
 
 impl Default for ExecutorConfig {
@@ -399,6 +464,9 @@ impl Default for ExecutorConfig {
             leg_timeout_per_m_s: 1.0,
             landing_timeout_s: 120.0,
             disarming_timeout_s: 20.0,
+            failsafe: None,
+            link_regain_wait_s: 30.0,
+            hold_confirm_s: 10.0,
         }
     }
 }
@@ -421,6 +489,133 @@ pub fn wrap_angle_rad(a: f64) -> f64 {
     if w <= -PI { w + 2.0 * PI } else { w }
 }
 
+/// A commanded hold awaiting the vehicle's confirmation.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PendingHold {
+    pub(crate) reason: String,
+    pub(crate) state: FlightState,
+    pub(crate) since_s: f64,
+    pub(crate) last_send_s: f64,
+    pub(crate) confirmed: bool,
+}
+
+/// Link-loss, hold and return-to-launch bookkeeping, shared by both executors.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Faults {
+    /// The link is lost (waiting for it): the state then.
+    pub(crate) lost: Option<FlightState>,
+    /// A hold was commanded.
+    pub(crate) hold: Option<PendingHold>,
+    /// The landing is a return to launch, with this LANDING budget (seconds).
+    pub(crate) rtl_budget_s: Option<f64>,
+}
+
+impl Faults {
+    /// Confirms a pending hold from an accepted ack or the reported mode.
+    pub(crate) fn observe(&mut self, event: &Event) {
+        if let Some(h) = &mut self.hold
+            && matches!(
+                event,
+                Event::Ack {
+                    command: CommandKind::Hold,
+                    accepted: Ok(())
+                } | Event::Mode(VehicleMode::Hold)
+            )
+        {
+            h.confirmed = true;
+        }
+    }
+
+    /// A lost link: `Some(failure)` ends the flight now; `None` waits for the link.
+    pub(crate) fn link_lost(
+        &mut self,
+        state: FlightState,
+        silent_s: f64,
+        c: &ExecutorConfig,
+        out: &mut Output,
+    ) -> Option<Failure> {
+        if let Some(lost_in) = self.lost {
+            return (silent_s > c.link_regain_wait_s).then_some(Failure::LinkLost {
+                state: lost_in,
+                silent_s,
+            });
+        }
+        match c.failsafe {
+            Some(action) if !matches!(state, FlightState::Manual | FlightState::Arming) => {
+                self.lost = Some(state);
+                out.notes.push(Note::LinkLost {
+                    state,
+                    silent_s,
+                    wait_s: c.link_regain_wait_s,
+                    action,
+                });
+                None
+            }
+            _ => Some(Failure::LinkLost { state, silent_s }),
+        }
+    }
+
+    /// The link came back: the reason and action to stop the flight with, if it was lost.
+    pub(crate) fn link_regained(
+        &mut self,
+        silent_s: f64,
+        c: &ExecutorConfig,
+        out: &mut Output,
+    ) -> Option<(String, FailsafeAction)> {
+        let state = self.lost.take()?;
+        let action = c.failsafe.unwrap_or(FailsafeAction::Land);
+        out.notes.push(Note::LinkRegained { silent_s, action });
+        Some((
+            format!("link lost in {state} for {silent_s:.1} s; --failsafe {action} on its return"),
+            action,
+        ))
+    }
+
+    /// The LANDING budget: longer for a return to launch.
+    pub(crate) fn landing_budget_s(&self, c: &ExecutorConfig) -> f64 {
+        self.rtl_budget_s.unwrap_or(c.landing_timeout_s)
+    }
+
+    /// Starts a return to launch from `t` toward the launch point `home`.
+    pub(crate) fn start_rtl(&mut self, c: &ExecutorConfig, t: Option<&Telemetry>, home: &Target) {
+        let far_m = t.map_or(0.0, |t| {
+            (home.north_m - t.north_m).hypot(home.east_m - t.east_m)
+        });
+        self.rtl_budget_s =
+            Some(c.landing_timeout_s + c.leg_timeout_base_s + c.leg_timeout_per_m_s * far_m);
+    }
+
+    /// Drives a pending hold: `Err(reason)` when unconfirmed too long (land instead), the
+    /// failure once confirmed, else the commands to repeat.
+    pub(crate) fn step_hold(
+        &mut self,
+        now_s: f64,
+        c: &ExecutorConfig,
+        out: &mut Output,
+    ) -> Option<Result<Failure, String>> {
+        let h = self.hold.as_mut()?;
+        if h.confirmed {
+            return Some(Ok(Failure::Held {
+                reason: h.reason.clone(),
+                state: h.state,
+            }));
+        }
+        if now_s - h.since_s > c.hold_confirm_s {
+            let reason = format!(
+                "{}; the hold was not confirmed within {:.0} s, landing instead",
+                h.reason, c.hold_confirm_s
+            );
+            self.hold = None;
+            return Some(Err(reason));
+        }
+        if now_s - h.last_send_s >= c.retry_s || now_s < h.last_send_s {
+            h.last_send_s = now_s;
+            out.commands.push(Command::Hold);
+        }
+        None
+    }
+}
+
 /// The state machine. See the module documentation.
 #[derive(Debug, Clone)]
 pub struct MissionExecutor {
@@ -440,6 +635,7 @@ pub struct MissionExecutor {
     abort: Option<String>,
     outcome: Option<Outcome>,
     started: bool,
+    faults: Faults,
 }
 
 impl MissionExecutor {
@@ -478,6 +674,7 @@ impl MissionExecutor {
             abort: None,
             outcome: None,
             started: false,
+            faults: Faults::default(),
         })
     }
 
@@ -547,6 +744,7 @@ impl MissionExecutor {
         if self.outcome.is_some() {
             return out;
         }
+        self.faults.observe(&event);
         match event {
             Event::Telemetry(t) => self.last = Some(t),
             Event::Ack { command, accepted } => match accepted {
@@ -566,32 +764,31 @@ impl MissionExecutor {
             },
             Event::StatusText(text) => self.last_text = Some(text),
             Event::LinkLost { silent_s } => {
-                let state = self.state;
-                self.finish(
-                    Outcome::Failed(Failure::LinkLost { state, silent_s }),
-                    &mut out,
-                );
+                if let Some(failure) =
+                    self.faults
+                        .link_lost(self.state, silent_s, &self.config, &mut out)
+                {
+                    self.finish(Outcome::Failed(failure), &mut out);
+                }
                 return out;
             }
+            Event::LinkRegained { silent_s } => {
+                if let Some((reason, action)) =
+                    self.faults.link_regained(silent_s, &self.config, &mut out)
+                    && matches!(self.state, FlightState::Takeoff | FlightState::Waypoint)
+                    && self.stop(now_s, reason, action, &mut out)
+                {
+                    return out;
+                }
+            }
             Event::Abort(reason) => {
-                if self.abort.is_none() {
-                    self.abort = Some(reason.clone());
-                    match self.state {
-                        FlightState::Manual | FlightState::Arming => {
-                            self.finish(Outcome::Failed(Failure::Aborted { reason }), &mut out);
-                            if self.last.is_some_and(|t| t.armed) {
-                                out.commands.push(Command::Disarm);
-                            }
-                            return out;
-                        }
-                        FlightState::Takeoff | FlightState::Waypoint => {
-                            self.enter(FlightState::Landing, now_s, &mut out);
-                            out.commands.push(Command::Land);
-                            self.last_send_s = Some(now_s);
-                            return out;
-                        }
-                        FlightState::Landing | FlightState::Disarming => {}
-                    }
+                if self.stop(now_s, reason, FailsafeAction::Land, &mut out) {
+                    return out;
+                }
+            }
+            Event::Stop { reason, action } => {
+                if self.stop(now_s, reason, action, &mut out) {
+                    return out;
                 }
             }
             Event::Mode(_)
@@ -599,8 +796,79 @@ impl MissionExecutor {
             | Event::MissionCurrent(_)
             | Event::Tick => {}
         }
+        if self.faults.lost.is_some() {
+            return out;
+        }
+        if self.faults.hold.is_some() {
+            match self.faults.step_hold(now_s, &self.config, &mut out) {
+                Some(Ok(failure)) => self.finish(Outcome::Failed(failure), &mut out),
+                Some(Err(reason)) => {
+                    self.abort = Some(reason);
+                    self.enter(FlightState::Landing, now_s, &mut out);
+                    out.commands.push(Command::Land);
+                    self.last_send_s = Some(now_s);
+                }
+                None => {}
+            }
+            return out;
+        }
         self.step(now_s, &mut out);
         out
+    }
+
+    /// Stops the flight early with `action`; `true` when the caller should return at once.
+    fn stop(
+        &mut self,
+        now_s: f64,
+        reason: String,
+        action: FailsafeAction,
+        out: &mut Output,
+    ) -> bool {
+        if self.abort.is_some() || self.faults.hold.is_some() {
+            return false;
+        }
+        match self.state {
+            FlightState::Manual | FlightState::Arming => {
+                self.abort = Some(reason.clone());
+                self.finish(Outcome::Failed(Failure::Aborted { reason }), out);
+                if self.last.is_some_and(|t| t.armed) {
+                    out.commands.push(Command::Disarm);
+                }
+                true
+            }
+            FlightState::Takeoff | FlightState::Waypoint => {
+                match action {
+                    FailsafeAction::Hold => {
+                        self.faults.hold = Some(PendingHold {
+                            reason,
+                            state: self.state,
+                            since_s: now_s,
+                            last_send_s: now_s,
+                            confirmed: false,
+                        });
+                        out.commands.push(Command::Hold);
+                        return true;
+                    }
+                    FailsafeAction::Land => {
+                        self.enter(FlightState::Landing, now_s, out);
+                        out.commands.push(Command::Land);
+                    }
+                    FailsafeAction::ReturnToLaunch => {
+                        self.faults
+                            .start_rtl(&self.config, self.last.as_ref(), &self.targets[0]);
+                        self.enter(FlightState::Landing, now_s, out);
+                        out.commands.push(Command::ReturnToLaunch);
+                    }
+                }
+                self.abort = Some(reason);
+                self.last_send_s = Some(now_s);
+                true
+            }
+            FlightState::Landing | FlightState::Disarming => {
+                self.abort = Some(reason);
+                false
+            }
+        }
     }
 
     fn expects(&self, command: CommandKind) -> bool {
@@ -608,6 +876,7 @@ impl MissionExecutor {
             (self.state, command),
             (FlightState::Takeoff, CommandKind::Takeoff)
                 | (FlightState::Landing, CommandKind::Land)
+                | (FlightState::Landing, CommandKind::ReturnToLaunch)
                 | (FlightState::Disarming, CommandKind::Disarm)
         )
     }
@@ -817,14 +1086,19 @@ impl MissionExecutor {
                 }
             }
             FlightState::Landing => {
+                let budget_s = self.faults.landing_budget_s(&c);
                 if self.on_ground(&t) || !t.armed {
                     self.enter(FlightState::Disarming, now_s, out);
                     self.step(now_s, out);
-                } else if in_state_s > c.landing_timeout_s {
+                } else if in_state_s > budget_s {
                     let awaited = format!("still {:.1} m above home", t.alt_m());
-                    self.time_out(now_s, c.landing_timeout_s, &awaited, out);
+                    self.time_out(now_s, budget_s, &awaited, out);
                 } else if !self.acked && self.due(now_s, c.retry_s) {
-                    out.commands.push(Command::Land);
+                    out.commands.push(if self.faults.rtl_budget_s.is_some() {
+                        Command::ReturnToLaunch
+                    } else {
+                        Command::Land
+                    });
                 }
             }
             FlightState::Disarming => {
@@ -874,6 +1148,20 @@ pub enum Event {
     },
     /// Stop the flight: land if in the air (Ctrl-C, overall timeout).
     Abort(String),
+    /// Stop the flight with this action if in the air (Ctrl-C with `--on-interrupt hold`);
+    /// on the ground it ends the flight (disarming) whatever the action.
+    Stop {
+        /// Why.
+        reason: String,
+        /// Land, return to launch or hold.
+        action: FailsafeAction,
+    },
+    /// A heartbeat came back after [`Event::LinkLost`]: with [`ExecutorConfig::failsafe`],
+    /// the executor commands it.
+    LinkRegained {
+        /// Seconds the vehicle was silent.
+        silent_s: f64,
+    },
     /// The vehicle's mode, from each of its heartbeats.
     Mode(VehicleMode),
     /// MISSION_ITEM_REACHED: the vehicle reached this item of the uploaded mission.

@@ -7,7 +7,9 @@
 //! toward the target heading at most at the yaw-rate limit. The ground stops descent.
 //!
 //! Modes follow ArduCopter: GUIDED obeys position targets and NAV_TAKEOFF, LAND descends where it
-//! is, AUTO flies the uploaded mission, LOITER holds. Positions are NED metres about the home.
+//! is, AUTO flies the uploaded mission, LOITER holds, RTL flies straight back over the home at
+//! the altitude it had when RTL began (ArduCopter would first climb to `RTL_ALT`), then lands
+//! there and disarms. Positions are NED metres about the home.
 //!
 //! ```
 //! use skyplan_flight::sim::{SimConfig, SimMode, SimVehicle};
@@ -35,6 +37,8 @@ pub enum SimMode {
     Loiter,
     /// Descends where it is and disarms on the ground.
     Land,
+    /// Returns to the home at its altitude, then lands there and disarms.
+    Rtl,
 }
 
 impl SimMode {
@@ -45,6 +49,7 @@ impl SimMode {
             SimMode::Auto => 3,
             SimMode::Guided => 4,
             SimMode::Loiter => 5,
+            SimMode::Rtl => 6,
             SimMode::Land => 9,
         }
     }
@@ -56,6 +61,7 @@ impl SimMode {
             3 => SimMode::Auto,
             4 => SimMode::Guided,
             5 => SimMode::Loiter,
+            6 => SimMode::Rtl,
             9 => SimMode::Land,
             _ => return None,
         })
@@ -70,6 +76,7 @@ impl fmt::Display for SimMode {
             SimMode::Auto => "AUTO",
             SimMode::Loiter => "LOITER",
             SimMode::Land => "LAND",
+            SimMode::Rtl => "RTL",
         })
     }
 }
@@ -200,6 +207,8 @@ pub struct SimVehicle {
     target: Option<([f64; 3], f64)>,
     mission: Vec<SimMissionItem>,
     mission_current: usize,
+    /// RTL: the home has been reached and the vehicle descends.
+    rtl_descending: bool,
 }
 
 fn norm2(v: [f64; 2]) -> f64 {
@@ -222,6 +231,7 @@ impl SimVehicle {
             target: None,
             mission: Vec::new(),
             mission_current: 0,
+            rtl_descending: false,
         }
     }
 
@@ -287,6 +297,11 @@ impl SimVehicle {
                 self.target = None;
             }
             SimMode::Land => self.target = None,
+            SimMode::Rtl => {
+                self.rtl_descending = false;
+                self.target =
+                    (!self.on_ground).then_some(([0.0, 0.0, self.position[2]], self.yaw_rad));
+            }
         }
     }
 
@@ -362,9 +377,18 @@ impl SimVehicle {
         let c = self.config;
         let mut v_cmd = [0.0; 3];
         let mut yaw_target = self.yaw_rad;
+        if self.armed && self.mode == SimMode::Rtl && !self.rtl_descending {
+            let d = norm2([self.position[0], self.position[1]]);
+            let speed = norm2([self.velocity[0], self.velocity[1]]);
+            if d <= c.acceptance_radius_m && speed < 0.5 {
+                self.rtl_descending = true;
+            }
+        }
         if self.armed {
+            let descend =
+                self.mode == SimMode::Land || self.mode == SimMode::Rtl && self.rtl_descending;
             match self.mode {
-                SimMode::Land => {
+                _ if descend => {
                     let hold = self.target.map_or(self.position, |(p, _)| p);
                     let h = self.horizontal_command([hold[0], hold[1]]);
                     v_cmd = [h[0], h[1], c.land_speed_m_s];
@@ -419,7 +443,7 @@ impl SimVehicle {
         }
         if self.on_ground && !was_on_ground {
             events.push(SimEvent::Landed);
-            if self.mode == SimMode::Land && self.armed {
+            if matches!(self.mode, SimMode::Land | SimMode::Rtl) && self.armed {
                 self.armed = false;
                 self.target = None;
                 events.push(SimEvent::AutoDisarmed);
@@ -652,5 +676,31 @@ mod tests {
         assert!(
             (s.position_ned_m[0] - 10.0).abs() < 1.0 && (s.position_ned_m[1] - 10.0).abs() < 1.0
         );
+    }
+
+    #[test]
+    fn rtl_flies_home_at_its_altitude_then_lands_and_disarms() {
+        let mut v = flying(7.0);
+        v.set_position_target([30.0, -40.0, -7.0], 0.0).unwrap();
+        run(&mut v, 30.0);
+        v.set_mode(SimMode::Rtl);
+        let mut max_alt_error: f64 = 0.0;
+        let mut events = Vec::new();
+        for _ in 0..3000 {
+            events.extend(v.step(0.02));
+            let s = v.state();
+            if s.position_ned_m[0].hypot(s.position_ned_m[1]) > 2.0 {
+                max_alt_error = max_alt_error.max((s.position_ned_m[2] + 7.0).abs());
+            }
+        }
+        assert!(max_alt_error < 0.2, "{max_alt_error}");
+        assert!(events.contains(&SimEvent::AutoDisarmed));
+        let s = v.state();
+        assert!(s.on_ground && !s.armed && s.mode == SimMode::Rtl, "{s:?}");
+        assert!(
+            s.position_ned_m[0].hypot(s.position_ned_m[1]) < 1.0,
+            "{s:?}"
+        );
+        assert_eq!(SimMode::from_arducopter_custom_mode(6), Some(SimMode::Rtl));
     }
 }

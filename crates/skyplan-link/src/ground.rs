@@ -14,7 +14,8 @@
 use crate::{Address, Link, LinkError, Received};
 use mavlink::dialects::common::*;
 use skyplan_flight::executor::{
-    Command, CommandKind, Event, FlightExecutor, FlightState, Note, Target, Telemetry, VehicleMode,
+    Command, CommandKind, Event, FailsafeAction, FlightExecutor, FlightState, Note, Target,
+    Telemetry, VehicleMode,
 };
 use skyplan_flight::upload::{
     ItemCommand, MissionItem, MissionPlan, MissionUpload, UploadConfig, UploadEvent, UploadSend,
@@ -50,6 +51,11 @@ pub struct GroundConfig {
     pub timeout_s: Option<f64>,
     /// After an abort, wall seconds to wait for the landing before giving up.
     pub abort_grace_s: f64,
+    /// What the interrupt flag ([`GroundStation::set_interrupt`]) commands: land (default) or
+    /// hold ([`FailsafeAction::Hold`]; a return to launch works too).
+    pub on_interrupt: FailsafeAction,
+    /// Wall seconds between [`Update::Progress`] reports.
+    pub progress_period_s: f64,
 }
 
 impl Default for GroundConfig {
@@ -59,6 +65,8 @@ impl Default for GroundConfig {
             link_timeout_s: 5.0,
             timeout_s: None,
             abort_grace_s: 120.0,
+            on_interrupt: FailsafeAction::Land,
+            progress_period_s: 0.2,
         }
     }
 }
@@ -149,10 +157,27 @@ pub enum Update {
     LinkClosed(String),
     /// The flight's wall-clock budget ran out: landing.
     TimedOut(f64),
-    /// The operator interrupted (Ctrl-C): landing.
-    Interrupted,
+    /// The operator interrupted (Ctrl-C): the action commanded.
+    Interrupted(FailsafeAction),
     /// The vehicle changed mode.
     Mode(VehicleMode),
+    /// Where the flight stands, every [`GroundConfig::progress_period_s`] (for a progress bar).
+    Progress(Progress),
+}
+
+/// Where the flight stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Vehicle time, seconds.
+    pub time_s: f64,
+    /// The executor's state.
+    pub state: FlightState,
+    /// Waypoints reached.
+    pub reached: usize,
+    /// Waypoints in all.
+    pub waypoints: usize,
+    /// Horizontal distance still to fly along the route, metres.
+    pub distance_left_m: f64,
 }
 
 /// The flight's account.
@@ -554,12 +579,22 @@ impl GroundStation {
         let mut sent_targets = 0usize;
         let mut last_local_ms = None;
         let mut last_mode = None;
+        let mut link_lost = false;
+        let mut last_progress: Option<Instant> = None;
         // The silence clock starts now: planning may have taken a while.
         self.last_heartbeat = Some(Instant::now());
         while ex.outcome().is_none() {
             let mut events = Vec::new();
             if let Some(r) = self.link.recv_timeout(Duration::from_millis(5)) {
-                if let Some(e) = self.absorb(&r) {
+                let heard_before = self.last_heartbeat;
+                let event = self.absorb(&r);
+                if link_lost && self.last_heartbeat != heard_before {
+                    // The vehicle speaks again: the executor commands the failsafe.
+                    link_lost = false;
+                    let silent_s = heard_before.map_or(0.0, |t| t.elapsed().as_secs_f64());
+                    events.push(Event::LinkRegained { silent_s });
+                }
+                if let Some(e) = event {
                     if let Event::StatusText(t) = &e {
                         on_update(Update::StatusText(t.clone()));
                     }
@@ -599,6 +634,7 @@ impl GroundStation {
                 .last_heartbeat
                 .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64());
             if silent_s > self.config.link_timeout_s {
+                link_lost = true;
                 events.push(Event::LinkLost { silent_s });
             }
             if let Some(limit) = self.config.timeout_s
@@ -616,8 +652,24 @@ impl GroundStation {
                     .is_some_and(|f| f.load(Ordering::Relaxed))
             {
                 aborted_at = Some(Instant::now());
-                on_update(Update::Interrupted);
-                events.push(Event::Abort("interrupted by Ctrl-C".into()));
+                let action = self.config.on_interrupt;
+                on_update(Update::Interrupted(action));
+                events.push(Event::Stop {
+                    reason: "interrupted by Ctrl-C".into(),
+                    action,
+                });
+            }
+            if last_progress
+                .is_none_or(|t| t.elapsed().as_secs_f64() >= self.config.progress_period_s)
+            {
+                last_progress = Some(Instant::now());
+                on_update(Update::Progress(Progress {
+                    time_s: now(start),
+                    state: ex.state(),
+                    reached: ex.reached().len(),
+                    waypoints: ex.targets().len(),
+                    distance_left_m: ex.distance_left_m(),
+                }));
             }
             if let Some(t) = aborted_at
                 && t.elapsed().as_secs_f64() > self.config.abort_grace_s

@@ -39,6 +39,9 @@ pub struct SimServerConfig {
     pub speedup: f64,
     /// Fault injection: after this much simulated time the vehicle goes silent and deaf.
     pub drop_link_after_s: Option<f64>,
+    /// With `drop_link_after_s`: the link comes back after this many simulated seconds of
+    /// silence (`None`: never).
+    pub link_gap_s: Option<f64>,
     /// Land when flying in GUIDED without a ground station heartbeat for this many wall seconds.
     pub gcs_failsafe_s: Option<f64>,
     /// Physics step, simulated seconds.
@@ -53,6 +56,7 @@ impl SimServerConfig {
             sim: SimConfig::default(),
             speedup: 1.0,
             drop_link_after_s: None,
+            link_gap_s: None,
             gcs_failsafe_s: Some(5.0),
             step_s: 0.02,
         }
@@ -86,6 +90,8 @@ pub enum SimNote {
     Failsafe(String),
     /// The injected link fault: the vehicle stopped talking.
     LinkDropped,
+    /// The injected link fault is over: the vehicle talks and listens again.
+    LinkRestored,
 }
 
 /// The simulator's account at the end.
@@ -227,6 +233,7 @@ impl SimServer {
         let mut last_gcs = Instant::now();
         let mut upload: Option<Upload> = None;
         let mut dropped = false;
+        let mut restored = false;
         let mut collided = false;
         let mut max_alt_m: f64 = 0.0;
         let mut distance_m = 0.0;
@@ -289,11 +296,21 @@ impl SimServer {
             }
             // The injected fault.
             if !dropped
+                && !restored
                 && let Some(after) = cfg.drop_link_after_s
                 && s.time_s >= after
             {
                 dropped = true;
                 note(SimNote::LinkDropped);
+            }
+            if dropped
+                && !restored
+                && let (Some(after), Some(gap)) = (cfg.drop_link_after_s, cfg.link_gap_s)
+                && s.time_s >= after + gap
+            {
+                dropped = false;
+                restored = true;
+                note(SimNote::LinkRestored);
             }
             // GCS failsafe.
             if let Some(fs) = cfg.gcs_failsafe_s

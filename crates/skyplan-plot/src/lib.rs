@@ -44,6 +44,7 @@
 mod draw;
 mod heatmap;
 mod layout;
+mod profile;
 mod rects;
 mod text;
 
@@ -57,6 +58,7 @@ use skyplan_map::colliders::ObstacleBox;
 use crate::draw::draw;
 pub use crate::heatmap::{Heatmap, normalise_0_255, render_heatmap_png};
 pub use crate::layout::{PlotLayout, layout};
+pub use crate::profile::{ProfileColumn, Scene3d, profile_columns, render_plan3d};
 pub use crate::rects::{CellRect, blocked_rects};
 use crate::text::TextMode;
 

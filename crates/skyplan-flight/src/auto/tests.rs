@@ -51,6 +51,7 @@ fn mode_of(m: SimMode) -> VehicleMode {
         SimMode::Auto => VehicleMode::Auto,
         SimMode::Land => VehicleMode::Land,
         SimMode::Loiter => VehicleMode::Hold,
+        SimMode::Rtl => VehicleMode::ReturnToLaunch,
         other => VehicleMode::Other(other.arducopter_custom_mode()),
     }
 }
@@ -92,6 +93,10 @@ fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
         Command::Hold => {
             v.set_mode(SimMode::Loiter);
             ack(CommandKind::Hold, Ok(()))
+        }
+        Command::ReturnToLaunch => {
+            v.set_mode(SimMode::Rtl);
+            ack(CommandKind::ReturnToLaunch, Ok(()))
         }
         other => panic!("the AUTO executor sent {other:?}"),
     })
@@ -292,4 +297,56 @@ fn bad_layouts_are_refused() {
     let mut low = route();
     low[0].alt_m = 0.0;
     assert!(AutoExecutor::new(&low, layout(4), ExecutorConfig::default()).is_err());
+}
+
+#[test]
+fn in_auto_a_returning_link_commands_the_failsafe() {
+    let targets = route();
+    for (action, command) in [
+        (FailsafeAction::Land, Command::Land),
+        (FailsafeAction::ReturnToLaunch, Command::ReturnToLaunch),
+    ] {
+        let config = ExecutorConfig {
+            failsafe: Some(action),
+            ..ExecutorConfig::default()
+        };
+        let mut ex = AutoExecutor::new(&targets, layout(targets.len()), config).unwrap();
+        let mut v = SimVehicle::new(SimConfig::default());
+        v.set_mission(sim_mission(&targets));
+        let f = fly(&mut ex, &mut v, false, |t, _, _| {
+            if t > 12.0 && t < 14.0 {
+                Some(Event::LinkLost { silent_s: t - 7.0 })
+            } else if (14.0..14.1).contains(&t) {
+                Some(Event::LinkRegained { silent_s: 7.0 })
+            } else {
+                None
+            }
+        });
+        assert!(f.commands.contains(&command), "{:?}", f.commands);
+        let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+            panic!("{:?}", ex.outcome())
+        };
+        assert!(reason.contains(&format!("--failsafe {action}")), "{reason}");
+        assert!(!v.state().armed && v.state().on_ground);
+        assert!(ex.reached().len() < targets.len());
+    }
+}
+
+#[test]
+fn in_auto_ctrl_c_hold_leaves_the_vehicle_loitering() {
+    let targets = route();
+    let (mut ex, mut v) = ready(&targets);
+    let mut sent = false;
+    fly(&mut ex, &mut v, false, |t, _, _| {
+        (t > 12.0 && !std::mem::replace(&mut sent, true)).then(|| Event::Stop {
+            reason: "interrupted by Ctrl-C".into(),
+            action: FailsafeAction::Hold,
+        })
+    });
+    assert!(matches!(
+        ex.outcome(),
+        Some(Outcome::Failed(Failure::Held { .. }))
+    ));
+    assert_eq!(v.state().mode, SimMode::Loiter);
+    assert!(v.state().armed && !v.state().on_ground);
 }

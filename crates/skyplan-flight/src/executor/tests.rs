@@ -68,10 +68,10 @@ fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
             v.set_mode(SimMode::Loiter);
             Some(ack(CommandKind::Hold, Ok(())))
         }
-        Command::ReturnToLaunch => Some(Event::Ack {
-            command: CommandKind::ReturnToLaunch,
-            accepted: Err("UNSUPPORTED".into()),
-        }),
+        Command::ReturnToLaunch => {
+            v.set_mode(SimMode::Rtl);
+            Some(ack(CommandKind::ReturnToLaunch, Ok(())))
+        }
     }
 }
 
@@ -429,4 +429,244 @@ fn wraps_angles() {
     assert!((wrap_angle_rad(3.0 * PI) - PI).abs() < 1e-12);
     assert!((wrap_angle_rad(-PI) - PI).abs() < 1e-12);
     assert!((wrap_angle_rad(0.1 - 2.0 * PI) - 0.1).abs() < 1e-12);
+}
+
+fn with_failsafe(action: FailsafeAction) -> ExecutorConfig {
+    ExecutorConfig {
+        failsafe: Some(action),
+        link_regain_wait_s: 10.0,
+        ..ExecutorConfig::default()
+    }
+}
+
+/// A link lost from `t` = 15 s to 18 s (vehicle time = link time here).
+fn gap(t: f64) -> Option<Event> {
+    if t > 15.0 && t < 18.0 {
+        Some(Event::LinkLost { silent_s: t - 14.0 })
+    } else if (18.0..18.1).contains(&t) {
+        Some(Event::LinkRegained { silent_s: 4.0 })
+    } else {
+        None
+    }
+}
+
+#[test]
+fn a_lost_link_is_waited_for_silently_and_given_up_on() {
+    let (mut ex, t) = at_waypoint_state();
+    let mut ex_fs = MissionExecutor::new(&route(), with_failsafe(FailsafeAction::Land)).unwrap();
+    for (i, e) in [
+        Event::Telemetry(Telemetry {
+            on_ground: Some(true),
+            ..t
+        }),
+        Event::Telemetry(t),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        ex_fs.handle(i as f64 * 0.1, e);
+    }
+    assert_eq!(ex_fs.state(), FlightState::Waypoint);
+    // Without --failsafe: the flight ends at once.
+    ex.handle(1.0, Event::LinkLost { silent_s: 5.0 });
+    assert!(matches!(
+        ex.outcome(),
+        Some(Outcome::Failed(Failure::LinkLost { .. }))
+    ));
+    // With it: a note, then nothing is sent (not even the position target that is due).
+    let out = ex_fs.handle(1.0, Event::LinkLost { silent_s: 5.0 });
+    assert!(out.commands.is_empty() && ex_fs.outcome().is_none());
+    assert!(matches!(
+        out.notes[..],
+        [Note::LinkLost {
+            state: FlightState::Waypoint,
+            wait_s: 10.0,
+            action: FailsafeAction::Land,
+            ..
+        }]
+    ));
+    for k in 0..20 {
+        let tt = 1.1 + f64::from(k) * 0.2;
+        assert!(ex_fs.handle(tt, Event::Telemetry(t)).commands.is_empty());
+        assert!(ex_fs.handle(tt, Event::Tick).commands.is_empty());
+    }
+    assert!(
+        ex_fs
+            .handle(5.0, Event::LinkLost { silent_s: 9.9 })
+            .notes
+            .is_empty()
+    );
+    // Past the wait: lost for good, reported in the state it was lost in.
+    ex_fs.handle(6.0, Event::LinkLost { silent_s: 10.1 });
+    assert_eq!(
+        ex_fs.outcome(),
+        Some(&Outcome::Failed(Failure::LinkLost {
+            state: FlightState::Waypoint,
+            silent_s: 10.1
+        }))
+    );
+}
+
+#[test]
+fn on_the_ground_a_lost_link_ends_the_flight_even_with_a_failsafe() {
+    let mut ex = MissionExecutor::new(&route(), with_failsafe(FailsafeAction::Hold)).unwrap();
+    ex.handle(0.0, Event::Telemetry(Telemetry::default()));
+    assert_eq!(ex.state(), FlightState::Arming);
+    ex.handle(0.5, Event::LinkLost { silent_s: 5.0 });
+    assert!(matches!(
+        ex.outcome(),
+        Some(Outcome::Failed(Failure::LinkLost {
+            state: FlightState::Arming,
+            ..
+        }))
+    ));
+}
+
+#[test]
+fn failsafe_land_when_the_link_returns() {
+    let mut ex = MissionExecutor::new(&route(), with_failsafe(FailsafeAction::Land)).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let f = fly(&mut ex, &mut v, 300.0, |t, _| gap(t));
+    use FlightState::*;
+    assert_eq!(
+        f.states,
+        vec![
+            Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+        ]
+    );
+    let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(
+        reason.contains("link lost in WAYPOINT for 4.0 s; --failsafe land on its return"),
+        "{reason}"
+    );
+    assert!(v.state().on_ground && !v.state().armed);
+    assert!(ex.reached().len() < 4);
+}
+
+#[test]
+fn failsafe_rtl_flies_home_and_lands_there() {
+    let mut ex =
+        MissionExecutor::new(&route(), with_failsafe(FailsafeAction::ReturnToLaunch)).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let f = fly(&mut ex, &mut v, 300.0, |t, _| gap(t));
+    assert!(f.commands.contains(&Command::ReturnToLaunch));
+    assert!(!f.commands.contains(&Command::Land));
+    let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(reason.contains("--failsafe rtl"), "{reason}");
+    let s = v.state();
+    assert!(s.on_ground && !s.armed, "{s:?}");
+    // Home is where it took off: the first waypoint, (0, 0).
+    assert!(
+        s.position_ned_m[0].hypot(s.position_ned_m[1]) < 1.5,
+        "{s:?}"
+    );
+}
+
+#[test]
+fn failsafe_hold_and_ctrl_c_hold_leave_the_vehicle_holding() {
+    let mut ex = MissionExecutor::new(&route(), with_failsafe(FailsafeAction::Hold)).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    fly(&mut ex, &mut v, 300.0, |t, _| gap(t));
+    let Some(Outcome::Failed(failure)) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(
+        matches!(failure, Failure::Held { state: FlightState::Waypoint, reason } if reason.contains("--failsafe hold")),
+        "{failure:?}"
+    );
+    assert!(
+        failure
+            .to_string()
+            .contains("holding its position in the air")
+    );
+    let s = v.state();
+    assert!(
+        s.armed && !s.on_ground && s.mode == SimMode::Loiter,
+        "{s:?}"
+    );
+
+    // Ctrl-C with --on-interrupt hold.
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut sent = false;
+    let f = fly(&mut ex, &mut v, 300.0, |t, _| {
+        (t > 12.0 && !std::mem::replace(&mut sent, true)).then(|| Event::Stop {
+            reason: "interrupted by Ctrl-C".into(),
+            action: FailsafeAction::Hold,
+        })
+    });
+    assert_eq!(f.commands.last(), Some(&Command::Hold));
+    assert!(matches!(
+        ex.outcome(),
+        Some(Outcome::Failed(Failure::Held { .. }))
+    ));
+    assert!(v.state().armed && !v.state().on_ground);
+}
+
+#[test]
+fn an_unconfirmed_hold_is_retried_then_becomes_a_landing() {
+    let (mut ex, t) = at_waypoint_state();
+    let out = ex.handle(
+        1.0,
+        Event::Stop {
+            reason: "interrupted by Ctrl-C".into(),
+            action: FailsafeAction::Hold,
+        },
+    );
+    assert_eq!(out.commands, vec![Command::Hold]);
+    assert!(ex.handle(1.5, Event::Telemetry(t)).commands.is_empty());
+    assert_eq!(
+        ex.handle(2.1, Event::Telemetry(t)).commands,
+        vec![Command::Hold]
+    );
+    let out = ex.handle(
+        2.2,
+        Event::Ack {
+            command: CommandKind::Hold,
+            accepted: Err("DENIED".into()),
+        },
+    );
+    assert!(matches!(out.notes[..], [Note::Refused { .. }]));
+    let out = ex.handle(11.5, Event::Telemetry(t));
+    assert_eq!(out.commands, vec![Command::Land]);
+    assert_eq!(ex.state(), FlightState::Landing);
+    let mut down = t;
+    down.on_ground = Some(true);
+    down.armed = false;
+    ex.handle(20.0, Event::Telemetry(down));
+    let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(
+        reason.contains("hold was not confirmed within 10 s, landing instead"),
+        "{reason}"
+    );
+}
+
+#[test]
+fn a_link_lost_while_landing_resumes_the_landing_when_it_returns() {
+    let mut ex = MissionExecutor::new(&route(), with_failsafe(FailsafeAction::Hold)).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut lost_at = None;
+    let f = fly(&mut ex, &mut v, 300.0, |t, v| {
+        if v.state().mode == SimMode::Land && lost_at.is_none() {
+            lost_at = Some(t);
+        }
+        let since = t - lost_at?;
+        if since < 1.0 {
+            Some(Event::LinkLost {
+                silent_s: since + 5.0,
+            })
+        } else if since < 1.1 {
+            Some(Event::LinkRegained { silent_s: 6.0 })
+        } else {
+            None
+        }
+    });
+    assert!(!f.commands.contains(&Command::Hold));
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed));
 }

@@ -1,0 +1,234 @@
+//! `skyplan plan --planner voronoi`: the Voronoi roadmap of the obstacles' grown footprints at
+//! the flight altitude (skyplan-roadmap), checked connectors, graph A\*, and the grid (JPS) as
+//! the fallback. Every segment is re-checked on the grid before anything is written.
+
+use crate::args::{Pair, PlanArgs, PlannerArg};
+use crate::config::Config;
+use crate::exit::{Classify, Failure, Kind, Result, bad_input};
+use crate::files::{BUNDLED_COLLIDERS, BUNDLED_NAME, read_text, write_atomic};
+use anyhow::anyhow;
+use serde_json::json;
+use skyplan_cspace::{Grid2, GridSpec};
+use skyplan_export::Format;
+use skyplan_frames::{Lla, LocalFrame};
+use skyplan_mission::Mission;
+use skyplan_roadmap::{Roadmap, RoadmapError, RoadmapSpec};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// True if `plan` runs here.
+pub fn handles(args: &PlanArgs) -> bool {
+    args.planner == Some(PlannerArg::Voronoi)
+}
+
+fn ne_of(
+    frame: &LocalFrame,
+    ne: Option<Pair>,
+    lla: Option<Pair>,
+    what: &str,
+) -> Result<Option<(f64, f64)>> {
+    if let Some(p) = ne {
+        return Ok(Some((p.0, p.1)));
+    }
+    let Some(p) = lla else {
+        return Ok(None);
+    };
+    let ned = frame
+        .ned_from_lla(Lla {
+            lat_deg: p.0,
+            lon_deg: p.1,
+            alt_m: 0.0,
+        })
+        .map_err(|e| bad_input(format!("--{what}-lla: {e}")))?;
+    Ok(Some((ned.north_m, ned.east_m)))
+}
+
+/// Runs the Voronoi planner.
+pub fn run(args: PlanArgs) -> Result<()> {
+    let t0 = Instant::now();
+    if args.grid.random.is_some()
+        || args
+            .map
+            .as_ref()
+            .is_some_and(|p| p.extension().is_none_or(|e| e != "csv"))
+    {
+        return Err(bad_input(
+            "--planner voronoi needs an FCND colliders map (--map FILE.csv, or the bundled map)",
+        ));
+    }
+    if args.plot.is_some() {
+        return Err(bad_input(
+            "--plot: pictures of the Voronoi roadmap are not available yet; omit --plot",
+        ));
+    }
+    let cfg = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => Config::default(),
+    };
+    let map_path = args.map.clone().or(cfg.map.clone());
+    let (map_name, text) = match &map_path {
+        Some(path) => (path.display().to_string(), read_text(path)?),
+        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
+    };
+    let map = skyplan_map::colliders::parse_colliders(&text)
+        .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
+    let frame = LocalFrame::new(Lla {
+        lat_deg: map.home.lat_deg,
+        lon_deg: map.home.lon_deg,
+        alt_m: 0.0,
+    })
+    .map_err(|e| bad_input(format!("{map_name}: home: {e}")))?;
+    let alt_m = args.alt_m.or(cfg.alt_m).unwrap_or(5.0);
+    let safety_m = args.safety_m.or(cfg.safety_m).unwrap_or(5.0);
+    let cell_m = args.cell_m.or(cfg.cell_m).unwrap_or(1.0);
+    let pair = |p: Option<[f64; 2]>| p.map(|[a, b]| Pair(a, b));
+    let start = match ne_of(&frame, args.start_ne, args.start_lla, "start")? {
+        Some(ne) => Some(ne),
+        None => ne_of(&frame, pair(cfg.start_ne), pair(cfg.start_lla), "start")?,
+    }
+    .unwrap_or((0.0, 0.0));
+    let goal = match ne_of(&frame, args.goal_ne, args.goal_lla, "goal")? {
+        Some(ne) => Some(ne),
+        None => ne_of(&frame, pair(cfg.goal_ne), pair(cfg.goal_lla), "goal")?,
+    }
+    .unwrap_or(crate::plan_cmd::DEFAULT_GOAL_NE);
+    let start_heading_rad = args
+        .start_heading_deg
+        .or(cfg.start_heading_deg)
+        .unwrap_or(0.0)
+        .to_radians();
+    let out = args
+        .out
+        .clone()
+        .or(cfg.out.clone())
+        .unwrap_or_else(|| PathBuf::from("waypoints.json"));
+    let format = match args.format.clone().or(cfg.format.clone()) {
+        Some(name) => Format::from_name(&name).ok_or_else(|| {
+            bad_input(format!(
+                "--format: expected json, csv, hdf5, geojson or plan, found {name:?}"
+            ))
+        })?,
+        None => Format::from_path(&out).ok_or_else(|| {
+            bad_input(format!(
+                "--out {}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or --format",
+                out.display()
+            ))
+        })?,
+    };
+
+    let spec = GridSpec {
+        alt_m,
+        safety_m,
+        cell_m,
+    };
+    let grid =
+        Grid2::from_colliders(&map, spec).map_err(|e| bad_input(format!("{map_name}: {e}")))?;
+    let roadmap = Roadmap::build(&map, &grid, alt_m, safety_m, &RoadmapSpec::default());
+    let t_query = Instant::now();
+    let route = match roadmap.query(&grid, [start.0, start.1], [goal.0, goal.1]) {
+        Ok(r) => r,
+        Err(e @ (RoadmapError::StartBlocked(..) | RoadmapError::GoalBlocked(..))) => {
+            return Err(bad_input(format!(
+                "{e} at {alt_m} m with a {safety_m} m margin"
+            )));
+        }
+        Err(e @ RoadmapError::NoPath) => {
+            return Err(Failure {
+                kind: Kind::NoPath,
+                error: anyhow!(
+                    "voronoi: {e} (the graph has {} components)",
+                    roadmap.component_count()
+                ),
+            });
+        }
+    };
+    let query_us = t_query.elapsed().as_micros() as u64;
+    // The independent final check on the grid.
+    if let Some(k) = skyplan_roadmap::first_blocked_segment(&grid, &route.points_ne) {
+        return Err(Failure {
+            kind: Kind::Runtime,
+            error: anyhow!("internal error: segment {k} of the route failed the exact re-check"),
+        });
+    }
+    let points: Vec<[f64; 3]> = route
+        .points_ne
+        .iter()
+        .map(|p| [p[0], p[1], alt_m])
+        .collect();
+    let mission =
+        Mission::from_points_nea(&frame, &points, start_heading_rad).or_exit(Kind::BadInput)?;
+    let stats = roadmap.stats();
+    let summary = json!({
+        "map": map_name,
+        "obstacles": map.boxes.len(),
+        "home": { "lat_deg": map.home.lat_deg, "lon_deg": map.home.lon_deg },
+        "planner": "voronoi",
+        "alt_m": alt_m,
+        "safety_m": safety_m,
+        "cell_m": cell_m,
+        "start": { "north_m": start.0, "east_m": start.1 },
+        "goal": { "north_m": goal.0, "east_m": goal.1 },
+        "cost_m": route.cost_m,
+        "graph_cost_m": route.graph_cost_m,
+        "components": roadmap.component_count(),
+        "largest_component": roadmap.largest_component(),
+        "nodes": roadmap.nodes().len(),
+        "edges": roadmap.edge_count(),
+        "sites": stats.sites,
+        "fallback": route.fallback,
+        "connectors": [route.connectors.0, route.connectors.1],
+        "expansions": route.expansions,
+        "build_time_us": stats.build_us,
+        "search_time_us": query_us,
+        "outputs": { "waypoints": out.display().to_string(), "format": format.name() },
+    });
+    let bytes = skyplan_export::encode(format, &mission, &summary).or_exit(Kind::Runtime)?;
+    write_atomic(&out, &bytes)?;
+    if args.json {
+        let mut full = summary;
+        full["status"] = json!("ok");
+        full["waypoints"] = json!(mission.rows());
+        full["waypoints_lla"] = json!(
+            mission
+                .waypoints
+                .iter()
+                .map(|w| [w.lat_deg, w.lon_deg])
+                .collect::<Vec<_>>()
+        );
+        full["wall_time_us"] = json!(t0.elapsed().as_micros() as u64);
+        println!("{full}");
+    } else {
+        println!(
+            "map        {map_name}: {} obstacles at {alt_m} m, {safety_m} m margin",
+            map.boxes.len()
+        );
+        println!(
+            "roadmap    Voronoi of {} boundary samples: {} nodes, {} exactly free edges, {} components (largest {}), {:.2} ms",
+            stats.sites,
+            roadmap.nodes().len(),
+            roadmap.edge_count(),
+            roadmap.component_count(),
+            roadmap.largest_component(),
+            stats.build_us as f64 / 1000.0
+        );
+        println!("start      N {:.2} m, E {:.2} m", start.0, start.1);
+        println!("goal       N {:.2} m, E {:.2} m", goal.0, goal.1);
+        match &route.fallback {
+            None => println!(
+                "path       voronoi graph A*: {:.2} m ({:.2} m on the graph), {} connectors from the start, {} to the goal, {:.2} ms",
+                route.cost_m,
+                route.graph_cost_m,
+                route.connectors.0,
+                route.connectors.1,
+                query_us as f64 / 1000.0
+            ),
+            Some(why) => println!("path       fallback: {why}: {:.2} m", route.cost_m),
+        }
+        println!(
+            "waypoints  {} after the checked shortcut; every segment re-checked on the grid",
+            mission.waypoints.len()
+        );
+        println!("wrote      {} ({})", out.display(), format.name());
+    }
+    Ok(())
+}

@@ -1,0 +1,64 @@
+//! `skyplan plan --planner voronoi`: the JSON contract, every segment free on the grid, start and
+//! goal as asked, exit codes for blocked ends.
+
+use assert_cmd::Command;
+use skyplan_cspace::{Grid2, GridSpec, Touch};
+
+const CITY: &str = include_str!("../../../data/colliders.csv");
+
+fn skyplan(dir: &std::path::Path) -> Command {
+    let mut c = Command::cargo_bin("skyplan").unwrap();
+    c.current_dir(dir);
+    c
+}
+
+#[test]
+fn voronoi_json_route_is_free_and_ends_where_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = skyplan(dir.path())
+        .args([
+            "plan",
+            "--planner",
+            "voronoi",
+            "--goal-ne",
+            "420,390",
+            "--json",
+        ])
+        .args(["--out", "route.csv"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["status"], "ok");
+    assert!(v["fallback"].is_null());
+    assert!(v["components"].as_u64().unwrap() >= 1);
+    let rows: Vec<[f64; 4]> = serde_json::from_value(v["waypoints"].clone()).unwrap();
+    assert_eq!(&rows[0][..3], &[0.0, 0.0, 5.0]);
+    assert_eq!(&rows.last().unwrap()[..3], &[420.0, 390.0, 5.0]);
+    let map = skyplan_map::colliders::parse_colliders(CITY).unwrap();
+    let grid = Grid2::from_colliders(&map, GridSpec::default()).unwrap();
+    let mut length = 0.0;
+    for w in rows.windows(2) {
+        assert!(grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed));
+        length += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+    }
+    assert!((length - v["cost_m"].as_f64().unwrap()).abs() < 1e-6);
+    assert!(dir.path().join("route.csv").exists());
+}
+
+#[test]
+fn voronoi_refuses_a_start_inside_a_margin() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = skyplan_map::colliders::parse_colliders(CITY).unwrap();
+    let b = &map.boxes[0];
+    skyplan(dir.path())
+        .args(["plan", "--planner", "voronoi", "--start-ne"])
+        .arg(format!("{},{}", b.north_m, b.east_m))
+        .assert()
+        .code(2);
+    assert!(!dir.path().join("waypoints.json").exists());
+}

@@ -1,0 +1,189 @@
+//! `skyplan plan --planner voxel`: the real binary; every returned segment is re-checked here
+//! against every box with the brute-force checker, and the pictures are written.
+
+use assert_cmd::Command;
+use serde_json::Value;
+use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, WorldSpec, path_length_m};
+use std::path::Path;
+
+const CITY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/colliders.csv");
+
+fn run(dir: &Path, args: &[&str]) -> (i32, Value) {
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .current_dir(dir)
+        .args(["plan", "--json", "--planner", "voxel"])
+        .args(args)
+        .output()
+        .unwrap();
+    let code = out.status.code().unwrap_or(-1);
+    let v = serde_json::from_slice(&out.stdout).unwrap_or_else(|_| {
+        panic!(
+            "stdout is not JSON; stderr: {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    (code, v)
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+/// The path of a JSON answer, re-checked against every box of the city grown by 5 m.
+fn checked_path(v: &Value, start: Neu, goal: Neu) -> Vec<Neu> {
+    assert_eq!(v["status"], "ok", "{v}");
+    assert_eq!(v["planner"], "voxel");
+    assert_eq!(v["planner_status"], "exact");
+    let rows: Vec<[f64; 4]> = serde_json::from_value(v["waypoints"].clone()).unwrap();
+    let path: Vec<Neu> = rows.iter().map(|r| [r[0], r[1], r[2]]).collect();
+    assert_eq!(path[0], start);
+    assert_eq!(*path.last().unwrap(), goal);
+    let vol = &v["flight_volume"];
+    let corner = |c: &Value| -> Neu { [num(&c[0]), num(&c[1]), num(&c[2])] };
+    let bounds = Aabb {
+        min: corner(&vol["min"]),
+        max: corner(&vol["max"]),
+    };
+    let map =
+        skyplan_map::colliders::parse_colliders(&std::fs::read_to_string(CITY).unwrap()).unwrap();
+    let spec = WorldSpec {
+        safety_m: 5.0,
+        min_alt_m: bounds.min[2],
+        max_alt_m: bounds.max[2],
+        margin_bounds_m: 0.0,
+    };
+    let world = BoxWorld3::with_bounds(&map.boxes, &spec, bounds).unwrap();
+    let bf = world.brute_force();
+    for (k, w) in path.windows(2).enumerate() {
+        assert!(bf.segment_is_free(w[0], w[1]), "segment {k} is not free");
+    }
+    assert!((num(&v["cost_m"]) - path_length_m(&path)).abs() < 1e-6);
+    path
+}
+
+#[test]
+fn climbs_onto_a_rooftop_and_draws_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // The roof at N 200, E 330 is 60 m high: the goal is 1 m above its 5 m margin.
+    let (code, v) = run(
+        dir.path(),
+        &[
+            "--goal-ne",
+            "200,330",
+            "--goal-alt-m",
+            "66",
+            "--plot",
+            "route.png",
+            "--out",
+            "route.plan",
+        ],
+    );
+    assert_eq!(code, 0, "{v}");
+    let path = checked_path(&v, [0.0, 0.0, 5.0], [200.0, 330.0, 66.0]);
+    assert!(path.len() >= 3);
+    let vox = &v["voxel"];
+    assert!(num(&vox["climb_m"]) >= 61.0 - 1e-9, "{vox}");
+    assert!(num(&vox["objective"]) <= num(&vox["lattice_objective"]) + 1e-9);
+    assert_eq!(vox["dims"][2], 24, "layers 5, 10, …, 120 m");
+    let png = std::fs::read(dir.path().join("route.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    assert!(dir.path().join("route.plan").exists());
+}
+
+#[test]
+fn the_climb_weight_trades_climbing_for_distance() {
+    let dir = tempfile::tempdir().unwrap();
+    let (start, goal) = ([300.0, -50.0, 5.0], [30.0, 300.0, 5.0]);
+    let args = |w: &'static str| {
+        [
+            "--start-ne",
+            "300,-50",
+            "--goal-ne",
+            "30,300",
+            "--climb-weight",
+            w,
+            "--plot",
+            "p.svg",
+        ]
+    };
+    let (code, free_climb) = run(dir.path(), &args("0"));
+    assert_eq!(code, 0, "{free_climb}");
+    let short = checked_path(&free_climb, start, goal);
+    let (code, dear_climb) = run(dir.path(), &args("100"));
+    assert_eq!(code, 0, "{dear_climb}");
+    let flat = checked_path(&dear_climb, start, goal);
+    assert!(num(&free_climb["voxel"]["climb_m"]) > 0.0);
+    assert!(num(&dear_climb["voxel"]["climb_m"]) < num(&free_climb["voxel"]["climb_m"]));
+    assert!(path_length_m(&short) <= path_length_m(&flat) + 1e-9);
+    let svg = std::fs::read_to_string(dir.path().join("p.svg")).unwrap();
+    assert!(svg.contains("ALTITUDE (m)"));
+}
+
+#[test]
+fn bad_ends_and_options_exit_2_and_a_low_ceiling_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    // The goal inside the 60 m building.
+    let (code, v) = run(dir.path(), &["--goal-ne", "200,330", "--goal-alt-m", "30"]);
+    assert_eq!(code, 2, "{v}");
+    assert!(v["error"].as_str().unwrap().contains("goal"), "{v}");
+    // Below --min-alt-m.
+    let (code, v) = run(dir.path(), &["--min-alt-m", "10"]);
+    assert_eq!(code, 2, "{v}");
+    assert!(v["error"].as_str().unwrap().contains("below"), "{v}");
+    // The rooftop goal under a ceiling lower than its approach: no path.
+    let (code, v) = run(
+        dir.path(),
+        &[
+            "--goal-ne",
+            "200,330",
+            "--goal-alt-m",
+            "66",
+            "--max-alt-m",
+            "67",
+        ],
+    );
+    assert_eq!(code, 3, "{v}");
+    // Voxel options with another planner.
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .current_dir(dir.path())
+        .args(["plan", "--planner", "astar", "--climb-weight", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn the_sampling_planners_draw_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .current_dir(dir.path())
+        .args([
+            "plan",
+            "--planner",
+            "prm",
+            "--goal-alt-m",
+            "40",
+            "--plot",
+            "prm.svg",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.path().join("prm.svg")).unwrap();
+    assert!(svg.contains("PRM roadmap") && svg.contains("ALTITUDE (m)"));
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .current_dir(dir.path())
+        .args(["plan", "--planner", "rrt-connect", "--plot", "x.jpg"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -1,0 +1,644 @@
+//! Pictures of a 3D route: a top view (buildings shaded by height, the route, optionally a
+//! roadmap or tree) beside a side profile (horizontal distance along the route against altitude,
+//! with the buildings under the route drawn as filled columns and the safety margin above them).
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::HPos;
+use skyplan_map::colliders::ObstacleBox;
+
+use crate::text::{Label, TextMode, VAlign, draw_label, ensure_font};
+use crate::{MAX_SIZE_PX, MIN_SIZE_PX, PlotError, PlotFormat};
+
+const ROUTE_COLOR: RGBColor = RGBColor(31, 96, 196);
+const RAW_COLOR: RGBColor = RGBColor(255, 127, 14);
+const EDGE_COLOR: RGBColor = RGBColor(170, 200, 235);
+const MARGIN_COLOR: RGBColor = RGBColor(222, 224, 228);
+const START_COLOR: RGBColor = RGBColor(0, 170, 60);
+const GOAL_COLOR: RGBColor = RGBColor(222, 30, 30);
+const FRAME_COLOR: RGBColor = RGBColor(40, 40, 40);
+const GRID_COLOR: RGBColor = RGBColor(232, 232, 232);
+
+/// What a 3D route picture shows. Points are `[north_m, east_m, alt_m]`.
+#[derive(Debug, Clone)]
+pub struct Scene3d<'a> {
+    /// Title above the picture.
+    pub title: String,
+    /// The map's obstacle boxes (not grown).
+    pub obstacles: &'a [ObstacleBox],
+    /// The safety margin, metres: drawn as a light band around the buildings in the profile.
+    pub safety_m: f64,
+    /// The route, start first (thick blue; start green, goal red).
+    pub path: &'a [[f64; 3]],
+    /// The route before post-processing (thin orange in the top view), or empty.
+    pub raw_path: &'a [[f64; 3]],
+    /// Legend text of `raw_path`.
+    pub raw_label: &'a str,
+    /// Roadmap or tree edges (faint, top view), or empty.
+    pub edges: &'a [([f64; 3], [f64; 3])],
+    /// Legend text of `edges` (for example `"PRM roadmap"`).
+    pub edges_label: &'a str,
+}
+
+/// One column of the side profile: over horizontal distances `from_m..to_m` along the route the
+/// tallest building reaches `top_m` (0 where there is none) and the tallest grown box
+/// `margin_top_m`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileColumn {
+    /// Start of the run, metres along the route (horizontal).
+    pub from_m: f64,
+    /// End of the run, metres along the route.
+    pub to_m: f64,
+    /// Highest roof under the run, metres (0: open ground).
+    pub top_m: f64,
+    /// Highest roof + margin of any box whose footprint grown by the margin is under the run.
+    pub margin_top_m: f64,
+}
+
+/// Samples the buildings under a route every `step_m` of horizontal distance and merges equal
+/// neighbours into columns. Returns the columns and the route's horizontal length.
+///
+/// ```
+/// use skyplan_map::colliders::ObstacleBox;
+/// let b = ObstacleBox { north_m: 50.0, east_m: 0.0, up_m: 10.0, half_north_m: 5.0, half_east_m: 5.0, half_up_m: 10.0 };
+/// let (cols, len) = skyplan_plot::profile_columns(&[b], 2.0, &[[0.0, 0.0, 5.0], [100.0, 0.0, 5.0]], 1.0);
+/// assert_eq!(len, 100.0);
+/// let roof: Vec<_> = cols.iter().filter(|c| c.top_m > 0.0).collect();
+/// assert_eq!((roof[0].top_m, roof[0].margin_top_m), (20.0, 22.0));
+/// assert!(roof[0].from_m >= 44.0 && roof[0].to_m <= 56.0);
+/// ```
+pub fn profile_columns(
+    obstacles: &[ObstacleBox],
+    safety_m: f64,
+    path: &[[f64; 3]],
+    step_m: f64,
+) -> (Vec<ProfileColumn>, f64) {
+    let total_m: f64 = path
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum();
+    let mut cols: Vec<ProfileColumn> = Vec::new();
+    if path.len() < 2 || step_m.is_nan() || step_m <= 0.0 || total_m <= 0.0 {
+        return (cols, total_m);
+    }
+    // Only boxes near the route matter.
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in path {
+        for a in 0..2 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let near: Vec<&ObstacleBox> = obstacles
+        .iter()
+        .filter(|b| {
+            b.north_m + b.half_north_m + safety_m >= lo[0]
+                && b.north_m - b.half_north_m - safety_m <= hi[0]
+                && b.east_m + b.half_east_m + safety_m >= lo[1]
+                && b.east_m - b.half_east_m - safety_m <= hi[1]
+        })
+        .collect();
+    let n = ((total_m / step_m).ceil() as usize).max(1);
+    let ds = total_m / n as f64;
+    let mut seg = 0usize;
+    let mut seg_start_m = 0.0;
+    for s in 0..n {
+        let d = (s as f64 + 0.5) * ds;
+        // Advance to the segment holding distance d.
+        let seg_len = |k: usize| (path[k + 1][0] - path[k][0]).hypot(path[k + 1][1] - path[k][1]);
+        while seg + 1 < path.len() - 1 && seg_start_m + seg_len(seg) < d {
+            seg_start_m += seg_len(seg);
+            seg += 1;
+        }
+        let len = seg_len(seg);
+        let t = if len > 0.0 {
+            ((d - seg_start_m) / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (a, b) = (path[seg], path[seg + 1]);
+        let p = [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
+        let (mut top, mut margin_top) = (0.0_f64, 0.0_f64);
+        for o in &near {
+            let dn = (p[0] - o.north_m).abs();
+            let de = (p[1] - o.east_m).abs();
+            if dn <= o.half_north_m + safety_m && de <= o.half_east_m + safety_m {
+                margin_top = margin_top.max(o.top_m() + safety_m);
+                if dn <= o.half_north_m && de <= o.half_east_m {
+                    top = top.max(o.top_m());
+                }
+            }
+        }
+        let (from_m, to_m) = (s as f64 * ds, (s + 1) as f64 * ds);
+        match cols.last_mut() {
+            Some(c) if c.top_m == top && c.margin_top_m == margin_top => c.to_m = to_m,
+            _ => cols.push(ProfileColumn {
+                from_m,
+                to_m,
+                top_m: top,
+                margin_top_m: margin_top,
+            }),
+        }
+    }
+    (cols, total_m)
+}
+
+/// Renders the top view and the side profile side by side, as PNG or SVG bytes.
+///
+/// ```
+/// use skyplan_map::colliders::ObstacleBox;
+/// use skyplan_plot::{PlotFormat, Scene3d, render_plan3d};
+/// let b = ObstacleBox { north_m: 50.0, east_m: 0.0, up_m: 10.0, half_north_m: 5.0, half_east_m: 5.0, half_up_m: 10.0 };
+/// let path = [[0.0, 0.0, 5.0], [40.0, 0.0, 25.0], [60.0, 0.0, 25.0], [100.0, 0.0, 5.0]];
+/// let scene = Scene3d { title: "over the roof".into(), obstacles: &[b], safety_m: 2.0, path: &path,
+///                       raw_path: &[], raw_label: "", edges: &[], edges_label: "" };
+/// let png = render_plan3d(&scene, PlotFormat::Png, 1000, 600)?;
+/// assert_eq!(&png[1..4], b"PNG");
+/// let svg = String::from_utf8(render_plan3d(&scene, PlotFormat::Svg, 1000, 600)?)?;
+/// assert!(svg.contains("ALTITUDE (m)") && svg.contains("NORTH (m)"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn render_plan3d(
+    scene: &Scene3d,
+    format: PlotFormat,
+    width_px: u32,
+    height_px: u32,
+) -> Result<Vec<u8>, PlotError> {
+    for s in [width_px, height_px] {
+        if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&s) {
+            return Err(PlotError::BadSize {
+                width: width_px,
+                height: height_px,
+            });
+        }
+    }
+    if scene.path.len() < 2 {
+        return Err(PlotError::BadScene {
+            what: "a 3D route needs at least two points",
+        });
+    }
+    let finite = |p: &[f64; 3]| p.iter().all(|v| v.is_finite());
+    if !scene.path.iter().all(finite) || !scene.raw_path.iter().all(finite) {
+        return Err(PlotError::BadScene {
+            what: "a route point is not finite",
+        });
+    }
+    ensure_font()?;
+    match format {
+        PlotFormat::Png => {
+            let mut rgb = vec![255_u8; width_px as usize * height_px as usize * 3];
+            {
+                let backend = BitMapBackend::<plotters::backend::RGBPixel>::with_buffer_and_format(
+                    &mut rgb,
+                    (width_px, height_px),
+                )
+                .map_err(err)?;
+                let root = backend.into_drawing_area();
+                draw3d(&root, scene, TextMode::Glyphs)?;
+                root.present().map_err(err)?;
+            }
+            let mut out = Vec::new();
+            let mut encoder = png::Encoder::new(&mut out, width_px, height_px);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            let enc = |e: png::EncodingError| PlotError::Encode(e.to_string());
+            let mut writer = encoder.write_header().map_err(enc)?;
+            writer.write_image_data(&rgb).map_err(enc)?;
+            writer.finish().map_err(enc)?;
+            Ok(out)
+        }
+        PlotFormat::Svg => {
+            let mut svg = String::new();
+            {
+                let root =
+                    SVGBackend::with_string(&mut svg, (width_px, height_px)).into_drawing_area();
+                draw3d(&root, scene, TextMode::Strings)?;
+                root.present().map_err(err)?;
+            }
+            Ok(svg.into_bytes())
+        }
+    }
+}
+
+fn err<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
+}
+
+/// A 1-2-5 step giving about `n` intervals over `span`.
+fn nice_step(span: f64, n: f64) -> f64 {
+    let raw = (span / n).max(1e-9);
+    let p = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|&s| s >= raw)
+        .unwrap_or(10.0 * p)
+}
+
+fn ticks(lo: f64, hi: f64, n: f64) -> Vec<f64> {
+    let s = nice_step(hi - lo, n);
+    let mut v = (lo / s).ceil() * s;
+    let mut out = Vec::new();
+    while v <= hi + 1e-9 {
+        out.push(if v.abs() < 1e-9 { 0.0 } else { v });
+        v += s;
+    }
+    out
+}
+
+/// A panel: a pixel rectangle showing `x` and `y` ranges.
+struct Panel {
+    x0: i32,
+    y0: i32,
+    w: i32,
+    h: i32,
+    xr: (f64, f64),
+    yr: (f64, f64),
+}
+
+impl Panel {
+    fn px(&self, x: f64, y: f64) -> (i32, i32) {
+        let fx = (x - self.xr.0) / (self.xr.1 - self.xr.0);
+        let fy = (y - self.yr.0) / (self.yr.1 - self.yr.0);
+        (
+            self.x0 + (fx * f64::from(self.w)).round() as i32,
+            self.y0 + self.h - (fy * f64::from(self.h)).round() as i32,
+        )
+    }
+
+    /// Frame, grid lines, ticks and the axis titles.
+    fn axes<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        mode: TextMode,
+        font: f64,
+        (x_title, y_title): (&str, &str),
+    ) -> Result<(), PlotError> {
+        let (x1, y1) = (self.x0 + self.w, self.y0 + self.h);
+        let tick = (font * 0.45).round() as i32;
+        for x in ticks(self.xr.0, self.xr.1, f64::from(self.w) / (font * 6.0)) {
+            let (px, _) = self.px(x, self.yr.0);
+            root.draw(&PathElement::new(
+                vec![(px, y1), (px, y1 + tick)],
+                FRAME_COLOR,
+            ))
+            .map_err(err)?;
+            let text = format!("{x:.0}");
+            draw_label(
+                root,
+                mode,
+                &Label {
+                    text: &text,
+                    size: font * 0.85,
+                    at: (px, y1 + tick + 3),
+                    h: HPos::Center,
+                    v: VAlign::Top,
+                    vertical: false,
+                },
+            )?;
+        }
+        for y in ticks(self.yr.0, self.yr.1, f64::from(self.h) / (font * 3.0)) {
+            let (_, py) = self.px(self.xr.0, y);
+            root.draw(&PathElement::new(
+                vec![(self.x0 - tick, py), (self.x0, py)],
+                FRAME_COLOR,
+            ))
+            .map_err(err)?;
+            let text = format!("{y:.0}");
+            draw_label(
+                root,
+                mode,
+                &Label {
+                    text: &text,
+                    size: font * 0.85,
+                    at: (self.x0 - tick - 4, py),
+                    h: HPos::Right,
+                    v: VAlign::Middle,
+                    vertical: false,
+                },
+            )?;
+        }
+        root.draw(&Rectangle::new([(self.x0, self.y0), (x1, y1)], FRAME_COLOR))
+            .map_err(err)?;
+        draw_label(
+            root,
+            mode,
+            &Label {
+                text: x_title,
+                size: font,
+                at: (self.x0 + self.w / 2, y1 + tick + (2.4 * font) as i32 + 4),
+                h: HPos::Center,
+                v: VAlign::Baseline,
+                vertical: false,
+            },
+        )?;
+        draw_label(
+            root,
+            mode,
+            &Label {
+                text: y_title,
+                size: font,
+                at: (self.x0 - tick - (3.2 * font) as i32, self.y0 + self.h / 2),
+                h: HPos::Center,
+                v: VAlign::Baseline,
+                vertical: true,
+            },
+        )
+    }
+
+    fn grid<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        font: f64,
+    ) -> Result<(), PlotError> {
+        let (x1, y1) = (self.x0 + self.w, self.y0 + self.h);
+        for x in ticks(self.xr.0, self.xr.1, f64::from(self.w) / (font * 6.0)) {
+            let (px, _) = self.px(x, self.yr.0);
+            root.draw(&PathElement::new(vec![(px, self.y0), (px, y1)], GRID_COLOR))
+                .map_err(err)?;
+        }
+        for y in ticks(self.yr.0, self.yr.1, f64::from(self.h) / (font * 3.0)) {
+            let (_, py) = self.px(self.xr.0, y);
+            root.draw(&PathElement::new(vec![(self.x0, py), (x1, py)], GRID_COLOR))
+                .map_err(err)?;
+        }
+        Ok(())
+    }
+}
+
+/// Building shade by height: light grey-blue (low) to near black (tall).
+fn building_color(top_m: f64, tallest_m: f64) -> RGBColor {
+    let f = (top_m / tallest_m.max(1.0)).clamp(0.0, 1.0).sqrt();
+    let lerp = |a: f64, b: f64| (a + (b - a) * f).round() as u8;
+    RGBColor(lerp(178.0, 38.0), lerp(184.0, 42.0), lerp(196.0, 52.0))
+}
+
+fn draw3d<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene3d,
+    mode: TextMode,
+) -> Result<(), PlotError> {
+    root.fill(&WHITE).map_err(err)?;
+    let (w, h) = root.dim_in_pixel();
+    let (w, h) = (w as i32, h as i32);
+    let font = (f64::from(h.min(w)) / 50.0).clamp(10.0, 28.0);
+    let k = font / 18.0;
+    let stroke = |v: f64| (v * k).round().max(1.0) as u32;
+
+    // Top view: the route's surroundings, equal scales, square.
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in scene.path.iter().chain(scene.raw_path) {
+        for a in 0..2 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let side = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(20.0) * 1.2 + 40.0;
+    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    let title_h = (2.6 * font) as i32;
+    let left = (4.6 * font) as i32;
+    let bottom = (3.6 * font) as i32;
+    let size = (h - title_h - bottom - (0.6 * font) as i32).min(w * 11 / 20 - left);
+    let top = Panel {
+        x0: left,
+        y0: title_h,
+        w: size,
+        h: size,
+        xr: (centre[1] - side / 2.0, centre[1] + side / 2.0),
+        yr: (centre[0] - side / 2.0, centre[0] + side / 2.0),
+    };
+    top.grid(root, font)?;
+    let tallest = scene
+        .obstacles
+        .iter()
+        .map(ObstacleBox::top_m)
+        .fold(1.0, f64::max);
+    {
+        let area = root
+            .clone()
+            .shrink((top.x0, top.y0), (top.w as u32, top.h as u32));
+        let mut chart = ChartBuilder::on(&area)
+            .build_cartesian_2d(top.xr.0..top.xr.1, top.yr.0..top.yr.1)
+            .map_err(err)?;
+        let mut boxes: Vec<&ObstacleBox> = scene.obstacles.iter().collect();
+        boxes.sort_by(|a, b| a.top_m().total_cmp(&b.top_m()));
+        chart
+            .draw_series(boxes.iter().map(|o| {
+                Rectangle::new(
+                    [
+                        (o.east_m - o.half_east_m, o.north_m + o.half_north_m),
+                        (o.east_m + o.half_east_m, o.north_m - o.half_north_m),
+                    ],
+                    building_color(o.top_m(), tallest).filled(),
+                )
+            }))
+            .map_err(err)?;
+        let en = |p: &[f64; 3]| (p[1], p[0]);
+        chart
+            .draw_series(
+                scene
+                    .edges
+                    .iter()
+                    .map(|(a, b)| PathElement::new(vec![en(a), en(b)], EDGE_COLOR.stroke_width(1))),
+            )
+            .map_err(err)?;
+        if scene.raw_path.len() > 1 {
+            chart
+                .draw_series(LineSeries::new(
+                    scene.raw_path.iter().map(en),
+                    RAW_COLOR.stroke_width(stroke(2.0)),
+                ))
+                .map_err(err)?;
+        }
+        chart
+            .draw_series(LineSeries::new(
+                scene.path.iter().map(en),
+                ROUTE_COLOR.stroke_width(stroke(3.5)),
+            ))
+            .map_err(err)?;
+    }
+    top.axes(root, mode, font, ("EAST (m)", "NORTH (m)"))?;
+    let r = stroke(7.0);
+    let first = scene.path[0];
+    let last = scene.path[scene.path.len() - 1];
+    marker(root, top.px(first[1], first[0]), r, START_COLOR)?;
+    marker(root, top.px(last[1], last[0]), r, GOAL_COLOR)?;
+
+    // Side profile on the right.
+    let horizontal_m: f64 = scene
+        .path
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum();
+    let (cols, total_m) = profile_columns(
+        scene.obstacles,
+        scene.safety_m,
+        scene.path,
+        (horizontal_m / 1500.0).max(0.05),
+    );
+    let max_alt = scene
+        .path
+        .iter()
+        .map(|p| p[2])
+        .chain(cols.iter().map(|c| c.margin_top_m))
+        .fold(10.0, f64::max);
+    let px0 = top.x0 + top.w + (6.0 * font) as i32;
+    let pw = w - px0 - (1.4 * font) as i32;
+    let ph = size * 11 / 20;
+    let prof = Panel {
+        x0: px0,
+        y0: title_h,
+        w: pw,
+        h: ph,
+        xr: (-0.02 * total_m.max(1.0), 1.02 * total_m.max(1.0)),
+        yr: (0.0, max_alt * 1.15),
+    };
+    prof.grid(root, font)?;
+    for (color, top_of) in [
+        (
+            MARGIN_COLOR,
+            (|c: &ProfileColumn| c.margin_top_m) as fn(&ProfileColumn) -> f64,
+        ),
+        (RGBColor(0, 0, 0), |c: &ProfileColumn| c.top_m),
+    ] {
+        for c in &cols {
+            let t = top_of(c);
+            if t <= 0.0 {
+                continue;
+            }
+            let fill = if color == MARGIN_COLOR {
+                MARGIN_COLOR
+            } else {
+                building_color(t, tallest)
+            };
+            let a = prof.px(c.from_m, 0.0);
+            let b = prof.px(c.to_m, t.min(prof.yr.1));
+            root.draw(&Rectangle::new(
+                [(a.0, b.1), (b.0.max(a.0 + 1), a.1)],
+                fill.filled(),
+            ))
+            .map_err(err)?;
+        }
+    }
+    // The route against horizontal distance.
+    let mut d = 0.0;
+    let mut pts = Vec::with_capacity(scene.path.len());
+    for (i, p) in scene.path.iter().enumerate() {
+        if i > 0 {
+            let q = scene.path[i - 1];
+            d += (p[0] - q[0]).hypot(p[1] - q[1]);
+        }
+        pts.push(prof.px(d, p[2]));
+    }
+    root.draw(&PathElement::new(
+        pts.clone(),
+        ROUTE_COLOR.stroke_width(stroke(3.5)),
+    ))
+    .map_err(err)?;
+    for &p in &pts[1..pts.len() - 1] {
+        root.draw(&Circle::new(p, stroke(4.0), ROUTE_COLOR.filled()))
+            .map_err(err)?;
+        root.draw(&Circle::new(p, stroke(2.0), WHITE.filled()))
+            .map_err(err)?;
+    }
+    marker(root, pts[0], r, START_COLOR)?;
+    marker(root, pts[pts.len() - 1], r, GOAL_COLOR)?;
+    prof.axes(
+        root,
+        mode,
+        font,
+        ("DISTANCE ALONG THE ROUTE (m)", "ALTITUDE (m)"),
+    )?;
+
+    // Legend under the profile.
+    let mut entries: Vec<(&str, Swatch)> = vec![
+        ("route", Swatch::Line(ROUTE_COLOR, 3.5)),
+        ("start", Swatch::Dot(START_COLOR)),
+        ("goal", Swatch::Dot(GOAL_COLOR)),
+    ];
+    let heights: Vec<(String, f64)> = [0.1, 0.35, 1.0]
+        .iter()
+        .map(|f| {
+            let t = (tallest * f / 5.0).round().max(1.0) * 5.0;
+            (format!("building {t:.0} m tall"), t)
+        })
+        .collect();
+    for (text, t) in &heights {
+        entries.push((text, Swatch::Fill(building_color(*t, tallest))));
+    }
+    entries.push(("safety margin (profile)", Swatch::Fill(MARGIN_COLOR)));
+    if scene.raw_path.len() > 1 && !scene.raw_label.is_empty() {
+        entries.insert(1, (scene.raw_label, Swatch::Line(RAW_COLOR, 2.0)));
+    }
+    if !scene.edges.is_empty() && !scene.edges_label.is_empty() {
+        entries.push((scene.edges_label, Swatch::Line(EDGE_COLOR, 1.0)));
+    }
+    let line_h = (1.7 * font) as i32;
+    let lx = prof.x0;
+    let mut ly = prof.y0 + prof.h + (5.2 * font) as i32;
+    let sw = (2.4 * font) as i32;
+    for (text, swatch) in entries {
+        match swatch {
+            Swatch::Line(c, width) => root.draw(&PathElement::new(
+                vec![(lx, ly), (lx + sw, ly)],
+                c.stroke_width(stroke(width)),
+            )),
+            Swatch::Dot(c) => {
+                marker(root, (lx + sw / 2, ly), r, c)?;
+                Ok(())
+            }
+            Swatch::Fill(c) => {
+                let hs = (0.45 * font) as i32;
+                root.draw(&Rectangle::new(
+                    [(lx, ly - hs), (lx + sw, ly + hs)],
+                    c.filled(),
+                ))
+            }
+        }
+        .map_err(err)?;
+        draw_label(
+            root,
+            mode,
+            &Label {
+                text,
+                size: font * 0.9,
+                at: (lx + sw + (0.7 * font) as i32, ly),
+                h: HPos::Left,
+                v: VAlign::Middle,
+                vertical: false,
+            },
+        )?;
+        ly += line_h;
+    }
+
+    draw_label(
+        root,
+        mode,
+        &Label {
+            text: &scene.title,
+            size: font * 1.15,
+            at: (w / 2, (0.7 * font) as i32),
+            h: HPos::Center,
+            v: VAlign::Top,
+            vertical: false,
+        },
+    )
+}
+
+enum Swatch {
+    Line(RGBColor, f64),
+    Dot(RGBColor),
+    Fill(RGBColor),
+}
+
+fn marker<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    at: (i32, i32),
+    r: u32,
+    color: RGBColor,
+) -> Result<(), PlotError> {
+    root.draw(&Circle::new(at, r, FRAME_COLOR.filled()))
+        .map_err(err)?;
+    root.draw(&Circle::new(at, r.saturating_sub(2).max(1), color.filled()))
+        .map_err(err)
+}

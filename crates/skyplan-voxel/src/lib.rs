@@ -1,0 +1,652 @@
+//! 2.5D / voxel planning for skyplan: a height map of the city and an exactly optimal
+//! 26-connected A\* over a lattice of voxel centres, so a route may climb over low buildings when
+//! that is cheaper than going around them.
+//!
+//! The lattice has a horizontal pitch `cell_m` and a vertical pitch `layer_m` (the altitude
+//! layers); its points are the multiples of the pitches inside the world's flight volume (the
+//! lowest layer is the lowest multiple of `layer_m` that is ≥ the floor and > 0). A lattice point
+//! is usable iff it lies outside every inflated box of the [`BoxWorld3`]; an edge joins two
+//! usable points that differ by at most one step on each axis (26 neighbours) and is usable iff
+//! world3's exact segment test passes ([`CollisionChecker::segment_is_free`]). The start and the
+//! goal join the lattice through the usable points within one step of them on every axis
+//! (again exactly checked), and to each other directly when that segment is free.
+//!
+//! The cost of a segment is its 3D length plus `climb_weight` × the altitude it gains
+//! ([`edge_cost`]), so climbing is paid for and descending is not. [`VoxelGrid::plan`] returns
+//! the cheapest path in that graph (A\* with an admissible, consistent heuristic), checks every
+//! edge of it again, and shortcuts it with exactly re-checked segments that never raise the cost.
+//!
+//! Checking all 26 edges of every voxel would cost tens of millions of segment tests on the city,
+//! so the grid marks the voxels whose neighbourhood box (the lattice points one step away on every
+//! axis, widened by 1 µm) meets no inflated box: every edge out of such a voxel lies inside that
+//! box and is free without a test. Only the edges out of the other voxels are tested, lazily, when
+//! the search reaches them.
+//!
+//! ```
+//! use skyplan_map::colliders::ObstacleBox;
+//! use skyplan_voxel::{Query, VoxelGrid, VoxelSpec};
+//! use skyplan_world3::{BoxWorld3, CollisionChecker, WorldSpec, first_blocked_segment};
+//! // A low, wide wall (10 m tall) across the way: around it is long, over it is short.
+//! let wall = ObstacleBox { north_m: 50.0, east_m: 50.0, up_m: 5.0, half_north_m: 2.0, half_east_m: 45.0, half_up_m: 5.0 };
+//! let spec = WorldSpec { safety_m: 2.0, min_alt_m: 0.0, max_alt_m: 40.0, margin_bounds_m: 45.0 };
+//! let world = BoxWorld3::new(&[wall], &spec)?;
+//! let grid = VoxelGrid::build(&world, &VoxelSpec { cell_m: 5.0, layer_m: 5.0 })?;
+//! let query = Query { start: [10.0, 50.0, 5.0], goal: [90.0, 50.0, 5.0], climb_weight: 1.0, shortcut: true };
+//! let route = grid.plan(&query)?;
+//! assert_eq!(route.path.first(), Some(&query.start));
+//! assert_eq!(route.path.last(), Some(&query.goal));
+//! assert!(route.path.iter().any(|p| p[2] >= 15.0));            // it climbed over the wall
+//! assert_eq!(first_blocked_segment(&world.brute_force(), &route.path), None);
+//! assert!(route.cost <= route.raw_cost);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, distance_m};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::time::Instant;
+
+/// Slack added around a voxel's neighbourhood box before calling it clear of every inflated box,
+/// metres: it keeps floating-point rounding in the slab test from ever disagreeing.
+const CLEAR_SLACK_M: f64 = 1e-6;
+
+/// Voxel states.
+const CLEAR: u8 = 0;
+const NEAR: u8 = 1;
+const BLOCKED: u8 = 2;
+
+/// The lattice's pitches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VoxelSpec {
+    /// Horizontal pitch (north and east), metres (> 0).
+    pub cell_m: f64,
+    /// Vertical pitch between altitude layers, metres (> 0).
+    pub layer_m: f64,
+}
+
+impl Default for VoxelSpec {
+    /// 5 m horizontally, 5 m between layers.
+    fn default() -> Self {
+        Self {
+            cell_m: 5.0,
+            layer_m: 5.0,
+        }
+    }
+}
+
+/// Which end of a query.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum End {
+    /// The start.
+    Start,
+    /// The goal.
+    Goal,
+}
+
+impl End {
+    /// `"start"` or `"goal"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            End::Start => "start",
+            End::Goal => "goal",
+        }
+    }
+}
+
+/// Why a grid could not be built or a query answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VoxelError {
+    /// A pitch or weight is not a finite positive number, or the lattice would be empty or huge.
+    #[error("invalid voxel spec: {0}")]
+    InvalidSpec(String),
+    /// The start or goal is not in free space (inside a grown box, under the floor or outside).
+    #[error("the {} is not in free space", .0.name())]
+    Invalid(End),
+    /// No usable lattice point sees the start or goal within one step on every axis.
+    #[error(
+        "no free voxel centre within one voxel of the {} is reachable by a free segment",
+        .0.name()
+    )]
+    NoConnector(End),
+    /// The goal is not reachable from the start in the lattice graph.
+    #[error("no path: the goal is unreachable in the voxel graph ({expansions} voxels reached)")]
+    NoPath {
+        /// Nodes expanded before the search ran out.
+        expansions: usize,
+    },
+    /// A returned segment failed the final exact check (a bug).
+    #[error("internal error: segment {0} of the voxel path failed the exact re-check")]
+    Internal(usize),
+}
+
+/// The highest inflated-box top over each lattice column (the height map of the city, grown by
+/// the margin), metres; the floor where no box covers the column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightMap {
+    /// Columns along north and east.
+    pub dims: [usize; 2],
+    /// Row-major (north index major) tops, metres.
+    pub top_m: Vec<f64>,
+}
+
+impl HeightMap {
+    /// The top over column `(i_north, j_east)`.
+    pub fn top_m(&self, i_north: usize, j_east: usize) -> f64 {
+        self.top_m[i_north * self.dims[1] + j_east]
+    }
+}
+
+/// One query for [`VoxelGrid::plan`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Query {
+    /// Start point `[north, east, alt]`.
+    pub start: Neu,
+    /// Goal point (may be above a roof).
+    pub goal: Neu,
+    /// Extra cost per metre of altitude gained (≥ 0); 0 minimises length alone.
+    pub climb_weight: f64,
+    /// Shortcut the lattice path with exactly re-checked segments (never more expensive).
+    pub shortcut: bool,
+}
+
+/// A planned route.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VoxelPath {
+    /// The optimal lattice path: start, voxel centres, goal.
+    pub raw: Vec<Neu>,
+    /// The returned path (`raw` shortcut, or `raw` itself).
+    pub path: Vec<Neu>,
+    /// Cost of `raw` ([`path_cost`]): the optimum of the voxel graph.
+    pub raw_cost: f64,
+    /// Cost of `path` (≤ `raw_cost`).
+    pub cost: f64,
+    /// 3D length of `path`, metres.
+    pub length_m: f64,
+    /// Altitude gained along `path` (sum of the climbs), metres.
+    pub climb_m: f64,
+    /// Nodes expanded by A\*.
+    pub expansions: usize,
+    /// Exact segment tests made during the search.
+    pub edge_checks: usize,
+    /// Wall time of the search and post-processing, microseconds.
+    pub search_us: u64,
+}
+
+/// Cost of the segment `a → b`: its length plus `climb_weight` × the altitude gained.
+///
+/// ```
+/// assert_eq!(skyplan_voxel::edge_cost([0.0, 0.0, 0.0], [3.0, 0.0, 4.0], 2.0), 5.0 + 8.0);
+/// assert_eq!(skyplan_voxel::edge_cost([3.0, 0.0, 4.0], [0.0, 0.0, 0.0], 2.0), 5.0);
+/// ```
+pub fn edge_cost(a: Neu, b: Neu, climb_weight: f64) -> f64 {
+    distance_m(a, b) + climb_weight * (b[2] - a[2]).max(0.0)
+}
+
+/// Cost of a polyline: the sum of [`edge_cost`] over its segments.
+pub fn path_cost(path: &[Neu], climb_weight: f64) -> f64 {
+    path.windows(2)
+        .map(|w| edge_cost(w[0], w[1], climb_weight))
+        .sum()
+}
+
+/// The sum of the altitude gains along a polyline, metres.
+pub fn climb_m(path: &[Neu]) -> f64 {
+    path.windows(2).map(|w| (w[1][2] - w[0][2]).max(0.0)).sum()
+}
+
+/// The voxel lattice over a [`BoxWorld3`], with each voxel classified as blocked (its centre is
+/// inside an inflated box), clear (no inflated box near it: its edges need no test) or near.
+#[derive(Debug, Clone)]
+pub struct VoxelGrid<'w> {
+    world: &'w BoxWorld3,
+    origin: Neu,
+    step: Neu,
+    dims: [usize; 3],
+    state: Vec<u8>,
+    heights: HeightMap,
+    build_us: u64,
+}
+
+/// Most voxels a grid may have.
+pub const MAX_VOXELS: usize = 50_000_000;
+
+/// The 26 neighbour offsets.
+fn offsets() -> impl Iterator<Item = [i64; 3]> {
+    (-1..=1_i64).flat_map(|a| {
+        (-1..=1_i64).flat_map(move |b| {
+            (-1..=1_i64)
+                .filter(move |&c| (a, b, c) != (0, 0, 0))
+                .map(move |c| [a, b, c])
+        })
+    })
+}
+
+impl<'w> VoxelGrid<'w> {
+    /// Lays the lattice over the world's flight volume and classifies every voxel by rasterising
+    /// the inflated boxes (no segment tests; these happen during queries).
+    pub fn build(world: &'w BoxWorld3, spec: &VoxelSpec) -> Result<Self, VoxelError> {
+        let t0 = Instant::now();
+        for (name, v) in [("cell_m", spec.cell_m), ("layer_m", spec.layer_m)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(VoxelError::InvalidSpec(format!(
+                    "{name}: expected a finite number > 0, found {v}"
+                )));
+            }
+        }
+        let bounds = world.bounds();
+        let step = [spec.cell_m, spec.cell_m, spec.layer_m];
+        let mut origin = [0.0; 3];
+        let mut dims = [0usize; 3];
+        for a in 0..3 {
+            let mut first = (bounds.min[a] / step[a]).ceil();
+            if a == 2 && first < 1.0 {
+                first = 1.0; // no layer on or under the ground at altitude 0
+            }
+            origin[a] = first * step[a];
+            let span = ((bounds.max[a] - origin[a]) / step[a]).floor();
+            if span.is_nan() || span < 0.0 {
+                return Err(VoxelError::InvalidSpec(format!(
+                    "no lattice point fits in the flight volume on axis {a} (pitch {} m)",
+                    step[a]
+                )));
+            }
+            let mut n = span as usize + 1;
+            // Every lattice point must lie inside the bounds, as computed.
+            while n > 0 && origin[a] + (n - 1) as f64 * step[a] > bounds.max[a] {
+                n -= 1;
+            }
+            while origin[a] < bounds.min[a] {
+                origin[a] += step[a];
+                n = n.saturating_sub(1);
+            }
+            if n == 0 {
+                return Err(VoxelError::InvalidSpec(format!(
+                    "no lattice point fits in the flight volume on axis {a} (pitch {} m)",
+                    step[a]
+                )));
+            }
+            dims[a] = n;
+        }
+        let total = dims[0]
+            .checked_mul(dims[1])
+            .and_then(|v| v.checked_mul(dims[2]))
+            .filter(|&v| v <= MAX_VOXELS)
+            .ok_or_else(|| {
+                VoxelError::InvalidSpec(format!(
+                    "{} × {} × {} voxels is more than {MAX_VOXELS}; use larger pitches",
+                    dims[0], dims[1], dims[2]
+                ))
+            })?;
+        let mut grid = Self {
+            world,
+            origin,
+            step,
+            dims,
+            state: vec![CLEAR; total],
+            heights: HeightMap {
+                dims: [dims[0], dims[1]],
+                top_m: vec![bounds.min[2]; dims[0] * dims[1]],
+            },
+            build_us: 0,
+        };
+        for b in world.inflated_boxes() {
+            // Per axis: the lattice indices whose neighbourhood meets the box (near), and those
+            // whose coordinate lies within it (the centre is inside iff on all three axes).
+            let mut near = [(0usize, 0usize); 3];
+            let mut inside = [(1usize, 0usize); 3];
+            let mut any = true;
+            for a in 0..3 {
+                let lo = ((b.min[a] - grid.origin[a]) / step[a]).floor() as i64 - 2;
+                let hi = ((b.max[a] - grid.origin[a]) / step[a]).ceil() as i64 + 2;
+                let lo = lo.clamp(0, dims[a] as i64 - 1) as usize;
+                let hi = hi.clamp(0, dims[a] as i64 - 1) as usize;
+                let (mut n0, mut n1) = (usize::MAX, 0);
+                let (mut i0, mut i1) = (usize::MAX, 0);
+                for i in lo..=hi {
+                    let below = grid.coord(a, i as f64 - 1.0) - CLEAR_SLACK_M;
+                    let above = grid.coord(a, i as f64 + 1.0) + CLEAR_SLACK_M;
+                    if below <= b.max[a] && above >= b.min[a] {
+                        n0 = n0.min(i);
+                        n1 = n1.max(i);
+                    }
+                    let c = grid.coord(a, i as f64);
+                    if c >= b.min[a] && c <= b.max[a] {
+                        i0 = i0.min(i);
+                        i1 = i1.max(i);
+                    }
+                }
+                if n0 == usize::MAX {
+                    any = false;
+                    break;
+                }
+                near[a] = (n0, n1);
+                inside[a] = (i0, i1);
+            }
+            if !any {
+                continue;
+            }
+            for i in near[0].0..=near[0].1 {
+                for j in near[1].0..=near[1].1 {
+                    for k in near[2].0..=near[2].1 {
+                        let v = grid.index([i, j, k]);
+                        if grid.state[v] == CLEAR {
+                            grid.state[v] = NEAR;
+                        }
+                    }
+                }
+            }
+            if inside[0].0 > inside[0].1 || inside[1].0 > inside[1].1 {
+                continue;
+            }
+            for i in inside[0].0..=inside[0].1 {
+                for j in inside[1].0..=inside[1].1 {
+                    let t = &mut grid.heights.top_m[i * dims[1] + j];
+                    *t = t.max(b.max[2]);
+                    for k in inside[2].0..=inside[2].1 {
+                        let v = grid.index([i, j, k]);
+                        grid.state[v] = BLOCKED;
+                    }
+                }
+            }
+        }
+        grid.build_us = t0.elapsed().as_micros() as u64;
+        Ok(grid)
+    }
+
+    fn coord(&self, axis: usize, i: f64) -> f64 {
+        self.origin[axis] + i * self.step[axis]
+    }
+
+    /// Lattice points along north, east and altitude.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Number of voxels.
+    pub fn len(&self) -> usize {
+        self.state.len()
+    }
+
+    /// Whether the lattice has no voxel (never true for a built grid).
+    pub fn is_empty(&self) -> bool {
+        self.state.is_empty()
+    }
+
+    /// The pitches `[north, east, alt]`, metres.
+    pub fn step(&self) -> Neu {
+        self.step
+    }
+
+    /// The altitudes of the layers, lowest first, metres.
+    pub fn layers_m(&self) -> Vec<f64> {
+        (0..self.dims[2]).map(|k| self.coord(2, k as f64)).collect()
+    }
+
+    /// The voxel index of lattice indices `[north, east, layer]`.
+    pub fn index(&self, ijk: [usize; 3]) -> usize {
+        (ijk[0] * self.dims[1] + ijk[1]) * self.dims[2] + ijk[2]
+    }
+
+    /// The lattice indices `[north, east, layer]` of a voxel.
+    pub fn ijk(&self, v: usize) -> [usize; 3] {
+        let k = v % self.dims[2];
+        let r = v / self.dims[2];
+        [r / self.dims[1], r % self.dims[1], k]
+    }
+
+    /// The centre (lattice point) of a voxel, `[north, east, alt]`.
+    pub fn point(&self, v: usize) -> Neu {
+        let [i, j, k] = self.ijk(v);
+        [
+            self.coord(0, i as f64),
+            self.coord(1, j as f64),
+            self.coord(2, k as f64),
+        ]
+    }
+
+    /// Whether the voxel's centre is inside an inflated box.
+    pub fn is_blocked(&self, v: usize) -> bool {
+        self.state[v] == BLOCKED
+    }
+
+    /// Number of blocked voxels.
+    pub fn blocked_count(&self) -> usize {
+        self.state.iter().filter(|&&s| s == BLOCKED).count()
+    }
+
+    /// Number of voxels whose edges need no test (no inflated box near them).
+    pub fn clear_count(&self) -> usize {
+        self.state.iter().filter(|&&s| s == CLEAR).count()
+    }
+
+    /// The height map (highest inflated top per lattice column).
+    pub fn height_map(&self) -> &HeightMap {
+        &self.heights
+    }
+
+    /// Wall time of [`VoxelGrid::build`], microseconds.
+    pub fn build_us(&self) -> u64 {
+        self.build_us
+    }
+
+    /// The world the grid was built on.
+    pub fn world(&self) -> &'w BoxWorld3 {
+        self.world
+    }
+
+    /// The unblocked voxels within one step of `p` on every axis (`|q − p| ≤ step` per axis):
+    /// the candidates to join `p` to the lattice (their segments still need a test).
+    pub fn connector_candidates(&self, p: Neu) -> Vec<usize> {
+        let mut range = [(0usize, 0usize); 3];
+        for (a, r) in range.iter_mut().enumerate() {
+            let lo = ((p[a] - self.step[a] - self.origin[a]) / self.step[a]).floor() as i64 - 1;
+            let hi = ((p[a] + self.step[a] - self.origin[a]) / self.step[a]).ceil() as i64 + 1;
+            if hi < 0 || lo > self.dims[a] as i64 - 1 {
+                return Vec::new();
+            }
+            *r = (lo.max(0) as usize, hi.min(self.dims[a] as i64 - 1) as usize);
+        }
+        let mut out = Vec::new();
+        for i in range[0].0..=range[0].1 {
+            for j in range[1].0..=range[1].1 {
+                for k in range[2].0..=range[2].1 {
+                    let v = self.index([i, j, k]);
+                    let q = self.point(v);
+                    if !self.is_blocked(v) && (0..3).all(|a| (q[a] - p[a]).abs() <= self.step[a]) {
+                        out.push(v);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The cheapest path from `query.start` to `query.goal` in the voxel graph (see the crate
+    /// docs), then shortcut if asked. Every segment of `raw` and `path` passes world3's exact
+    /// segment test.
+    pub fn plan(&self, query: &Query) -> Result<VoxelPath, VoxelError> {
+        let t0 = Instant::now();
+        let w = query.climb_weight;
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(VoxelError::InvalidSpec(format!(
+                "climb weight: expected a finite number ≥ 0, found {w}"
+            )));
+        }
+        let (start, goal) = (query.start, query.goal);
+        if !self.world.is_free(start) {
+            return Err(VoxelError::Invalid(End::Start));
+        }
+        if !self.world.is_free(goal) {
+            return Err(VoxelError::Invalid(End::Goal));
+        }
+        let mut edge_checks = 0usize;
+        let join = |p: Neu, forward: bool, checks: &mut usize| -> Vec<(usize, f64)> {
+            self.connector_candidates(p)
+                .into_iter()
+                .filter_map(|v| {
+                    let q = self.point(v);
+                    *checks += 1;
+                    let (a, b) = if forward { (p, q) } else { (q, p) };
+                    self.world
+                        .segment_is_free(a, b)
+                        .then(|| (v, edge_cost(a, b, w)))
+                })
+                .collect()
+        };
+        let from_start = join(start, true, &mut edge_checks);
+        let mut to_goal = join(goal, false, &mut edge_checks);
+        edge_checks += 1;
+        let direct = self.world.segment_is_free(start, goal);
+        if !direct {
+            if from_start.is_empty() {
+                return Err(VoxelError::NoConnector(End::Start));
+            }
+            if to_goal.is_empty() {
+                return Err(VoxelError::NoConnector(End::Goal));
+            }
+        }
+        to_goal.sort_unstable_by_key(|&(v, _)| v);
+
+        let n = self.len();
+        let (start_id, goal_id) = (n, n + 1);
+        let mut g = vec![f64::INFINITY; n + 2];
+        let mut parent = vec![u32::MAX; n + 2];
+        let mut closed = vec![false; n + 2];
+        let point_of = |id: usize| -> Neu {
+            if id == start_id {
+                start
+            } else if id == goal_id {
+                goal
+            } else {
+                self.point(id)
+            }
+        };
+        let h = |p: Neu| distance_m(p, goal) + w * (goal[2] - p[2]).max(0.0);
+        let mut heap: BinaryHeap<Reverse<(u64, u32)>> = BinaryHeap::new();
+        g[start_id] = 0.0;
+        heap.push(Reverse((h(start).to_bits(), start_id as u32)));
+        let mut expansions = 0usize;
+        let relax = |heap: &mut BinaryHeap<Reverse<(u64, u32)>>,
+                     g: &mut [f64],
+                     parent: &mut [u32],
+                     from: usize,
+                     to: usize,
+                     cost: f64| {
+            let ng = g[from] + cost;
+            if ng < g[to] {
+                g[to] = ng;
+                parent[to] = from as u32;
+                heap.push(Reverse(((ng + h(point_of(to))).to_bits(), to as u32)));
+            }
+        };
+        while let Some(Reverse((_, u))) = heap.pop() {
+            let u = u as usize;
+            if closed[u] {
+                continue;
+            }
+            closed[u] = true;
+            expansions += 1;
+            if u == goal_id {
+                break;
+            }
+            if u == start_id {
+                if direct {
+                    relax(
+                        &mut heap,
+                        &mut g,
+                        &mut parent,
+                        u,
+                        goal_id,
+                        edge_cost(start, goal, w),
+                    );
+                }
+                for &(v, c) in &from_start {
+                    relax(&mut heap, &mut g, &mut parent, u, v, c);
+                }
+                continue;
+            }
+            let p = self.point(u);
+            if let Ok(k) = to_goal.binary_search_by_key(&u, |&(v, _)| v) {
+                relax(&mut heap, &mut g, &mut parent, u, goal_id, to_goal[k].1);
+            }
+            let ijk = self.ijk(u);
+            let near = self.state[u] == NEAR;
+            for d in offsets() {
+                let mut nb = [0usize; 3];
+                let mut inside = true;
+                for a in 0..3 {
+                    let c = ijk[a] as i64 + d[a];
+                    if c < 0 || c >= self.dims[a] as i64 {
+                        inside = false;
+                        break;
+                    }
+                    nb[a] = c as usize;
+                }
+                if !inside {
+                    continue;
+                }
+                let v = self.index(nb);
+                if closed[v] || self.state[v] == BLOCKED {
+                    continue;
+                }
+                let q = self.point(v);
+                let cost = edge_cost(p, q, w);
+                if g[u] + cost >= g[v] {
+                    continue;
+                }
+                if near {
+                    edge_checks += 1;
+                    if !self.world.segment_is_free(p, q) {
+                        continue;
+                    }
+                }
+                relax(&mut heap, &mut g, &mut parent, u, v, cost);
+            }
+        }
+        if !closed[goal_id] {
+            return Err(VoxelError::NoPath { expansions });
+        }
+        let mut ids = vec![goal_id];
+        while *ids.last().unwrap() != start_id {
+            ids.push(parent[*ids.last().unwrap()] as usize);
+        }
+        ids.reverse();
+        let mut raw: Vec<Neu> = Vec::with_capacity(ids.len());
+        for &id in &ids {
+            let p = point_of(id);
+            if raw.last() != Some(&p) {
+                raw.push(p);
+            }
+        }
+        if raw.len() == 1 {
+            raw.push(goal);
+        }
+        if let Some(k) = skyplan_world3::first_blocked_segment(self.world, &raw) {
+            return Err(VoxelError::Internal(k));
+        }
+        let raw_cost = path_cost(&raw, w);
+        let mut path = raw.clone();
+        if query.shortcut {
+            let short = skyplan_sampling::shortcut::reduce_vertices(self.world, &raw);
+            if path_cost(&short, w) <= raw_cost {
+                path = short;
+            }
+            if let Some(k) = skyplan_world3::first_blocked_segment(self.world, &path) {
+                return Err(VoxelError::Internal(k));
+            }
+        }
+        Ok(VoxelPath {
+            cost: path_cost(&path, w),
+            length_m: skyplan_world3::path_length_m(&path),
+            climb_m: climb_m(&path),
+            raw,
+            path,
+            raw_cost,
+            expansions,
+            edge_checks,
+            search_us: t0.elapsed().as_micros() as u64,
+        })
+    }
+}
