@@ -78,6 +78,10 @@ pub enum PlannerArg {
     Costmap,
     /// 3D probabilistic roadmap among the boxes (grown until start and goal connect), graph A*.
     Prm,
+    /// 3D lazy PRM: the same roadmap, edges checked only on found paths (blocked ones removed, search repeated).
+    #[value(name = "lazy-prm")]
+    #[serde(rename = "lazy-prm")]
+    LazyPrm,
     /// 3D RRT-Connect: bidirectional trees, stops at the first path.
     #[value(name = "rrt-connect")]
     #[serde(rename = "rrt-connect")]

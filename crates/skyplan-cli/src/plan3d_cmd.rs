@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 /// Options of the 3D planners (flattened into `plan`; `--seed` is shared with random maps).
 #[derive(Debug, Args)]
-#[command(next_help_heading = "3D planners (prm, rrt-connect, rrt-star)")]
+#[command(next_help_heading = "3D planners (prm, lazy-prm, rrt-connect, rrt-star)")]
 pub struct Plan3dArgs {
     /// Start altitude above home, metres [default: --alt-m].
     #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
@@ -46,11 +46,18 @@ pub struct Plan3dArgs {
     /// voxel: vertical pitch between altitude layers, metres [default: 5].
     #[arg(long, value_name = "M", value_parser = parse_finite)]
     pub layer_m: Option<f64>,
+    /// prm, lazy-prm: save the roadmap after the run (JSON with the map's fingerprint).
+    #[arg(long, value_name = "FILE")]
+    pub save_roadmap: Option<PathBuf>,
+    /// prm, lazy-prm: start from a saved roadmap (refused if built for another map, margin or volume).
+    #[arg(long, value_name = "FILE")]
+    pub load_roadmap: Option<PathBuf>,
 }
 
 fn kind_of(planner: Option<PlannerArg>) -> Option<PlannerKind> {
     match planner? {
         PlannerArg::Prm => Some(PlannerKind::Prm),
+        PlannerArg::LazyPrm => Some(PlannerKind::LazyPrm),
         PlannerArg::RrtConnect => Some(PlannerKind::RrtConnect),
         PlannerArg::RrtStar => Some(PlannerKind::RrtStar),
         _ => None,
@@ -61,6 +68,12 @@ fn kind_of(planner: Option<PlannerArg>) -> Option<PlannerKind> {
 pub fn handles(args: &PlanArgs) -> Result<bool> {
     let a = &args.plan3d;
     let voxel = args.planner == Some(PlannerArg::Voxel);
+    let prm = matches!(args.planner, Some(PlannerArg::Prm | PlannerArg::LazyPrm));
+    if !prm && (a.save_roadmap.is_some() || a.load_roadmap.is_some()) {
+        return Err(bad_input(
+            "--save-roadmap and --load-roadmap need --planner prm or lazy-prm",
+        ));
+    }
     if !voxel && (a.climb_weight.is_some() || a.voxel_m.is_some() || a.layer_m.is_some()) {
         return Err(bad_input(
             "--climb-weight, --voxel-m and --layer-m need --planner voxel",
@@ -226,15 +239,34 @@ pub fn run(args: PlanArgs) -> Result<()> {
     let mut plot_edges: Vec<(Neu, Neu)> = Vec::new();
     let mut voxel_json = serde_json::Value::Null;
     let mut raw_path: Vec<Neu> = Vec::new();
+    let mut roadmap_json = serde_json::Value::Null;
+    let mut roadmap_bytes: Option<Vec<u8>> = None;
+    let roadmap_io = args.plan3d.save_roadmap.is_some() || args.plan3d.load_roadmap.is_some();
     let solution = match kind {
-        Some(PlannerKind::Prm) if args.plot.is_some() => {
-            // The same run as `skyplan_sampling::plan`, keeping the roadmap for the picture.
-            let config = skyplan_sampling::prm::PrmConfig {
-                seed,
-                ..Default::default()
-            };
+        Some(k @ (PlannerKind::Prm | PlannerKind::LazyPrm))
+            if args.plot.is_some() || roadmap_io =>
+        {
+            // The same run as `skyplan_sampling::plan`, keeping the roadmap for the picture and
+            // the file (or starting from a saved one).
             let (roadmap, mut solution) =
-                skyplan_sampling::prm::solve(&world, start, goal, &config, request.budget);
+                run_prm(&args.plan3d, &world, k, seed, start, goal, request.budget)?;
+            let st = roadmap.stats;
+            roadmap_json = json!({
+                "vertices": roadmap.vertices().len(),
+                "edges": roadmap.edges(),
+                "unchecked_edges": roadmap.unchecked_edges(),
+                "edges_tested": st.edges_tested,
+                "edges_removed": st.edges_removed,
+                "connector_tests": st.connector_tests,
+                "build_us": st.build_us,
+                "loaded_from": args.plan3d.load_roadmap.as_ref().map(|p| p.display().to_string()),
+                "saved_to": args.plan3d.save_roadmap.as_ref().map(|p| p.display().to_string()),
+            });
+            if args.plan3d.save_roadmap.is_some() {
+                let bytes = roadmap.to_json(&world);
+                roadmap_json["saved_bytes"] = json!(bytes.len());
+                roadmap_bytes = Some(bytes);
+            }
             let points = roadmap.vertices();
             plot_edges = roadmap
                 .edge_list()
@@ -249,6 +281,12 @@ pub fn run(args: PlanArgs) -> Result<()> {
                     skyplan_sampling::shortcut::simplify(&world, &solution.path, &mut rng, 200);
                 solution.cost_m = skyplan_world3::path_length_m(&solution.path);
             }
+            solution
+        }
+        Some(kind) if args.plot.is_some() => {
+            // The same run as `skyplan_sampling::plan`, keeping the trees for the picture.
+            let (solution, tree) = skyplan_sampling::plan_with_tree(&world, kind, &request);
+            plot_edges = tree;
             solution
         }
         Some(kind) => skyplan_sampling::plan(&world, kind, &request),
@@ -348,11 +386,17 @@ pub fn run(args: PlanArgs) -> Result<()> {
     if !voxel_json.is_null() {
         summary["voxel"] = voxel_json.clone();
     }
+    if !roadmap_json.is_null() {
+        summary["roadmap"] = roadmap_json;
+    }
     if let Some(p) = &args.plot {
         summary["outputs"]["plot"] = json!(p.display().to_string());
     }
     let bytes = skyplan_export::encode(format, &mission, &summary).or_exit(Kind::Runtime)?;
     write_atomic(&out, &bytes)?;
+    if let (Some(path), Some(bytes)) = (&args.plan3d.save_roadmap, &roadmap_bytes) {
+        write_atomic(path, bytes)?;
+    }
     if let Some(plot_path) = &args.plot {
         let title = format!(
             "{map_name}: {planner_name}, {:.0} m, margin {safety_m} m",
@@ -360,6 +404,9 @@ pub fn run(args: PlanArgs) -> Result<()> {
         );
         let edges_label = match kind {
             Some(PlannerKind::Prm) => "PRM roadmap",
+            Some(PlannerKind::LazyPrm) => "lazy PRM roadmap (unchecked edges included)",
+            Some(PlannerKind::RrtConnect) => "RRT-Connect trees",
+            Some(PlannerKind::RrtStar) => "RRT* tree",
             _ => "",
         };
         let scene = skyplan_plot::Scene3d {
@@ -441,6 +488,23 @@ pub fn run(args: PlanArgs) -> Result<()> {
                 ms(solution.elapsed_us)
             );
         }
+        if let Some(r) = summary.get("roadmap") {
+            let file = |k: &str, what: &str| {
+                r[k].as_str()
+                    .map(|p| format!(", {what} {p}"))
+                    .unwrap_or_default()
+            };
+            println!(
+                "roadmap    {} vertices, {} edges ({} unchecked), {} edge tests, {} edges removed{}{}",
+                r["vertices"],
+                r["edges"],
+                r["unchecked_edges"],
+                r["edges_tested"],
+                r["edges_removed"],
+                file("loaded_from", "loaded from"),
+                file("saved_to", "saved to")
+            );
+        }
         println!(
             "waypoints  {} after exactly re-checked shortcutting; every segment re-checked against all {} boxes",
             mission.waypoints.len(),
@@ -458,6 +522,41 @@ pub fn run(args: PlanArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `--planner prm|lazy-prm` keeping the roadmap: built and grown as in `skyplan_sampling::plan`,
+/// or loaded from `--load-roadmap` (refused with exit 2 if built for another world or planner)
+/// and grown from there.
+fn run_prm(
+    a: &Plan3dArgs,
+    world: &BoxWorld3,
+    kind: PlannerKind,
+    seed: u64,
+    start: Neu,
+    goal: Neu,
+    budget: Budget,
+) -> Result<(skyplan_sampling::prm::Roadmap, skyplan_sampling::Solution)> {
+    use skyplan_sampling::prm::{PrmConfig, Roadmap, solve, solve_from};
+    let lazy = kind == PlannerKind::LazyPrm;
+    let Some(path) = &a.load_roadmap else {
+        let config = PrmConfig {
+            seed,
+            lazy,
+            ..Default::default()
+        };
+        return Ok(solve(world, start, goal, &config, budget));
+    };
+    let text = read_text(path)?;
+    let roadmap = Roadmap::from_json(text.as_bytes(), world)
+        .map_err(|e| bad_input(format!("--load-roadmap {}: {e}", path.display())))?;
+    if roadmap.is_lazy() != lazy {
+        let built = if roadmap.is_lazy() { "lazy-prm" } else { "prm" };
+        return Err(bad_input(format!(
+            "--load-roadmap {}: the roadmap was built by --planner {built}; use that planner",
+            path.display()
+        )));
+    }
+    Ok(solve_from(world, roadmap, start, goal, 0, budget))
 }
 
 /// `--planner voxel`: the voxel grid over the world, one query; the result as a sampling

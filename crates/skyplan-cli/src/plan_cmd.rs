@@ -90,6 +90,7 @@ pub(crate) fn resolve(args: PlanArgs) -> Result<Options> {
             ));
         }
         PlannerArg::Prm
+        | PlannerArg::LazyPrm
         | PlannerArg::RrtConnect
         | PlannerArg::RrtStar
         | PlannerArg::Voxel
@@ -294,12 +295,14 @@ fn write_plot(
         pruned_path_ne: &waypoints,
         start_ne: Some((o.start.north_m, o.start.east_m)),
         goal_ne: Some((o.goal.north_m, o.goal.east_m)),
+        graph_ne: &[],
+        connectors_ne: &[],
     };
     let bytes = skyplan_plot::render(&scene, format, 1000, 1000).or_exit(Kind::Runtime)?;
     write_atomic(path, &bytes)
 }
 
-fn short_name(map_name: &str) -> &str {
+pub(crate) fn short_name(map_name: &str) -> &str {
     if map_name == BUNDLED_NAME {
         return "FCND city map";
     }

@@ -61,7 +61,11 @@ pub fn run(args: ScenArgs) -> Result<()> {
                 "--planner theta finds any-angle paths; MovingAI lengths are octile: use jps-plus, jps, astar or dijkstra",
             ));
         }
-        PlannerArg::Prm | PlannerArg::RrtConnect | PlannerArg::RrtStar | PlannerArg::Voxel => {
+        PlannerArg::Prm
+        | PlannerArg::LazyPrm
+        | PlannerArg::RrtConnect
+        | PlannerArg::RrtStar
+        | PlannerArg::Voxel => {
             return Err(bad_input(
                 "scen replays grid scenarios: prm, rrt-connect, rrt-star and voxel are 3D planners for `skyplan plan`",
             ));

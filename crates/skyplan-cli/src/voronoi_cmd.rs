@@ -56,11 +56,12 @@ pub fn run(args: PlanArgs) -> Result<()> {
             "--planner voronoi needs an FCND colliders map (--map FILE.csv, or the bundled map)",
         ));
     }
-    if args.plot.is_some() {
-        return Err(bad_input(
-            "--plot: pictures of the Voronoi roadmap are not available yet; omit --plot",
-        ));
-    }
+    let plot_format = match &args.plot {
+        Some(path) => Some(skyplan_plot::PlotFormat::from_path(path).ok_or_else(|| {
+            bad_input(format!("--plot {}: expected .png or .svg", path.display()))
+        })?),
+        None => None,
+    };
     let cfg = match &args.config {
         Some(path) => Config::load(path)?,
         None => Config::default(),
@@ -158,7 +159,7 @@ pub fn run(args: PlanArgs) -> Result<()> {
     let mission =
         Mission::from_points_nea(&frame, &points, start_heading_rad).or_exit(Kind::BadInput)?;
     let stats = roadmap.stats();
-    let summary = json!({
+    let mut summary = json!({
         "map": map_name,
         "obstacles": map.boxes.len(),
         "home": { "lat_deg": map.home.lat_deg, "lon_deg": map.home.lon_deg },
@@ -182,8 +183,24 @@ pub fn run(args: PlanArgs) -> Result<()> {
         "search_time_us": query_us,
         "outputs": { "waypoints": out.display().to_string(), "format": format.name() },
     });
+    if let Some(p) = &args.plot {
+        summary["outputs"]["plot"] = json!(p.display().to_string());
+    }
     let bytes = skyplan_export::encode(format, &mission, &summary).or_exit(Kind::Runtime)?;
     write_atomic(&out, &bytes)?;
+    if let (Some(path), Some(plot_format)) = (&args.plot, plot_format) {
+        let picture = Picture {
+            map: &map,
+            grid: &grid,
+            roadmap: &roadmap,
+            route: &route,
+            start,
+            goal,
+            spec,
+            map_name: &map_name,
+        };
+        write_atomic(path, &picture.render(plot_format)?)?;
+    }
     if args.json {
         let mut full = summary;
         full["status"] = json!("ok");
@@ -229,6 +246,72 @@ pub fn run(args: PlanArgs) -> Result<()> {
             mission.waypoints.len()
         );
         println!("wrote      {} ({})", out.display(), format.name());
+        if let Some(path) = &args.plot {
+            println!("wrote      {} (picture)", path.display());
+        }
     }
     Ok(())
+}
+
+/// What `--plot` draws: the grid, the footprints, the Voronoi graph, the connectors, the graph
+/// route before the shortcut and the waypoints.
+struct Picture<'a> {
+    map: &'a skyplan_map::colliders::CollidersMap,
+    grid: &'a Grid2,
+    roadmap: &'a Roadmap,
+    route: &'a skyplan_roadmap::Route,
+    start: (f64, f64),
+    goal: (f64, f64),
+    spec: GridSpec,
+    map_name: &'a str,
+}
+
+impl Picture<'_> {
+    fn render(&self, format: skyplan_plot::PlotFormat) -> Result<Vec<u8>> {
+        let spec = self.spec;
+        let obstacles: Vec<_> = self
+            .map
+            .boxes
+            .iter()
+            .filter(|b| {
+                b.top_m() + spec.safety_m > spec.alt_m && b.bottom_m() - spec.safety_m < spec.alt_m
+            })
+            .copied()
+            .collect();
+        let seg = |a: [f64; 2], b: [f64; 2]| ((a[0], a[1]), (b[0], b[1]));
+        let graph: Vec<_> = self.roadmap.edges().map(|(a, b)| seg(a, b)).collect();
+        let mut connectors = Vec::new();
+        for end in [self.start, self.goal] {
+            let p = [end.0, end.1];
+            for q in self.roadmap.connector_nodes(self.grid, p) {
+                connectors.push(seg(p, q));
+            }
+        }
+        let raw: Vec<_> = self.route.raw_ne.iter().map(|p| (p[0], p[1])).collect();
+        let waypoints: Vec<_> = self.route.points_ne.iter().map(|p| (p[0], p[1])).collect();
+        let how = if self.route.fallback.is_some() {
+            "grid fallback"
+        } else {
+            "Voronoi roadmap"
+        };
+        let scene = skyplan_plot::Scene {
+            title: format!(
+                "{}, {how} at {} m, {} m margin: {:.1} m, {} waypoints",
+                crate::plan_cmd::short_name(self.map_name),
+                spec.alt_m,
+                spec.safety_m,
+                self.route.cost_m,
+                waypoints.len()
+            ),
+            grid: self.grid,
+            obstacles: &obstacles,
+            raw_path_ne: &raw,
+            pruned_path_ne: &waypoints,
+            start_ne: Some(self.start),
+            goal_ne: Some(self.goal),
+            graph_ne: &graph,
+            connectors_ne: &connectors,
+        };
+        skyplan_plot::render(&scene, format, 1000, 1000).or_exit(Kind::Runtime)
+    }
 }

@@ -62,3 +62,51 @@ fn voronoi_refuses_a_start_inside_a_margin() {
         .code(2);
     assert!(!dir.path().join("waypoints.json").exists());
 }
+
+#[test]
+fn voronoi_plot_draws_the_graph_connectors_and_route() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, magic) in [
+        ("voronoi.svg", &b"<svg"[..]),
+        ("voronoi.png", &b"\x89PNG"[..]),
+    ] {
+        let out = skyplan(dir.path())
+            .args([
+                "plan",
+                "--planner",
+                "voronoi",
+                "--goal-ne",
+                "420,390",
+                "--json",
+            ])
+            .args(["--out", "route.json", "--plot", name])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["outputs"]["plot"], name);
+        let bytes = std::fs::read(dir.path().join(name)).unwrap();
+        assert!(bytes.starts_with(magic), "{name}");
+        if name.ends_with(".svg") {
+            let svg = String::from_utf8(bytes).unwrap();
+            let edges = v["edges"].as_u64().unwrap();
+            assert!(svg.contains(&format!("roadmap ({edges} edges)")), "legend");
+            assert!(svg.contains("connectors ("), "legend");
+            assert!(svg.contains("graph route ("), "legend");
+            assert!(svg.contains("waypoints ("), "legend");
+        }
+    }
+    let out = skyplan(dir.path())
+        .args(["plan", "--planner", "voronoi", "--plot", "voronoi.jpg"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        !dir.path().join("waypoints.json").exists(),
+        "nothing written on bad input"
+    );
+}

@@ -72,6 +72,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pruned_path_ne: &pruned,
         start_ne: Some(start),
         goal_ne: Some(goal),
+        graph_ne: &[],
+        connectors_ne: &[],
     };
 
     let t = Instant::now();

@@ -12,6 +12,8 @@ use crate::{PlotError, Scene};
 
 const CSPACE_COLOR: RGBColor = RGBColor(204, 207, 212);
 const OBSTACLE_COLOR: RGBColor = RGBColor(92, 95, 102);
+const GRAPH_COLOR: RGBColor = RGBColor(120, 175, 225);
+const CONNECTOR_COLOR: RGBColor = RGBColor(160, 60, 190);
 const RAW_COLOR: RGBColor = RGBColor(255, 127, 14);
 const PRUNED_COLOR: RGBColor = RGBColor(31, 96, 196);
 const START_COLOR: RGBColor = RGBColor(0, 170, 60);
@@ -75,6 +77,22 @@ pub(crate) fn draw<DB: DrawingBackend>(
             Rectangle::new([nw, se], OBSTACLE_COLOR.filled())
         }))
         .map_err(err)?;
+
+    // A roadmap's edges thin and light, its connectors a little stronger.
+    let graph_style = GRAPH_COLOR.stroke_width(px(1.0 * k));
+    let connector_style = CONNECTOR_COLOR.stroke_width(px(2.0 * k));
+    for (segments, style) in [
+        (scene.graph_ne, graph_style),
+        (scene.connectors_ne, connector_style),
+    ] {
+        chart
+            .draw_series(
+                segments
+                    .iter()
+                    .map(|&((n0, e0), (n1, e1))| PathElement::new(vec![(e0, n0), (e1, n1)], style)),
+            )
+            .map_err(err)?;
+    }
 
     // Paths: the raw grid path thin, the pruned one thick with a circle at each waypoint.
     let en = |&(n, e): &(f64, f64)| (e, n);
@@ -209,14 +227,15 @@ pub(crate) fn draw<DB: DrawingBackend>(
             },
         )?;
     }
-    draw_legend(root, l, mode, (raw_style, pruned_style), (r_wp, r_end))
+    let styles = [graph_style, connector_style, raw_style, pruned_style];
+    draw_legend(root, l, mode, styles, (r_wp, r_end))
 }
 
 fn draw_legend<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     l: &PlotLayout,
     mode: TextMode,
-    (raw_style, pruned_style): (ShapeStyle, ShapeStyle),
+    [graph_style, connector_style, raw_style, pruned_style]: [ShapeStyle; 4],
     (r_wp, r_end): (u32, u32),
 ) -> Result<(), PlotError> {
     let legend = &l.legend;
@@ -243,6 +262,8 @@ fn draw_legend<DB: DrawingBackend>(
         match entry.kind {
             LegendKind::CSpace => root.draw(&swatch(CSPACE_COLOR)),
             LegendKind::Obstacle => root.draw(&swatch(OBSTACLE_COLOR)),
+            LegendKind::Graph => root.draw(&line(graph_style)),
+            LegendKind::Connector => root.draw(&line(connector_style)),
             LegendKind::Raw => root.draw(&line(raw_style)),
             LegendKind::Pruned => root
                 .draw(&line(pruned_style))

@@ -65,6 +65,8 @@ pub(crate) struct LegendEntry {
 pub(crate) enum LegendKind {
     CSpace,
     Obstacle,
+    Graph,
+    Connector,
     Raw,
     Pruned,
     Start,
@@ -115,7 +117,7 @@ impl PlotLayout {
     /// let grid = Grid2::from_ascii("....\n....")?;
     /// let scene = Scene {
     ///     title: String::new(), grid: &grid, obstacles: &[], raw_path_ne: &[],
-    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None,
+    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[],
     /// };
     /// let l = layout(&scene, 800, 600)?;
     /// let (x0, y0, _w, h) = l.plot_area();
@@ -265,10 +267,27 @@ fn legend_entries(scene: &Scene) -> Vec<LegendEntry> {
             format!("{n} points")
         }
     };
+    if !scene.graph_ne.is_empty() {
+        push(
+            LegendKind::Graph,
+            format!("roadmap ({} edges)", scene.graph_ne.len()),
+        );
+    }
+    if !scene.connectors_ne.is_empty() {
+        push(
+            LegendKind::Connector,
+            format!("connectors ({})", scene.connectors_ne.len()),
+        );
+    }
     if !scene.raw_path_ne.is_empty() {
+        let what = if scene.graph_ne.is_empty() {
+            "grid path"
+        } else {
+            "graph route"
+        };
         push(
             LegendKind::Raw,
-            format!("grid path ({})", points(scene.raw_path_ne.len())),
+            format!("{what} ({})", points(scene.raw_path_ne.len())),
         );
     }
     if !scene.pruned_path_ne.is_empty() {

@@ -31,6 +31,8 @@
 //!     pruned_path_ne: &[path[0], path[2]],
 //!     start_ne: Some(path[0]),
 //!     goal_ne: Some(path[2]),
+//!     graph_ne: &[],
+//!     connectors_ne: &[],
 //! };
 //! let png = render_png(&scene, 640, 480)?;
 //! assert_eq!(&png[1..4], b"PNG");
@@ -84,7 +86,15 @@ pub struct Scene<'a> {
     pub start_ne: Option<(f64, f64)>,
     /// The goal, if any.
     pub goal_ne: Option<(f64, f64)>,
+    /// Edges of a roadmap (e.g. a Voronoi graph), drawn thin and light under everything else;
+    /// empty for none. With edges, the raw path is labelled as the graph route.
+    pub graph_ne: &'a [Segment],
+    /// Connectors from the start and the goal to the roadmap, drawn thin; empty for none.
+    pub connectors_ne: &'a [Segment],
 }
+
+/// A segment between two (north, east) points, metres.
+pub type Segment = ((f64, f64), (f64, f64));
 
 impl Scene<'_> {
     fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
@@ -94,6 +104,12 @@ impl Scene<'_> {
             .copied()
             .chain(self.start_ne)
             .chain(self.goal_ne)
+            .chain(
+                self.graph_ne
+                    .iter()
+                    .chain(self.connectors_ne)
+                    .flat_map(|&(a, b)| [a, b]),
+            )
     }
 }
 

@@ -75,6 +75,8 @@ fn scene(f: &Fixture) -> Scene<'_> {
         pruned_path_ne: &f.pruned,
         start_ne: f.pruned.first().copied(),
         goal_ne: f.pruned.last().copied(),
+        graph_ne: &[],
+        connectors_ne: &[],
     }
 }
 
@@ -213,6 +215,8 @@ fn north_is_up_east_is_right_and_scales_are_equal() {
         pruned_path_ne: &[],
         start_ne: None,
         goal_ne: None,
+        graph_ne: &[],
+        connectors_ne: &[],
     };
     let (w, h) = (500, 500);
     let l = layout(&scene, w, h).unwrap();
@@ -375,6 +379,8 @@ fn empty_scene_and_points_outside_the_grid_still_render() {
         pruned_path_ne: &[],
         start_ne: None,
         goal_ne: None,
+        graph_ne: &[],
+        connectors_ne: &[],
     };
     Image::decode(&render_png(&empty, 300, 300).unwrap());
     let f = fixture();

@@ -116,6 +116,9 @@ pub struct Route {
     pub cost_m: f64,
     /// Length before the greedy shortcut, metres.
     pub graph_cost_m: f64,
+    /// The route before the greedy shortcut: start, connector, graph nodes, connector, goal (or
+    /// the JPS cells on a fallback). Its length is `graph_cost_m`.
+    pub raw_ne: Vec<Ne>,
     /// `None` when the route runs on the Voronoi graph; otherwise why the grid (JPS) was used.
     pub fallback: Option<String>,
     /// Checked connectors from the start / to the goal that were kept.
@@ -494,6 +497,18 @@ impl Roadmap {
     /// Up to `spec.candidates` nodes joined to `p` by a free segment, among the `spec.max_tries`
     /// nearest; at most half of them from any one component while others are available, so a
     /// nearby fragment cannot crowd out the main graph.
+    /// The graph nodes a query at `p` links to through checked connectors (the candidates
+    /// [`Roadmap::query`] offers A\*); for pictures.
+    pub fn connector_nodes(&self, grid: &Grid2, p: Ne) -> Vec<Ne> {
+        if !point_free(grid, p) {
+            return Vec::new();
+        }
+        self.connectors(grid, p)
+            .into_iter()
+            .map(|(v, _)| self.nodes[v as usize])
+            .collect()
+    }
+
     fn connectors(&self, grid: &Grid2, p: Ne) -> Vec<(u32, f64)> {
         let mut order: Vec<(f64, u32)> = self
             .nodes
@@ -583,6 +598,7 @@ impl Roadmap {
             cost_m: polyline_length_m(&points_ne),
             graph_cost_m,
             points_ne,
+            raw_ne: raw,
             fallback,
             connectors,
             expansions,

@@ -216,6 +216,9 @@ impl Solution {
 pub enum PlannerKind {
     /// Probabilistic roadmap (k-nearest, grown until start and goal connect), then graph A\*.
     Prm,
+    /// Lazy PRM (Bohlin & Kavraki): the same roadmap with unchecked edges; only the edges of a
+    /// found path are checked, blocked ones removed, and the search repeated.
+    LazyPrm,
     /// Bidirectional RRT; stops at the first solution.
     RrtConnect,
     /// Asymptotically optimal RRT\* with informed sampling once a solution exists; uses the whole
@@ -224,10 +227,11 @@ pub enum PlannerKind {
 }
 
 impl PlannerKind {
-    /// The name used on the command line: `prm`, `rrt-connect`, `rrt-star`.
+    /// The name used on the command line: `prm`, `lazy-prm`, `rrt-connect`, `rrt-star`.
     pub fn name(self) -> &'static str {
         match self {
             PlannerKind::Prm => "prm",
+            PlannerKind::LazyPrm => "lazy-prm",
             PlannerKind::RrtConnect => "rrt-connect",
             PlannerKind::RrtStar => "rrt-star",
         }
@@ -270,33 +274,79 @@ impl Default for Request {
 /// The returned path's first point is `request.start` and, when the status is
 /// [`Status::Exact`], its last point is `request.goal`, bit for bit.
 pub fn plan(checker: &impl CollisionChecker, kind: PlannerKind, request: &Request) -> Solution {
+    run_plan(checker, kind, request, None)
+}
+
+/// [`plan`], also returning what the planner grew, as segments for pictures: the trees' edges
+/// for RRT-Connect (both trees) and RRT\*, the roadmap's edges for PRM (lazy PRM: also edges it
+/// has not checked). They are collected after the run, so the solution (and its timings) is
+/// that of [`plan`].
+pub fn plan_with_tree(
+    checker: &impl CollisionChecker,
+    kind: PlannerKind,
+    request: &Request,
+) -> (Solution, Vec<(Neu, Neu)>) {
+    let mut edges = Vec::new();
+    let solution = run_plan(checker, kind, request, Some(&mut edges));
+    (solution, edges)
+}
+
+fn run_plan(
+    checker: &impl CollisionChecker,
+    kind: PlannerKind,
+    request: &Request,
+    edges: Option<&mut Vec<(Neu, Neu)>>,
+) -> Solution {
     let mut solution = match kind {
-        PlannerKind::Prm => {
+        PlannerKind::Prm | PlannerKind::LazyPrm => {
             let config = prm::PrmConfig {
                 seed: request.seed,
+                lazy: kind == PlannerKind::LazyPrm,
                 ..prm::PrmConfig::default()
             };
-            prm::solve(
+            let (roadmap, solution) = prm::solve(
                 checker,
                 request.start,
                 request.goal,
                 &config,
                 request.budget,
-            )
-            .1
+            );
+            if let Some(edges) = edges {
+                let points = roadmap.vertices();
+                edges.extend(
+                    roadmap
+                        .edge_list()
+                        .into_iter()
+                        .map(|(a, b)| (points[a as usize], points[b as usize])),
+                );
+            }
+            solution
         }
         PlannerKind::RrtConnect => {
             let config = rrt_connect::RrtConnectConfig {
                 seed: request.seed,
                 range_m: request.range_m,
             };
-            rrt_connect::solve(
-                checker,
-                request.start,
-                request.goal,
-                &config,
-                request.budget,
-            )
+            match edges {
+                Some(edges) => {
+                    let (solution, tree) = rrt_connect::solve_with_tree(
+                        checker,
+                        request.start,
+                        request.goal,
+                        &config,
+                        request.budget,
+                    );
+                    edges.extend(tree);
+                    solution
+                }
+                None => rrt_connect::solve(
+                    checker,
+                    request.start,
+                    request.goal,
+                    &config,
+                    request.budget,
+                ),
+            }
         }
         PlannerKind::RrtStar => {
             let config = rrt_star::RrtStarConfig {
@@ -304,13 +354,26 @@ pub fn plan(checker: &impl CollisionChecker, kind: PlannerKind, request: &Reques
                 range_m: request.range_m,
                 ..rrt_star::RrtStarConfig::default()
             };
-            rrt_star::solve(
-                checker,
-                request.start,
-                request.goal,
-                &config,
-                request.budget,
-            )
+            match edges {
+                Some(edges) => {
+                    let (solution, tree) = rrt_star::solve_with_tree(
+                        checker,
+                        request.start,
+                        request.goal,
+                        &config,
+                        request.budget,
+                    );
+                    edges.extend(tree);
+                    solution
+                }
+                None => rrt_star::solve(
+                    checker,
+                    request.start,
+                    request.goal,
+                    &config,
+                    request.budget,
+                ),
+            }
         }
     };
     if request.simplify && solution.status == Status::Exact {
@@ -349,6 +412,18 @@ pub(crate) fn steer(from: Neu, to: Neu, range_m: f64) -> Neu {
         from[1] + (to[1] - from[1]) * s,
         from[2] + (to[2] - from[2]) * s,
     ]
+}
+
+/// Every (child, parent) edge of a tree given by parent links (the root is its own parent).
+pub(crate) fn tree_edges<'a>(
+    points: &'a [Neu],
+    parent: &'a [u32],
+) -> impl Iterator<Item = (Neu, Neu)> + 'a {
+    parent
+        .iter()
+        .enumerate()
+        .filter(|&(v, &p)| p as usize != v)
+        .map(|(v, &p)| (points[v], points[p as usize]))
 }
 
 /// Walks parent links from `node` to the root and returns the points root-first.

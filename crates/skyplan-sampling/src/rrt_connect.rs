@@ -21,7 +21,7 @@
 use crate::nearest::NearIndex;
 use crate::{
     Budget, Clock, CollisionChecker, Neu, Solution, Status, default_range_m, sample_in, steer,
-    trace,
+    trace, tree_edges,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -87,6 +87,38 @@ pub fn solve(
     config: &RrtConnectConfig,
     budget: Budget,
 ) -> Solution {
+    run(checker, start, goal, config, budget, None)
+}
+
+/// [`solve`], also returning the edges of both trees (child, parent) for pictures; collected
+/// after the run, so the timings are those of [`solve`].
+pub fn solve_with_tree(
+    checker: &impl CollisionChecker,
+    start: Neu,
+    goal: Neu,
+    config: &RrtConnectConfig,
+    budget: Budget,
+) -> (Solution, Vec<(Neu, Neu)>) {
+    let mut edges = Vec::new();
+    let solution = run(checker, start, goal, config, budget, Some(&mut edges));
+    (solution, edges)
+}
+
+fn run(
+    checker: &impl CollisionChecker,
+    start: Neu,
+    goal: Neu,
+    config: &RrtConnectConfig,
+    budget: Budget,
+    mut edges: Option<&mut Vec<(Neu, Neu)>>,
+) -> Solution {
+    let mut keep = |a: &Tree, b: &Tree| {
+        if let Some(edges) = edges.as_deref_mut() {
+            for t in [a, b] {
+                edges.extend(tree_edges(&t.points, &t.parent));
+            }
+        }
+    };
     let mut clock = Clock::start(budget);
     if !checker.is_free(start) {
         return Solution::failed(Status::InvalidStart, 0, 0, clock.elapsed_us());
@@ -143,7 +175,9 @@ pub fn solve(
                             from_a.reverse();
                         }
                         let vertices = a.points.len() + b.points.len();
-                        return finish(Status::Exact, from_a, &clock, vertices);
+                        let solution = finish(Status::Exact, from_a, &clock, vertices);
+                        keep(&a, &b);
+                        return solution;
                     }
                 }
             }
@@ -151,10 +185,12 @@ pub fn solve(
         std::mem::swap(&mut a, &mut b);
         a_is_start = !a_is_start;
     }
-    Solution::failed(
+    let solution = Solution::failed(
         Status::Timeout,
         clock.iterations(),
         a.points.len() + b.points.len(),
         clock.elapsed_us(),
-    )
+    );
+    keep(&a, &b);
+    solution
 }

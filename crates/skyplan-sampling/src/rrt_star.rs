@@ -24,7 +24,7 @@
 use crate::nearest::NearIndex;
 use crate::{
     Budget, Clock, CollisionChecker, Neu, Solution, Status, default_range_m, sample_in, steer,
-    trace,
+    trace, tree_edges,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -156,6 +156,31 @@ pub fn solve(
     goal: Neu,
     config: &RrtStarConfig,
     budget: Budget,
+) -> Solution {
+    run(checker, start, goal, config, budget, None)
+}
+
+/// [`solve`], also returning the final tree's edges (child, parent) for pictures; collected
+/// after the run, so the timings are those of [`solve`].
+pub fn solve_with_tree(
+    checker: &impl CollisionChecker,
+    start: Neu,
+    goal: Neu,
+    config: &RrtStarConfig,
+    budget: Budget,
+) -> (Solution, Vec<(Neu, Neu)>) {
+    let mut edges = Vec::new();
+    let solution = run(checker, start, goal, config, budget, Some(&mut edges));
+    (solution, edges)
+}
+
+fn run(
+    checker: &impl CollisionChecker,
+    start: Neu,
+    goal: Neu,
+    config: &RrtStarConfig,
+    budget: Budget,
+    edges: Option<&mut Vec<(Neu, Neu)>>,
 ) -> Solution {
     let mut clock = Clock::start(budget);
     if !checker.is_free(start) {
@@ -302,5 +327,8 @@ pub fn solve(
     solution.vertices = vertices;
     solution.elapsed_us = clock.elapsed_us();
     solution.first_solution_us = first_solution_us;
+    if let Some(edges) = edges {
+        edges.extend(tree_edges(&tree.points, &tree.parent));
+    }
     solution
 }
