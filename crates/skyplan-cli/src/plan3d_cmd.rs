@@ -3,15 +3,13 @@
 //! voxel A* (altitude layers, climb cost). Every segment of the result is re-checked against every
 //! box before anything is written.
 
-use crate::args::{Pair, PlanArgs, PlannerArg, parse_finite};
-use crate::config::Config;
+use crate::args::{PlanArgs, PlannerArg, parse_finite};
 use crate::exit::{Classify, Failure, Kind, Result, bad_input};
-use crate::files::{BUNDLED_COLLIDERS, BUNDLED_NAME, read_text, write_atomic};
+use crate::files::{read_text, write_atomic};
 use anyhow::anyhow;
 use clap::Args;
 use serde_json::json;
 use skyplan_export::Format;
-use skyplan_frames::{Lla, LocalFrame};
 use skyplan_mission::Mission;
 use skyplan_sampling::{Budget, PlannerKind, Request, Status};
 use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, WorldSpec, distance_m};
@@ -95,28 +93,6 @@ pub fn handles(args: &PlanArgs) -> Result<bool> {
     Ok(false)
 }
 
-fn ne_of(
-    frame: &LocalFrame,
-    ne: Option<Pair>,
-    lla: Option<Pair>,
-    what: &str,
-) -> Result<Option<(f64, f64)>> {
-    if let Some(p) = ne {
-        return Ok(Some((p.0, p.1)));
-    }
-    let Some(p) = lla else {
-        return Ok(None);
-    };
-    let ned = frame
-        .ned_from_lla(Lla {
-            lat_deg: p.0,
-            lon_deg: p.1,
-            alt_m: 0.0,
-        })
-        .map_err(|e| bad_input(format!("--{what}-lla: {e}")))?;
-    Ok(Some((ned.north_m, ned.east_m)))
-}
-
 /// Runs a 3D planner.
 pub fn run(args: PlanArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -139,37 +115,16 @@ pub fn run(args: PlanArgs) -> Result<()> {
             p.display()
         )));
     }
-    let cfg = match &args.config {
-        Some(path) => Config::load(path)?,
-        None => Config::default(),
-    };
-    let map_path = args.map.clone().or(cfg.map.clone());
-    let (map_name, text) = match &map_path {
-        Some(path) => (path.display().to_string(), read_text(path)?),
-        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
-    };
-    let map = skyplan_map::colliders::parse_colliders(&text)
-        .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
-    let frame = LocalFrame::new(Lla {
-        lat_deg: map.home.lat_deg,
-        lon_deg: map.home.lon_deg,
-        alt_m: 0.0,
-    })
-    .map_err(|e| bad_input(format!("{map_name}: home: {e}")))?;
-
-    let alt_m = args.alt_m.or(cfg.alt_m).unwrap_or(5.0);
-    let safety_m = args.safety_m.or(cfg.safety_m).unwrap_or(5.0);
-    let pair = |p: Option<[f64; 2]>| p.map(|[a, b]| Pair(a, b));
-    let start_ne = match ne_of(&frame, args.start_ne, args.start_lla, "start")? {
-        Some(ne) => Some(ne),
-        None => ne_of(&frame, pair(cfg.start_ne), pair(cfg.start_lla), "start")?,
-    }
-    .unwrap_or((0.0, 0.0));
-    let goal_ne = match ne_of(&frame, args.goal_ne, args.goal_lla, "goal")? {
-        Some(ne) => Some(ne),
-        None => ne_of(&frame, pair(cfg.goal_ne), pair(cfg.goal_lla), "goal")?,
-    }
-    .unwrap_or(crate::plan_cmd::DEFAULT_GOAL_NE);
+    let crate::colliders_query::CollidersQuery {
+        map_name,
+        map,
+        frame,
+        cfg,
+        alt_m,
+        safety_m,
+        start_ne,
+        goal_ne,
+    } = crate::colliders_query::resolve(&args)?;
     let start: Neu = [
         start_ne.0,
         start_ne.1,
