@@ -9,7 +9,6 @@ use crate::files::{read_text, write_atomic};
 use anyhow::anyhow;
 use clap::Args;
 use serde_json::json;
-use skyplan_export::Format;
 use skyplan_mission::Mission;
 use skyplan_sampling::{Budget, PlannerKind, Request, Status};
 use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, WorldSpec, distance_m};
@@ -149,24 +148,10 @@ pub fn run(args: PlanArgs) -> Result<()> {
         .or(cfg.start_heading_deg)
         .unwrap_or(0.0)
         .to_radians();
-    let out = args
-        .out
-        .clone()
-        .or(cfg.out.clone())
-        .unwrap_or_else(|| PathBuf::from("waypoints.json"));
-    let format = match args.format.clone().or(cfg.format.clone()) {
-        Some(name) => Format::from_name(&name).ok_or_else(|| {
-            bad_input(format!(
-                "--format: expected json, csv, hdf5, geojson or plan, found {name:?}"
-            ))
-        })?,
-        None => Format::from_path(&out).ok_or_else(|| {
-            bad_input(format!(
-                "--out {}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or --format",
-                out.display()
-            ))
-        })?,
-    };
+    let (out, format) = crate::plan_cmd::output_file(
+        args.out.clone().or(cfg.out.clone()),
+        args.format.clone().or(cfg.format.clone()),
+    )?;
 
     let min_alt_m = args.plan3d.min_alt_m.unwrap_or(0.0);
     if min_alt_m >= max_alt_m {

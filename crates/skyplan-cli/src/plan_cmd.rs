@@ -46,6 +46,26 @@ fn position(
         .or(cfg_lla.map(|[a, b]| from_lla(Pair(a, b))))
 }
 
+/// The waypoint file and its format: the given path (or `waypoints.json`), and the given format
+/// name (or the file's extension).
+pub(crate) fn output_file(
+    out: Option<PathBuf>,
+    format: Option<String>,
+) -> Result<(PathBuf, Format)> {
+    let out = out.unwrap_or_else(|| PathBuf::from("waypoints.json"));
+    let format = match format {
+        Some(name) => Format::from_name(&name)
+            .ok_or_else(|| bad_input(format!("--format: expected json, csv, hdf5, geojson or plan, found {name:?}")))?,
+        None => Format::from_path(&out).ok_or_else(|| {
+            bad_input(format!(
+                "--out {}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or --format",
+                out.display()
+            ))
+        })?,
+    };
+    Ok((out, format))
+}
+
 pub(crate) fn resolve(args: PlanArgs) -> Result<Options> {
     let cfg = match &args.config {
         Some(path) => Config::load(path)?,
@@ -136,20 +156,7 @@ pub(crate) fn resolve(args: PlanArgs) -> Result<Options> {
         .or(cfg.start_heading_deg)
         .unwrap_or(0.0)
         .to_radians();
-    let out = args
-        .out
-        .or(cfg.out)
-        .unwrap_or_else(|| PathBuf::from("waypoints.json"));
-    let format = match args.format.or(cfg.format) {
-        Some(name) => Format::from_name(&name)
-            .ok_or_else(|| bad_input(format!("--format: expected json, csv, hdf5, geojson or plan, found {name:?}")))?,
-        None => Format::from_path(&out).ok_or_else(|| {
-            bad_input(format!(
-                "--out {}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or --format",
-                out.display()
-            ))
-        })?,
-    };
+    let (out, format) = output_file(args.out.or(cfg.out), args.format.or(cfg.format))?;
     let plot = args.plot.or(cfg.plot);
     if let Some(p) = &plot
         && skyplan_plot::PlotFormat::from_path(p).is_none()

@@ -8,10 +8,8 @@ use crate::files::write_atomic;
 use anyhow::anyhow;
 use serde_json::json;
 use skyplan_cspace::{Grid2, GridSpec};
-use skyplan_export::Format;
 use skyplan_mission::Mission;
 use skyplan_roadmap::{Roadmap, RoadmapError, RoadmapSpec};
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// True if `plan` runs here.
@@ -54,24 +52,10 @@ pub fn run(args: PlanArgs) -> Result<()> {
         .or(cfg.start_heading_deg)
         .unwrap_or(0.0)
         .to_radians();
-    let out = args
-        .out
-        .clone()
-        .or(cfg.out.clone())
-        .unwrap_or_else(|| PathBuf::from("waypoints.json"));
-    let format = match args.format.clone().or(cfg.format.clone()) {
-        Some(name) => Format::from_name(&name).ok_or_else(|| {
-            bad_input(format!(
-                "--format: expected json, csv, hdf5, geojson or plan, found {name:?}"
-            ))
-        })?,
-        None => Format::from_path(&out).ok_or_else(|| {
-            bad_input(format!(
-                "--out {}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or --format",
-                out.display()
-            ))
-        })?,
-    };
+    let (out, format) = crate::plan_cmd::output_file(
+        args.out.clone().or(cfg.out.clone()),
+        args.format.clone().or(cfg.format.clone()),
+    )?;
 
     let spec = GridSpec {
         alt_m,
