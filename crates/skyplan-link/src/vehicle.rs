@@ -416,6 +416,15 @@ impl SimServer {
                 }
             }
         }
+        // A mode or arming change made in the last iteration (the ground station may stop the
+        // simulator as soon as it sees it in a heartbeat) is still reported.
+        let s = vehicle.state();
+        if s.mode != last_mode {
+            note(SimNote::Mode(s.mode));
+        }
+        if s.armed != last_armed {
+            note(SimNote::Armed(s.armed));
+        }
         SimReport {
             sim_time_s: vehicle.state().time_s,
             wall_time_s: wall0.elapsed().as_secs_f64(),
