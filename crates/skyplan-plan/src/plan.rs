@@ -1,0 +1,199 @@
+//! [`Plan`]: a planned route with its statistics and the geometry pictures need.
+
+use crate::planner_id::PlannerId;
+use serde::Serialize;
+use serde_json::{Map, Value};
+use skyplan_cspace::Grid2;
+use skyplan_mission::Mission;
+use std::sync::Arc;
+
+/// A resolved start or goal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Place {
+    /// Metres north of the map's origin.
+    pub north_m: f64,
+    /// Metres east of the map's origin.
+    pub east_m: f64,
+    /// Altitude above home, metres.
+    pub alt_m: f64,
+    /// Latitude, degrees (maps with a geodetic home).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lat_deg: Option<f64>,
+    /// Longitude, degrees (maps with a geodetic home).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lon_deg: Option<f64>,
+    /// The grid cell `[row, col]` (grid planners).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cell: Option<[u32; 2]>,
+}
+
+impl std::fmt::Display for Place {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "N {:.2} m, E {:.2} m", self.north_m, self.east_m)?;
+        if let (Some(lat), Some(lon)) = (self.lat_deg, self.lon_deg) {
+            write!(f, " (lat {lat:.7}, lon {lon:.7})")?;
+        }
+        Ok(())
+    }
+}
+
+/// The grid a 2D planner ran on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GridInfo {
+    /// Rows (north).
+    pub rows: u32,
+    /// Columns (east).
+    pub cols: u32,
+    /// Cell size, metres.
+    pub cell_m: f64,
+    /// Southern edge, metres north of the origin.
+    pub origin_north_m: f64,
+    /// Western edge, metres east of the origin.
+    pub origin_east_m: f64,
+    /// Altitude of the slice, metres.
+    pub alt_m: f64,
+    /// Margin grown around obstacles, metres.
+    pub safety_m: f64,
+    /// Blocked cells.
+    pub blocked_cells: usize,
+}
+
+/// Latitude and longitude of the map's home.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Home {
+    /// Degrees.
+    pub lat_deg: f64,
+    /// Degrees.
+    pub lon_deg: f64,
+}
+
+/// Waypoint counts through the post-processing passes (grid planners).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct WaypointCounts {
+    /// Cells of the raw grid path.
+    pub grid_path: usize,
+    /// After collinearity pruning.
+    pub after_pruning: usize,
+    /// After the line-of-sight shortcut.
+    pub after_shortcut: usize,
+    /// Waypoints of the mission (with the exact start and goal).
+    pub mission: usize,
+}
+
+/// Wall time of each stage, microseconds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct Timings {
+    /// Building (or fetching from the session) the grid / world / roadmap.
+    pub grid_build_us: u64,
+    /// The search alone.
+    pub search_us: u64,
+    /// Pruning and shortcutting.
+    pub postprocess_us: u64,
+    /// The whole request.
+    pub total_us: u64,
+}
+
+/// A segment in north/east/altitude metres.
+pub type Segment3 = [[f64; 3]; 2];
+
+/// What pictures draw besides the route (only when the request asks for `geometry`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Geometry {
+    /// The route before post-processing: the grid path's cell centres, the voxel lattice path,
+    /// the roadmap route before shortcutting.
+    pub raw_path: Vec<[f64; 3]>,
+    /// Roadmap edges or tree edges.
+    pub edges: Vec<Segment3>,
+    /// What `edges` are (`PRM roadmap`, `RRT* tree`, `Voronoi graph`, …).
+    pub edges_label: String,
+    /// Connectors from the start and goal to a roadmap.
+    pub connectors: Vec<Segment3>,
+    /// A field over the grid's cells, row-major from the southern row (distance or
+    /// cost-to-go, cells; `inf` where unreachable).
+    #[serde(skip)]
+    pub field: Option<Vec<f64>>,
+    /// The obstacles that count at the altitude (2D planners on colliders maps).
+    #[serde(skip)]
+    pub active_boxes: Vec<skyplan_map::colliders::ObstacleBox>,
+}
+
+/// A planned route: waypoints from the exact start to the exact goal, every segment re-checked.
+#[derive(Debug, Clone, Serialize)]
+pub struct Plan {
+    /// Always `"ok"` (failures are `PlanFailure`s); kept so JSON readers can test one field.
+    pub status: &'static str,
+    /// The map's name.
+    pub map: String,
+    /// Obstacle boxes (colliders maps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub obstacles: Option<usize>,
+    /// The geodetic home.
+    pub home: Option<Home>,
+    /// The planner, by its CLI spelling.
+    pub planner: PlannerId,
+    /// The grid (2D planners).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grid: Option<GridInfo>,
+    /// The move model (grid planners): `8-connected, no corner cutting`, …
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub move_model: Option<&'static str>,
+    /// Where the route starts.
+    pub start: Place,
+    /// Where it ends.
+    pub goal: Place,
+    /// Length of the planner's route, metres (the octile cost of a grid path; the Euclidean
+    /// length of any-angle, roadmap and 3D routes).
+    pub cost_m: f64,
+    /// Length of the waypoints actually flown (after post-processing), metres, in 3D.
+    pub mission_length_m: f64,
+    /// Straight-line distance from start to goal, metres (a lower bound).
+    pub straight_line_m: f64,
+    /// Any-angle planners: the octile optimum between the same cells, for comparison.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub octile_optimum_m: Option<f64>,
+    /// Nodes the search expanded (samples for the sampling planners).
+    pub expansions: u64,
+    /// Cells of the grid path (grid planners).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path_cells: Option<usize>,
+    /// Orthogonal moves of the grid path.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub straight_moves: Option<u64>,
+    /// Diagonal moves of the grid path.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diagonal_moves: Option<u64>,
+    /// Waypoint counts through the passes (grid planners).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub waypoint_counts: Option<WaypointCounts>,
+    /// The search's wall time, microseconds.
+    pub search_time_us: u64,
+    /// Stage timings.
+    pub timings_us: Timings,
+    /// Waypoints `[north_m, east_m, alt_m, heading_rad]` (FCND's layout).
+    pub waypoints: Vec<[f64; 4]>,
+    /// Waypoints' `[lat_deg, lon_deg]` (maps with a geodetic home).
+    pub waypoints_lla: Option<Vec<[f64; 2]>>,
+    /// Planner-specific details (`roadmap`, `voxel`, `costmap`, `fallback`, …), flattened into
+    /// the JSON object.
+    #[serde(flatten)]
+    pub details: Map<String, Value>,
+    /// Pictures' geometry, when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geometry: Option<Geometry>,
+    /// The mission (maps with a geodetic home): waypoints with lat/lon and headings.
+    #[serde(skip)]
+    pub mission: Option<Mission>,
+    /// The grid the route was planned and checked on (2D planners).
+    #[serde(skip)]
+    pub grid_used: Option<Arc<Grid2>>,
+    /// The PRM roadmap as bytes, when the request asked to save it.
+    #[serde(skip)]
+    pub saved_roadmap: Option<Vec<u8>>,
+}
+
+impl Plan {
+    /// The waypoints as `[north_m, east_m, alt_m]` points.
+    pub fn points_nea(&self) -> Vec<[f64; 3]> {
+        self.waypoints.iter().map(|w| [w[0], w[1], w[2]]).collect()
+    }
+}

@@ -1,0 +1,259 @@
+//! The planner registry: one line per planner (name, family, capabilities, summary).
+//!
+//! Adding a planner to an existing family is one line in [`planners!`]; a new family adds its
+//! module and one arm in `Session::run_family` (an exhaustive match: the compiler lists what is
+//! missing).
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::fmt;
+use std::str::FromStr;
+
+/// How a planner finds its route (which module runs it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Family {
+    /// Best-first grid search (`skyplan-search`), then pruning and line-of-sight shortcutting.
+    Grid(skyplan_search::Planner),
+    /// The wavefront navigation function (`skyplan-navfn`): distance field, gradient descent.
+    Wavefront,
+    /// A\* over an inflated cost map (`skyplan-navfn`).
+    Costmap,
+    /// The Voronoi roadmap at the flight altitude (`skyplan-roadmap`).
+    Voronoi,
+    /// A sampling planner among the 3D boxes (`skyplan-sampling`).
+    Sampling(skyplan_sampling::PlannerKind),
+    /// Voxel A\* among the 3D boxes (`skyplan-voxel`).
+    Voxel,
+}
+
+/// How good the returned route is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Optimality {
+    /// Shortest among grid paths under the move model (checked against an exact oracle).
+    Exact,
+    /// Shortest for its objective (length + weight · cost), not for length alone.
+    ExactForObjective,
+    /// Any-angle: shorter than any grid path, not guaranteed shortest.
+    AnyAngle,
+    /// A free route with no optimality guarantee (roadmaps, sampling planners).
+    Feasible,
+    /// Improves towards the optimum with more time (RRT\*).
+    AsymptoticallyOptimal,
+}
+
+/// Which maps a planner takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MapKinds {
+    /// Every map: colliders (as a grid at the altitude), images, MovingAI, random, grids.
+    AnyGrid,
+    /// Only FCND colliders maps (it needs the boxes).
+    CollidersOnly,
+}
+
+/// What a planner can do, for help texts, `--json` and clients that choose one.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PlannerInfo {
+    /// The CLI spelling.
+    pub name: &'static str,
+    /// Human label used in summaries (`JPS+`, `Theta*`, …).
+    pub label: &'static str,
+    /// 2 for routes at one altitude, 3 for routes that change altitude.
+    pub dims: u8,
+    /// How good the route is.
+    pub optimality: Optimality,
+    /// Which maps it takes.
+    pub maps: MapKinds,
+    /// One line for help texts.
+    pub summary: &'static str,
+    /// Which module runs it.
+    #[serde(skip)]
+    pub family: Family,
+}
+
+macro_rules! planners {
+    ($( $(#[$doc:meta])* $variant:ident => $name:literal, $label:literal, $dims:literal, $family:expr, $opt:ident, $maps:ident, $summary:literal; )*) => {
+        /// Every planner skyplan has, by its CLI spelling (`jps-plus`, `rrt-star`, …).
+        ///
+        /// ```
+        /// use skyplan_plan::PlannerId;
+        /// let p: PlannerId = "rrt-star".parse().unwrap();
+        /// assert_eq!(p, PlannerId::RrtStar);
+        /// assert_eq!(p.to_string(), "rrt-star");
+        /// assert_eq!(p.info().dims, 3);
+        /// ```
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+        pub enum PlannerId {
+            $( $(#[$doc])* $variant, )*
+        }
+
+        impl PlannerId {
+            /// Every planner, in registry order.
+            pub const ALL: &'static [PlannerId] = &[$(PlannerId::$variant),*];
+
+            /// What the planner is and can do.
+            pub fn info(self) -> PlannerInfo {
+                match self {
+                    $(PlannerId::$variant => PlannerInfo {
+                        name: $name,
+                        label: $label,
+                        dims: $dims,
+                        optimality: Optimality::$opt,
+                        maps: MapKinds::$maps,
+                        summary: $summary,
+                        family: $family,
+                    },)*
+                }
+            }
+        }
+    };
+}
+
+use skyplan_sampling::PlannerKind as K;
+use skyplan_search::Planner as G;
+
+planners! {
+    /// Jump Point Search (the default).
+    #[default]
+    Jps => "jps", "JPS", 2, Family::Grid(G::Jps), Exact, AnyGrid,
+        "Jump Point Search: A*'s optimal costs, far fewer expansions (the default)";
+    /// JPS with precomputed jumps.
+    JpsPlus => "jps-plus", "JPS+", 2, Family::Grid(G::JpsPlus), Exact, AnyGrid,
+        "JPS+: JPS with every scan precomputed per grid; pays off over many queries";
+    /// A\* with the octile (or Manhattan) heuristic.
+    Astar => "astar", "A*", 2, Family::Grid(G::AStar), Exact, AnyGrid,
+        "A* with the octile (8-connected) or Manhattan (4-connected) heuristic";
+    /// Dijkstra.
+    Dijkstra => "dijkstra", "Dijkstra", 2, Family::Grid(G::Dijkstra), Exact, AnyGrid,
+        "Dijkstra (A* without a heuristic)";
+    /// Theta\*.
+    Theta => "theta", "Theta*", 2, Family::Grid(G::ThetaStar), AnyAngle, AnyGrid,
+        "Theta*: any-angle routes through cell centres, shorter than any grid path";
+    /// Wavefront navigation function.
+    Wavefront => "wavefront", "wavefront", 2, Family::Wavefront, Exact, AnyGrid,
+        "wavefront navigation function: distance field from the goal, then gradient descent";
+    /// Inflated cost map A\*.
+    Costmap => "costmap", "costmap A*", 2, Family::Costmap, ExactForObjective, AnyGrid,
+        "inflated cost map (Nav2-style): A* minimising length + weight x cost";
+    /// Voronoi roadmap.
+    Voronoi => "voronoi", "Voronoi roadmap", 2, Family::Voronoi, Feasible, CollidersOnly,
+        "Voronoi roadmap of the grown footprints at the altitude: exactly free edges, graph A*";
+    /// Probabilistic roadmap in 3D.
+    Prm => "prm", "PRM", 3, Family::Sampling(K::Prm), Feasible, CollidersOnly,
+        "3D probabilistic roadmap among the boxes (grown until start and goal connect)";
+    /// Lazy PRM in 3D.
+    LazyPrm => "lazy-prm", "lazy PRM", 3, Family::Sampling(K::LazyPrm), Feasible, CollidersOnly,
+        "3D lazy PRM: edges checked only on found paths";
+    /// RRT-Connect in 3D.
+    RrtConnect => "rrt-connect", "RRT-Connect", 3, Family::Sampling(K::RrtConnect), Feasible, CollidersOnly,
+        "3D RRT-Connect: bidirectional trees, stops at the first path";
+    /// Informed RRT\* in 3D.
+    RrtStar => "rrt-star", "RRT*", 3, Family::Sampling(K::RrtStar), AsymptoticallyOptimal, CollidersOnly,
+        "3D Informed RRT*: improves the path until the time limit";
+    /// Voxel A\* in 3D.
+    Voxel => "voxel", "voxel A*", 3, Family::Voxel, ExactForObjective, CollidersOnly,
+        "3D voxel A* (26-connected, altitude layers, climb cost): may climb over low buildings";
+}
+
+impl PlannerId {
+    /// The CLI spelling (`jps-plus`).
+    pub fn name(self) -> &'static str {
+        self.info().name
+    }
+
+    /// The planners that take this map kind.
+    pub fn for_maps(colliders: bool) -> impl Iterator<Item = PlannerId> {
+        Self::ALL
+            .iter()
+            .copied()
+            .filter(move |p| colliders || p.info().maps == MapKinds::AnyGrid)
+    }
+
+    /// Every name, comma-separated (for messages).
+    pub fn all_names() -> String {
+        Self::ALL
+            .iter()
+            .map(|p| p.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+impl fmt::Display for PlannerId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An unknown planner name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown planner {given:?}; expected one of {expected}")]
+pub struct UnknownPlanner {
+    /// What was given.
+    pub given: String,
+    /// The names there are.
+    pub expected: String,
+}
+
+impl FromStr for PlannerId {
+    type Err = UnknownPlanner;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.trim();
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| UnknownPlanner {
+                given: s.to_string(),
+                expected: Self::all_names(),
+            })
+    }
+}
+
+impl Serialize for PlannerId {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for PlannerId {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_through_text_and_json() {
+        for &p in PlannerId::ALL {
+            assert_eq!(p.name().parse::<PlannerId>(), Ok(p));
+            let json = serde_json::to_string(&p).unwrap();
+            assert_eq!(json, format!("\"{}\"", p.name()));
+            assert_eq!(serde_json::from_str::<PlannerId>(&json).unwrap(), p);
+        }
+    }
+
+    #[test]
+    fn names_are_unique_and_kebab_case() {
+        let mut names: Vec<_> = PlannerId::ALL.iter().map(|p| p.name()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), PlannerId::ALL.len());
+        assert!(
+            names
+                .iter()
+                .all(|n| n.chars().all(|c| c.is_ascii_lowercase() || c == '-'))
+        );
+    }
+
+    #[test]
+    fn unknown_names_list_the_known_ones() {
+        let e = "rrt".parse::<PlannerId>().unwrap_err();
+        assert!(e.to_string().contains("rrt-connect"));
+    }
+}

@@ -1,0 +1,436 @@
+//! [`PlanRequest`]: what to plan, as plain serialisable options. Its keys are the CLI's long
+//! options with underscores (the TOML config, the HTTP API and the Python keywords use the same
+//! names); every field is optional and has a documented default.
+
+use crate::failure::{FailureKind, PlanFailure};
+use crate::planner_id::PlannerId;
+use serde::{Deserialize, Serialize};
+use std::time::Duration;
+
+/// Collinearity pruning of grid paths.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PruneMode {
+    /// Exact integer collinearity on grid cells (the default).
+    Collinear,
+    /// Keep every cell of the grid path.
+    None,
+}
+
+/// What the wavefront's distance field counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FieldMode {
+    /// Path length (octile Dijkstra; descends along A\*-optimal paths). The default.
+    Length,
+    /// Number of moves (breadth-first wavefront).
+    Steps,
+}
+
+/// A saved PRM roadmap to start from, and whether to return the roadmap for saving.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RoadmapIo {
+    /// The bytes of a roadmap saved earlier (`Plan::saved_roadmap`), with a name for messages.
+    pub load: Option<(String, Vec<u8>)>,
+    /// Return the roadmap in `Plan::saved_roadmap`.
+    pub save: bool,
+}
+
+/// One planning request. Every field is optional; `None` takes the default in its doc.
+///
+/// ```
+/// use skyplan_plan::{PlanRequest, PlannerId};
+/// let r: PlanRequest = serde_json::from_str(
+///     r#"{"planner": "jps-plus", "goal_ne": [420, 390], "alt_m": 10}"#).unwrap();
+/// assert_eq!(r.planner, Some(PlannerId::JpsPlus));
+/// assert!(serde_json::from_str::<PlanRequest>(r#"{"safty_m": 3}"#).is_err()); // typos are refused
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanRequest {
+    /// Which planner [jps].
+    #[serde(alias = "method")]
+    pub planner: Option<PlannerId>,
+    /// Flight altitude above home, metres [5].
+    #[serde(alias = "target_altitude")]
+    pub alt_m: Option<f64>,
+    /// Safety margin around obstacles, metres [5].
+    #[serde(alias = "safety_distance")]
+    pub safety_m: Option<f64>,
+    /// Grid cell size of colliders maps, metres [1].
+    pub cell_m: Option<f64>,
+    /// Start, metres north,east of the map's origin [the map's default: the home].
+    pub start_ne: Option<[f64; 2]>,
+    /// Start as latitude,longitude, degrees.
+    pub start_lla: Option<[f64; 2]>,
+    /// Goal, metres north,east of the map's origin [the map's default].
+    pub goal_ne: Option<[f64; 2]>,
+    /// Goal as latitude,longitude, degrees.
+    pub goal_lla: Option<[f64; 2]>,
+    /// Start altitude of 3D planners, metres [alt_m].
+    pub start_alt_m: Option<f64>,
+    /// Goal altitude of 3D planners, metres [alt_m].
+    pub goal_alt_m: Option<f64>,
+    /// Heading of the first waypoint, degrees clockwise from north [0].
+    pub start_heading_deg: Option<f64>,
+    /// Grid connectivity, 4 or 8 [8].
+    pub connectivity: Option<u8>,
+    /// Let diagonal moves pass between two blocked cells (the FCND move model) [false].
+    pub corner_cutting: Option<bool>,
+    /// Collinearity pruning [collinear].
+    pub prune: Option<PruneMode>,
+    /// The FCND determinant collinearity test with this tolerance (cells²) instead.
+    pub epsilon: Option<f64>,
+    /// Line-of-sight shortcut of grid paths [true].
+    pub shortcut: Option<bool>,
+    /// Time budget of the 3D planners, milliseconds [1000; at most 600000].
+    pub time_limit_ms: Option<u64>,
+    /// Seed of the sampling planners [1].
+    pub seed: Option<u64>,
+    /// Floor of the 3D flight volume, metres [0].
+    pub min_alt_m: Option<f64>,
+    /// Ceiling of the 3D flight volume, metres [120, at least 10 m above both ends].
+    pub max_alt_m: Option<f64>,
+    /// voxel: extra cost per metre climbed [1].
+    pub climb_weight: Option<f64>,
+    /// voxel: horizontal pitch of the lattice, metres [5].
+    pub voxel_m: Option<f64>,
+    /// voxel: vertical pitch of the layers, metres [5].
+    pub layer_m: Option<f64>,
+    /// wavefront: what the field counts [length].
+    pub field: Option<FieldMode>,
+    /// costmap: radius inscribed in the footprint, metres [0].
+    pub inscribed_radius_m: Option<f64>,
+    /// costmap: distance up to which costs are raised, metres [10 cells].
+    pub inflation_radius_m: Option<f64>,
+    /// costmap: decay of 252·exp(−k·(d − r)), per metre [3 / inflation radius].
+    pub cost_scaling: Option<f64>,
+    /// costmap: weight of the cost in length + weight · cost [2].
+    pub cost_weight: Option<f64>,
+    /// Return the geometry pictures need (grid path, roadmap, trees, field) [false].
+    pub geometry: Option<bool>,
+    /// A saved PRM roadmap to start from / return the roadmap (Rust callers only).
+    #[serde(skip)]
+    pub roadmap: RoadmapIo,
+}
+
+macro_rules! merge_fields {
+    ($a:ident, $b:ident; $($f:ident),* $(,)?) => {
+        PlanRequest { $($f: $a.$f.or($b.$f),)* roadmap: if $a.roadmap == RoadmapIo::default() { $b.roadmap } else { $a.roadmap } }
+    };
+}
+
+impl PlanRequest {
+    /// Field by field, `self` where set, else `fallback` (command line over config file).
+    pub fn or(self, fallback: PlanRequest) -> PlanRequest {
+        let (a, b) = (self, fallback);
+        merge_fields!(a, b; planner, alt_m, safety_m, cell_m, start_ne, start_lla, goal_ne,
+            goal_lla, start_alt_m, goal_alt_m, start_heading_deg, connectivity, corner_cutting,
+            prune, epsilon, shortcut, time_limit_ms, seed, min_alt_m, max_alt_m, climb_weight,
+            voxel_m, layer_m, field, inscribed_radius_m, inflation_radius_m, cost_scaling,
+            cost_weight, geometry)
+    }
+
+    /// The request with another start (replanning from where the vehicle is now).
+    pub fn from_start_ne(&self, north_m: f64, east_m: f64) -> PlanRequest {
+        PlanRequest {
+            start_ne: Some([north_m, east_m]),
+            start_lla: None,
+            ..self.clone()
+        }
+    }
+}
+
+/// Highest altitude any option takes, metres.
+pub const MAX_ALT_M: f64 = 10_000.0;
+/// Longest time budget, milliseconds (10 minutes).
+pub const MAX_TIME_LIMIT_MS: u64 = 600_000;
+
+/// A position as given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Position {
+    Ne(f64, f64),
+    Lla(f64, f64),
+}
+
+/// How the vehicle moves between cells.
+pub(crate) use skyplan_search::MoveModel;
+
+/// The request with defaults applied and every value checked.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Resolved {
+    pub planner: PlannerId,
+    pub alt_m: f64,
+    pub safety_m: f64,
+    pub cell_m: f64,
+    pub start: Option<Position>,
+    pub goal: Option<Position>,
+    pub start_alt_m: f64,
+    pub goal_alt_m: f64,
+    pub start_heading_rad: f64,
+    pub model: MoveModel,
+    pub prune: Prune,
+    pub shortcut: bool,
+    pub time_limit: Duration,
+    pub time_limit_ms: u64,
+    pub seed: u64,
+    pub min_alt_m: f64,
+    pub max_alt_m: f64,
+    pub climb_weight: f64,
+    pub voxel_m: f64,
+    pub layer_m: f64,
+    pub field: FieldMode,
+    pub inscribed_radius_m: f64,
+    pub inflation_radius_m: Option<f64>,
+    pub cost_scaling: Option<f64>,
+    pub cost_weight: f64,
+    pub geometry: bool,
+}
+
+/// Collinearity pruning, resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Prune {
+    None,
+    Collinear,
+    Epsilon(f64),
+}
+
+fn bad(message: String) -> PlanFailure {
+    PlanFailure::new(FailureKind::BadRequest, message)
+}
+
+/// A value in `[lo, hi]`, else an error naming the field and the range.
+fn in_range(name: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, PlanFailure> {
+    if v.is_finite() && (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(bad(format!(
+            "{name} {v}: expected a number from {lo} to {hi}{unit}"
+        )))
+    }
+}
+
+fn positive(name: &str, v: f64, hi: f64) -> Result<f64, PlanFailure> {
+    if v.is_finite() && v > 0.0 && v <= hi {
+        Ok(v)
+    } else {
+        Err(bad(format!(
+            "{name} {v}: expected a number above 0 and at most {hi}"
+        )))
+    }
+}
+
+fn position(
+    ne: Option<[f64; 2]>,
+    lla: Option<[f64; 2]>,
+    which: &str,
+) -> Result<Option<Position>, PlanFailure> {
+    match (ne, lla) {
+        (Some(_), Some(_)) => Err(bad(format!(
+            "give either {which}_ne or {which}_lla, not both"
+        ))),
+        (Some([n, e]), None) if n.is_finite() && e.is_finite() => Ok(Some(Position::Ne(n, e))),
+        (None, Some([lat, lon])) if lat.is_finite() && lon.is_finite() => {
+            Ok(Some(Position::Lla(lat, lon)))
+        }
+        (None, None) => Ok(None),
+        _ => Err(bad(format!("{which}: expected finite numbers"))),
+    }
+}
+
+impl Resolved {
+    pub(crate) fn new(r: &PlanRequest) -> Result<Self, PlanFailure> {
+        let planner = r.planner.unwrap_or_default();
+        let alt_m = in_range("alt_m", r.alt_m.unwrap_or(5.0), 0.0, MAX_ALT_M, " m")?;
+        let safety_m = in_range("safety_m", r.safety_m.unwrap_or(5.0), 0.0, 1000.0, " m")?;
+        let cell_m = positive("cell_m", r.cell_m.unwrap_or(1.0), 1000.0)?;
+        let connectivity = r.connectivity.unwrap_or(8);
+        let corner_cutting = r.corner_cutting.unwrap_or(false);
+        let model = match (connectivity, corner_cutting) {
+            (8, false) => MoveModel::Octile,
+            (8, true) => MoveModel::OctileCornerCutting,
+            (4, false) => MoveModel::FourConnected,
+            (4, true) => {
+                return Err(bad(
+                    "corner_cutting needs diagonal moves: use it with connectivity 8".into(),
+                ));
+            }
+            (other, _) => {
+                return Err(bad(format!("connectivity {other}: expected 4 or 8")));
+            }
+        };
+        let prune = match (r.epsilon, r.prune) {
+            (Some(eps), _) if !(eps.is_finite() && eps >= 0.0) => {
+                return Err(bad(format!("epsilon {eps}: expected a tolerance ≥ 0")));
+            }
+            (Some(_), Some(PruneMode::None)) => {
+                return Err(bad("epsilon asks for pruning, prune none forbids it".into()));
+            }
+            (Some(eps), _) => Prune::Epsilon(eps),
+            (None, Some(PruneMode::None)) => Prune::None,
+            (None, _) => Prune::Collinear,
+        };
+        let start_alt_m = in_range(
+            "start_alt_m",
+            r.start_alt_m.unwrap_or(alt_m),
+            0.0,
+            MAX_ALT_M,
+            " m",
+        )?;
+        let goal_alt_m = in_range(
+            "goal_alt_m",
+            r.goal_alt_m.unwrap_or(alt_m),
+            0.0,
+            MAX_ALT_M,
+            " m",
+        )?;
+        let min_alt_m = in_range(
+            "min_alt_m",
+            r.min_alt_m.unwrap_or(0.0),
+            0.0,
+            MAX_ALT_M,
+            " m",
+        )?;
+        let max_alt_m = match r.max_alt_m {
+            Some(v) => in_range("max_alt_m", v, 0.0, MAX_ALT_M, " m")?,
+            None => 120f64
+                .max(start_alt_m + 10.0)
+                .max(goal_alt_m + 10.0)
+                .min(MAX_ALT_M),
+        };
+        if min_alt_m >= max_alt_m {
+            let (which, given) = match (r.min_alt_m, r.max_alt_m) {
+                (_, Some(_)) => ("max_alt_m", format!("{max_alt_m}")),
+                _ => ("min_alt_m", format!("{min_alt_m}")),
+            };
+            return Err(bad(format!(
+                "{which} {given}: the floor of the flight volume ({min_alt_m} m) must be below its ceiling ({max_alt_m} m)"
+            )));
+        }
+        let time_limit_ms = r.time_limit_ms.unwrap_or(1000);
+        if !(1..=MAX_TIME_LIMIT_MS).contains(&time_limit_ms) {
+            return Err(bad(format!(
+                "time_limit_ms {time_limit_ms}: expected 1 to {MAX_TIME_LIMIT_MS} (10 minutes)"
+            )));
+        }
+        let climb_weight = in_range("climb_weight", r.climb_weight.unwrap_or(1.0), 0.0, 1e6, "")?;
+        let voxel_m = positive("voxel_m", r.voxel_m.unwrap_or(5.0), 1000.0)?;
+        let layer_m = positive("layer_m", r.layer_m.unwrap_or(5.0), 1000.0)?;
+        let nonneg = |name: &str, v: Option<f64>| -> Result<Option<f64>, PlanFailure> {
+            v.map(|v| in_range(name, v, 0.0, 1e6, "")).transpose()
+        };
+        let start_heading_deg = r.start_heading_deg.unwrap_or(0.0);
+        if !start_heading_deg.is_finite() {
+            return Err(bad("start_heading_deg: expected a finite number".into()));
+        }
+        Ok(Self {
+            planner,
+            alt_m,
+            safety_m,
+            cell_m,
+            start: position(r.start_ne, r.start_lla, "start")?,
+            goal: position(r.goal_ne, r.goal_lla, "goal")?,
+            start_alt_m,
+            goal_alt_m,
+            start_heading_rad: start_heading_deg.to_radians(),
+            model,
+            prune,
+            shortcut: r.shortcut.unwrap_or(true),
+            time_limit: Duration::from_millis(time_limit_ms),
+            time_limit_ms,
+            seed: r.seed.unwrap_or(1),
+            min_alt_m,
+            max_alt_m,
+            climb_weight,
+            voxel_m,
+            layer_m,
+            field: r.field.unwrap_or(FieldMode::Length),
+            inscribed_radius_m: nonneg("inscribed_radius_m", r.inscribed_radius_m)?.unwrap_or(0.0),
+            inflation_radius_m: nonneg("inflation_radius_m", r.inflation_radius_m)?,
+            cost_scaling: nonneg("cost_scaling", r.cost_scaling)?,
+            cost_weight: nonneg("cost_weight", r.cost_weight)?.unwrap_or(2.0),
+            geometry: r.geometry.unwrap_or(false),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn out_of_range_values_name_the_field_and_range() {
+        for (req, phrase) in [
+            (
+                PlanRequest {
+                    alt_m: Some(-5.0),
+                    ..Default::default()
+                },
+                "alt_m -5",
+            ),
+            (
+                PlanRequest {
+                    alt_m: Some(1e9),
+                    ..Default::default()
+                },
+                "alt_m 1000000000",
+            ),
+            (
+                PlanRequest {
+                    cell_m: Some(0.0),
+                    ..Default::default()
+                },
+                "cell_m 0",
+            ),
+            (
+                PlanRequest {
+                    time_limit_ms: Some(u64::MAX),
+                    ..Default::default()
+                },
+                "time_limit_ms",
+            ),
+            (
+                PlanRequest {
+                    max_alt_m: Some(0.0),
+                    ..Default::default()
+                },
+                "max_alt_m 0",
+            ),
+            (
+                PlanRequest {
+                    connectivity: Some(4),
+                    corner_cutting: Some(true),
+                    ..Default::default()
+                },
+                "corner_cutting",
+            ),
+            (
+                PlanRequest {
+                    start_ne: Some([0.0, 0.0]),
+                    start_lla: Some([1.0, 1.0]),
+                    ..Default::default()
+                },
+                "either start_ne or start_lla",
+            ),
+        ] {
+            let e = Resolved::new(&req).unwrap_err();
+            assert_eq!(e.kind, FailureKind::BadRequest);
+            assert!(e.message.contains(phrase), "{} lacks {phrase}", e.message);
+        }
+    }
+
+    #[test]
+    fn command_line_wins_over_config_field_by_field() {
+        let cli = PlanRequest {
+            alt_m: Some(10.0),
+            ..Default::default()
+        };
+        let cfg = PlanRequest {
+            alt_m: Some(3.0),
+            safety_m: Some(2.0),
+            ..Default::default()
+        };
+        let merged = cli.or(cfg);
+        assert_eq!((merged.alt_m, merged.safety_m), (Some(10.0), Some(2.0)));
+    }
+}

@@ -1,0 +1,460 @@
+//! [`Session`]: one world loaded once, many requests answered; caches what requests share
+//! (grids per altitude/margin/cell size, 3D box worlds, Voronoi and PRM roadmaps).
+
+use crate::failure::{FailureKind, PlanFailure};
+use crate::plan::{Geometry, GridInfo, Home, Place, Plan, Timings, WaypointCounts};
+use crate::planner_id::{Family, MapKinds, PlannerId};
+use crate::request::{PlanRequest, Position, Resolved};
+use crate::world::{Source, World};
+use serde_json::{Map, Value};
+use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
+use skyplan_frames::{Lla, Ned};
+use skyplan_mission::Mission;
+use skyplan_search::{GridSearch, MoveModel};
+use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Most entries kept per cache (a server asked for many altitudes does not grow without bound).
+const CACHE_ENTRIES: usize = 8;
+
+type Key = [u64; 4];
+
+fn key(values: [f64; 4]) -> Key {
+    values.map(f64::to_bits)
+}
+
+fn put<V: Clone>(cache: &mut HashMap<Key, V>, k: Key, v: V) -> V {
+    if cache.len() >= CACHE_ENTRIES {
+        cache.clear();
+    }
+    cache.insert(k, v.clone());
+    v
+}
+
+pub(crate) fn micros(d: Duration) -> u64 {
+    u64::try_from(d.as_micros()).unwrap_or(u64::MAX)
+}
+
+/// How the final re-check runs.
+pub(crate) enum Check {
+    /// Every segment against the grid, with the move model's corner rule.
+    Grid { grid: Arc<Grid2>, touch: Touch },
+    /// Every segment against every grown box (brute force).
+    Boxes(Arc<BoxWorld3>),
+}
+
+/// What a planner family hands back to the session.
+pub(crate) struct Route {
+    /// Waypoints, exactly the start first and exactly the goal last.
+    pub points: Vec<[f64; 3]>,
+    pub cost_m: f64,
+    pub check: Check,
+    pub start_cell: Option<Cell>,
+    pub goal_cell: Option<Cell>,
+    pub expansions: u64,
+    pub build_us: u64,
+    pub search_us: u64,
+    pub postprocess_us: u64,
+    /// Grid planners: path cells, straight moves, diagonal moves, waypoint counts.
+    pub grid_stats: Option<(usize, u64, u64, WaypointCounts)>,
+    pub octile_optimum_m: Option<f64>,
+    pub details: Map<String, Value>,
+    pub geometry: Geometry,
+    pub grid: Option<Arc<Grid2>>,
+    pub saved_roadmap: Option<Vec<u8>>,
+}
+
+impl Route {
+    pub(crate) fn new(points: Vec<[f64; 3]>, cost_m: f64, check: Check) -> Self {
+        Self {
+            points,
+            cost_m,
+            check,
+            start_cell: None,
+            goal_cell: None,
+            expansions: 0,
+            build_us: 0,
+            search_us: 0,
+            postprocess_us: 0,
+            grid_stats: None,
+            octile_optimum_m: None,
+            details: Map::new(),
+            geometry: Geometry::default(),
+            grid: None,
+            saved_roadmap: None,
+        }
+    }
+}
+
+/// What every planner family gets: the request, resolved, and both ends in local metres.
+pub(crate) struct Query<'a> {
+    pub r: &'a Resolved,
+    pub start_ne: [f64; 2],
+    pub goal_ne: [f64; 2],
+    pub world: &'a World,
+}
+
+/// A world loaded once and the caches its requests share.
+///
+/// ```
+/// use skyplan_plan::{PlanRequest, PlannerId, Session, World};
+/// let mut session = Session::new(World::fcnd_city());
+/// // The default request: JPS from the home to the default goal at 5 m with a 5 m margin.
+/// let plan = session.plan(&PlanRequest::default())?;
+/// assert_eq!(plan.planner, PlannerId::Jps);
+/// assert!((plan.cost_m - 1097.94).abs() < 0.01);
+/// // The same world, another planner: the grid is reused.
+/// let theta = session.plan(&PlanRequest { planner: Some(PlannerId::Theta), ..Default::default() })?;
+/// assert!(theta.cost_m < plan.cost_m);
+/// # Ok::<(), skyplan_plan::PlanFailure>(())
+/// ```
+pub struct Session {
+    world: World,
+    grids: HashMap<Key, Arc<Grid2>>,
+    boxes: HashMap<Key, Arc<BoxWorld3>>,
+    pub(crate) voronoi: HashMap<Key, Arc<skyplan_roadmap::Roadmap>>,
+    pub(crate) prm: HashMap<Key, skyplan_sampling::prm::Roadmap>,
+    pub(crate) search: GridSearch,
+}
+
+impl Session {
+    /// A session over `world`.
+    pub fn new(world: World) -> Self {
+        Self {
+            world,
+            grids: HashMap::new(),
+            boxes: HashMap::new(),
+            voronoi: HashMap::new(),
+            prm: HashMap::new(),
+            search: GridSearch::new(),
+        }
+    }
+
+    /// The world.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The grid at an altitude, margin and cell size (built once per session; the fixed grid
+    /// of image, MovingAI and random maps whatever the arguments).
+    pub fn grid(
+        &mut self,
+        alt_m: f64,
+        safety_m: f64,
+        cell_m: f64,
+    ) -> Result<Arc<Grid2>, PlanFailure> {
+        let map = match &self.world.source {
+            Source::Grid(g) => return Ok(Arc::clone(g)),
+            Source::Colliders(m) => Arc::clone(m),
+        };
+        let k = key([alt_m, safety_m, cell_m, 0.0]);
+        if let Some(g) = self.grids.get(&k) {
+            return Ok(Arc::clone(g));
+        }
+        let spec = GridSpec {
+            alt_m,
+            safety_m,
+            cell_m,
+        };
+        let grid = Grid2::from_colliders(&map, spec)
+            .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
+        Ok(put(&mut self.grids, k, Arc::new(grid)))
+    }
+
+    /// The 3D box world for a request: boxes grown by the margin, the ground, the altitude band,
+    /// and horizontal bounds that cover the grid's (so every planner takes the same points).
+    pub(crate) fn boxes(&mut self, r: &Resolved) -> Result<Arc<BoxWorld3>, PlanFailure> {
+        let Some(map) = self.world.colliders() else {
+            return Err(PlanFailure::bad_request(format!(
+                "--planner {}: needs an FCND colliders map (--map FILE.csv, or the bundled map)",
+                r.planner
+            )));
+        };
+        let k = key([r.safety_m, r.min_alt_m, r.max_alt_m, r.cell_m]);
+        if let Some(w) = self.boxes.get(&k) {
+            return Ok(Arc::clone(w));
+        }
+        let b = self.world.bounds_ne(r.cell_m);
+        let spec = WorldSpec {
+            safety_m: r.safety_m,
+            min_alt_m: r.min_alt_m,
+            max_alt_m: r.max_alt_m,
+            margin_bounds_m: 0.0,
+        };
+        let bounds = Aabb {
+            min: [b.north_min_m, b.east_min_m, r.min_alt_m],
+            max: [b.north_max_m, b.east_max_m, r.max_alt_m],
+        };
+        let world = BoxWorld3::with_bounds(&map.boxes, &spec, bounds)
+            .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
+        Ok(put(&mut self.boxes, k, Arc::new(world)))
+    }
+
+    /// Plans one request with any planner; the route is re-checked before it is returned.
+    pub fn plan(&mut self, request: &PlanRequest) -> Result<Plan, PlanFailure> {
+        let t0 = Instant::now();
+        let r = Resolved::new(request)?;
+        let info = r.planner.info();
+        if info.maps == MapKinds::CollidersOnly && self.world.colliders().is_none() {
+            return Err(PlanFailure::bad_request(format!(
+                "--planner {}: needs an FCND colliders map (--map FILE.csv, or the bundled map); on {} use one of {}",
+                r.planner,
+                self.world.name(),
+                PlannerId::for_maps(false)
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        let (start_ne, start_lla) = self.endpoint(r.start, self.world.default_start_ne, "start")?;
+        let (goal_ne, goal_lla) = self.endpoint(r.goal, self.world.default_goal_ne, "goal")?;
+        let world = self.world.clone();
+        let q = Query {
+            r: &r,
+            start_ne,
+            goal_ne,
+            world: &world,
+        };
+        let mut route = match info.family {
+            Family::Grid(planner) => crate::grid::plan(self, &q, planner)?,
+            Family::Wavefront => crate::navfn::wavefront(self, &q)?,
+            Family::Costmap => crate::navfn::costmap(self, &q)?,
+            Family::Voronoi => crate::voronoi::plan(self, &q)?,
+            Family::Sampling(kind) => crate::three_d::sampling(self, &q, kind, request)?,
+            Family::Voxel => crate::three_d::voxel(self, &q)?,
+        };
+        recheck(&route)?;
+        let place = |p: [f64; 3],
+                     cell: Option<Cell>,
+                     given: Option<[f64; 2]>|
+         -> Result<Place, PlanFailure> {
+            let lla = match (given, world.frame()) {
+                (Some(ll), _) => Some(ll),
+                (None, Some(frame)) => {
+                    let l = frame
+                        .lla_from_ned(Ned {
+                            north_m: p[0],
+                            east_m: p[1],
+                            down_m: -p[2],
+                        })
+                        .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
+                    Some([l.lat_deg, l.lon_deg])
+                }
+                (None, None) => None,
+            };
+            Ok(Place {
+                north_m: p[0],
+                east_m: p[1],
+                alt_m: p[2],
+                lat_deg: lla.map(|l| l[0]),
+                lon_deg: lla.map(|l| l[1]),
+                cell: cell.map(|c| [c.row, c.col]),
+            })
+        };
+        let first = *route
+            .points
+            .first()
+            .ok_or_else(|| PlanFailure::internal("empty route"))?;
+        let last = *route
+            .points
+            .last()
+            .ok_or_else(|| PlanFailure::internal("empty route"))?;
+        let start = place(first, route.start_cell, start_lla)?;
+        let goal = place(last, route.goal_cell, goal_lla)?;
+        let (mission, waypoints, waypoints_lla) = match world.frame() {
+            Some(frame) => {
+                let m = Mission::from_points_nea(frame, &route.points, r.start_heading_rad)
+                    .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
+                let rows = m.rows();
+                let lla = m.waypoints.iter().map(|w| [w.lat_deg, w.lon_deg]).collect();
+                (Some(m), rows, Some(lla))
+            }
+            None => (
+                None,
+                rows_without_frame(&route.points, r.start_heading_rad),
+                None,
+            ),
+        };
+        let mission_length_m = route
+            .points
+            .windows(2)
+            .map(|w| skyplan_world3::distance_m(w[0], w[1]))
+            .sum();
+        let straight_line_m = skyplan_world3::distance_m(first, last);
+        let grid_info = route.grid.as_ref().filter(|_| info.dims == 2).map(|g| {
+            let f = g.frame();
+            GridInfo {
+                rows: g.rows(),
+                cols: g.cols(),
+                cell_m: f.cell_m,
+                origin_north_m: f.origin_north_m,
+                origin_east_m: f.origin_east_m,
+                alt_m: r.alt_m,
+                safety_m: r.safety_m,
+                blocked_cells: g.blocked_count(),
+            }
+        });
+        let grid_planner = matches!(
+            info.family,
+            Family::Grid(_) | Family::Wavefront | Family::Costmap
+        );
+        let mut counts = route.grid_stats.map(|s| s.3);
+        if let Some(c) = counts.as_mut() {
+            c.mission = waypoints.len();
+        }
+        if r.geometry
+            && info.dims == 2
+            && let Some(map) = world.colliders()
+        {
+            {
+                route.geometry.active_boxes = map
+                    .boxes
+                    .iter()
+                    .filter(|b| {
+                        b.top_m() + r.safety_m > r.alt_m && b.bottom_m() - r.safety_m < r.alt_m
+                    })
+                    .copied()
+                    .collect();
+            }
+        }
+        Ok(Plan {
+            status: "ok",
+            map: world.name().to_string(),
+            obstacles: world.colliders().map(|m| m.boxes.len()),
+            home: world.frame().map(|f| Home {
+                lat_deg: f.home().lat_deg,
+                lon_deg: f.home().lon_deg,
+            }),
+            planner: r.planner,
+            grid: grid_info,
+            move_model: grid_planner.then(|| model_name(r.model)),
+            start,
+            goal,
+            cost_m: route.cost_m,
+            mission_length_m,
+            straight_line_m,
+            octile_optimum_m: route.octile_optimum_m,
+            expansions: route.expansions,
+            path_cells: route.grid_stats.map(|s| s.0),
+            straight_moves: route.grid_stats.map(|s| s.1),
+            diagonal_moves: route.grid_stats.map(|s| s.2),
+            waypoint_counts: counts,
+            search_time_us: route.search_us,
+            timings_us: Timings {
+                grid_build_us: route.build_us,
+                search_us: route.search_us,
+                postprocess_us: route.postprocess_us,
+                total_us: micros(t0.elapsed()),
+            },
+            waypoints,
+            waypoints_lla,
+            details: std::mem::take(&mut route.details),
+            geometry: r.geometry.then(|| std::mem::take(&mut route.geometry)),
+            mission,
+            grid_used: route.grid.take(),
+            saved_roadmap: route.saved_roadmap.take(),
+        })
+    }
+
+    /// Plans `request` again from another start (where the vehicle is now), reusing the caches.
+    pub fn replan_from(
+        &mut self,
+        request: &PlanRequest,
+        north_m: f64,
+        east_m: f64,
+    ) -> Result<Plan, PlanFailure> {
+        self.plan(&request.from_start_ne(north_m, east_m))
+    }
+
+    /// A position in local metres (and the lat/lon it was given as).
+    fn endpoint(
+        &self,
+        given: Option<Position>,
+        default: Option<[f64; 2]>,
+        which: &str,
+    ) -> Result<([f64; 2], Option<[f64; 2]>), PlanFailure> {
+        let kind = if which == "start" {
+            FailureKind::InvalidStart
+        } else {
+            FailureKind::InvalidGoal
+        };
+        match given {
+            Some(Position::Ne(n, e)) => Ok(([n, e], None)),
+            Some(Position::Lla(lat_deg, lon_deg)) => {
+                let Some(frame) = self.world.frame() else {
+                    return Err(PlanFailure::bad_request(format!(
+                        "{which}_lla: {} has no geodetic home; give {which}_ne (metres north,east of the map's origin) or a home",
+                        self.world.name()
+                    )));
+                };
+                let ned = frame
+                    .ned_from_lla(Lla { lat_deg, lon_deg, alt_m: 0.0 })
+                    .map_err(|e| PlanFailure::new(kind, format!("{which}: {e}")))?;
+                Ok(([ned.north_m, ned.east_m], Some([lat_deg, lon_deg])))
+            }
+            None => default.map(|ne| (ne, None)).ok_or_else(|| {
+                PlanFailure::bad_request(format!(
+                    "missing {which}: give {which}_ne N,E (metres north,east of the map's origin; {})",
+                    self.world.bounds_ne(1.0)
+                ))
+            }),
+        }
+    }
+}
+
+/// Headings as FCND computes them, for maps without a geodetic home.
+fn rows_without_frame(points: &[[f64; 3]], start_heading_rad: f64) -> Vec<[f64; 4]> {
+    let mut heading = start_heading_rad;
+    points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            if k > 0 {
+                let q = points[k - 1];
+                if (q[0], q[1]) != (p[0], p[1]) {
+                    heading = skyplan_mission::heading_rad((q[0], q[1]), (p[0], p[1]));
+                }
+            }
+            [p[0], p[1], p[2], heading]
+        })
+        .collect()
+}
+
+/// The move model as users read it.
+pub(crate) fn model_name(model: MoveModel) -> &'static str {
+    match model {
+        MoveModel::FourConnected => "4-connected",
+        MoveModel::Octile => "8-connected, no corner cutting",
+        MoveModel::OctileCornerCutting => "8-connected, corner cutting",
+    }
+}
+
+/// The final, independent re-check of every segment: no caller can skip it.
+fn recheck(route: &Route) -> Result<(), PlanFailure> {
+    let p = &route.points;
+    if p.is_empty() {
+        return Err(PlanFailure::internal(
+            "internal check failed: the route is empty; please report this with the request",
+        ));
+    }
+    let bad = match &route.check {
+        Check::Grid { grid, touch } => p
+            .windows(2)
+            .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), *touch)),
+        Check::Boxes(world) => skyplan_world3::first_blocked_segment(&world.brute_force(), p),
+    };
+    match bad {
+        None => Ok(()),
+        Some(k) => Err(PlanFailure::internal(format!(
+            "internal check failed: segment {k} of the route (N {:.2}, E {:.2}, {:.2} m → N {:.2}, E {:.2}, {:.2} m) meets an obstacle; please report this with the request",
+            p[k][0],
+            p[k][1],
+            p[k][2],
+            p[k + 1][0],
+            p[k + 1][1],
+            p[k + 1][2]
+        ))),
+    }
+}

@@ -1,0 +1,114 @@
+//! The Voronoi roadmap of the grown footprints at the flight altitude, with the grid (JPS) as
+//! the fallback; the roadmap is built once per altitude/margin/cell size in a session.
+
+use crate::failure::{FailureKind, PlanFailure};
+use crate::grid::grid_for;
+use crate::session::{Check, Query, Route, Session, micros};
+use serde_json::json;
+use skyplan_cspace::Touch;
+use skyplan_roadmap::{Roadmap, RoadmapError, RoadmapSpec};
+use std::sync::Arc;
+use std::time::Instant;
+
+pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+    let r = q.r;
+    let map = q
+        .world
+        .colliders()
+        .ok_or_else(|| PlanFailure::bad_request("--planner voronoi needs an FCND colliders map"))?;
+    let (grid, grid_us) = grid_for(session, q)?;
+    let t_build = Instant::now();
+    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0].map(f64::to_bits);
+    let roadmap = match session.voronoi.get(&k) {
+        Some(m) => Arc::clone(m),
+        None => {
+            let m = Arc::new(Roadmap::build(
+                map,
+                &grid,
+                r.alt_m,
+                r.safety_m,
+                &RoadmapSpec::default(),
+            ));
+            if session.voronoi.len() >= 8 {
+                session.voronoi.clear();
+            }
+            session.voronoi.insert(k, Arc::clone(&m));
+            m
+        }
+    };
+    let build_us = grid_us + micros(t_build.elapsed());
+    let t = Instant::now();
+    let found = roadmap.query(&grid, q.start_ne, q.goal_ne);
+    let search_us = micros(t.elapsed());
+    let at = format!("at {} m with a {} m margin", r.alt_m, r.safety_m);
+    let route = match found {
+        Ok(route) => route,
+        Err(e @ RoadmapError::StartBlocked(..)) => {
+            return Err(PlanFailure::new(
+                FailureKind::InvalidStart,
+                format!("{e} {at}"),
+            ));
+        }
+        Err(e @ RoadmapError::GoalBlocked(..)) => {
+            return Err(PlanFailure::new(
+                FailureKind::InvalidGoal,
+                format!("{e} {at}"),
+            ));
+        }
+        Err(e @ RoadmapError::NoPath) => {
+            return Err(PlanFailure::new(
+                FailureKind::NoPath,
+                format!(
+                    "voronoi: {e} (the graph has {} components)",
+                    roadmap.component_count()
+                ),
+            ));
+        }
+    };
+    let points = route
+        .points_ne
+        .iter()
+        .map(|p| [p[0], p[1], r.alt_m])
+        .collect();
+    let mut out = Route::new(
+        points,
+        route.cost_m,
+        Check::Grid {
+            grid: Arc::clone(&grid),
+            touch: Touch::Closed,
+        },
+    );
+    let stats = roadmap.stats();
+    out.expansions = route.expansions as u64;
+    out.build_us = build_us;
+    out.search_us = search_us;
+    for (k, v) in [
+        ("graph_cost_m", json!(route.graph_cost_m)),
+        ("components", json!(roadmap.component_count())),
+        ("largest_component", json!(roadmap.largest_component())),
+        ("nodes", json!(roadmap.nodes().len())),
+        ("edges", json!(roadmap.edge_count())),
+        ("sites", json!(stats.sites)),
+        ("fallback", json!(route.fallback)),
+        (
+            "connectors",
+            json!([route.connectors.0, route.connectors.1]),
+        ),
+        ("build_time_us", json!(stats.build_us)),
+    ] {
+        out.details.insert(k.into(), v);
+    }
+    if r.geometry {
+        let seg = |a: [f64; 2], b: [f64; 2]| [[a[0], a[1], r.alt_m], [b[0], b[1], r.alt_m]];
+        out.geometry.edges = roadmap.edges().map(|(a, b)| seg(a, b)).collect();
+        out.geometry.edges_label = "Voronoi graph".into();
+        for end in [q.start_ne, q.goal_ne] {
+            for node in roadmap.connector_nodes(&grid, end) {
+                out.geometry.connectors.push(seg(end, node));
+            }
+        }
+        out.geometry.raw_path = route.raw_ne.iter().map(|p| [p[0], p[1], r.alt_m]).collect();
+    }
+    out.grid = Some(grid);
+    Ok(out)
+}

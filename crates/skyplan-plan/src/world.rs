@@ -1,0 +1,313 @@
+//! [`World`]: one loaded map of any kind, with one set of bounds for every planner family.
+
+use crate::failure::PlanFailure;
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_frames::{Lla, LocalFrame};
+use skyplan_imagemap::MapYaml;
+use skyplan_map::colliders::CollidersMap;
+use std::sync::Arc;
+
+/// The FCND city map (Udacity FCND-Motion-Planning `colliders.csv`), compiled in.
+pub const FCND_CITY_CSV: &str = include_str!("../../../data/colliders.csv");
+/// How the bundled map is named in messages and outputs.
+pub const FCND_CITY_NAME: &str = "colliders.csv (bundled FCND city map)";
+/// The default goal on the bundled map: a free street corner across the city from the home.
+pub const FCND_DEFAULT_GOAL_NE: [f64; 2] = [420.0, 390.0];
+
+/// What a world was loaded from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MapKind {
+    /// FCND `colliders.csv`: boxes in metres about a geodetic home.
+    Colliders,
+    /// An occupancy image (PNG/PGM, bare or through a ROS map_server YAML).
+    Image,
+    /// A MovingAI `.map` grid.
+    MovingAi,
+    /// A random workspace.
+    Random,
+    /// A grid given directly.
+    Grid,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) enum Source {
+    Colliders(Arc<CollidersMap>),
+    Grid(Arc<Grid2>),
+}
+
+/// Horizontal extent shared by every planner family, metres north/east of the map's origin.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct BoundsNe {
+    /// Southern edge.
+    pub north_min_m: f64,
+    /// Northern edge.
+    pub north_max_m: f64,
+    /// Western edge.
+    pub east_min_m: f64,
+    /// Eastern edge.
+    pub east_max_m: f64,
+}
+
+impl BoundsNe {
+    /// Whether the point lies inside (edges included).
+    pub fn contains(&self, north_m: f64, east_m: f64) -> bool {
+        (self.north_min_m..=self.north_max_m).contains(&north_m)
+            && (self.east_min_m..=self.east_max_m).contains(&east_m)
+    }
+}
+
+impl std::fmt::Display for BoundsNe {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "north {:.2}..{:.2} m, east {:.2}..{:.2} m",
+            self.north_min_m, self.north_max_m, self.east_min_m, self.east_max_m
+        )
+    }
+}
+
+/// One loaded map: colliders boxes, an image, a MovingAI grid or a random workspace, with its
+/// geodetic home when it has one. Built from text or bytes (no I/O).
+///
+/// ```
+/// use skyplan_plan::{World, MapKind};
+/// let world = World::fcnd_city();
+/// assert_eq!(world.kind(), MapKind::Colliders);
+/// assert_eq!(world.colliders().map(|m| m.boxes.len()), Some(3845));
+/// let b = world.bounds_ne(1.0);
+/// assert!(b.contains(-316.0, -389.0)); // the grid's corner: every planner takes it
+/// ```
+#[derive(Debug, Clone)]
+pub struct World {
+    name: String,
+    kind: MapKind,
+    pub(crate) source: Source,
+    frame: Option<LocalFrame>,
+    pub(crate) default_start_ne: Option<[f64; 2]>,
+    pub(crate) default_goal_ne: Option<[f64; 2]>,
+}
+
+fn parse_failure(name: &str, e: impl std::fmt::Display) -> PlanFailure {
+    PlanFailure::bad_request(format!("{name}: {e}"))
+}
+
+fn frame_at(lat_deg: f64, lon_deg: f64, what: &str) -> Result<LocalFrame, PlanFailure> {
+    LocalFrame::new(Lla {
+        lat_deg,
+        lon_deg,
+        alt_m: 0.0,
+    })
+    .map_err(|e| PlanFailure::bad_request(format!("{what}: {e}")))
+}
+
+impl World {
+    fn grid_world(name: String, kind: MapKind, grid: Grid2) -> Self {
+        Self {
+            name,
+            kind,
+            source: Source::Grid(Arc::new(grid)),
+            frame: None,
+            default_start_ne: None,
+            default_goal_ne: None,
+        }
+    }
+
+    /// The bundled FCND city map, with its default start (the home) and goal.
+    pub fn fcnd_city() -> Self {
+        // The bundled text is pinned by tests; a failure here is a build defect.
+        let mut world = Self::from_colliders_csv(FCND_CITY_NAME, FCND_CITY_CSV)
+            .unwrap_or_else(|e| panic!("the bundled map does not parse: {e}"));
+        world.default_goal_ne = Some(FCND_DEFAULT_GOAL_NE);
+        world
+    }
+
+    /// An FCND colliders map from its text; `name` is used in messages. The default start is
+    /// the home.
+    pub fn from_colliders_csv(name: &str, text: &str) -> Result<Self, PlanFailure> {
+        let map =
+            skyplan_map::colliders::parse_colliders(text).map_err(|e| parse_failure(name, e))?;
+        Self::from_colliders(name, map)
+    }
+
+    /// An FCND colliders map already parsed.
+    pub fn from_colliders(name: &str, map: CollidersMap) -> Result<Self, PlanFailure> {
+        if map.boxes.is_empty() {
+            return Err(PlanFailure::bad_request(format!(
+                "{name}: the map has no obstacle boxes (expected lines posX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ after the header)"
+            )));
+        }
+        let frame = frame_at(map.home.lat_deg, map.home.lon_deg, &format!("{name}: home"))?;
+        Ok(Self {
+            name: name.to_string(),
+            kind: MapKind::Colliders,
+            source: Source::Colliders(Arc::new(map)),
+            frame: Some(frame),
+            default_start_ne: Some([0.0, 0.0]),
+            default_goal_ne: None,
+        })
+    }
+
+    /// A MovingAI `.map` from its text, north up (row 0 of the file is the northern edge), 1 m
+    /// cells, origin at the south-west corner.
+    pub fn from_movingai(name: &str, text: &str) -> Result<Self, PlanFailure> {
+        let m = skyplan_map::movingai::parse_map(text).map_err(|e| parse_failure(name, e))?;
+        let grid = skyplan_imagemap::grid_from_movingai(&m).map_err(|e| parse_failure(name, e))?;
+        Ok(Self::grid_world(name.to_string(), MapKind::MovingAi, grid))
+    }
+
+    /// An occupancy image (PNG or PGM bytes) read with a ROS map_server YAML's rules (or
+    /// [`MapYaml::bare`] for a bare image).
+    pub fn from_image(
+        name: &str,
+        image_bytes: &[u8],
+        meta: &MapYaml,
+        unknown_free: bool,
+    ) -> Result<Self, PlanFailure> {
+        let raster =
+            skyplan_imagemap::decode_image(image_bytes).map_err(|e| parse_failure(name, e))?;
+        let map = skyplan_imagemap::image_map_with(&raster, meta, unknown_free)
+            .map_err(|e| parse_failure(name, e))?;
+        Ok(Self::grid_world(name.to_string(), MapKind::Image, map.grid))
+    }
+
+    /// A random workspace of `width` × `height` 1 m cells, each blocked with probability
+    /// `density`; its default start and goal are the farthest-apart pair of 16 free cells drawn
+    /// with the same seed.
+    pub fn random(width: u32, height: u32, density: f64, seed: u64) -> Result<Self, PlanFailure> {
+        let grid = skyplan_imagemap::random_workspace(height, width, density, seed)
+            .map_err(|e| PlanFailure::bad_request(format!("random workspace: {e}")))?;
+        let cells = skyplan_imagemap::draw_free_cells(&grid, 16, seed);
+        let dist2 = |a: Cell, b: Cell| {
+            u64::from(a.row.abs_diff(b.row)).pow(2) + u64::from(a.col.abs_diff(b.col)).pow(2)
+        };
+        let mut drawn: Option<(Cell, Cell)> = None;
+        for (i, &a) in cells.iter().enumerate() {
+            for &b in &cells[i + 1..] {
+                if drawn.is_none_or(|(x, y)| dist2(a, b) > dist2(x, y)) {
+                    drawn = Some((a, b));
+                }
+            }
+        }
+        let name = format!("random {width}x{height} (density {density}, seed {seed})");
+        let mut world = Self::grid_world(name, MapKind::Random, grid);
+        if let (Some((a, b)), Source::Grid(g)) = (drawn, &world.source) {
+            let (an, ae) = g.center_ne(a);
+            let (bn, be) = g.center_ne(b);
+            world.default_start_ne = Some([an, ae]);
+            world.default_goal_ne = Some([bn, be]);
+        }
+        Ok(world)
+    }
+
+    /// A grid given directly (row 0 is the southern edge; see `Grid2`).
+    pub fn from_grid(name: &str, grid: Grid2) -> Self {
+        Self::grid_world(name.to_string(), MapKind::Grid, grid)
+    }
+
+    /// Gives a map without a geodetic home (images, MovingAI, random, grids) one, so that
+    /// waypoints get lat/lon and positions may be given as lat/lon. Colliders maps carry their
+    /// own home and refuse another.
+    pub fn with_home(mut self, lat_deg: f64, lon_deg: f64) -> Result<Self, PlanFailure> {
+        if self.kind == MapKind::Colliders {
+            return Err(PlanFailure::bad_request(
+                "home: a colliders map carries its own home (line 1); drop the extra home",
+            ));
+        }
+        self.frame = Some(frame_at(lat_deg, lon_deg, "home")?);
+        Ok(self)
+    }
+
+    /// Replaces the default start and goal (metres north,east of the map's origin).
+    pub fn with_defaults(mut self, start_ne: Option<[f64; 2]>, goal_ne: Option<[f64; 2]>) -> Self {
+        self.default_start_ne = start_ne;
+        self.default_goal_ne = goal_ne;
+        self
+    }
+
+    /// The name used in messages and outputs.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// What the world was loaded from.
+    pub fn kind(&self) -> MapKind {
+        self.kind
+    }
+
+    /// The boxes of a colliders map.
+    pub fn colliders(&self) -> Option<&CollidersMap> {
+        match &self.source {
+            Source::Colliders(m) => Some(m),
+            Source::Grid(_) => None,
+        }
+    }
+
+    /// The fixed grid of an image, MovingAI, random or given grid map (colliders grids depend on
+    /// the altitude, margin and cell size: see `Session::grid`).
+    pub fn fixed_grid(&self) -> Option<&Grid2> {
+        match &self.source {
+            Source::Grid(g) => Some(g),
+            Source::Colliders(_) => None,
+        }
+    }
+
+    /// The local frame about the geodetic home, if the map has one.
+    pub fn frame(&self) -> Option<&LocalFrame> {
+        self.frame.as_ref()
+    }
+
+    /// The default start and goal, metres north,east (the home and a far corner on the bundled
+    /// map; drawn free cells on random maps).
+    pub fn default_endpoints_ne(&self) -> (Option<[f64; 2]>, Option<[f64; 2]>) {
+        (self.default_start_ne, self.default_goal_ne)
+    }
+
+    /// The horizontal extent every planner accepts: the grid's extent at this cell size
+    /// (`floor(min(north − half))` … as `Grid2::from_colliders` lays it) for colliders maps, the
+    /// grid's for the others. The 3D planners' flight volume covers at least this.
+    pub fn bounds_ne(&self, cell_m: f64) -> BoundsNe {
+        match &self.source {
+            Source::Grid(g) => grid_bounds(g),
+            Source::Colliders(map) => {
+                let lo = |f: fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
+                    map.boxes
+                        .iter()
+                        .map(f)
+                        .fold(f64::INFINITY, f64::min)
+                        .floor()
+                };
+                let hi = |f: fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
+                    map.boxes.iter().map(f).fold(f64::NEG_INFINITY, f64::max)
+                };
+                let north_min_m = lo(|b| b.north_m - b.half_north_m);
+                let east_min_m = lo(|b| b.east_m - b.half_east_m);
+                let north_max = hi(|b| b.north_m + b.half_north_m);
+                let east_max = hi(|b| b.east_m + b.half_east_m);
+                let cell_m = if cell_m.is_finite() && cell_m > 0.0 {
+                    cell_m
+                } else {
+                    1.0
+                };
+                let span = |lo: f64, hi: f64| ((hi - lo) / cell_m).ceil().max(1.0) * cell_m;
+                BoundsNe {
+                    north_min_m,
+                    north_max_m: north_min_m + span(north_min_m, north_max),
+                    east_min_m,
+                    east_max_m: east_min_m + span(east_min_m, east_max),
+                }
+            }
+        }
+    }
+}
+
+/// The extent of a grid in metres.
+pub(crate) fn grid_bounds(g: &Grid2) -> BoundsNe {
+    let f = g.frame();
+    BoundsNe {
+        north_min_m: f.origin_north_m,
+        north_max_m: f.origin_north_m + f64::from(g.rows()) * f.cell_m,
+        east_min_m: f.origin_east_m,
+        east_max_m: f.origin_east_m + f64::from(g.cols()) * f.cell_m,
+    }
+}
