@@ -23,53 +23,40 @@ mod peer_pathfinding;
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{Components, GridSearch, JpsPlus, MoveModel, Planner};
+use skyplan_plan::{CellSearch, Family, PlannerId};
+use skyplan_search::{Components, MoveModel};
 use std::time::Instant;
 
-/// A planner the benchmark can run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-pub enum BenchPlanner {
-    /// skyplan JPS+ (table built once per grid; build time reported apart).
-    JpsPlus,
-    /// skyplan online Jump Point Search.
-    Jps,
-    /// skyplan A\* (the reference implementation).
-    AStar,
-    /// skyplan Dijkstra.
-    Dijkstra,
+/// What the benchmark can run: a skyplan grid planner (through the planning API), or a peer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Contender {
+    /// A skyplan grid-search planner (JPS+ builds its table once per grid; reported apart).
+    Skyplan(PlannerId),
     /// The Rust `pathfinding` crate's A\* with exact octile costs (a peer).
     PathfindingCrateAStar,
 }
 
-impl BenchPlanner {
-    /// Every planner, skyplan's first.
-    pub const ALL: [BenchPlanner; 5] = [
-        BenchPlanner::JpsPlus,
-        BenchPlanner::Jps,
-        BenchPlanner::AStar,
-        BenchPlanner::Dijkstra,
-        BenchPlanner::PathfindingCrateAStar,
-    ];
-
-    /// Short name for tables and `--planners`.
+impl Contender {
+    /// Short name for tables and `--planners`: the planner's CLI spelling, or the peer's name.
     pub fn name(self) -> &'static str {
         match self {
-            BenchPlanner::JpsPlus => "jps-plus",
-            BenchPlanner::Jps => "jps",
-            BenchPlanner::AStar => "astar",
-            BenchPlanner::Dijkstra => "dijkstra",
-            BenchPlanner::PathfindingCrateAStar => "rust-pathfinding-astar",
+            Contender::Skyplan(p) => p.name(),
+            Contender::PathfindingCrateAStar => "rust-pathfinding-astar",
         }
     }
 
-    /// Parses a [`BenchPlanner::name`].
+    /// Parses a [`Contender::name`]: a grid-search planner or the peer.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|p| p.name() == name)
+        if name == "rust-pathfinding-astar" {
+            return Some(Contender::PathfindingCrateAStar);
+        }
+        let p: PlannerId = name.parse().ok()?;
+        matches!(p.info().family, Family::Grid(_)).then_some(Contender::Skyplan(p))
     }
 
     /// True for skyplan's own planners (false for peers).
     pub fn is_skyplan(self) -> bool {
-        self != BenchPlanner::PathfindingCrateAStar
+        matches!(self, Contender::Skyplan(_))
     }
 }
 
@@ -146,55 +133,36 @@ pub fn random_far_queries(
 pub fn run(
     grid: &Grid2,
     model: MoveModel,
-    planner: BenchPlanner,
+    contender: Contender,
     queries: &[(Cell, Cell)],
     mut progress: impl FnMut(usize),
 ) -> Run {
-    let t_pre = Instant::now();
-    let mut jps_plus = (planner == BenchPlanner::JpsPlus).then(|| JpsPlus::new(grid, model));
-    let precompute_us = t_pre.elapsed().as_secs_f64() * 1e6;
-    let mut search = GridSearch::new();
+    let mut engine = match contender {
+        Contender::Skyplan(p) => CellSearch::new(grid, p, model).ok(),
+        Contender::PathfindingCrateAStar => None,
+    };
+    let precompute_us = engine.as_ref().map_or(0.0, |e| e.precompute_us() as f64);
+    let mut query_once = |start: Cell, goal: Cell| -> (Option<f64>, Option<u64>) {
+        match engine.as_mut() {
+            Some(e) => match e.search(start, goal) {
+                Ok(p) => (Some(p.cost_cells()), Some(p.expansions)),
+                Err(_) => (None, None),
+            },
+            None => (peer_pathfinding::astar_cost(grid, model, start, goal), None),
+        }
+    };
     // One untimed warm-up query, so that no planner's first timed query pays for allocating and
     // faulting in its buffers.
     if let Some(&(start, goal)) = queries.first() {
-        let _warm_up_cost = match (&mut jps_plus, planner) {
-            (Some(plus), _) => plus.search(start, goal).ok().map(|p| p.cost_cells()),
-            (None, BenchPlanner::PathfindingCrateAStar) => {
-                peer_pathfinding::astar_cost(grid, model, start, goal)
-            }
-            (None, _) => search
-                .search(grid, start, goal, model, Planner::AStar)
-                .ok()
-                .map(|p| p.cost_cells()),
-        };
+        let _warm_up = query_once(start, goal);
     }
     let mut records = Vec::with_capacity(queries.len());
     for (query, &(start, goal)) in queries.iter().enumerate() {
         let t = Instant::now();
-        let (cost, expansions) = match planner {
-            BenchPlanner::PathfindingCrateAStar => {
-                (peer_pathfinding::astar_cost(grid, model, start, goal), None)
-            }
-            _ => {
-                let result = match (&mut jps_plus, planner) {
-                    (Some(plus), _) => plus.search(start, goal),
-                    (None, BenchPlanner::Jps) => {
-                        search.search(grid, start, goal, model, Planner::Jps)
-                    }
-                    (None, BenchPlanner::Dijkstra) => {
-                        search.search(grid, start, goal, model, Planner::Dijkstra)
-                    }
-                    _ => search.search(grid, start, goal, model, Planner::AStar),
-                };
-                match result {
-                    Ok(p) => (Some(p.cost_cells()), Some(p.expansions)),
-                    Err(_) => (None, None),
-                }
-            }
-        };
+        let (cost, expansions) = query_once(start, goal);
         let time_us = t.elapsed().as_secs_f64() * 1e6;
         records.push(Record {
-            planner: planner.name().to_string(),
+            planner: contender.name().to_string(),
             query,
             time_us,
             expansions,
@@ -203,7 +171,7 @@ pub fn run(
         progress(query);
     }
     Run {
-        planner: planner.name().to_string(),
+        planner: contender.name().to_string(),
         records,
         precompute_us,
     }

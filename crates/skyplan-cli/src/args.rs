@@ -1,6 +1,8 @@
 //! What the user typed, validated by clap without I/O.
 
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use skyplan_plan::PlannerId;
 use std::path::PathBuf;
 
 #[derive(Debug, Parser)]
@@ -18,7 +20,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Plan on an FCND colliders map: grid at altitude → optimal path → pruned, geo-referenced waypoints.
+    /// Plan a route with any planner on an FCND colliders map (.csv), an occupancy image (.png/.pgm
+    /// or a ROS map_server .yaml), a MovingAI grid (.map) or a random workspace (--random).
     Plan(Box<PlanArgs>),
     /// Replay MovingAI scenarios and check every cost against the published optimal length.
     Scen(ScenArgs),
@@ -57,79 +60,59 @@ pub(crate) fn parse_finite(s: &str) -> Result<f64, String> {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PlannerArg {
-    /// A* with the octile (8-connected) or Manhattan (4-connected) heuristic.
-    Astar,
-    /// Dijkstra (no heuristic).
-    Dijkstra,
-    /// Jump Point Search: A*'s optimal costs, far fewer expansions (octile grids).
-    Jps,
-    /// Theta*: any-angle paths through cell centres, shorter than any grid path.
-    Theta,
-    /// JPS+: JPS with precomputed jumps; pays off over many queries on one grid.
-    #[value(name = "jps-plus")]
-    #[serde(rename = "jps-plus")]
-    JpsPlus,
-    /// Wavefront navigation function: distance field from the goal, then gradient descent.
-    Wavefront,
-    /// Inflated cost map: A* minimising length + weight · cost (Nav2-style inflation).
-    Costmap,
-    /// 3D probabilistic roadmap among the boxes (grown until start and goal connect), graph A*.
-    Prm,
-    /// 3D lazy PRM: the same roadmap, edges checked only on found paths (blocked ones removed, search repeated).
-    #[value(name = "lazy-prm")]
-    #[serde(rename = "lazy-prm")]
-    LazyPrm,
-    /// 3D RRT-Connect: bidirectional trees, stops at the first path.
-    #[value(name = "rrt-connect")]
-    #[serde(rename = "rrt-connect")]
-    RrtConnect,
-    /// 3D Informed RRT*: improves the path until --time-limit-ms.
-    #[value(name = "rrt-star")]
-    #[serde(rename = "rrt-star")]
-    RrtStar,
-    /// 3D voxel A* (26-connected, altitude layers): may climb over low buildings; --climb-weight.
-    Voxel,
-    /// 2D Voronoi roadmap of the obstacles' grown footprints at --alt-m: exactly free edges, graph A*, grid fallback.
-    Voronoi,
+/// `--planner` for `plan` and `fly`: every planner of the registry, with its summary.
+fn any_planner() -> impl clap::builder::TypedValueParser<Value = PlannerId> {
+    planner_parser(|_| true)
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PruneArg {
-    /// Exact collinearity on grid cells.
-    Collinear,
-    /// Keep every cell of the grid path.
-    None,
+/// `--planner` for `scen`: the grid-search planners only.
+fn grid_search_planner() -> impl clap::builder::TypedValueParser<Value = PlannerId> {
+    planner_parser(|p| {
+        matches!(p.info().family, skyplan_plan::Family::Grid(_)) && p != PlannerId::Theta
+    })
 }
 
+fn planner_parser(
+    keep: fn(PlannerId) -> bool,
+) -> impl clap::builder::TypedValueParser<Value = PlannerId> {
+    let values = PlannerId::ALL
+        .iter()
+        .copied()
+        .filter(|&p| keep(p))
+        .map(|p| {
+            let info = p.info();
+            clap::builder::PossibleValue::new(info.name).help(info.summary)
+        });
+    clap::builder::PossibleValuesParser::new(values)
+        .map(|s| s.parse::<PlannerId>().unwrap_or_default())
+}
+
+/// How the route is planned: the map, the request and the planner (shared by `plan` and `fly`).
 #[derive(Debug, Args)]
-pub struct PlanArgs {
-    /// Map file, by extension: .csv FCND colliders, .yaml map_server, .png/.pgm (with
+pub struct RouteArgs {
+    /// Map file, by extension: .csv FCND colliders, .yaml ROS map_server, .png/.pgm (with
     /// --resolution), .map MovingAI; default: the bundled FCND city map.
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
     /// TOML file with default values for these options (command-line options win).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
-    /// Flight altitude above home, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    /// Flight altitude above home, metres, 0 to 10000 [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
     pub alt_m: Option<f64>,
     /// Safety margin around obstacles, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
     pub safety_m: Option<f64>,
-    /// Grid cell size, metres [default: 1].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    /// Grid cell size of colliders maps, metres [default: 1].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
     pub cell_m: Option<f64>,
-    /// Start as local metres north,east of home [default: 0,0, the home].
+    /// Start as local metres north,east of the map's origin [default: the home].
     #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "start_lla", allow_hyphen_values = true)]
     pub start_ne: Option<Pair>,
     /// Start as latitude,longitude in degrees (the vehicle's current global position).
     #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
     pub start_lla: Option<Pair>,
-    /// Goal as local metres north,east of home.
+    /// Goal as local metres north,east of the map's origin [default on the bundled map: 420,390].
     #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "goal_lla", allow_hyphen_values = true)]
     pub goal_ne: Option<Pair>,
     /// Goal as latitude,longitude in degrees.
@@ -144,34 +127,88 @@ pub struct PlanArgs {
     /// Let diagonal moves pass between two blocked cells (the FCND move model).
     #[arg(long)]
     pub corner_cutting: bool,
-    /// Search algorithm [default: jps; 4-connected grids use astar].
-    #[arg(long, value_enum)]
-    pub planner: Option<PlannerArg>,
+    /// The planner [default: jps].
+    #[arg(long, value_name = "PLANNER", value_parser = any_planner())]
+    pub planner: Option<PlannerId>,
     /// Collinearity pruning [default: collinear].
     #[arg(long, value_enum)]
     pub prune: Option<PruneArg>,
     /// Use the FCND determinant collinearity test with this tolerance (cells²) instead of exact pruning.
-    #[arg(long, value_name = "EPS", value_parser = parse_finite)]
+    #[arg(long, value_name = "EPS", value_parser = parse_finite, allow_hyphen_values = true)]
     pub epsilon: Option<f64>,
     /// Skip line-of-sight shortcutting.
     #[arg(long)]
     pub no_shortcut: bool,
+    #[command(flatten)]
+    pub grid: crate::grid_args::GridMapArgs,
+    #[command(flatten)]
+    pub plan3d: Plan3dArgs,
+}
+
+/// Options of the 3D planners.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "3D planners (prm, lazy-prm, rrt-connect, rrt-star, voxel)")]
+pub struct Plan3dArgs {
+    /// Start altitude above home, metres [default: --alt-m].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub start_alt_m: Option<f64>,
+    /// Goal altitude above home, metres [default: --alt-m].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub goal_alt_m: Option<f64>,
+    /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000].
+    #[arg(long, value_name = "MS")]
+    pub time_limit_ms: Option<u64>,
+    /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub max_alt_m: Option<f64>,
+    /// Floor of the flight volume: nothing flies lower, metres [default: 0, the ground].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub min_alt_m: Option<f64>,
+    /// voxel: extra cost per metre climbed (0: shortest path) [default: 1].
+    #[arg(long, value_name = "W", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub climb_weight: Option<f64>,
+    /// voxel: horizontal pitch of the voxel lattice, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub voxel_m: Option<f64>,
+    /// voxel: vertical pitch between altitude layers, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub layer_m: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PruneArg {
+    /// Exact collinearity on grid cells.
+    Collinear,
+    /// Keep every cell of the grid path.
+    None,
+}
+
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub route: RouteArgs,
     /// Waypoint file; the format follows the extension (.json .csv .h5 .geojson .plan) [default: waypoints.json].
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Waypoint file format, overriding the extension: json, csv, hdf5, geojson, plan.
     #[arg(long, value_name = "FORMAT")]
     pub format: Option<String>,
-    /// Also draw the map, path and waypoints to this picture (.png or .svg).
+    /// Also draw the map, the route and what the planner built to this picture (.png or .svg;
+    /// wavefront/costmap: a .png heat map).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
     /// Print one JSON object on stdout instead of the human summary.
     #[arg(long)]
     pub json: bool,
-    #[command(flatten)]
-    pub grid: crate::grid_args::GridMapArgs,
-    #[command(flatten)]
-    pub plan3d: crate::plan3d_cmd::Plan3dArgs,
+    /// Print the workspace, the distance matrix and the path as text (grids up to 80 × 60).
+    #[arg(long)]
+    pub show: bool,
+    /// prm, lazy-prm: save the roadmap after the run (JSON with the map's fingerprint).
+    #[arg(long, value_name = "FILE")]
+    pub save_roadmap: Option<PathBuf>,
+    /// prm, lazy-prm: start from a saved roadmap (refused if built for another map, margin or volume).
+    #[arg(long, value_name = "FILE")]
+    pub load_roadmap: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -183,9 +220,9 @@ pub struct ScenArgs {
     /// Print one JSON object per scenario (then a summary object) instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Search algorithm.
-    #[arg(long, value_enum, default_value = "jps-plus")]
-    pub planner: PlannerArg,
+    /// Grid-search planner.
+    #[arg(long, value_name = "PLANNER", default_value = "jps-plus", value_parser = grid_search_planner())]
+    pub planner: PlannerId,
 }
 
 #[derive(Debug, Args)]
@@ -282,8 +319,14 @@ pub struct FlyArgs {
     /// Fault injection for tests: the silence lasts this many simulated seconds, then the link comes back.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim_drop_link_after_s")]
     pub sim_link_gap_s: Option<f64>,
+    /// Also write the planned waypoints to this file (.json .csv .h5 .geojson .plan).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Waypoint file format, overriding the extension.
+    #[arg(long, value_name = "FORMAT")]
+    pub format: Option<String>,
     #[command(flatten)]
-    pub plan: PlanArgs,
+    pub route: RouteArgs,
 }
 
 #[derive(Debug, Args)]

@@ -5,9 +5,10 @@
 
 use crate::args::BenchArgs;
 use crate::exit::{Result, bad_input};
-use crate::files::{BUNDLED_COLLIDERS, read_text};
+use crate::files::read_text;
 use serde_json::{Value, json};
 use skyplan_bench::Stats;
+use skyplan_plan::FCND_CITY_CSV as BUNDLED_COLLIDERS;
 use skyplan_sampling::{Budget, PlannerKind, Request, Status};
 use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, WorldSpec, distance_m};
 use std::process::Command;

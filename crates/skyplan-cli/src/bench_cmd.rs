@@ -3,11 +3,12 @@
 
 use crate::args::BenchArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
-use crate::files::{BUNDLED_COLLIDERS, read_text, write_atomic};
+use crate::files::{read_text, write_atomic};
 use anyhow::Context;
 use serde_json::{Value, json};
-use skyplan_bench::{BenchPlanner, Record, Run, Stats, cost_ratio, random_far_queries, run};
+use skyplan_bench::{Contender, Record, Run, Stats, cost_ratio, random_far_queries, run};
 use skyplan_cspace::{Cell, Grid2, GridFrame, GridSpec};
+use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
 use skyplan_search::MoveModel;
 use std::path::PathBuf;
 use std::process::Command;
@@ -240,32 +241,41 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.three_d {
         return crate::bench3d_cmd::run(args);
     }
+    if args.random == Some(0) {
+        return Err(bad_input("--random 0: expected at least 1 query"));
+    }
+    if let Some(out) = &args.out
+        && !out.extension().is_some_and(|e| e == "csv" || e == "json")
+    {
+        return Err(bad_input(format!(
+            "--out {}: expected a .csv or .json file name",
+            out.display()
+        )));
+    }
     let model = if args.corner_cutting {
         MoveModel::OctileCornerCutting
     } else {
         MoveModel::Octile
     };
-    let planners: Vec<BenchPlanner> = match &args.planners {
+    let planners: Vec<Contender> = match &args.planners {
         Some(list) => list
             .split(',')
             .map(|n| {
-                BenchPlanner::from_name(n.trim()).ok_or_else(|| {
-                    let all: Vec<&str> = BenchPlanner::ALL.iter().map(|p| p.name()).collect();
+                Contender::from_name(n.trim()).ok_or_else(|| {
                     bad_input(format!(
-                        "--planners: unknown planner {n:?}; expected some of {}",
-                        all.join(", ")
+                        "--planners: unknown planner {n:?}; expected some of jps-plus, jps, astar, dijkstra, theta, rust-pathfinding-astar"
                     ))
                 })
             })
             .collect::<Result<_>>()?,
         None => {
             let mut v = vec![
-                BenchPlanner::JpsPlus,
-                BenchPlanner::Jps,
-                BenchPlanner::AStar,
+                Contender::Skyplan(PlannerId::JpsPlus),
+                Contender::Skyplan(PlannerId::Jps),
+                Contender::Skyplan(PlannerId::Astar),
             ];
             if args.peers {
-                v.push(BenchPlanner::PathfindingCrateAStar);
+                v.push(Contender::PathfindingCrateAStar);
             }
             v
         }
@@ -317,7 +327,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         .collect();
     let medians: Vec<f64> = runs
         .iter()
-        .filter(|r| BenchPlanner::from_name(&r.planner).is_some_and(BenchPlanner::is_skyplan))
+        .filter(|r| Contender::from_name(&r.planner).is_some_and(Contender::is_skyplan))
         .filter_map(|r| {
             Stats::of(&r.records.iter().map(|x| x.time_us).collect::<Vec<_>>()).map(|s| s.median)
         })
@@ -411,7 +421,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         "×fastest"
     );
     for r in &rows {
-        let name = if r.planner == BenchPlanner::JpsPlus.name() {
+        let name = if r.planner == PlannerId::JpsPlus.name() {
             format!("{} (+{:.0} ms table)", r.planner, r.precompute_ms)
         } else {
             r.planner.clone()

@@ -1,4 +1,5 @@
-//! The TOML config file: the same values as the `plan` options (like the FCND config).
+//! The TOML config file: the plan request's keys (as `skyplan_plan::PlanRequest`, FCND aliases
+//! `target_altitude`, `safety_distance`, `method` accepted) plus the CLI's files.
 //!
 //! ```toml
 //! map = "data/colliders.csv"   # relative paths are relative to the config file
@@ -9,33 +10,15 @@
 //! out = "waypoints.h5"
 //! ```
 
-use crate::args::{PlannerArg, PruneArg};
-use crate::exit::{Classify, Kind, Result};
-use anyhow::Context;
-use serde::Deserialize;
+use crate::exit::{Result, bad_input};
+use skyplan_plan::PlanRequest;
 use std::path::{Path, PathBuf};
 
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// A config file: the request and the CLI's own keys.
+#[derive(Debug, Default)]
 pub struct Config {
+    pub request: PlanRequest,
     pub map: Option<PathBuf>,
-    #[serde(alias = "target_altitude")]
-    pub alt_m: Option<f64>,
-    #[serde(alias = "safety_distance")]
-    pub safety_m: Option<f64>,
-    pub cell_m: Option<f64>,
-    pub start_ne: Option<[f64; 2]>,
-    pub start_lla: Option<[f64; 2]>,
-    pub goal_ne: Option<[f64; 2]>,
-    pub goal_lla: Option<[f64; 2]>,
-    pub start_heading_deg: Option<f64>,
-    pub connectivity: Option<u8>,
-    pub corner_cutting: Option<bool>,
-    #[serde(alias = "method")]
-    pub planner: Option<PlannerArg>,
-    pub prune: Option<PruneArg>,
-    pub epsilon: Option<f64>,
-    pub shortcut: Option<bool>,
     pub out: Option<PathBuf>,
     pub format: Option<String>,
     pub plot: Option<PathBuf>,
@@ -45,18 +28,41 @@ impl Config {
     /// Reads a config file; paths inside it become relative to its directory.
     pub fn load(path: &Path) -> Result<Self> {
         let text = crate::files::read_text(path)?;
-        let mut config: Config = toml::from_str(&text)
-            .with_context(|| format!("{}: invalid config", path.display()))
-            .or_exit(Kind::BadInput)?;
+        let name = path.display();
+        let mut table: toml::Table =
+            toml::from_str(&text).map_err(|e| bad_input(format!("{name}: invalid config: {e}")))?;
         let base = path.parent().unwrap_or(Path::new(""));
-        for p in [&mut config.map, &mut config.out, &mut config.plot]
-            .into_iter()
-            .flatten()
-        {
-            if p.is_relative() {
-                *p = base.join(&*p);
+        let mut take = |key: &str| -> Result<Option<String>> {
+            match table.remove(key) {
+                None => Ok(None),
+                Some(toml::Value::String(s)) => Ok(Some(s)),
+                Some(other) => Err(bad_input(format!(
+                    "{name}: {key}: expected a string, found {other}"
+                ))),
             }
+        };
+        let relative = |p: Option<String>| {
+            p.map(|p| {
+                let p = PathBuf::from(p);
+                if p.is_relative() { base.join(p) } else { p }
+            })
+        };
+        let map = relative(take("map")?);
+        let out = relative(take("out")?);
+        let plot = relative(take("plot")?);
+        let format = take("format")?;
+        let request: PlanRequest = table
+            .try_into()
+            .map_err(|e| bad_input(format!("{name}: invalid config: {e}")))?;
+        if request.geometry.is_some() {
+            return Err(bad_input(format!("{name}: geometry is not a config key")));
         }
-        Ok(config)
+        Ok(Config {
+            request,
+            map,
+            out,
+            format,
+            plot,
+        })
     }
 }

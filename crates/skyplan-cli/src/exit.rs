@@ -1,4 +1,7 @@
-//! Exit codes: scripts tell bad input from "no path" from success.
+//! Exit codes: scripts tell bad input from "no path" from success. The one place where the
+//! planning API's failure kinds become exit codes.
+
+use skyplan_plan::{FailureKind, PlanFailure};
 
 /// What kind of failure ended the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,6 +30,8 @@ impl Kind {
 pub struct Failure {
     pub kind: Kind,
     pub error: anyhow::Error,
+    /// The planning API's kind, when the failure came from it (for `--json`).
+    pub plan_kind: Option<FailureKind>,
 }
 
 pub type Result<T> = std::result::Result<T, Failure>;
@@ -41,12 +46,30 @@ impl<T, E: Into<anyhow::Error>> Classify<T> for std::result::Result<T, E> {
         self.map_err(|e| Failure {
             kind,
             error: e.into(),
+            plan_kind: None,
         })
     }
 }
 
+impl From<PlanFailure> for Failure {
+    fn from(f: PlanFailure) -> Self {
+        let kind = match f.kind {
+            FailureKind::InvalidStart | FailureKind::InvalidGoal | FailureKind::BadRequest => {
+                Kind::BadInput
+            }
+            FailureKind::NoPath | FailureKind::Timeout => Kind::NoPath,
+            FailureKind::Internal => Kind::Runtime,
+        };
+        Failure {
+            kind,
+            plan_kind: Some(f.kind),
+            error: anyhow::anyhow!(f.message),
+        }
+    }
+}
+
 /// With `--json`, scripts get one JSON object on stdout for failures too:
-/// `{"status": "bad_input" | "no_path" | "error", "error": "…"}`.
+/// `{"status": "bad_input" | "no_path" | "error", "kind": "invalid_goal" | …, "error": "…"}`.
 pub fn print_json_failure<T>(result: &Result<T>) {
     if let Err(f) = result {
         let status = match f.kind {
@@ -56,7 +79,7 @@ pub fn print_json_failure<T>(result: &Result<T>) {
         };
         println!(
             "{}",
-            serde_json::json!({ "status": status, "error": format!("{:#}", f.error) })
+            serde_json::json!({ "status": status, "kind": f.plan_kind, "error": format!("{:#}", f.error) })
         );
     }
 }
@@ -66,5 +89,15 @@ pub fn bad_input(message: impl std::fmt::Display) -> Failure {
     Failure {
         kind: Kind::BadInput,
         error: anyhow::anyhow!("{message}"),
+        plan_kind: None,
+    }
+}
+
+/// A runtime failure from a message.
+pub fn runtime(message: impl std::fmt::Display) -> Failure {
+    Failure {
+        kind: Kind::Runtime,
+        error: anyhow::anyhow!("{message}"),
+        plan_kind: None,
     }
 }

@@ -1,20 +1,85 @@
-//! File access for the CLI: reading inputs with their names in errors, atomic writes.
+//! File access for the CLI: reading inputs with their names in errors; outputs checked before
+//! anything is planned, then written atomically (a temporary file beside the target, renamed).
 
-use crate::exit::{Classify, Kind, Result};
+use crate::exit::{Classify, Kind, Result, bad_input};
 use anyhow::Context;
 use std::io::Write;
-use std::path::Path;
-
-/// The FCND city map, compiled into the binary so that `skyplan plan` works anywhere.
-pub const BUNDLED_COLLIDERS: &str = include_str!("../../../data/colliders.csv");
-/// How the bundled map is named in messages and metadata.
-pub const BUNDLED_NAME: &str = "colliders.csv (bundled FCND city map)";
+use std::path::{Path, PathBuf};
 
 /// Reads a text file; a missing or unreadable file is bad input.
 pub fn read_text(path: &Path) -> Result<String> {
     std::fs::read_to_string(path)
         .with_context(|| format!("cannot read {}", path.display()))
         .or_exit(Kind::BadInput)
+}
+
+/// Reads a binary file; a missing or unreadable file is bad input.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path)
+        .with_context(|| format!("cannot read {}", path.display()))
+        .or_exit(Kind::BadInput)
+}
+
+/// Where an output goes: standard output for `-`, else the file the path names (a symlink is
+/// followed to its target, so the link survives).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Target {
+    Stdout,
+    File(PathBuf),
+}
+
+/// Checks an output path before anything is planned: `-` is standard output; a regular file or
+/// a path that does not exist yet (in an existing directory) is written; anything else — a
+/// device, a FIFO, a socket, a directory — is refused (exit 2) and left untouched.
+pub fn output_target(option: &str, path: &Path) -> Result<Target> {
+    if path.as_os_str() == "-" {
+        return Ok(Target::Stdout);
+    }
+    let resolved = match std::fs::canonicalize(path) {
+        Ok(p) => p,
+        Err(_) => path.to_path_buf(),
+    };
+    match std::fs::metadata(&resolved) {
+        Ok(m) if m.is_file() => Ok(Target::File(resolved)),
+        Ok(m) => {
+            let what = if m.is_dir() {
+                "a directory"
+            } else {
+                "not a regular file (a device, FIFO or socket)"
+            };
+            Err(bad_input(format!(
+                "{option} {}: {what}; skyplan writes only regular files (or - for standard output)",
+                path.display()
+            )))
+        }
+        Err(_) => {
+            let dir = match resolved.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            if dir.is_dir() {
+                Ok(Target::File(resolved))
+            } else {
+                Err(bad_input(format!(
+                    "{option} {}: the directory {} does not exist",
+                    path.display(),
+                    dir.display()
+                )))
+            }
+        }
+    }
+}
+
+/// Writes `bytes` to a checked target: standard output, or atomically to the file (a temporary
+/// file beside it, then a rename), so a reader never sees a half-written file.
+pub fn write_target(target: &Target, bytes: &[u8]) -> Result<()> {
+    match target {
+        Target::Stdout => std::io::stdout()
+            .write_all(bytes)
+            .context("writing to standard output")
+            .or_exit(Kind::Runtime),
+        Target::File(path) => write_atomic(path, bytes),
+    }
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename, so a reader

@@ -3,10 +3,10 @@
 //! every waypoint reached.
 
 use crate::args::FlyArgs;
-use crate::exit::{Classify, Failure, Kind, Result, bad_input};
-use crate::files::{BUNDLED_COLLIDERS, BUNDLED_NAME, read_text, write_atomic};
-use crate::plan_cmd::resolve;
-use anyhow::anyhow;
+use crate::exit::runtime;
+use crate::exit::{Classify, Kind, Result, bad_input};
+use crate::files::{Target as OutTarget, write_atomic, write_target};
+use skyplan_export::Format;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
@@ -18,7 +18,7 @@ use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update};
 use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
 use skyplan_link::{Address, Role};
-use skyplan_pipeline::{PlanError, Position, plan};
+use skyplan_plan::{PlanRequest, Session, World};
 use std::io::IsTerminal;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -154,27 +154,6 @@ pub(crate) fn sim_note_line(n: &SimNote) -> Option<String> {
     })
 }
 
-fn plan_failure(e: PlanError) -> Failure {
-    let kind = if e.is_no_path() {
-        Kind::NoPath
-    } else if matches!(e, PlanError::Internal(_)) {
-        Kind::Runtime
-    } else {
-        Kind::BadInput
-    };
-    Failure {
-        kind,
-        error: anyhow!(e),
-    }
-}
-
-fn runtime(message: impl std::fmt::Display) -> Failure {
-    Failure {
-        kind: Kind::Runtime,
-        error: anyhow!("{message}"),
-    }
-}
-
 pub fn run(args: FlyArgs) -> Result<()> {
     let t0 = Instant::now();
     if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
@@ -202,23 +181,31 @@ pub fn run(args: FlyArgs) -> Result<()> {
         )));
     }
     let ctrl_c = CtrlC::install();
-    let user_start = args.plan.start_ne.is_some() || args.plan.start_lla.is_some();
-    let write_waypoints = args.plan.out.is_some();
     let view = args_view(&args);
     let log_path = args.log.clone();
-    let opts = resolve(args.plan)?;
-    let (map_name, text) = match &opts.map {
-        Some(path) => (path.display().to_string(), read_text(path)?),
-        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
+    let crate::world_load::Resolved {
+        world,
+        request,
+        config,
+    } = crate::world_load::resolve(&args.route)?;
+    let user_start = request.start_ne.is_some() || request.start_lla.is_some();
+    let out = match args.out.clone().or(config.out.clone()) {
+        Some(path) => {
+            let (target, format) = crate::plan_cmd::output_file(
+                &path,
+                args.format.as_deref().or(config.format.as_deref()),
+            )?;
+            Some((path, target, format))
+        }
+        None => None,
     };
-    let map = skyplan_map::colliders::parse_colliders(&text)
-        .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
-    let frame = LocalFrame::new(Lla {
-        lat_deg: map.home.lat_deg,
-        lon_deg: map.home.lon_deg,
-        alt_m: 0.0,
-    })
-    .map_err(|e| bad_input(format!("{map_name}: home: {e}")))?;
+    let (Some(map), Some(frame)) = (world.colliders().cloned(), world.frame().cloned()) else {
+        return Err(bad_input(format!(
+            "fly: {} is not an FCND colliders map; flying needs the map's boxes and geodetic home (--map FILE.csv, or the bundled map)",
+            world.name()
+        )));
+    };
+    let map_name = world.name().to_string();
     println!(
         "map        {map_name}: {} obstacles, home lat {:.6}, lon {:.6}",
         map.boxes.len(),
@@ -228,20 +215,20 @@ pub fn run(args: FlyArgs) -> Result<()> {
 
     // The vehicle: the built-in simulator on a free loopback port, or the given address.
     let (address, sim) = if args.sim {
-        let home = match opts.request.start {
-            _ if !user_start => frame.home(),
-            Position::Lla { lat_deg, lon_deg } => Lla {
+        let home = match (request.start_lla, request.start_ne) {
+            (Some([lat_deg, lon_deg]), _) => Lla {
                 lat_deg,
                 lon_deg,
                 alt_m: 0.0,
             },
-            Position::Ne { north_m, east_m } => frame
+            (None, Some([north_m, east_m])) => frame
                 .lla_from_ned(Ned {
                     north_m,
                     east_m,
                     down_m: 0.0,
                 })
                 .map_err(|e| bad_input(format!("start: {e}")))?,
+            (None, None) => frame.home(),
         };
         let config = SimServerConfig {
             speedup: args.speedup,
@@ -282,17 +269,13 @@ pub fn run(args: FlyArgs) -> Result<()> {
             None,
         )
     };
-    let result = fly(
-        &view,
-        &address,
-        &map,
-        &frame,
-        opts,
+    let plan_with = FlyPlan {
+        world,
+        request,
         user_start,
-        write_waypoints,
-        sim.as_ref(),
-        &ctrl_c,
-    );
+        out,
+    };
+    let result = fly(&view, &address, &frame, plan_with, sim.as_ref(), &ctrl_c);
     let report = sim.and_then(InProcessSim::finish);
     let (log, ended) = result?;
     let outcome = match ended {
@@ -384,15 +367,19 @@ fn args_view(a: &FlyArgs) -> FlyView {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// What `fly` plans: the world, the request, whether the start was given, the waypoint file.
+struct FlyPlan {
+    world: World,
+    request: PlanRequest,
+    user_start: bool,
+    out: Option<(std::path::PathBuf, OutTarget, Format)>,
+}
+
 fn fly(
     a: &FlyView,
     address: &Address,
-    map: &skyplan_map::colliders::CollidersMap,
     frame: &LocalFrame,
-    mut opts: crate::plan_cmd::Options,
-    user_start: bool,
-    write_waypoints: bool,
+    p: FlyPlan,
     sim: Option<&InProcessSim>,
     ctrl_c: &CtrlC,
 ) -> Result<(Vec<LogRow>, Ended)> {
@@ -423,30 +410,41 @@ fn fly(
 
     // PLANNING: the heartbeat thread keeps the link alive meanwhile.
     println!("state      PLANNING");
-    if !user_start {
-        opts.request.start = Position::Lla {
-            lat_deg: info.position.lat_deg,
-            lon_deg: info.position.lon_deg,
-        };
+    let mut request = p.request;
+    if !p.user_start {
+        request.start_lla = Some([info.position.lat_deg, info.position.lon_deg]);
+        request.start_ne = None;
     }
     let t_plan = Instant::now();
-    let outcome = plan(map, &opts.request).map_err(plan_failure)?;
-    let mission = &outcome.mission;
+    let plan = Session::new(p.world).plan(&request)?;
+    let mission = plan
+        .mission
+        .as_ref()
+        .ok_or_else(|| runtime("the plan has no geodetic waypoints"))?;
     println!(
-        "plan       {} → {}: {} waypoints, {:.1} m at {} m altitude, planned in {:.1} ms",
-        outcome.start,
-        outcome.goal,
+        "plan       {}: {} → {}: {} waypoints, {:.1} m, altitudes {:.1}..{:.1} m, planned in {:.1} ms",
+        plan.planner,
+        plan.start,
+        plan.goal,
         mission.waypoints.len(),
-        mission.length_m(),
-        opts.request.spec.alt_m,
+        mission.length_3d_m(),
+        mission
+            .waypoints
+            .iter()
+            .map(|w| w.alt_m)
+            .fold(f64::INFINITY, f64::min),
+        mission
+            .waypoints
+            .iter()
+            .map(|w| w.alt_m)
+            .fold(f64::NEG_INFINITY, f64::max),
         t_plan.elapsed().as_secs_f64() * 1000.0
     );
-    if write_waypoints {
-        let summary = serde_json::json!({ "map_home": [map.home.lat_deg, map.home.lon_deg] });
-        let bytes =
-            skyplan_export::encode(opts.format, mission, &summary).or_exit(Kind::Runtime)?;
-        write_atomic(&opts.out, &bytes)?;
-        println!("wrote      {} ({})", opts.out.display(), opts.format.name());
+    if let Some((path, target, format)) = &p.out {
+        let summary = serde_json::json!({ "map_home": plan.home, "planner": plan.planner });
+        let bytes = skyplan_export::encode(*format, mission, &summary).or_exit(Kind::Runtime)?;
+        write_target(target, &bytes)?;
+        println!("wrote      {} ({})", path.display(), format.name());
     }
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
     let config = ExecutorConfig {
@@ -472,7 +470,7 @@ fn fly(
         "mission    {} items: {}take-off to {} m, {} waypoints with headings, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
         if home.is_some() { "home, " } else { "" },
-        opts.request.spec.alt_m,
+        request.alt_m.unwrap_or(5.0),
         targets.len()
     );
     let report = gcs
@@ -710,7 +708,7 @@ fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
         write(&mut w, rec)?;
     }
     w.into_inner()
-        .map_err(|e| anyhow!("flight log: {e}"))
+        .map_err(|e| anyhow::anyhow!("flight log: {e}"))
         .or_exit(Kind::Runtime)
 }
 

@@ -105,16 +105,13 @@ pub struct GridMapArgs {
     /// Probability that a cell of the random workspace is blocked.
     #[arg(long, value_name = "P", value_parser = parse_probability, default_value_t = 0.25)]
     pub density: f64,
-    /// Seed of the random workspace (and of the drawn source/destination).
+    /// Seed of the random workspace, of the drawn start/goal and of the 3D sampling planners.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
     /// Geodetic home LAT,LON of the map's origin, for lat/lon of waypoints on maps without one
     /// (images, MovingAI, random).
     #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
     pub home: Option<Pair>,
-    /// Print the workspace, the distance matrix and the path as text (grids up to 80 × 60).
-    #[arg(long)]
-    pub show: bool,
     /// Wavefront field: length (Dijkstra, octile) or steps (BFS) [default: length].
     #[arg(long, value_enum)]
     pub field: Option<FieldArg>,
@@ -171,6 +168,9 @@ pub struct NavigateArgs {
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Print the workspace and the ride as text (grids up to 80 × 60).
+    #[arg(long)]
+    pub show: bool,
     #[command(flatten)]
     pub grid: GridMapArgs,
 }

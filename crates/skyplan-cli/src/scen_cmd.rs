@@ -1,12 +1,11 @@
 //! `skyplan scen`: replay MovingAI scenarios and compare each cost with `optimal_length`.
 
-use crate::args::{PlannerArg, ScenArgs};
-use crate::exit::{Failure, Kind, Result, bad_input};
+use crate::args::ScenArgs;
+use crate::exit::{Result, bad_input};
 use crate::files::read_text;
-use anyhow::anyhow;
 use serde_json::json;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
-use skyplan_search::{GridSearch, JpsPlus, MoveModel, Planner};
+use skyplan_search::MoveModel;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -51,46 +50,13 @@ pub fn run(args: ScenArgs) -> Result<()> {
             }
         }
     }
-    let planner = match args.planner {
-        PlannerArg::Astar => Planner::AStar,
-        PlannerArg::Dijkstra => Planner::Dijkstra,
-        PlannerArg::Jps => Planner::Jps,
-        PlannerArg::JpsPlus => Planner::JpsPlus,
-        PlannerArg::Theta => {
-            return Err(bad_input(
-                "--planner theta finds any-angle paths; MovingAI lengths are octile: use jps-plus, jps, astar or dijkstra",
-            ));
-        }
-        PlannerArg::Prm
-        | PlannerArg::LazyPrm
-        | PlannerArg::RrtConnect
-        | PlannerArg::RrtStar
-        | PlannerArg::Voxel => {
-            return Err(bad_input(
-                "scen replays grid scenarios: prm, rrt-connect, rrt-star and voxel are 3D planners for `skyplan plan`",
-            ));
-        }
-        PlannerArg::Voronoi => {
-            return Err(bad_input(
-                "scen replays grid scenarios: voronoi is a roadmap planner for `skyplan plan` on colliders maps",
-            ));
-        }
-        PlannerArg::Wavefront | PlannerArg::Costmap => {
-            return Err(bad_input(
-                "scen replays A*-family planners: use jps-plus, jps, astar or dijkstra (wavefront and costmap are for `skyplan plan`)",
-            ));
-        }
-    };
     // JPS+ builds its table once for all scenarios (reported, not counted per query).
-    let t_table = Instant::now();
-    let mut jps_plus =
-        (planner == Planner::JpsPlus).then(|| JpsPlus::new(&grid, MoveModel::Octile));
-    let table_ms = t_table.elapsed().as_secs_f64() * 1e3;
+    let mut search = skyplan_plan::CellSearch::new(&grid, args.planner, MoveModel::Octile)?;
+    let table_ms = search.precompute_us() as f64 / 1e3;
     let progress = indicatif::ProgressBar::new(scenarios.len() as u64);
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let mut search = GridSearch::new();
     let mut buckets: BTreeMap<u32, Bucket> = BTreeMap::new();
     let mut failures = Vec::new();
     for s in &scenarios {
@@ -98,10 +64,7 @@ pub fn run(args: ScenArgs) -> Result<()> {
         let start = Cell::new(s.start_y as u32, s.start_x as u32);
         let goal = Cell::new(s.goal_y as u32, s.goal_x as u32);
         let t = Instant::now();
-        let result = match jps_plus.as_mut() {
-            Some(plus) => plus.search(start, goal),
-            None => search.search(&grid, start, goal, MoveModel::Octile, planner),
-        };
+        let result = search.search(start, goal);
         let time_us = t.elapsed().as_secs_f64() * 1e6;
         let (cost, expansions) = match &result {
             Ok(p) => (Some(p.cost_cells()), p.expansions),
@@ -114,8 +77,15 @@ pub fn run(args: ScenArgs) -> Result<()> {
         b.matched += u64::from(ok);
         b.total_us += time_us;
         if !ok {
+            let found = match cost {
+                Some(c) => format!("found {c:.8}"),
+                None if grid.is_blocked(start) || grid.is_blocked(goal) => {
+                    "no path: the start or goal is on a blocked cell".to_string()
+                }
+                None => "no path found".to_string(),
+            };
             failures.push(format!(
-                "line {}: cost {cost:?}, optimal {}",
+                "line {}: {found}, optimal {}",
                 s.line, s.optimal_length
             ));
         }
@@ -138,21 +108,22 @@ pub fn run(args: ScenArgs) -> Result<()> {
         println!(
             "{}",
             json!({ "summary": true, "map": args.map.display().to_string(), "scenarios": total, "matched": matched,
-                    "mean_time_us": total_us / total.max(1) as f64, "planner": format!("{planner:?}"),
+                    "mean_time_us": total_us / total.max(1) as f64, "planner": args.planner,
                     "precompute_ms": table_ms })
         );
     } else {
-        let table = if jps_plus.is_some() {
+        let table = if args.planner == skyplan_plan::PlannerId::JpsPlus {
             format!(" (JPS+ table built in {table_ms:.1} ms)")
         } else {
             String::new()
         };
         println!(
-            "{}: {} × {} grid, {} scenarios, planner {planner:?}{table}",
+            "{}: {} × {} grid, {} scenarios, planner {}{table}",
             args.map.display(),
             map.width,
             map.height,
-            total
+            total,
+            args.planner
         );
         println!(
             "{:>6} {:>9} {:>9} {:>14}",
@@ -176,13 +147,10 @@ pub fn run(args: ScenArgs) -> Result<()> {
         Ok(())
     } else {
         let shown: Vec<&str> = failures.iter().take(5).map(String::as_str).collect();
-        Err(Failure {
-            kind: Kind::Runtime,
-            error: anyhow!(
-                "{} of {total} scenarios do not match optimal_length (relative {REL_TOL}): {}",
-                total - matched,
-                shown.join("; ")
-            ),
-        })
+        Err(crate::exit::runtime(format!(
+            "{} of {total} scenarios do not match optimal_length (relative {REL_TOL}): {}",
+            total - matched,
+            shown.join("; ")
+        )))
     }
 }

@@ -68,6 +68,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod cell_search;
 mod failure;
 mod grid;
 mod navfn;
@@ -79,6 +80,7 @@ mod three_d;
 mod voronoi;
 mod world;
 
+pub use cell_search::CellSearch;
 pub use failure::{FailureKind, PlanFailure};
 pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, WaypointCounts};
 pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};

@@ -1,0 +1,80 @@
+//! `--show`: the workspace, the distance matrix and the path as text, and the terminal prompt
+//! for a start or goal on grid maps without defaults.
+
+use crate::args::Pair;
+use crate::exit::{Classify, Kind, Result, bad_input};
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_navfn::{DistanceField, FieldMetric, distance_field, show};
+use skyplan_search::MoveModel;
+use std::io::{BufRead, Write};
+
+/// Largest grid `--show` prints as text.
+const SHOW_MAX_ROWS: u32 = 60;
+const SHOW_MAX_COLS: u32 = 80;
+
+/// Prints the workspace (with the wavefront field's unreachable cells), the distance matrix and
+/// the path.
+pub fn print(grid: &Grid2, start: Cell, goal: Cell, path: &[Cell], model: MoveModel, steps: bool) {
+    if grid.rows() > SHOW_MAX_ROWS || grid.cols() > SHOW_MAX_COLS {
+        eprintln!(
+            "--show: the grid is {} × {} cells; text output is for grids up to {SHOW_MAX_COLS} × {SHOW_MAX_ROWS} (use --plot)",
+            grid.rows(),
+            grid.cols()
+        );
+        return;
+    }
+    let metric = if steps {
+        FieldMetric::Steps
+    } else {
+        FieldMetric::Length
+    };
+    let field: Option<DistanceField> = distance_field(grid, goal, model, metric).ok();
+    println!("workspace (north up; {})", show::WORKSPACE_LEGEND);
+    print!(
+        "{}",
+        show::workspace(grid, Some(start), Some(goal), path, field.as_ref())
+    );
+    if let Some(field) = &field {
+        println!("\ndistance matrix (cells; {})", show::MATRIX_LEGEND);
+        print!("{}", show::distance_matrix(field, Some(start)));
+    }
+    if !path.is_empty() {
+        let cells: Vec<String> = path
+            .iter()
+            .map(|c| format!("({},{})", c.row, c.col))
+            .collect();
+        println!("\npath (row,col): {}", cells.join(" → "));
+    }
+}
+
+/// Asks on the terminal until the answer is a free cell on the map.
+pub fn ask_position(grid: &Grid2, which: &str) -> Result<Pair> {
+    let extent = {
+        let f = grid.frame();
+        format!(
+            "north {:.2}..{:.2} m, east {:.2}..{:.2} m",
+            f.origin_north_m,
+            f.origin_north_m + f64::from(grid.rows()) * f.cell_m,
+            f.origin_east_m,
+            f.origin_east_m + f64::from(grid.cols()) * f.cell_m
+        )
+    };
+    let stdin = std::io::stdin();
+    loop {
+        eprint!("{which} as N,E metres ({extent}): ");
+        let _ = std::io::stderr().flush();
+        let mut line = String::new();
+        let read = stdin.lock().read_line(&mut line).or_exit(Kind::Runtime)?;
+        if read == 0 {
+            return Err(bad_input(format!("no {which} given (end of input)")));
+        }
+        match crate::args::parse_pair(line.trim()) {
+            Err(e) => eprintln!("  {e}; try again"),
+            Ok(p) => match grid.cell_at_ne(p.0, p.1) {
+                Some(c) if !grid.is_blocked(c) => return Ok(p),
+                Some(_) => eprintln!("  N {} m, E {} m is at an obstacle; try again", p.0, p.1),
+                None => eprintln!("  N {} m, E {} m is off the map; try again", p.0, p.1),
+            },
+        }
+    }
+}

@@ -1,0 +1,149 @@
+//! Map files (by extension) and `--random` into a `skyplan_plan::World`, and the CLI's options
+//! (over a config file) into a `PlanRequest`.
+
+use crate::args::{Pair, PruneArg, RouteArgs};
+use crate::config::Config;
+use crate::exit::{Result, bad_input};
+use crate::files::{read_bytes, read_text};
+use crate::grid_args::{FieldArg, GridMapArgs};
+use skyplan_plan::{FieldMode, MapYaml, PlanRequest, PruneMode, World};
+use std::path::{Path, PathBuf};
+
+fn is_ext(path: &Path, exts: &[&str]) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// The world a command runs on: `--random`, the map file by extension, or the bundled city.
+pub fn load_world(map: Option<&Path>, g: &GridMapArgs) -> Result<World> {
+    let colliders = map.is_none_or(|p| is_ext(p, &["csv"])) && g.random.is_none();
+    if g.resolution.is_some() && !map.is_some_and(|p| is_ext(p, &["png", "pgm"])) {
+        return Err(bad_input(
+            "--resolution: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)",
+        ));
+    }
+    if colliders && g.home.is_some() {
+        return Err(bad_input(
+            "--home: a colliders map carries its own home (line 1); drop --home",
+        ));
+    }
+    let world = if let Some(size) = g.random {
+        World::random(size.width, size.height, g.density, g.seed)?
+    } else {
+        match map {
+            None => World::fcnd_city(),
+            Some(path) => load_file(path, g)?,
+        }
+    };
+    match g.home {
+        Some(Pair(lat, lon)) => Ok(world.with_home(lat, lon)?),
+        None => Ok(world),
+    }
+}
+
+fn load_file(path: &Path, g: &GridMapArgs) -> Result<World> {
+    let name = path.display().to_string();
+    if is_ext(path, &["csv"]) {
+        Ok(World::from_colliders_csv(&name, &read_text(path)?)?)
+    } else if is_ext(path, &["yaml", "yml"]) {
+        let meta =
+            MapYaml::parse(&read_text(path)?).map_err(|e| bad_input(format!("{name}: {e}")))?;
+        let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
+        let bytes = read_bytes(&image)
+            .map_err(|f| bad_input(format!("{name}: field image: {:#}", f.error)))?;
+        Ok(World::from_image(
+            &image.display().to_string(),
+            &bytes,
+            &meta,
+            g.unknown_free,
+        )?)
+    } else if is_ext(path, &["png", "pgm"]) {
+        let resolution = g.resolution.ok_or_else(|| {
+            bad_input(format!(
+                "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"
+            ))
+        })?;
+        Ok(World::from_image(
+            &name,
+            &read_bytes(path)?,
+            &MapYaml::bare(resolution),
+            g.unknown_free,
+        )?)
+    } else if is_ext(path, &["map"]) {
+        Ok(World::from_movingai(&name, &read_text(path)?)?)
+    } else {
+        Err(bad_input(format!(
+            "{name}: unknown map type; expected .csv (colliders), .yaml (map_server), .png/.pgm (with --resolution) or .map (MovingAI)"
+        )))
+    }
+}
+
+/// The request typed on the command line (only what was given).
+fn typed_request(a: &RouteArgs) -> PlanRequest {
+    let pair = |p: Option<Pair>| p.map(|Pair(x, y)| [x, y]);
+    let g = &a.grid;
+    let p3 = &a.plan3d;
+    PlanRequest {
+        planner: a.planner,
+        alt_m: a.alt_m,
+        safety_m: a.safety_m,
+        cell_m: a.cell_m,
+        start_ne: pair(a.start_ne),
+        start_lla: pair(a.start_lla),
+        goal_ne: pair(a.goal_ne),
+        goal_lla: pair(a.goal_lla),
+        start_alt_m: p3.start_alt_m,
+        goal_alt_m: p3.goal_alt_m,
+        start_heading_deg: a.start_heading_deg,
+        connectivity: a.connectivity,
+        corner_cutting: a.corner_cutting.then_some(true),
+        prune: a.prune.map(|p| match p {
+            PruneArg::Collinear => PruneMode::Collinear,
+            PruneArg::None => PruneMode::None,
+        }),
+        epsilon: a.epsilon,
+        shortcut: a.no_shortcut.then_some(false),
+        time_limit_ms: p3.time_limit_ms,
+        seed: Some(g.seed),
+        min_alt_m: p3.min_alt_m,
+        max_alt_m: p3.max_alt_m,
+        climb_weight: p3.climb_weight,
+        voxel_m: p3.voxel_m,
+        layer_m: p3.layer_m,
+        field: g.field.map(|f| match f {
+            FieldArg::Length => FieldMode::Length,
+            FieldArg::Steps => FieldMode::Steps,
+        }),
+        inscribed_radius_m: Some(g.inscribed_radius_m),
+        inflation_radius_m: g.inflation_radius_m,
+        cost_scaling: g.cost_scaling,
+        cost_weight: Some(g.cost_weight),
+        geometry: None,
+        roadmap: Default::default(),
+    }
+}
+
+/// The route options resolved: the world, the request (command line over config file), and the
+/// config's file options.
+pub struct Resolved {
+    pub world: World,
+    pub request: PlanRequest,
+    pub config: Config,
+}
+
+/// Reads the config (if any) and the map, and merges the request.
+pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
+    let config = match &a.config {
+        Some(path) => Config::load(path)?,
+        None => Config::default(),
+    };
+    let map: Option<PathBuf> = a.map.clone().or(config.map.clone());
+    let world = load_world(map.as_deref(), &a.grid)?;
+    let request = typed_request(a).or(config.request.clone());
+    Ok(Resolved {
+        world,
+        request,
+        config,
+    })
+}
