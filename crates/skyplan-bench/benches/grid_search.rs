@@ -14,10 +14,7 @@ fn city_map() -> skyplan_map::colliders::CollidersMap {
 }
 
 fn movingai(name: &str) -> Option<(Grid2, Vec<(Cell, Cell)>)> {
-    let dir = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/movingai/"
-    );
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/movingai/");
     let map = std::fs::read_to_string(format!("{dir}{name}.map")).ok()?;
     let scen = std::fs::read_to_string(format!("{dir}{name}.map.scen")).ok()?;
     let map = skyplan_map::movingai::parse_map(&map).ok()?;

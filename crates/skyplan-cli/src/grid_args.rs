@@ -115,18 +115,18 @@ pub struct GridMapArgs {
     /// Wavefront field: length (Dijkstra, octile) or steps (BFS) [default: length].
     #[arg(long, value_enum)]
     pub field: Option<FieldArg>,
-    /// Cost map: radius inscribed in the vehicle's footprint, metres (cells within it are lethal).
-    #[arg(long, value_name = "M", value_parser = parse_nonneg, default_value_t = 0.0)]
-    pub inscribed_radius_m: f64,
+    /// Cost map: radius inscribed in the vehicle's footprint, metres (cells within it are lethal) [default: 0].
+    #[arg(long, value_name = "M", value_parser = parse_nonneg)]
+    pub inscribed_radius_m: Option<f64>,
     /// Cost map: distance up to which costs are raised, metres [default: 10 cells].
     #[arg(long, value_name = "M", value_parser = parse_nonneg)]
     pub inflation_radius_m: Option<f64>,
     /// Cost map: decay k of 252·exp(−k·(d − r_inscribed)), per metre [default: 3 / inflation radius].
     #[arg(long, value_name = "K", value_parser = parse_nonneg)]
     pub cost_scaling: Option<f64>,
-    /// Cost map: weight of the cost in length + weight · cost.
-    #[arg(long, value_name = "W", value_parser = parse_nonneg, default_value_t = 2.0)]
-    pub cost_weight: f64,
+    /// Cost map: weight of the cost in length + weight · cost [default: 2].
+    #[arg(long, value_name = "W", value_parser = parse_nonneg)]
+    pub cost_weight: Option<f64>,
 }
 
 #[derive(Debug, Args)]

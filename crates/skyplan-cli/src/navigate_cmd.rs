@@ -78,7 +78,7 @@ fn inflation_of(g: &GridMapArgs, cell_m: f64) -> Inflation {
         0.0
     });
     Inflation {
-        inscribed_radius_m: g.inscribed_radius_m,
+        inscribed_radius_m: g.inscribed_radius_m.unwrap_or(0.0),
         inflation_radius_m,
         cost_scaling_factor,
     }
@@ -192,7 +192,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         targets,
         changes,
         model,
-        weight: g.cost_weight,
+        weight: g.cost_weight.unwrap_or(2.0),
     };
     let run = navigate(&costmap, &request).map_err(|e| nav_failure(e, grid))?;
     let ride_us = t0.elapsed().as_micros() as u64 - inflate_us;
@@ -236,7 +236,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
             "inscribed_radius_m": params.inscribed_radius_m,
             "inflation_radius_m": params.inflation_radius_m,
             "cost_scaling_factor": params.cost_scaling_factor,
-            "cost_weight": g.cost_weight,
+            "cost_weight": g.cost_weight.unwrap_or(2.0),
         },
         "inflation_time_us": inflate_us,
         "ride_time_us": ride_us,
@@ -266,8 +266,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
             start: Some(start),
             goal: Some(goal),
         };
-        let bytes =
-            skyplan_plot::render_heatmap_png(&heat, 1000).map_err(|e| crate::exit::runtime(e))?;
+        let bytes = skyplan_plot::render_heatmap_png(&heat, 1000).map_err(crate::exit::runtime)?;
         write_atomic(path, &bytes)?;
     }
     if args.json {

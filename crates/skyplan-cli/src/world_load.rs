@@ -115,10 +115,10 @@ fn typed_request(a: &RouteArgs) -> PlanRequest {
             FieldArg::Length => FieldMode::Length,
             FieldArg::Steps => FieldMode::Steps,
         }),
-        inscribed_radius_m: Some(g.inscribed_radius_m),
+        inscribed_radius_m: g.inscribed_radius_m,
         inflation_radius_m: g.inflation_radius_m,
         cost_scaling: g.cost_scaling,
-        cost_weight: Some(g.cost_weight),
+        cost_weight: g.cost_weight,
         geometry: None,
         roadmap: Default::default(),
     }

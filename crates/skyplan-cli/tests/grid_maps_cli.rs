@@ -140,7 +140,7 @@ fn image_axes_north_is_up_east_is_right() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("the source N 3.5 m, E 0.5 m (row 3, col 0) is at an obstacle"),
+        err.contains("start N 3.50 m, E 0.50 m (row 3, col 0) is at an obstacle"),
         "{err}"
     );
     // The bottom-left pixel (north 0.5) is free; so is the top-right (east 5.5).

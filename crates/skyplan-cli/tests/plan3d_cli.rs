@@ -222,5 +222,5 @@ fn three_d_options_need_a_three_d_planner() {
     let dir = tempfile::tempdir().unwrap();
     let (code, v) = run(dir.path(), &["--goal-alt-m", "30"]);
     assert_eq!(code, 2);
-    assert!(v["error"].as_str().unwrap().contains("3D planner"));
+    assert!(v["error"].as_str().unwrap().contains("3D planner"), "{v}");
 }

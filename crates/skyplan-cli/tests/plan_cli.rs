@@ -251,7 +251,7 @@ fn config_file_supplies_defaults_and_flags_win() {
     let v = run_json(dir.path(), &["--config", "fcnd.toml", "--safety-m", "4"]);
     assert_eq!(v["grid"]["alt_m"], 10.0);
     assert_eq!(v["grid"]["safety_m"], 4.0);
-    assert_eq!(v["planner"], "Dijkstra");
+    assert_eq!(v["planner"], "dijkstra");
     assert_eq!(v["goal"]["north_m"], 99.5);
     assert!(dir.path().join("cfg.csv").exists());
     std::fs::write(dir.path().join("bad.toml"), "alt_m = 5\nsafty_m = 3\n").unwrap();
@@ -395,7 +395,7 @@ fn unwritable_output_fails_cleanly() {
     skyplan(dir.path())
         .args(["plan", "--out", "no/such/dir/w.json"])
         .assert()
-        .code(1)
+        .code(2)
         .stderr(predicate::str::contains("no/such/dir/w.json"));
 }
 

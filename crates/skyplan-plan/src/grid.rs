@@ -44,11 +44,24 @@ pub(crate) fn end_cell(
     } else {
         FailureKind::InvalidGoal
     };
+    let lla = q
+        .world
+        .frame()
+        .and_then(|f| {
+            f.lla_from_ned(skyplan_frames::Ned {
+                north_m: ne[0],
+                east_m: ne[1],
+                down_m: -q.r.alt_m,
+            })
+            .ok()
+        })
+        .map(|l| format!(" (lat {:.7}, lon {:.7})", l.lat_deg, l.lon_deg))
+        .unwrap_or_default();
     let Some(cell) = grid.cell_at_ne(ne[0], ne[1]) else {
         return Err(PlanFailure::new(
             kind,
             format!(
-                "{which} {} is off the map ({}); {}",
+                "{which} {}{lla} is off the map ({}); {}",
                 describe(grid, ne),
                 grid_bounds(grid),
                 nearest_hint(grid, ne)
@@ -67,7 +80,7 @@ pub(crate) fn end_cell(
         return Err(PlanFailure::new(
             kind,
             format!(
-                "{which} {} is {why}; {}",
+                "{which} {}{lla} is {why}; {}",
                 describe(grid, ne),
                 nearest_hint(grid, ne)
             ),

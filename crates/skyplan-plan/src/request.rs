@@ -238,9 +238,82 @@ fn position(
     }
 }
 
+/// Options given that the planner does not use: refused, so that nothing is silently ignored.
+fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailure> {
+    use crate::planner_id::Family;
+    let info = planner.info();
+    let given = |fields: &[(&'static str, bool)]| -> Vec<&'static str> {
+        fields.iter().filter(|f| f.1).map(|f| f.0).collect()
+    };
+    let groups: [(Vec<&str>, bool, &str); 5] = [
+        (
+            given(&[
+                ("start_alt_m", r.start_alt_m.is_some()),
+                ("goal_alt_m", r.goal_alt_m.is_some()),
+                ("time_limit_ms", r.time_limit_ms.is_some()),
+                ("min_alt_m", r.min_alt_m.is_some()),
+                ("max_alt_m", r.max_alt_m.is_some()),
+            ]),
+            info.dims == 3,
+            "a 3D planner (prm, lazy-prm, rrt-connect, rrt-star, voxel)",
+        ),
+        (
+            given(&[
+                ("climb_weight", r.climb_weight.is_some()),
+                ("voxel_m", r.voxel_m.is_some()),
+                ("layer_m", r.layer_m.is_some()),
+            ]),
+            planner == PlannerId::Voxel,
+            "planner voxel",
+        ),
+        (
+            given(&[
+                ("inscribed_radius_m", r.inscribed_radius_m.is_some()),
+                ("inflation_radius_m", r.inflation_radius_m.is_some()),
+                ("cost_scaling", r.cost_scaling.is_some()),
+                ("cost_weight", r.cost_weight.is_some()),
+            ]),
+            planner == PlannerId::Costmap,
+            "planner costmap",
+        ),
+        (
+            given(&[("field", r.field.is_some())]),
+            planner == PlannerId::Wavefront,
+            "planner wavefront",
+        ),
+        (
+            given(&[
+                ("prune", r.prune.is_some()),
+                ("epsilon", r.epsilon.is_some()),
+                ("shortcut", r.shortcut.is_some()),
+                ("connectivity", r.connectivity.is_some()),
+                ("corner_cutting", r.corner_cutting.is_some()),
+            ]),
+            matches!(
+                info.family,
+                Family::Grid(_) | Family::Wavefront | Family::Costmap
+            ),
+            "a grid planner (jps, jps-plus, astar, dijkstra, theta, wavefront, costmap)",
+        ),
+    ];
+    for (names, applies, needs) in groups {
+        if !names.is_empty() && !applies {
+            return Err(bad(format!(
+                "{} {} not used by planner {planner}: {} need{} {needs}",
+                names.join(", "),
+                if names.len() == 1 { "is" } else { "are" },
+                if names.len() == 1 { "it" } else { "they" },
+                if names.len() == 1 { "s" } else { "" },
+            )));
+        }
+    }
+    Ok(())
+}
+
 impl Resolved {
     pub(crate) fn new(r: &PlanRequest) -> Result<Self, PlanFailure> {
         let planner = r.planner.unwrap_or_default();
+        check_applicable(r, planner)?;
         let alt_m = in_range("alt_m", r.alt_m.unwrap_or(5.0), 0.0, MAX_ALT_M, " m")?;
         let safety_m = in_range("safety_m", r.safety_m.unwrap_or(5.0), 0.0, 1000.0, " m")?;
         let cell_m = positive("cell_m", r.cell_m.unwrap_or(1.0), 1000.0)?;
@@ -385,6 +458,7 @@ mod tests {
             (
                 PlanRequest {
                     time_limit_ms: Some(u64::MAX),
+                    planner: Some(PlannerId::Prm),
                     ..Default::default()
                 },
                 "time_limit_ms",
@@ -392,6 +466,7 @@ mod tests {
             (
                 PlanRequest {
                     max_alt_m: Some(0.0),
+                    planner: Some(PlannerId::Prm),
                     ..Default::default()
                 },
                 "max_alt_m 0",
@@ -417,6 +492,37 @@ mod tests {
             assert_eq!(e.kind, FailureKind::BadRequest);
             assert!(e.message.contains(phrase), "{} lacks {phrase}", e.message);
         }
+    }
+
+    #[test]
+    fn options_the_planner_does_not_use_are_refused() {
+        let e = Resolved::new(&PlanRequest {
+            goal_alt_m: Some(30.0),
+            ..Default::default()
+        })
+        .unwrap_err();
+        assert!(
+            e.message.contains("goal_alt_m is not used by planner jps"),
+            "{}",
+            e.message
+        );
+        assert!(e.message.contains("3D planner"), "{}", e.message);
+        let e = Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::Astar),
+            climb_weight: Some(2.0),
+            ..Default::default()
+        })
+        .unwrap_err();
+        assert!(e.message.contains("planner voxel"), "{}", e.message);
+        assert!(
+            Resolved::new(&PlanRequest {
+                planner: Some(PlannerId::Voxel),
+                climb_weight: Some(2.0),
+                goal_alt_m: Some(30.0),
+                ..Default::default()
+            })
+            .is_ok()
+        );
     }
 
     #[test]

@@ -1,0 +1,55 @@
+//! The facade's exact planners against the exact Dijkstra oracle on random grids, start and goal
+//! drawn among free cells (no case is skipped).
+
+use proptest::prelude::*;
+use skyplan_cspace::{Cell, Grid2, GridFrame};
+use skyplan_plan::{FailureKind, PlanRequest, PlannerId, Session, World};
+use skyplan_search::{MoveModel, oracle::dijkstra_exact};
+
+fn grid_and_ends() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
+    (2u32..14, 2u32..14, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
+        let n = (rows * cols) as usize;
+        (
+            proptest::collection::vec(proptest::bool::weighted(density), n),
+            0..n,
+            0..n,
+        )
+            .prop_map(move |(mut blocked, a, b)| {
+                blocked[a] = false;
+                blocked[b] = false;
+                let grid = Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap();
+                (grid.clone(), grid.cell(a), grid.cell(b))
+            })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(if std::env::var_os("CI").is_some() { 600 } else { 200 }))]
+    #[test]
+    fn exact_planners_equal_the_oracle((grid, start, goal) in grid_and_ends(), model_ix in 0usize..3) {
+        let (model, connectivity, corner_cutting) = [
+            (MoveModel::Octile, 8, false),
+            (MoveModel::OctileCornerCutting, 8, true),
+            (MoveModel::FourConnected, 4, false),
+        ][model_ix];
+        let truth = dijkstra_exact(&grid, start, goal, model);
+        let mut session = Session::new(World::from_grid("random", grid.clone()));
+        let (sn, se) = grid.center_ne(start);
+        let (gn, ge) = grid.center_ne(goal);
+        for planner in [PlannerId::Jps, PlannerId::JpsPlus, PlannerId::Astar, PlannerId::Dijkstra, PlannerId::Wavefront] {
+            let r = session.plan(&PlanRequest {
+                planner: Some(planner),
+                start_ne: Some([sn, se]),
+                goal_ne: Some([gn, ge]),
+                connectivity: Some(connectivity),
+                corner_cutting: Some(corner_cutting),
+                ..Default::default()
+            });
+            match (truth, r) {
+                (Some(t), Ok(plan)) => prop_assert!((plan.cost_m - t.to_f64()).abs() < 1e-9, "{planner}: {} vs {}", plan.cost_m, t.to_f64()),
+                (None, Err(e)) => prop_assert_eq!(e.kind, FailureKind::NoPath, "{}: {}", planner, e),
+                (t, r) => prop_assert!(false, "{planner}: oracle {t:?}, plan {:?}", r.map(|p| p.cost_m)),
+            }
+        }
+    }
+}

@@ -1,0 +1,274 @@
+//! Every planner through the one door, on the city: routes exactly free by an independent check,
+//! ends where asked, kinds of failure as documented. (These were CLI tests before the facade.)
+
+use skyplan_plan::{FailureKind, Family, PlanRequest, PlannerId, Session, World};
+use skyplan_world3::{BoxWorld3, CollisionChecker, WorldSpec};
+
+fn city() -> Session {
+    Session::new(World::fcnd_city())
+}
+
+/// An independent check of a route among the boxes: every segment against every box grown by
+/// the margin (minus a hair for routes that run along a margin's edge), by dense sampling.
+fn assert_route_clear(world: &World, points: &[[f64; 3]], safety_m: f64) {
+    let map = world.colliders().unwrap();
+    let spec = WorldSpec {
+        safety_m: (safety_m - 0.01).max(0.0),
+        min_alt_m: -1.0,
+        max_alt_m: 10_000.0,
+        margin_bounds_m: 1000.0,
+    };
+    let boxes = BoxWorld3::new(&map.boxes, &spec).unwrap();
+    let brute = boxes.brute_force();
+    for w in points.windows(2) {
+        let len = skyplan_world3::distance_m(w[0], w[1]);
+        let n = (len / 0.05).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let p = skyplan_world3::lerp(w[0], w[1], k as f64 / n as f64);
+            assert!(
+                brute.is_free(p),
+                "point {p:?} of segment {:?} → {:?} is inside a grown box",
+                w[0],
+                w[1]
+            );
+        }
+    }
+}
+
+#[test]
+fn every_route_producing_planner_flies_a_clear_route_on_the_city() {
+    let mut session = city();
+    for &planner in PlannerId::ALL {
+        let three_d = planner.info().dims == 3;
+        let request = PlanRequest {
+            planner: Some(planner),
+            goal_ne: Some([60.0, 40.0]),
+            seed: Some(3),
+            time_limit_ms: three_d.then_some(5000),
+            ..Default::default()
+        };
+        let plan = session
+            .plan(&request)
+            .unwrap_or_else(|e| panic!("{planner}: {e}"));
+        assert_eq!(plan.planner, planner);
+        let points = plan.points_nea();
+        assert_eq!(
+            points.first().map(|p| (p[0], p[1])),
+            Some((0.0, 0.0)),
+            "{planner}"
+        );
+        assert_eq!(
+            points.last().map(|p| (p[0], p[1])),
+            Some((60.0, 40.0)),
+            "{planner}"
+        );
+        assert!(plan.cost_m >= plan.straight_line_m - 1e-9, "{planner}");
+        assert_route_clear(session.world(), &points, 5.0);
+        // The JSON report names the planner by its CLI spelling, and no Rust Debug names leak.
+        let json = serde_json::to_string(&plan).unwrap();
+        assert!(
+            json.contains(&format!("\"planner\":\"{}\"", planner.name())),
+            "{json}"
+        );
+        for debug in ["Some(", "None", "JpsPlus", "Octile\"", "Collinear"] {
+            assert!(!json.contains(debug), "{planner}: {debug} in {json}");
+        }
+    }
+}
+
+#[test]
+fn optimal_grid_planners_agree_on_the_default_route() {
+    let mut session = city();
+    let cost = |s: &mut Session, p| {
+        s.plan(&PlanRequest {
+            planner: Some(p),
+            ..Default::default()
+        })
+        .unwrap()
+        .cost_m
+    };
+    let jps = cost(&mut session, PlannerId::Jps);
+    for p in [
+        PlannerId::JpsPlus,
+        PlannerId::Astar,
+        PlannerId::Dijkstra,
+        PlannerId::Wavefront,
+    ] {
+        assert_eq!(cost(&mut session, p), jps, "{p}");
+    }
+    // The published FCND figure (README): 1097.94 m on the 921 × 921 grid.
+    assert!((jps - 1097.94).abs() < 0.005, "{jps}");
+    assert!(cost(&mut session, PlannerId::Theta) < jps);
+}
+
+#[test]
+fn the_3d_planners_accept_every_point_the_grid_planners_accept() {
+    let mut session = city();
+    // Free cells on the grid's four edges: a grid planner takes them, so must every 3D planner
+    // (the flight volume covers the grid's extent).
+    let grid = session.grid(5.0, 5.0, 1.0).unwrap();
+    let (rows, cols) = (grid.rows(), grid.cols());
+    let edges = [
+        (0..cols)
+            .map(|c| skyplan_cspace::Cell::new(0, c))
+            .collect::<Vec<_>>(),
+        (0..cols)
+            .map(|c| skyplan_cspace::Cell::new(rows - 1, c))
+            .collect(),
+        (0..rows).map(|r| skyplan_cspace::Cell::new(r, 0)).collect(),
+        (0..rows)
+            .map(|r| skyplan_cspace::Cell::new(r, cols - 1))
+            .collect(),
+    ];
+    for edge in edges {
+        let cell = edge
+            .into_iter()
+            .find(|&c| !grid.is_blocked(c))
+            .expect("a free cell on every edge");
+        let (n, e) = grid.center_ne(cell);
+        let goal = [n, e];
+        let grid_plan = session.plan(&PlanRequest {
+            goal_ne: Some(goal),
+            ..Default::default()
+        });
+        if let Err(e) = &grid_plan {
+            assert_ne!(
+                e.kind,
+                FailureKind::InvalidGoal,
+                "grid planner refused {goal:?}: {e}"
+            );
+        }
+        for planner in [PlannerId::RrtConnect, PlannerId::Voxel] {
+            let r = session.plan(&PlanRequest {
+                planner: Some(planner),
+                goal_ne: Some(goal),
+                time_limit_ms: Some(3000),
+                ..Default::default()
+            });
+            if let Err(e) = r {
+                assert_ne!(
+                    e.kind,
+                    FailureKind::InvalidGoal,
+                    "{planner} refused {goal:?}: {e}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn failures_have_kinds_and_say_what_is_wrong() {
+    let mut session = city();
+    let fail = |s: &mut Session, r: PlanRequest| s.plan(&r).unwrap_err();
+    let e = fail(
+        &mut session,
+        PlanRequest {
+            goal_ne: Some([5000.0, 0.0]),
+            ..Default::default()
+        },
+    );
+    assert_eq!(e.kind, FailureKind::InvalidGoal);
+    assert!(
+        e.message.contains("off the map") && e.message.contains("nearest free cell centre"),
+        "{e}"
+    );
+    let e = fail(
+        &mut session,
+        PlanRequest {
+            start_ne: Some([-310.2, -439.2]),
+            ..Default::default()
+        },
+    );
+    assert_eq!(e.kind, FailureKind::InvalidStart, "{e}");
+    let e = fail(
+        &mut session,
+        PlanRequest {
+            alt_m: Some(-5.0),
+            ..Default::default()
+        },
+    );
+    assert_eq!(e.kind, FailureKind::BadRequest);
+    let e = fail(
+        &mut session,
+        PlanRequest {
+            goal_lla: Some([37.79, -110.0]),
+            ..Default::default()
+        },
+    );
+    assert_eq!(e.kind, FailureKind::InvalidGoal);
+    assert!(e.message.contains("UTM zone 12"), "{e}");
+    // A 3D planner on a grid map is a bad request naming the planners that do work there.
+    let grid = skyplan_cspace::Grid2::from_ascii("....\n....").unwrap();
+    let mut tiny = Session::new(World::from_grid("tiny", grid));
+    let e = tiny
+        .plan(&PlanRequest {
+            planner: Some(PlannerId::Prm),
+            start_ne: Some([0.5, 0.5]),
+            goal_ne: Some([1.5, 3.5]),
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert_eq!(e.kind, FailureKind::BadRequest);
+    assert!(
+        e.message.contains("colliders") && e.message.contains("wavefront"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_enclosed_goal_is_no_path_with_both_regions() {
+    let grid =
+        skyplan_cspace::Grid2::from_ascii(".......\n.#####.\n.#...#.\n.#####.\n.......").unwrap();
+    let mut s = Session::new(World::from_grid("box", grid));
+    for planner in [
+        PlannerId::Jps,
+        PlannerId::Astar,
+        PlannerId::Wavefront,
+        PlannerId::Costmap,
+    ] {
+        let e = s
+            .plan(&PlanRequest {
+                planner: Some(planner),
+                start_ne: Some([0.5, 0.5]),
+                goal_ne: Some([2.5, 3.5]),
+                ..Default::default()
+            })
+            .unwrap_err();
+        assert_eq!(e.kind, FailureKind::NoPath, "{planner}: {e}");
+    }
+}
+
+#[test]
+fn lat_lon_ends_give_the_same_route_as_local_ones() {
+    let mut s = city();
+    let local = s
+        .plan(&PlanRequest {
+            start_ne: Some([-100.0, -50.0]),
+            goal_ne: Some([199.5, -298.5]),
+            ..Default::default()
+        })
+        .unwrap();
+    let global = s
+        .plan(&PlanRequest {
+            start_lla: Some([local.start.lat_deg.unwrap(), local.start.lon_deg.unwrap()]),
+            goal_lla: Some([local.goal.lat_deg.unwrap(), local.goal.lon_deg.unwrap()]),
+            ..Default::default()
+        })
+        .unwrap();
+    assert_eq!(local.start.cell, global.start.cell);
+    assert_eq!(local.goal.cell, global.goal.cell);
+    assert_eq!(local.cost_m, global.cost_m);
+    for (a, b) in local.waypoints.iter().zip(&global.waypoints) {
+        assert!((a[0] - b[0]).abs() < 1e-3 && (a[1] - b[1]).abs() < 1e-3);
+    }
+}
+
+#[test]
+fn registry_families_cover_every_planner_and_help_lists_them() {
+    for &p in PlannerId::ALL {
+        let info = p.info();
+        assert!(!info.summary.is_empty());
+        let three_d = matches!(info.family, Family::Sampling(_) | Family::Voxel);
+        assert_eq!(info.dims == 3, three_d, "{p}");
+    }
+}
