@@ -19,6 +19,7 @@
 #![warn(missing_docs)]
 
 mod peer_pathfinding;
+pub mod three_d;
 
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
@@ -233,4 +234,158 @@ pub fn cost_ratio(run: &[Option<f64>], best: &[Option<f64>]) -> Option<f64> {
         }
     }
     (theirs > 0.0).then(|| mine / theirs)
+}
+
+/// One row of the benchmark table: a planner's times, expansions and costs over the queries.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Row {
+    /// Planner name.
+    pub planner: String,
+    /// Queries answered.
+    pub queries: usize,
+    /// Median search time, microseconds.
+    pub median_us: f64,
+    /// 95th percentile, microseconds.
+    pub p95_us: f64,
+    /// Slowest query, microseconds.
+    pub max_us: f64,
+    /// Mean, microseconds.
+    pub mean_us: f64,
+    /// Mean expansions (planners that report them).
+    pub mean_expansions: Option<f64>,
+    /// Mean cost of the solved queries, metres.
+    pub mean_cost_m: Option<f64>,
+    /// Cost relative to the best over every planner, per query (1 = always optimal).
+    pub cost_over_best: Option<f64>,
+    /// Median time ÷ the fastest skyplan planner's median.
+    pub median_over_fastest: f64,
+    /// One-off preparation (the JPS+ table), milliseconds.
+    pub precompute_ms: f64,
+}
+
+/// The table's rows: each run against the best cost per query over every run, and against the
+/// fastest skyplan planner's median.
+pub fn table(runs: &[Run], query_count: usize, cell_m: f64) -> Vec<Row> {
+    let best: Vec<Option<f64>> = (0..query_count)
+        .map(|q| {
+            runs.iter()
+                .filter_map(|r| {
+                    r.records
+                        .get(q)
+                        .filter(|rec| rec.query == q)
+                        .and_then(|rec| rec.cost)
+                })
+                .min_by(f64::total_cmp)
+        })
+        .collect();
+    let times = |r: &Run| r.records.iter().map(|x| x.time_us).collect::<Vec<_>>();
+    let fastest = runs
+        .iter()
+        .filter(|r| Contender::from_name(&r.planner).is_some_and(Contender::is_skyplan))
+        .filter_map(|r| Stats::of(&times(r)).map(|s| s.median))
+        .fold(f64::INFINITY, f64::min);
+    let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+    runs.iter()
+        .filter_map(|r| {
+            let stats = Stats::of(&times(r))?;
+            let exp: Vec<f64> = r
+                .records
+                .iter()
+                .filter_map(|x| x.expansions.map(|e| e as f64))
+                .collect();
+            let costs: Vec<Option<f64>> = r.records.iter().map(|x| x.cost).collect();
+            let best_same: Vec<Option<f64>> = r
+                .records
+                .iter()
+                .map(|x| best.get(x.query).copied().flatten())
+                .collect();
+            let solved: Vec<f64> = costs.iter().flatten().copied().collect();
+            Some(Row {
+                planner: r.planner.clone(),
+                queries: stats.n,
+                median_us: stats.median,
+                p95_us: stats.p95,
+                max_us: stats.max,
+                mean_us: stats.mean,
+                mean_expansions: mean(&exp),
+                mean_cost_m: mean(&solved).map(|c| c * cell_m),
+                cost_over_best: cost_ratio(&costs, &best_same),
+                median_over_fastest: stats.median / fastest,
+                precompute_ms: r.precompute_us / 1e3,
+            })
+        })
+        .collect()
+}
+
+/// The table as aligned text, times in milliseconds.
+pub fn format_table(rows: &[Row]) -> String {
+    let mut s = format!(
+        "{:<34} {:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>10} {:>10}\n",
+        "planner",
+        "queries",
+        "median ms",
+        "p95 ms",
+        "max ms",
+        "expansions",
+        "mean cost m",
+        "cost/best",
+        "×fastest"
+    );
+    for r in rows {
+        let name = if r.precompute_ms > 0.0 {
+            format!("{} (+{:.0} ms table)", r.planner, r.precompute_ms)
+        } else {
+            r.planner.clone()
+        };
+        let opt =
+            |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |x| format!("{x:.digits$}"));
+        s.push_str(&format!(
+            "{:<34} {:>7} {:>10.3} {:>10.3} {:>10.3} {:>10} {:>11} {:>10} {:>10.1}\n",
+            name,
+            r.queries,
+            r.median_us / 1e3,
+            r.p95_us / 1e3,
+            r.max_us / 1e3,
+            opt(r.mean_expansions, 0),
+            opt(r.mean_cost_m, 2),
+            opt(r.cost_over_best, 6),
+            r.median_over_fastest
+        ));
+    }
+    s
+}
+
+/// The Python peers' output (one JSON object per line: `peer`, `query`, `time_s`, `cost`, or
+/// `unavailable`) as runs, and notes for the unavailable ones.
+pub fn parse_peer_lines(text: &str) -> (Vec<Run>, Vec<String>) {
+    let mut runs: Vec<Run> = Vec::new();
+    let mut notes = Vec::new();
+    for line in text.lines() {
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
+            continue;
+        };
+        let peer = v["peer"].as_str().unwrap_or("?").to_string();
+        if let Some(why) = v["unavailable"].as_str() {
+            notes.push(format!(
+                "{peer} unavailable ({why}); run bench/setup-peers.sh"
+            ));
+            continue;
+        }
+        let record = Record {
+            planner: peer.clone(),
+            query: v["query"].as_u64().unwrap_or(0) as usize,
+            time_us: v["time_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
+            expansions: None,
+            cost: v["cost"].as_f64(),
+        };
+        match runs.iter_mut().find(|r| r.planner == peer) {
+            Some(r) => r.records.push(record),
+            None => runs.push(Run {
+                planner: peer,
+                records: vec![record],
+                precompute_us: 0.0,
+            }),
+        }
+    }
+    (runs, notes)
 }

@@ -5,8 +5,8 @@ use crate::args::BenchArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
 use crate::files::{read_text, write_atomic};
 use anyhow::Context;
-use serde_json::{Value, json};
-use skyplan_bench::{Contender, Record, Run, Stats, cost_ratio, random_far_queries, run};
+use serde_json::json;
+use skyplan_bench::{Contender, Record, Run, random_far_queries, run};
 use skyplan_cspace::{Cell, Grid2, GridFrame, GridSpec};
 use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
 use skyplan_search::MoveModel;
@@ -135,7 +135,6 @@ fn python_peers(
     model: MoveModel,
     budget_s: f64,
 ) -> (Vec<Run>, Vec<String>) {
-    let mut notes = Vec::new();
     let dir = match tempfile_dir() {
         Ok(d) => d,
         Err(e) => return (Vec::new(), vec![format!("python peers skipped: {e:#}")]),
@@ -190,34 +189,7 @@ fn python_peers(
             );
         }
     };
-    let mut runs: Vec<Run> = Vec::new();
-    for line in String::from_utf8_lossy(&output.stdout).lines() {
-        let Ok(v) = serde_json::from_str::<Value>(line) else {
-            continue;
-        };
-        let peer = v["peer"].as_str().unwrap_or("?").to_string();
-        if let Some(why) = v["unavailable"].as_str() {
-            notes.push(format!(
-                "{peer} unavailable ({why}); run bench/setup-peers.sh"
-            ));
-            continue;
-        }
-        let record = Record {
-            planner: peer.clone(),
-            query: v["query"].as_u64().unwrap_or(0) as usize,
-            time_us: v["time_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
-            expansions: None,
-            cost: v["cost"].as_f64(),
-        };
-        match runs.iter_mut().find(|r| r.planner == peer) {
-            Some(r) => r.records.push(record),
-            None => runs.push(Run {
-                planner: peer,
-                records: vec![record],
-                precompute_us: 0.0,
-            }),
-        }
-    }
+    let (runs, notes) = skyplan_bench::parse_peer_lines(&String::from_utf8_lossy(&output.stdout));
     (runs, notes)
 }
 
@@ -225,16 +197,6 @@ fn tempfile_dir() -> anyhow::Result<PathBuf> {
     let dir = std::env::temp_dir().join(format!("skyplan-peers-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     Ok(dir)
-}
-
-struct Row {
-    planner: String,
-    stats: Stats,
-    expansions: Option<f64>,
-    mean_cost_m: Option<f64>,
-    cost_ratio: Option<f64>,
-    vs_fastest: f64,
-    precompute_ms: f64,
 }
 
 pub fn run_bench(args: BenchArgs) -> Result<()> {
@@ -312,55 +274,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         notes.extend(py_notes);
     }
 
-    // Best cost per query over every run (the optimal planners all agree on it).
-    let best: Vec<Option<f64>> = (0..queries.len())
-        .map(|q| {
-            runs.iter()
-                .filter_map(|r| {
-                    r.records
-                        .get(q)
-                        .filter(|rec| rec.query == q)
-                        .and_then(|rec| rec.cost)
-                })
-                .min_by(f64::total_cmp)
-        })
-        .collect();
-    let medians: Vec<f64> = runs
-        .iter()
-        .filter(|r| Contender::from_name(&r.planner).is_some_and(Contender::is_skyplan))
-        .filter_map(|r| {
-            Stats::of(&r.records.iter().map(|x| x.time_us).collect::<Vec<_>>()).map(|s| s.median)
-        })
-        .collect();
-    let fastest = medians.iter().copied().fold(f64::INFINITY, f64::min);
-    let rows: Vec<Row> = runs
-        .iter()
-        .filter_map(|r| {
-            let stats = Stats::of(&r.records.iter().map(|x| x.time_us).collect::<Vec<_>>())?;
-            let exp: Vec<f64> = r
-                .records
-                .iter()
-                .filter_map(|x| x.expansions.map(|e| e as f64))
-                .collect();
-            let costs: Vec<Option<f64>> = r.records.iter().map(|x| x.cost).collect();
-            let best_same: Vec<Option<f64>> = r
-                .records
-                .iter()
-                .map(|x| best.get(x.query).copied().flatten())
-                .collect();
-            let solved: Vec<f64> = costs.iter().flatten().copied().collect();
-            Some(Row {
-                planner: r.planner.clone(),
-                stats,
-                expansions: (!exp.is_empty()).then(|| exp.iter().sum::<f64>() / exp.len() as f64),
-                mean_cost_m: (!solved.is_empty())
-                    .then(|| solved.iter().sum::<f64>() / solved.len() as f64 * cell_m),
-                cost_ratio: cost_ratio(&costs, &best_same),
-                vs_fastest: stats.median / fastest,
-                precompute_ms: r.precompute_us / 1e3,
-            })
-        })
-        .collect();
+    let rows = skyplan_bench::table(&runs, queries.len(), cell_m);
 
     if let Some(out) = &args.out {
         let records: Vec<&Record> = runs.iter().flat_map(|r| &r.records).collect();
@@ -382,20 +296,9 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     }
 
     if args.json {
-        let table: Vec<Value> = rows
-            .iter()
-            .map(|r| {
-                json!({
-                    "planner": r.planner, "queries": r.stats.n, "median_us": r.stats.median, "p95_us": r.stats.p95,
-                    "max_us": r.stats.max, "mean_us": r.stats.mean, "mean_expansions": r.expansions,
-                    "mean_cost_m": r.mean_cost_m, "cost_over_best": r.cost_ratio, "median_over_fastest": r.vs_fastest,
-                    "precompute_ms": r.precompute_ms,
-                })
-            })
-            .collect();
         println!(
             "{}",
-            json!({ "map": source.name, "grid": [grid.rows(), grid.cols()], "queries": described, "rows": table, "notes": notes })
+            json!({ "map": source.name, "grid": [grid.rows(), grid.cols()], "queries": described, "rows": rows, "notes": notes })
         );
         return Ok(());
     }
@@ -406,39 +309,14 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         grid.cols(),
         cell_m
     );
-    println!("queries  {described}; move model {model:?}");
+    let model_name = if args.corner_cutting {
+        "8-connected, corner cutting"
+    } else {
+        "8-connected, no corner cutting"
+    };
+    println!("queries  {described}; move model {model_name}");
     println!();
-    println!(
-        "{:<34} {:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>10} {:>10}",
-        "planner",
-        "queries",
-        "median ms",
-        "p95 ms",
-        "max ms",
-        "expansions",
-        "mean cost m",
-        "cost/best",
-        "×fastest"
-    );
-    for r in &rows {
-        let name = if r.planner == PlannerId::JpsPlus.name() {
-            format!("{} (+{:.0} ms table)", r.planner, r.precompute_ms)
-        } else {
-            r.planner.clone()
-        };
-        println!(
-            "{:<34} {:>7} {:>10.3} {:>10.3} {:>10.3} {:>10} {:>11} {:>10} {:>10.1}",
-            name,
-            r.stats.n,
-            r.stats.median / 1e3,
-            r.stats.p95 / 1e3,
-            r.stats.max / 1e3,
-            r.expansions.map_or("-".to_string(), |e| format!("{e:.0}")),
-            r.mean_cost_m.map_or("-".to_string(), |c| format!("{c:.2}")),
-            r.cost_ratio.map_or("-".to_string(), |c| format!("{c:.6}")),
-            r.vs_fastest
-        );
-    }
+    print!("{}", skyplan_bench::format_table(&rows));
     for n in &notes {
         println!("note     {n}");
     }
