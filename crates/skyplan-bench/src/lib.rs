@@ -19,6 +19,7 @@
 #![warn(missing_docs)]
 
 mod peer_pathfinding;
+pub mod replay;
 pub mod three_d;
 
 use rand::{RngExt, SeedableRng};

@@ -7,7 +7,7 @@ use crate::files::{read_text, write_atomic};
 use anyhow::Context;
 use serde_json::json;
 use skyplan_bench::{Contender, Record, Run, random_far_queries, run};
-use skyplan_cspace::{Cell, Grid2, GridFrame, GridSpec};
+use skyplan_cspace::{Cell, Grid2, GridSpec};
 use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
 use skyplan_search::MoveModel;
 use std::path::PathBuf;
@@ -32,14 +32,8 @@ fn load(args: &BenchArgs) -> Result<Source> {
             let text = read_text(path)?;
             let map = skyplan_map::movingai::parse_map(&text)
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-            let blocked = map.passable.iter().map(|&p| !p).collect();
-            let grid = Grid2::new(
-                map.height as u32,
-                map.width as u32,
-                blocked,
-                GridFrame::default(),
-            )
-            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+            let grid = skyplan_bench::replay::file_order_grid(&map)
+                .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
             Ok(Source {
                 name: path.display().to_string(),
                 grid,
@@ -199,27 +193,9 @@ fn tempfile_dir() -> anyhow::Result<PathBuf> {
     Ok(dir)
 }
 
-pub fn run_bench(args: BenchArgs) -> Result<()> {
-    if args.three_d {
-        return crate::bench3d_cmd::run(args);
-    }
-    if args.random == Some(0) {
-        return Err(bad_input("--random 0: expected at least 1 query"));
-    }
-    if let Some(out) = &args.out
-        && !out.extension().is_some_and(|e| e == "csv" || e == "json")
-    {
-        return Err(bad_input(format!(
-            "--out {}: expected a .csv or .json file name",
-            out.display()
-        )));
-    }
-    let model = if args.corner_cutting {
-        MoveModel::OctileCornerCutting
-    } else {
-        MoveModel::Octile
-    };
-    let planners: Vec<Contender> = match &args.planners {
+/// The planners of `--planners` (or jps-plus, jps, astar, and the Rust peer with `--peers`).
+fn contenders(args: &BenchArgs) -> Result<Vec<Contender>> {
+    Ok(match &args.planners {
         Some(list) => list
             .split(',')
             .map(|n| {
@@ -241,7 +217,48 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
             }
             v
         }
+    })
+}
+
+/// Every record (planner, query, time, expansions, cost) to a .csv or .json file.
+fn write_records(out: &std::path::Path, map: &str, described: &str, runs: &[Run]) -> Result<()> {
+    let records: Vec<&Record> = runs.iter().flat_map(|r| &r.records).collect();
+    let bytes = if out.extension().is_some_and(|e| e == "json") {
+        serde_json::to_vec_pretty(&json!({ "map": map, "queries": described, "records": records }))
+            .or_exit(Kind::Runtime)?
+    } else {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for r in &records {
+            w.serialize(r).or_exit(Kind::Runtime)?;
+        }
+        w.into_inner()
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .or_exit(Kind::Runtime)?
     };
+    write_atomic(out, &bytes)
+}
+
+pub fn run_bench(args: BenchArgs) -> Result<()> {
+    if args.three_d {
+        return crate::bench3d_cmd::run(args);
+    }
+    if args.random == Some(0) {
+        return Err(bad_input("--random 0: expected at least 1 query"));
+    }
+    if let Some(out) = &args.out
+        && !out.extension().is_some_and(|e| e == "csv" || e == "json")
+    {
+        return Err(bad_input(format!(
+            "--out {}: expected a .csv or .json file name",
+            out.display()
+        )));
+    }
+    let model = if args.corner_cutting {
+        MoveModel::OctileCornerCutting
+    } else {
+        MoveModel::Octile
+    };
+    let planners = contenders(&args)?;
     let source = load(&args)?;
     let grid = &source.grid;
     let (queries, described) = queries(&args, grid, model)?;
@@ -277,24 +294,8 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     let rows = skyplan_bench::table(&runs, queries.len(), cell_m);
 
     if let Some(out) = &args.out {
-        let records: Vec<&Record> = runs.iter().flat_map(|r| &r.records).collect();
-        let bytes = if out.extension().is_some_and(|e| e == "json") {
-            serde_json::to_vec_pretty(
-                &json!({ "map": source.name, "queries": described, "records": records }),
-            )
-            .or_exit(Kind::Runtime)?
-        } else {
-            let mut w = csv::Writer::from_writer(Vec::new());
-            for r in &records {
-                w.serialize(r).or_exit(Kind::Runtime)?;
-            }
-            w.into_inner()
-                .map_err(|e| anyhow::anyhow!("{e}"))
-                .or_exit(Kind::Runtime)?
-        };
-        write_atomic(out, &bytes)?;
+        write_records(out, &source.name, &described, &runs)?;
     }
-
     if args.json {
         println!(
             "{}",

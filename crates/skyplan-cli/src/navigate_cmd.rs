@@ -4,7 +4,7 @@
 
 use crate::args::Pair;
 use crate::exit::{Failure, Kind, Result, bad_input};
-use crate::files::{read_text, write_atomic};
+use crate::files::read_text;
 use crate::grid_args::{GridMapArgs, NavigateArgs};
 use serde_json::{Value, json};
 use skyplan_cspace::{Cell, Grid2};
@@ -150,16 +150,66 @@ pub fn run_navigate(args: NavigateArgs) -> Result<()> {
     }
 }
 
-/// Runs the ride; `Ok(Some(failure))` when it stopped short (its summary is already printed).
-fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
-    let g = &args.grid;
-    let world = crate::world_load::load_world(args.map.as_deref(), g)?;
-    let (start_default, goal_default) = world.default_endpoints_ne();
-    let mut session = skyplan_plan::Session::new(world);
-    let grid_arc = session.grid(args.alt_m, args.safety_m, args.cell_m)?;
-    let grid: &Grid2 = &grid_arc;
-    let model = model_of(args.connectivity, args.corner_cutting)?;
-    let (start, start_ne) = endpoint(grid, "source", "--start-ne", args.start_ne, start_default)?;
+/// The human summary of a ride.
+fn print_ride(map_name: &str, grid: &Grid2, run: &skyplan_navfn::NavRun) {
+    let cell_m = grid.frame().cell_m;
+    println!(
+        "map        {map_name}: {} × {} cells of {cell_m} m",
+        grid.rows(),
+        grid.cols()
+    );
+    for (k, l) in run.legs.iter().enumerate() {
+        let (n, e) = grid.center_ne(l.target);
+        let how = match (l.reached, l.replaced) {
+            (true, _) => "reached",
+            (false, true) => "replaced",
+            (false, false) => "not reached",
+        };
+        println!(
+            "leg {:<6} N {n:.2} m, E {e:.2} m: steps {}..{}, {how}",
+            k + 1,
+            l.from_step,
+            l.to_step
+        );
+    }
+    println!(
+        "ride       {}: {} steps, {:.2} m travelled, min clearance {:.2} m",
+        if run.reached { "reached" } else { "stopped" },
+        run.steps,
+        run.distance_cells * cell_m,
+        run.min_clearance_cells * cell_m
+    );
+}
+
+/// The normalised cost map with the ride, as a PNG heat map.
+fn write_heat(
+    target: &crate::files::Target,
+    grid: &Grid2,
+    costmap: &Costmap,
+    trace: &[Cell],
+    start: Cell,
+    goal: Cell,
+) -> Result<()> {
+    let values: Vec<f64> = costmap.normalised().iter().map(|&c| f64::from(c)).collect();
+    let heat = skyplan_plot::Heatmap {
+        rows: grid.rows(),
+        cols: grid.cols(),
+        values: &values,
+        blocked: grid.blocked_cells(),
+        path: trace,
+        start: Some(start),
+        goal: Some(goal),
+    };
+    let bytes = skyplan_plot::render_heatmap_png(&heat, 1000).map_err(crate::exit::runtime)?;
+    crate::files::write_target(target, &bytes)
+}
+
+/// The targets in order and the mid-ride changes, as free cells.
+fn targets_of(
+    grid: &Grid2,
+    args: &NavigateArgs,
+    goal_default: Option<[f64; 2]>,
+) -> Result<(Vec<Cell>, Vec<TargetChange>)> {
     let target_pairs: Vec<Pair> = match (&args.targets, &args.targets_file) {
         (Some(t), _) => t.0.clone(),
         (None, Some(path)) => read_targets_file(path)?,
@@ -182,6 +232,36 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
             target,
         });
     }
+    Ok((targets, changes))
+}
+
+/// Runs the ride; `Ok(Some(failure))` when it stopped short (its summary is already printed).
+fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
+    let g = &args.grid;
+    let plot = match &args.plot {
+        Some(path)
+            if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("png")) =>
+        {
+            Some(crate::files::output_target("--plot", path)?)
+        }
+        Some(path) => {
+            return Err(bad_input(format!(
+                "--plot {}: navigate draws a PNG heat map; use a .png file name",
+                path.display()
+            )));
+        }
+        None => None,
+    };
+    let world = crate::world_load::load_world(args.map.as_deref(), g)?;
+    let (start_default, goal_default) = world.default_endpoints_ne();
+    let mut session = skyplan_plan::Session::new(world);
+    let grid_arc = session.grid(args.alt_m, args.safety_m, args.cell_m)?;
+    let grid: &Grid2 = &grid_arc;
+    let model = model_of(args.connectivity, args.corner_cutting)?;
+    let (start, start_ne) = endpoint(grid, "source", "--start-ne", args.start_ne, start_default)?;
+    let (targets, changes) = targets_of(grid, &args, goal_default)?;
     let cell_m = grid.frame().cell_m;
     let params = inflation_of(g, cell_m);
     let t0 = Instant::now();
@@ -245,63 +325,14 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         let goal = run.legs.last().map_or(start, |l| l.target);
         crate::show::print(grid, start, goal, &run.trace, model, false);
     }
-    if let Some(path) = &args.plot {
-        if !path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
-        {
-            return Err(bad_input(format!(
-                "--plot {}: navigate draws a PNG heat map; use a .png file name",
-                path.display()
-            )));
-        }
-        let values: Vec<f64> = costmap.normalised().iter().map(|&c| f64::from(c)).collect();
+    if let Some(target) = &plot {
         let goal = run.legs.last().map_or(start, |l| l.target);
-        let heat = skyplan_plot::Heatmap {
-            rows: grid.rows(),
-            cols: grid.cols(),
-            values: &values,
-            blocked: grid.blocked_cells(),
-            path: &run.trace,
-            start: Some(start),
-            goal: Some(goal),
-        };
-        let bytes = skyplan_plot::render_heatmap_png(&heat, 1000).map_err(crate::exit::runtime)?;
-        write_atomic(path, &bytes)?;
+        write_heat(target, grid, &costmap, &run.trace, start, goal)?;
     }
     if args.json {
         println!("{summary}");
     } else {
-        println!(
-            "map        {}: {} × {} cells of {} m",
-            session.world().name(),
-            grid.rows(),
-            grid.cols(),
-            cell_m
-        );
-        for (k, l) in run.legs.iter().enumerate() {
-            let (n, e) = grid.center_ne(l.target);
-            let how = if l.reached {
-                "reached"
-            } else if l.replaced {
-                "replaced"
-            } else {
-                "not reached"
-            };
-            println!(
-                "leg {:<6} N {n:.2} m, E {e:.2} m: steps {}..{}, {how}",
-                k + 1,
-                l.from_step,
-                l.to_step
-            );
-        }
-        println!(
-            "ride       {}: {} steps, {:.2} m travelled, min clearance {:.2} m",
-            if run.reached { "reached" } else { "stopped" },
-            run.steps,
-            run.distance_cells * cell_m,
-            run.min_clearance_cells * cell_m
-        );
+        print_ride(session.world().name(), grid, &run);
     }
     Ok(match run.failure {
         Some(e) if !run.reached => Some(nav_failure(e, grid)),

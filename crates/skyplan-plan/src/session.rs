@@ -217,7 +217,7 @@ impl Session {
             goal_ne,
             world: &world,
         };
-        let mut route = match info.family {
+        let route = match info.family {
             Family::Grid(planner) => crate::grid::plan(self, &q, planner)?,
             Family::Wavefront => crate::navfn::wavefront(self, &q)?,
             Family::Costmap => crate::navfn::costmap(self, &q)?,
@@ -226,136 +226,7 @@ impl Session {
             Family::Voxel => crate::three_d::voxel(self, &q)?,
         };
         recheck(&route)?;
-        let place = |p: [f64; 3],
-                     cell: Option<Cell>,
-                     given: Option<[f64; 2]>|
-         -> Result<Place, PlanFailure> {
-            let lla = match (given, world.frame()) {
-                (Some(ll), _) => Some(ll),
-                (None, Some(frame)) => {
-                    let l = frame
-                        .lla_from_ned(Ned {
-                            north_m: p[0],
-                            east_m: p[1],
-                            down_m: -p[2],
-                        })
-                        .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
-                    Some([l.lat_deg, l.lon_deg])
-                }
-                (None, None) => None,
-            };
-            Ok(Place {
-                north_m: p[0],
-                east_m: p[1],
-                alt_m: p[2],
-                lat_deg: lla.map(|l| l[0]),
-                lon_deg: lla.map(|l| l[1]),
-                cell: cell.map(|c| [c.row, c.col]),
-            })
-        };
-        let first = *route
-            .points
-            .first()
-            .ok_or_else(|| PlanFailure::internal("empty route"))?;
-        let last = *route
-            .points
-            .last()
-            .ok_or_else(|| PlanFailure::internal("empty route"))?;
-        let start = place(first, route.start_cell, start_lla)?;
-        let goal = place(last, route.goal_cell, goal_lla)?;
-        let (mission, waypoints, waypoints_lla) = match world.frame() {
-            Some(frame) => {
-                let m = Mission::from_points_nea(frame, &route.points, r.start_heading_rad)
-                    .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
-                let rows = m.rows();
-                let lla = m.waypoints.iter().map(|w| [w.lat_deg, w.lon_deg]).collect();
-                (Some(m), rows, Some(lla))
-            }
-            None => (
-                None,
-                rows_without_frame(&route.points, r.start_heading_rad),
-                None,
-            ),
-        };
-        let mission_length_m = route
-            .points
-            .windows(2)
-            .map(|w| skyplan_world3::distance_m(w[0], w[1]))
-            .sum();
-        let straight_line_m = skyplan_world3::distance_m(first, last);
-        let grid_info = route.grid.as_ref().filter(|_| info.dims == 2).map(|g| {
-            let f = g.frame();
-            GridInfo {
-                rows: g.rows(),
-                cols: g.cols(),
-                cell_m: f.cell_m,
-                origin_north_m: f.origin_north_m,
-                origin_east_m: f.origin_east_m,
-                alt_m: r.alt_m,
-                safety_m: r.safety_m,
-                blocked_cells: g.blocked_count(),
-            }
-        });
-        let grid_planner = matches!(
-            info.family,
-            Family::Grid(_) | Family::Wavefront | Family::Costmap
-        );
-        let mut counts = route.grid_stats.map(|s| s.3);
-        if let Some(c) = counts.as_mut() {
-            c.mission = waypoints.len();
-        }
-        if r.geometry
-            && info.dims == 2
-            && let Some(map) = world.colliders()
-        {
-            {
-                route.geometry.active_boxes = map
-                    .boxes
-                    .iter()
-                    .filter(|b| {
-                        b.top_m() + r.safety_m > r.alt_m && b.bottom_m() - r.safety_m < r.alt_m
-                    })
-                    .copied()
-                    .collect();
-            }
-        }
-        Ok(Plan {
-            status: "ok",
-            map: world.name().to_string(),
-            obstacles: world.colliders().map(|m| m.boxes.len()),
-            home: world.frame().map(|f| Home {
-                lat_deg: f.home().lat_deg,
-                lon_deg: f.home().lon_deg,
-            }),
-            planner: r.planner,
-            grid: grid_info,
-            move_model: grid_planner.then(|| model_name(r.model)),
-            start,
-            goal,
-            cost_m: route.cost_m,
-            mission_length_m,
-            straight_line_m,
-            octile_optimum_m: route.octile_optimum_m,
-            expansions: route.expansions,
-            path_cells: route.grid_stats.map(|s| s.0),
-            straight_moves: route.grid_stats.map(|s| s.1),
-            diagonal_moves: route.grid_stats.map(|s| s.2),
-            waypoint_counts: counts,
-            search_time_us: route.search_us,
-            timings_us: Timings {
-                grid_build_us: route.build_us,
-                search_us: route.search_us,
-                postprocess_us: route.postprocess_us,
-                total_us: micros(t0.elapsed()),
-            },
-            waypoints,
-            waypoints_lla,
-            details: std::mem::take(&mut route.details),
-            geometry: r.geometry.then(|| std::mem::take(&mut route.geometry)),
-            mission,
-            grid_used: route.grid.take(),
-            saved_roadmap: route.saved_roadmap.take(),
-        })
+        assemble(&world, &r, route, [start_lla, goal_lla], t0)
     }
 
     /// Plans `request` again from another start (where the vehicle is now), reusing the caches.
@@ -402,6 +273,144 @@ impl Session {
             }),
         }
     }
+}
+
+/// The plan from a re-checked route: places with lat/lon, the mission, statistics.
+fn assemble(
+    world: &World,
+    r: &Resolved,
+    mut route: Route,
+    given_lla: [Option<[f64; 2]>; 2],
+    t0: Instant,
+) -> Result<Plan, PlanFailure> {
+    let info = r.planner.info();
+    let [start_lla, goal_lla] = given_lla;
+    let place =
+        |p: [f64; 3], cell: Option<Cell>, given: Option<[f64; 2]>| -> Result<Place, PlanFailure> {
+            let lla = match (given, world.frame()) {
+                (Some(ll), _) => Some(ll),
+                (None, Some(frame)) => {
+                    let l = frame
+                        .lla_from_ned(Ned {
+                            north_m: p[0],
+                            east_m: p[1],
+                            down_m: -p[2],
+                        })
+                        .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
+                    Some([l.lat_deg, l.lon_deg])
+                }
+                (None, None) => None,
+            };
+            Ok(Place {
+                north_m: p[0],
+                east_m: p[1],
+                alt_m: p[2],
+                lat_deg: lla.map(|l| l[0]),
+                lon_deg: lla.map(|l| l[1]),
+                cell: cell.map(|c| [c.row, c.col]),
+            })
+        };
+    let first = *route
+        .points
+        .first()
+        .ok_or_else(|| PlanFailure::internal("empty route"))?;
+    let last = *route
+        .points
+        .last()
+        .ok_or_else(|| PlanFailure::internal("empty route"))?;
+    let start = place(first, route.start_cell, start_lla)?;
+    let goal = place(last, route.goal_cell, goal_lla)?;
+    let (mission, waypoints, waypoints_lla) = match world.frame() {
+        Some(frame) => {
+            let m = Mission::from_points_nea(frame, &route.points, r.start_heading_rad)
+                .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
+            let rows = m.rows();
+            let lla = m.waypoints.iter().map(|w| [w.lat_deg, w.lon_deg]).collect();
+            (Some(m), rows, Some(lla))
+        }
+        None => (
+            None,
+            rows_without_frame(&route.points, r.start_heading_rad),
+            None,
+        ),
+    };
+    let mission_length_m = route
+        .points
+        .windows(2)
+        .map(|w| skyplan_world3::distance_m(w[0], w[1]))
+        .sum();
+    let straight_line_m = skyplan_world3::distance_m(first, last);
+    let grid_info = route.grid.as_ref().filter(|_| info.dims == 2).map(|g| {
+        let f = g.frame();
+        GridInfo {
+            rows: g.rows(),
+            cols: g.cols(),
+            cell_m: f.cell_m,
+            origin_north_m: f.origin_north_m,
+            origin_east_m: f.origin_east_m,
+            alt_m: r.alt_m,
+            safety_m: r.safety_m,
+            blocked_cells: g.blocked_count(),
+        }
+    });
+    let grid_planner = matches!(
+        info.family,
+        Family::Grid(_) | Family::Wavefront | Family::Costmap
+    );
+    let mut counts = route.grid_stats.map(|s| s.3);
+    if let Some(c) = counts.as_mut() {
+        c.mission = waypoints.len();
+    }
+    if r.geometry
+        && info.dims == 2
+        && let Some(map) = world.colliders()
+    {
+        {
+            route.geometry.active_boxes = map
+                .boxes
+                .iter()
+                .filter(|b| b.top_m() + r.safety_m > r.alt_m && b.bottom_m() - r.safety_m < r.alt_m)
+                .copied()
+                .collect();
+        }
+    }
+    Ok(Plan {
+        status: "ok",
+        map: world.name().to_string(),
+        obstacles: world.colliders().map(|m| m.boxes.len()),
+        home: world.frame().map(|f| Home {
+            lat_deg: f.home().lat_deg,
+            lon_deg: f.home().lon_deg,
+        }),
+        planner: r.planner,
+        grid: grid_info,
+        move_model: grid_planner.then(|| model_name(r.model)),
+        start,
+        goal,
+        cost_m: route.cost_m,
+        mission_length_m,
+        straight_line_m,
+        octile_optimum_m: route.octile_optimum_m,
+        expansions: route.expansions,
+        path_cells: route.grid_stats.map(|s| s.0),
+        straight_moves: route.grid_stats.map(|s| s.1),
+        diagonal_moves: route.grid_stats.map(|s| s.2),
+        waypoint_counts: counts,
+        search_time_us: route.search_us,
+        timings_us: Timings {
+            grid_build_us: route.build_us,
+            search_us: route.search_us,
+            postprocess_us: route.postprocess_us,
+            total_us: micros(t0.elapsed()),
+        },
+        waypoints,
+        waypoints_lla,
+        details: std::mem::take(&mut route.details),
+        geometry: r.geometry.then(|| std::mem::take(&mut route.geometry)),
+        mission,
+        grid_used: route.grid.take(),
+        saved_roadmap: route.saved_roadmap.take(),
+    })
 }
 
 /// Headings as FCND computes them, for maps without a geodetic home.
