@@ -44,6 +44,17 @@ pub struct Bucket {
     pub total_us: f64,
 }
 
+/// A whole replay: totals per bucket, the scenarios that did not match, the JPS+ table time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Replay {
+    /// Totals per bucket.
+    pub buckets: BTreeMap<u32, Bucket>,
+    /// The scenarios that did not match.
+    pub failures: Vec<Outcome>,
+    /// One-off preparation (the JPS+ table), ms.
+    pub table_ms: f64,
+}
+
 /// A MovingAI map as a grid in file row order (row = y, column = x, as the scenarios count).
 pub fn file_order_grid(map: &MovingAiMap) -> Result<Grid2, skyplan_cspace::GridError> {
     let blocked: Vec<bool> = map.passable.iter().map(|&p| !p).collect();
@@ -80,7 +91,7 @@ pub fn replay(
     scenarios: &[Scenario],
     planner: PlannerId,
     mut each: impl FnMut(&Outcome),
-) -> Result<(BTreeMap<u32, Bucket>, Vec<Outcome>, f64), PlanFailure> {
+) -> Result<Replay, PlanFailure> {
     let mut search = CellSearch::new(grid, planner, MoveModel::Octile)?;
     let table_ms = search.precompute_us() as f64 / 1e3;
     let mut buckets: BTreeMap<u32, Bucket> = BTreeMap::new();
@@ -132,5 +143,9 @@ pub fn replay(
             failures.push(outcome);
         }
     }
-    Ok((buckets, failures, table_ms))
+    Ok(Replay {
+        buckets,
+        failures,
+        table_ms,
+    })
 }

@@ -25,7 +25,11 @@ pub fn run(args: ScenArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let (buckets, failures, table_ms) = replay(&grid, &scenarios, args.planner, |o| {
+    let skyplan_bench::replay::Replay {
+        buckets,
+        failures,
+        table_ms,
+    } = replay(&grid, &scenarios, args.planner, |o| {
         if args.json {
             println!("{}", json!(o));
         }
