@@ -139,10 +139,51 @@ pub struct RouteArgs {
     /// Skip line-of-sight shortcutting.
     #[arg(long)]
     pub no_shortcut: bool,
+    /// Most memory a map or plan may need, estimated before anything is allocated: bytes, or
+    /// with a suffix K, M, G [default: half the machine's memory].
+    #[arg(long, value_name = "SIZE", value_parser = parse_size_bytes)]
+    pub max_memory: Option<u64>,
     #[command(flatten)]
     pub grid: crate::grid_args::GridMapArgs,
     #[command(flatten)]
     pub plan3d: Plan3dArgs,
+}
+
+/// `1G`, `512M`, `300K` or a number of bytes.
+pub(crate) fn parse_size_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (num, mult) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => {
+            let m = match c.to_ascii_uppercase() {
+                'K' => 1u64 << 10,
+                'M' => 1 << 20,
+                'G' => 1 << 30,
+                'T' => 1 << 40,
+                _ => return Err(format!("expected a size like 512M or 2G, found {s:?}")),
+            };
+            (&t[..i], m)
+        }
+        _ => (t, 1),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v * (mult as f64) < 1.8e19 => {
+            Ok((v * mult as f64) as u64)
+        }
+        _ => Err(format!("expected a size like 512M or 2G, found {s:?}")),
+    }
+}
+
+/// Half the machine's memory (`/proc/meminfo`), or 8 GiB where it cannot be read.
+pub(crate) fn default_max_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("MemTotal:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map_or(8 << 30, |kb| kb * 1024 / 2)
 }
 
 /// Options of the 3D planners.

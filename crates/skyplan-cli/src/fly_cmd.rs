@@ -185,6 +185,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
     let log_path = args.log.clone();
     let crate::world_load::Resolved {
         world,
+        limits,
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
@@ -271,6 +272,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
     };
     let plan_with = FlyPlan {
         world,
+        limits,
         request,
         user_start,
         out,
@@ -370,6 +372,7 @@ fn args_view(a: &FlyArgs) -> FlyView {
 /// What `fly` plans: the world, the request, whether the start was given, the waypoint file.
 struct FlyPlan {
     world: World,
+    limits: skyplan_plan::Limits,
     request: PlanRequest,
     user_start: bool,
     out: Option<(std::path::PathBuf, OutTarget, Format)>,
@@ -416,7 +419,7 @@ fn fly(
         request.start_ne = None;
     }
     let t_plan = Instant::now();
-    let plan = Session::new(p.world).plan(&request)?;
+    let plan = Session::new(p.world).with_limits(p.limits).plan(&request)?;
     let mission = plan
         .mission
         .as_ref()

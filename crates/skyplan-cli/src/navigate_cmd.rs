@@ -254,9 +254,14 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         }
         None => None,
     };
-    let world = crate::world_load::load_world(args.map.as_deref(), g)?;
+    let limits = skyplan_plan::Limits {
+        max_memory_bytes: args
+            .max_memory
+            .unwrap_or_else(crate::args::default_max_memory),
+    };
+    let world = crate::world_load::load_world(args.map.as_deref(), g, &limits)?;
     let (start_default, goal_default) = world.default_endpoints_ne();
-    let mut session = skyplan_plan::Session::new(world);
+    let mut session = skyplan_plan::Session::new(world).with_limits(limits);
     let grid_arc = session.grid(args.alt_m, args.safety_m, args.cell_m)?;
     let grid: &Grid2 = &grid_arc;
     let model = model_of(args.connectivity, args.corner_cutting)?;

@@ -113,6 +113,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     let t0 = Instant::now();
     let crate::world_load::Resolved {
         world,
+        limits,
         mut request,
         config,
     } = crate::world_load::resolve(&args.route)?;
@@ -124,7 +125,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         request.roadmap.load = Some((path.display().to_string(), read_bytes(path)?));
     }
     prompt_missing(&world, &mut request)?;
-    let mut session = Session::new(world);
+    let mut session = Session::new(world).with_limits(limits);
     let plan = match session.plan(&request) {
         Ok(plan) => plan,
         Err(f) => {

@@ -6,7 +6,7 @@ use crate::config::Config;
 use crate::exit::{Result, bad_input};
 use crate::files::{read_bytes, read_text};
 use crate::grid_args::{FieldArg, GridMapArgs};
-use skyplan_plan::{FieldMode, MapYaml, PlanRequest, PruneMode, World};
+use skyplan_plan::{FieldMode, Limits, MapYaml, PlanRequest, PruneMode, World};
 use std::path::{Path, PathBuf};
 
 fn is_ext(path: &Path, exts: &[&str]) -> bool {
@@ -16,7 +16,7 @@ fn is_ext(path: &Path, exts: &[&str]) -> bool {
 }
 
 /// The world a command runs on: `--random`, the map file by extension, or the bundled city.
-pub fn load_world(map: Option<&Path>, g: &GridMapArgs) -> Result<World> {
+pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     let colliders = map.is_none_or(|p| is_ext(p, &["csv"])) && g.random.is_none();
     if g.resolution.is_some() && !map.is_some_and(|p| is_ext(p, &["png", "pgm"])) {
         return Err(bad_input(
@@ -29,11 +29,11 @@ pub fn load_world(map: Option<&Path>, g: &GridMapArgs) -> Result<World> {
         ));
     }
     let world = if let Some(size) = g.random {
-        World::random(size.width, size.height, g.density, g.seed)?
+        World::random_within(size.width, size.height, g.density, g.seed, limits)?
     } else {
         match map {
             None => World::fcnd_city(),
-            Some(path) => load_file(path, g)?,
+            Some(path) => load_file(path, g, limits)?,
         }
     };
     match g.home {
@@ -42,7 +42,7 @@ pub fn load_world(map: Option<&Path>, g: &GridMapArgs) -> Result<World> {
     }
 }
 
-fn load_file(path: &Path, g: &GridMapArgs) -> Result<World> {
+fn load_file(path: &Path, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     let name = path.display().to_string();
     if is_ext(path, &["csv"]) {
         Ok(World::from_colliders_csv(&name, &read_text(path)?)?)
@@ -52,11 +52,12 @@ fn load_file(path: &Path, g: &GridMapArgs) -> Result<World> {
         let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
         let bytes = read_bytes(&image)
             .map_err(|f| bad_input(format!("{name}: field image: {:#}", f.error)))?;
-        Ok(World::from_image(
+        Ok(World::from_image_within(
             &image.display().to_string(),
             &bytes,
             &meta,
             g.unknown_free,
+            limits,
         )?)
     } else if is_ext(path, &["png", "pgm"]) {
         let resolution = g.resolution.ok_or_else(|| {
@@ -64,11 +65,12 @@ fn load_file(path: &Path, g: &GridMapArgs) -> Result<World> {
                 "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"
             ))
         })?;
-        Ok(World::from_image(
+        Ok(World::from_image_within(
             &name,
             &read_bytes(path)?,
             &MapYaml::bare(resolution),
             g.unknown_free,
+            limits,
         )?)
     } else if is_ext(path, &["map"]) {
         Ok(World::from_movingai(&name, &read_text(path)?)?)
@@ -128,6 +130,7 @@ fn typed_request(a: &RouteArgs) -> PlanRequest {
 /// config's file options.
 pub struct Resolved {
     pub world: World,
+    pub limits: Limits,
     pub request: PlanRequest,
     pub config: Config,
 }
@@ -139,10 +142,14 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
         None => Config::default(),
     };
     let map: Option<PathBuf> = a.map.clone().or(config.map.clone());
-    let world = load_world(map.as_deref(), &a.grid)?;
+    let limits = Limits {
+        max_memory_bytes: a.max_memory.unwrap_or_else(crate::args::default_max_memory),
+    };
+    let world = load_world(map.as_deref(), &a.grid, &limits)?;
     let request = typed_request(a).or(config.request.clone());
     Ok(Resolved {
         world,
+        limits,
         request,
         config,
     })

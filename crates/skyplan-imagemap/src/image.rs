@@ -35,29 +35,54 @@ fn check_not_empty(width: u32, height: u32) -> Result<(), ImageMapError> {
     Ok(())
 }
 
+/// Width and height of a PNG or PGM from its header alone (nothing is decoded), so that a
+/// caller can refuse an image too large for its memory budget before allocating anything.
+pub fn image_size(bytes: &[u8]) -> Result<(u32, u32), ImageMapError> {
+    if bytes.starts_with(PNG_SIGNATURE) {
+        // The IHDR chunk comes first: length, "IHDR", width, height (big-endian).
+        let field = |at: usize| {
+            bytes
+                .get(at..at + 4)
+                .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+        };
+        match (bytes.get(12..16), field(16), field(20)) {
+            (Some(b"IHDR"), Some(w), Some(h)) => Ok((w, h)),
+            _ => Err(ImageMapError::Png("no IHDR chunk where PNG puts it".into())),
+        }
+    } else if bytes.starts_with(b"P2") || bytes.starts_with(b"P5") {
+        let mut h = Header { bytes, pos: 2 };
+        let width = h.number("width")?;
+        let height = h.number("height")?;
+        Ok((width, height))
+    } else {
+        Err(ImageMapError::UnknownFormat)
+    }
+}
+
 /// Decodes a PNG of any colour type and bit depth (palettes expanded, 16 bits reduced to 8).
+/// Non-interlaced images are decoded row by row: the decoder adds one row's buffer, so the grey
+/// raster (one byte per pixel, plus alpha when the image has it) is the only full-size copy.
 pub fn decode_png(bytes: &[u8]) -> Result<Raster, ImageMapError> {
     let err = |e: png::DecodingError| ImageMapError::Png(e.to_string());
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
     let mut reader = decoder.read_info().map_err(err)?;
-    let size = reader
-        .output_buffer_size()
-        .ok_or_else(|| ImageMapError::Png("the image is too large".into()))?;
-    let mut buf = vec![0; size];
-    let info = reader.next_frame(&mut buf).map_err(err)?;
-    check_not_empty(info.width, info.height)?;
-    let channels = info.color_type.samples();
-    let (w, h) = (info.width as usize, info.height as usize);
+    let (width, height, interlaced) = {
+        let info = reader.info();
+        (info.width, info.height, info.interlaced)
+    };
+    check_not_empty(width, height)?;
+    let (color_type, _) = reader.output_color_type();
+    let channels = color_type.samples();
+    let (w, h) = (width as usize, height as usize);
     let mut gray = Vec::with_capacity(w * h);
     let has_alpha = matches!(
-        info.color_type,
+        color_type,
         png::ColorType::GrayscaleAlpha | png::ColorType::Rgba
     );
     let mut alpha = has_alpha.then(|| Vec::with_capacity(w * h));
-    for y in 0..h {
-        let line = &buf[y * info.line_size..y * info.line_size + w * channels];
-        for px in line.chunks_exact(channels) {
+    let mut push_line = |line: &[u8]| {
+        for px in line[..w * channels].chunks_exact(channels) {
             let color = if channels >= 3 { &px[..3] } else { &px[..1] };
             let sum: u32 = color.iter().map(|&v| u32::from(v)).sum();
             let n = color.len() as u32;
@@ -66,10 +91,33 @@ pub fn decode_png(bytes: &[u8]) -> Result<Raster, ImageMapError> {
                 a.push(px[channels - 1]);
             }
         }
+    };
+    if interlaced {
+        let size = reader
+            .output_buffer_size()
+            .ok_or_else(|| ImageMapError::Png("the image is too large".into()))?;
+        let mut buf = vec![0; size];
+        let info = reader.next_frame(&mut buf).map_err(err)?;
+        for y in 0..h {
+            push_line(&buf[y * info.line_size..(y + 1) * info.line_size]);
+        }
+    } else {
+        for _ in 0..h {
+            let row = reader
+                .next_row()
+                .map_err(err)?
+                .ok_or_else(|| ImageMapError::Png("fewer rows than the header says".into()))?;
+            if row.data().len() < w * channels {
+                return Err(ImageMapError::Png(
+                    "a row shorter than the header says".into(),
+                ));
+            }
+            push_line(row.data());
+        }
     }
     Ok(Raster {
-        width: info.width,
-        height: info.height,
+        width,
+        height,
         gray,
         alpha,
     })

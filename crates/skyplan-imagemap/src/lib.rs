@@ -34,7 +34,7 @@ mod occupancy;
 mod random;
 mod yaml;
 
-pub use image::{Raster, decode_image, decode_pgm, decode_png};
+pub use image::{Raster, decode_image, decode_pgm, decode_png, image_size};
 pub use occupancy::{
     ImageMap, OCC_FREE, OCC_OCCUPIED, OCC_UNKNOWN, image_map, image_map_with, occupancy,
 };

@@ -87,4 +87,7 @@ pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, Unkno
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};
 pub use session::Session;
 pub use skyplan_imagemap::MapYaml;
-pub use world::{BoundsNe, FCND_CITY_CSV, FCND_CITY_NAME, FCND_DEFAULT_GOAL_NE, MapKind, World};
+pub use world::{
+    BoundsNe, FCND_CITY_CSV, FCND_CITY_NAME, FCND_DEFAULT_GOAL_NE, Limits, MapKind, World,
+    human_bytes,
+};

@@ -5,7 +5,7 @@ use crate::failure::{FailureKind, PlanFailure};
 use crate::plan::{Geometry, GridInfo, Home, Place, Plan, Timings, WaypointCounts};
 use crate::planner_id::{Family, MapKinds, PlannerId};
 use crate::request::{PlanRequest, Position, Resolved};
-use crate::world::{Source, World};
+use crate::world::{Limits, Source, World, check_memory};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
@@ -15,6 +15,9 @@ use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+/// Bytes per cell of a colliders grid while it is built and kept.
+const GRID_BYTES_PER_CELL: u64 = 2;
 
 /// Most entries kept per cache (a server asked for many altitudes does not grow without bound).
 const CACHE_ENTRIES: usize = 8;
@@ -112,6 +115,7 @@ pub(crate) struct Query<'a> {
 /// ```
 pub struct Session {
     world: World,
+    limits: Limits,
     grids: HashMap<Key, Arc<Grid2>>,
     boxes: HashMap<Key, Arc<BoxWorld3>>,
     pub(crate) voronoi: HashMap<Key, Arc<skyplan_roadmap::Roadmap>>,
@@ -124,12 +128,19 @@ impl Session {
     pub fn new(world: World) -> Self {
         Self {
             world,
+            limits: Limits::default(),
             grids: HashMap::new(),
             boxes: HashMap::new(),
             voronoi: HashMap::new(),
             prm: HashMap::new(),
             search: GridSearch::new(),
         }
+    }
+
+    /// The same session with other resource limits.
+    pub fn with_limits(mut self, limits: Limits) -> Self {
+        self.limits = limits;
+        self
     }
 
     /// The world.
@@ -153,6 +164,16 @@ impl Session {
         if let Some(g) = self.grids.get(&k) {
             return Ok(Arc::clone(g));
         }
+        let cells = self.cells_at(cell_m);
+        check_memory(
+            cells.saturating_mul(GRID_BYTES_PER_CELL),
+            &self.limits,
+            &format!(
+                "{}: a grid of {cells} cells of {cell_m} m",
+                self.world.name()
+            ),
+            "use a larger cell_m",
+        )?;
         let spec = GridSpec {
             alt_m,
             safety_m,
@@ -192,10 +213,66 @@ impl Session {
         Ok(put(&mut self.boxes, k, Arc::new(world)))
     }
 
+    /// Cells of the grid at this cell size (before building it), saturating.
+    fn cells_at(&self, cell_m: f64) -> u64 {
+        if let Some(g) = self.world.fixed_grid() {
+            return g.len() as u64;
+        }
+        let b = self.world.bounds_ne(cell_m);
+        let rows = ((b.north_max_m - b.north_min_m) / cell_m).ceil();
+        let cols = ((b.east_max_m - b.east_min_m) / cell_m).ceil();
+        let cells = rows * cols;
+        if cells.is_finite() && cells < 1.8e19 {
+            cells as u64
+        } else {
+            u64::MAX
+        }
+    }
+
+    /// The memory a request needs, estimated before anything is allocated.
+    fn check_request_memory(&self, r: &Resolved) -> Result<(), PlanFailure> {
+        let info = r.planner.info();
+        let (units, per_unit, what, change) = match info.family {
+            Family::Grid(skyplan_search::Planner::JpsPlus) => {
+                (self.cells_at(r.cell_m), 68, "cells", "use a larger cell_m")
+            }
+            Family::Grid(_) | Family::Voronoi => {
+                (self.cells_at(r.cell_m), 24, "cells", "use a larger cell_m")
+            }
+            Family::Wavefront | Family::Costmap => {
+                (self.cells_at(r.cell_m), 48, "cells", "use a larger cell_m")
+            }
+            Family::Voxel => {
+                let b = self.world.bounds_ne(r.cell_m);
+                let n = ((b.north_max_m - b.north_min_m) / r.voxel_m).ceil()
+                    * ((b.east_max_m - b.east_min_m) / r.voxel_m).ceil()
+                    * ((r.max_alt_m - r.min_alt_m) / r.layer_m).ceil().max(1.0);
+                let n = if n.is_finite() && n < 1.8e19 {
+                    n as u64
+                } else {
+                    u64::MAX
+                };
+                (n, 40, "voxels", "use a larger voxel_m or layer_m")
+            }
+            Family::Sampling(_) => return Ok(()),
+        };
+        check_memory(
+            units.saturating_mul(per_unit),
+            &self.limits,
+            &format!(
+                "planner {} on {} ({units} {what})",
+                r.planner,
+                self.world.name()
+            ),
+            change,
+        )
+    }
+
     /// Plans one request with any planner; the route is re-checked before it is returned.
     pub fn plan(&mut self, request: &PlanRequest) -> Result<Plan, PlanFailure> {
         let t0 = Instant::now();
         let r = Resolved::new(request)?;
+        self.check_request_memory(&r)?;
         let info = r.planner.info();
         if info.maps == MapKinds::CollidersOnly && self.world.colliders().is_none() {
             return Err(PlanFailure::bad_request(format!(

@@ -14,6 +14,51 @@ pub const FCND_CITY_NAME: &str = "colliders.csv (bundled FCND city map)";
 /// The default goal on the bundled map: a free street corner across the city from the home.
 pub const FCND_DEFAULT_GOAL_NE: [f64; 2] = [420.0, 390.0];
 
+/// Resource limits checked before anything large is allocated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Most memory one world or request may need, bytes (estimated before allocating).
+    pub max_memory_bytes: u64,
+}
+
+impl Default for Limits {
+    /// 8 GiB.
+    fn default() -> Self {
+        Self {
+            max_memory_bytes: 8 << 30,
+        }
+    }
+}
+
+/// Bytes as people read them (`1.5 GB`).
+pub fn human_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= 1e9 {
+        format!("{:.1} GB", b / 1e9)
+    } else if b >= 1e6 {
+        format!("{:.0} MB", b / 1e6)
+    } else {
+        format!("{:.0} kB", b / 1e3)
+    }
+}
+
+/// Refuses an estimate above the limit, naming what needs the memory and what to change.
+pub(crate) fn check_memory(
+    estimate: u64,
+    limits: &Limits,
+    what: &str,
+    change: &str,
+) -> Result<(), PlanFailure> {
+    if estimate <= limits.max_memory_bytes {
+        return Ok(());
+    }
+    Err(PlanFailure::bad_request(format!(
+        "{what} needs about {} of memory, above the limit of {}; {change}, or raise the limit (--max-memory)",
+        human_bytes(estimate),
+        human_bytes(limits.max_memory_bytes)
+    )))
+}
+
 /// What a world was loaded from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -171,6 +216,27 @@ impl World {
         Ok(Self::grid_world(name.to_string(), MapKind::Image, map.grid))
     }
 
+    /// [`World::from_image`], refused before decoding when the image (one grey byte per pixel,
+    /// plus alpha, plus the grid) would not fit in `limits`.
+    pub fn from_image_within(
+        name: &str,
+        image_bytes: &[u8],
+        meta: &MapYaml,
+        unknown_free: bool,
+        limits: &Limits,
+    ) -> Result<Self, PlanFailure> {
+        let (w, h) =
+            skyplan_imagemap::image_size(image_bytes).map_err(|e| parse_failure(name, e))?;
+        let pixels = u64::from(w) * u64::from(h);
+        check_memory(
+            pixels.saturating_mul(4),
+            limits,
+            &format!("{name}: a {w} × {h} image"),
+            "use a smaller image",
+        )?;
+        Self::from_image(name, image_bytes, meta, unknown_free)
+    }
+
     /// A random workspace of `width` × `height` 1 m cells, each blocked with probability
     /// `density`; its default start and goal are the farthest-apart pair of 16 free cells drawn
     /// with the same seed.
@@ -198,6 +264,24 @@ impl World {
             world.default_goal_ne = Some([bn, be]);
         }
         Ok(world)
+    }
+
+    /// [`World::random`], refused before allocating when the grid would not fit in `limits`.
+    pub fn random_within(
+        width: u32,
+        height: u32,
+        density: f64,
+        seed: u64,
+        limits: &Limits,
+    ) -> Result<Self, PlanFailure> {
+        let cells = u64::from(width) * u64::from(height);
+        check_memory(
+            cells.saturating_mul(2),
+            limits,
+            &format!("a random {width}x{height} workspace"),
+            "use a smaller workspace",
+        )?;
+        Self::random(width, height, density, seed)
     }
 
     /// A grid given directly (row 0 is the southern edge; see `Grid2`).
