@@ -243,7 +243,6 @@ fn costmap_keeps_clearance_and_plots_a_heat_map() {
         String::from_utf8_lossy(&out.stderr)
     );
     let v = json_of(&out);
-    assert!(v["costmap"]["objective_m"].as_f64().unwrap() >= v["cost_m"].as_f64().unwrap());
     assert!(v["costmap"]["min_clearance_m"].as_f64().unwrap() >= 1.0);
     assert_eq!(
         v["waypoints"].as_array().unwrap().len(),
