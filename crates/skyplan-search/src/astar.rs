@@ -1,45 +1,9 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
+use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::f64::consts::SQRT_2;
-
-/// A heap entry: smallest `f` first; on equal `f`, largest `g` first (deepest first, which
-/// expands fewer cells on open grids).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Entry {
-    pub(crate) f: f64,
-    pub(crate) g: f64,
-    pub(crate) index: u32,
-}
-
-impl PartialEq for Entry {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Entry {
-    /// `f` and `g` are never negative or NaN, and for such floats the IEEE-754 bit patterns,
-    /// read as integers, are ordered exactly like the numbers: integer compares are cheaper.
-    #[inline]
-    fn cmp(&self, other: &Self) -> Ordering {
-        debug_assert!(self.f >= 0.0 && self.g >= 0.0 && other.f >= 0.0 && other.g >= 0.0);
-        other
-            .f
-            .to_bits()
-            .cmp(&self.f.to_bits())
-            .then(self.g.to_bits().cmp(&other.g.to_bits()))
-            .then(other.index.cmp(&self.index))
-    }
-}
 
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
@@ -49,7 +13,7 @@ pub struct GridSearch {
     /// `2 × query number`: a node's `stamp` is `open_stamp` (reached) or `open_stamp + 1`
     /// (expanded) in the current query; anything older is stale and means "unseen".
     open_stamp: u32,
-    pub(crate) heap: BinaryHeap<Entry>,
+    queue: BucketQueue,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -103,7 +67,7 @@ impl GridSearch {
             self.open_stamp = 0;
         }
         self.open_stamp += 2;
-        self.heap.clear();
+        self.queue.clear();
     }
 
     /// True if cell `i` was expanded in the current query.
@@ -140,25 +104,24 @@ impl GridSearch {
     #[inline(always)]
     pub(crate) fn offer(&mut self, i: usize, g: f64, h: f64, parent: u32) {
         if !self.is_closed(i) && self.relax(i, g, parent) {
-            self.heap.push(Entry {
-                f: g + h,
-                g,
-                index: i as u32,
-            });
+            self.queue.push(key(g + h, g, i as u32));
         }
     }
 
-    /// Pops the best queued cell that is still current (skipping stale entries), marks it
-    /// expanded and returns its cost and index.
+    /// Pops the best queued cell not expanded yet, marks it expanded and returns its best cost
+    /// and index. An older entry of a cell (a worse `g`) can only come first on an exact tie of
+    /// `f`, and then the cell's best entry has the same `f`: expanding it with its best `g` is
+    /// what A\* would do next anyway.
     #[inline(always)]
     pub(crate) fn expand_next(&mut self) -> Option<(f64, u32)> {
-        while let Some(Entry { g, index, .. }) = self.heap.pop() {
+        while let Some(k) = self.queue.pop() {
+            let index = key_index(k);
             let i = index as usize;
-            if self.is_closed(i) || g > self.g(i) {
+            if self.is_closed(i) {
                 continue;
             }
             self.close(i);
-            return Some((g, index));
+            return Some((self.nodes[i].g, index));
         }
         None
     }
@@ -191,7 +154,6 @@ impl GridSearch {
         planner: Planner,
     ) -> Result<GridPath, SearchError> {
         check_endpoints(grid, start, goal)?;
-        let (rows, cols) = (grid.rows(), grid.cols());
         if planner == Planner::ThetaStar {
             return self.theta_star(grid, start, goal, model);
         }
@@ -202,61 +164,102 @@ impl GridSearch {
                 Planner::AStar | Planner::Dijkstra | Planner::ThetaStar => {}
             }
         }
+        let dijkstra = planner == Planner::Dijkstra;
+        match (model, dijkstra) {
+            (MoveModel::FourConnected, false) => {
+                self.astar::<false, false, true>(grid, start, goal)
+            }
+            (MoveModel::FourConnected, true) => {
+                self.astar::<false, false, false>(grid, start, goal)
+            }
+            (MoveModel::Octile, false) => self.astar::<true, false, true>(grid, start, goal),
+            (MoveModel::Octile, true) => self.astar::<true, false, false>(grid, start, goal),
+            (MoveModel::OctileCornerCutting, false) => {
+                self.astar::<true, true, true>(grid, start, goal)
+            }
+            (MoveModel::OctileCornerCutting, true) => {
+                self.astar::<true, true, false>(grid, start, goal)
+            }
+        }
+    }
+
+    /// A\* (Dijkstra without `HEURISTIC`), one copy per move model: `DIAGONALS` and
+    /// `CORNER_CUTTING` are decided at compile time, not per node.
+    fn astar<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
         self.reset(grid.len());
         let blocked = grid.blocked_cells();
-        let cols_i = cols as i64;
-        let h = |c: Cell| match planner {
-            Planner::Dijkstra => 0.0,
-            Planner::AStar | Planner::Jps | Planner::JpsPlus | Planner::ThetaStar => {
-                model.heuristic(c, goal)
+        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
+        let (goal_r, goal_c) = (i64::from(goal.row), i64::from(goal.col));
+        let h = |r: i64, c: i64| -> f64 {
+            if !HEURISTIC {
+                return 0.0;
+            }
+            let dr = (r - goal_r).abs() as f64;
+            let dc = (c - goal_c).abs() as f64;
+            if DIAGONALS {
+                let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
+                (hi - lo) + lo * SQRT_2
+            } else {
+                dr + dc
             }
         };
-        let start_i = grid.index(start) as u32;
+        let start_i = grid.index(start);
         let goal_i = grid.index(goal) as u32;
-        self.offer(start_i as usize, 0.0, h(start), NO_PARENT);
-
-        // (dr, dc, cost): orthogonal moves first.
-        const MOVES: [(i64, i64, f64); 8] = [
-            (1, 0, 1.0),
-            (-1, 0, 1.0),
-            (0, 1, 1.0),
-            (0, -1, 1.0),
-            (1, 1, SQRT_2),
-            (1, -1, SQRT_2),
-            (-1, 1, SQRT_2),
-            (-1, -1, SQRT_2),
-        ];
-        let moves = if model.has_diagonals() {
-            &MOVES[..]
-        } else {
-            &MOVES[..4]
-        };
-        let corner_cutting = model == MoveModel::OctileCornerCutting;
-        let free = |r: i64, c: i64| -> bool {
-            r >= 0
-                && c >= 0
-                && r < i64::from(rows)
-                && c < cols_i
-                && !blocked[(r * cols_i + c) as usize]
-        };
+        self.offer(
+            start_i,
+            0.0,
+            h(i64::from(start.row), i64::from(start.col)),
+            NO_PARENT,
+        );
+        let ucols = cols as usize;
         let mut expansions = 0u64;
         while let Some((g, index)) = self.expand_next() {
-            let i = index as usize;
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
             }
-            let (r, c) = ((i as i64) / cols_i, (i as i64) % cols_i);
-            for &(dr, dc, step) in moves {
-                let (nr, nc) = (r + dr, c + dc);
-                if !free(nr, nc) {
-                    continue;
+            let i = index as usize;
+            let (r, c) = ((i / ucols) as i64, (i % ucols) as i64);
+            // Which neighbours are on the grid; away from the border all of them.
+            let (has_s, has_n, has_w, has_e) = (r > 0, r + 1 < rows, c > 0, c + 1 < cols);
+            let free = |ok: bool, j: usize| ok && !blocked[j];
+            let n = free(has_n, i + ucols);
+            let s = free(has_s, i.wrapping_sub(ucols));
+            let e = free(has_e, i + 1);
+            let w = free(has_w, i.wrapping_sub(1));
+            let g1 = g + 1.0;
+            let try_move = |this: &mut Self, ok: bool, j: usize, nr: i64, nc: i64, ng: f64| {
+                if ok && !this.is_closed(j) && this.relax(j, ng, index) {
+                    this.queue.push(key(ng + h(nr, nc), ng, j as u32));
                 }
-                if dr != 0 && dc != 0 && !corner_cutting && !(free(r + dr, c) && free(r, c + dc)) {
-                    continue;
-                }
-                let ni = (nr * cols_i + nc) as usize;
-                self.offer(ni, g + step, h(Cell::new(nr as u32, nc as u32)), index);
+            };
+            try_move(self, n, i + ucols, r + 1, c, g1);
+            try_move(self, s, i.wrapping_sub(ucols), r - 1, c, g1);
+            try_move(self, e, i + 1, r, c + 1, g1);
+            try_move(self, w, i.wrapping_sub(1), r, c - 1, g1);
+            if DIAGONALS {
+                let gd = g + SQRT_2;
+                let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
+                let ne = has_n && has_e && corner(n, e) && free(true, i + ucols + 1);
+                let nw = has_n && has_w && corner(n, w) && free(true, i + ucols - 1);
+                let se = has_s && has_e && corner(s, e) && free(true, i + 1 - ucols);
+                let sw = has_s && has_w && corner(s, w) && free(true, i - 1 - ucols);
+                try_move(self, ne, i + ucols + 1, r + 1, c + 1, gd);
+                try_move(self, nw, i + ucols - 1, r + 1, c - 1, gd);
+                try_move(self, se, (i + 1).wrapping_sub(ucols), r - 1, c + 1, gd);
+                try_move(
+                    self,
+                    sw,
+                    (i.wrapping_sub(1)).wrapping_sub(ucols),
+                    r - 1,
+                    c - 1,
+                    gd,
+                );
             }
         }
         Err(SearchError::Unreachable { expansions })

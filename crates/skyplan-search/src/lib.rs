@@ -27,6 +27,7 @@ mod components;
 mod jps;
 mod jps_plus;
 pub mod oracle;
+mod queue;
 mod theta;
 
 pub use astar::GridSearch;
