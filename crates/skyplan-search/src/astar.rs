@@ -233,15 +233,19 @@ impl GridSearch {
             let e = free(has_e, i + 1);
             let w = free(has_w, i.wrapping_sub(1));
             let g1 = g + 1.0;
-            let try_move = |this: &mut Self, ok: bool, j: usize, nr: i64, nc: i64, ng: f64| {
-                if ok && !this.is_closed(j) && this.relax(j, ng, index) {
-                    this.queue.push(key(ng + h(nr, nc), ng, j as u32));
-                }
-            };
-            try_move(self, n, i + ucols, r + 1, c, g1);
-            try_move(self, s, i.wrapping_sub(ucols), r - 1, c, g1);
-            try_move(self, e, i + 1, r, c + 1, g1);
-            try_move(self, w, i.wrapping_sub(1), r, c - 1, g1);
+            // A macro, not a closure: inlined for sure.
+            macro_rules! try_move {
+                ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ng:expr) => {{
+                    let j: usize = $j;
+                    if $ok && !self.is_closed(j) && self.relax(j, $ng, index) {
+                        self.queue.push(key($ng + h($nr, $nc), $ng, j as u32));
+                    }
+                }};
+            }
+            try_move!(n, i + ucols, r + 1, c, g1);
+            try_move!(s, i.wrapping_sub(ucols), r - 1, c, g1);
+            try_move!(e, i + 1, r, c + 1, g1);
+            try_move!(w, i.wrapping_sub(1), r, c - 1, g1);
             if DIAGONALS {
                 let gd = g + SQRT_2;
                 let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
@@ -249,17 +253,10 @@ impl GridSearch {
                 let nw = has_n && has_w && corner(n, w) && free(true, i + ucols - 1);
                 let se = has_s && has_e && corner(s, e) && free(true, i + 1 - ucols);
                 let sw = has_s && has_w && corner(s, w) && free(true, i - 1 - ucols);
-                try_move(self, ne, i + ucols + 1, r + 1, c + 1, gd);
-                try_move(self, nw, i + ucols - 1, r + 1, c - 1, gd);
-                try_move(self, se, (i + 1).wrapping_sub(ucols), r - 1, c + 1, gd);
-                try_move(
-                    self,
-                    sw,
-                    (i.wrapping_sub(1)).wrapping_sub(ucols),
-                    r - 1,
-                    c - 1,
-                    gd,
-                );
+                try_move!(ne, i + ucols + 1, r + 1, c + 1, gd);
+                try_move!(nw, i + ucols - 1, r + 1, c - 1, gd);
+                try_move!(se, (i + 1).wrapping_sub(ucols), r - 1, c + 1, gd);
+                try_move!(sw, i.wrapping_sub(1).wrapping_sub(ucols), r - 1, c - 1, gd);
             }
         }
         Err(SearchError::Unreachable { expansions })
