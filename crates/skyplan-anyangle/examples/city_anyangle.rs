@@ -3,7 +3,7 @@
 //! `cargo run --release -p skyplan-anyangle --example city_anyangle`.
 
 use skyplan_bench::random_far_queries;
-use skyplan_cspace::{Grid2, GridSpec};
+use skyplan_cspace::{Cell, Grid2, GridSpec};
 use skyplan_search::{GridSearch, JpsPlus, MoveModel, Planner};
 use std::time::Instant;
 
@@ -45,7 +45,7 @@ fn main() {
     let model = MoveModel::Octile;
     let mut search = GridSearch::new();
     let reps = 5;
-    // `city_anyangle astar` (or jps, theta): that planner only, for profiling.
+    // `city_anyangle astar` (or jps, theta, anyangle, jps+): that planner only.
     let only = std::env::args().nth(1);
     for (name, planner) in [
         ("astar", Planner::AStar),
@@ -97,11 +97,19 @@ fn main() {
             lengths.iter().sum::<f64>() / lengths.len() as f64
         );
     }
-    if only.is_some() {
-        return;
+    let wanted = |name: &str| only.as_deref().is_none_or(|o| o == name);
+    if wanted("anyangle") {
+        anyangle(&grid, &queries, &mut search, reps);
     }
+    if wanted("jps+") {
+        jps_plus(&grid, &queries, reps);
+    }
+}
+
+fn anyangle(grid: &Grid2, queries: &[(Cell, Cell)], search: &mut GridSearch, reps: usize) {
+    let (grid, model) = (grid, MoveModel::Octile);
     let t = Instant::now();
-    let planner = skyplan_anyangle::AnyAngle::new(&grid);
+    let planner = skyplan_anyangle::AnyAngle::new(grid);
     println!(
         "anyangle graph: {:.1} ms, {} corners, {} edges, {:.1} MB",
         t.elapsed().as_secs_f64() * 1e3,
@@ -112,7 +120,7 @@ fn main() {
     let mut times = vec![];
     let (mut exp, mut tests) = (0, 0);
     let mut worst_ratio = 0.0f64;
-    for &(s, g) in &queries {
+    for &(s, g) in queries {
         let mut best = f64::INFINITY;
         let (ps, pg) = (
             skyplan_anyangle::GridPoint::center(s),
@@ -150,11 +158,14 @@ fn main() {
         "anyangle median {:9.3} ms, worst length / theta {worst_ratio:.6}",
         median(times) * 1e3
     );
+}
+
+fn jps_plus(grid: &Grid2, queries: &[(Cell, Cell)], reps: usize) {
     let t = Instant::now();
-    let mut plus = JpsPlus::new(&grid, model);
+    let mut plus = JpsPlus::new(grid, MoveModel::Octile);
     println!("jps+ table {:.1} ms", t.elapsed().as_secs_f64() * 1e3);
     let mut times = vec![];
-    for &(s, g) in &queries {
+    for &(s, g) in queries {
         let mut best = f64::INFINITY;
         for _ in 0..reps {
             let t = Instant::now();

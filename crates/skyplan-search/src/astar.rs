@@ -57,7 +57,9 @@ impl GridSearch {
         Self::default()
     }
 
-    pub(crate) fn reset(&mut self, cells: usize) {
+    /// Starts a query on a grid of `cells` cells. `dense`: A\*/Dijkstra, whose keys rise in small
+    /// steps (the bucket queue pays); JPS and Theta\* push few, far-apart keys (a plain heap).
+    pub(crate) fn reset(&mut self, cells: usize, dense: bool) {
         if self.nodes.len() != cells {
             self.nodes = vec![Node::default(); cells];
             self.open_stamp = 0;
@@ -67,7 +69,7 @@ impl GridSearch {
             self.open_stamp = 0;
         }
         self.open_stamp += 2;
-        self.queue.clear();
+        self.queue.clear(dense);
     }
 
     /// True if cell `i` was expanded in the current query.
@@ -191,7 +193,7 @@ impl GridSearch {
         start: Cell,
         goal: Cell,
     ) -> Result<GridPath, SearchError> {
-        self.reset(grid.len());
+        self.reset(grid.len(), true);
         let blocked = grid.blocked_cells();
         let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
         let (goal_r, goal_c) = (i64::from(goal.row), i64::from(goal.col));

@@ -326,7 +326,7 @@ impl GridSearch {
         neighbour_mask: impl Fn(i64, i64, usize) -> u8,
         jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
     ) -> Result<GridPath, SearchError> {
-        self.reset(grid.len());
+        self.reset(grid.len(), false);
         let cols = view.cols;
         let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
         let start_i = grid.index(start) as u32;

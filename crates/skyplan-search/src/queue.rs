@@ -119,6 +119,10 @@ pub(crate) struct BucketQueue {
     base: u64,
     /// Keys in `buckets`.
     in_buckets: usize,
+    /// False: every key goes to `current`.
+    use_buckets: bool,
+    /// Bit `s` set iff bucket slot `s` is non-empty: empty buckets are skipped a word at a time.
+    occupied: [u64; (WINDOW / 64) as usize],
     current: QuadHeap,
     /// Keys with a bucket ≥ `base + WINDOW` when pushed.
     far: QuadHeap,
@@ -130,6 +134,8 @@ impl Default for BucketQueue {
             buckets: (0..WINDOW).map(|_| Vec::new()).collect(),
             base: 0,
             in_buckets: 0,
+            use_buckets: true,
+            occupied: [0; (WINDOW / 64) as usize],
             current: QuadHeap::default(),
             far: QuadHeap::default(),
         }
@@ -137,13 +143,18 @@ impl Default for BucketQueue {
 }
 
 impl BucketQueue {
-    /// Empties the queue, keeping its memory.
-    pub(crate) fn clear(&mut self) {
+    /// Empties the queue, keeping its memory. Without `buckets` every key goes to the heap (for
+    /// searches with few, far-apart keys, where buckets only cost).
+    pub(crate) fn clear(&mut self, buckets: bool) {
+        self.use_buckets = buckets;
         if self.in_buckets > 0 {
-            for b in &mut self.buckets {
-                b.clear();
+            for slot in 0..WINDOW as usize {
+                if self.occupied[slot / 64] & (1 << (slot % 64)) != 0 {
+                    self.buckets[slot].clear();
+                }
             }
         }
+        self.occupied = [0; (WINDOW / 64) as usize];
         self.in_buckets = 0;
         self.base = 0;
         self.current.clear();
@@ -154,14 +165,44 @@ impl BucketQueue {
     #[inline(always)]
     pub(crate) fn push(&mut self, key: u128) {
         let b = bucket(key);
-        if b <= self.base {
+        if b <= self.base || !self.use_buckets {
             self.current.push(key);
         } else if b - self.base < WINDOW {
-            self.buckets[(b % WINDOW) as usize].push(key);
-            self.in_buckets += 1;
+            self.to_bucket(b, key);
         } else {
             self.far.push(key);
         }
+    }
+
+    #[inline(always)]
+    fn to_bucket(&mut self, b: u64, key: u128) {
+        let slot = (b % WINDOW) as usize;
+        self.buckets[slot].push(key);
+        self.occupied[slot / 64] |= 1 << (slot % 64);
+        self.in_buckets += 1;
+    }
+
+    /// The first non-empty bucket after `base` (some bucket must be non-empty).
+    fn next_occupied(&self) -> u64 {
+        let start = ((self.base + 1) % WINDOW) as usize;
+        let words = self.occupied.len();
+        // Scan the words from `start`'s word, wrapping once; the first word masked below `start`.
+        for k in 0..=words {
+            let w = (start / 64 + k) % words;
+            let mut bits = self.occupied[w];
+            if k == 0 {
+                bits &= !0u64 << (start % 64);
+            }
+            if k == words {
+                bits &= !(!0u64 << (start % 64));
+            }
+            if bits != 0 {
+                let slot = (w * 64 + bits.trailing_zeros() as usize) as u64;
+                let ahead = (slot + WINDOW - start as u64) % WINDOW;
+                return self.base + 1 + ahead;
+            }
+        }
+        self.base + 1
     }
 
     /// Removes the smallest key.
@@ -186,10 +227,12 @@ impl BucketQueue {
                 };
                 self.base = self.base.max(bucket(top));
             } else {
-                self.base += 1;
-                let slot = &mut self.buckets[(self.base % WINDOW) as usize];
-                self.in_buckets -= slot.len();
-                for k in slot.drain(..) {
+                self.base = self.next_occupied();
+                let slot = (self.base % WINDOW) as usize;
+                self.occupied[slot / 64] &= !(1 << (slot % 64));
+                let keys = &mut self.buckets[slot];
+                self.in_buckets -= keys.len();
+                for k in keys.drain(..) {
                     self.current.push(k);
                 }
             }
@@ -203,8 +246,7 @@ impl BucketQueue {
                     self.current.push(k);
                 } else {
                     // Now inside the window.
-                    self.buckets[(b % WINDOW) as usize].push(k);
-                    self.in_buckets += 1;
+                    self.to_bucket(b, k);
                 }
             }
             if !self.current.is_empty() {
@@ -249,7 +291,7 @@ mod tests {
                     heap.push(Reverse(key));
                 }
                 if k % 50 == 49 {
-                    queue.clear();
+                    queue.clear(k % 100 == 49);
                     heap.clear();
                     last_f = 0.0;
                 }
