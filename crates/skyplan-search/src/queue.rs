@@ -168,14 +168,14 @@ impl BucketQueue {
         if b <= self.base || !self.use_buckets {
             self.current.push(key);
         } else if b - self.base < WINDOW {
-            self.into_bucket(b, key);
+            self.put_in_bucket(b, key);
         } else {
             self.far.push(key);
         }
     }
 
     #[inline(always)]
-    fn into_bucket(&mut self, b: u64, key: u128) {
+    fn put_in_bucket(&mut self, b: u64, key: u128) {
         let slot = (b % WINDOW) as usize;
         self.buckets[slot].push(key);
         self.occupied[slot / 64] |= 1 << (slot % 64);
@@ -246,7 +246,7 @@ impl BucketQueue {
                     self.current.push(k);
                 } else {
                     // Now inside the window.
-                    self.into_bucket(b, k);
+                    self.put_in_bucket(b, k);
                 }
             }
             if !self.current.is_empty() {
