@@ -136,11 +136,11 @@ fn anyangle(grid: &Grid2, queries: &[(Cell, Cell)], search: &mut GridSearch, rep
             tests = p.segment_tests;
         }
         let theta = search
-            .search(&grid, s, g, model, Planner::ThetaStar)
+            .search(grid, s, g, model, Planner::ThetaStar)
             .expect("theta")
             .cost_cells();
         let octile = search
-            .search(&grid, s, g, model, Planner::Jps)
+            .search(grid, s, g, model, Planner::Jps)
             .expect("jps")
             .cost_cells();
         worst_ratio = worst_ratio.max(length / theta);
