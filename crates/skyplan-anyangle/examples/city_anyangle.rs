@@ -44,7 +44,10 @@ fn main() {
     );
     let model = MoveModel::Octile;
     let mut search = GridSearch::new();
-    let reps = 5;
+    let reps: usize = std::env::var("REPS")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(5);
     // `city_anyangle astar` (or jps, theta, anyangle, jps+): that planner only.
     let only = std::env::args().nth(1);
     for (name, planner) in [

@@ -1,5 +1,6 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
+use crate::nodes::PagedNodes;
 use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
@@ -8,19 +9,10 @@ use std::f64::consts::SQRT_2;
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
 pub struct GridSearch {
-    /// Per-cell search state, one cache line for all of it.
-    nodes: Vec<Node>,
-    /// `2 × query number`: a node's `stamp` is `open_stamp` (reached) or `open_stamp + 1`
-    /// (expanded) in the current query; anything older is stale and means "unseen".
-    open_stamp: u32,
+    /// Per-cell search state: flat on small grids, 8 × 8-cell pages allocated on touch on big
+    /// ones (memory grows with the area searched, not with the map).
+    pub(crate) nodes: PagedNodes,
     queue: BucketQueue,
-}
-
-#[derive(Debug, Clone, Copy, Default)]
-struct Node {
-    g: f64,
-    parent: u32,
-    stamp: u32,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
@@ -57,57 +49,82 @@ impl GridSearch {
         Self::default()
     }
 
-    /// Starts a query on a grid of `cells` cells. `dense`: A\*/Dijkstra, whose keys rise in small
-    /// steps (the bucket queue pays); JPS and Theta\* push few, far-apart keys (a plain heap).
-    pub(crate) fn reset(&mut self, cells: usize, dense: bool) {
-        if self.nodes.len() != cells {
-            self.nodes = vec![Node::default(); cells];
-            self.open_stamp = 0;
-        }
-        if self.open_stamp >= u32::MAX - 3 {
-            self.nodes.fill(Node::default());
-            self.open_stamp = 0;
-        }
-        self.open_stamp += 2;
+    /// Heap bytes of the search state. Grids of up to 2²⁴ cells use one flat array (16 bytes per
+    /// cell, the fastest layout); bigger grids keep nodes in 8 × 8-cell pages allocated on touch
+    /// (plus a page table of 4 bytes per page), so the state grows with the area searches visit,
+    /// not with the map's area. Pages are kept between queries up to 256 MiB.
+    ///
+    /// ```
+    /// use skyplan_cspace::{Cell, Grid2, GridFrame};
+    /// use skyplan_search::{GridSearch, MoveModel, Planner};
+    /// // 17 M cells: above the flat array's limit of 2²⁴ cells, nodes live in pages.
+    /// let grid = Grid2::new(4100, 4100, vec![false; 4100 * 4100], GridFrame::default())?;
+    /// let mut search = GridSearch::new();
+    /// search.search(&grid, Cell::new(5, 5), Cell::new(40, 60), MoveModel::Octile, Planner::AStar)?;
+    /// assert!(search.node_bytes() < 2_000_000); // a full node array would be 269 MB
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn node_bytes(&self) -> usize {
+        self.nodes.bytes()
+    }
+
+    /// Starts a query on `grid`. `dense`: A\*/Dijkstra, whose keys rise in small steps (the
+    /// bucket queue pays); JPS and Theta\* push few, far-apart keys (a plain heap).
+    pub(crate) fn reset(&mut self, grid: &Grid2, dense: bool) {
+        self.nodes.reset(grid.rows(), grid.cols());
         self.queue.clear(dense);
     }
 
     /// True if cell `i` was expanded in the current query.
     #[inline(always)]
     pub(crate) fn is_closed(&self, i: usize) -> bool {
-        self.nodes[i].stamp == self.open_stamp + 1
-    }
-
-    /// Marks cell `i` expanded.
-    #[inline(always)]
-    pub(crate) fn close(&mut self, i: usize) {
-        self.nodes[i].stamp = self.open_stamp + 1;
+        let (r, c) = self.nodes.rc(i);
+        self.nodes.is_closed(r, c)
     }
 
     /// The best cost found so far to cell `i` (infinite if unseen in this query).
     #[inline(always)]
     pub(crate) fn g(&self, i: usize) -> f64 {
-        let n = self.nodes[i];
-        if n.stamp >= self.open_stamp {
-            n.g
-        } else {
-            f64::INFINITY
-        }
+        let (r, c) = self.nodes.rc(i);
+        self.nodes.g(r, c)
     }
 
     /// The parent of cell `i` on its best path ([`NO_PARENT`] for the start).
     #[inline(always)]
     pub(crate) fn parent(&self, i: usize) -> u32 {
-        self.nodes[i].parent
+        let (r, c) = self.nodes.rc(i);
+        self.nodes.parent(r, c)
     }
 
     /// Offers a path of cost `g` to cell `i` through `parent`, with heuristic `h`: queued if the
     /// cell is not expanded yet and the path is better than any found before.
     #[inline(always)]
     pub(crate) fn offer(&mut self, i: usize, g: f64, h: f64, parent: u32) {
-        if !self.is_closed(i) && self.relax(i, g, parent) {
+        let (r, c) = self.nodes.rc(i);
+        if self.nodes.relax(r, c, g, parent) {
             self.queue.push(key(g + h, g, i as u32));
         }
+    }
+
+    /// Like [`GridSearch::offer`] for the cell at row `r`, column `c` (index `i`).
+    #[inline(always)]
+    pub(crate) fn offer_rc(&mut self, i: usize, r: usize, c: usize, g: f64, h: f64, parent: u32) {
+        if self.nodes.relax(r, c, g, parent) {
+            self.queue.push(key(g + h, g, i as u32));
+        }
+    }
+
+    /// Like [`GridSearch::expand_next`], also returning the cell's row and column.
+    #[inline(always)]
+    pub(crate) fn expand_next_rc(&mut self) -> Option<(f64, u32, usize, usize)> {
+        while let Some(k) = self.queue.pop() {
+            let index = key_index(k);
+            let (r, c) = self.nodes.rc(index as usize);
+            if let Some(g) = self.nodes.close(r, c) {
+                return Some((g, index, r, c));
+            }
+        }
+        None
     }
 
     /// Pops the best queued cell not expanded yet, marks it expanded and returns its best cost
@@ -118,30 +135,12 @@ impl GridSearch {
     pub(crate) fn expand_next(&mut self) -> Option<(f64, u32)> {
         while let Some(k) = self.queue.pop() {
             let index = key_index(k);
-            let i = index as usize;
-            if self.is_closed(i) {
-                continue;
+            let (r, c) = self.nodes.rc(index as usize);
+            if let Some(g) = self.nodes.close(r, c) {
+                return Some((g, index));
             }
-            self.close(i);
-            return Some((self.nodes[i].g, index));
         }
         None
-    }
-
-    /// Records a better path to the not yet expanded cell `i`; returns false if it is not better.
-    #[inline(always)]
-    pub(crate) fn relax(&mut self, i: usize, g: f64, parent: u32) -> bool {
-        let open_stamp = self.open_stamp;
-        let n = &mut self.nodes[i];
-        if n.stamp >= open_stamp && g >= n.g {
-            return false;
-        }
-        *n = Node {
-            g,
-            parent,
-            stamp: open_stamp,
-        };
-        true
     }
 
     /// Finds an optimal path from `start` to `goal` under `model`.
@@ -193,7 +192,7 @@ impl GridSearch {
         start: Cell,
         goal: Cell,
     ) -> Result<GridPath, SearchError> {
-        self.reset(grid.len(), true);
+        self.reset(grid, true);
         let blocked = grid.blocked_cells();
         let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
         let (goal_r, goal_c) = (i64::from(goal.row), i64::from(goal.col));
@@ -220,13 +219,18 @@ impl GridSearch {
         );
         let ucols = cols as usize;
         let mut expansions = 0u64;
-        while let Some((g, index)) = self.expand_next() {
+        while let Some(k) = self.queue.pop() {
+            let index = key_index(k);
+            let i = index as usize;
+            let (ur, uc) = self.nodes.rc(i);
+            let Some(g) = self.nodes.close(ur, uc) else {
+                continue;
+            };
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
             }
-            let i = index as usize;
-            let (r, c) = ((i / ucols) as i64, (i % ucols) as i64);
+            let (r, c) = (ur as i64, uc as i64);
             // Which neighbours are on the grid; away from the border all of them.
             let (has_s, has_n, has_w, has_e) = (r > 0, r + 1 < rows, c > 0, c + 1 < cols);
             let free = |ok: bool, j: usize| ok && !blocked[j];
@@ -239,7 +243,7 @@ impl GridSearch {
             macro_rules! try_move {
                 ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ng:expr) => {{
                     let j: usize = $j;
-                    if $ok && !self.is_closed(j) && self.relax(j, $ng, index) {
+                    if $ok && self.nodes.relax($nr as usize, $nc as usize, $ng, index) {
                         self.queue.push(key($ng + h($nr, $nc), $ng, j as u32));
                     }
                 }};

@@ -26,6 +26,7 @@ mod astar;
 mod components;
 mod jps;
 mod jps_plus;
+mod nodes;
 pub mod oracle;
 mod queue;
 mod theta;
