@@ -135,24 +135,40 @@ pub(crate) trait Occupancy {
         let den = SCALE * dy;
         let k0 = p.r.div_euclid(SCALE);
         let k1 = ceil_div(q.r, SCALE) - 1;
-        // x · dy at height y, an exact rational numerator over `dy`.
-        let x_num = |y: i64| p.c * dy + (y - p.r) * dx;
-        let mut xa = x_num(p.r);
+        // x · dy at height y is an exact numerator over `dy`; its column is the numerator's
+        // quotient by `den`, kept with the remainder and advanced band by band (no division in
+        // the loop).
+        let divmod = |n: i64| (n.div_euclid(den), n.rem_euclid(den));
+        let (step_q, step_r) = divmod(SCALE * dx);
+        let (mut qa, mut ra) = divmod(p.c * dy);
         for k in k0..=k1 {
-            let yb = ((k + 1) * SCALE).min(q.r);
-            let xb = x_num(yb);
-            let (lo, hi) = if xa < xb { (xa, xb) } else { (xb, xa) };
-            let c_min = lo.div_euclid(den);
-            let c_max = ceil_div(hi, den) - 1;
+            let (qb, rb) = if k == k1 {
+                divmod(q.c * dy)
+            } else if k == k0 {
+                divmod(p.c * dy + ((k + 1) * SCALE - p.r) * dx)
+            } else {
+                let (mut qb, mut rb) = (qa + step_q, ra + step_r);
+                if rb >= den {
+                    rb -= den;
+                    qb += 1;
+                }
+                (qb, rb)
+            };
+            // Columns whose open interval meets the open x-range of this band.
+            let (c_min, c_max) = if dx > 0 {
+                (qa, qb + i64::from(rb > 0) - 1)
+            } else {
+                (qb, qa + i64::from(ra > 0) - 1)
+            };
             for c in c_min..=c_max {
                 if self.blocked(k, c) {
                     return false;
                 }
             }
-            if yb < q.r && xb.rem_euclid(den) == 0 && self.pinch(k + 1, xb.div_euclid(den)) {
+            if k < k1 && rb == 0 && self.pinch(k + 1, qb) {
                 return false;
             }
-            xa = xb;
+            (qa, ra) = (qb, rb);
         }
         true
     }
