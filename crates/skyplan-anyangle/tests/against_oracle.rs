@@ -123,9 +123,14 @@ fn dist(p: (i64, i64), q: (i64, i64), s: i64) -> f64 {
 /// path can neither pass nor usefully turn: leaving into the other free quadrant passes between
 /// the blocked cells, leaving into the same one is never shorter). Doubled coordinates.
 fn oracle(grid: &Grid2, start: Cell, goal: Cell) -> Option<f64> {
-    let brute = Brute { grid, s: 2 };
     let centre = |c: Cell| (2 * i64::from(c.row) + 1, 2 * i64::from(c.col) + 1);
-    let mut nodes = vec![centre(start), centre(goal)];
+    oracle_doubled(grid, centre(start), centre(goal))
+}
+
+/// [`oracle`] between any points of the half-cell lattice, in doubled coordinates.
+fn oracle_doubled(grid: &Grid2, start: (i64, i64), goal: (i64, i64)) -> Option<f64> {
+    let brute = Brute { grid, s: 2 };
+    let mut nodes = vec![start, goal];
     for r in 0..=i64::from(grid.rows()) {
         for c in 0..=i64::from(grid.cols()) {
             let around = [(r - 1, c - 1), (r - 1, c), (r, c - 1), (r, c)];
@@ -254,6 +259,44 @@ proptest! {
         let point = |(r, c): (i64, i64)| GridPoint { row: r as f64 / 4.0, col: c as f64 / 4.0 };
         let brute = Brute { grid: &grid, s: 4 };
         prop_assert_eq!(segment_is_free_any_angle(&grid, point(p), point(q)), brute.segment_free(p, q));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(500))]
+
+    /// Starts and goals anywhere on the half-cell lattice: centres, edge midpoints, corners
+    /// (convex corners, pinch vertices, points touching only blocked cells).
+    #[test]
+    fn any_lattice_endpoints_match_the_oracle(
+        (grid, _, _) in random_grid(),
+        a in (0i64..=48, 0i64..=48),
+        b in (0i64..=48, 0i64..=48),
+    ) {
+        let (rows2, cols2) = (2 * i64::from(grid.rows()), 2 * i64::from(grid.cols()));
+        let (a, b) = ((a.0 % (rows2 + 1), a.1 % (cols2 + 1)), (b.0 % (rows2 + 1), b.1 % (cols2 + 1)));
+        let point = |(r, c): (i64, i64)| GridPoint { row: r as f64 / 2.0, col: c as f64 / 2.0 };
+        let brute = Brute { grid: &grid, s: 2 };
+        let got = AnyAngle::new(&grid).plan(point(a), point(b));
+        if !brute.segment_free(a, a) {
+            prop_assert!(matches!(got, Err(AnyAngleError::Blocked { end: skyplan_anyangle::End::Start, .. })), "{:?}", got);
+            return Ok(());
+        }
+        if !brute.segment_free(b, b) {
+            prop_assert!(matches!(got, Err(AnyAngleError::Blocked { end: skyplan_anyangle::End::Goal, .. })), "{:?}", got);
+            return Ok(());
+        }
+        match (got, oracle_doubled(&grid, a, b)) {
+            (Ok(path), Some(len)) => {
+                prop_assert!(close(path.length_cells, len), "planner {} oracle {}", path.length_cells, len);
+                for w in path.points.windows(2) {
+                    let fixed = |p: &GridPoint| ((p.row * 2.0) as i64, (p.col * 2.0) as i64);
+                    prop_assert!(brute.segment_free(fixed(&w[0]), fixed(&w[1])), "segment {:?}", w);
+                }
+            }
+            (Err(AnyAngleError::NoPath { .. }), None) => {}
+            (got, want) => prop_assert!(false, "planner {:?}, oracle {:?}", got, want),
+        }
     }
 }
 
