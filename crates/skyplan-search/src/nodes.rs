@@ -16,8 +16,8 @@ const SIDE: usize = 1 << SHIFT;
 const PAGE: usize = SIDE * SIDE;
 const NO_PAGE: u32 = u32::MAX;
 
-/// Largest grid (cells) whose nodes are one flat array: 2²⁴ cells, 256 MiB.
-pub(crate) const FLAT_MAX_CELLS: usize = 1 << 24;
+/// Largest grid (cells) whose nodes are one flat array: 2²² cells (4.2 M), 64 MiB.
+pub(crate) const FLAT_MAX_CELLS: usize = 1 << 22;
 
 /// Pool size above which the next query drops every page (256 MiB).
 pub(crate) const KEEP_BYTES: usize = 256 << 20;
