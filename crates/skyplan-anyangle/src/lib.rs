@@ -12,6 +12,12 @@
 //! tested lazily, in order of `|start, corner| + |corner, goal|`, and a corner's edge to the goal
 //! only when the corner is expanded, so a query tests few segments.
 //!
+//! Cost: the graph build tests `O(corners²)` candidate segments (the city at 1 m: 909 corners,
+//! 6,963 edges, 0.1–0.3 s, 0.2 MB); a query then takes a fraction of a millisecond there. The
+//! path touches obstacles (the safety margin must already be in the grid); re-check it with
+//! [`segment_is_free_any_angle`], not with the grid planners' closed line-of-sight rule, under
+//! which a path touching a corner is refused.
+//!
 //! Points are fractional cell coordinates ([`GridPoint`]: `row` north, `col` east; cell
 //! `(r, c)` covers `[r, r + 1) × [c, c + 1)`, its centre is `(r + 0.5, c + 0.5)`), held exactly
 //! as multiples of 1/4096 cell (other inputs are rounded to the nearest such point). Any point of
@@ -25,8 +31,9 @@
 //! let grid = Grid2::from_ascii("....\n.##.\n....")?;
 //! let planner = AnyAngle::new(&grid);
 //! let path = planner.plan(GridPoint::center(Cell::new(0, 0)), GridPoint::center(Cell::new(2, 3)))?;
-//! // Around the block's corner at (1, 3) ... or (2, 1): both are sqrt(0.5² + 2.5²) + sqrt(1.5² + 0.5²).
-//! let want = (0.5f64.hypot(2.5)) + (1.5f64.hypot(0.5));
+//! // The block covers rows 1..2, columns 1..3. One turn, at its corner (1, 3) or, equally
+//! // short, at (2, 1): √(0.5² + 2.5²) + √(1.5² + 0.5²) cells.
+//! let want = 0.5f64.hypot(2.5) + 1.5f64.hypot(0.5);
 //! assert!((path.length_cells - want).abs() < 1e-12);
 //! assert_eq!(path.points.len(), 3);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
