@@ -23,6 +23,9 @@
 
 pub mod colliders;
 pub mod movingai;
+mod tile;
+
+pub use tile::{tile, to_colliders_csv};
 
 use std::fmt;
 

@@ -1,62 +1,18 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
+use crate::nodes::PagedNodes;
+use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::f64::consts::SQRT_2;
-
-/// A heap entry: smallest `f` first; on equal `f`, largest `g` first (deepest first, which
-/// expands fewer cells on open grids).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Entry {
-    pub(crate) f: f64,
-    pub(crate) g: f64,
-    pub(crate) index: u32,
-}
-
-impl PartialEq for Entry {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Entry {
-    /// `f` and `g` are never negative or NaN, and for such floats the IEEE-754 bit patterns,
-    /// read as integers, are ordered exactly like the numbers: integer compares are cheaper.
-    #[inline]
-    fn cmp(&self, other: &Self) -> Ordering {
-        debug_assert!(self.f >= 0.0 && self.g >= 0.0 && other.f >= 0.0 && other.g >= 0.0);
-        other
-            .f
-            .to_bits()
-            .cmp(&self.f.to_bits())
-            .then(self.g.to_bits().cmp(&other.g.to_bits()))
-            .then(other.index.cmp(&self.index))
-    }
-}
 
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
 pub struct GridSearch {
-    /// Per-cell search state, one cache line for all of it.
-    nodes: Vec<Node>,
-    /// `2 × query number`: a node's `stamp` is `open_stamp` (reached) or `open_stamp + 1`
-    /// (expanded) in the current query; anything older is stale and means "unseen".
-    open_stamp: u32,
-    pub(crate) heap: BinaryHeap<Entry>,
-}
-
-#[derive(Debug, Clone, Copy, Default)]
-struct Node {
-    g: f64,
-    parent: u32,
-    stamp: u32,
+    /// Per-cell search state: flat on small grids, 8 × 8-cell pages allocated on touch on big
+    /// ones (memory grows with the area searched, not with the map).
+    pub(crate) nodes: PagedNodes,
+    queue: BucketQueue,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
@@ -93,90 +49,98 @@ impl GridSearch {
         Self::default()
     }
 
-    pub(crate) fn reset(&mut self, cells: usize) {
-        if self.nodes.len() != cells {
-            self.nodes = vec![Node::default(); cells];
-            self.open_stamp = 0;
-        }
-        if self.open_stamp >= u32::MAX - 3 {
-            self.nodes.fill(Node::default());
-            self.open_stamp = 0;
-        }
-        self.open_stamp += 2;
-        self.heap.clear();
+    /// Heap bytes of the search state. Grids of up to 2²² (4.2 M) cells use one flat array (16 bytes per
+    /// cell, the fastest layout); bigger grids keep nodes in 8 × 8-cell pages allocated on touch
+    /// (plus a page table of 4 bytes per page), so the state grows with the area searches visit,
+    /// not with the map's area. Pages are kept between queries up to 256 MiB.
+    ///
+    /// ```
+    /// use skyplan_cspace::{Cell, Grid2, GridFrame};
+    /// use skyplan_search::{GridSearch, MoveModel, Planner};
+    /// // 4.4 M cells: above the flat array's limit of 2²² cells, nodes live in pages.
+    /// let grid = Grid2::new(2100, 2100, vec![false; 2100 * 2100], GridFrame::default())?;
+    /// let mut search = GridSearch::new();
+    /// search.search(&grid, Cell::new(5, 5), Cell::new(40, 60), MoveModel::Octile, Planner::AStar)?;
+    /// assert!(search.node_bytes() < 500_000); // a full node array would be 70 MB
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn node_bytes(&self) -> usize {
+        self.nodes.bytes()
+    }
+
+    /// Starts a query on `grid`. `dense`: A\*/Dijkstra, whose keys rise in small steps (the
+    /// bucket queue pays); JPS and Theta\* push few, far-apart keys (a plain heap).
+    pub(crate) fn reset(&mut self, grid: &Grid2, dense: bool) {
+        self.nodes.reset(grid.rows(), grid.cols());
+        self.queue.clear(dense);
     }
 
     /// True if cell `i` was expanded in the current query.
     #[inline(always)]
     pub(crate) fn is_closed(&self, i: usize) -> bool {
-        self.nodes[i].stamp == self.open_stamp + 1
-    }
-
-    /// Marks cell `i` expanded.
-    #[inline(always)]
-    pub(crate) fn close(&mut self, i: usize) {
-        self.nodes[i].stamp = self.open_stamp + 1;
+        let (r, c) = self.nodes.rc(i);
+        self.nodes.is_closed(r, c)
     }
 
     /// The best cost found so far to cell `i` (infinite if unseen in this query).
     #[inline(always)]
     pub(crate) fn g(&self, i: usize) -> f64 {
-        let n = self.nodes[i];
-        if n.stamp >= self.open_stamp {
-            n.g
-        } else {
-            f64::INFINITY
-        }
+        let (r, c) = self.nodes.rc(i);
+        self.nodes.g(r, c)
     }
 
     /// The parent of cell `i` on its best path ([`NO_PARENT`] for the start).
     #[inline(always)]
     pub(crate) fn parent(&self, i: usize) -> u32 {
-        self.nodes[i].parent
+        let (r, c) = self.nodes.rc(i);
+        self.nodes.parent(r, c)
     }
 
     /// Offers a path of cost `g` to cell `i` through `parent`, with heuristic `h`: queued if the
     /// cell is not expanded yet and the path is better than any found before.
     #[inline(always)]
     pub(crate) fn offer(&mut self, i: usize, g: f64, h: f64, parent: u32) {
-        if !self.is_closed(i) && self.relax(i, g, parent) {
-            self.heap.push(Entry {
-                f: g + h,
-                g,
-                index: i as u32,
-            });
+        let (r, c) = self.nodes.rc(i);
+        if self.nodes.relax(r, c, g, parent) {
+            self.queue.push(key(g + h, g, i as u32));
         }
     }
 
-    /// Pops the best queued cell that is still current (skipping stale entries), marks it
-    /// expanded and returns its cost and index.
+    /// Like [`GridSearch::offer`] for the cell at row `r`, column `c` (index `i`).
     #[inline(always)]
-    pub(crate) fn expand_next(&mut self) -> Option<(f64, u32)> {
-        while let Some(Entry { g, index, .. }) = self.heap.pop() {
-            let i = index as usize;
-            if self.is_closed(i) || g > self.g(i) {
-                continue;
+    pub(crate) fn offer_rc(&mut self, i: usize, r: usize, c: usize, g: f64, h: f64, parent: u32) {
+        if self.nodes.relax(r, c, g, parent) {
+            self.queue.push(key(g + h, g, i as u32));
+        }
+    }
+
+    /// Like [`GridSearch::expand_next`], also returning the cell's row and column.
+    #[inline(always)]
+    pub(crate) fn expand_next_rc(&mut self) -> Option<(f64, u32, usize, usize)> {
+        while let Some(k) = self.queue.pop() {
+            let index = key_index(k);
+            let (r, c) = self.nodes.rc(index as usize);
+            if let Some(g) = self.nodes.close(r, c) {
+                return Some((g, index, r, c));
             }
-            self.close(i);
-            return Some((g, index));
         }
         None
     }
 
-    /// Records a better path to the not yet expanded cell `i`; returns false if it is not better.
+    /// Pops the best queued cell not expanded yet, marks it expanded and returns its best cost
+    /// and index. An older entry of a cell (a worse `g`) can only come first on an exact tie of
+    /// `f`, and then the cell's best entry has the same `f`: expanding it with its best `g` is
+    /// what A\* would do next anyway.
     #[inline(always)]
-    pub(crate) fn relax(&mut self, i: usize, g: f64, parent: u32) -> bool {
-        let open_stamp = self.open_stamp;
-        let n = &mut self.nodes[i];
-        if n.stamp >= open_stamp && g >= n.g {
-            return false;
+    pub(crate) fn expand_next(&mut self) -> Option<(f64, u32)> {
+        while let Some(k) = self.queue.pop() {
+            let index = key_index(k);
+            let (r, c) = self.nodes.rc(index as usize);
+            if let Some(g) = self.nodes.close(r, c) {
+                return Some((g, index));
+            }
         }
-        *n = Node {
-            g,
-            parent,
-            stamp: open_stamp,
-        };
-        true
+        None
     }
 
     /// Finds an optimal path from `start` to `goal` under `model`.
@@ -191,7 +155,6 @@ impl GridSearch {
         planner: Planner,
     ) -> Result<GridPath, SearchError> {
         check_endpoints(grid, start, goal)?;
-        let (rows, cols) = (grid.rows(), grid.cols());
         if planner == Planner::ThetaStar {
             return self.theta_star(grid, start, goal, model);
         }
@@ -202,61 +165,104 @@ impl GridSearch {
                 Planner::AStar | Planner::Dijkstra | Planner::ThetaStar => {}
             }
         }
-        self.reset(grid.len());
+        let dijkstra = planner == Planner::Dijkstra;
+        match (model, dijkstra) {
+            (MoveModel::FourConnected, false) => {
+                self.astar::<false, false, true>(grid, start, goal)
+            }
+            (MoveModel::FourConnected, true) => {
+                self.astar::<false, false, false>(grid, start, goal)
+            }
+            (MoveModel::Octile, false) => self.astar::<true, false, true>(grid, start, goal),
+            (MoveModel::Octile, true) => self.astar::<true, false, false>(grid, start, goal),
+            (MoveModel::OctileCornerCutting, false) => {
+                self.astar::<true, true, true>(grid, start, goal)
+            }
+            (MoveModel::OctileCornerCutting, true) => {
+                self.astar::<true, true, false>(grid, start, goal)
+            }
+        }
+    }
+
+    /// A\* (Dijkstra without `HEURISTIC`), one copy per move model: `DIAGONALS` and
+    /// `CORNER_CUTTING` are decided at compile time, not per node.
+    fn astar<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
+        self.reset(grid, true);
         let blocked = grid.blocked_cells();
-        let cols_i = cols as i64;
-        let h = |c: Cell| match planner {
-            Planner::Dijkstra => 0.0,
-            Planner::AStar | Planner::Jps | Planner::JpsPlus | Planner::ThetaStar => {
-                model.heuristic(c, goal)
+        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
+        let (goal_r, goal_c) = (i64::from(goal.row), i64::from(goal.col));
+        let h = |r: i64, c: i64| -> f64 {
+            if !HEURISTIC {
+                return 0.0;
+            }
+            let dr = (r - goal_r).abs() as f64;
+            let dc = (c - goal_c).abs() as f64;
+            if DIAGONALS {
+                let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
+                (hi - lo) + lo * SQRT_2
+            } else {
+                dr + dc
             }
         };
-        let start_i = grid.index(start) as u32;
+        let start_i = grid.index(start);
         let goal_i = grid.index(goal) as u32;
-        self.offer(start_i as usize, 0.0, h(start), NO_PARENT);
-
-        // (dr, dc, cost): orthogonal moves first.
-        const MOVES: [(i64, i64, f64); 8] = [
-            (1, 0, 1.0),
-            (-1, 0, 1.0),
-            (0, 1, 1.0),
-            (0, -1, 1.0),
-            (1, 1, SQRT_2),
-            (1, -1, SQRT_2),
-            (-1, 1, SQRT_2),
-            (-1, -1, SQRT_2),
-        ];
-        let moves = if model.has_diagonals() {
-            &MOVES[..]
-        } else {
-            &MOVES[..4]
-        };
-        let corner_cutting = model == MoveModel::OctileCornerCutting;
-        let free = |r: i64, c: i64| -> bool {
-            r >= 0
-                && c >= 0
-                && r < i64::from(rows)
-                && c < cols_i
-                && !blocked[(r * cols_i + c) as usize]
-        };
+        self.offer(
+            start_i,
+            0.0,
+            h(i64::from(start.row), i64::from(start.col)),
+            NO_PARENT,
+        );
+        let ucols = cols as usize;
         let mut expansions = 0u64;
-        while let Some((g, index)) = self.expand_next() {
+        while let Some(k) = self.queue.pop() {
+            let index = key_index(k);
             let i = index as usize;
+            let (ur, uc) = self.nodes.rc(i);
+            let Some(g) = self.nodes.close(ur, uc) else {
+                continue;
+            };
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
             }
-            let (r, c) = ((i as i64) / cols_i, (i as i64) % cols_i);
-            for &(dr, dc, step) in moves {
-                let (nr, nc) = (r + dr, c + dc);
-                if !free(nr, nc) {
-                    continue;
-                }
-                if dr != 0 && dc != 0 && !corner_cutting && !(free(r + dr, c) && free(r, c + dc)) {
-                    continue;
-                }
-                let ni = (nr * cols_i + nc) as usize;
-                self.offer(ni, g + step, h(Cell::new(nr as u32, nc as u32)), index);
+            let (r, c) = (ur as i64, uc as i64);
+            // Which neighbours are on the grid; away from the border all of them.
+            let (has_s, has_n, has_w, has_e) = (r > 0, r + 1 < rows, c > 0, c + 1 < cols);
+            let free = |ok: bool, j: usize| ok && !blocked[j];
+            let n = free(has_n, i + ucols);
+            let s = free(has_s, i.wrapping_sub(ucols));
+            let e = free(has_e, i + 1);
+            let w = free(has_w, i.wrapping_sub(1));
+            let g1 = g + 1.0;
+            // A macro, not a closure: inlined for sure.
+            macro_rules! try_move {
+                ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ng:expr) => {{
+                    let j: usize = $j;
+                    if $ok && self.nodes.relax($nr as usize, $nc as usize, $ng, index) {
+                        self.queue.push(key($ng + h($nr, $nc), $ng, j as u32));
+                    }
+                }};
+            }
+            try_move!(n, i + ucols, r + 1, c, g1);
+            try_move!(s, i.wrapping_sub(ucols), r - 1, c, g1);
+            try_move!(e, i + 1, r, c + 1, g1);
+            try_move!(w, i.wrapping_sub(1), r, c - 1, g1);
+            if DIAGONALS {
+                let gd = g + SQRT_2;
+                let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
+                let ne = has_n && has_e && corner(n, e) && free(true, i + ucols + 1);
+                let nw = has_n && has_w && corner(n, w) && free(true, i + ucols - 1);
+                let se = has_s && has_e && corner(s, e) && free(true, i + 1 - ucols);
+                let sw = has_s && has_w && corner(s, w) && free(true, i - 1 - ucols);
+                try_move!(ne, i + ucols + 1, r + 1, c + 1, gd);
+                try_move!(nw, i + ucols - 1, r + 1, c - 1, gd);
+                try_move!(se, (i + 1).wrapping_sub(ucols), r - 1, c + 1, gd);
+                try_move!(sw, i.wrapping_sub(1).wrapping_sub(ucols), r - 1, c - 1, gd);
             }
         }
         Err(SearchError::Unreachable { expansions })

@@ -326,7 +326,7 @@ impl GridSearch {
         neighbour_mask: impl Fn(i64, i64, usize) -> u8,
         jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
     ) -> Result<GridPath, SearchError> {
-        self.reset(grid.len());
+        self.reset(grid, false);
         let cols = view.cols;
         let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
         let start_i = grid.index(start) as u32;
@@ -338,14 +338,14 @@ impl GridSearch {
             NO_PARENT,
         );
         let mut expansions = 0u64;
-        while let Some((g, index)) = self.expand_next() {
+        while let Some((g, index, ur, uc)) = self.expand_next_rc() {
             let i = index as usize;
             expansions += 1;
             if index == goal_i {
                 let jump_points = self.reconstruct(grid, goal_i, expansions);
                 return Ok(interpolate(jump_points));
             }
-            let (r, c) = ((i as i64) / cols, (i as i64) % cols);
+            let (r, c) = (ur as i64, uc as i64);
             let (dr, dc) = match self.parent(i) {
                 NO_PARENT => (0, 0),
                 p => {
@@ -361,7 +361,8 @@ impl GridSearch {
                     continue;
                 };
                 let ji = (jr * cols + jc) as usize;
-                self.offer(ji, g + octile(jr - r, jc - c), h(jr, jc), index);
+                let step = g + octile(jr - r, jc - c);
+                self.offer_rc(ji, jr as usize, jc as usize, step, h(jr, jc), index);
             }
         }
         Err(SearchError::Unreachable { expansions })

@@ -26,7 +26,9 @@ mod astar;
 mod components;
 mod jps;
 mod jps_plus;
+mod nodes;
 pub mod oracle;
+mod queue;
 mod theta;
 
 pub use astar::GridSearch;

@@ -37,7 +37,7 @@ impl GridSearch {
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
         crate::astar::check_endpoints(grid, start, goal)?;
-        self.reset(grid.len());
+        self.reset(grid, false);
         let touch = model.touch();
         let cols = i64::from(grid.cols());
         let start_i = grid.index(start);

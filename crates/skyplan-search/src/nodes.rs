@@ -1,0 +1,243 @@
+//! Search state: a flat array on small grids, pages allocated on touch on big ones.
+//!
+//! Grids of at most [`FLAT_MAX_CELLS`] cells get one row-major node array, allocated in full
+//! (16 bytes per cell; the fastest layout). On bigger grids the grid is cut into 8 × 8-cell tiles; a tile's 64 nodes (1 KiB) are allocated the first time
+//! a search touches one of its cells, back to back in one pool. Memory therefore grows with the
+//! area searches visit (plus a 4-byte page entry per tile, 1/16 byte per cell), not with the
+//! map's area, and neighbouring cells share a page. Pages stay between queries (a node's stamp
+//! says whether it belongs to the current query, so nothing is cleared per query) until the pool
+//! outgrows [`KEEP_BYTES`]; then the next query starts from an empty pool.
+
+use crate::astar::NO_PARENT;
+
+/// Tile side, as a shift: 8 cells.
+const SHIFT: usize = 3;
+const SIDE: usize = 1 << SHIFT;
+const PAGE: usize = SIDE * SIDE;
+const NO_PAGE: u32 = u32::MAX;
+
+/// Largest grid (cells) whose nodes are one flat array: 2²² cells (4.2 M), 64 MiB.
+pub(crate) const FLAT_MAX_CELLS: usize = 1 << 22;
+
+/// Pool size above which the next query drops every page (256 MiB).
+pub(crate) const KEEP_BYTES: usize = 256 << 20;
+
+/// One cell's search state. `stamp` is `open_stamp` (reached) or `open_stamp + 1` (expanded) in
+/// the current query; anything older means "unseen".
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Node {
+    pub(crate) g: f64,
+    pub(crate) parent: u32,
+    pub(crate) stamp: u32,
+}
+
+const FRESH: Node = Node {
+    g: f64::INFINITY,
+    parent: NO_PARENT,
+    stamp: 0,
+};
+
+#[derive(Debug)]
+pub(crate) struct PagedNodes {
+    /// Grids up to this many cells are flat ([`FLAT_MAX_CELLS`]; tests lower it).
+    pub(crate) flat_max_cells: usize,
+    rows: u32,
+    cols: usize,
+    /// One row-major array (`pool`), no pages.
+    flat: bool,
+    tiles_per_row: usize,
+    /// Page number of each tile in `pool`, or `NO_PAGE`.
+    table: Vec<u32>,
+    pool: Vec<Node>,
+    /// `2 × query number` (module docs).
+    open_stamp: u32,
+}
+
+impl Default for PagedNodes {
+    fn default() -> Self {
+        Self {
+            flat_max_cells: FLAT_MAX_CELLS,
+            rows: 0,
+            cols: 0,
+            flat: false,
+            tiles_per_row: 0,
+            table: Vec::new(),
+            pool: Vec::new(),
+            open_stamp: 0,
+        }
+    }
+}
+
+impl PagedNodes {
+    /// Starts a query on a `rows × cols` grid.
+    pub(crate) fn reset(&mut self, rows: u32, cols: u32) {
+        let cells = rows as usize * cols as usize;
+        let same_grid = self.rows == rows && self.cols == cols as usize && !self.pool.is_empty();
+        let too_big = !self.flat && self.pool.len() * std::mem::size_of::<Node>() > KEEP_BYTES;
+        if !same_grid || too_big {
+            self.rows = rows;
+            self.cols = cols as usize;
+            self.flat = cells <= self.flat_max_cells;
+            self.table.clear();
+            self.pool.clear();
+            if self.flat {
+                self.table.shrink_to_fit();
+                self.pool.resize(cells, FRESH);
+            } else {
+                self.tiles_per_row = (cols as usize).div_ceil(SIDE);
+                let tiles = self.tiles_per_row * (rows as usize).div_ceil(SIDE);
+                self.table.resize(tiles, NO_PAGE);
+            }
+            self.open_stamp = 0;
+        }
+        if self.open_stamp >= u32::MAX - 3 {
+            self.pool.fill(FRESH);
+            self.open_stamp = 0;
+        }
+        self.open_stamp += 2;
+    }
+
+    /// Heap bytes held (capacity of the page table and the pool).
+    pub(crate) fn bytes(&self) -> usize {
+        self.table.capacity() * std::mem::size_of::<u32>()
+            + self.pool.capacity() * std::mem::size_of::<Node>()
+    }
+
+    #[inline(always)]
+    fn tile(&self, r: usize, c: usize) -> (usize, usize) {
+        (
+            (r >> SHIFT) * self.tiles_per_row + (c >> SHIFT),
+            ((r & (SIDE - 1)) << SHIFT) | (c & (SIDE - 1)),
+        )
+    }
+
+    /// Row and column of a row-major index.
+    #[inline(always)]
+    pub(crate) fn rc(&self, i: usize) -> (usize, usize) {
+        // Indices and widths fit in u32 (the grid has at most `MAX_CELLS` cells): 32-bit division.
+        let (i, cols) = (i as u32, self.cols as u32);
+        ((i / cols) as usize, (i % cols) as usize)
+    }
+
+    #[inline(always)]
+    fn node(&self, r: usize, c: usize) -> Node {
+        if self.flat {
+            return self.pool[r * self.cols + c];
+        }
+        let (t, o) = self.tile(r, c);
+        match self.table[t] {
+            NO_PAGE => FRESH,
+            p => self.pool[p as usize * PAGE + o],
+        }
+    }
+
+    /// The node of cell (r, c), allocating its tile's page on first touch.
+    #[inline(always)]
+    fn node_mut(&mut self, r: usize, c: usize) -> &mut Node {
+        if self.flat {
+            return &mut self.pool[r * self.cols + c];
+        }
+        let (t, o) = self.tile(r, c);
+        let mut p = self.table[t];
+        if p == NO_PAGE {
+            p = self.new_page(t);
+        }
+        &mut self.pool[p as usize * PAGE + o]
+    }
+
+    #[cold]
+    fn new_page(&mut self, tile: usize) -> u32 {
+        let p = (self.pool.len() / PAGE) as u32;
+        self.pool.resize(self.pool.len() + PAGE, FRESH);
+        self.table[tile] = p;
+        p
+    }
+
+    /// True if cell (r, c) was expanded in this query.
+    #[inline(always)]
+    pub(crate) fn is_closed(&self, r: usize, c: usize) -> bool {
+        self.node(r, c).stamp == self.open_stamp + 1
+    }
+
+    /// Best cost to cell (r, c) in this query (infinite if unseen).
+    #[inline(always)]
+    pub(crate) fn g(&self, r: usize, c: usize) -> f64 {
+        let n = self.node(r, c);
+        if n.stamp >= self.open_stamp {
+            n.g
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Parent of cell (r, c) on its best path.
+    #[inline(always)]
+    pub(crate) fn parent(&self, r: usize, c: usize) -> u32 {
+        self.node(r, c).parent
+    }
+
+    /// Records a better path to cell (r, c) if it is not expanded yet; false if it is expanded
+    /// or the path is not better.
+    #[inline(always)]
+    pub(crate) fn relax(&mut self, r: usize, c: usize, g: f64, parent: u32) -> bool {
+        let open = self.open_stamp;
+        let n = self.node_mut(r, c);
+        if n.stamp == open + 1 || (n.stamp == open && g >= n.g) {
+            return false;
+        }
+        *n = Node {
+            g,
+            parent,
+            stamp: open,
+        };
+        true
+    }
+
+    /// Marks cell (r, c) expanded and returns its best cost, or `None` if it was expanded
+    /// already.
+    #[inline(always)]
+    pub(crate) fn close(&mut self, r: usize, c: usize) -> Option<f64> {
+        let closed = self.open_stamp + 1;
+        let n = self.node_mut(r, c);
+        if n.stamp == closed {
+            return None;
+        }
+        n.stamp = closed;
+        Some(n.g)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{GridSearch, MoveModel, Planner};
+    use proptest::prelude::*;
+    use skyplan_cspace::{Cell, Grid2, GridFrame};
+
+    proptest! {
+        /// Pages give exactly the flat array's answers (paths, costs, expansions), including
+        /// grids whose sides are not multiples of the tile and queries reusing the pages.
+        #[test]
+        fn pages_answer_like_the_flat_array(
+            rows in 1u32..40, cols in 1u32..40, seed in proptest::collection::vec(proptest::bool::weighted(0.25), 1600),
+            ends in proptest::collection::vec((0u32..40, 0u32..40, 0u32..40, 0u32..40), 1..4),
+        ) {
+            let cells = seed[..(rows * cols) as usize].to_vec();
+            let grid = Grid2::new(rows, cols, cells, GridFrame::default()).expect("size");
+            let mut flat = GridSearch::new();
+            let mut paged = GridSearch::new();
+            paged.nodes.flat_max_cells = 0;
+            for &(a, b, c, d) in &ends {
+                let (start, goal) = (Cell::new(a % rows, b % cols), Cell::new(c % rows, d % cols));
+                for model in [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting] {
+                    for planner in [Planner::AStar, Planner::Dijkstra, Planner::Jps, Planner::ThetaStar] {
+                        prop_assert_eq!(
+                            flat.search(&grid, start, goal, model, planner),
+                            paged.search(&grid, start, goal, model, planner)
+                        );
+                    }
+                }
+            }
+            prop_assert!(paged.node_bytes() <= flat.node_bytes() + 64 * 16 * 64);
+        }
+    }
+}

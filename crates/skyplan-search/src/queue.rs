@@ -1,0 +1,312 @@
+//! The open list: a bucket queue over `f` whose current bucket is a 4-ary heap of packed keys.
+//!
+//! An entry is one `u128` key: the bits of `f` (non-negative floats order like their bit
+//! patterns), then the complement of the high 32 bits of `g`'s bits (larger `g` first on equal
+//! `f`: deepest first), then the cell index. One integer compare orders two entries.
+//!
+//! A\* with a consistent heuristic pops `f` in non-decreasing order and pushes keys at most a few
+//! cells above the current one, so most entries go to a bucket (`⌊f · BUCKETS_PER_CELL⌋`, an
+//! append to a reused vector) and only the current bucket is a heap. The pop order is exactly the
+//! keys' order: buckets split `f` monotonically, and the heap orders everything inside the
+//! current bucket. Keys below the current bucket (rounding, inconsistent heuristics) join the
+//! heap, keys beyond the window wait in an overflow heap, so any key sequence pops in order.
+
+/// Buckets per cell of `f`.
+const BUCKETS_PER_CELL: f64 = 64.0;
+/// Buckets in the circular window (a power of two): keys up to 16 cells above the current one.
+const WINDOW: u64 = 1024;
+
+/// The packed key of an entry (module docs).
+#[inline(always)]
+pub(crate) fn key(f: f64, g: f64, index: u32) -> u128 {
+    debug_assert!(f >= 0.0 && g >= 0.0);
+    let g_hi = (g.to_bits() >> 32) as u32;
+    (u128::from(f.to_bits()) << 64) | (u128::from(!g_hi) << 32) | u128::from(index)
+}
+
+/// The `f` of a key.
+#[inline(always)]
+pub(crate) fn key_f(key: u128) -> f64 {
+    f64::from_bits((key >> 64) as u64)
+}
+
+/// The cell index of a key.
+#[inline(always)]
+pub(crate) fn key_index(key: u128) -> u32 {
+    key as u32
+}
+
+#[inline(always)]
+fn bucket(key: u128) -> u64 {
+    // f ≥ 0; the cast saturates for huge keys, which then wait in `far`.
+    (key_f(key) * BUCKETS_PER_CELL) as u64
+}
+
+/// A 4-ary min-heap of keys.
+#[derive(Debug, Default)]
+struct QuadHeap {
+    keys: Vec<u128>,
+}
+
+impl QuadHeap {
+    #[inline(always)]
+    fn push(&mut self, key: u128) {
+        let keys = &mut self.keys;
+        let mut at = keys.len();
+        keys.push(key);
+        while at > 0 {
+            let up = (at - 1) / 4;
+            if keys[up] <= key {
+                break;
+            }
+            keys[at] = keys[up];
+            at = up;
+        }
+        keys[at] = key;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<u128> {
+        let keys = &mut self.keys;
+        let last = keys.pop()?;
+        if keys.is_empty() {
+            return Some(last);
+        }
+        let top = keys[0];
+        let n = keys.len();
+        let mut at = 0;
+        loop {
+            let first = 4 * at + 1;
+            if first >= n {
+                break;
+            }
+            let end = (first + 4).min(n);
+            let mut best = first;
+            for c in first + 1..end {
+                if keys[c] < keys[best] {
+                    best = c;
+                }
+            }
+            if keys[best] >= last {
+                break;
+            }
+            keys[at] = keys[best];
+            at = best;
+        }
+        keys[at] = last;
+        Some(top)
+    }
+
+    #[inline]
+    fn peek(&self) -> Option<u128> {
+        self.keys.first().copied()
+    }
+
+    fn is_empty(&self) -> bool {
+        self.keys.is_empty()
+    }
+
+    fn clear(&mut self) {
+        self.keys.clear();
+    }
+}
+
+#[derive(Debug)]
+pub(crate) struct BucketQueue {
+    /// `WINDOW` buckets; bucket `b` (absolute) lives at `b % WINDOW`.
+    buckets: Vec<Vec<u128>>,
+    /// Absolute bucket of `current`; every key in `current` has a bucket ≤ `base`.
+    base: u64,
+    /// Keys in `buckets`.
+    in_buckets: usize,
+    /// False: every key goes to `current`.
+    use_buckets: bool,
+    /// Bit `s` set iff bucket slot `s` is non-empty: empty buckets are skipped a word at a time.
+    occupied: [u64; (WINDOW / 64) as usize],
+    current: QuadHeap,
+    /// Keys with a bucket ≥ `base + WINDOW` when pushed.
+    far: QuadHeap,
+}
+
+impl Default for BucketQueue {
+    fn default() -> Self {
+        Self {
+            buckets: (0..WINDOW).map(|_| Vec::new()).collect(),
+            base: 0,
+            in_buckets: 0,
+            use_buckets: true,
+            occupied: [0; (WINDOW / 64) as usize],
+            current: QuadHeap::default(),
+            far: QuadHeap::default(),
+        }
+    }
+}
+
+impl BucketQueue {
+    /// Empties the queue, keeping its memory. Without `buckets` every key goes to the heap (for
+    /// searches with few, far-apart keys, where buckets only cost).
+    pub(crate) fn clear(&mut self, buckets: bool) {
+        self.use_buckets = buckets;
+        if self.in_buckets > 0 {
+            for slot in 0..WINDOW as usize {
+                if self.occupied[slot / 64] & (1 << (slot % 64)) != 0 {
+                    self.buckets[slot].clear();
+                }
+            }
+        }
+        self.occupied = [0; (WINDOW / 64) as usize];
+        self.in_buckets = 0;
+        self.base = 0;
+        self.current.clear();
+        self.far.clear();
+    }
+
+    /// Queues a key.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, key: u128) {
+        let b = bucket(key);
+        if b <= self.base || !self.use_buckets {
+            self.current.push(key);
+        } else if b - self.base < WINDOW {
+            self.put_in_bucket(b, key);
+        } else {
+            self.far.push(key);
+        }
+    }
+
+    #[inline(always)]
+    fn put_in_bucket(&mut self, b: u64, key: u128) {
+        let slot = (b % WINDOW) as usize;
+        self.buckets[slot].push(key);
+        self.occupied[slot / 64] |= 1 << (slot % 64);
+        self.in_buckets += 1;
+    }
+
+    /// The first non-empty bucket after `base` (some bucket must be non-empty).
+    fn next_occupied(&self) -> u64 {
+        let start = ((self.base + 1) % WINDOW) as usize;
+        let words = self.occupied.len();
+        // Scan the words from `start`'s word, wrapping once; the first word masked below `start`.
+        for k in 0..=words {
+            let w = (start / 64 + k) % words;
+            let mut bits = self.occupied[w];
+            if k == 0 {
+                bits &= !0u64 << (start % 64);
+            }
+            if k == words {
+                bits &= !(!0u64 << (start % 64));
+            }
+            if bits != 0 {
+                let slot = (w * 64 + bits.trailing_zeros() as usize) as u64;
+                let ahead = (slot + WINDOW - start as u64) % WINDOW;
+                return self.base + 1 + ahead;
+            }
+        }
+        self.base + 1
+    }
+
+    /// Removes the smallest key.
+    #[inline(always)]
+    pub(crate) fn pop(&mut self) -> Option<u128> {
+        if let Some(k) = self.current.pop() {
+            return Some(k);
+        }
+        self.advance();
+        self.current.pop()
+    }
+
+    /// Moves `base` to the next non-empty bucket and loads it (and due overflow keys) into the
+    /// current heap.
+    #[cold]
+    fn advance(&mut self) {
+        loop {
+            if self.in_buckets == 0 {
+                // Nothing in the window: jump to the overflow's first bucket.
+                let Some(top) = self.far.peek() else {
+                    return;
+                };
+                self.base = self.base.max(bucket(top));
+            } else {
+                self.base = self.next_occupied();
+                let slot = (self.base % WINDOW) as usize;
+                self.occupied[slot / 64] &= !(1 << (slot % 64));
+                let keys = &mut self.buckets[slot];
+                self.in_buckets -= keys.len();
+                for k in keys.drain(..) {
+                    self.current.push(k);
+                }
+            }
+            while let Some(k) = self.far.peek() {
+                let b = bucket(k);
+                if b - self.base.min(b) >= WINDOW {
+                    break;
+                }
+                self.far.pop();
+                if b <= self.base {
+                    self.current.push(k);
+                } else {
+                    // Now inside the window.
+                    self.put_in_bucket(b, k);
+                }
+            }
+            if !self.current.is_empty() {
+                return;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+
+    proptest! {
+        /// Any interleaving of pushes and pops gives a binary heap's order, for keys that mostly
+        /// rise from the last pop (A\*) but also fall below it, tie, or jump far ahead.
+        #[test]
+        fn pops_in_key_order(
+            ops in proptest::collection::vec((0u8..4, 0.0f64..3.0, 0u8..3, 0u32..50), 1..400)
+        ) {
+            let mut queue = BucketQueue::default();
+            let mut heap = BinaryHeap::new();
+            let mut last_f = 0.0f64;
+            for (k, (op, step, g, index)) in ops.into_iter().enumerate() {
+                if op == 0 {
+                    let (a, b) = (queue.pop(), heap.pop().map(|Reverse(k)| k));
+                    prop_assert_eq!(a, b);
+                    if let Some(a) = a { last_f = key_f(a); }
+                } else {
+                    let f = match k % 7 {
+                        0 => (last_f - step * 0.01).max(0.0),  // a little below the current key
+                        1 => last_f + step * 100.0,            // far ahead, past the window
+                        2 => last_f,                           // a tie
+                        _ => last_f + step,
+                    };
+                    let key = key(f, f64::from(g), index);
+                    prop_assert_eq!((key_f(key), key_index(key)), (f, index));
+                    queue.push(key);
+                    heap.push(Reverse(key));
+                }
+                if k % 50 == 49 {
+                    queue.clear(k % 100 == 49);
+                    heap.clear();
+                    last_f = 0.0;
+                }
+            }
+            while let Some(Reverse(b)) = heap.pop() {
+                prop_assert_eq!(queue.pop(), Some(b));
+            }
+            prop_assert!(queue.pop().is_none());
+        }
+    }
+
+    #[test]
+    fn keys_order_by_f_then_larger_g_then_index() {
+        assert!(key(1.0, 0.0, 0) < key(1.5, 9.0, 0));
+        assert!(key(2.0, 1.5, 7) < key(2.0, 1.0, 3));
+        assert!(key(2.0, 1.0, 3) < key(2.0, 1.0, 4));
+    }
+}
