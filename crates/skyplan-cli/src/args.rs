@@ -33,6 +33,31 @@ pub enum Command {
     Fly(Box<FlyArgs>),
     /// Run the built-in simulated multicopter as a MAVLink vehicle (for `fly`, pymavlink, QGroundControl).
     Sim(SimArgs),
+    /// Make maps: `skyplan map tile` copies a colliders map K × K times (big test worlds).
+    #[command(subcommand)]
+    Map(MapCommand),
+}
+
+#[derive(Debug, Subcommand)]
+pub enum MapCommand {
+    /// The map copied K × K times at a pitch (north and east), same home: a city of cities.
+    Tile(TileArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct TileArgs {
+    /// Colliders map to copy [default: the bundled FCND city map].
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// Copies along each axis (1 to 100).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub times: u32,
+    /// Distance between copies, metres [default: the map's extent, rounded up to 10 m].
+    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    pub pitch_m: Option<f64>,
+    /// The new map (.csv).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
 }
 
 /// A pair of numbers typed as `A,B`.

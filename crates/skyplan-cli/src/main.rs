@@ -9,6 +9,7 @@ mod exit;
 mod files;
 mod fly_cmd;
 mod grid_args;
+mod map_cmd;
 mod navigate_cmd;
 mod picture;
 mod plan_cmd;
@@ -31,6 +32,7 @@ fn main() -> ExitCode {
         args::Command::Navigate(a) => navigate_cmd::run_navigate(*a),
         args::Command::Fly(a) => fly_cmd::run(*a),
         args::Command::Sim(a) => sim_cmd::run(a),
+        args::Command::Map(args::MapCommand::Tile(a)) => map_cmd::tile(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

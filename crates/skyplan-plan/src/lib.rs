@@ -68,6 +68,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod any_angle;
 mod cell_search;
 mod failure;
 mod grid;

@@ -13,6 +13,8 @@ use std::str::FromStr;
 pub enum Family {
     /// Best-first grid search (`skyplan-search`), then pruning and line-of-sight shortcutting.
     Grid(skyplan_search::Planner),
+    /// Exact any-angle shortest paths (`skyplan-anyangle`): visibility graph of convex corners.
+    AnyAngle,
     /// The wavefront navigation function (`skyplan-navfn`): distance field, gradient descent.
     Wavefront,
     /// A\* over an inflated cost map (`skyplan-navfn`).
@@ -35,6 +37,8 @@ pub enum Optimality {
     ExactForObjective,
     /// Any-angle: shorter than any grid path, not guaranteed shortest.
     AnyAngle,
+    /// The Euclidean-shortest path through the free cells (any angle, exact).
+    ExactAnyAngle,
     /// A free route with no optimality guarantee (roadmaps, sampling planners).
     Feasible,
     /// Improves towards the optimum with more time (RRT\*).
@@ -129,6 +133,9 @@ planners! {
     /// Theta\*.
     Theta => "theta", "Theta*", 2, Family::Grid(G::ThetaStar), AnyAngle, AnyGrid,
         "Theta*: any-angle routes through cell centres, shorter than any grid path";
+    /// Exact any-angle shortest paths.
+    AnyAngle => "any-angle", "exact any-angle", 2, Family::AnyAngle, ExactAnyAngle, AnyGrid,
+        "exact any-angle: the Euclidean-shortest route through the free cells, turning at obstacle corners";
     /// Wavefront navigation function.
     Wavefront => "wavefront", "wavefront", 2, Family::Wavefront, Exact, AnyGrid,
         "wavefront navigation function: distance field from the goal, then gradient descent";

@@ -46,6 +46,9 @@ pub(crate) enum Check {
     Grid { grid: Arc<Grid2>, touch: Touch },
     /// Every segment against every grown box (brute force).
     Boxes(Arc<BoxWorld3>),
+    /// Every segment under the any-angle rule: along blocked cells' boundaries, never through
+    /// their interiors nor between two blocked cells that touch only at a corner.
+    AnyAngle(Arc<Grid2>),
 }
 
 /// What a planner family hands back to the session.
@@ -120,6 +123,7 @@ pub struct Session {
     boxes: HashMap<Key, Arc<BoxWorld3>>,
     pub(crate) voronoi: HashMap<Key, Arc<skyplan_roadmap::Roadmap>>,
     pub(crate) prm: HashMap<Key, skyplan_sampling::prm::Roadmap>,
+    pub(crate) any_angle: HashMap<Key, Arc<skyplan_anyangle::AnyAngle>>,
     pub(crate) search: GridSearch,
 }
 
@@ -133,6 +137,7 @@ impl Session {
             boxes: HashMap::new(),
             voronoi: HashMap::new(),
             prm: HashMap::new(),
+            any_angle: HashMap::new(),
             search: GridSearch::new(),
         }
     }
@@ -236,7 +241,7 @@ impl Session {
             Family::Grid(skyplan_search::Planner::JpsPlus) => {
                 (self.cells_at(r.cell_m), 68, "cells", "use a larger cell_m")
             }
-            Family::Grid(_) | Family::Voronoi => {
+            Family::Grid(_) | Family::Voronoi | Family::AnyAngle => {
                 (self.cells_at(r.cell_m), 24, "cells", "use a larger cell_m")
             }
             Family::Wavefront | Family::Costmap => {
@@ -301,6 +306,7 @@ impl Session {
             Family::Voronoi => crate::voronoi::plan(self, &q)?,
             Family::Sampling(kind) => crate::three_d::sampling(self, &q, kind, request)?,
             Family::Voxel => crate::three_d::voxel(self, &q)?,
+            Family::AnyAngle => crate::any_angle::plan(self, &q)?,
         };
         recheck(&route)?;
         assemble(&world, &r, route, [start_lla, goal_lla], t0)
@@ -530,6 +536,12 @@ fn recheck(route: &Route) -> Result<(), PlanFailure> {
             .windows(2)
             .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), *touch)),
         Check::Boxes(world) => skyplan_world3::first_blocked_segment(&world.brute_force(), p),
+        Check::AnyAngle(grid) => {
+            let at = |q: [f64; 3]| skyplan_anyangle::GridPoint::from_ne(grid.frame(), q[0], q[1]);
+            p.windows(2).position(|w| {
+                !skyplan_anyangle::segment_is_free_any_angle(grid, at(w[0]), at(w[1]))
+            })
+        }
     };
     match bad {
         None => Ok(()),

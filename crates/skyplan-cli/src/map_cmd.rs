@@ -1,0 +1,40 @@
+//! `skyplan map tile`: big test worlds from a colliders map.
+
+use crate::args::TileArgs;
+use crate::exit::{Result, bad_input};
+use crate::files::{output_target, read_text, write_target};
+
+pub fn tile(args: TileArgs) -> Result<()> {
+    let target = output_target("--out", &args.out)?;
+    let (name, text) = match &args.map {
+        Some(p) => (p.display().to_string(), read_text(p)?),
+        None => (
+            skyplan_plan::FCND_CITY_NAME.to_string(),
+            skyplan_plan::FCND_CITY_CSV.to_string(),
+        ),
+    };
+    let map = skyplan_map::colliders::parse_colliders(&text)
+        .map_err(|e| bad_input(format!("{name}: {e}")))?;
+    let world = skyplan_plan::World::from_colliders(&name, map.clone())?;
+    let b = world.bounds_ne(1.0);
+    let extent_m = (b.north_max_m - b.north_min_m).max(b.east_max_m - b.east_min_m);
+    let pitch_m = match args.pitch_m {
+        Some(p) if p.is_finite() && p > 0.0 && p <= 1e6 => p,
+        Some(p) => {
+            return Err(bad_input(format!(
+                "--pitch-m {p}: expected a distance above 0 and at most 1000000 m"
+            )));
+        }
+        None => (extent_m / 10.0).ceil() * 10.0,
+    };
+    let big = skyplan_map::tile(&map, args.times, pitch_m);
+    write_target(&target, skyplan_map::to_colliders_csv(&big).as_bytes())?;
+    let side_km = (f64::from(args.times - 1) * pitch_m + extent_m) / 1000.0;
+    println!(
+        "wrote      {}: {} boxes, {k} × {k} copies of {name} every {pitch_m} m ({side_km:.1} km square)",
+        args.out.display(),
+        big.boxes.len(),
+        k = args.times
+    );
+    Ok(())
+}

@@ -1,0 +1,60 @@
+//! `skyplan map tile`: the copies are the map, shifted; the result plans.
+
+use assert_cmd::Command;
+
+#[test]
+fn tiled_city_has_k_squared_copies_and_plans_across_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        Command::cargo_bin("skyplan")
+            .unwrap()
+            .current_dir(dir.path())
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&[
+        "map",
+        "tile",
+        "--times",
+        "2",
+        "--pitch-m",
+        "1000",
+        "--out",
+        "city2.csv",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let small = skyplan_map::colliders::parse_colliders(skyplan_plan::FCND_CITY_CSV).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("city2.csv")).unwrap();
+    let big = skyplan_map::colliders::parse_colliders(&text).unwrap();
+    assert_eq!(big.home, small.home);
+    assert_eq!(big.boxes.len(), 4 * small.boxes.len());
+    let last = big.boxes.last().unwrap();
+    let orig = small.boxes.last().unwrap();
+    assert_eq!(
+        (last.north_m, last.east_m),
+        (orig.north_m + 1000.0, orig.east_m + 1000.0)
+    );
+    // Across the copies: the default goal of the north-east copy.
+    let out = run(&[
+        "plan",
+        "--map",
+        "city2.csv",
+        "--goal-ne",
+        "1420,1390",
+        "--json",
+        "--out",
+        "w.json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bad = run(&["map", "tile", "--times", "0", "--out", "x.csv"]);
+    assert_eq!(bad.status.code(), Some(2));
+}
