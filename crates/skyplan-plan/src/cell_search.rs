@@ -8,7 +8,7 @@ use skyplan_search::{GridPath, GridSearch, JpsPlus, MoveModel, Planner, SearchEr
 
 enum Engine<'g> {
     Plus(Box<JpsPlus<'g>>),
-    Online(GridSearch, Planner),
+    Online(Box<GridSearch>, Planner),
 }
 
 /// A grid planner prepared for many queries on one grid.
@@ -47,7 +47,7 @@ impl<'g> CellSearch<'g> {
         let t = std::time::Instant::now();
         let engine = match p {
             Planner::JpsPlus => Engine::Plus(Box::new(JpsPlus::new(grid, model))),
-            other => Engine::Online(GridSearch::new(), other),
+            other => Engine::Online(Box::new(GridSearch::new()), other),
         };
         Ok(Self {
             grid,
