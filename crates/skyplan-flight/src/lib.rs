@@ -19,3 +19,6 @@ pub mod collision;
 pub mod executor;
 pub mod sim;
 pub mod upload;
+
+#[cfg(test)]
+mod testkit;

@@ -1,23 +1,7 @@
 use super::*;
+use crate::executor::{FailsafeAction, Note, Outcome};
 use crate::sim::{SimConfig, SimEvent, SimMissionItem, SimMode, SimVehicle};
-
-fn wp(n: f64, e: f64, heading_deg: f64) -> Target {
-    Target {
-        north_m: n,
-        east_m: e,
-        alt_m: 5.0,
-        heading_rad: heading_deg.to_radians(),
-    }
-}
-
-fn route() -> Vec<Target> {
-    vec![
-        wp(0.0, 0.0, 0.0),
-        wp(20.0, 0.0, 0.0),
-        wp(20.0, 20.0, 90.0),
-        wp(0.0, 20.0, 180.0),
-    ]
-}
+use crate::testkit::{apply, link_gap, mode_of, route, telemetry};
 
 /// ArduPilot's layout: item 0 home, 1 take-off, the waypoints, land.
 fn layout(n: usize) -> MissionLayout {
@@ -43,63 +27,6 @@ fn sim_mission(targets: &[Target]) -> Vec<SimMissionItem> {
     }));
     items.push(SimMissionItem::Land);
     items
-}
-
-fn mode_of(m: SimMode) -> VehicleMode {
-    match m {
-        SimMode::Guided => VehicleMode::Guided,
-        SimMode::Auto => VehicleMode::Auto,
-        SimMode::Land => VehicleMode::Land,
-        SimMode::Loiter => VehicleMode::Hold,
-        SimMode::Rtl => VehicleMode::ReturnToLaunch,
-        other => VehicleMode::Other(other.arducopter_custom_mode()),
-    }
-}
-
-fn telemetry(v: &SimVehicle) -> Telemetry {
-    let s = v.state();
-    Telemetry {
-        north_m: s.position_ned_m[0],
-        east_m: s.position_ned_m[1],
-        down_m: s.position_ned_m[2],
-        velocity_ned_m_s: s.velocity_ned_m_s,
-        yaw_rad: s.yaw_rad,
-        armed: s.armed,
-        guided: s.mode == SimMode::Guided,
-        on_ground: Some(s.on_ground),
-    }
-}
-
-fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
-    let ack = |command, r: Result<(), crate::sim::SimRefusal>| Event::Ack {
-        command,
-        accepted: r.map_err(|e| format!("DENIED: {e}")),
-    };
-    Some(match c {
-        Command::TakeControl => {
-            v.set_mode(SimMode::Guided);
-            ack(CommandKind::TakeControl, Ok(()))
-        }
-        Command::Arm => ack(CommandKind::Arm, v.arm()),
-        Command::Disarm => ack(CommandKind::Disarm, v.disarm()),
-        Command::StartMission => {
-            v.set_mode(SimMode::Auto);
-            ack(CommandKind::StartMission, Ok(()))
-        }
-        Command::Land => {
-            v.land();
-            ack(CommandKind::Land, Ok(()))
-        }
-        Command::Hold => {
-            v.set_mode(SimMode::Loiter);
-            ack(CommandKind::Hold, Ok(()))
-        }
-        Command::ReturnToLaunch => {
-            v.set_mode(SimMode::Rtl);
-            ack(CommandKind::ReturnToLaunch, Ok(()))
-        }
-        other => panic!("the AUTO executor sent {other:?}"),
-    })
 }
 
 struct Flight {
@@ -134,6 +61,10 @@ fn fly(
             }
         }
         for c in out.commands {
+            assert!(
+                !matches!(c, Command::GoTo { .. } | Command::Takeoff { .. }),
+                "the AUTO executor sent {c:?}"
+            );
             commands.push(c);
             pending.extend(apply(v, c));
         }
@@ -172,7 +103,11 @@ fn fly(
 }
 
 fn ready(targets: &[Target]) -> (AutoExecutor, SimVehicle) {
-    let ex = AutoExecutor::new(targets, layout(targets.len()), ExecutorConfig::default()).unwrap();
+    ready_with(targets, ExecutorConfig::default())
+}
+
+fn ready_with(targets: &[Target], config: ExecutorConfig) -> (AutoExecutor, SimVehicle) {
+    let ex = AutoExecutor::new(targets, layout(targets.len()), config).unwrap();
     let mut v = SimVehicle::new(SimConfig::default());
     v.set_mission(sim_mission(targets));
     (ex, v)
@@ -310,18 +245,8 @@ fn in_auto_a_returning_link_commands_the_failsafe() {
             failsafe: Some(action),
             ..ExecutorConfig::default()
         };
-        let mut ex = AutoExecutor::new(&targets, layout(targets.len()), config).unwrap();
-        let mut v = SimVehicle::new(SimConfig::default());
-        v.set_mission(sim_mission(&targets));
-        let f = fly(&mut ex, &mut v, false, |t, _, _| {
-            if t > 12.0 && t < 14.0 {
-                Some(Event::LinkLost { silent_s: t - 7.0 })
-            } else if (14.0..14.1).contains(&t) {
-                Some(Event::LinkRegained { silent_s: 7.0 })
-            } else {
-                None
-            }
-        });
+        let (mut ex, mut v) = ready_with(&targets, config);
+        let f = fly(&mut ex, &mut v, false, |t, _, _| link_gap(t, 12.0, 14.0));
         assert!(f.commands.contains(&command), "{:?}", f.commands);
         let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
             panic!("{:?}", ex.outcome())
