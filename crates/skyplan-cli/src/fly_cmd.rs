@@ -243,10 +243,18 @@ pub fn run(args: FlyArgs) -> Result<()> {
                 })
                 .map_err(|e| bad_input(format!("start: {e}")))?,
         };
+        if args.sim_ekf_delay_s < 0.0 {
+            return Err(bad_input(format!(
+                "--sim-ekf-delay-s: expected 0 or more, found {}",
+                args.sim_ekf_delay_s
+            )));
+        }
         let config = SimServerConfig {
             speedup: args.speedup,
             drop_link_after_s: args.sim_drop_link_after_s,
             link_gap_s: args.sim_link_gap_s,
+            ekf_delay_s: args.sim_ekf_delay_s,
+            map_home: Some(frame.home()),
             ..SimServerConfig::at(home)
         };
         let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config)
@@ -406,19 +414,25 @@ fn fly(
     let mut gcs = GroundStation::connect(address, ground).or_exit(Kind::Runtime)?;
     gcs.set_interrupt(Arc::clone(&ctrl_c.interrupt));
     println!("link       {address}: connected, sending heartbeats at 1 Hz");
-    let info = gcs
-        .wait_for_vehicle(Duration::from_secs_f64(a.wait_s))
-        .or_exit(Kind::Runtime)?;
+    let info = wait_for_vehicle(&mut gcs, a)?;
     if let Some(s) = sim {
         s.print_notes();
     }
     println!(
-        "vehicle    system {} ({:?}) at lat {:.7}, lon {:.7}, {:.2} m above home",
+        "vehicle    system {} ({}) at lat {:.7}, lon {:.7}, {:.2} m above home; {}",
         info.system_id,
-        info.autopilot,
+        match info.autopilot {
+            Autopilot::ArduPilot => "ArduPilot",
+            Autopilot::Px4 => "PX4",
+            Autopilot::Other => "another autopilot",
+        },
         info.position.lat_deg,
         info.position.lon_deg,
-        info.position.alt_m
+        info.position.alt_m,
+        match info.ekf_origin {
+            Some(o) => format!("EKF origin lat {:.7}, lon {:.7}", o.lat_deg, o.lon_deg),
+            None => "no EKF origin reported".to_string(),
+        }
     );
 
     // PLANNING: the heartbeat thread keeps the link alive meanwhile.
@@ -467,13 +481,20 @@ fn fly(
         Autopilot::Px4 => None,
         _ => Some((info.position.lat_deg, info.position.lon_deg)),
     };
-    let items = mission_items(&waypoints, home).map_err(bad_input)?;
+    // ArduCopter ignores NAV_WAYPOINT's yaw: a CONDITION_YAW after each waypoint sets it.
+    let condition_yaw = info.autopilot == Autopilot::ArduPilot;
+    let items = mission_items(&waypoints, home, condition_yaw).map_err(bad_input)?;
     println!(
-        "mission    {} items: {}take-off to {} m, {} waypoints with headings, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
         if home.is_some() { "home, " } else { "" },
         opts.request.spec.alt_m,
-        targets.len()
+        targets.len(),
+        if condition_yaw {
+            " (each followed by CONDITION_YAW)"
+        } else {
+            ""
+        }
     );
     let report = gcs
         .upload_mission(&items, UploadConfig::default())
@@ -489,6 +510,35 @@ fn fly(
     let mut ex =
         AutoExecutor::new(&targets, MissionLayout::from(&items), config).map_err(bad_input)?;
     fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c).map(|(log, o)| (log, Ended::Flight(o)))
+}
+
+/// Waits for the vehicle (heartbeat, EKF origin, position) up to `--wait-s` vehicle seconds,
+/// showing what it waits for on the progress line (and, without a terminal, once per change).
+fn wait_for_vehicle(
+    gcs: &mut GroundStation,
+    a: &FlyView,
+) -> Result<skyplan_link::ground::VehicleInfo> {
+    let bar = progress_bar(0);
+    bar.set_prefix("WAITING");
+    let mut last = None;
+    let wall = Duration::from_secs_f64(a.wait_s / a.speedup);
+    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
+        if last != Some(waiting) {
+            last = Some(waiting);
+            say(&format!(
+                "wait       {:7.1} s  for the vehicle's {waiting}",
+                wall_s * a.speedup
+            ));
+        }
+        bar.set_message(format!(
+            "waiting for the vehicle's {waiting}  t {:.1} s of {:.0} s",
+            wall_s * a.speedup,
+            a.wait_s
+        ));
+        bar.tick();
+    });
+    bar.set_message("");
+    info.or_exit(Kind::Runtime)
 }
 
 /// Prints a line, above the progress bar when there is one.
@@ -682,6 +732,8 @@ fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
             "target_east_m",
             "target_alt_m",
             "target_heading_deg",
+            "lat_deg",
+            "lon_deg",
         ]
         .iter()
         .map(|s| s.to_string())
@@ -707,6 +759,7 @@ fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
             ]),
             None => rec.extend(std::iter::repeat_n(String::new(), 5)),
         }
+        rec.extend([format!("{:.7}", r.lat_deg), format!("{:.7}", r.lon_deg)]);
         write(&mut w, rec)?;
     }
     w.into_inner()

@@ -29,8 +29,10 @@ pub const LEFT_AUTO_GRACE_S: f64 = 1.5;
 pub struct MissionLayout {
     /// The NAV_TAKEOFF item.
     pub takeoff_seq: u16,
-    /// The first waypoint's item; waypoint `k` is item `first_waypoint_seq + k`.
+    /// The first waypoint's item; waypoint `k` is item `first_waypoint_seq + waypoint_stride · k`.
     pub first_waypoint_seq: u16,
+    /// Items per waypoint (2 when each NAV_WAYPOINT is followed by its CONDITION_YAW).
+    pub waypoint_stride: u16,
     /// The NAV_LAND item.
     pub land_seq: u16,
 }
@@ -40,6 +42,7 @@ impl From<&MissionPlan> for MissionLayout {
         Self {
             takeoff_seq: p.takeoff_seq,
             first_waypoint_seq: p.first_waypoint_seq,
+            waypoint_stride: p.waypoint_stride,
             land_seq: p.land_seq,
         }
     }
@@ -64,13 +67,17 @@ impl Executor<AutoMission> {
         layout: MissionLayout,
         config: ExecutorConfig,
     ) -> Result<Self, ConfigError> {
-        if usize::from(layout.land_seq) != usize::from(layout.first_waypoint_seq) + targets.len()
+        let stride = usize::from(layout.waypoint_stride);
+        if usize::from(layout.land_seq)
+            != usize::from(layout.first_waypoint_seq) + stride * targets.len()
             || layout.takeoff_seq >= layout.first_waypoint_seq
+            || stride == 0
         {
             return Err(ConfigError(format!(
-                "the mission layout (take-off item {}, first waypoint item {}, land item {}) does not match {} waypoints",
+                "the mission layout (take-off item {}, first waypoint item {}, {} items a waypoint, land item {}) does not match {} waypoints",
                 layout.takeoff_seq,
                 layout.first_waypoint_seq,
+                layout.waypoint_stride,
                 layout.land_seq,
                 targets.len()
             )));
@@ -86,9 +93,19 @@ impl Executor<AutoMission> {
 }
 
 impl AutoMission {
-    /// Every waypoint up to item `seq` (inclusive when `inclusive`) counts as reached.
+    /// Every waypoint up to item `seq` (inclusive when `inclusive`) counts as reached. A
+    /// CONDITION_YAW reported reached says nothing of its waypoint (ArduCopter may finish the
+    /// turn before the waypoint).
     fn passed(&mut self, core: &mut Core, now_s: f64, seq: u16, inclusive: bool, out: &mut Output) {
         let l = self.layout;
+        let stride = l.waypoint_stride.max(1);
+        if inclusive
+            && seq > l.first_waypoint_seq
+            && seq < l.land_seq
+            && !(seq - l.first_waypoint_seq).is_multiple_of(stride)
+        {
+            return;
+        }
         if seq > l.takeoff_seq || (inclusive && seq == l.takeoff_seq) {
             self.takeoff_done = true;
         }
@@ -103,7 +120,8 @@ impl AutoMission {
         if end <= l.first_waypoint_seq {
             return;
         }
-        let upto = usize::from(end - l.first_waypoint_seq).min(core.targets.len());
+        let upto =
+            usize::from((end - l.first_waypoint_seq).div_ceil(stride)).min(core.targets.len());
         while core.reached.len() < upto {
             core.reach(now_s, core.reached.len(), out);
         }
@@ -194,7 +212,7 @@ impl Strategy for AutoMission {
             } else {
                 "the vehicle did not enter AUTO".to_string()
             };
-            core.time_out(c.takeoff_timeout_s, &awaited, out);
+            core.time_out(now_s, c.takeoff_timeout_s, &awaited, out);
         } else if !self.seen_auto && core.due(now_s, c.retry_s) {
             out.commands.push(Command::StartMission);
         }
@@ -204,11 +222,8 @@ impl Strategy for AutoMission {
     fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
         let n = core.targets.len();
         let all = core.reached.len() >= n;
-        let landing = self.land_started
-            || core.mode == Some(VehicleMode::Land)
-            || !t.armed
-            || core.on_ground(t);
-        if all && landing {
+        // The last waypoint reached or the land item current: the vehicle lands by itself.
+        if all || self.land_started {
             core.land_after_mission(now_s, Self::COMMANDS_LANDING, out);
             return true;
         }
@@ -229,18 +244,14 @@ impl Strategy for AutoMission {
         let i = core.reached.len().min(n - 1);
         let budget_s = core.leg_budget_s(i);
         if now_s - core.leg_since_s > budget_s {
-            let awaited = if all {
-                "the vehicle did not start the land item".to_string()
-            } else {
-                let w = core.targets[i];
-                format!(
-                    "waypoint {} of {n} not reported reached: {:.1} m away horizontally, {:.1} m vertically",
-                    i + 1,
-                    w.horizontal_error_m(t),
-                    w.vertical_error_m(t),
-                )
-            };
-            core.time_out(budget_s, &awaited, out);
+            let w = core.targets[i];
+            let awaited = format!(
+                "waypoint {} of {n} not reported reached: {:.1} m away horizontally, {:.1} m vertically",
+                i + 1,
+                w.horizontal_error_m(t),
+                w.vertical_error_m(t),
+            );
+            core.time_out(now_s, budget_s, &awaited, out);
         }
         false
     }

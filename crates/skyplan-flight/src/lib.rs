@@ -17,6 +17,7 @@
 pub mod auto;
 pub mod collision;
 pub mod executor;
+pub mod flat_earth;
 pub mod sim;
 pub mod upload;
 

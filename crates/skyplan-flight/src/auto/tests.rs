@@ -3,12 +3,13 @@ use crate::executor::{FailsafeAction, Note, Outcome};
 use crate::sim::{SimConfig, SimEvent, SimMissionItem, SimMode, SimVehicle};
 use crate::testkit::{apply, link_gap, mode_of, route, telemetry};
 
-/// ArduPilot's layout: item 0 home, 1 take-off, the waypoints, land.
+/// ArduPilot's layout: item 0 home, 1 take-off, each waypoint and its CONDITION_YAW, land.
 fn layout(n: usize) -> MissionLayout {
     MissionLayout {
         takeoff_seq: 1,
         first_waypoint_seq: 2,
-        land_seq: 2 + n as u16,
+        waypoint_stride: 2,
+        land_seq: 2 + 2 * n as u16,
     }
 }
 
@@ -19,12 +20,16 @@ fn sim_mission(targets: &[Target]) -> Vec<SimMissionItem> {
             alt_m: targets[0].alt_m,
         },
     ];
-    items.extend(targets.iter().map(|t| SimMissionItem::Waypoint {
-        north_m: t.north_m,
-        east_m: t.east_m,
-        alt_m: t.alt_m,
-        yaw_rad: t.heading_rad,
-    }));
+    for t in targets {
+        items.push(SimMissionItem::Waypoint {
+            north_m: t.north_m,
+            east_m: t.east_m,
+            alt_m: t.alt_m,
+        });
+        items.push(SimMissionItem::Yaw {
+            yaw_rad: t.heading_rad,
+        });
+    }
     items.push(SimMissionItem::Land);
     items
 }
@@ -274,4 +279,31 @@ fn in_auto_ctrl_c_hold_leaves_the_vehicle_loitering() {
     ));
     assert_eq!(v.state().mode, SimMode::Loiter);
     assert!(v.state().armed && !v.state().on_ground);
+}
+
+#[test]
+fn a_hop_at_40_m_lands_in_landing_without_the_land_item_reported() {
+    // The land item is reported only at the touchdown (as ArduCopter): LANDING begins at the
+    // last waypoint, high up, and its budget covers the whole descent.
+    let targets: Vec<Target> = [(0.0, 0.0), (10.0, 0.0)]
+        .iter()
+        .map(|&(n, e)| Target {
+            north_m: n,
+            east_m: e,
+            alt_m: 40.0,
+            heading_rad: 0.0,
+        })
+        .collect();
+    let (mut ex, mut v) = ready(&targets);
+    let mut landing_began_at_m = None;
+    let f = fly(&mut ex, &mut v, false, |_, v, ex| {
+        if landing_began_at_m.is_none() && ex.state() == FlightState::Landing {
+            landing_began_at_m = Some(-v.state().position_ned_m[2]);
+        }
+        None
+    });
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    let alt = landing_began_at_m.unwrap();
+    assert!(alt > 35.0, "LANDING began at {alt} m");
+    assert!(!v.state().armed && v.state().on_ground);
 }

@@ -51,7 +51,10 @@ pub struct Core {
     acked: bool,
     last_refusal: Option<String>,
     last_text: Option<String>,
-    abort: Option<String>,
+    /// How the flight ends once the vehicle is down: a stop or a timeout in the air.
+    ending: Option<Failure>,
+    /// Altitude when LANDING began, metres.
+    landing_alt_m: f64,
     outcome: Option<Outcome>,
     started: bool,
     faults: Faults,
@@ -100,7 +103,8 @@ impl Core {
             acked: false,
             last_refusal: None,
             last_text: None,
-            abort: None,
+            ending: None,
+            landing_alt_m: 0.0,
             outcome: None,
             started: false,
             faults: Faults::default(),
@@ -119,6 +123,9 @@ impl Core {
         self.last_send_s = None;
         self.acked = false;
         self.last_refusal = None;
+        if to == FlightState::Landing {
+            self.landing_alt_m = self.last.map_or(0.0, |t| t.alt_m().max(0.0));
+        }
     }
 
     pub(crate) fn finish(&mut self, outcome: Outcome, out: &mut Output) {
@@ -190,24 +197,29 @@ impl Core {
         self.leg_since_s = now_s;
     }
 
-    /// Fails with a timeout, landing first if the vehicle may be in the air.
-    pub(crate) fn time_out(&mut self, after_s: f64, awaited: &str, out: &mut Output) {
-        let detail = match &self.last_refusal {
+    /// A state ran out of time. In the air (TAKEOFF, WAYPOINT) the vehicle is told to land and
+    /// the flight fails once it is down and disarmed; on the ground, or when the landing itself
+    /// runs out, it fails now, saying why.
+    pub(crate) fn time_out(&mut self, now_s: f64, after_s: f64, awaited: &str, out: &mut Output) {
+        let mut detail = match &self.last_refusal {
             Some(r) => format!("{awaited}; last answer: {r}"),
             None => awaited.to_string(),
         };
         let state = self.state;
-        if matches!(state, FlightState::Takeoff | FlightState::Waypoint) {
-            out.commands.push(Command::Land);
+        if let Some(ending) = self.ending.take() {
+            detail = format!("{ending}; then {state} timed out after {after_s:.1} s: {detail}");
         }
-        self.fail(
-            Failure::Timeout {
-                state,
-                after_s,
-                detail,
-            },
-            out,
-        );
+        let failure = Failure::Timeout {
+            state,
+            after_s,
+            detail,
+        };
+        if matches!(state, FlightState::Takeoff | FlightState::Waypoint) {
+            self.ending = Some(failure);
+            self.command_landing(now_s, Command::Land, out);
+        } else {
+            self.fail(failure, out);
+        }
     }
 
     /// Records the vehicle's mode (and since when it is out of AUTO).
@@ -259,12 +271,11 @@ impl Core {
         action: FailsafeAction,
         out: &mut Output,
     ) -> bool {
-        if self.abort.is_some() || self.faults.hold.is_some() {
+        if self.ending.is_some() || self.faults.hold.is_some() {
             return false;
         }
         match self.state {
             FlightState::Manual | FlightState::Arming => {
-                self.abort = Some(reason.clone());
                 self.fail(Failure::Aborted { reason }, out);
                 if self.last.is_some_and(|t| t.armed) {
                     out.commands.push(Command::Disarm);
@@ -291,11 +302,11 @@ impl Core {
                         self.command_landing(now_s, Command::ReturnToLaunch, out);
                     }
                 }
-                self.abort = Some(reason);
+                self.ending = Some(Failure::Aborted { reason });
                 true
             }
             FlightState::Landing | FlightState::Disarming => {
-                self.abort = Some(reason);
+                self.ending = Some(Failure::Aborted { reason });
                 false
             }
         }
@@ -315,7 +326,7 @@ impl Core {
             } else {
                 "the vehicle did not enter guided mode"
             };
-            self.time_out(c.arming_timeout_s, awaited, out);
+            self.time_out(now_s, c.arming_timeout_s, awaited, out);
         } else if self.due(now_s, c.retry_s) {
             out.commands.push(if guided {
                 Command::Arm
@@ -334,14 +345,20 @@ impl Core {
 
     /// One step in LANDING; `true` when DISARMING was entered.
     fn landing(&mut self, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
-        let budget_s = self.faults.landing_budget_s(&self.config);
+        let budget_s = self.faults.landing_budget_s(&self.config)
+            + self.landing_alt_m / self.config.landing_descent_m_s.max(0.1);
         if self.on_ground(t) || !t.armed {
             self.enter(FlightState::Disarming, now_s, out);
             return true;
         }
         if now_s - self.state_since_s > budget_s {
-            let awaited = format!("still {:.1} m above home", t.alt_m());
-            self.time_out(budget_s, &awaited, out);
+            let awaited = format!(
+                "still {:.1} m above home, {}; it was {:.1} m up when the landing began",
+                t.alt_m(),
+                if t.armed { "armed" } else { "disarmed" },
+                self.landing_alt_m
+            );
+            self.time_out(now_s, budget_s, &awaited, out);
         } else if let Some(command) = self.landing_command
             && !self.acked
             && self.due(now_s, self.config.retry_s)
@@ -357,8 +374,17 @@ impl Core {
         let in_state_s = now_s - self.state_since_s;
         if !t.armed {
             self.enter(FlightState::Manual, now_s, out);
-            let outcome = match self.abort.take() {
-                Some(reason) => Outcome::Failed(Failure::Aborted { reason }),
+            let outcome = match self.ending.take() {
+                Some(Failure::Timeout {
+                    state,
+                    after_s,
+                    detail,
+                }) => Outcome::Failed(Failure::Timeout {
+                    state,
+                    after_s,
+                    detail: format!("{detail}; the vehicle then landed and disarmed"),
+                }),
+                Some(failure) => Outcome::Failed(failure),
                 None if self.reached.len() == self.targets.len() => Outcome::Completed,
                 None => Outcome::Failed(Failure::Aborted {
                     reason: "landed before the last waypoint".into(),
@@ -366,7 +392,12 @@ impl Core {
             };
             self.finish(outcome, out);
         } else if in_state_s > c.disarming_timeout_s {
-            self.time_out(c.disarming_timeout_s, "the vehicle did not disarm", out);
+            self.time_out(
+                now_s,
+                c.disarming_timeout_s,
+                "the vehicle did not disarm",
+                out,
+            );
         } else if in_state_s >= wait_s && self.due(now_s, c.retry_s) {
             out.commands.push(Command::Disarm);
         }
@@ -498,7 +529,7 @@ impl<S: Strategy> Executor<S> {
             match core.faults.step_hold(now_s, &core.config, &mut out) {
                 Some(Ok(failure)) => core.fail(failure, &mut out),
                 Some(Err(reason)) => {
-                    core.abort = Some(reason);
+                    core.ending = Some(Failure::Aborted { reason });
                     core.command_landing(now_s, Command::Land, &mut out);
                 }
                 None => {}

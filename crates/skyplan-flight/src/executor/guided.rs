@@ -64,7 +64,7 @@ impl Strategy for GuidedTargets {
                 t.alt_m(),
                 c.takeoff_fraction * alt_m
             );
-            core.time_out(c.takeoff_timeout_s, &awaited, out);
+            core.time_out(now_s, c.takeoff_timeout_s, &awaited, out);
         } else if !core.acked() && core.due(now_s, c.retry_s) {
             out.commands.push(Command::Takeoff { alt_m });
         }
@@ -118,7 +118,7 @@ impl Strategy for GuidedTargets {
                     w.heading_error_rad(t).to_degrees()
                 )
             };
-            core.time_out(budget_s, &awaited, out);
+            core.time_out(now_s, budget_s, &awaited, out);
         } else if core.due(now_s, c.target_period_s) {
             out.commands.push(goto(&w));
         }

@@ -193,8 +193,12 @@ pub struct ExecutorConfig {
     pub leg_timeout_base_s: f64,
     /// …plus this many per metre of the leg.
     pub leg_timeout_per_m_s: f64,
-    /// Budget of LANDING, seconds.
+    /// Budget of LANDING beyond the descent itself, seconds: LANDING may take the altitude
+    /// when it began ÷ [`ExecutorConfig::landing_descent_m_s`] plus this.
     pub landing_timeout_s: f64,
+    /// The slowest descent rate the budget of LANDING allows for, m/s (ArduCopter's
+    /// `LAND_SPEED`, 0.5 m/s, in its last 10 m; it descends faster above).
+    pub landing_descent_m_s: f64,
     /// Budget of DISARMING, seconds.
     pub disarming_timeout_s: f64,
     /// What to command when a lost link comes back; `None`: a lost link ends the flight at once
@@ -226,7 +230,8 @@ impl Default for ExecutorConfig {
             takeoff_timeout_s: 60.0,
             leg_timeout_base_s: 30.0,
             leg_timeout_per_m_s: 1.0,
-            landing_timeout_s: 120.0,
+            landing_timeout_s: 60.0,
+            landing_descent_m_s: 0.5,
             disarming_timeout_s: 20.0,
             failsafe: None,
             link_regain_wait_s: 30.0,

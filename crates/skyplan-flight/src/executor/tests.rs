@@ -296,12 +296,34 @@ fn stuck_leg_times_out_and_lands() {
     assert!(ex.handle(49.0, Event::Telemetry(t)).notes.is_empty());
     let out = ex.handle(51.0, Event::Telemetry(t));
     assert_eq!(out.commands, vec![Command::Land]);
+    // The flight is not over until the vehicle is down and disarmed.
+    assert_eq!(ex.state(), FlightState::Landing);
+    assert_eq!(ex.outcome(), None);
+    let down = Telemetry {
+        down_m: 0.0,
+        on_ground: Some(true),
+        ..t
+    };
+    assert_eq!(
+        ex.handle(60.0, Event::Telemetry(down)).commands,
+        vec![Command::Disarm]
+    );
+    assert_eq!(ex.outcome(), None);
+    let disarmed = Telemetry {
+        armed: false,
+        ..down
+    };
+    ex.handle(61.0, Event::Telemetry(disarmed));
     let Some(Outcome::Failed(Failure::Timeout { state, detail, .. })) = ex.outcome() else {
         panic!("{:?}", ex.outcome())
     };
     assert_eq!(*state, FlightState::Waypoint);
     assert!(
         detail.contains("waypoint 2 of 4 not reached: 20.0 m away"),
+        "{detail}"
+    );
+    assert!(
+        detail.ends_with("the vehicle then landed and disarmed"),
         "{detail}"
     );
 }
@@ -619,6 +641,7 @@ fn both_executors_resend_the_landing_after_a_failed_hold_only_after_the_retry_pe
     let layout = crate::auto::MissionLayout {
         takeoff_seq: 1,
         first_waypoint_seq: 2,
+        waypoint_stride: 1,
         land_seq: 4,
     };
     let mut auto = crate::auto::AutoExecutor::new(&targets, layout, config).unwrap();
@@ -635,4 +658,44 @@ fn both_executors_resend_the_landing_after_a_failed_hold_only_after_the_retry_pe
         a.windows(2).all(|w| w[1] - w[0] >= config.retry_s - 1e-9),
         "{a:?}"
     );
+}
+
+#[test]
+fn the_landing_budget_grows_with_the_altitude() {
+    // LANDING from 40 m may take 40 / 0.5 + 60 = 140 s; from 5 m, 10 + 60 = 70 s.
+    let config = ExecutorConfig::default();
+    for (alt_m, budget_s) in [(40.0, 140.0), (5.0, 70.0)] {
+        let high = Target {
+            alt_m,
+            ..wp(0.0, 0.0, 0.0)
+        };
+        let mut ex = MissionExecutor::new(&[high], config).unwrap();
+        let t = Telemetry {
+            down_m: -alt_m,
+            ..hovering()
+        };
+        ex.handle(0.0, Event::Telemetry(t));
+        assert_eq!(ex.state(), FlightState::Landing);
+        let hovering_still = Telemetry {
+            down_m: -alt_m + 1.0,
+            ..t
+        };
+        ex.handle(budget_s - 0.5, Event::Telemetry(hovering_still));
+        assert_eq!(ex.outcome(), None, "{alt_m}");
+        ex.handle(budget_s + 0.5, Event::Telemetry(hovering_still));
+        let Some(Outcome::Failed(Failure::Timeout {
+            state,
+            after_s,
+            detail,
+        })) = ex.outcome()
+        else {
+            panic!("{:?}", ex.outcome())
+        };
+        assert_eq!(*state, FlightState::Landing);
+        assert!((after_s - budget_s).abs() < 1e-9, "{after_s}");
+        assert!(
+            detail.contains(&format!("it was {alt_m:.1} m up when the landing began")),
+            "{detail}"
+        );
+    }
 }
