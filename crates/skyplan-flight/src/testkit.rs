@@ -64,13 +64,10 @@ pub(crate) fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
         }
         Command::Arm => Some(ack(CommandKind::Arm, v.arm())),
         Command::Takeoff { alt_m } => Some(ack(CommandKind::Takeoff, v.takeoff(alt_m))),
-        Command::GoTo {
-            north_m,
-            east_m,
-            down_m,
-            yaw_rad,
-        } => {
-            let _ = v.set_position_target([north_m, east_m, down_m], yaw_rad);
+        Command::GoTo { .. } => {
+            if let Some((position_ned_m, yaw_rad)) = c.position_target() {
+                let _ = v.set_position_target(position_ned_m, yaw_rad);
+            }
             None
         }
         Command::Land => {
@@ -118,4 +115,16 @@ pub(crate) fn link_gap(t: f64, from_s: f64, to_s: f64) -> Option<Event> {
     } else {
         None
     }
+}
+
+/// A Ctrl-C with `--on-interrupt hold` at `now_s`: the executor commands the hold at once.
+pub(crate) fn ctrl_c_hold<E: crate::executor::FlightExecutor>(ex: &mut E, now_s: f64) {
+    let out = ex.handle(
+        now_s,
+        Event::Stop {
+            reason: "interrupted by Ctrl-C".into(),
+            action: crate::executor::FailsafeAction::Hold,
+        },
+    );
+    assert_eq!(out.commands, vec![Command::Hold]);
 }

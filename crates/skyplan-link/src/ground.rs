@@ -579,6 +579,12 @@ impl GroundStation {
         let from_vehicle = self
             .vehicle
             .is_none_or(|(sys, _)| u32::from(sys) == r.header.system_id);
+        // Telemetry arrives: the stream requests work.
+        self.streaming |= from_vehicle
+            && matches!(
+                r.message,
+                MavMessage::GLOBAL_POSITION_INT(_) | MavMessage::ATTITUDE(_)
+            );
         match &r.message {
             MavMessage::HEARTBEAT(h) => {
                 if h.mavtype == MavType::MAV_TYPE_GCS
@@ -607,7 +613,6 @@ impl GroundStation {
             _ if !from_vehicle => None,
             MavMessage::GLOBAL_POSITION_INT(g) => {
                 self.global = Some(g.clone());
-                self.streaming = true;
                 None
             }
             MavMessage::LOCAL_POSITION_NED(l) => {
@@ -616,7 +621,6 @@ impl GroundStation {
             }
             MavMessage::ATTITUDE(a) => {
                 self.yaw_rad = f64::from(a.yaw);
-                self.streaming = true;
                 None
             }
             MavMessage::GPS_GLOBAL_ORIGIN(o) => {

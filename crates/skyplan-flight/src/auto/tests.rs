@@ -118,12 +118,17 @@ fn ready_with(targets: &[Target], config: ExecutorConfig) -> (AutoExecutor, SimV
     (ex, v)
 }
 
+/// Flies the square route undisturbed, to completion.
+fn fly_the_route(lose_reached: bool) -> (AutoExecutor, SimVehicle, Flight) {
+    let (mut ex, mut v) = ready(&route());
+    let f = fly(&mut ex, &mut v, lose_reached, |_, _, _| None);
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    (ex, v, f)
+}
+
 #[test]
 fn the_uploaded_mission_is_flown_in_auto_with_every_waypoint_reported() {
-    let targets = route();
-    let (mut ex, mut v) = ready(&targets);
-    let f = fly(&mut ex, &mut v, false, |_, _, _| None);
-    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    let (ex, v, f) = fly_the_route(false);
     use FlightState::*;
     assert_eq!(
         f.states,
@@ -152,10 +157,7 @@ fn the_uploaded_mission_is_flown_in_auto_with_every_waypoint_reported() {
 
 #[test]
 fn progress_from_mission_current_alone_when_item_reached_is_lost() {
-    let targets = route();
-    let (mut ex, mut v) = ready(&targets);
-    let f = fly(&mut ex, &mut v, true, |_, _, _| None);
-    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    let (ex, _, _) = fly_the_route(true);
     assert_eq!(ex.reached().len(), 4);
 }
 

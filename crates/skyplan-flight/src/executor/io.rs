@@ -193,6 +193,21 @@ pub enum Command {
     ReturnToLaunch,
 }
 
+impl Command {
+    /// A [`Command::GoTo`]'s position (metres north, east, down of home) and heading.
+    pub fn position_target(&self) -> Option<([f64; 3], f64)> {
+        match *self {
+            Command::GoTo {
+                north_m,
+                east_m,
+                down_m,
+                yaw_rad,
+            } => Some(([north_m, east_m, down_m], yaw_rad)),
+            _ => None,
+        }
+    }
+}
+
 /// The vehicle's flight mode, as far as the executors care.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum VehicleMode {

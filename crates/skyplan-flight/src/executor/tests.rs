@@ -1,7 +1,7 @@
 use super::*;
 use crate::executor::{CommandKind, Note, Outcome};
 use crate::sim::{SimConfig, SimMode, SimVehicle};
-use crate::testkit::{apply, hovering, link_gap, route, telemetry, wp};
+use crate::testkit::{apply, ctrl_c_hold, hovering, link_gap, route, telemetry, wp};
 use std::f64::consts::PI;
 
 struct Flight {
@@ -543,14 +543,7 @@ fn failsafe_hold_and_ctrl_c_hold_leave_the_vehicle_holding() {
 #[test]
 fn an_unconfirmed_hold_is_retried_then_becomes_a_landing() {
     let (mut ex, t) = at_waypoint_state();
-    let out = ex.handle(
-        1.0,
-        Event::Stop {
-            reason: "interrupted by Ctrl-C".into(),
-            action: FailsafeAction::Hold,
-        },
-    );
-    assert_eq!(out.commands, vec![Command::Hold]);
+    ctrl_c_hold(&mut ex, 1.0);
     assert!(ex.handle(1.5, Event::Telemetry(t)).commands.is_empty());
     assert_eq!(
         ex.handle(2.1, Event::Telemetry(t)).commands,
@@ -613,14 +606,7 @@ fn land_times_after_an_unconfirmed_hold<E: FlightExecutor>(ex: &mut E) -> Vec<f6
     ex.handle(0.1, Event::Mode(VehicleMode::Auto));
     ex.handle(0.1, Event::Telemetry(t));
     assert_eq!(ex.state(), FlightState::Waypoint);
-    let out = ex.handle(
-        1.0,
-        Event::Stop {
-            reason: "interrupted by Ctrl-C".into(),
-            action: FailsafeAction::Hold,
-        },
-    );
-    assert_eq!(out.commands, vec![Command::Hold]);
+    ctrl_c_hold(ex, 1.0);
     let mut lands = Vec::new();
     for k in 11..=150 {
         let now_s = f64::from(k) * 0.1;
