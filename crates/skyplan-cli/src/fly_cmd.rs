@@ -15,7 +15,9 @@ use skyplan_flight::executor::{
 };
 use skyplan_flight::upload::{GlobalWaypoint, UploadConfig, mission_items};
 use skyplan_frames::{Lla, LocalFrame, Ned};
-use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update};
+use skyplan_link::ground::{
+    Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update, grid_convergence_rad,
+};
 use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
 use skyplan_link::{Address, Role};
 use skyplan_pipeline::{PlanError, Position, plan};
@@ -475,8 +477,23 @@ fn fly(
             .map(|(log, o)| (log, Ended::Flight(o)));
     }
     // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
-    let waypoints: Vec<GlobalWaypoint> =
-        mission.waypoints.iter().map(GlobalWaypoint::from).collect();
+    // The plan's headings are from the map's grid north; the vehicle's are from true north.
+    let waypoints: Vec<GlobalWaypoint> = mission
+        .waypoints
+        .iter()
+        .map(|w| {
+            let at = Lla {
+                lat_deg: w.lat_deg,
+                lon_deg: w.lon_deg,
+                alt_m: 0.0,
+            };
+            let convergence_rad = grid_convergence_rad(frame, at).unwrap_or(0.0);
+            GlobalWaypoint {
+                heading_rad: w.heading_rad + convergence_rad,
+                ..GlobalWaypoint::from(w)
+            }
+        })
+        .collect();
     let home = match info.autopilot {
         Autopilot::Px4 => None,
         _ => Some((info.position.lat_deg, info.position.lon_deg)),
