@@ -984,8 +984,17 @@ pub fn grid_convergence_rad(frame: &LocalFrame, at: Lla) -> Result<f64, GroundEr
             ..ned
         })
         .map_err(bad)?;
-    let mid_lat = ((at.lat_deg + ahead.lat_deg) / 2.0).to_radians();
-    Ok(((ahead.lon_deg - at.lon_deg) * mid_lat.cos()).atan2(ahead.lat_deg - at.lat_deg))
+    // WGS84 radii of curvature there: north (meridian) and east (prime vertical).
+    const A_M: f64 = 6_378_137.0;
+    const E2: f64 = 6.694_379_990_14e-3;
+    let lat = ((at.lat_deg + ahead.lat_deg) / 2.0).to_radians();
+    let w = 1.0 - E2 * lat.sin().powi(2);
+    let (m_north, m_east) = (A_M * (1.0 - E2) / w.powf(1.5), A_M / w.sqrt() * lat.cos());
+    let (dn, de) = (
+        (ahead.lat_deg - at.lat_deg).to_radians() * m_north,
+        (ahead.lon_deg - at.lon_deg).to_radians() * m_east,
+    );
+    Ok(de.atan2(dn))
 }
 
 /// An item as MISSION_ITEM_INT (relative-altitude frame, auto-continue; a CONDITION_YAW carries
@@ -1034,3 +1043,51 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
 
 /// `type_mask` of a position + yaw target: ignore velocity, acceleration and yaw rate.
 pub const POSITION_AND_YAW: u16 = 0x9F8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_convergence_matches_the_utm_formula() {
+        // UTM convergence (Snyder, "Map Projections — A Working Manual", eq. 8-15 without
+        // higher terms): γ = Δλ sin φ [1 + Δλ² cos² φ (1 + 3η² + 2η⁴) / 3], η² = e'² cos² φ,
+        // Δλ from the zone's central meridian; grid north is east of true north east of it.
+        let frame = LocalFrame::new(Lla {
+            lat_deg: 37.792480,
+            lon_deg: -122.397450,
+            alt_m: 0.0,
+        })
+        .unwrap();
+        for (lat_deg, lon_deg) in [(37.792480, -122.397450), (37.80, -122.45), (37.70, -122.90)] {
+            let phi = f64::to_radians(lat_deg);
+            let dl = f64::to_radians(lon_deg + 123.0); // zone 10: central meridian 123° W
+            let eta2 = 6.739_496_742e-3 * phi.cos().powi(2);
+            let gamma = dl
+                * phi.sin()
+                * (1.0
+                    + dl.powi(2) * phi.cos().powi(2) * (1.0 + 3.0 * eta2 + 2.0 * eta2 * eta2)
+                        / 3.0);
+            let got = grid_convergence_rad(
+                &frame,
+                Lla {
+                    lat_deg,
+                    lon_deg,
+                    alt_m: 0.0,
+                },
+            )
+            .unwrap();
+            assert!(
+                (got - gamma).to_degrees().abs() < 2e-4,
+                "{lat_deg} {lon_deg}: {} vs {}",
+                got.to_degrees(),
+                gamma.to_degrees()
+            );
+        }
+        // At the FCND home: 0.37°, as FLIGHT-NOTES measured.
+        let home = grid_convergence_rad(&frame, frame.home())
+            .unwrap()
+            .to_degrees();
+        assert!((home - 0.369).abs() < 0.001, "{home}");
+    }
+}
