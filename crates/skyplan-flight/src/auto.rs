@@ -52,6 +52,9 @@ impl From<&MissionPlan> for MissionLayout {
 #[derive(Debug, Clone)]
 pub struct AutoMission {
     layout: MissionLayout,
+    /// The item a MISSION_ITEM_REACHED said before this mission ran (ArduPilot streams the last
+    /// one reached when asked to): ignored until another one comes.
+    stale_reached: Option<u16>,
     seen_auto: bool,
     takeoff_done: bool,
     land_started: bool,
@@ -84,6 +87,7 @@ impl Executor<AutoMission> {
         }
         let strategy = AutoMission {
             layout,
+            stale_reached: None,
             seen_auto: false,
             takeoff_done: false,
             land_started: false,
@@ -161,12 +165,17 @@ impl Strategy for AutoMission {
 
     fn observe(&mut self, core: &mut Core, now_s: f64, event: &Event, out: &mut Output) {
         match *event {
-            Event::MissionItemReached(seq)
-                if !matches!(core.state, FlightState::Manual | FlightState::Arming) =>
-            {
+            // Not an item of this mission (ArduPilot says 65535 before any).
+            Event::MissionItemReached(seq) | Event::MissionCurrent(seq)
+                if seq > self.layout.land_seq => {}
+            // Before this mission runs, a report is the previous flight's (or a stream's
+            // repeat of it): remembered, not counted, until another item is reported.
+            Event::MissionItemReached(seq) if !self.seen_auto => self.stale_reached = Some(seq),
+            Event::MissionItemReached(seq) if self.stale_reached == Some(seq) => {}
+            Event::MissionItemReached(seq) => {
+                self.stale_reached = None;
                 self.passed(core, now_s, seq, true, out);
             }
-            // Only once the mission runs: before, it is the previous flight's or 0.
             Event::MissionCurrent(seq) if self.seen_auto => {
                 self.passed(core, now_s, seq, false, out);
             }

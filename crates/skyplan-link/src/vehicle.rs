@@ -148,8 +148,9 @@ pub struct SimServer {
 }
 
 /// The streamed messages, ArduCopter's way: off until requested. Message id and default period.
-const STREAMS: [(u32, f64); 6] = [
+const STREAMS: [(u32, f64); 7] = [
     (ATTITUDE_ID, 0.1),
+    (MISSION_ITEM_REACHED_ID, 1.0),
     (LOCAL_POSITION_NED_ID, 0.1),
     (GLOBAL_POSITION_INT_ID, 0.1),
     (MISSION_CURRENT_ID, 0.5),
@@ -175,8 +176,7 @@ impl Streams {
     /// SET_MESSAGE_INTERVAL: −1 stops, 0 is the default rate; `false` for an unknown message.
     fn set_interval(&mut self, id: u32, interval_us: f32) -> bool {
         let Some(k) = STREAMS.iter().position(|(m, _)| *m == id) else {
-            // MISSION_ITEM_REACHED is sent when it happens, requested or not.
-            return id == MISSION_ITEM_REACHED_ID;
+            return false;
         };
         self.period_s[k] = if interval_us < 0.0 {
             None
@@ -194,10 +194,10 @@ impl Streams {
     #[allow(deprecated)]
     fn request(&mut self, stream: MavDataStream, rate_hz: u16, start: bool) {
         let ids: &[u32] = match stream {
-            MavDataStream::MAV_DATA_STREAM_ALL => &[30, 32, 33, 42, 49, 245],
+            MavDataStream::MAV_DATA_STREAM_ALL => &[30, 32, 33, 42, 46, 49, 245],
             MavDataStream::MAV_DATA_STREAM_POSITION => &[32, 33],
             MavDataStream::MAV_DATA_STREAM_EXTRA1 => &[30],
-            MavDataStream::MAV_DATA_STREAM_EXTENDED_STATUS => &[42, 49, 245],
+            MavDataStream::MAV_DATA_STREAM_EXTENDED_STATUS => &[42, 46, 49, 245],
             _ => &[],
         };
         let interval_us = if start && rate_hz > 0 {
@@ -337,6 +337,7 @@ impl SimServer {
             home_alt_m: cfg.home.alt_m,
             ekf_delay_s: cfg.ekf_delay_s.max(0.0),
             streams: Streams::default(),
+            last_reached: u16::MAX,
         };
         let mut last_gcs = Instant::now();
         let mut upload: Option<Upload> = None;
@@ -371,6 +372,7 @@ impl SimServer {
                     match e {
                         skyplan_flight::sim::SimEvent::MissionItemReached(seq) => {
                             note(SimNote::MissionItemReached(seq));
+                            side.last_reached = seq;
                             if !dropped && let Some(l) = &link {
                                 let _ = l.send(&MavMessage::MISSION_ITEM_REACHED(
                                     MISSION_ITEM_REACHED_DATA { seq },
@@ -549,6 +551,9 @@ struct Side {
     home_alt_m: f64,
     ekf_delay_s: f64,
     streams: Streams,
+    /// The last mission item reached (65535: none yet), which a requested MISSION_ITEM_REACHED
+    /// stream repeats, as ArduPilot's does.
+    last_reached: u16,
 }
 
 impl Side {
@@ -626,6 +631,11 @@ impl Side {
                     MavLandedState::MAV_LANDED_STATE_IN_AIR
                 },
             }),
+            MISSION_ITEM_REACHED_ID => {
+                MavMessage::MISSION_ITEM_REACHED(MISSION_ITEM_REACHED_DATA {
+                    seq: self.last_reached,
+                })
+            }
             // As ArduPilot: in every mode, once there is a mission.
             MISSION_CURRENT_ID if mission_len > 1 => {
                 MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {

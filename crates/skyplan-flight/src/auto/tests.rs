@@ -309,3 +309,26 @@ fn a_hop_at_40_m_lands_in_landing_without_the_land_item_reported() {
     assert!(alt > 35.0, "LANDING began at {alt} m");
     assert!(!v.state().armed && v.state().on_ground);
 }
+
+#[test]
+fn reports_of_no_item_or_of_a_previous_flight_count_for_nothing() {
+    // ArduPilot streams MISSION_ITEM_REACHED when asked: 65535 before any item, else the last
+    // one reached — perhaps by the previous flight (its land item, 6 here).
+    for stale in [u16::MAX, 2 + 2 * 4] {
+        let targets = route();
+        let (mut ex, mut v) = ready(&targets);
+        let f = fly(&mut ex, &mut v, false, |t, v, _| {
+            // Repeated until this mission's take-off is reached.
+            (v.state().mission_current <= 1 && t < 30.0).then_some(Event::MissionItemReached(stale))
+        });
+        assert_eq!(
+            ex.outcome(),
+            Some(&Outcome::Completed),
+            "{stale}: {:?}",
+            f.states
+        );
+        for r in &ex.reached()[1..] {
+            assert!(r.horizontal_error_m <= 1.6, "{stale}: {r:?}");
+        }
+    }
+}
