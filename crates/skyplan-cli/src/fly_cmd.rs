@@ -508,7 +508,7 @@ fn fly(
         opts.request.spec.alt_m,
         targets.len(),
         if condition_yaw {
-            " (each followed by CONDITION_YAW)"
+            " (each after a CONDITION_YAW to its heading)"
         } else {
             ""
         }

@@ -31,7 +31,8 @@ pub struct MissionLayout {
     pub takeoff_seq: u16,
     /// The first waypoint's item; waypoint `k` is item `first_waypoint_seq + waypoint_stride · k`.
     pub first_waypoint_seq: u16,
-    /// Items per waypoint (2 when each NAV_WAYPOINT is followed by its CONDITION_YAW).
+    /// Items per waypoint (2 when each NAV_WAYPOINT is preceded by its CONDITION_YAW); the land
+    /// item follows the last waypoint.
     pub waypoint_stride: u16,
     /// The NAV_LAND item.
     pub land_seq: u16,
@@ -71,8 +72,9 @@ impl Executor<AutoMission> {
         config: ExecutorConfig,
     ) -> Result<Self, ConfigError> {
         let stride = usize::from(layout.waypoint_stride);
-        if usize::from(layout.land_seq)
-            != usize::from(layout.first_waypoint_seq) + stride * targets.len()
+        if targets.is_empty()
+            || usize::from(layout.land_seq)
+                != usize::from(layout.first_waypoint_seq) + stride * (targets.len() - 1) + 1
             || layout.takeoff_seq >= layout.first_waypoint_seq
             || stride == 0
         {

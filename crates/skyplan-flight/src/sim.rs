@@ -130,7 +130,7 @@ pub enum SimMissionItem {
     },
     /// Fly to a point (NAV_WAYPOINT). As ArduCopter with its default `WP_YAW_BEHAVIOR`, the
     /// vehicle faces the waypoint while flying to it (`param4` is ignored) unless a
-    /// [`SimMissionItem::Yaw`] follows it.
+    /// [`SimMissionItem::Yaw`] comes right before it.
     Waypoint {
         /// Metres north of home.
         north_m: f64,
@@ -139,8 +139,9 @@ pub enum SimMissionItem {
         /// Metres above home.
         alt_m: f64,
     },
-    /// CONDITION_YAW (absolute): as on ArduCopter, it runs alongside the NAV_WAYPOINT before it,
-    /// so the vehicle faces this heading while flying to that waypoint and holds it there.
+    /// CONDITION_YAW (absolute): as on ArduCopter, which starts the "do" items between two
+    /// NAV_WAYPOINTs when the first is reached, the vehicle faces this heading on the way to the
+    /// next waypoint and holds it there.
     Yaw {
         /// Heading, radians clockwise from north.
         yaw_rad: f64,
@@ -522,9 +523,10 @@ impl SimVehicle {
                 } => {
                     let p = [north_m, east_m, -alt_m];
                     let d_h = norm2([p[0] - self.position[0], p[1] - self.position[1]]);
-                    // A CONDITION_YAW after the waypoint runs alongside it; else face the
-                    // waypoint (WP_YAW_BEHAVIOR 2), keeping the heading in the last 2 m.
-                    let yaw = match self.mission.get(self.mission_current + 1) {
+                    // A CONDITION_YAW before the waypoint holds its heading on the way; else
+                    // face the waypoint (WP_YAW_BEHAVIOR 2), keeping the heading in the last 2 m.
+                    let before = self.mission_current.checked_sub(1);
+                    let yaw = match before.and_then(|i| self.mission.get(i)) {
                         Some(SimMissionItem::Yaw { yaw_rad }) => *yaw_rad,
                         _ if d_h > 2.0 => (p[1] - self.position[1]).atan2(p[0] - self.position[0]),
                         _ => self.target.map_or(self.yaw_rad, |(_, y)| y),
@@ -539,7 +541,7 @@ impl SimVehicle {
                     return;
                 }
                 SimMissionItem::Yaw { .. } => {
-                    // Done with its waypoint (the vehicle turns within the yaw-rate limit).
+                    // Started with the next waypoint (the vehicle turns within the yaw-rate limit).
                     events.push(SimEvent::MissionItemReached(seq));
                     self.mission_current += 1;
                 }
@@ -676,8 +678,8 @@ mod tests {
         v.set_mission(vec![
             SimMissionItem::Takeoff { alt_m: 5.0 },
             wp(10.0, 0.0),
-            wp(10.0, 10.0),
             SimMissionItem::Yaw { yaw_rad: PI },
+            wp(10.0, 10.0),
             wp(-10.0, 10.0),
             SimMissionItem::Land,
         ]);
@@ -707,13 +709,13 @@ mod tests {
             wrap_angle_rad(reached[4].2 - PI).abs() < 0.05,
             "{reached:?}"
         );
-        // … but a CONDITION_YAW after a waypoint holds its heading on the way there and on
+        // … but a CONDITION_YAW before a waypoint holds its heading on the way there and on
         // arrival (the leg to (10, 10) flies east, the vehicle faces south).
         assert!(
-            wrap_angle_rad(reached[2].2 - PI).abs() < 0.05,
+            wrap_angle_rad(reached[3].2 - PI).abs() < 0.05,
             "{reached:?}"
         );
-        assert!((wrap_angle_rad(reached[2].2) - FRAC_PI_2).abs() > 1.0);
+        assert!((wrap_angle_rad(reached[3].2) - FRAC_PI_2).abs() > 1.0);
         // The land item: flown in AUTO, reported only at the touchdown.
         assert!(!modes_in_descent.is_empty());
         assert!(modes_in_descent.iter().all(|m| *m == SimMode::Auto));

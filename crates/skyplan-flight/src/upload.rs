@@ -2,9 +2,10 @@
 //!
 //! [`mission_items`] turns a planned mission into the items a flight controller flies in AUTO:
 //! (ArduPilot's item 0, the home) → NAV_TAKEOFF → one NAV_WAYPOINT per waypoint (its heading as
-//! the yaw in `param4`, degrees, which PX4 honours), each followed on ArduPilot by a
-//! CONDITION_YAW to the same heading (ArduCopter ignores `param4` and runs the CONDITION_YAW
-//! alongside the waypoint before it) → NAV_LAND, all in the relative-altitude frame
+//! the yaw in `param4`, degrees, which PX4 honours), each preceded on ArduPilot by a
+//! CONDITION_YAW to the same heading (ArduCopter ignores `param4`; it starts the "do" commands
+//! between two NAV commands when the first completes, and its CONDITION_YAW then holds the heading
+//! over the next leg) → NAV_LAND, all in the relative-altitude frame
 //! (`MAV_FRAME_GLOBAL_RELATIVE_ALT_INT`). [`MissionUpload`] is the protocol: MISSION_COUNT → the
 //! vehicle requests each item (MISSION_REQUEST_INT or the older MISSION_REQUEST, answered the
 //! same way) → MISSION_ITEM_INT → MISSION_ACK, with a retry when the vehicle goes quiet and a
@@ -31,8 +32,8 @@ pub enum ItemCommand {
     Takeoff,
     /// MAV_CMD_NAV_LAND (21): land at the point.
     Land,
-    /// MAV_CMD_CONDITION_YAW (115): face `yaw_deg` (absolute, `param1`), alongside the
-    /// NAV_WAYPOINT before it.
+    /// MAV_CMD_CONDITION_YAW (115): face `yaw_deg` (absolute, `param1`) on the way to the
+    /// NAV_WAYPOINT after it.
     ConditionYaw,
 }
 
@@ -80,7 +81,7 @@ pub struct MissionPlan {
     /// The NAV_WAYPOINT of the first waypoint; waypoint `k` is item
     /// `first_waypoint_seq + waypoint_stride · k`.
     pub first_waypoint_seq: u16,
-    /// Items per waypoint: 1, or 2 when each NAV_WAYPOINT is followed by its CONDITION_YAW.
+    /// Items per waypoint: 1, or 2 when each NAV_WAYPOINT is preceded by its CONDITION_YAW.
     pub waypoint_stride: u16,
     /// The NAV_LAND item (the last one).
     pub land_seq: u16,
@@ -133,8 +134,8 @@ pub fn yaw_param_deg(heading_rad: f64) -> f32 {
 
 /// The mission items for these waypoints. `home` (latitude, longitude) adds ArduPilot's item 0,
 /// the home, which it overwrites and never flies; PX4 starts at item 0, so pass `None` for it.
-/// `condition_yaw` follows each NAV_WAYPOINT with a CONDITION_YAW to its heading (for ArduCopter,
-/// which ignores `param4`).
+/// `condition_yaw` puts a CONDITION_YAW to each waypoint's heading before its NAV_WAYPOINT (for
+/// ArduCopter, which ignores `param4`).
 pub fn mission_items(
     waypoints: &[GlobalWaypoint],
     home: Option<(f64, f64)>,
@@ -187,9 +188,12 @@ pub fn mission_items(
         first.alt_m,
         f32::NAN,
     );
-    let first_waypoint_seq = takeoff_seq + 1;
+    let first_waypoint_seq = takeoff_seq + waypoint_stride;
     for w in waypoints {
         let yaw_deg = yaw_param_deg(w.heading_rad);
+        if condition_yaw {
+            push(ItemCommand::ConditionYaw, 0.0, 0.0, 0.0, yaw_deg);
+        }
         push(
             ItemCommand::Waypoint,
             w.lat_deg,
@@ -197,9 +201,6 @@ pub fn mission_items(
             w.alt_m,
             yaw_deg,
         );
-        if condition_yaw {
-            push(ItemCommand::ConditionYaw, 0.0, 0.0, 0.0, yaw_deg);
-        }
     }
     let land_seq = push(ItemCommand::Land, last.lat_deg, last.lon_deg, 0.0, f32::NAN);
     Ok(MissionPlan {
@@ -437,7 +438,7 @@ mod tests {
     }
 
     #[test]
-    fn on_ardupilot_each_waypoint_is_followed_by_its_condition_yaw() {
+    fn on_ardupilot_each_waypoint_is_preceded_by_its_condition_yaw() {
         let p = mission_items(&wps(), Some((37.7924801, -122.3974504)), true).unwrap();
         let cmds: Vec<ItemCommand> = p.items.iter().map(|i| i.command).collect();
         use ItemCommand::*;
@@ -446,10 +447,10 @@ mod tests {
             [
                 Waypoint,
                 Takeoff,
-                Waypoint,
                 ConditionYaw,
                 Waypoint,
                 ConditionYaw,
+                Waypoint,
                 Land
             ]
         );
@@ -461,11 +462,11 @@ mod tests {
                 p.waypoint_stride,
                 p.land_seq
             ),
-            (1, 2, 2, 6)
+            (1, 3, 2, 6)
         );
-        assert_eq!((p.items[3].yaw_deg, p.items[5].yaw_deg), (0.0, 270.0));
+        assert_eq!((p.items[2].yaw_deg, p.items[4].yaw_deg), (0.0, 270.0));
         let wp_of: Vec<Option<usize>> = (0..7).map(|s| p.waypoint_index(s)).collect();
-        assert_eq!(wp_of, [None, None, Some(0), None, Some(1), None, None]);
+        assert_eq!(wp_of, [None, None, None, Some(0), None, Some(1), None]);
     }
 
     #[test]
