@@ -361,8 +361,8 @@ pub struct FlyArgs {
     /// A vehicle silent this long (no heartbeat, wall seconds) has lost the link.
     #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = parse_finite)]
     pub link_timeout_s: f64,
-    /// How long to wait for the vehicle's heartbeat and position, wall seconds.
-    #[arg(long, value_name = "S", default_value_t = 30.0, value_parser = parse_finite)]
+    /// How long to wait for the vehicle's heartbeat, EKF origin and position, vehicle seconds (wall seconds × --speedup); ArduCopter's EKF needs ~40 s after boot.
+    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = parse_finite)]
     pub wait_s: f64,
     /// Waypoint deadband, horizontal metres.
     #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
@@ -379,6 +379,9 @@ pub struct FlyArgs {
     /// What to command when a lost link comes back within 6 × --link-timeout-s: land, rtl or hold [default: none, a lost link ends the flight at once].
     #[arg(long, value_enum, value_name = "ACTION")]
     pub failsafe: Option<crate::fly_cmd::FailsafeArg>,
+    /// With --sim: simulated seconds after boot until the vehicle's EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
+    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = parse_finite, requires = "sim")]
+    pub sim_ekf_delay_s: f64,
     /// Fault injection for tests: the simulated vehicle goes silent after this many simulated seconds.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim")]
     pub sim_drop_link_after_s: Option<f64>,
@@ -412,6 +415,9 @@ pub struct SimArgs {
     /// Stop after this many wall seconds (default: run until killed).
     #[arg(long, value_name = "S", value_parser = parse_finite)]
     pub duration_s: Option<f64>,
+    /// Simulated seconds after boot until the EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
+    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = parse_finite)]
+    pub ekf_delay_s: f64,
     /// Fault injection for tests: go silent after this many simulated seconds.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true)]
     pub drop_link_after_s: Option<f64>,

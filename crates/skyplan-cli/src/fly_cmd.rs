@@ -15,7 +15,9 @@ use skyplan_flight::executor::{
 };
 use skyplan_flight::upload::{GlobalWaypoint, UploadConfig, mission_items};
 use skyplan_frames::{Lla, LocalFrame, Ned};
-use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update};
+use skyplan_link::ground::{
+    Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update, grid_convergence_rad,
+};
 use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
 use skyplan_link::{Address, Role};
 use skyplan_plan::{PlanRequest, Session, World};
@@ -231,10 +233,18 @@ pub fn run(args: FlyArgs) -> Result<()> {
                 .map_err(|e| bad_input(format!("start: {e}")))?,
             (None, None) => frame.home(),
         };
+        if args.sim_ekf_delay_s < 0.0 {
+            return Err(bad_input(format!(
+                "--sim-ekf-delay-s: expected 0 or more, found {}",
+                args.sim_ekf_delay_s
+            )));
+        }
         let config = SimServerConfig {
             speedup: args.speedup,
             drop_link_after_s: args.sim_drop_link_after_s,
             link_gap_s: args.sim_link_gap_s,
+            ekf_delay_s: args.sim_ekf_delay_s,
+            map_home: Some(frame.home()),
             ..SimServerConfig::at(home)
         };
         let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config)
@@ -396,19 +406,25 @@ fn fly(
     let mut gcs = GroundStation::connect(address, ground).or_exit(Kind::Runtime)?;
     gcs.set_interrupt(Arc::clone(&ctrl_c.interrupt));
     println!("link       {address}: connected, sending heartbeats at 1 Hz");
-    let info = gcs
-        .wait_for_vehicle(Duration::from_secs_f64(a.wait_s))
-        .or_exit(Kind::Runtime)?;
+    let info = wait_for_vehicle(&mut gcs, a)?;
     if let Some(s) = sim {
         s.print_notes();
     }
     println!(
-        "vehicle    system {} ({:?}) at lat {:.7}, lon {:.7}, {:.2} m above home",
+        "vehicle    system {} ({}) at lat {:.7}, lon {:.7}, {:.2} m above home; {}",
         info.system_id,
-        info.autopilot,
+        match info.autopilot {
+            Autopilot::ArduPilot => "ArduPilot",
+            Autopilot::Px4 => "PX4",
+            Autopilot::Other => "another autopilot",
+        },
         info.position.lat_deg,
         info.position.lon_deg,
-        info.position.alt_m
+        info.position.alt_m,
+        match info.ekf_origin {
+            Some(o) => format!("EKF origin lat {:.7}, lon {:.7}", o.lat_deg, o.lon_deg),
+            None => "no EKF origin reported".to_string(),
+        }
     );
 
     // PLANNING: the heartbeat thread keeps the link alive meanwhile.
@@ -462,19 +478,41 @@ fn fly(
             .map(|(log, o)| (log, Ended::Flight(o)));
     }
     // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
-    let waypoints: Vec<GlobalWaypoint> =
-        mission.waypoints.iter().map(GlobalWaypoint::from).collect();
+    // The plan's headings are from the map's grid north; the vehicle's are from true north.
+    let waypoints: Vec<GlobalWaypoint> = mission
+        .waypoints
+        .iter()
+        .map(|w| {
+            let at = Lla {
+                lat_deg: w.lat_deg,
+                lon_deg: w.lon_deg,
+                alt_m: 0.0,
+            };
+            let convergence_rad = grid_convergence_rad(frame, at).unwrap_or(0.0);
+            GlobalWaypoint {
+                heading_rad: w.heading_rad + convergence_rad,
+                ..GlobalWaypoint::from(w)
+            }
+        })
+        .collect();
     let home = match info.autopilot {
         Autopilot::Px4 => None,
         _ => Some((info.position.lat_deg, info.position.lon_deg)),
     };
-    let items = mission_items(&waypoints, home).map_err(bad_input)?;
+    // ArduCopter ignores NAV_WAYPOINT's yaw: a CONDITION_YAW after each waypoint sets it.
+    let condition_yaw = info.autopilot == Autopilot::ArduPilot;
+    let items = mission_items(&waypoints, home, condition_yaw).map_err(bad_input)?;
     println!(
-        "mission    {} items: {}take-off to {} m, {} waypoints with headings, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
         if home.is_some() { "home, " } else { "" },
         request.alt_m.unwrap_or(5.0),
-        targets.len()
+        targets.len(),
+        if condition_yaw {
+            " (each after a CONDITION_YAW to its heading)"
+        } else {
+            ""
+        }
     );
     let report = gcs
         .upload_mission(&items, UploadConfig::default())
@@ -490,6 +528,35 @@ fn fly(
     let mut ex =
         AutoExecutor::new(&targets, MissionLayout::from(&items), config).map_err(bad_input)?;
     fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c).map(|(log, o)| (log, Ended::Flight(o)))
+}
+
+/// Waits for the vehicle (heartbeat, EKF origin, position) up to `--wait-s` vehicle seconds,
+/// showing what it waits for on the progress line (and, without a terminal, once per change).
+fn wait_for_vehicle(
+    gcs: &mut GroundStation,
+    a: &FlyView,
+) -> Result<skyplan_link::ground::VehicleInfo> {
+    let bar = progress_bar(0);
+    bar.set_prefix("WAITING");
+    let mut last = None;
+    let wall = Duration::from_secs_f64(a.wait_s / a.speedup);
+    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
+        if last != Some(waiting) {
+            last = Some(waiting);
+            say(&format!(
+                "wait       {:7.1} s  for the vehicle's {waiting}",
+                wall_s * a.speedup
+            ));
+        }
+        bar.set_message(format!(
+            "waiting for the vehicle's {waiting}  t {:.1} s of {:.0} s",
+            wall_s * a.speedup,
+            a.wait_s
+        ));
+        bar.tick();
+    });
+    bar.set_message("");
+    info.or_exit(Kind::Runtime)
 }
 
 /// Prints a line, above the progress bar when there is one.
@@ -683,6 +750,8 @@ fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
             "target_east_m",
             "target_alt_m",
             "target_heading_deg",
+            "lat_deg",
+            "lon_deg",
         ]
         .iter()
         .map(|s| s.to_string())
@@ -708,6 +777,7 @@ fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
             ]),
             None => rec.extend(std::iter::repeat_n(String::new(), 5)),
         }
+        rec.extend([format!("{:.7}", r.lat_deg), format!("{:.7}", r.lon_deg)]);
         write(&mut w, rec)?;
     }
     w.into_inner()

@@ -47,9 +47,21 @@ pub fn run(args: SimArgs) -> Result<()> {
             alt_m: 0.0,
         },
     };
+    if args.ekf_delay_s < 0.0 {
+        return Err(bad_input(format!(
+            "--ekf-delay-s: expected 0 or more, found {}",
+            args.ekf_delay_s
+        )));
+    }
     let config = SimServerConfig {
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
+        ekf_delay_s: args.ekf_delay_s,
+        map_home: Some(Lla {
+            lat_deg: map.home.lat_deg,
+            lon_deg: map.home.lon_deg,
+            alt_m: 0.0,
+        }),
         ..SimServerConfig::at(home)
     };
     let server = SimServer::bind(&address, config).or_exit(Kind::Runtime)?;

@@ -158,8 +158,9 @@ fn fly_sim_upload_flies_the_mission_in_auto() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no result line:\n{}", r.stdout));
     assert!(n >= 2);
-    // Home, take-off, the waypoints, land: every item requested once and acknowledged.
-    let items = n + 3;
+    // Home, take-off, each waypoint and its CONDITION_YAW (ArduPilot), land: every item requested
+    // once and acknowledged.
+    let items = 2 * n + 3;
     assert!(
         r.stdout
             .contains(&format!("upload     accepted: {items} items in"))
@@ -444,6 +445,7 @@ fn pymavlink_drives_skyplan_sim() {
         String::from_utf8_lossy(&out.stderr)
     );
     for expected in [
+        "no telemetry before it is requested",
         "refusal reason: Takeoff: vehicle not armed",
         "mission upload accepted after 4 items",
         "took off to 95 % of 5 m",
@@ -715,4 +717,275 @@ fn failsafe_rtl_is_commanded_when_a_lost_link_comes_back() {
         "{first:?} → {last:?}"
     );
     assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+}
+
+/// The bundled map's frame (its home), to turn the vehicle's latitude/longitude into map metres.
+fn bundled_frame() -> skyplan_frames::LocalFrame {
+    let text = include_str!("../../../data/colliders.csv");
+    let map = skyplan_map::colliders::parse_colliders(text).unwrap();
+    skyplan_frames::LocalFrame::new(skyplan_frames::Lla {
+        lat_deg: map.home.lat_deg,
+        lon_deg: map.home.lon_deg,
+        alt_m: 0.0,
+    })
+    .unwrap()
+}
+
+/// Distance from a point to the segment a–b, metres (horizontal).
+fn to_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+}
+
+/// The vehicle's true track (its own GLOBAL_POSITION_INT latitude/longitude, logged as received)
+/// in the map frame, and the planned waypoints (north, east) from `--out`.
+/// Logged rows as (state, map north/east, altitude).
+type Track = Vec<(String, [f64; 2], f64)>;
+
+fn true_track_and_plan(dir: &Path) -> (Track, Vec<[f64; 2]>) {
+    let frame = bundled_frame();
+    let (header, rows) = read_log(&dir.join("flight.csv"));
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (lat, lon, alt) = (col("lat_deg"), col("lon_deg"), col("alt_m"));
+    let track = rows
+        .iter()
+        .map(|r| {
+            let ned = frame
+                .ned_from_lla(skyplan_frames::Lla {
+                    lat_deg: r[lat].parse().unwrap(),
+                    lon_deg: r[lon].parse().unwrap(),
+                    alt_m: 0.0,
+                })
+                .unwrap();
+            (
+                r[1].clone(),
+                [ned.north_m, ned.east_m],
+                r[alt].parse().unwrap(),
+            )
+        })
+        .collect();
+    let plan: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("route.json")).unwrap()).unwrap();
+    let waypoints = plan["waypoints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| [w[0].as_f64().unwrap(), w[1].as_f64().unwrap()])
+        .collect();
+    (track, waypoints)
+}
+
+#[test]
+fn on_a_long_route_the_true_track_stays_on_the_planned_segments() {
+    // The default route (~1 km) with the simulator's ArduPilot frame: true north, flat earth
+    // about its EKF origin, its latitude/longitude as ArduPilot's Location::offset gives them.
+    // The map frame's north is UTM grid north (0.37° off here) and its metres are the
+    // ellipsoid's: targets sent in the vehicle's LOCAL_NED frame would drift 0.4 % of the
+    // distance from home (~3.4 m at the goal); lat/lon targets keep it within the deadband.
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "50",
+            "--log",
+            "flight.csv",
+            "--out",
+            "route.json",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    let (track, plan) = true_track_and_plan(dir.path());
+    assert!(plan.len() >= 5, "{plan:?}");
+    let route_m: f64 = plan
+        .windows(2)
+        .map(|w| to_segment_m(w[0], w[1], w[1]))
+        .sum();
+    assert!(route_m > 800.0, "{route_m}");
+    let mut worst = (0.0f64, [0.0; 2]);
+    for (state, p, _) in track.iter().filter(|(s, _, _)| s == "WAYPOINT") {
+        let d = plan
+            .windows(2)
+            .map(|w| to_segment_m(*p, w[0], w[1]))
+            .fold(f64::INFINITY, f64::min);
+        if d > worst.0 {
+            worst = (d, *p);
+        }
+        assert_eq!(state, "WAYPOINT");
+    }
+    // The deadband (1 m) plus the simulator's braking overshoot.
+    assert!(
+        worst.0 < 1.25,
+        "true track {:.2} m off the plan at {:?}",
+        worst.0,
+        worst.1
+    );
+    let (_, end, end_alt) = track.last().unwrap();
+    let goal = plan.last().unwrap();
+    // The test can fail: a LOCAL_NED target of the goal's map N/E would put the vehicle where
+    // ArduPilot's flat-earth frame has that N/E, this far from the goal.
+    let frame = bundled_frame();
+    let home = frame.home();
+    let flat = skyplan_flight::flat_earth::FlatEarth::new(home.lat_deg, home.lon_deg);
+    let (lat_deg, lon_deg) = flat.lat_lon_from_ne(goal[0], goal[1]);
+    let local_ned_goal = frame
+        .ned_from_lla(skyplan_frames::Lla {
+            lat_deg,
+            lon_deg,
+            alt_m: 0.0,
+        })
+        .unwrap();
+    let frame_mismatch_m =
+        (local_ned_goal.north_m - goal[0]).hypot(local_ned_goal.east_m - goal[1]);
+    assert!(frame_mismatch_m > 2.0, "{frame_mismatch_m}");
+    let landing_error_m = (end[0] - goal[0]).hypot(end[1] - goal[1]);
+    assert!(
+        landing_error_m < 1.0,
+        "landed {landing_error_m:.2} m from the goal"
+    );
+    assert!(end_alt.abs() < 0.3);
+}
+
+#[test]
+fn a_hop_at_40_m_in_auto_lands_in_landing_and_disarms() {
+    // ArduCopter-like simulator: no stream until requested, the EKF ready after 5 s, and no
+    // MISSION_ITEM_REACHED for NAV_LAND before the touchdown.
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--upload",
+            "--goal-ne",
+            "10,0",
+            "--alt-m",
+            "40",
+            "--speedup",
+            "50",
+            "--log",
+            "flight.csv",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(r.stdout.contains("WAYPOINT → LANDING"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("result     landed and disarmed"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("CONDITION_YAW"), "{}", r.stdout);
+    let (header, rows) = read_log(&dir.path().join("flight.csv"));
+    let alt = header.iter().position(|h| h == "alt_m").unwrap();
+    // The descent from 40 m is logged as LANDING, not WAYPOINT.
+    let descending: Vec<&str> = rows
+        .iter()
+        .filter(|r| r[alt].parse::<f64>().unwrap() < 35.0)
+        .skip_while(|r| r[1] == "TAKEOFF" || r[1] == "ARMING" || r[1] == "MANUAL")
+        .map(|r| r[1].as_str())
+        .collect();
+    assert!(descending.len() > 20, "{}", descending.len());
+    assert!(
+        descending
+            .iter()
+            .all(|s| *s == "LANDING" || *s == "DISARMING" || *s == "MANUAL"),
+        "{descending:?}"
+    );
+    assert!(descending.contains(&"LANDING"));
+}
+
+#[test]
+fn a_slow_ekf_is_waited_for_and_named_when_it_never_comes() {
+    // The EKF needs 40 s of vehicle time (as ArduCopter SITL at boot): the default wait (90 s)
+    // covers it and says what it waits for…
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--sim-ekf-delay-s",
+            "40",
+            "--goal-ne",
+            "10,0",
+            "--speedup",
+            "50",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    for waiting in [
+        "for the vehicle's EKF origin (GPS_GLOBAL_ORIGIN)",
+        "for the vehicle's position (GLOBAL_POSITION_INT, LOCAL_POSITION_NED)",
+    ] {
+        assert!(
+            r.stdout.contains(waiting),
+            "missing {waiting:?}:\n{}",
+            r.stdout
+        );
+    }
+    assert!(r.stdout.contains("EKF origin lat 37.79"), "{}", r.stdout);
+    // …and a wait shorter than the EKF names what never came.
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--sim-ekf-delay-s",
+            "40",
+            "--wait-s",
+            "30",
+            "--goal-ne",
+            "10,0",
+            "--speedup",
+            "50",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(
+        r.stderr
+            .contains("no GLOBAL_POSITION_INT, no LOCAL_POSITION_NED within 0.6 s")
+            && r.stderr
+                .contains("the EKF has its origin but is not using GPS yet"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stderr.contains("no EKF origin"), "{}", r.stderr);
 }

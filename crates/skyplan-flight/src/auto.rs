@@ -10,9 +10,8 @@
 //! flight, the vehicle leaving AUTO (a pilot or failsafe took over), and lands on an abort.
 
 use crate::executor::{
-    Command, CommandKind, ConfigError, Event, ExecutorConfig, FailsafeAction, Failure, Faults,
-    FlightExecutor, FlightState, Note, Outcome, Output, PendingHold, Reached, Target, Telemetry,
-    VehicleMode, wrap_angle_rad,
+    Command, ConfigError, Core, Event, Executor, ExecutorConfig, Failure, FlightState, Output,
+    Strategy, Target, Telemetry, VehicleMode,
 };
 use crate::upload::MissionPlan;
 
@@ -30,8 +29,11 @@ pub const LEFT_AUTO_GRACE_S: f64 = 1.5;
 pub struct MissionLayout {
     /// The NAV_TAKEOFF item.
     pub takeoff_seq: u16,
-    /// The first waypoint's item; waypoint `k` is item `first_waypoint_seq + k`.
+    /// The first waypoint's item; waypoint `k` is item `first_waypoint_seq + waypoint_stride · k`.
     pub first_waypoint_seq: u16,
+    /// Items per waypoint (2 when each NAV_WAYPOINT is preceded by its CONDITION_YAW); the land
+    /// item follows the last waypoint.
+    pub waypoint_stride: u16,
     /// The NAV_LAND item.
     pub land_seq: u16,
 }
@@ -41,148 +43,79 @@ impl From<&MissionPlan> for MissionLayout {
         Self {
             takeoff_seq: p.takeoff_seq,
             first_waypoint_seq: p.first_waypoint_seq,
+            waypoint_stride: p.waypoint_stride,
             land_seq: p.land_seq,
         }
     }
 }
 
-/// The AUTO executor. See the module documentation.
+/// The uploaded mission flown in AUTO: see the module documentation.
 #[derive(Debug, Clone)]
-pub struct AutoExecutor {
-    config: ExecutorConfig,
-    targets: Vec<Target>,
+pub struct AutoMission {
     layout: MissionLayout,
-    state: FlightState,
-    state_since_s: f64,
-    leg_since_s: f64,
-    last: Option<Telemetry>,
-    mode: Option<VehicleMode>,
-    not_auto_since_s: Option<f64>,
+    /// The item a MISSION_ITEM_REACHED said before this mission ran (ArduPilot streams the last
+    /// one reached when asked to): ignored until another one comes.
+    stale_reached: Option<u16>,
     seen_auto: bool,
     takeoff_done: bool,
     land_started: bool,
-    reached: Vec<Reached>,
-    last_send_s: Option<f64>,
-    last_refusal: Option<String>,
-    last_text: Option<String>,
-    abort: Option<String>,
-    outcome: Option<Outcome>,
-    started: bool,
-    faults: Faults,
 }
 
-impl AutoExecutor {
+/// The AUTO executor. See the module documentation.
+pub type AutoExecutor = Executor<AutoMission>;
+
+impl Executor<AutoMission> {
     /// An executor for these waypoints, uploaded with this layout.
     pub fn new(
         targets: &[Target],
         layout: MissionLayout,
         config: ExecutorConfig,
     ) -> Result<Self, ConfigError> {
-        let Some(first) = targets.first() else {
-            return Err(ConfigError("the mission has no waypoint".into()));
-        };
-        if usize::from(layout.land_seq) != usize::from(layout.first_waypoint_seq) + targets.len()
+        let stride = usize::from(layout.waypoint_stride);
+        if targets.is_empty()
+            || usize::from(layout.land_seq)
+                != usize::from(layout.first_waypoint_seq) + stride * (targets.len() - 1) + 1
             || layout.takeoff_seq >= layout.first_waypoint_seq
+            || stride == 0
         {
             return Err(ConfigError(format!(
-                "the mission layout {layout:?} does not match {} waypoints",
+                "the mission layout (take-off item {}, first waypoint item {}, {} items a waypoint, land item {}) does not match {} waypoints",
+                layout.takeoff_seq,
+                layout.first_waypoint_seq,
+                layout.waypoint_stride,
+                layout.land_seq,
                 targets.len()
             )));
         }
-        if targets.iter().any(|t| {
-            !(t.north_m.is_finite()
-                && t.east_m.is_finite()
-                && t.alt_m.is_finite()
-                && t.heading_rad.is_finite())
-        }) {
-            return Err(ConfigError("a waypoint is not a finite number".into()));
-        }
-        if first.alt_m <= config.landed_alt_m {
-            return Err(ConfigError(format!(
-                "the flight altitude {} m is not above the ground (> {} m)",
-                first.alt_m, config.landed_alt_m
-            )));
-        }
-        Ok(Self {
-            config,
-            targets: targets.to_vec(),
+        let strategy = AutoMission {
             layout,
-            state: FlightState::Manual,
-            state_since_s: 0.0,
-            leg_since_s: 0.0,
-            last: None,
-            mode: None,
-            not_auto_since_s: None,
+            stale_reached: None,
             seen_auto: false,
             takeoff_done: false,
             land_started: false,
-            reached: Vec::new(),
-            last_send_s: None,
-            last_refusal: None,
-            last_text: None,
-            abort: None,
-            outcome: None,
-            started: false,
-            faults: Faults::default(),
-        })
-    }
-
-    /// The vehicle's last reported mode.
-    pub fn mode(&self) -> Option<VehicleMode> {
-        self.mode
-    }
-
-    fn enter(&mut self, to: FlightState, now_s: f64, out: &mut Output) {
-        out.notes.push(Note::State {
-            from: self.state,
-            to,
-        });
-        self.state = to;
-        self.state_since_s = now_s;
-        self.last_send_s = None;
-        self.last_refusal = None;
-    }
-
-    fn finish(&mut self, outcome: Outcome, out: &mut Output) {
-        self.outcome = Some(outcome);
-        out.notes.push(Note::Finished);
-    }
-
-    fn due(&mut self, now_s: f64, period_s: f64) -> bool {
-        let due = self
-            .last_send_s
-            .is_none_or(|t| now_s - t >= period_s || now_s < t);
-        if due {
-            self.last_send_s = Some(now_s);
-        }
-        due
-    }
-
-    fn time_out(&mut self, after_s: f64, awaited: &str, out: &mut Output) {
-        let detail = match &self.last_refusal {
-            Some(r) => format!("{awaited}; last answer: {r}"),
-            None => awaited.to_string(),
         };
-        let state = self.state;
-        if matches!(state, FlightState::Takeoff | FlightState::Waypoint) {
-            out.commands.push(Command::Land);
-        }
-        self.finish(
-            Outcome::Failed(Failure::Timeout {
-                state,
-                after_s,
-                detail,
-            }),
-            out,
-        );
+        Self::with_strategy(targets, config, strategy)
     }
+}
 
-    /// Every waypoint up to item `seq` (inclusive when `inclusive`) counts as reached.
-    fn passed(&mut self, now_s: f64, seq: u16, inclusive: bool, out: &mut Output) {
-        if seq > self.layout.takeoff_seq || (inclusive && seq == self.layout.takeoff_seq) {
+impl AutoMission {
+    /// Every waypoint up to item `seq` (inclusive when `inclusive`) counts as reached. A
+    /// CONDITION_YAW reported reached says nothing of its waypoint (ArduCopter may finish the
+    /// turn before the waypoint).
+    fn passed(&mut self, core: &mut Core, now_s: f64, seq: u16, inclusive: bool, out: &mut Output) {
+        let l = self.layout;
+        let stride = l.waypoint_stride.max(1);
+        if inclusive
+            && seq > l.first_waypoint_seq
+            && seq < l.land_seq
+            && !(seq - l.first_waypoint_seq).is_multiple_of(stride)
+        {
+            return;
+        }
+        if seq > l.takeoff_seq || (inclusive && seq == l.takeoff_seq) {
             self.takeoff_done = true;
         }
-        if seq >= self.layout.land_seq {
+        if seq >= l.land_seq {
             self.land_started = true;
         }
         let end = if inclusive {
@@ -190,411 +123,148 @@ impl AutoExecutor {
         } else {
             seq
         };
-        let upto =
-            usize::from(end.saturating_sub(self.layout.first_waypoint_seq)).min(self.targets.len());
-        if end <= self.layout.first_waypoint_seq {
+        if end <= l.first_waypoint_seq {
             return;
         }
-        while self.reached.len() < upto {
-            let index = self.reached.len();
-            let w = self.targets[index];
-            let (h, v, yaw) = match &self.last {
-                Some(t) => (
-                    (w.north_m - t.north_m).hypot(w.east_m - t.east_m),
-                    (w.alt_m - t.alt_m()).abs(),
-                    wrap_angle_rad(w.heading_rad - t.yaw_rad).abs(),
-                ),
-                None => (f64::NAN, f64::NAN, f64::NAN),
-            };
-            let r = Reached {
-                index,
-                time_s: now_s,
-                horizontal_error_m: h,
-                vertical_error_m: v,
-                heading_error_rad: yaw,
-            };
-            self.reached.push(r);
-            out.notes.push(Note::Reached(r));
-            self.leg_since_s = now_s;
+        let upto =
+            usize::from((end - l.first_waypoint_seq).div_ceil(stride)).min(core.targets.len());
+        while core.reached.len() < upto {
+            core.reach(now_s, core.reached.len(), out);
         }
     }
 
-    /// Stops the flight early with `action`; `true` when the caller should return at once.
-    fn stop(
-        &mut self,
-        now_s: f64,
-        reason: String,
-        action: FailsafeAction,
-        out: &mut Output,
-    ) -> bool {
-        if self.abort.is_some() || self.faults.hold.is_some() {
-            return false;
-        }
-        match self.state {
-            FlightState::Manual | FlightState::Arming => {
-                self.abort = Some(reason.clone());
-                self.finish(Outcome::Failed(Failure::Aborted { reason }), out);
-                if self.last.is_some_and(|t| t.armed) {
-                    out.commands.push(Command::Disarm);
-                }
-                true
-            }
-            FlightState::Takeoff | FlightState::Waypoint => {
-                match action {
-                    FailsafeAction::Hold => {
-                        self.faults.hold = Some(PendingHold {
-                            reason,
-                            state: self.state,
-                            since_s: now_s,
-                            last_send_s: now_s,
-                            confirmed: false,
-                        });
-                        out.commands.push(Command::Hold);
-                        return true;
-                    }
-                    FailsafeAction::Land => {
-                        self.enter(FlightState::Landing, now_s, out);
-                        out.commands.push(Command::Land);
-                    }
-                    FailsafeAction::ReturnToLaunch => {
-                        self.faults
-                            .start_rtl(&self.config, self.last.as_ref(), &self.targets[0]);
-                        self.enter(FlightState::Landing, now_s, out);
-                        out.commands.push(Command::ReturnToLaunch);
-                    }
-                }
-                self.abort = Some(reason);
-                true
-            }
-            FlightState::Landing | FlightState::Disarming => {
-                self.abort = Some(reason);
-                false
-            }
-        }
+    /// The vehicle has been out of AUTO too long: the mode it is in.
+    fn left_auto(&self, core: &Core, now_s: f64) -> Option<VehicleMode> {
+        core.mode.filter(|&m| {
+            m != VehicleMode::Auto
+                && core
+                    .not_auto_since_s
+                    .is_some_and(|since| now_s - since >= LEFT_AUTO_GRACE_S)
+        })
     }
+}
 
-    fn on_ground(&self, t: &Telemetry) -> bool {
-        match t.on_ground {
-            Some(flag) => flag,
-            None => {
-                t.alt_m() < self.config.landed_alt_m
-                    && t.velocity_ned_m_s[2].abs() < self.config.landed_vertical_speed_m_s
-            }
-        }
-    }
+impl Strategy for AutoMission {
+    const DISARM_WAIT_S: f64 = AUTO_DISARM_WAIT_S;
+    const COMMANDS_LANDING: bool = false;
 
-    fn guided(&self, t: &Telemetry) -> bool {
-        match self.mode {
+    fn in_control(&self, core: &Core, t: &Telemetry) -> bool {
+        match core.mode {
             Some(m) => m == VehicleMode::Guided,
             None => t.guided,
         }
     }
 
-    fn step(&mut self, now_s: f64, out: &mut Output) {
-        let Some(t) = self.last else {
-            return;
-        };
-        let c = self.config;
-        let in_state_s = now_s - self.state_since_s;
-        let n = self.targets.len();
-        match self.state {
-            FlightState::Manual => {
-                if !self.started {
-                    self.started = true;
-                    self.enter(FlightState::Arming, now_s, out);
-                    self.step(now_s, out);
-                }
-            }
-            FlightState::Arming => {
-                let guided = self.guided(&t);
-                if t.armed && (guided || self.mode == Some(VehicleMode::Auto)) {
-                    self.enter(FlightState::Takeoff, now_s, out);
-                    out.commands.push(Command::StartMission);
-                    self.last_send_s = Some(now_s);
-                } else if in_state_s > c.arming_timeout_s {
-                    let awaited = if guided {
-                        "the vehicle did not arm"
-                    } else {
-                        "the vehicle did not enter guided mode"
-                    };
-                    self.time_out(c.arming_timeout_s, awaited, out);
-                } else if self.due(now_s, c.retry_s) {
-                    out.commands.push(if guided {
-                        Command::Arm
-                    } else {
-                        Command::TakeControl
-                    });
-                }
-            }
-            FlightState::Takeoff => {
-                if self.mode == Some(VehicleMode::Auto) {
-                    self.seen_auto = true;
-                }
-                let alt_m = self.targets[0].alt_m;
-                if self.takeoff_done || t.alt_m() >= c.takeoff_fraction * alt_m {
-                    self.takeoff_done = true;
-                    self.enter(FlightState::Waypoint, now_s, out);
-                    self.leg_since_s = now_s;
-                    self.step(now_s, out);
-                } else if !t.armed {
-                    self.finish(
-                        Outcome::Failed(Failure::DisarmedInFlight { state: self.state }),
-                        out,
-                    );
-                } else if let Some(mode) = self.mode
-                    && self.seen_auto
-                    && mode != VehicleMode::Auto
-                    && self
-                        .not_auto_since_s
-                        .is_some_and(|since| now_s - since >= LEFT_AUTO_GRACE_S)
-                {
-                    self.finish(
-                        Outcome::Failed(Failure::LeftMission {
-                            state: self.state,
-                            mode,
-                        }),
-                        out,
-                    );
-                } else if in_state_s > c.takeoff_timeout_s {
-                    let awaited = if self.seen_auto {
-                        format!(
-                            "the vehicle reached {:.1} m of the {:.1} m needed",
-                            t.alt_m(),
-                            c.takeoff_fraction * alt_m
-                        )
-                    } else {
-                        "the vehicle did not enter AUTO".to_string()
-                    };
-                    self.time_out(c.takeoff_timeout_s, &awaited, out);
-                } else if !self.seen_auto && self.due(now_s, c.retry_s) {
-                    out.commands.push(Command::StartMission);
-                }
-            }
-            FlightState::Waypoint => {
-                let all = self.reached.len() >= n;
-                let landing = self.land_started
-                    || self.mode == Some(VehicleMode::Land)
-                    || !t.armed
-                    || self.on_ground(&t);
-                if all && landing {
-                    self.enter(FlightState::Landing, now_s, out);
-                    self.step(now_s, out);
-                    return;
-                }
-                if !t.armed {
-                    self.finish(
-                        Outcome::Failed(Failure::DisarmedInFlight { state: self.state }),
-                        out,
-                    );
-                    return;
-                }
-                if let Some(mode) = self.mode
-                    && mode != VehicleMode::Auto
-                    && self
-                        .not_auto_since_s
-                        .is_some_and(|since| now_s - since >= LEFT_AUTO_GRACE_S)
-                {
-                    self.finish(
-                        Outcome::Failed(Failure::LeftMission {
-                            state: self.state,
-                            mode,
-                        }),
-                        out,
-                    );
-                    return;
-                }
-                let i = self.reached.len().min(n - 1);
-                let leg_m = if i == 0 {
-                    0.0
-                } else {
-                    let (a, b) = (self.targets[i - 1], self.targets[i]);
-                    (b.north_m - a.north_m).hypot(b.east_m - a.east_m)
-                };
-                let budget_s = c.leg_timeout_base_s + c.leg_timeout_per_m_s * leg_m;
-                if now_s - self.leg_since_s > budget_s {
-                    let awaited = if all {
-                        "the vehicle did not start the land item".to_string()
-                    } else {
-                        let w = self.targets[i];
-                        format!(
-                            "waypoint {} of {n} not reported reached: {:.1} m away horizontally, {:.1} m vertically",
-                            i + 1,
-                            (w.north_m - t.north_m).hypot(w.east_m - t.east_m),
-                            (w.alt_m - t.alt_m()).abs(),
-                        )
-                    };
-                    self.time_out(budget_s, &awaited, out);
-                }
-            }
-            FlightState::Landing => {
-                let budget_s = self.faults.landing_budget_s(&c);
-                if self.on_ground(&t) || !t.armed {
-                    self.enter(FlightState::Disarming, now_s, out);
-                    self.step(now_s, out);
-                } else if in_state_s > budget_s {
-                    let awaited = format!("still {:.1} m above home", t.alt_m());
-                    self.time_out(budget_s, &awaited, out);
-                }
-            }
-            FlightState::Disarming => {
-                if !t.armed {
-                    self.enter(FlightState::Manual, now_s, out);
-                    let outcome = match self.abort.take() {
-                        Some(reason) => Outcome::Failed(Failure::Aborted { reason }),
-                        None if self.reached.len() == n => Outcome::Completed,
-                        None => Outcome::Failed(Failure::Aborted {
-                            reason: "landed before the last waypoint".into(),
-                        }),
-                    };
-                    self.finish(outcome, out);
-                } else if in_state_s > c.disarming_timeout_s {
-                    self.time_out(c.disarming_timeout_s, "the vehicle did not disarm", out);
-                } else if in_state_s >= AUTO_DISARM_WAIT_S && self.due(now_s, c.retry_s) {
-                    out.commands.push(Command::Disarm);
-                }
-            }
-        }
+    fn ready_to_fly(&self, core: &Core, t: &Telemetry) -> bool {
+        t.armed && (self.in_control(core, t) || core.mode == Some(VehicleMode::Auto))
     }
-}
 
-impl FlightExecutor for AutoExecutor {
-    fn handle(&mut self, now_s: f64, event: Event) -> Output {
-        let mut out = Output::default();
-        if self.outcome.is_some() {
-            return out;
-        }
-        self.faults.observe(&event);
-        match event {
-            Event::Telemetry(t) => self.last = Some(t),
-            Event::Mode(m) => {
-                if m == VehicleMode::Auto {
-                    self.not_auto_since_s = None;
-                } else if self.not_auto_since_s.is_none() {
-                    self.not_auto_since_s = Some(now_s);
-                }
-                self.mode = Some(m);
-            }
+    fn start(&mut self, core: &mut Core, now_s: f64, out: &mut Output) -> bool {
+        out.commands.push(Command::StartMission);
+        core.last_send_s = Some(now_s);
+        false
+    }
+
+    fn observe(&mut self, core: &mut Core, now_s: f64, event: &Event, out: &mut Output) {
+        match *event {
+            // Not an item of this mission (ArduPilot says 65535 before any).
+            Event::MissionItemReached(seq) | Event::MissionCurrent(seq)
+                if seq > self.layout.land_seq => {}
+            // Before this mission runs, a report is the previous flight's (or a stream's
+            // repeat of it): remembered, not counted, until another item is reported.
+            Event::MissionItemReached(seq) if !self.seen_auto => self.stale_reached = Some(seq),
+            Event::MissionItemReached(seq) if self.stale_reached == Some(seq) => {}
             Event::MissionItemReached(seq) => {
-                if self.state != FlightState::Manual && self.state != FlightState::Arming {
-                    self.passed(now_s, seq, true, &mut out);
-                }
+                self.stale_reached = None;
+                self.passed(core, now_s, seq, true, out);
             }
-            Event::MissionCurrent(seq) => {
-                // Only once the mission runs: before, it is the previous flight's or 0.
-                if self.seen_auto {
-                    self.passed(now_s, seq, false, &mut out);
-                }
+            Event::MissionCurrent(seq) if self.seen_auto => {
+                self.passed(core, now_s, seq, false, out);
             }
-            Event::Ack { command, accepted } => {
-                if let Err(answer) = accepted {
-                    let reason = match &self.last_text {
-                        Some(text) => format!("{answer}: {text}"),
-                        None => answer,
-                    };
-                    self.last_refusal = Some(format!("{command} refused ({reason})"));
-                    out.notes.push(Note::Refused { command, reason });
-                } else if command == CommandKind::StartMission {
-                    self.seen_auto |= self.mode == Some(VehicleMode::Auto);
-                }
-            }
-            Event::StatusText(text) => self.last_text = Some(text),
-            Event::LinkLost { silent_s } => {
-                if let Some(failure) =
-                    self.faults
-                        .link_lost(self.state, silent_s, &self.config, &mut out)
-                {
-                    self.finish(Outcome::Failed(failure), &mut out);
-                }
-                return out;
-            }
-            Event::LinkRegained { silent_s } => {
-                if let Some((reason, action)) =
-                    self.faults.link_regained(silent_s, &self.config, &mut out)
-                    && matches!(self.state, FlightState::Takeoff | FlightState::Waypoint)
-                    && self.stop(now_s, reason, action, &mut out)
-                {
-                    return out;
-                }
-            }
-            Event::Abort(reason) => {
-                if self.stop(now_s, reason, FailsafeAction::Land, &mut out) {
-                    return out;
-                }
-            }
-            Event::Stop { reason, action } => {
-                if self.stop(now_s, reason, action, &mut out) {
-                    return out;
-                }
-            }
-            Event::Tick => {}
-        }
-        if self.faults.lost.is_some() {
-            return out;
-        }
-        if self.faults.hold.is_some() {
-            match self.faults.step_hold(now_s, &self.config, &mut out) {
-                Some(Ok(failure)) => self.finish(Outcome::Failed(failure), &mut out),
-                Some(Err(reason)) => {
-                    self.abort = Some(reason);
-                    self.enter(FlightState::Landing, now_s, &mut out);
-                    out.commands.push(Command::Land);
-                }
-                None => {}
-            }
-            return out;
-        }
-        self.step(now_s, &mut out);
-        out
-    }
-
-    fn state(&self) -> FlightState {
-        self.state
-    }
-
-    fn outcome(&self) -> Option<&Outcome> {
-        self.outcome.as_ref()
-    }
-
-    fn last_telemetry(&self) -> Option<&Telemetry> {
-        self.last.as_ref()
-    }
-
-    fn current_target(&self) -> Option<(usize, Target)> {
-        match self.state {
-            FlightState::Waypoint => {
-                let i = self.reached.len().min(self.targets.len() - 1);
-                Some((i, self.targets[i]))
-            }
-            _ => None,
+            Event::Ack {
+                command: crate::executor::CommandKind::StartMission,
+                accepted: Ok(()),
+            } => self.seen_auto |= core.mode == Some(VehicleMode::Auto),
+            _ => {}
         }
     }
 
-    fn reached(&self) -> &[Reached] {
-        &self.reached
+    fn takeoff(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        let c = core.config;
+        if core.mode == Some(VehicleMode::Auto) {
+            self.seen_auto = true;
+        }
+        let alt_m = core.targets[0].alt_m;
+        if self.takeoff_done || t.alt_m() >= c.takeoff_fraction * alt_m {
+            self.takeoff_done = true;
+            core.enter(FlightState::Waypoint, now_s, out);
+            core.leg_since_s = now_s;
+            return true;
+        }
+        if !t.armed {
+            core.fail(Failure::DisarmedInFlight { state: core.state }, out);
+        } else if let Some(mode) = self.left_auto(core, now_s)
+            && self.seen_auto
+        {
+            core.fail(
+                Failure::LeftMission {
+                    state: core.state,
+                    mode,
+                },
+                out,
+            );
+        } else if now_s - core.state_since_s > c.takeoff_timeout_s {
+            let awaited = if self.seen_auto {
+                format!(
+                    "the vehicle reached {:.1} m of the {:.1} m needed",
+                    t.alt_m(),
+                    c.takeoff_fraction * alt_m
+                )
+            } else {
+                "the vehicle did not enter AUTO".to_string()
+            };
+            core.time_out(now_s, c.takeoff_timeout_s, &awaited, out);
+        } else if !self.seen_auto && core.due(now_s, c.retry_s) {
+            out.commands.push(Command::StartMission);
+        }
+        false
     }
 
-    fn targets(&self) -> &[Target] {
-        &self.targets
-    }
-
-    fn distance_left_m(&self) -> f64 {
-        let route_from = |i: usize| -> f64 {
-            self.targets[i..]
-                .windows(2)
-                .map(|w| (w[1].north_m - w[0].north_m).hypot(w[1].east_m - w[0].east_m))
-                .sum()
-        };
-        let Some(t) = &self.last else {
-            return route_from(0);
-        };
-        let i = match self.state {
-            FlightState::Manual if self.outcome.is_none() => 0,
-            FlightState::Manual | FlightState::Landing | FlightState::Disarming => return 0.0,
-            FlightState::Arming | FlightState::Takeoff => 0,
-            FlightState::Waypoint => self.reached.len().min(self.targets.len() - 1),
-        };
-        let w = self.targets[i];
-        (w.north_m - t.north_m).hypot(w.east_m - t.east_m) + route_from(i)
+    fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        let n = core.targets.len();
+        let all = core.reached.len() >= n;
+        // The last waypoint reached or the land item current: the vehicle lands by itself.
+        if all || self.land_started {
+            core.land_after_mission(now_s, Self::COMMANDS_LANDING, out);
+            return true;
+        }
+        if !t.armed {
+            core.fail(Failure::DisarmedInFlight { state: core.state }, out);
+            return false;
+        }
+        if let Some(mode) = self.left_auto(core, now_s) {
+            core.fail(
+                Failure::LeftMission {
+                    state: core.state,
+                    mode,
+                },
+                out,
+            );
+            return false;
+        }
+        let i = core.reached.len().min(n - 1);
+        let budget_s = core.leg_budget_s(i);
+        if now_s - core.leg_since_s > budget_s {
+            let w = core.targets[i];
+            let awaited = format!(
+                "waypoint {} of {n} not reported reached: {:.1} m away horizontally, {:.1} m vertically",
+                i + 1,
+                w.horizontal_error_m(t),
+                w.vertical_error_m(t),
+            );
+            core.time_out(now_s, budget_s, &awaited, out);
+        }
+        false
     }
 }
 

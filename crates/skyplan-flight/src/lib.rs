@@ -17,5 +17,9 @@
 pub mod auto;
 pub mod collision;
 pub mod executor;
+pub mod flat_earth;
 pub mod sim;
 pub mod upload;
+
+#[cfg(test)]
+mod testkit;

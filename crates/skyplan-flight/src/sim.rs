@@ -128,7 +128,9 @@ pub enum SimMissionItem {
         /// Metres above home.
         alt_m: f64,
     },
-    /// Fly to a point, facing `yaw_rad` (NaN: keep the heading).
+    /// Fly to a point (NAV_WAYPOINT). As ArduCopter with its default `WP_YAW_BEHAVIOR`, the
+    /// vehicle faces the waypoint while flying to it (`param4` is ignored) unless a
+    /// [`SimMissionItem::Yaw`] comes right before it.
     Waypoint {
         /// Metres north of home.
         north_m: f64,
@@ -136,10 +138,16 @@ pub enum SimMissionItem {
         east_m: f64,
         /// Metres above home.
         alt_m: f64,
+    },
+    /// CONDITION_YAW (absolute): as on ArduCopter, which starts the "do" items between two
+    /// NAV_WAYPOINTs when the first is reached, the vehicle faces this heading on the way to the
+    /// next waypoint and holds it there.
+    Yaw {
         /// Heading, radians clockwise from north.
         yaw_rad: f64,
     },
-    /// Land where the vehicle is (then disarm).
+    /// Land where the vehicle is, staying in AUTO, then disarm; as on ArduCopter, the item is
+    /// reported reached (MISSION_ITEM_REACHED) only after the touchdown.
     Land,
     /// An item the simulator does not fly (skipped).
     Unsupported,
@@ -209,6 +217,8 @@ pub struct SimVehicle {
     mission_current: usize,
     /// RTL: the home has been reached and the vehicle descends.
     rtl_descending: bool,
+    /// AUTO: the land item is being flown.
+    mission_landing: bool,
 }
 
 fn norm2(v: [f64; 2]) -> f64 {
@@ -232,6 +242,7 @@ impl SimVehicle {
             mission: Vec::new(),
             mission_current: 0,
             rtl_descending: false,
+            mission_landing: false,
         }
     }
 
@@ -294,6 +305,7 @@ impl SimVehicle {
             }
             SimMode::Auto => {
                 self.mission_current = 0;
+                self.mission_landing = false;
                 self.target = None;
             }
             SimMode::Land => self.target = None,
@@ -385,8 +397,9 @@ impl SimVehicle {
             }
         }
         if self.armed {
-            let descend =
-                self.mode == SimMode::Land || self.mode == SimMode::Rtl && self.rtl_descending;
+            let descend = self.mode == SimMode::Land
+                || self.mode == SimMode::Rtl && self.rtl_descending
+                || self.mode == SimMode::Auto && self.mission_landing;
             match self.mode {
                 _ if descend => {
                     let hold = self.target.map_or(self.position, |(p, _)| p);
@@ -443,10 +456,17 @@ impl SimVehicle {
         }
         if self.on_ground && !was_on_ground {
             events.push(SimEvent::Landed);
-            if matches!(self.mode, SimMode::Land | SimMode::Rtl) && self.armed {
+            let mission_landing = self.mode == SimMode::Auto && self.mission_landing;
+            if (matches!(self.mode, SimMode::Land | SimMode::Rtl) || mission_landing) && self.armed
+            {
                 self.armed = false;
                 self.target = None;
                 events.push(SimEvent::AutoDisarmed);
+            }
+            if mission_landing {
+                let seq = self.mission_current.min(u16::MAX as usize) as u16;
+                events.push(SimEvent::MissionItemReached(seq));
+                self.mission_landing = false;
             }
         }
         // Heading, within the yaw-rate limit (only when flying).
@@ -500,19 +520,19 @@ impl SimVehicle {
                     north_m,
                     east_m,
                     alt_m,
-                    yaw_rad,
                 } => {
-                    let yaw = if yaw_rad.is_finite() {
-                        yaw_rad
-                    } else {
-                        self.yaw_rad
-                    };
                     let p = [north_m, east_m, -alt_m];
+                    let d_h = norm2([p[0] - self.position[0], p[1] - self.position[1]]);
+                    // A CONDITION_YAW before the waypoint holds its heading on the way; else
+                    // face the waypoint (WP_YAW_BEHAVIOR 2), keeping the heading in the last 2 m.
+                    let before = self.mission_current.checked_sub(1);
+                    let yaw = match before.and_then(|i| self.mission.get(i)) {
+                        Some(SimMissionItem::Yaw { yaw_rad }) => *yaw_rad,
+                        _ if d_h > 2.0 => (p[1] - self.position[1]).atan2(p[0] - self.position[0]),
+                        _ => self.target.map_or(self.yaw_rad, |(_, y)| y),
+                    };
                     self.target = Some((p, yaw));
-                    let d = ((p[0] - self.position[0]).powi(2)
-                        + (p[1] - self.position[1]).powi(2)
-                        + (p[2] - self.position[2]).powi(2))
-                    .sqrt();
+                    let d = (d_h.powi(2) + (p[2] - self.position[2]).powi(2)).sqrt();
                     if d <= c.acceptance_radius_m {
                         events.push(SimEvent::MissionItemReached(seq));
                         self.mission_current += 1;
@@ -520,11 +540,16 @@ impl SimVehicle {
                     }
                     return;
                 }
-                SimMissionItem::Land => {
+                SimMissionItem::Yaw { .. } => {
+                    // Started with the next waypoint (the vehicle turns within the yaw-rate limit).
                     events.push(SimEvent::MissionItemReached(seq));
                     self.mission_current += 1;
-                    self.target = Some((self.position, self.yaw_rad));
-                    self.mode = SimMode::Land;
+                }
+                SimMissionItem::Land => {
+                    if !self.mission_landing {
+                        self.mission_landing = true;
+                        self.target = Some((self.position, self.yaw_rad));
+                    }
                     return;
                 }
                 SimMissionItem::Unsupported => {
@@ -642,39 +667,63 @@ mod tests {
     }
 
     #[test]
-    fn auto_flies_the_mission_and_reports_each_item() {
+    fn auto_flies_the_mission_like_arducopter() {
+        use std::f64::consts::{FRAC_PI_2, PI};
         let mut v = SimVehicle::new(SimConfig::default());
+        let wp = |north_m, east_m| SimMissionItem::Waypoint {
+            north_m,
+            east_m,
+            alt_m: 5.0,
+        };
         v.set_mission(vec![
             SimMissionItem::Takeoff { alt_m: 5.0 },
-            SimMissionItem::Waypoint {
-                north_m: 10.0,
-                east_m: 0.0,
-                alt_m: 5.0,
-                yaw_rad: 0.0,
-            },
-            SimMissionItem::Waypoint {
-                north_m: 10.0,
-                east_m: 10.0,
-                alt_m: 5.0,
-                yaw_rad: std::f64::consts::FRAC_PI_2,
-            },
+            wp(10.0, 0.0),
+            SimMissionItem::Yaw { yaw_rad: PI },
+            wp(10.0, 10.0),
+            wp(-10.0, 10.0),
             SimMissionItem::Land,
         ]);
         v.arm().unwrap();
         v.set_mode(SimMode::Auto);
-        let events = run(&mut v, 40.0);
-        let reached: Vec<u16> = events
-            .iter()
-            .filter_map(|e| match e {
-                SimEvent::MissionItemReached(s) => Some(*s),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(reached, vec![0, 1, 2, 3]);
-        let s = v.state();
-        assert!(s.on_ground && !s.armed);
+        let mut reached = Vec::new();
+        let mut landed_at = None;
+        let mut modes_in_descent = Vec::new();
+        for k in 0..4000 {
+            for e in v.step(0.02) {
+                match e {
+                    SimEvent::MissionItemReached(seq) => reached.push((seq, k, v.state().yaw_rad)),
+                    SimEvent::Landed => landed_at = Some(k),
+                    SimEvent::AutoDisarmed => {}
+                }
+            }
+            let s = v.state();
+            if s.mission_current == 5 && s.armed {
+                modes_in_descent.push(s.mode);
+            }
+        }
+        let seqs: Vec<u16> = reached.iter().map(|r| r.0).collect();
+        assert_eq!(seqs, vec![0, 1, 2, 3, 4, 5]);
+        // NAV_WAYPOINT's heading is the direction of flight (param4 ignored) …
+        assert!(wrap_angle_rad(reached[1].2).abs() < 0.05, "{reached:?}");
         assert!(
-            (s.position_ned_m[0] - 10.0).abs() < 1.0 && (s.position_ned_m[1] - 10.0).abs() < 1.0
+            wrap_angle_rad(reached[4].2 - PI).abs() < 0.05,
+            "{reached:?}"
+        );
+        // … but a CONDITION_YAW before a waypoint holds its heading on the way there and on
+        // arrival (the leg to (10, 10) flies east, the vehicle faces south).
+        assert!(
+            wrap_angle_rad(reached[3].2 - PI).abs() < 0.05,
+            "{reached:?}"
+        );
+        assert!((wrap_angle_rad(reached[3].2) - FRAC_PI_2).abs() > 1.0);
+        // The land item: flown in AUTO, reported only at the touchdown.
+        assert!(!modes_in_descent.is_empty());
+        assert!(modes_in_descent.iter().all(|m| *m == SimMode::Auto));
+        assert_eq!(Some(reached[5].1), landed_at);
+        let s = v.state();
+        assert!(s.on_ground && !s.armed && s.mode == SimMode::Auto);
+        assert!(
+            (s.position_ned_m[0] + 10.0).abs() < 1.0 && (s.position_ned_m[1] - 10.0).abs() < 1.0
         );
     }
 

@@ -2,7 +2,10 @@
 //!
 //! [`mission_items`] turns a planned mission into the items a flight controller flies in AUTO:
 //! (ArduPilot's item 0, the home) → NAV_TAKEOFF → one NAV_WAYPOINT per waypoint (its heading as
-//! the yaw in `param4`, degrees) → NAV_LAND, all in the relative-altitude frame
+//! the yaw in `param4`, degrees, which PX4 honours), each preceded on ArduPilot by a
+//! CONDITION_YAW to the same heading (ArduCopter ignores `param4`; it starts the "do" commands
+//! between two NAV commands when the first completes, and its CONDITION_YAW then holds the heading
+//! over the next leg) → NAV_LAND, all in the relative-altitude frame
 //! (`MAV_FRAME_GLOBAL_RELATIVE_ALT_INT`). [`MissionUpload`] is the protocol: MISSION_COUNT → the
 //! vehicle requests each item (MISSION_REQUEST_INT or the older MISSION_REQUEST, answered the
 //! same way) → MISSION_ITEM_INT → MISSION_ACK, with a retry when the vehicle goes quiet and a
@@ -29,6 +32,9 @@ pub enum ItemCommand {
     Takeoff,
     /// MAV_CMD_NAV_LAND (21): land at the point.
     Land,
+    /// MAV_CMD_CONDITION_YAW (115): face `yaw_deg` (absolute, `param1`) on the way to the
+    /// NAV_WAYPOINT after it.
+    ConditionYaw,
 }
 
 impl ItemCommand {
@@ -38,6 +44,7 @@ impl ItemCommand {
             ItemCommand::Waypoint => 16,
             ItemCommand::Takeoff => 22,
             ItemCommand::Land => 21,
+            ItemCommand::ConditionYaw => 115,
         }
     }
 }
@@ -59,8 +66,8 @@ pub struct MissionItem {
     pub lon_e7: i32,
     /// Metres above home.
     pub alt_m: f32,
-    /// `param4`: the yaw at the point, degrees clockwise from north in [0, 360); NaN keeps the
-    /// vehicle's heading.
+    /// The yaw at the point, degrees clockwise from north in [0, 360) (`param4` of
+    /// NAV_WAYPOINT, `param1` of CONDITION_YAW); NaN keeps the vehicle's heading.
     pub yaw_deg: f32,
 }
 
@@ -71,17 +78,23 @@ pub struct MissionPlan {
     pub items: Vec<MissionItem>,
     /// The NAV_TAKEOFF item.
     pub takeoff_seq: u16,
-    /// The NAV_WAYPOINT of the first waypoint; waypoint `k` is item `first_waypoint_seq + k`.
+    /// The NAV_WAYPOINT of the first waypoint; waypoint `k` is item
+    /// `first_waypoint_seq + waypoint_stride · k`.
     pub first_waypoint_seq: u16,
+    /// Items per waypoint: 1, or 2 when each NAV_WAYPOINT is preceded by its CONDITION_YAW.
+    pub waypoint_stride: u16,
     /// The NAV_LAND item (the last one).
     pub land_seq: u16,
 }
 
 impl MissionPlan {
-    /// The waypoint index of item `seq`, if it is a waypoint.
+    /// The waypoint index of item `seq`, if it is a waypoint's NAV_WAYPOINT.
     pub fn waypoint_index(&self, seq: u16) -> Option<usize> {
-        (seq >= self.first_waypoint_seq && seq < self.land_seq)
-            .then(|| usize::from(seq - self.first_waypoint_seq))
+        let stride = self.waypoint_stride.max(1);
+        (seq >= self.first_waypoint_seq
+            && seq < self.land_seq
+            && (seq - self.first_waypoint_seq).is_multiple_of(stride))
+        .then(|| usize::from((seq - self.first_waypoint_seq) / stride))
     }
 }
 
@@ -121,9 +134,12 @@ pub fn yaw_param_deg(heading_rad: f64) -> f32 {
 
 /// The mission items for these waypoints. `home` (latitude, longitude) adds ArduPilot's item 0,
 /// the home, which it overwrites and never flies; PX4 starts at item 0, so pass `None` for it.
+/// `condition_yaw` puts a CONDITION_YAW to each waypoint's heading before its NAV_WAYPOINT (for
+/// ArduCopter, which ignores `param4`).
 pub fn mission_items(
     waypoints: &[GlobalWaypoint],
     home: Option<(f64, f64)>,
+    condition_yaw: bool,
 ) -> Result<MissionPlan, ConfigError> {
     let (Some(first), Some(last)) = (waypoints.first(), waypoints.last()) else {
         return Err(ConfigError("the mission has no waypoint".into()));
@@ -142,7 +158,8 @@ pub fn mission_items(
         ));
     }
     // Home (optional), take-off, the waypoints, land: must fit the u16 sequence numbers.
-    if waypoints.len() + 3 > usize::from(u16::MAX) {
+    let waypoint_stride: u16 = if condition_yaw { 2 } else { 1 };
+    if usize::from(waypoint_stride) * waypoints.len() + 3 > usize::from(u16::MAX) {
         return Err(ConfigError(format!(
             "{} waypoints do not fit in one MAVLink mission",
             waypoints.len()
@@ -171,14 +188,18 @@ pub fn mission_items(
         first.alt_m,
         f32::NAN,
     );
-    let first_waypoint_seq = takeoff_seq + 1;
+    let first_waypoint_seq = takeoff_seq + waypoint_stride;
     for w in waypoints {
+        let yaw_deg = yaw_param_deg(w.heading_rad);
+        if condition_yaw {
+            push(ItemCommand::ConditionYaw, 0.0, 0.0, 0.0, yaw_deg);
+        }
         push(
             ItemCommand::Waypoint,
             w.lat_deg,
             w.lon_deg,
             w.alt_m,
-            yaw_param_deg(w.heading_rad),
+            yaw_deg,
         );
     }
     let land_seq = push(ItemCommand::Land, last.lat_deg, last.lon_deg, 0.0, f32::NAN);
@@ -186,6 +207,7 @@ pub fn mission_items(
         items,
         takeoff_seq,
         first_waypoint_seq,
+        waypoint_stride,
         land_seq,
     })
 }
@@ -386,7 +408,7 @@ mod tests {
 
     #[test]
     fn items_are_home_takeoff_waypoints_land() {
-        let p = mission_items(&wps(), Some((37.7924801, -122.3974504))).unwrap();
+        let p = mission_items(&wps(), Some((37.7924801, -122.3974504)), false).unwrap();
         let cmds: Vec<ItemCommand> = p.items.iter().map(|i| i.command).collect();
         use ItemCommand::*;
         assert_eq!(cmds, [Waypoint, Takeoff, Waypoint, Waypoint, Land]);
@@ -407,7 +429,7 @@ mod tests {
         assert_eq!(p.waypoint_index(3), Some(1));
         assert_eq!(p.waypoint_index(4), None);
         assert_eq!(p.waypoint_index(1), None);
-        let px4 = mission_items(&wps(), None).unwrap();
+        let px4 = mission_items(&wps(), None, false).unwrap();
         assert_eq!(px4.items.len(), 4);
         assert_eq!(
             (px4.takeoff_seq, px4.first_waypoint_seq, px4.land_seq),
@@ -416,13 +438,45 @@ mod tests {
     }
 
     #[test]
+    fn on_ardupilot_each_waypoint_is_preceded_by_its_condition_yaw() {
+        let p = mission_items(&wps(), Some((37.7924801, -122.3974504)), true).unwrap();
+        let cmds: Vec<ItemCommand> = p.items.iter().map(|i| i.command).collect();
+        use ItemCommand::*;
+        assert_eq!(
+            cmds,
+            [
+                Waypoint,
+                Takeoff,
+                ConditionYaw,
+                Waypoint,
+                ConditionYaw,
+                Waypoint,
+                Land
+            ]
+        );
+        assert_eq!(ConditionYaw.mav_cmd(), 115);
+        assert_eq!(
+            (
+                p.takeoff_seq,
+                p.first_waypoint_seq,
+                p.waypoint_stride,
+                p.land_seq
+            ),
+            (1, 3, 2, 6)
+        );
+        assert_eq!((p.items[2].yaw_deg, p.items[4].yaw_deg), (0.0, 270.0));
+        let wp_of: Vec<Option<usize>> = (0..7).map(|s| p.waypoint_index(s)).collect();
+        assert_eq!(wp_of, [None, None, None, Some(0), None, Some(1), None]);
+    }
+
+    #[test]
     fn bad_missions_are_refused() {
-        assert!(mission_items(&[], None).is_err());
+        assert!(mission_items(&[], None, false).is_err());
         let mut w = wps();
         w[1].lat_deg = f64::NAN;
-        assert!(mission_items(&w, None).is_err());
+        assert!(mission_items(&w, None, false).is_err());
         w[1].lat_deg = 91.0;
-        assert!(mission_items(&w, None).is_err());
+        assert!(mission_items(&w, None, false).is_err());
     }
 
     #[test]

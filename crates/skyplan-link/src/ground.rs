@@ -1,18 +1,25 @@
 //! The ground side: `skyplan fly` connects to a vehicle and drives the mission state machine.
 //!
 //! Vehicle messages become [`Event`]s of the executor (HEARTBEAT → armed and mode,
-//! LOCAL_POSITION_NED + ATTITUDE + EXTENDED_SYS_STATE → telemetry, COMMAND_ACK → acks,
-//! STATUSTEXT → reasons), its [`Command`]s become COMMAND_LONG (DO_SET_MODE GUIDED,
-//! COMPONENT_ARM_DISARM, NAV_TAKEOFF, NAV_LAND) and SET_POSITION_TARGET_LOCAL_NED with
-//! `type_mask` 0x9F8 (position + yaw). Heartbeats go out at 1 Hz from their own thread; a vehicle
-//! silent for [`GroundConfig::link_timeout_s`] is a lost link.
+//! GLOBAL_POSITION_INT + ATTITUDE + EXTENDED_SYS_STATE → telemetry, COMMAND_ACK → acks,
+//! STATUSTEXT → reasons, MISSION_ITEM_REACHED / MISSION_CURRENT → mission progress), its
+//! [`Command`]s become COMMAND_LONG (DO_SET_MODE GUIDED, COMPONENT_ARM_DISARM, NAV_TAKEOFF,
+//! NAV_LAND) and SET_POSITION_TARGET_GLOBAL_INT (`MAV_FRAME_GLOBAL_RELATIVE_ALT_INT`, `type_mask`
+//! 0x9F8: position + yaw). Heartbeats go out at 1 Hz from their own thread; a vehicle silent for
+//! [`GroundConfig::link_timeout_s`] is a lost link. Autopilots stream nothing by default
+//! (ArduCopter's rates are 0): every message needed is requested with SET_MESSAGE_INTERVAL, and
+//! with REQUEST_DATA_STREAM as well when that brings nothing.
 //!
-//! The vehicle's local frame (its EKF origin) and the mission's frame (the map's home) differ in
-//! general: the offset is measured once on the ground from GLOBAL_POSITION_INT and
-//! LOCAL_POSITION_NED, and applied to every position both ways.
+//! **One frame chain.** Every position sent to or read from the vehicle goes through latitude
+//! and longitude with the map's own [`LocalFrame`]: targets are `lla_from_ned` of the plan's
+//! points, telemetry is `ned_from_lla` of GLOBAL_POSITION_INT. The vehicle's LOCAL_POSITION_NED
+//! (a true-north flat-earth frame about its EKF origin, not the map's UTM grid) is never mixed
+//! in; it only tells that the EKF has a position. Headings are turned between true north and the
+//! map's grid north by the grid convergence at the vehicle.
 
 use crate::{Address, Link, LinkError, Received};
 use mavlink::dialects::common::*;
+use skyplan_flight::executor::wrap_angle_rad;
 use skyplan_flight::executor::{
     Command, CommandKind, Event, FailsafeAction, FlightExecutor, FlightState, Note, Target,
     Telemetry, VehicleMode,
@@ -21,10 +28,25 @@ use skyplan_flight::upload::{
     ItemCommand, MissionItem, MissionPlan, MissionUpload, UploadConfig, UploadEvent, UploadSend,
     UploadStatus,
 };
-use skyplan_frames::{Lla, LocalFrame};
+use skyplan_frames::{Lla, LocalFrame, Ned};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+
+/// The messages the flight needs and their rates, Hz: GLOBAL_POSITION_INT, LOCAL_POSITION_NED,
+/// ATTITUDE, EXTENDED_SYS_STATE, MISSION_CURRENT, MISSION_ITEM_REACHED, GPS_GLOBAL_ORIGIN.
+pub const STREAM_RATES_HZ: [(u32, f64); 7] = [
+    (33, 10.0),
+    (32, 2.0),
+    (30, 10.0),
+    (245, 2.0),
+    (42, 2.0),
+    (46, 2.0),
+    (49, 1.0),
+];
+
+/// Wall seconds to wait for GPS_GLOBAL_ORIGIN once the vehicle has a position.
+pub const ORIGIN_GRACE_S: f64 = 2.0;
 
 /// Our MAVLink system id (a ground station).
 pub const SYSTEM_ID: u8 = 255;
@@ -123,6 +145,29 @@ pub struct VehicleInfo {
     pub autopilot: Autopilot,
     /// Its global position (altitude: relative to home).
     pub position: Lla,
+    /// Its EKF origin (GPS_GLOBAL_ORIGIN; altitude above mean sea level), if it sent one.
+    pub ekf_origin: Option<Lla>,
+}
+
+/// What [`GroundStation::wait_for_vehicle`] is waiting for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Waiting {
+    /// A HEARTBEAT from an autopilot.
+    Heartbeat,
+    /// The EKF origin (GPS_GLOBAL_ORIGIN): set once the autopilot has a GPS fix.
+    EkfOrigin,
+    /// A position: GLOBAL_POSITION_INT and LOCAL_POSITION_NED (the EKF uses GPS).
+    Position,
+}
+
+impl std::fmt::Display for Waiting {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Waiting::Heartbeat => "heartbeat",
+            Waiting::EkfOrigin => "EKF origin (GPS_GLOBAL_ORIGIN)",
+            Waiting::Position => "position (GLOBAL_POSITION_INT, LOCAL_POSITION_NED)",
+        })
+    }
 }
 
 /// One row of the flight log.
@@ -132,6 +177,10 @@ pub struct LogRow {
     pub time_s: f64,
     /// The executor's state.
     pub state: FlightState,
+    /// The vehicle's own latitude, degrees (GLOBAL_POSITION_INT, as received).
+    pub lat_deg: f64,
+    /// The vehicle's own longitude, degrees.
+    pub lon_deg: f64,
     /// Position in the mission frame: metres north, east of home, altitude above home.
     pub north_m: f64,
     /// See `north_m`.
@@ -207,6 +256,9 @@ pub struct GroundStation {
     custom_mode: u32,
     global: Option<GLOBAL_POSITION_INT_DATA>,
     local: Option<LOCAL_POSITION_NED_DATA>,
+    origin: Option<GPS_GLOBAL_ORIGIN_DATA>,
+    /// An ATTITUDE arrived: the stream requests work.
+    streaming: bool,
     yaw_rad: f64,
     on_ground: Option<bool>,
     last_arm_request: CommandKind,
@@ -242,6 +294,8 @@ impl GroundStation {
             custom_mode: 0,
             global: None,
             local: None,
+            origin: None,
+            streaming: false,
             yaw_rad: 0.0,
             on_ground: None,
             last_arm_request: CommandKind::Arm,
@@ -374,10 +428,22 @@ impl GroundStation {
         Ok(())
     }
 
-    /// Waits for the vehicle's heartbeat and positions, asking it to stream them at 10 Hz.
-    pub fn wait_for_vehicle(&mut self, timeout: Duration) -> Result<VehicleInfo, GroundError> {
+    /// Waits, like a ground station, for the vehicle's heartbeat, its EKF origin and its
+    /// position, asking it to stream what the flight needs; `on_wait` hears what is awaited (at
+    /// each change and every `progress_period_s`) with the wall seconds waited. `timeout` is wall
+    /// time. An EKF origin that does not come within [`ORIGIN_GRACE_S`] of the position is not
+    /// waited for (not every autopilot sends GPS_GLOBAL_ORIGIN).
+    pub fn wait_for_vehicle(
+        &mut self,
+        timeout: Duration,
+        mut on_wait: impl FnMut(Waiting, f64),
+    ) -> Result<VehicleInfo, GroundError> {
         let start = Instant::now();
         let mut asked = None::<Instant>;
+        let mut first_ask = None::<Instant>;
+        let mut fallback = false;
+        let mut position_since = None::<Instant>;
+        let mut shown: Option<(Waiting, Instant)> = None;
         loop {
             if let Some(r) = self.link.recv_timeout(Duration::from_millis(20)) {
                 let _ = self.absorb(&r);
@@ -389,11 +455,21 @@ impl GroundStation {
             }
             if self.vehicle.is_some() && asked.is_none_or(|t| t.elapsed() > Duration::from_secs(1))
             {
-                self.request_streams();
+                let first = *first_ask.get_or_insert_with(Instant::now);
+                // Nothing streams 3 s after SET_MESSAGE_INTERVAL: ask the old way too.
+                fallback |= !self.streaming && first.elapsed() > Duration::from_secs(3);
+                self.request_streams(fallback);
                 asked = Some(Instant::now());
             }
-            if let (Some((sys, comp)), Some(g), Some(_)) =
-                (self.vehicle, self.global.clone(), self.local.clone())
+            let position = self.global.as_ref().filter(|g| g.lat != 0 || g.lon != 0);
+            let position_ready = position.is_some() && self.local.is_some();
+            if position_ready {
+                position_since.get_or_insert_with(Instant::now);
+            }
+            let origin_waited =
+                position_since.is_some_and(|t| t.elapsed().as_secs_f64() > ORIGIN_GRACE_S);
+            if let (Some((sys, comp)), Some(g), true) = (self.vehicle, position, position_ready)
+                && (self.origin.is_some() || origin_waited)
             {
                 return Ok(VehicleInfo {
                     system_id: sys,
@@ -404,30 +480,80 @@ impl GroundStation {
                         lon_deg: f64::from(g.lon) * 1e-7,
                         alt_m: f64::from(g.relative_alt) * 1e-3,
                     },
+                    ekf_origin: self.origin.as_ref().map(|o| Lla {
+                        lat_deg: f64::from(o.latitude) * 1e-7,
+                        lon_deg: f64::from(o.longitude) * 1e-7,
+                        alt_m: f64::from(o.altitude) * 1e-3,
+                    }),
                 });
             }
+            let waiting = if self.vehicle.is_none() {
+                Waiting::Heartbeat
+            } else if self.origin.is_none() && (position_ready || self.local.is_none()) {
+                Waiting::EkfOrigin
+            } else {
+                Waiting::Position
+            };
+            if shown.is_none_or(|(w, t)| {
+                w != waiting || t.elapsed().as_secs_f64() >= self.config.progress_period_s
+            }) {
+                shown = Some((waiting, Instant::now()));
+                on_wait(waiting, start.elapsed().as_secs_f64());
+            }
             if start.elapsed() > timeout {
-                let what = match (self.vehicle, self.global.is_some()) {
-                    (None, _) => "no heartbeat from an autopilot",
-                    (Some(_), false) => {
-                        "a heartbeat but no GLOBAL_POSITION_INT (no position fix yet?)"
-                    }
-                    _ => "no LOCAL_POSITION_NED (EKF origin not set yet?)",
-                };
-                return Err(GroundError::NoVehicle(format!(
-                    "{what} within {:.1} s",
-                    timeout.as_secs_f64()
-                )));
+                return Err(GroundError::NoVehicle(self.missing(timeout)));
             }
         }
     }
 
-    fn request_streams(&self) {
-        for (id, hz) in [(32u32, 10.0), (33, 10.0), (30, 10.0), (245, 2.0)] {
+    /// What never came, for the error of [`GroundStation::wait_for_vehicle`].
+    fn missing(&self, timeout: Duration) -> String {
+        let within = format!("within {:.1} s", timeout.as_secs_f64());
+        if self.vehicle.is_none() {
+            return format!("no heartbeat from an autopilot {within}");
+        }
+        let mut never = Vec::new();
+        if self.origin.is_none() {
+            never.push("no EKF origin (GPS_GLOBAL_ORIGIN)");
+        }
+        match &self.global {
+            None => never.push("no GLOBAL_POSITION_INT"),
+            Some(g) if g.lat == 0 && g.lon == 0 => never.push("GLOBAL_POSITION_INT without a fix"),
+            Some(_) => {}
+        }
+        if self.local.is_none() {
+            never.push("no LOCAL_POSITION_NED");
+        }
+        let hint = if !self.streaming {
+            "the vehicle streams nothing we asked for (SET_MESSAGE_INTERVAL, REQUEST_DATA_STREAM)"
+        } else if self.origin.is_none() {
+            "no GPS fix yet?"
+        } else {
+            "the EKF has its origin but is not using GPS yet (ArduCopter SITL needs ~40 s after boot at 1×: raise --wait-s)"
+        };
+        format!("a heartbeat, but {} {within}: {hint}", never.join(", "))
+    }
+
+    /// Asks the vehicle to stream what the flight needs (SET_MESSAGE_INTERVAL; with `fallback`,
+    /// REQUEST_DATA_STREAM of every stream too, for autopilots without the former).
+    fn request_streams(&self, fallback: bool) {
+        for (id, hz) in STREAM_RATES_HZ {
             let _ = self.send_command(
                 MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
                 [id as f32, (1e6 / hz) as f32, 0.0, 0.0, 0.0, 0.0, 0.0],
             );
+        }
+        if fallback {
+            let (sys, comp) = self.vehicle.unwrap_or((1, 1));
+            #[allow(deprecated)] // superseded by SET_MESSAGE_INTERVAL, still honoured by ArduPilot
+            let request = MavMessage::REQUEST_DATA_STREAM(REQUEST_DATA_STREAM_DATA {
+                req_message_rate: 10,
+                target_system: sys,
+                target_component: comp,
+                req_stream_id: MavDataStream::MAV_DATA_STREAM_ALL,
+                start_stop: 1,
+            });
+            let _ = self.link.send(&request);
         }
     }
 
@@ -453,6 +579,12 @@ impl GroundStation {
         let from_vehicle = self
             .vehicle
             .is_none_or(|(sys, _)| u32::from(sys) == r.header.system_id);
+        // Telemetry arrives: the stream requests work.
+        self.streaming |= from_vehicle
+            && matches!(
+                r.message,
+                MavMessage::GLOBAL_POSITION_INT(_) | MavMessage::ATTITUDE(_)
+            );
         match &r.message {
             MavMessage::HEARTBEAT(h) => {
                 if h.mavtype == MavType::MAV_TYPE_GCS
@@ -489,6 +621,10 @@ impl GroundStation {
             }
             MavMessage::ATTITUDE(a) => {
                 self.yaw_rad = f64::from(a.yaw);
+                None
+            }
+            MavMessage::GPS_GLOBAL_ORIGIN(o) => {
+                self.origin = Some(o.clone());
                 None
             }
             MavMessage::EXTENDED_SYS_STATE(s) => {
@@ -551,24 +687,14 @@ impl GroundStation {
         while let Some(r) = self.link.recv_timeout(Duration::ZERO) {
             let _ = self.absorb(&r);
         }
-        let (Some(g), Some(l)) = (self.global.clone(), self.local.clone()) else {
+        let Some(g) = self.global.clone() else {
             return Err(GroundError::NoVehicle(
                 "call wait_for_vehicle first: no position yet".into(),
             ));
         };
-        let vehicle_ned = frame
-            .ned_from_lla(Lla {
-                lat_deg: f64::from(g.lat) * 1e-7,
-                lon_deg: f64::from(g.lon) * 1e-7,
-                alt_m: 0.0,
-            })
-            .map_err(|e| GroundError::Position(e.to_string()))?;
-        // mission = local + offset.
-        let offset = [
-            vehicle_ned.north_m - f64::from(l.x),
-            vehicle_ned.east_m - f64::from(l.y),
-            -f64::from(l.z),
-        ];
+        // True bearing of the map's grid north at the vehicle (UTM convergence; 0.37° at the
+        // FCND home): headings are turned by it between the vehicle and the plan.
+        let convergence_rad = grid_convergence_rad(frame, global_lla(&g))?;
         let speedup = self.config.speedup.max(0.1);
         let start = Instant::now();
         let now = |start: Instant| start.elapsed().as_secs_f64() * speedup;
@@ -577,7 +703,8 @@ impl GroundStation {
         let mut aborted_at: Option<Instant> = None;
         let mut closed_reported = false;
         let mut sent_targets = 0usize;
-        let mut last_local_ms = None;
+        let mut last_global_ms = None;
+        let mut last_request = Instant::now();
         let mut last_mode = None;
         let mut link_lost = false;
         let mut last_progress: Option<Instant> = None;
@@ -606,21 +733,34 @@ impl GroundStation {
                     }
                     events.push(e);
                 }
-                if let MavMessage::LOCAL_POSITION_NED(p) = &r.message
-                    && last_local_ms != Some(p.time_boot_ms)
+                if let MavMessage::GLOBAL_POSITION_INT(g) = &r.message
+                    && last_global_ms != Some(g.time_boot_ms)
+                    && (g.lat != 0 || g.lon != 0)
+                    && let Ok(ned) = frame.ned_from_lla(global_lla(g))
                 {
-                    last_local_ms = Some(p.time_boot_ms);
+                    last_global_ms = Some(g.time_boot_ms);
+                    let (c, s) = (convergence_rad.cos(), convergence_rad.sin());
+                    let [vn, ve] = [f64::from(g.vx) * 0.01, f64::from(g.vy) * 0.01];
                     events.push(Event::Telemetry(Telemetry {
-                        north_m: f64::from(p.x) + offset[0],
-                        east_m: f64::from(p.y) + offset[1],
-                        down_m: f64::from(p.z) + offset[2],
-                        velocity_ned_m_s: [f64::from(p.vx), f64::from(p.vy), f64::from(p.vz)],
-                        yaw_rad: self.yaw_rad,
+                        north_m: ned.north_m,
+                        east_m: ned.east_m,
+                        down_m: -f64::from(g.relative_alt) * 1e-3,
+                        velocity_ned_m_s: [
+                            vn * c + ve * s,
+                            ve * c - vn * s,
+                            f64::from(g.vz) * 0.01,
+                        ],
+                        yaw_rad: wrap_angle_rad(self.yaw_rad - convergence_rad),
                         armed: self.armed,
                         guided: self.guided(),
                         on_ground: self.on_ground,
                     }));
                 }
+            }
+            // Ask again now and then: a request lost on the way would cost the mission progress.
+            if last_request.elapsed() > Duration::from_secs(10) {
+                last_request = Instant::now();
+                self.request_streams(false);
             }
             if !closed_reported && let Some(why) = self.link.closed() {
                 closed_reported = true;
@@ -685,14 +825,20 @@ impl GroundStation {
                         sent_targets += 1;
                     }
                     // A failed send shows up as a lost link; nothing else to do here.
-                    let _ = self.send(*c, offset);
+                    let _ = self.send(*c, frame, convergence_rad);
                 }
                 if !out.notes.is_empty() {
                     on_update(Update::Notes(t, out.notes));
                 }
                 if is_telemetry && let Some(tel) = ex.last_telemetry() {
+                    let (lat_deg, lon_deg) =
+                        self.global.as_ref().map_or((f64::NAN, f64::NAN), |g| {
+                            (f64::from(g.lat) * 1e-7, f64::from(g.lon) * 1e-7)
+                        });
                     log.push(LogRow {
                         time_s: t,
+                        lat_deg,
+                        lon_deg,
                         state: ex.state(),
                         north_m: tel.north_m,
                         east_m: tel.east_m,
@@ -713,7 +859,12 @@ impl GroundStation {
         })
     }
 
-    fn send(&mut self, c: Command, offset: [f64; 3]) -> Result<(), LinkError> {
+    fn send(
+        &mut self,
+        c: Command,
+        frame: &LocalFrame,
+        convergence_rad: f64,
+    ) -> Result<(), LinkError> {
         match c {
             Command::TakeControl | Command::Hold | Command::ReturnToLaunch => {
                 // PX4: main mode in param2, sub mode in param3 (AUTO = 4: LOITER 3, RTL 5).
@@ -776,24 +927,36 @@ impl GroundStation {
                 yaw_rad,
             } => {
                 let (sys, comp) = self.vehicle.unwrap_or((1, 1));
-                self.link.send(&MavMessage::SET_POSITION_TARGET_LOCAL_NED(
-                    SET_POSITION_TARGET_LOCAL_NED_DATA {
+                let lla = frame
+                    .lla_from_ned(Ned {
+                        north_m,
+                        east_m,
+                        down_m: 0.0,
+                    })
+                    .map_err(|e| LinkError::Send {
+                        message: "SET_POSITION_TARGET_GLOBAL_INT",
+                        detail: format!("the target has no latitude/longitude: {e}"),
+                    })?;
+                #[allow(deprecated)] // GLOBAL_RELATIVE_ALT_INT: what ArduPilot and PX4 expect here.
+                let coordinate_frame = MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT;
+                self.link.send(&MavMessage::SET_POSITION_TARGET_GLOBAL_INT(
+                    SET_POSITION_TARGET_GLOBAL_INT_DATA {
                         time_boot_ms: 0,
-                        x: (north_m - offset[0]) as f32,
-                        y: (east_m - offset[1]) as f32,
-                        z: (down_m - offset[2]) as f32,
+                        lat_int: (lla.lat_deg * 1e7).round() as i32,
+                        lon_int: (lla.lon_deg * 1e7).round() as i32,
+                        alt: (-down_m) as f32,
                         vx: 0.0,
                         vy: 0.0,
                         vz: 0.0,
                         afx: 0.0,
                         afy: 0.0,
                         afz: 0.0,
-                        yaw: yaw_rad as f32,
+                        yaw: wrap_angle_rad(yaw_rad + convergence_rad) as f32,
                         yaw_rate: 0.0,
                         type_mask: PositionTargetTypemask::from_bits_truncate(POSITION_AND_YAW),
                         target_system: sys,
                         target_component: comp,
-                        coordinate_frame: MavFrame::MAV_FRAME_LOCAL_NED,
+                        coordinate_frame,
                     },
                 ))
             }
@@ -801,26 +964,78 @@ impl GroundStation {
     }
 }
 
-/// An item as MISSION_ITEM_INT (relative-altitude frame, auto-continue).
+/// The latitude and longitude of a GLOBAL_POSITION_INT (altitude 0: positions are horizontal).
+fn global_lla(g: &GLOBAL_POSITION_INT_DATA) -> Lla {
+    Lla {
+        lat_deg: f64::from(g.lat) * 1e-7,
+        lon_deg: f64::from(g.lon) * 1e-7,
+        alt_m: 0.0,
+    }
+}
+
+/// The true bearing of the map frame's north axis at `at`, radians clockwise from true north
+/// (the grid convergence of its UTM projection there).
+pub fn grid_convergence_rad(frame: &LocalFrame, at: Lla) -> Result<f64, GroundError> {
+    let bad = |e: skyplan_frames::FrameError| GroundError::Position(e.to_string());
+    let ned = frame.ned_from_lla(at).map_err(bad)?;
+    let ahead = frame
+        .lla_from_ned(Ned {
+            north_m: ned.north_m + 100.0,
+            ..ned
+        })
+        .map_err(bad)?;
+    // WGS84 radii of curvature there: north (meridian) and east (prime vertical).
+    const A_M: f64 = 6_378_137.0;
+    const E2: f64 = 6.694_379_990_14e-3;
+    let lat = ((at.lat_deg + ahead.lat_deg) / 2.0).to_radians();
+    let w = 1.0 - E2 * lat.sin().powi(2);
+    let (m_north, m_east) = (A_M * (1.0 - E2) / w.powf(1.5), A_M / w.sqrt() * lat.cos());
+    let (dn, de) = (
+        (ahead.lat_deg - at.lat_deg).to_radians() * m_north,
+        (ahead.lon_deg - at.lon_deg).to_radians() * m_east,
+    );
+    Ok(de.atan2(dn))
+}
+
+/// An item as MISSION_ITEM_INT (relative-altitude frame, auto-continue; a CONDITION_YAW carries
+/// its absolute heading in `param1`, at the default rate, the shortest way).
 #[allow(deprecated)] // MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: what ArduPilot and PX4 expect here.
 pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component: u8) -> MavMessage {
+    let (command, frame, params) = match item.command {
+        ItemCommand::Waypoint => (
+            MavCmd::MAV_CMD_NAV_WAYPOINT,
+            MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            [0.0, 0.0, 0.0, item.yaw_deg],
+        ),
+        ItemCommand::Takeoff => (
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            [0.0, 0.0, 0.0, item.yaw_deg],
+        ),
+        ItemCommand::Land => (
+            MavCmd::MAV_CMD_NAV_LAND,
+            MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            [0.0, 0.0, 0.0, item.yaw_deg],
+        ),
+        ItemCommand::ConditionYaw => (
+            MavCmd::MAV_CMD_CONDITION_YAW,
+            MavFrame::MAV_FRAME_MISSION,
+            [item.yaw_deg, 0.0, 0.0, 0.0],
+        ),
+    };
     MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
-        param1: 0.0,
-        param2: 0.0,
-        param3: 0.0,
-        param4: item.yaw_deg,
+        param1: params[0],
+        param2: params[1],
+        param3: params[2],
+        param4: params[3],
         x: item.lat_e7,
         y: item.lon_e7,
         z: item.alt_m,
         seq: item.seq,
-        command: match item.command {
-            ItemCommand::Waypoint => MavCmd::MAV_CMD_NAV_WAYPOINT,
-            ItemCommand::Takeoff => MavCmd::MAV_CMD_NAV_TAKEOFF,
-            ItemCommand::Land => MavCmd::MAV_CMD_NAV_LAND,
-        },
+        command,
         target_system,
         target_component,
-        frame: MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        frame,
         current: 0,
         autocontinue: 1,
     })
@@ -828,3 +1043,51 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
 
 /// `type_mask` of a position + yaw target: ignore velocity, acceleration and yaw rate.
 pub const POSITION_AND_YAW: u16 = 0x9F8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_convergence_matches_the_utm_formula() {
+        // UTM convergence (Snyder, "Map Projections — A Working Manual", eq. 8-15 without
+        // higher terms): γ = Δλ sin φ [1 + Δλ² cos² φ (1 + 3η² + 2η⁴) / 3], η² = e'² cos² φ,
+        // Δλ from the zone's central meridian; grid north is east of true north east of it.
+        let frame = LocalFrame::new(Lla {
+            lat_deg: 37.792480,
+            lon_deg: -122.397450,
+            alt_m: 0.0,
+        })
+        .unwrap();
+        for (lat_deg, lon_deg) in [(37.792480, -122.397450), (37.80, -122.45), (37.70, -122.90)] {
+            let phi = f64::to_radians(lat_deg);
+            let dl = f64::to_radians(lon_deg + 123.0); // zone 10: central meridian 123° W
+            let eta2 = 6.739_496_742e-3 * phi.cos().powi(2);
+            let gamma = dl
+                * phi.sin()
+                * (1.0
+                    + dl.powi(2) * phi.cos().powi(2) * (1.0 + 3.0 * eta2 + 2.0 * eta2 * eta2)
+                        / 3.0);
+            let got = grid_convergence_rad(
+                &frame,
+                Lla {
+                    lat_deg,
+                    lon_deg,
+                    alt_m: 0.0,
+                },
+            )
+            .unwrap();
+            assert!(
+                (got - gamma).to_degrees().abs() < 2e-4,
+                "{lat_deg} {lon_deg}: {} vs {}",
+                got.to_degrees(),
+                gamma.to_degrees()
+            );
+        }
+        // At the FCND home: 0.37°, as FLIGHT-NOTES measured.
+        let home = grid_convergence_rad(&frame, frame.home())
+            .unwrap()
+            .to_degrees();
+        assert!((home - 0.369).abs() < 0.001, "{home}");
+    }
+}

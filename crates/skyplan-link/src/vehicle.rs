@@ -5,11 +5,19 @@
 //! (ARM_DISARM, NAV_TAKEOFF, NAV_LAND, DO_SET_MODE, MISSION_START, SET_MESSAGE_INTERVAL), SET_MODE,
 //! SET_POSITION_TARGET_LOCAL_NED (position, optional yaw), the mission upload (MISSION_COUNT →
 //! MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0 is the home, as on
-//! ArduPilot) and MISSION_CLEAR_ALL; streams HEARTBEAT (1 Hz), LOCAL_POSITION_NED,
-//! GLOBAL_POSITION_INT, ATTITUDE (10 Hz), EXTENDED_SYS_STATE (2 Hz), MISSION_CURRENT (2 Hz, once
-//! a mission is loaded) and MISSION_ITEM_REACHED, and STATUSTEXT with the reason of every refusal. Rates are in simulated
-//! time; with `speedup` K the simulation runs K× faster than the wall clock, and heartbeats are
-//! also sent at least once a wall-clock second.
+//! ArduPilot) and MISSION_CLEAR_ALL. Like ArduCopter, it sends only HEARTBEAT (1 Hz), command
+//! and mission answers, MISSION_ITEM_REACHED and STATUSTEXT (the reason of every refusal)
+//! unrequested: LOCAL_POSITION_NED, GLOBAL_POSITION_INT, ATTITUDE, EXTENDED_SYS_STATE,
+//! MISSION_CURRENT and GPS_GLOBAL_ORIGIN stream only once asked for with SET_MESSAGE_INTERVAL or
+//! REQUEST_DATA_STREAM. Its EKF needs [`SimServerConfig::ekf_delay_s`] after boot: the origin
+//! (GPS_GLOBAL_ORIGIN) is set half-way, positions are sent and arming is allowed only after it.
+//! Rates are in simulated time; with `speedup` K the simulation runs K× faster than the wall
+//! clock, and heartbeats are also sent at least once a wall-clock second.
+//!
+//! Positions are ArduPilot's: LOCAL_POSITION_NED and the vehicle's dynamics are in the
+//! true-north flat-earth frame about its EKF origin (the home, [`FlatEarth`]), and its latitude
+//! and longitude come from that frame as ArduPilot's `Location::offset` computes them — not from
+//! skyplan's UTM map frame, so a ground station that mixes the two is caught.
 //!
 //! Like ArduCopter's GCS failsafe, a flying vehicle in GUIDED lands when it has heard no ground
 //! station heartbeat for [`SimServerConfig::gcs_failsafe_s`] wall-clock seconds.
@@ -17,11 +25,15 @@
 use crate::{Address, Link, LinkError};
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
+use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimVehicle};
-use skyplan_frames::{Lla, LocalFrame, Ned};
+use skyplan_frames::{Lla, LocalFrame};
 use std::net::{SocketAddr, TcpListener};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+
+/// Simulated seconds after boot until the simulated EKF has a position, by default.
+pub const DEFAULT_EKF_DELAY_S: f64 = 5.0;
 
 /// The simulated vehicle's MAVLink system id.
 pub const SYSTEM_ID: u8 = 1;
@@ -31,8 +43,13 @@ pub const COMPONENT_ID: u8 = 1;
 /// How the simulator runs.
 #[derive(Debug, Clone)]
 pub struct SimServerConfig {
-    /// Where the vehicle starts (home), also the origin of LOCAL_POSITION_NED.
+    /// Where the vehicle starts (home), also its EKF origin: the origin of LOCAL_POSITION_NED.
     pub home: Lla,
+    /// The home of the map whose boxes the flown track is checked against (`None`: `home`).
+    pub map_home: Option<Lla>,
+    /// Simulated seconds after boot until the EKF has a position (GPS_GLOBAL_ORIGIN at half of
+    /// it). ArduCopter SITL needs ~40 s at 1×.
+    pub ekf_delay_s: f64,
     /// Vehicle limits.
     pub sim: SimConfig,
     /// Simulated seconds per wall-clock second (≥ 0.1).
@@ -49,10 +66,13 @@ pub struct SimServerConfig {
 }
 
 impl SimServerConfig {
-    /// Defaults at a home: real time, no fault, 5 s GCS failsafe, 20 ms steps.
+    /// Defaults at a home: real time, no fault, 5 s GCS failsafe, 20 ms steps, EKF ready 5 s
+    /// after boot.
     pub fn at(home: Lla) -> Self {
         Self {
             home,
+            map_home: None,
+            ekf_delay_s: DEFAULT_EKF_DELAY_S,
             sim: SimConfig::default(),
             speedup: 1.0,
             drop_link_after_s: None,
@@ -121,7 +141,88 @@ pub struct SimServer {
     listener: Listener,
     local: Option<SocketAddr>,
     config: SimServerConfig,
-    frame: LocalFrame,
+    /// The vehicle's own frame (ArduPilot's, about its EKF origin).
+    earth: FlatEarth,
+    /// The map's frame, for the collision check.
+    map_frame: LocalFrame,
+}
+
+/// The streamed messages, ArduCopter's way: off until requested. Message id and default period.
+const STREAMS: [(u32, f64); 7] = [
+    (ATTITUDE_ID, 0.1),
+    (MISSION_ITEM_REACHED_ID, 1.0),
+    (LOCAL_POSITION_NED_ID, 0.1),
+    (GLOBAL_POSITION_INT_ID, 0.1),
+    (MISSION_CURRENT_ID, 0.5),
+    (GPS_GLOBAL_ORIGIN_ID, 1.0),
+    (EXTENDED_SYS_STATE_ID, 0.5),
+];
+const ATTITUDE_ID: u32 = 30;
+const LOCAL_POSITION_NED_ID: u32 = 32;
+const GLOBAL_POSITION_INT_ID: u32 = 33;
+const MISSION_CURRENT_ID: u32 = 42;
+const MISSION_ITEM_REACHED_ID: u32 = 46;
+const GPS_GLOBAL_ORIGIN_ID: u32 = 49;
+const EXTENDED_SYS_STATE_ID: u32 = 245;
+
+/// Requested stream periods (simulated seconds) and when each was last sent.
+#[derive(Debug, Clone, Default)]
+struct Streams {
+    period_s: [Option<f64>; STREAMS.len()],
+    last_s: [f64; STREAMS.len()],
+}
+
+impl Streams {
+    /// SET_MESSAGE_INTERVAL: −1 stops, 0 is the default rate; `false` for an unknown message.
+    fn set_interval(&mut self, id: u32, interval_us: f32) -> bool {
+        let Some(k) = STREAMS.iter().position(|(m, _)| *m == id) else {
+            return false;
+        };
+        self.period_s[k] = if interval_us < 0.0 {
+            None
+        } else if interval_us == 0.0 {
+            Some(STREAMS[k].1)
+        } else {
+            Some(f64::from(interval_us) * 1e-6)
+        };
+        self.last_s[k] = f64::NEG_INFINITY;
+        true
+    }
+
+    /// REQUEST_DATA_STREAM: a group of streams at a rate (0 or `start` false: off). Deprecated
+    /// by MAVLink, still what older ground stations send and what ArduPilot honours.
+    #[allow(deprecated)]
+    fn request(&mut self, stream: MavDataStream, rate_hz: u16, start: bool) {
+        let ids: &[u32] = match stream {
+            MavDataStream::MAV_DATA_STREAM_ALL => &[30, 32, 33, 42, 46, 49, 245],
+            MavDataStream::MAV_DATA_STREAM_POSITION => &[32, 33],
+            MavDataStream::MAV_DATA_STREAM_EXTRA1 => &[30],
+            MavDataStream::MAV_DATA_STREAM_EXTENDED_STATUS => &[42, 46, 49, 245],
+            _ => &[],
+        };
+        let interval_us = if start && rate_hz > 0 {
+            1e6 / f32::from(rate_hz)
+        } else {
+            -1.0
+        };
+        for id in ids {
+            self.set_interval(*id, interval_us);
+        }
+    }
+
+    /// The messages due at `now_s` (and marks them sent).
+    fn due(&mut self, now_s: f64) -> Vec<u32> {
+        let mut ids = Vec::new();
+        for (k, (id, _)) in STREAMS.iter().enumerate() {
+            if let Some(p) = self.period_s[k]
+                && now_s - self.last_s[k] >= p
+            {
+                self.last_s[k] = now_s;
+                ids.push(*id);
+            }
+        }
+        ids
+    }
 }
 
 struct Upload {
@@ -168,10 +269,12 @@ fn status_text(severity: MavSeverity, text: &str) -> MavMessage {
 impl SimServer {
     /// Binds a TCP listener (`tcpin:`; port 0 picks a free port) or a UDP socket (`udpin:`).
     pub fn bind(address: &Address, config: SimServerConfig) -> Result<Self, LinkError> {
-        let frame = LocalFrame::new(config.home).map_err(|e| LinkError::Address {
-            address: format!("{:?}", config.home),
-            message: format!("the home is not usable: {e}"),
+        let map_home = config.map_home.unwrap_or(config.home);
+        let map_frame = LocalFrame::new(map_home).map_err(|e| LinkError::Address {
+            address: format!("lat {}, lon {}", map_home.lat_deg, map_home.lon_deg),
+            message: format!("the map's home is not usable: {e}"),
         })?;
+        let earth = FlatEarth::new(config.home.lat_deg, config.home.lon_deg);
         let (listener, local) = match address {
             Address::TcpIn(hp) => {
                 let l = TcpListener::bind(hp.as_str()).map_err(|source| LinkError::Open {
@@ -200,7 +303,8 @@ impl SimServer {
             listener,
             local,
             config,
-            frame,
+            earth,
+            map_frame,
         })
     }
 
@@ -228,8 +332,13 @@ impl SimServer {
         let wall0 = Instant::now();
         let mut last_hb_sim = f64::NEG_INFINITY;
         let mut last_hb_wall = wall0 - Duration::from_secs(10);
-        let mut last_fast = f64::NEG_INFINITY;
-        let mut last_slow = f64::NEG_INFINITY;
+        let mut side = Side {
+            earth: self.earth,
+            home_alt_m: cfg.home.alt_m,
+            ekf_delay_s: cfg.ekf_delay_s.max(0.0),
+            streams: Streams::default(),
+            last_reached: u16::MAX,
+        };
         let mut last_gcs = Instant::now();
         let mut upload: Option<Upload> = None;
         let mut dropped = false;
@@ -263,6 +372,7 @@ impl SimServer {
                     match e {
                         skyplan_flight::sim::SimEvent::MissionItemReached(seq) => {
                             note(SimNote::MissionItemReached(seq));
+                            side.last_reached = seq;
                             if !dropped && let Some(l) = &link {
                                 let _ = l.send(&MavMessage::MISSION_ITEM_REACHED(
                                     MISSION_ITEM_REACHED_DATA { seq },
@@ -278,7 +388,17 @@ impl SimServer {
                 distance_m += (s.position_ned_m[0] - before.position_ned_m[0])
                     .hypot(s.position_ned_m[1] - before.position_ned_m[1]);
                 if let Some(w) = world {
-                    track.add(w, s.time_s, s.position_ned_m);
+                    let (lat_deg, lon_deg) = self
+                        .earth
+                        .lat_lon_from_ne(s.position_ned_m[0], s.position_ned_m[1]);
+                    if let Ok(ned) = self.map_frame.ned_from_lla(Lla {
+                        lat_deg,
+                        lon_deg,
+                        alt_m: 0.0,
+                    }) {
+                        let p = [ned.north_m, ned.east_m, s.position_ned_m[2]];
+                        track.add(w, s.time_s, p);
+                    }
                     if !collided && let Some(c) = track.collision() {
                         collided = true;
                         note(SimNote::Collision(c));
@@ -347,7 +467,7 @@ impl SimServer {
                 }
                 let replies = handle_message(
                     &mut vehicle,
-                    &self.frame,
+                    &mut side,
                     &mut upload,
                     &mut last_gcs,
                     r.message,
@@ -391,28 +511,9 @@ impl SimServer {
                 last_hb_wall = Instant::now();
                 let _ = l.send(&heartbeat_of(&s));
             }
-            if s.time_s - last_fast >= 0.1 {
-                last_fast = s.time_s;
-                for m in telemetry(&s, &self.frame, cfg.home) {
+            for id in side.streams.due(s.time_s) {
+                if let Some(m) = side.message(id, &s, vehicle.mission().len()) {
                     let _ = l.send(&m);
-                }
-            }
-            if s.time_s - last_slow >= 0.5 {
-                last_slow = s.time_s;
-                let landed = if s.on_ground {
-                    MavLandedState::MAV_LANDED_STATE_ON_GROUND
-                } else {
-                    MavLandedState::MAV_LANDED_STATE_IN_AIR
-                };
-                let _ = l.send(&MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
-                    vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
-                    landed_state: landed,
-                }));
-                // As ArduPilot: in every mode, once there is a mission.
-                if vehicle.mission().len() > 1 {
-                    let _ = l.send(&MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
-                        seq: s.mission_current,
-                    }));
                 }
             }
         }
@@ -444,86 +545,135 @@ fn request_int(seq: u16) -> MavMessage {
     })
 }
 
-fn telemetry(s: &SimState, frame: &LocalFrame, home: Lla) -> Vec<MavMessage> {
-    let time_boot_ms = (s.time_s * 1000.0) as u32;
-    let [n, e, d] = s.position_ned_m;
-    let [vn, ve, vd] = s.velocity_ned_m_s;
-    let mut out = vec![
-        MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
-            time_boot_ms,
-            x: n as f32,
-            y: e as f32,
-            z: d as f32,
-            vx: vn as f32,
-            vy: ve as f32,
-            vz: vd as f32,
-        }),
-        MavMessage::ATTITUDE(ATTITUDE_DATA {
-            time_boot_ms,
-            roll: 0.0,
-            pitch: 0.0,
-            yaw: s.yaw_rad as f32,
-            rollspeed: 0.0,
-            pitchspeed: 0.0,
-            yawspeed: s.yaw_rate_rad_s as f32,
-        }),
-    ];
-    if let Ok(lla) = frame.lla_from_ned(Ned {
-        north_m: n,
-        east_m: e,
-        down_m: d,
-    }) {
-        let hdg = (s.yaw_rad.to_degrees().rem_euclid(360.0) * 100.0).round() as u16 % 36000;
-        out.push(MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
-            time_boot_ms,
-            lat: (lla.lat_deg * 1e7).round() as i32,
-            lon: (lla.lon_deg * 1e7).round() as i32,
-            alt: ((home.alt_m - d) * 1000.0).round() as i32,
-            relative_alt: (-d * 1000.0).round() as i32,
-            vx: (vn * 100.0).round().clamp(-32768.0, 32767.0) as i16,
-            vy: (ve * 100.0).round().clamp(-32768.0, 32767.0) as i16,
-            vz: (vd * 100.0).round().clamp(-32768.0, 32767.0) as i16,
-            hdg,
-        }));
+/// The vehicle side's frame, EKF and streams.
+struct Side {
+    earth: FlatEarth,
+    home_alt_m: f64,
+    ekf_delay_s: f64,
+    streams: Streams,
+    /// The last mission item reached (65535: none yet), which a requested MISSION_ITEM_REACHED
+    /// stream repeats, as ArduPilot's does.
+    last_reached: u16,
+}
+
+impl Side {
+    /// The EKF has set its origin (half-way to a position, as ArduCopter's ~20 s of ~40 s).
+    fn origin_set(&self, s: &SimState) -> bool {
+        s.time_s >= 0.5 * self.ekf_delay_s
     }
-    out
+
+    /// The EKF has a position: positions are sent and arming is allowed.
+    fn position_ready(&self, s: &SimState) -> bool {
+        s.time_s >= self.ekf_delay_s
+    }
+
+    /// Latitude and longitude of a point of the vehicle's local frame, as integers × 10⁷.
+    fn lat_lon_e7(&self, north_m: f64, east_m: f64) -> (i32, i32) {
+        let (lat, lon) = self.earth.lat_lon_from_ne(north_m, east_m);
+        ((lat * 1e7).round() as i32, (lon * 1e7).round() as i32)
+    }
+
+    /// The streamed message `id` now, if the vehicle has it to send.
+    fn message(&self, id: u32, s: &SimState, mission_len: usize) -> Option<MavMessage> {
+        let time_boot_ms = (s.time_s * 1000.0) as u32;
+        let [n, e, d] = s.position_ned_m;
+        let [vn, ve, vd] = s.velocity_ned_m_s;
+        let cm_s = |v: f64| (v * 100.0).round().clamp(-32768.0, 32767.0) as i16;
+        Some(match id {
+            ATTITUDE_ID => MavMessage::ATTITUDE(ATTITUDE_DATA {
+                time_boot_ms,
+                roll: 0.0,
+                pitch: 0.0,
+                yaw: s.yaw_rad as f32,
+                rollspeed: 0.0,
+                pitchspeed: 0.0,
+                yawspeed: s.yaw_rate_rad_s as f32,
+            }),
+            LOCAL_POSITION_NED_ID if self.position_ready(s) => {
+                MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    time_boot_ms,
+                    x: n as f32,
+                    y: e as f32,
+                    z: d as f32,
+                    vx: vn as f32,
+                    vy: ve as f32,
+                    vz: vd as f32,
+                })
+            }
+            GLOBAL_POSITION_INT_ID if self.position_ready(s) => {
+                let (lat, lon) = self.lat_lon_e7(n, e);
+                let hdg = (s.yaw_rad.to_degrees().rem_euclid(360.0) * 100.0).round() as u16 % 36000;
+                MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+                    time_boot_ms,
+                    lat,
+                    lon,
+                    alt: ((self.home_alt_m - d) * 1000.0).round() as i32,
+                    relative_alt: (-d * 1000.0).round() as i32,
+                    vx: cm_s(vn),
+                    vy: cm_s(ve),
+                    vz: cm_s(vd),
+                    hdg,
+                })
+            }
+            GPS_GLOBAL_ORIGIN_ID if self.origin_set(s) => {
+                let (latitude, longitude) = self.lat_lon_e7(0.0, 0.0);
+                MavMessage::GPS_GLOBAL_ORIGIN(GPS_GLOBAL_ORIGIN_DATA {
+                    latitude,
+                    longitude,
+                    altitude: (self.home_alt_m * 1000.0).round() as i32,
+                })
+            }
+            EXTENDED_SYS_STATE_ID => MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
+                vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+                landed_state: if s.on_ground {
+                    MavLandedState::MAV_LANDED_STATE_ON_GROUND
+                } else {
+                    MavLandedState::MAV_LANDED_STATE_IN_AIR
+                },
+            }),
+            MISSION_ITEM_REACHED_ID => {
+                MavMessage::MISSION_ITEM_REACHED(MISSION_ITEM_REACHED_DATA {
+                    seq: self.last_reached,
+                })
+            }
+            // As ArduPilot: in every mode, once there is a mission.
+            MISSION_CURRENT_ID if mission_len > 1 => {
+                MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
+                    seq: s.mission_current,
+                })
+            }
+            _ => return None,
+        })
+    }
 }
 
 fn ack(command: MavCmd, result: MavResult) -> MavMessage {
     MavMessage::COMMAND_ACK(COMMAND_ACK_DATA { command, result })
 }
 
-/// A mission item in the local frame (the deprecated `_INT` frame is what ArduPilot sends).
+/// A mission item in the vehicle's frame (the deprecated `_INT` frame is what ArduPilot sends).
+/// `p` holds `param1`, the latitude and longitude (degrees) and `z`.
 #[allow(deprecated)]
-fn item_to_sim(
-    frame: &LocalFrame,
-    command: MavCmd,
-    mav_frame: MavFrame,
-    lat_deg: f64,
-    lon_deg: f64,
-    z: f64,
-    yaw_deg: f64,
-) -> SimMissionItem {
+fn item_to_sim(side: &Side, command: MavCmd, mav_frame: MavFrame, p: [f64; 4]) -> SimMissionItem {
+    let [param1, lat_deg, lon_deg, z] = p;
     let relative = matches!(
         mav_frame,
         MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
     );
-    let alt_m = if relative { z } else { z - frame.home().alt_m };
+    let alt_m = if relative { z } else { z - side.home_alt_m };
     match command {
         MavCmd::MAV_CMD_NAV_TAKEOFF => SimMissionItem::Takeoff { alt_m },
         MavCmd::MAV_CMD_NAV_LAND => SimMissionItem::Land,
-        MavCmd::MAV_CMD_NAV_WAYPOINT => match frame.ned_from_lla(Lla {
-            lat_deg,
-            lon_deg,
-            alt_m: 0.0,
-        }) {
-            Ok(ned) => SimMissionItem::Waypoint {
-                north_m: ned.north_m,
-                east_m: ned.east_m,
+        MavCmd::MAV_CMD_NAV_WAYPOINT if lat_deg.is_finite() && lon_deg.is_finite() => {
+            let [north_m, east_m] = side.earth.ne_from_lat_lon(lat_deg, lon_deg);
+            SimMissionItem::Waypoint {
+                north_m,
+                east_m,
                 alt_m,
-                yaw_rad: yaw_deg.to_radians(),
-            },
-            Err(_) => SimMissionItem::Unsupported,
+            }
+        }
+        MavCmd::MAV_CMD_CONDITION_YAW if param1.is_finite() => SimMissionItem::Yaw {
+            yaw_rad: param1.to_radians(),
         },
         _ => SimMissionItem::Unsupported,
     }
@@ -533,7 +683,7 @@ fn item_to_sim(
 #[allow(deprecated)]
 fn handle_message(
     v: &mut SimVehicle,
-    frame: &LocalFrame,
+    side: &mut Side,
     upload: &mut Option<Upload>,
     last_gcs: &mut Instant,
     message: MavMessage,
@@ -556,6 +706,12 @@ fn handle_message(
                 return out;
             }
             let result = match c.command {
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
+                    if c.param1 >= 0.5 && !side.position_ready(&v.state()) =>
+                {
+                    refuse(&mut out, "PreArm: Need Position Estimate".into());
+                    MavResult::MAV_RESULT_FAILED
+                }
                 MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
                     let r = if c.param1 >= 0.5 { v.arm() } else { v.disarm() };
                     match r {
@@ -604,9 +760,14 @@ fn handle_message(
                         MavResult::MAV_RESULT_ACCEPTED
                     }
                 }
-                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL | MavCmd::MAV_CMD_REQUEST_MESSAGE => {
-                    MavResult::MAV_RESULT_ACCEPTED
+                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => {
+                    if side.streams.set_interval(c.param1 as u32, c.param2) {
+                        MavResult::MAV_RESULT_ACCEPTED
+                    } else {
+                        MavResult::MAV_RESULT_UNSUPPORTED
+                    }
                 }
+                MavCmd::MAV_CMD_REQUEST_MESSAGE => MavResult::MAV_RESULT_ACCEPTED,
                 _ => MavResult::MAV_RESULT_UNSUPPORTED,
             };
             out.push(ack(c.command, result));
@@ -614,6 +775,39 @@ fn handle_message(
         MavMessage::SET_MODE(m) => {
             if let Some(mode) = SimMode::from_arducopter_custom_mode(m.custom_mode) {
                 v.set_mode(mode);
+            }
+        }
+        MavMessage::REQUEST_DATA_STREAM(r) => {
+            side.streams
+                .request(r.req_stream_id, r.req_message_rate, r.start_stop == 1);
+        }
+        MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => {
+            let mask = t.type_mask.bits();
+            let relative = matches!(
+                t.coordinate_frame,
+                MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+                    | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
+            );
+            let absolute = matches!(
+                t.coordinate_frame,
+                MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL
+            );
+            if mask & 0x7 == 0 && (relative || absolute) {
+                let [north_m, east_m] = side
+                    .earth
+                    .ne_from_lat_lon(f64::from(t.lat_int) * 1e-7, f64::from(t.lon_int) * 1e-7);
+                let alt_m = if relative {
+                    f64::from(t.alt)
+                } else {
+                    f64::from(t.alt) - side.home_alt_m
+                };
+                let yaw = if mask & 0x400 != 0 {
+                    f64::NAN
+                } else {
+                    f64::from(t.yaw)
+                };
+                // Ignored outside GUIDED, as ArduPilot does.
+                let _ = v.set_position_target([north_m, east_m, -alt_m], yaw);
             }
         }
         MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) => {
@@ -646,27 +840,23 @@ fn handle_message(
             }
         }
         MavMessage::MISSION_ITEM_INT(i) => {
-            let item = item_to_sim(
-                frame,
-                i.command,
-                i.frame,
+            let p = [
+                f64::from(i.param1),
                 f64::from(i.x) * 1e-7,
                 f64::from(i.y) * 1e-7,
                 f64::from(i.z),
-                f64::from(i.param4),
-            );
+            ];
+            let item = item_to_sim(side, i.command, i.frame, p);
             accept_item(v, upload, i.seq, item, &mut out, note);
         }
         MavMessage::MISSION_ITEM(i) => {
-            let item = item_to_sim(
-                frame,
-                i.command,
-                i.frame,
+            let p = [
+                f64::from(i.param1),
                 f64::from(i.x),
                 f64::from(i.y),
                 f64::from(i.z),
-                f64::from(i.param4),
-            );
+            ];
+            let item = item_to_sim(side, i.command, i.frame, p);
             accept_item(v, upload, i.seq, item, &mut out, note);
         }
         MavMessage::MISSION_CLEAR_ALL(_) => {

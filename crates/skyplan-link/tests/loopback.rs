@@ -43,7 +43,9 @@ fn fly(config: SimServerConfig, ground: GroundConfig) -> Run {
     let sim = std::thread::spawn(move || server.run(None, &s2, |n| n2.lock().unwrap().push(n)));
     let address = Address::parse(&format!("tcp:127.0.0.1:{port}"), Role::Client).unwrap();
     let mut gcs = GroundStation::connect(&address, ground).unwrap();
-    let info = gcs.wait_for_vehicle(Duration::from_secs(10)).unwrap();
+    let info = gcs
+        .wait_for_vehicle(Duration::from_secs(10), |_, _| {})
+        .unwrap();
     assert!((info.position.lat_deg - HOME.lat_deg).abs() < 1e-6);
     let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
     let frame = LocalFrame::new(HOME).unwrap();
@@ -114,4 +116,66 @@ fn a_silent_vehicle_is_a_lost_link() {
     };
     assert!(f.to_string().contains("link lost"), "{f}");
     assert!(run.sim_notes.contains(&SimNote::LinkDropped));
+}
+
+#[test]
+fn the_simulator_streams_nothing_until_asked_like_arducopter() {
+    use skyplan_link::Link;
+    use skyplan_link::mavlink::dialects::common::{COMMAND_LONG_DATA, MavCmd, MavMessage};
+    let config = SimServerConfig {
+        speedup: 20.0,
+        ekf_delay_s: 2.0,
+        ..SimServerConfig::at(HOME)
+    };
+    let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).unwrap();
+    let port = server.local_addr().unwrap().port();
+    let stop = Arc::new(AtomicBool::new(false));
+    let s2 = Arc::clone(&stop);
+    let sim = std::thread::spawn(move || server.run(None, &s2, |_| {}));
+    let address = Address::TcpOut(format!("127.0.0.1:{port}"));
+    let mut link = Link::open(&address, 250, 190).unwrap();
+    let names = |link: &mut Link, wall_s: f64| {
+        let until = std::time::Instant::now() + Duration::from_secs_f64(wall_s);
+        let mut names = std::collections::BTreeSet::new();
+        while std::time::Instant::now() < until {
+            if let Some(r) = link.recv_timeout(Duration::from_millis(20)) {
+                names.insert(skyplan_link::message_name(&r.message));
+            }
+        }
+        names
+    };
+    // 0.5 s wall = 10 s of vehicle time: heartbeats only.
+    let first = names(&mut link, 0.5);
+    assert_eq!(first.into_iter().collect::<Vec<_>>(), ["HEARTBEAT"]);
+    for (id, us) in [(33.0, 1e5), (49.0, 1e6)] {
+        link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: id,
+            param2: us,
+            param3: 0.0,
+            param4: 0.0,
+            param5: 0.0,
+            param6: 0.0,
+            param7: 0.0,
+            command: MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+            target_system: 1,
+            target_component: 1,
+            confirmation: 0,
+        }))
+        .unwrap();
+    }
+    let then = names(&mut link, 0.5);
+    for name in [
+        "HEARTBEAT",
+        "COMMAND_ACK",
+        "GLOBAL_POSITION_INT",
+        "GPS_GLOBAL_ORIGIN",
+    ] {
+        assert!(then.contains(name), "{then:?}");
+    }
+    assert!(
+        !then.contains("LOCAL_POSITION_NED") && !then.contains("ATTITUDE"),
+        "{then:?}"
+    );
+    stop.store(true, Ordering::Relaxed);
+    sim.join().unwrap();
 }

@@ -6,7 +6,7 @@ mavsdk`), publishes a position with TelemetryServer (skyplan waits for one befor
 prints "listening PORT", then waits for one mission upload, prints its items and checks them
 against skyplan's plan (PLAN.json, written by `skyplan fly --out` before it uploads): the home,
 NAV_TAKEOFF to the altitude, one NAV_WAYPOINT per waypoint (lat/lon within 1e-7°, altitude, yaw
-in param4), NAV_LAND at the last one, all in MAV_FRAME_GLOBAL_RELATIVE_ALT_INT. Prints "OK" at the
+in param4: the plan's grid heading turned to true north), NAV_LAND at the last one, all in MAV_FRAME_GLOBAL_RELATIVE_ALT_INT. Prints "OK" at the
 end, or "FAIL ..." and exits 1.
 """
 import json
@@ -124,13 +124,28 @@ check(commands == [NAV_WAYPOINT, NAV_TAKEOFF] + [NAV_WAYPOINT] * n + [NAV_LAND],
 near_deg(items[0].x, home_lat, "home latitude")
 near_deg(items[0].y, home_lon, "home longitude")
 check(abs(items[1].z - wps[0]["alt_m"]) < 1e-4, f"takeoff altitude {items[1].z}")
+# The plan's headings are from the map's grid north (UTM); the items' yaw from true north. The
+# convergence between them is the true bearing of the plan's first-to-last line minus its grid
+# bearing (0.37 deg at the FCND home).
+with open(plan_path) as f:
+    rows = json.load(f)["waypoints"]
+first, last = wps[0], wps[-1]
+mid_lat = math.radians((first["lat_deg"] + last["lat_deg"]) / 2)
+# WGS84 radii of curvature: metres per radian north (meridian) and east (prime vertical).
+a, e2 = 6378137.0, 6.69437999014e-3
+w = 1 - e2 * math.sin(mid_lat) ** 2
+m_north, m_east = a * (1 - e2) / w**1.5, a / w**0.5 * math.cos(mid_lat)
+true_bearing = math.degrees(math.atan2((last["lon_deg"] - first["lon_deg"]) * m_east, (last["lat_deg"] - first["lat_deg"]) * m_north))
+grid_bearing = math.degrees(math.atan2(rows[-1][1] - rows[0][1], rows[-1][0] - rows[0][0]))
+convergence = true_bearing - grid_bearing
+check(0.2 < convergence < 0.6, f"grid convergence {convergence} deg")
 for k, (it, w) in enumerate(zip(items[2:-1], wps)):
     near_deg(it.x, w["lat_deg"], f"waypoint {k + 1} latitude")
     near_deg(it.y, w["lon_deg"], f"waypoint {k + 1} longitude")
     check(abs(it.z - w["alt_m"]) < 1e-4, f"waypoint {k + 1} altitude {it.z} vs {w['alt_m']}")
-    want = w["heading_deg"] % 360.0
+    want = (w["heading_deg"] + convergence) % 360.0
     diff = abs((it.param4 - want + 180.0) % 360.0 - 180.0)
-    check(not math.isnan(it.param4) and diff < 1e-3, f"waypoint {k + 1} yaw {it.param4} vs {want}")
+    check(not math.isnan(it.param4) and diff < 0.01, f"waypoint {k + 1} yaw {it.param4} vs {want}")
 land = items[-1]
 near_deg(land.x, wps[-1]["lat_deg"], "land latitude")
 near_deg(land.y, wps[-1]["lon_deg"], "land longitude")

@@ -60,7 +60,16 @@ print("heartbeat from system", conn.target_system, "autopilot", hb.autopilot, "t
 assert hb.autopilot == mavutil.mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA
 heartbeat(conn)
 
-# Telemetry streams.
+# Like ArduCopter, nothing streams until asked for: no telemetry in the first second.
+early = conn.recv_match(type=["GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "ATTITUDE"], blocking=True, timeout=1.0)
+if early is not None:
+    fail(f"{early.get_type()} arrived before any stream was requested")
+print("no telemetry before it is requested", flush=True)
+
+# Telemetry streams, requested with SET_MESSAGE_INTERVAL (microseconds).
+for msg_id, hz in [(33, 10), (32, 10), (30, 10), (245, 2), (42, 2)]:
+    if command(conn, mavutil.mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, 1e6 / hz) != 0:
+        fail(f"SET_MESSAGE_INTERVAL {msg_id} refused")
 g = wait(conn, "GLOBAL_POSITION_INT")
 wait(conn, "LOCAL_POSITION_NED")
 wait(conn, "ATTITUDE")

@@ -1,30 +1,15 @@
 use super::*;
+use crate::executor::{FailsafeAction, Note, Outcome};
 use crate::sim::{SimConfig, SimEvent, SimMissionItem, SimMode, SimVehicle};
+use crate::testkit::{apply, link_gap, mode_of, route, telemetry};
 
-fn wp(n: f64, e: f64, heading_deg: f64) -> Target {
-    Target {
-        north_m: n,
-        east_m: e,
-        alt_m: 5.0,
-        heading_rad: heading_deg.to_radians(),
-    }
-}
-
-fn route() -> Vec<Target> {
-    vec![
-        wp(0.0, 0.0, 0.0),
-        wp(20.0, 0.0, 0.0),
-        wp(20.0, 20.0, 90.0),
-        wp(0.0, 20.0, 180.0),
-    ]
-}
-
-/// ArduPilot's layout: item 0 home, 1 take-off, the waypoints, land.
+/// ArduPilot's layout: item 0 home, 1 take-off, each waypoint after its CONDITION_YAW, land.
 fn layout(n: usize) -> MissionLayout {
     MissionLayout {
         takeoff_seq: 1,
-        first_waypoint_seq: 2,
-        land_seq: 2 + n as u16,
+        first_waypoint_seq: 3,
+        waypoint_stride: 2,
+        land_seq: 2 + 2 * n as u16,
     }
 }
 
@@ -35,71 +20,18 @@ fn sim_mission(targets: &[Target]) -> Vec<SimMissionItem> {
             alt_m: targets[0].alt_m,
         },
     ];
-    items.extend(targets.iter().map(|t| SimMissionItem::Waypoint {
-        north_m: t.north_m,
-        east_m: t.east_m,
-        alt_m: t.alt_m,
-        yaw_rad: t.heading_rad,
-    }));
+    for t in targets {
+        items.push(SimMissionItem::Yaw {
+            yaw_rad: t.heading_rad,
+        });
+        items.push(SimMissionItem::Waypoint {
+            north_m: t.north_m,
+            east_m: t.east_m,
+            alt_m: t.alt_m,
+        });
+    }
     items.push(SimMissionItem::Land);
     items
-}
-
-fn mode_of(m: SimMode) -> VehicleMode {
-    match m {
-        SimMode::Guided => VehicleMode::Guided,
-        SimMode::Auto => VehicleMode::Auto,
-        SimMode::Land => VehicleMode::Land,
-        SimMode::Loiter => VehicleMode::Hold,
-        SimMode::Rtl => VehicleMode::ReturnToLaunch,
-        other => VehicleMode::Other(other.arducopter_custom_mode()),
-    }
-}
-
-fn telemetry(v: &SimVehicle) -> Telemetry {
-    let s = v.state();
-    Telemetry {
-        north_m: s.position_ned_m[0],
-        east_m: s.position_ned_m[1],
-        down_m: s.position_ned_m[2],
-        velocity_ned_m_s: s.velocity_ned_m_s,
-        yaw_rad: s.yaw_rad,
-        armed: s.armed,
-        guided: s.mode == SimMode::Guided,
-        on_ground: Some(s.on_ground),
-    }
-}
-
-fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
-    let ack = |command, r: Result<(), crate::sim::SimRefusal>| Event::Ack {
-        command,
-        accepted: r.map_err(|e| format!("DENIED: {e}")),
-    };
-    Some(match c {
-        Command::TakeControl => {
-            v.set_mode(SimMode::Guided);
-            ack(CommandKind::TakeControl, Ok(()))
-        }
-        Command::Arm => ack(CommandKind::Arm, v.arm()),
-        Command::Disarm => ack(CommandKind::Disarm, v.disarm()),
-        Command::StartMission => {
-            v.set_mode(SimMode::Auto);
-            ack(CommandKind::StartMission, Ok(()))
-        }
-        Command::Land => {
-            v.land();
-            ack(CommandKind::Land, Ok(()))
-        }
-        Command::Hold => {
-            v.set_mode(SimMode::Loiter);
-            ack(CommandKind::Hold, Ok(()))
-        }
-        Command::ReturnToLaunch => {
-            v.set_mode(SimMode::Rtl);
-            ack(CommandKind::ReturnToLaunch, Ok(()))
-        }
-        other => panic!("the AUTO executor sent {other:?}"),
-    })
 }
 
 struct Flight {
@@ -134,6 +66,10 @@ fn fly(
             }
         }
         for c in out.commands {
+            assert!(
+                !matches!(c, Command::GoTo { .. } | Command::Takeoff { .. }),
+                "the AUTO executor sent {c:?}"
+            );
             commands.push(c);
             pending.extend(apply(v, c));
         }
@@ -172,18 +108,27 @@ fn fly(
 }
 
 fn ready(targets: &[Target]) -> (AutoExecutor, SimVehicle) {
-    let ex = AutoExecutor::new(targets, layout(targets.len()), ExecutorConfig::default()).unwrap();
+    ready_with(targets, ExecutorConfig::default())
+}
+
+fn ready_with(targets: &[Target], config: ExecutorConfig) -> (AutoExecutor, SimVehicle) {
+    let ex = AutoExecutor::new(targets, layout(targets.len()), config).unwrap();
     let mut v = SimVehicle::new(SimConfig::default());
     v.set_mission(sim_mission(targets));
     (ex, v)
 }
 
+/// Flies the square route undisturbed, to completion.
+fn fly_the_route(lose_reached: bool) -> (AutoExecutor, SimVehicle, Flight) {
+    let (mut ex, mut v) = ready(&route());
+    let f = fly(&mut ex, &mut v, lose_reached, |_, _, _| None);
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    (ex, v, f)
+}
+
 #[test]
 fn the_uploaded_mission_is_flown_in_auto_with_every_waypoint_reported() {
-    let targets = route();
-    let (mut ex, mut v) = ready(&targets);
-    let f = fly(&mut ex, &mut v, false, |_, _, _| None);
-    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    let (ex, v, f) = fly_the_route(false);
     use FlightState::*;
     assert_eq!(
         f.states,
@@ -193,9 +138,12 @@ fn the_uploaded_mission_is_flown_in_auto_with_every_waypoint_reported() {
     );
     assert_eq!(ex.reached().len(), 4);
     assert!(ex.reached().iter().enumerate().all(|(i, r)| r.index == i));
-    // Reported within the simulator's 1 m acceptance radius (3D).
+    // Reported within the simulator's 1 m acceptance radius (3D), facing the planned heading
+    // (the CONDITION_YAW before each waypoint; the simulator ignores NAV_WAYPOINT's yaw, as
+    // ArduCopter does, and would face the waypoint instead).
     for r in &ex.reached()[1..] {
         assert!(r.horizontal_error_m <= 1.6, "{r:?}");
+        assert!(r.heading_error_rad.to_degrees() < 5.0, "{r:?}");
     }
     assert!(ex.reached().windows(2).all(|w| w[0].time_s <= w[1].time_s));
     // GUIDED, arm, start — and nothing after: the vehicle flies, lands and disarms by itself.
@@ -212,10 +160,7 @@ fn the_uploaded_mission_is_flown_in_auto_with_every_waypoint_reported() {
 
 #[test]
 fn progress_from_mission_current_alone_when_item_reached_is_lost() {
-    let targets = route();
-    let (mut ex, mut v) = ready(&targets);
-    let f = fly(&mut ex, &mut v, true, |_, _, _| None);
-    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    let (ex, _, _) = fly_the_route(true);
     assert_eq!(ex.reached().len(), 4);
 }
 
@@ -310,18 +255,8 @@ fn in_auto_a_returning_link_commands_the_failsafe() {
             failsafe: Some(action),
             ..ExecutorConfig::default()
         };
-        let mut ex = AutoExecutor::new(&targets, layout(targets.len()), config).unwrap();
-        let mut v = SimVehicle::new(SimConfig::default());
-        v.set_mission(sim_mission(&targets));
-        let f = fly(&mut ex, &mut v, false, |t, _, _| {
-            if t > 12.0 && t < 14.0 {
-                Some(Event::LinkLost { silent_s: t - 7.0 })
-            } else if (14.0..14.1).contains(&t) {
-                Some(Event::LinkRegained { silent_s: 7.0 })
-            } else {
-                None
-            }
-        });
+        let (mut ex, mut v) = ready_with(&targets, config);
+        let f = fly(&mut ex, &mut v, false, |t, _, _| link_gap(t, 12.0, 14.0));
         assert!(f.commands.contains(&command), "{:?}", f.commands);
         let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
             panic!("{:?}", ex.outcome())
@@ -349,4 +284,54 @@ fn in_auto_ctrl_c_hold_leaves_the_vehicle_loitering() {
     ));
     assert_eq!(v.state().mode, SimMode::Loiter);
     assert!(v.state().armed && !v.state().on_ground);
+}
+
+#[test]
+fn a_hop_at_40_m_lands_in_landing_without_the_land_item_reported() {
+    // The land item is reported only at the touchdown (as ArduCopter): LANDING begins at the
+    // last waypoint, high up, and its budget covers the whole descent.
+    let targets: Vec<Target> = [(0.0, 0.0), (10.0, 0.0)]
+        .iter()
+        .map(|&(n, e)| Target {
+            north_m: n,
+            east_m: e,
+            alt_m: 40.0,
+            heading_rad: 0.0,
+        })
+        .collect();
+    let (mut ex, mut v) = ready(&targets);
+    let mut landing_began_at_m = None;
+    let f = fly(&mut ex, &mut v, false, |_, v, ex| {
+        if landing_began_at_m.is_none() && ex.state() == FlightState::Landing {
+            landing_began_at_m = Some(-v.state().position_ned_m[2]);
+        }
+        None
+    });
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{:?}", f.states);
+    let alt = landing_began_at_m.unwrap();
+    assert!(alt > 35.0, "LANDING began at {alt} m");
+    assert!(!v.state().armed && v.state().on_ground);
+}
+
+#[test]
+fn reports_of_no_item_or_of_a_previous_flight_count_for_nothing() {
+    // ArduPilot streams MISSION_ITEM_REACHED when asked: 65535 before any item, else the last
+    // one reached — perhaps by the previous flight (its land item, 6 here).
+    for stale in [u16::MAX, 2 + 2 * 4] {
+        let targets = route();
+        let (mut ex, mut v) = ready(&targets);
+        let f = fly(&mut ex, &mut v, false, |t, v, _| {
+            // Repeated until this mission's take-off is reached.
+            (v.state().mission_current <= 1 && t < 30.0).then_some(Event::MissionItemReached(stale))
+        });
+        assert_eq!(
+            ex.outcome(),
+            Some(&Outcome::Completed),
+            "{stale}: {:?}",
+            f.states
+        );
+        for r in &ex.reached()[1..] {
+            assert!(r.horizontal_error_m <= 1.6, "{stale}: {r:?}");
+        }
+    }
 }

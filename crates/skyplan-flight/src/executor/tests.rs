@@ -1,79 +1,8 @@
 use super::*;
+use crate::executor::{CommandKind, Note, Outcome};
 use crate::sim::{SimConfig, SimMode, SimVehicle};
-
-fn wp(n: f64, e: f64, heading_deg: f64) -> Target {
-    Target {
-        north_m: n,
-        east_m: e,
-        alt_m: 5.0,
-        heading_rad: heading_deg.to_radians(),
-    }
-}
-
-fn route() -> Vec<Target> {
-    vec![
-        wp(0.0, 0.0, 0.0),
-        wp(20.0, 0.0, 0.0),
-        wp(20.0, 20.0, 90.0),
-        wp(0.0, 20.0, 180.0),
-    ]
-}
-
-fn telemetry(v: &SimVehicle) -> Telemetry {
-    let s = v.state();
-    Telemetry {
-        north_m: s.position_ned_m[0],
-        east_m: s.position_ned_m[1],
-        down_m: s.position_ned_m[2],
-        velocity_ned_m_s: s.velocity_ned_m_s,
-        yaw_rad: s.yaw_rad,
-        armed: s.armed,
-        guided: s.mode == SimMode::Guided,
-        on_ground: Some(s.on_ground),
-    }
-}
-
-/// Applies a command to the simulated vehicle the way the link does, returning the ack.
-fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
-    let ack = |command, r: Result<(), crate::sim::SimRefusal>| Event::Ack {
-        command,
-        accepted: r.map_err(|e| format!("DENIED: {e}")),
-    };
-    match c {
-        Command::TakeControl => {
-            v.set_mode(SimMode::Guided);
-            Some(ack(CommandKind::TakeControl, Ok(())))
-        }
-        Command::Arm => Some(ack(CommandKind::Arm, v.arm())),
-        Command::Takeoff { alt_m } => Some(ack(CommandKind::Takeoff, v.takeoff(alt_m))),
-        Command::GoTo {
-            north_m,
-            east_m,
-            down_m,
-            yaw_rad,
-        } => {
-            let _ = v.set_position_target([north_m, east_m, down_m], yaw_rad);
-            None
-        }
-        Command::Land => {
-            v.land();
-            Some(ack(CommandKind::Land, Ok(())))
-        }
-        Command::Disarm => Some(ack(CommandKind::Disarm, v.disarm())),
-        Command::StartMission => {
-            v.set_mode(SimMode::Auto);
-            Some(ack(CommandKind::StartMission, Ok(())))
-        }
-        Command::Hold => {
-            v.set_mode(SimMode::Loiter);
-            Some(ack(CommandKind::Hold, Ok(())))
-        }
-        Command::ReturnToLaunch => {
-            v.set_mode(SimMode::Rtl);
-            Some(ack(CommandKind::ReturnToLaunch, Ok(())))
-        }
-    }
-}
+use crate::testkit::{apply, ctrl_c_hold, hovering, link_gap, route, telemetry, wp};
+use std::f64::consts::PI;
 
 struct Flight {
     states: Vec<FlightState>,
@@ -192,13 +121,7 @@ fn takeoff_ends_at_95_percent_of_the_altitude() {
 
 fn at_waypoint_state() -> (MissionExecutor, Telemetry) {
     let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
-    let t = Telemetry {
-        armed: true,
-        guided: true,
-        down_m: -5.0,
-        on_ground: Some(false),
-        ..Telemetry::default()
-    };
+    let t = hovering();
     ex.handle(0.0, Event::Telemetry(t));
     assert_eq!(ex.state(), FlightState::Waypoint);
     assert_eq!(ex.reached().len(), 1);
@@ -235,13 +158,7 @@ fn deadband_can_grow_with_speed() {
         ..ExecutorConfig::default()
     };
     let mut ex = MissionExecutor::new(&route(), config).unwrap();
-    let mut t = Telemetry {
-        armed: true,
-        guided: true,
-        down_m: -5.0,
-        on_ground: Some(false),
-        ..Telemetry::default()
-    };
+    let mut t = hovering();
     ex.handle(0.0, Event::Telemetry(t));
     t.north_m = 17.5; // 2.5 m short, at 4 m/s: deadband 1 + 2 = 3 m
     t.velocity_ned_m_s = [4.0, 0.0, 0.0];
@@ -379,12 +296,34 @@ fn stuck_leg_times_out_and_lands() {
     assert!(ex.handle(49.0, Event::Telemetry(t)).notes.is_empty());
     let out = ex.handle(51.0, Event::Telemetry(t));
     assert_eq!(out.commands, vec![Command::Land]);
+    // The flight is not over until the vehicle is down and disarmed.
+    assert_eq!(ex.state(), FlightState::Landing);
+    assert_eq!(ex.outcome(), None);
+    let down = Telemetry {
+        down_m: 0.0,
+        on_ground: Some(true),
+        ..t
+    };
+    assert_eq!(
+        ex.handle(60.0, Event::Telemetry(down)).commands,
+        vec![Command::Disarm]
+    );
+    assert_eq!(ex.outcome(), None);
+    let disarmed = Telemetry {
+        armed: false,
+        ..down
+    };
+    ex.handle(61.0, Event::Telemetry(disarmed));
     let Some(Outcome::Failed(Failure::Timeout { state, detail, .. })) = ex.outcome() else {
         panic!("{:?}", ex.outcome())
     };
     assert_eq!(*state, FlightState::Waypoint);
     assert!(
         detail.contains("waypoint 2 of 4 not reached: 20.0 m away"),
+        "{detail}"
+    );
+    assert!(
+        detail.ends_with("the vehicle then landed and disarmed"),
         "{detail}"
     );
 }
@@ -441,13 +380,7 @@ fn with_failsafe(action: FailsafeAction) -> ExecutorConfig {
 
 /// A link lost from `t` = 15 s to 18 s (vehicle time = link time here).
 fn gap(t: f64) -> Option<Event> {
-    if t > 15.0 && t < 18.0 {
-        Some(Event::LinkLost { silent_s: t - 14.0 })
-    } else if (18.0..18.1).contains(&t) {
-        Some(Event::LinkRegained { silent_s: 4.0 })
-    } else {
-        None
-    }
+    link_gap(t, 15.0, 18.0)
 }
 
 #[test]
@@ -610,14 +543,7 @@ fn failsafe_hold_and_ctrl_c_hold_leave_the_vehicle_holding() {
 #[test]
 fn an_unconfirmed_hold_is_retried_then_becomes_a_landing() {
     let (mut ex, t) = at_waypoint_state();
-    let out = ex.handle(
-        1.0,
-        Event::Stop {
-            reason: "interrupted by Ctrl-C".into(),
-            action: FailsafeAction::Hold,
-        },
-    );
-    assert_eq!(out.commands, vec![Command::Hold]);
+    ctrl_c_hold(&mut ex, 1.0);
     assert!(ex.handle(1.5, Event::Telemetry(t)).commands.is_empty());
     assert_eq!(
         ex.handle(2.1, Event::Telemetry(t)).commands,
@@ -669,4 +595,93 @@ fn a_link_lost_while_landing_resumes_the_landing_when_it_returns() {
     });
     assert!(!f.commands.contains(&Command::Hold));
     assert_eq!(ex.outcome(), Some(&Outcome::Completed));
+}
+
+/// Drives an executor through an unconfirmed hold in WAYPOINT and returns the times at which it
+/// sent LAND afterwards (hovering telemetry every 0.1 s, nothing acknowledged).
+fn land_times_after_an_unconfirmed_hold<E: FlightExecutor>(ex: &mut E) -> Vec<f64> {
+    let t = hovering();
+    ex.handle(0.0, Event::Mode(VehicleMode::Guided));
+    ex.handle(0.0, Event::Telemetry(t));
+    ex.handle(0.1, Event::Mode(VehicleMode::Auto));
+    ex.handle(0.1, Event::Telemetry(t));
+    assert_eq!(ex.state(), FlightState::Waypoint);
+    ctrl_c_hold(ex, 1.0);
+    let mut lands = Vec::new();
+    for k in 11..=150 {
+        let now_s = f64::from(k) * 0.1;
+        let out = ex.handle(now_s, Event::Telemetry(t));
+        if out.commands.contains(&Command::Land) {
+            lands.push(now_s);
+        }
+    }
+    assert_eq!(ex.state(), FlightState::Landing);
+    lands
+}
+
+#[test]
+fn both_executors_resend_the_landing_after_a_failed_hold_only_after_the_retry_period() {
+    let config = ExecutorConfig::default();
+    let targets = [wp(0.0, 0.0, 0.0), wp(20.0, 0.0, 0.0)];
+    let mut guided = MissionExecutor::new(&targets, config).unwrap();
+    let layout = crate::auto::MissionLayout {
+        takeoff_seq: 1,
+        first_waypoint_seq: 2,
+        waypoint_stride: 1,
+        land_seq: 4,
+    };
+    let mut auto = crate::auto::AutoExecutor::new(&targets, layout, config).unwrap();
+    let a = land_times_after_an_unconfirmed_hold(&mut guided);
+    let b = land_times_after_an_unconfirmed_hold(&mut auto);
+    // The hold (at 1.0 s) is given up after 10 s: LAND then, and again every retry period
+    // while unacknowledged — the same in both executors.
+    assert_eq!(a.len(), b.len(), "{a:?} vs {b:?}");
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() < 1e-9, "{a:?} vs {b:?}");
+    }
+    assert!((a[0] - 11.1).abs() < 1e-9, "{a:?}");
+    assert!(
+        a.windows(2).all(|w| w[1] - w[0] >= config.retry_s - 1e-9),
+        "{a:?}"
+    );
+}
+
+#[test]
+fn the_landing_budget_grows_with_the_altitude() {
+    // LANDING from 40 m may take 40 / 0.5 + 60 = 140 s; from 5 m, 10 + 60 = 70 s.
+    let config = ExecutorConfig::default();
+    for (alt_m, budget_s) in [(40.0, 140.0), (5.0, 70.0)] {
+        let high = Target {
+            alt_m,
+            ..wp(0.0, 0.0, 0.0)
+        };
+        let mut ex = MissionExecutor::new(&[high], config).unwrap();
+        let t = Telemetry {
+            down_m: -alt_m,
+            ..hovering()
+        };
+        ex.handle(0.0, Event::Telemetry(t));
+        assert_eq!(ex.state(), FlightState::Landing);
+        let hovering_still = Telemetry {
+            down_m: -alt_m + 1.0,
+            ..t
+        };
+        ex.handle(budget_s - 0.5, Event::Telemetry(hovering_still));
+        assert_eq!(ex.outcome(), None, "{alt_m}");
+        ex.handle(budget_s + 0.5, Event::Telemetry(hovering_still));
+        let Some(Outcome::Failed(Failure::Timeout {
+            state,
+            after_s,
+            detail,
+        })) = ex.outcome()
+        else {
+            panic!("{:?}", ex.outcome())
+        };
+        assert_eq!(*state, FlightState::Landing);
+        assert!((after_s - budget_s).abs() < 1e-9, "{after_s}");
+        assert!(
+            detail.contains(&format!("it was {alt_m:.1} m up when the landing began")),
+            "{detail}"
+        );
+    }
 }

@@ -1,0 +1,620 @@
+//! The executor core: one state machine, its fault handling and its budgets, shared by both
+//! mission strategies (GUIDED position targets in [`super::guided`], the uploaded mission in AUTO
+//! in [`crate::auto`]). A strategy decides only TAKEOFF and WAYPOINT and reads mission progress.
+
+use super::faults::{Faults, PendingHold};
+use super::io::{
+    Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
+};
+use super::report::{ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached};
+use std::fmt;
+
+/// How a mission is flown between the take-off and the landing: the part in which the GUIDED
+/// and the AUTO executors differ. Everything else (arming, landing, disarming, timeouts, link
+/// loss, stop, hold, RTL) is the [`Core`]'s.
+pub trait Strategy: Clone + fmt::Debug {
+    /// After touchdown, vehicle seconds to wait for the autopilot's own disarm before commanding
+    /// one (0: command it at once).
+    const DISARM_WAIT_S: f64;
+    /// Whether the normal landing (after the last waypoint) is commanded by the executor (GUIDED)
+    /// rather than flown by the vehicle from its mission (AUTO).
+    const COMMANDS_LANDING: bool;
+
+    /// The vehicle is in the mode that obeys us (GUIDED / OFFBOARD).
+    fn in_control(&self, core: &Core, t: &Telemetry) -> bool;
+    /// ARMING is over: armed, in a mode to start the mission from.
+    fn ready_to_fly(&self, core: &Core, t: &Telemetry) -> bool;
+    /// TAKEOFF was just entered; `true`: step again at once.
+    fn start(&mut self, core: &mut Core, now_s: f64, out: &mut Output) -> bool;
+    /// One step in TAKEOFF; `true` when it changed the state and the core should step again.
+    fn takeoff(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool;
+    /// One step in WAYPOINT; `true` when it changed the state and the core should step again.
+    fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool;
+    /// Sees every event first (mission progress, acknowledgements).
+    fn observe(&mut self, core: &mut Core, now_s: f64, event: &Event, out: &mut Output);
+}
+
+/// The state every executor keeps, and the steps all of them share.
+#[derive(Debug, Clone)]
+pub struct Core {
+    pub(crate) config: ExecutorConfig,
+    pub(crate) targets: Vec<Target>,
+    pub(crate) state: FlightState,
+    pub(crate) state_since_s: f64,
+    pub(crate) leg_since_s: f64,
+    pub(crate) reached: Vec<Reached>,
+    pub(crate) last: Option<Telemetry>,
+    pub(crate) mode: Option<VehicleMode>,
+    /// Since when the vehicle reports a mode other than AUTO (vehicle seconds).
+    pub(crate) not_auto_since_s: Option<f64>,
+    pub(crate) last_send_s: Option<f64>,
+    acked: bool,
+    last_refusal: Option<String>,
+    last_text: Option<String>,
+    /// How the flight ends once the vehicle is down: a stop or a timeout in the air.
+    ending: Option<Failure>,
+    /// Altitude when LANDING began, metres.
+    landing_alt_m: f64,
+    outcome: Option<Outcome>,
+    started: bool,
+    faults: Faults,
+    /// A landing the executor commanded (LAND or RTL), re-sent until acknowledged.
+    landing_command: Option<Command>,
+}
+
+/// An executor: the [`Core`] with a mission strategy. See [`super::MissionExecutor`] (GUIDED)
+/// and [`crate::auto::AutoExecutor`] (AUTO).
+#[derive(Debug, Clone)]
+pub struct Executor<S> {
+    core: Core,
+    strategy: S,
+}
+
+impl Core {
+    fn new(targets: &[Target], config: ExecutorConfig) -> Result<Self, ConfigError> {
+        let Some(first) = targets.first() else {
+            return Err(ConfigError("the mission has no waypoint".into()));
+        };
+        if targets.iter().any(|t| {
+            !(t.north_m.is_finite()
+                && t.east_m.is_finite()
+                && t.alt_m.is_finite()
+                && t.heading_rad.is_finite())
+        }) {
+            return Err(ConfigError("a waypoint is not a finite number".into()));
+        }
+        if first.alt_m <= config.landed_alt_m {
+            return Err(ConfigError(format!(
+                "the flight altitude {} m is not above the ground (> {} m)",
+                first.alt_m, config.landed_alt_m
+            )));
+        }
+        Ok(Self {
+            config,
+            targets: targets.to_vec(),
+            state: FlightState::Manual,
+            state_since_s: 0.0,
+            leg_since_s: 0.0,
+            reached: Vec::new(),
+            last: None,
+            mode: None,
+            not_auto_since_s: None,
+            last_send_s: None,
+            acked: false,
+            last_refusal: None,
+            last_text: None,
+            ending: None,
+            landing_alt_m: 0.0,
+            outcome: None,
+            started: false,
+            faults: Faults::default(),
+            landing_command: None,
+        })
+    }
+
+    /// Enters a state: its clock, sends and acknowledgement start afresh.
+    pub(crate) fn enter(&mut self, to: FlightState, now_s: f64, out: &mut Output) {
+        out.notes.push(Note::State {
+            from: self.state,
+            to,
+        });
+        self.state = to;
+        self.state_since_s = now_s;
+        self.last_send_s = None;
+        self.acked = false;
+        self.last_refusal = None;
+        if to == FlightState::Landing {
+            self.landing_alt_m = self.last.map_or(0.0, |t| t.alt_m().max(0.0));
+        }
+    }
+
+    pub(crate) fn finish(&mut self, outcome: Outcome, out: &mut Output) {
+        self.outcome = Some(outcome);
+        out.notes.push(Note::Finished);
+    }
+
+    /// Whether the vehicle accepted the command of this state.
+    pub(crate) fn acked(&self) -> bool {
+        self.acked
+    }
+
+    /// Ends the flight with this failure.
+    pub(crate) fn fail(&mut self, failure: Failure, out: &mut Output) {
+        self.finish(Outcome::Failed(failure), out);
+    }
+
+    /// Whether a command with this period is due (and marks it sent).
+    pub(crate) fn due(&mut self, now_s: f64, period_s: f64) -> bool {
+        let due = self
+            .last_send_s
+            .is_none_or(|t| now_s - t >= period_s || now_s < t);
+        if due {
+            self.last_send_s = Some(now_s);
+        }
+        due
+    }
+
+    /// On the ground: the vehicle's landed flag, else low and not moving vertically.
+    pub(crate) fn on_ground(&self, t: &Telemetry) -> bool {
+        match t.on_ground {
+            Some(flag) => flag,
+            None => {
+                t.alt_m() < self.config.landed_alt_m
+                    && t.velocity_ned_m_s[2].abs() < self.config.landed_vertical_speed_m_s
+            }
+        }
+    }
+
+    /// The budget of the leg to waypoint `i`, seconds.
+    pub(crate) fn leg_budget_s(&self, i: usize) -> f64 {
+        let leg_m = match i {
+            0 => 0.0,
+            _ => self.targets[i - 1].horizontal_distance_m(&self.targets[i]),
+        };
+        self.config.leg_timeout_base_s + self.config.leg_timeout_per_m_s * leg_m
+    }
+
+    /// Records waypoint `index` as reached now, with the vehicle's errors (NaN without telemetry).
+    pub(crate) fn reach(&mut self, now_s: f64, index: usize, out: &mut Output) {
+        let w = self.targets[index];
+        let (h, v, yaw) = match &self.last {
+            Some(t) => (
+                w.horizontal_error_m(t),
+                w.vertical_error_m(t),
+                w.heading_error_rad(t),
+            ),
+            None => (f64::NAN, f64::NAN, f64::NAN),
+        };
+        let r = Reached {
+            index,
+            time_s: now_s,
+            horizontal_error_m: h,
+            vertical_error_m: v,
+            heading_error_rad: yaw,
+        };
+        self.reached.push(r);
+        out.notes.push(Note::Reached(r));
+        self.leg_since_s = now_s;
+    }
+
+    /// A state ran out of time. In the air (TAKEOFF, WAYPOINT) the vehicle is told to land and
+    /// the flight fails once it is down and disarmed; on the ground, or when the landing itself
+    /// runs out, it fails now, saying why.
+    pub(crate) fn time_out(&mut self, now_s: f64, after_s: f64, awaited: &str, out: &mut Output) {
+        let mut detail = match &self.last_refusal {
+            Some(r) => format!("{awaited}; last answer: {r}"),
+            None => awaited.to_string(),
+        };
+        let state = self.state;
+        if let Some(ending) = self.ending.take() {
+            detail = format!("{ending}; then {state} timed out after {after_s:.1} s: {detail}");
+        }
+        let failure = Failure::Timeout {
+            state,
+            after_s,
+            detail,
+        };
+        if matches!(state, FlightState::Takeoff | FlightState::Waypoint) {
+            self.ending = Some(failure);
+            self.command_landing(now_s, Command::Land, out);
+        } else {
+            self.fail(failure, out);
+        }
+    }
+
+    /// Records the vehicle's mode (and since when it is out of AUTO).
+    fn set_mode(&mut self, now_s: f64, m: VehicleMode) {
+        if m == VehicleMode::Auto {
+            self.not_auto_since_s = None;
+        } else if self.not_auto_since_s.is_none() {
+            self.not_auto_since_s = Some(now_s);
+        }
+        self.mode = Some(m);
+    }
+
+    fn ack(&mut self, command: CommandKind, accepted: Result<(), String>, out: &mut Output) {
+        match accepted {
+            Ok(()) => {
+                let expected = matches!(
+                    (self.state, command),
+                    (FlightState::Takeoff, CommandKind::Takeoff)
+                        | (FlightState::Landing, CommandKind::Land)
+                        | (FlightState::Landing, CommandKind::ReturnToLaunch)
+                        | (FlightState::Disarming, CommandKind::Disarm)
+                );
+                self.acked |= expected;
+            }
+            Err(answer) => {
+                let reason = match &self.last_text {
+                    Some(text) => format!("{answer}: {text}"),
+                    None => answer,
+                };
+                self.last_refusal = Some(format!("{command} refused ({reason})"));
+                out.notes.push(Note::Refused { command, reason });
+            }
+        }
+    }
+
+    /// Lands now (the executor commands it): LANDING, the command sent and re-sent until acked.
+    fn command_landing(&mut self, now_s: f64, command: Command, out: &mut Output) {
+        self.enter(FlightState::Landing, now_s, out);
+        self.landing_command = Some(command);
+        out.commands.push(command);
+        self.last_send_s = Some(now_s);
+    }
+
+    /// Stops the flight early with `action`; `true` when the caller should return at once.
+    fn stop(
+        &mut self,
+        now_s: f64,
+        reason: String,
+        action: FailsafeAction,
+        out: &mut Output,
+    ) -> bool {
+        if self.ending.is_some() || self.faults.hold.is_some() {
+            return false;
+        }
+        match self.state {
+            FlightState::Manual | FlightState::Arming => {
+                self.fail(Failure::Aborted { reason }, out);
+                if self.last.is_some_and(|t| t.armed) {
+                    out.commands.push(Command::Disarm);
+                }
+                true
+            }
+            FlightState::Takeoff | FlightState::Waypoint => {
+                match action {
+                    FailsafeAction::Hold => {
+                        self.faults.hold = Some(PendingHold {
+                            reason,
+                            state: self.state,
+                            since_s: now_s,
+                            last_send_s: now_s,
+                            confirmed: false,
+                        });
+                        out.commands.push(Command::Hold);
+                        return true;
+                    }
+                    FailsafeAction::Land => self.command_landing(now_s, Command::Land, out),
+                    FailsafeAction::ReturnToLaunch => {
+                        self.faults
+                            .start_rtl(&self.config, self.last.as_ref(), &self.targets[0]);
+                        self.command_landing(now_s, Command::ReturnToLaunch, out);
+                    }
+                }
+                self.ending = Some(Failure::Aborted { reason });
+                true
+            }
+            FlightState::Landing | FlightState::Disarming => {
+                self.ending = Some(Failure::Aborted { reason });
+                false
+            }
+        }
+    }
+
+    /// One step in ARMING; `true` when TAKEOFF was entered and the strategy should start.
+    fn arming<S: Strategy>(&mut self, s: &S, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        let c = self.config;
+        let guided = s.in_control(self, t);
+        if s.ready_to_fly(self, t) {
+            self.enter(FlightState::Takeoff, now_s, out);
+            return true;
+        }
+        if now_s - self.state_since_s > c.arming_timeout_s {
+            let awaited = if guided {
+                "the vehicle did not arm"
+            } else {
+                "the vehicle did not enter guided mode"
+            };
+            self.time_out(now_s, c.arming_timeout_s, awaited, out);
+        } else if self.due(now_s, c.retry_s) {
+            out.commands.push(if guided {
+                Command::Arm
+            } else {
+                Command::TakeControl
+            });
+        }
+        false
+    }
+
+    /// Enters LANDING after the last waypoint; the GUIDED strategy commands the landing.
+    pub(crate) fn land_after_mission(&mut self, now_s: f64, commanded: bool, out: &mut Output) {
+        self.enter(FlightState::Landing, now_s, out);
+        self.landing_command = commanded.then_some(Command::Land);
+    }
+
+    /// One step in LANDING; `true` when DISARMING was entered.
+    fn landing(&mut self, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        let budget_s = self.faults.landing_budget_s(&self.config)
+            + self.landing_alt_m / self.config.landing_descent_m_s.max(0.1);
+        if self.on_ground(t) || !t.armed {
+            self.enter(FlightState::Disarming, now_s, out);
+            return true;
+        }
+        if now_s - self.state_since_s > budget_s {
+            let awaited = format!(
+                "still {:.1} m above home, {}; it was {:.1} m up when the landing began",
+                t.alt_m(),
+                if t.armed { "armed" } else { "disarmed" },
+                self.landing_alt_m
+            );
+            self.time_out(now_s, budget_s, &awaited, out);
+        } else if let Some(command) = self.landing_command
+            && !self.acked
+            && self.due(now_s, self.config.retry_s)
+        {
+            out.commands.push(command);
+        }
+        false
+    }
+
+    /// One step in DISARMING: the outcome once disarmed.
+    fn disarming(&mut self, now_s: f64, t: &Telemetry, wait_s: f64, out: &mut Output) {
+        let c = self.config;
+        let in_state_s = now_s - self.state_since_s;
+        if !t.armed {
+            self.enter(FlightState::Manual, now_s, out);
+            let outcome = match self.ending.take() {
+                Some(Failure::Timeout {
+                    state,
+                    after_s,
+                    detail,
+                }) => Outcome::Failed(Failure::Timeout {
+                    state,
+                    after_s,
+                    detail: format!("{detail}; the vehicle then landed and disarmed"),
+                }),
+                Some(failure) => Outcome::Failed(failure),
+                None if self.reached.len() == self.targets.len() => Outcome::Completed,
+                None => Outcome::Failed(Failure::Aborted {
+                    reason: "landed before the last waypoint".into(),
+                }),
+            };
+            self.finish(outcome, out);
+        } else if in_state_s > c.disarming_timeout_s {
+            self.time_out(
+                now_s,
+                c.disarming_timeout_s,
+                "the vehicle did not disarm",
+                out,
+            );
+        } else if in_state_s >= wait_s && self.due(now_s, c.retry_s) {
+            out.commands.push(Command::Disarm);
+        }
+    }
+}
+
+impl<S: Strategy> Executor<S> {
+    pub(crate) fn with_strategy(
+        targets: &[Target],
+        config: ExecutorConfig,
+        strategy: S,
+    ) -> Result<Self, ConfigError> {
+        Ok(Self {
+            core: Core::new(targets, config)?,
+            strategy,
+        })
+    }
+
+    /// The current state.
+    pub fn state(&self) -> FlightState {
+        self.core.state
+    }
+
+    /// The waypoints.
+    pub fn targets(&self) -> &[Target] {
+        &self.core.targets
+    }
+
+    /// The vehicle's last reported mode.
+    pub fn mode(&self) -> Option<VehicleMode> {
+        self.core.mode
+    }
+
+    /// The waypoint being flown to (in WAYPOINT), if any.
+    pub fn current_target(&self) -> Option<(usize, Target)> {
+        match self.core.state {
+            FlightState::Waypoint => {
+                let i = self.core.reached.len().min(self.core.targets.len() - 1);
+                Some((i, self.core.targets[i]))
+            }
+            _ => None,
+        }
+    }
+
+    /// The waypoints reached so far, in order.
+    pub fn reached(&self) -> &[Reached] {
+        &self.core.reached
+    }
+
+    /// How the flight ended, once it has.
+    pub fn outcome(&self) -> Option<&Outcome> {
+        self.core.outcome.as_ref()
+    }
+
+    /// The last telemetry seen.
+    pub fn last_telemetry(&self) -> Option<&Telemetry> {
+        self.core.last.as_ref()
+    }
+
+    /// Distance still to fly along the route from the vehicle, metres (horizontal).
+    pub fn distance_left_m(&self) -> f64 {
+        let c = &self.core;
+        let route_from = |i: usize| -> f64 {
+            c.targets[i..]
+                .windows(2)
+                .map(|w| w[0].horizontal_distance_m(&w[1]))
+                .sum()
+        };
+        let Some(t) = &c.last else {
+            return route_from(0);
+        };
+        let i = match c.state {
+            FlightState::Manual if c.outcome.is_none() => 0,
+            FlightState::Manual | FlightState::Landing | FlightState::Disarming => return 0.0,
+            FlightState::Arming | FlightState::Takeoff => 0,
+            FlightState::Waypoint => c.reached.len().min(c.targets.len() - 1),
+        };
+        c.targets[i].horizontal_error_m(t) + route_from(i)
+    }
+
+    /// Feeds one event at executor time `now_s` (seconds, monotonic) and returns what to send.
+    pub fn handle(&mut self, now_s: f64, event: Event) -> Output {
+        let mut out = Output::default();
+        let core = &mut self.core;
+        if core.outcome.is_some() {
+            return out;
+        }
+        core.faults.observe(&event);
+        self.strategy.observe(core, now_s, &event, &mut out);
+        match event {
+            Event::Telemetry(t) => core.last = Some(t),
+            Event::Mode(m) => core.set_mode(now_s, m),
+            Event::Ack { command, accepted } => core.ack(command, accepted, &mut out),
+            Event::StatusText(text) => core.last_text = Some(text),
+            Event::LinkLost { silent_s } => {
+                if let Some(failure) =
+                    core.faults
+                        .link_lost(core.state, silent_s, &core.config, &mut out)
+                {
+                    core.fail(failure, &mut out);
+                }
+                return out;
+            }
+            Event::LinkRegained { silent_s } => {
+                if let Some((reason, action)) =
+                    core.faults.link_regained(silent_s, &core.config, &mut out)
+                    && matches!(core.state, FlightState::Takeoff | FlightState::Waypoint)
+                    && core.stop(now_s, reason, action, &mut out)
+                {
+                    return out;
+                }
+            }
+            Event::Abort(reason) => {
+                if core.stop(now_s, reason, FailsafeAction::Land, &mut out) {
+                    return out;
+                }
+            }
+            Event::Stop { reason, action } => {
+                if core.stop(now_s, reason, action, &mut out) {
+                    return out;
+                }
+            }
+            Event::MissionItemReached(_) | Event::MissionCurrent(_) | Event::Tick => {}
+        }
+        if core.faults.lost.is_some() {
+            return out;
+        }
+        if core.faults.hold.is_some() {
+            match core.faults.step_hold(now_s, &core.config, &mut out) {
+                Some(Ok(failure)) => core.fail(failure, &mut out),
+                Some(Err(reason)) => {
+                    core.ending = Some(Failure::Aborted { reason });
+                    core.command_landing(now_s, Command::Land, &mut out);
+                }
+                None => {}
+            }
+            return out;
+        }
+        self.step(now_s, &mut out);
+        out
+    }
+
+    fn step(&mut self, now_s: f64, out: &mut Output) {
+        let core = &mut self.core;
+        let Some(t) = core.last else {
+            return;
+        };
+        let again = match core.state {
+            FlightState::Manual => {
+                let first = !core.started;
+                if first {
+                    core.started = true;
+                    core.enter(FlightState::Arming, now_s, out);
+                }
+                first
+            }
+            FlightState::Arming => {
+                core.arming(&self.strategy, now_s, &t, out) && self.strategy.start(core, now_s, out)
+            }
+            FlightState::Takeoff => self.strategy.takeoff(core, now_s, &t, out),
+            FlightState::Waypoint => self.strategy.waypoint(core, now_s, &t, out),
+            FlightState::Landing => core.landing(now_s, &t, out),
+            FlightState::Disarming => {
+                core.disarming(now_s, &t, S::DISARM_WAIT_S, out);
+                false
+            }
+        };
+        if again {
+            self.step(now_s, out);
+        }
+    }
+}
+
+/// What the link layer needs from an executor: [`super::MissionExecutor`] (position targets in
+/// GUIDED) and [`crate::auto::AutoExecutor`] (the uploaded mission in AUTO) both fly through it.
+pub trait FlightExecutor {
+    /// Feeds one event at executor time `now_s` (seconds, monotonic) and returns what to send.
+    fn handle(&mut self, now_s: f64, event: Event) -> Output;
+    /// The current state.
+    fn state(&self) -> FlightState;
+    /// How the flight ended, once it has.
+    fn outcome(&self) -> Option<&Outcome>;
+    /// The last telemetry seen.
+    fn last_telemetry(&self) -> Option<&Telemetry>;
+    /// The waypoint being flown to (in WAYPOINT), with its index.
+    fn current_target(&self) -> Option<(usize, Target)>;
+    /// The waypoints reached so far, in order.
+    fn reached(&self) -> &[Reached];
+    /// The waypoints.
+    fn targets(&self) -> &[Target];
+    /// Horizontal distance still to fly along the route, metres.
+    fn distance_left_m(&self) -> f64;
+}
+
+impl<S: Strategy> FlightExecutor for Executor<S> {
+    fn handle(&mut self, now_s: f64, event: Event) -> Output {
+        Executor::handle(self, now_s, event)
+    }
+    fn state(&self) -> FlightState {
+        Executor::state(self)
+    }
+    fn outcome(&self) -> Option<&Outcome> {
+        Executor::outcome(self)
+    }
+    fn last_telemetry(&self) -> Option<&Telemetry> {
+        Executor::last_telemetry(self)
+    }
+    fn current_target(&self) -> Option<(usize, Target)> {
+        Executor::current_target(self)
+    }
+    fn reached(&self) -> &[Reached] {
+        Executor::reached(self)
+    }
+    fn targets(&self) -> &[Target] {
+        Executor::targets(self)
+    }
+    fn distance_left_m(&self) -> f64 {
+        Executor::distance_left_m(self)
+    }
+}
