@@ -1,19 +1,14 @@
 //! `skyplan plan --planner wavefront|costmap` and `skyplan navigate` on image, MovingAI and
 //! random maps: the CLI contract (maps by extension, north = up the image, JSON fields, exit codes).
 
-use assert_cmd::Command;
 use predicates::prelude::*;
 use serde_json::Value;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
 use std::path::Path;
-
-fn skyplan(dir: &Path) -> Command {
-    let mut cmd = Command::cargo_bin("skyplan").unwrap();
-    cmd.current_dir(dir);
-    cmd
-}
+mod common;
+use common::skyplan;
 
 /// A picture, top line = north, `#` black (occupied), `.` white (free), as a plain PGM.
 fn write_pgm(dir: &Path, name: &str, picture: &str) {

@@ -1,20 +1,15 @@
 //! The real `skyplan` binary in temporary directories, on the bundled map and small fixtures.
 
-use assert_cmd::Command;
 use predicates::prelude::*;
 use serde_json::Value;
 use skyplan_cspace::{Grid2, GridSpec, Touch};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
 use std::path::Path;
+mod common;
+use common::skyplan;
 
 const CITY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/colliders.csv");
-
-fn skyplan(dir: &Path) -> Command {
-    let mut cmd = Command::cargo_bin("skyplan").unwrap();
-    cmd.current_dir(dir);
-    cmd
-}
 
 fn run_json(dir: &Path, args: &[&str]) -> Value {
     let out = skyplan(dir)

@@ -1,57 +1,20 @@
 //! `skyplan plan --planner lazy-prm` and `--save-roadmap` / `--load-roadmap`: the real binary.
 //! Every returned segment is re-checked here against every box with the brute-force checker.
 
-use assert_cmd::Command;
 use serde_json::Value;
-use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, WorldSpec};
+mod common;
+use common::{CITY_CSV, checked_path_3d};
+use skyplan_world3::Neu;
 use std::path::Path;
 
-const CITY: &str = include_str!("../../../data/colliders.csv");
-
-/// Runs `plan --json …`; returns the exit code, the JSON on stdout (or null) and stderr.
+/// `skyplan plan --json ARGS`: exit code, JSON (or null), stderr.
 fn run(dir: &Path, args: &[&str]) -> (i32, Value, String) {
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .current_dir(dir)
-        .arg("plan")
-        .arg("--json")
-        .args(args)
-        .output()
-        .unwrap();
-    let v = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
-    (
-        out.status.code().unwrap_or(-1),
-        v,
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    common::run(dir, &[&["plan", "--json"], args].concat())
 }
 
-/// The waypoints of an answer, re-checked free against every box grown by 5 m.
+/// The route of an answer, exactly re-checked against every box grown by 5 m.
 fn checked_path(v: &Value, start: Neu, goal: Neu) -> Vec<Neu> {
-    assert_eq!(v["status"], "ok", "{v}");
-    assert_eq!(v["planner_status"], "exact");
-    let rows: Vec<[f64; 4]> = serde_json::from_value(v["waypoints"].clone()).unwrap();
-    let path: Vec<Neu> = rows.iter().map(|r| [r[0], r[1], r[2]]).collect();
-    assert_eq!(path[0], start);
-    assert_eq!(*path.last().unwrap(), goal);
-    let corner = |c: &Value| -> Neu { [0, 1, 2].map(|i| c[i].as_f64().unwrap()) };
-    let bounds = Aabb {
-        min: corner(&v["flight_volume"]["min"]),
-        max: corner(&v["flight_volume"]["max"]),
-    };
-    let map = skyplan_map::colliders::parse_colliders(CITY).unwrap();
-    let spec = WorldSpec {
-        safety_m: 5.0,
-        min_alt_m: 0.0,
-        max_alt_m: bounds.max[2],
-        margin_bounds_m: 0.0,
-    };
-    let world = BoxWorld3::with_bounds(&map.boxes, &spec, bounds).unwrap();
-    let bf = world.brute_force();
-    for (k, w) in path.windows(2).enumerate() {
-        assert!(bf.segment_is_free(w[0], w[1]), "segment {k} is not free");
-    }
-    path
+    checked_path_3d(CITY_CSV, v, 5.0, start, goal)
 }
 
 #[test]

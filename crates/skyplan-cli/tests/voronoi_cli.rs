@@ -1,16 +1,11 @@
 //! `skyplan plan --planner voronoi`: the JSON contract, every segment free on the grid, start and
 //! goal as asked, exit codes for blocked ends.
 
-use assert_cmd::Command;
 use skyplan_cspace::{Grid2, GridSpec, Touch};
+mod common;
+use common::skyplan;
 
 const CITY: &str = include_str!("../../../data/colliders.csv");
-
-fn skyplan(dir: &std::path::Path) -> Command {
-    let mut c = Command::cargo_bin("skyplan").unwrap();
-    c.current_dir(dir);
-    c
-}
 
 #[test]
 fn voronoi_json_route_is_free_and_ends_where_asked() {

@@ -3,63 +3,20 @@
 
 use assert_cmd::Command;
 use serde_json::Value;
-use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, WorldSpec, path_length_m};
+mod common;
+use common::{CITY_CSV, checked_path_3d, num, plan_json};
+use skyplan_world3::{Neu, path_length_m};
 use std::path::Path;
 
-const CITY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/colliders.csv");
-
+/// `skyplan plan --json --planner voxel ARGS`.
 fn run(dir: &Path, args: &[&str]) -> (i32, Value) {
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .current_dir(dir)
-        .args(["plan", "--json", "--planner", "voxel"])
-        .args(args)
-        .output()
-        .unwrap();
-    let code = out.status.code().unwrap_or(-1);
-    let v = serde_json::from_slice(&out.stdout).unwrap_or_else(|_| {
-        panic!(
-            "stdout is not JSON; stderr: {}",
-            String::from_utf8_lossy(&out.stderr)
-        )
-    });
-    (code, v)
+    plan_json(dir, &[&["--planner", "voxel"], args].concat())
 }
 
-fn num(v: &Value) -> f64 {
-    v.as_f64().unwrap()
-}
-
-/// The path of a JSON answer, re-checked against every box of the city grown by 5 m.
+/// The route of a voxel answer, exactly re-checked.
 fn checked_path(v: &Value, start: Neu, goal: Neu) -> Vec<Neu> {
-    assert_eq!(v["status"], "ok", "{v}");
     assert_eq!(v["planner"], "voxel");
-    assert_eq!(v["planner_status"], "exact");
-    let rows: Vec<[f64; 4]> = serde_json::from_value(v["waypoints"].clone()).unwrap();
-    let path: Vec<Neu> = rows.iter().map(|r| [r[0], r[1], r[2]]).collect();
-    assert_eq!(path[0], start);
-    assert_eq!(*path.last().unwrap(), goal);
-    let vol = &v["flight_volume"];
-    let corner = |c: &Value| -> Neu { [num(&c[0]), num(&c[1]), num(&c[2])] };
-    let bounds = Aabb {
-        min: corner(&vol["min"]),
-        max: corner(&vol["max"]),
-    };
-    let map =
-        skyplan_map::colliders::parse_colliders(&std::fs::read_to_string(CITY).unwrap()).unwrap();
-    let spec = WorldSpec {
-        safety_m: 5.0,
-        min_alt_m: bounds.min[2],
-        max_alt_m: bounds.max[2],
-        margin_bounds_m: 0.0,
-    };
-    let world = BoxWorld3::with_bounds(&map.boxes, &spec, bounds).unwrap();
-    let bf = world.brute_force();
-    for (k, w) in path.windows(2).enumerate() {
-        assert!(bf.segment_is_free(w[0], w[1]), "segment {k} is not free");
-    }
-    assert!((num(&v["cost_m"]) - path_length_m(&path)).abs() < 1e-6);
-    path
+    checked_path_3d(CITY_CSV, v, 5.0, start, goal)
 }
 
 #[test]
