@@ -158,30 +158,7 @@ pub(crate) fn sim_note_line(n: &SimNote) -> Option<String> {
 
 pub fn run(args: FlyArgs) -> Result<()> {
     let t0 = Instant::now();
-    if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
-        return Err(bad_input(format!(
-            "--speedup: expected 0.1 to 1000, found {}",
-            args.speedup
-        )));
-    }
-    for (name, v) in [
-        ("--link-timeout-s", args.link_timeout_s),
-        ("--wait-s", args.wait_s),
-        ("--deadband-m", args.deadband_m),
-    ] {
-        if v <= 0.0 {
-            return Err(bad_input(format!(
-                "{name}: expected a positive number, found {v}"
-            )));
-        }
-    }
-    if let Some(t) = args.timeout_s
-        && t <= 0.0
-    {
-        return Err(bad_input(format!(
-            "--timeout-s: expected a positive number, found {t}"
-        )));
-    }
+    check_flight_args(&args)?;
     let ctrl_c = CtrlC::install();
     let view = args_view(&args);
     let log_path = args.log.clone();
@@ -218,62 +195,8 @@ pub fn run(args: FlyArgs) -> Result<()> {
 
     // The vehicle: the built-in simulator on a free loopback port, or the given address.
     let (address, sim) = if args.sim {
-        let home = match (request.start_lla, request.start_ne) {
-            (Some([lat_deg, lon_deg]), _) => Lla {
-                lat_deg,
-                lon_deg,
-                alt_m: 0.0,
-            },
-            (None, Some([north_m, east_m])) => frame
-                .lla_from_ned(Ned {
-                    north_m,
-                    east_m,
-                    down_m: 0.0,
-                })
-                .map_err(|e| bad_input(format!("start: {e}")))?,
-            (None, None) => frame.home(),
-        };
-        if args.sim_ekf_delay_s < 0.0 {
-            return Err(bad_input(format!(
-                "--sim-ekf-delay-s: expected 0 or more, found {}",
-                args.sim_ekf_delay_s
-            )));
-        }
-        let config = SimServerConfig {
-            speedup: args.speedup,
-            drop_link_after_s: args.sim_drop_link_after_s,
-            link_gap_s: args.sim_link_gap_s,
-            ekf_delay_s: args.sim_ekf_delay_s,
-            map_home: Some(frame.home()),
-            ..SimServerConfig::at(home)
-        };
-        let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config)
-            .or_exit(Kind::Runtime)?;
-        let port = server
-            .local_addr()
-            .map(|a| a.port())
-            .ok_or_else(|| runtime("the simulator has no local address"))?;
-        let stop = Arc::new(AtomicBool::new(false));
-        let (tx, notes) = mpsc::channel();
-        let world = BoxWorld::new(&map.boxes);
-        let thread_stop = Arc::clone(&stop);
-        let thread = std::thread::spawn(move || {
-            server.run(Some(&world), &thread_stop, |n| {
-                let _ = tx.send(n);
-            })
-        });
-        println!(
-            "sim        simulated multicopter on tcp:127.0.0.1:{port}, {}× real time, at lat {:.7}, lon {:.7}",
-            args.speedup, home.lat_deg, home.lon_deg
-        );
-        (
-            Address::TcpOut(format!("127.0.0.1:{port}")),
-            Some(InProcessSim {
-                stop,
-                thread,
-                notes,
-            }),
-        )
+        let (address, sim) = start_sim(&args, &request, &frame, &map)?;
+        (address, Some(sim))
     } else {
         (
             Address::parse(&args.connect, Role::Client).map_err(bad_input)?,
@@ -305,6 +228,107 @@ pub fn run(args: FlyArgs) -> Result<()> {
             log.len()
         );
     }
+    finish_flight(report.as_ref(), outcome, t0)
+}
+
+/// Flight options out of range are bad input.
+fn check_flight_args(args: &FlyArgs) -> Result<()> {
+    if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
+        return Err(bad_input(format!(
+            "--speedup: expected 0.1 to 1000, found {}",
+            args.speedup
+        )));
+    }
+    for (name, v) in [
+        ("--link-timeout-s", args.link_timeout_s),
+        ("--wait-s", args.wait_s),
+        ("--deadband-m", args.deadband_m),
+    ] {
+        if v <= 0.0 {
+            return Err(bad_input(format!(
+                "{name}: expected a positive number, found {v}"
+            )));
+        }
+    }
+    if let Some(t) = args.timeout_s
+        && t <= 0.0
+    {
+        return Err(bad_input(format!(
+            "--timeout-s: expected a positive number, found {t}"
+        )));
+    }
+    if args.sim_ekf_delay_s < 0.0 {
+        return Err(bad_input(format!(
+            "--sim-ekf-delay-s: expected 0 or more, found {}",
+            args.sim_ekf_delay_s
+        )));
+    }
+    Ok(())
+}
+
+/// Starts the built-in simulator in-process at the plan's start, on a free loopback port.
+fn start_sim(
+    args: &FlyArgs,
+    request: &PlanRequest,
+    frame: &LocalFrame,
+    map: &skyplan_map::colliders::CollidersMap,
+) -> Result<(Address, InProcessSim)> {
+    let home = match (request.start_lla, request.start_ne) {
+        (Some([lat_deg, lon_deg]), _) => Lla {
+            lat_deg,
+            lon_deg,
+            alt_m: 0.0,
+        },
+        (None, Some([north_m, east_m])) => frame
+            .lla_from_ned(Ned {
+                north_m,
+                east_m,
+                down_m: 0.0,
+            })
+            .map_err(|e| bad_input(format!("start: {e}")))?,
+        (None, None) => frame.home(),
+    };
+    let config = SimServerConfig {
+        speedup: args.speedup,
+        drop_link_after_s: args.sim_drop_link_after_s,
+        link_gap_s: args.sim_link_gap_s,
+        ekf_delay_s: args.sim_ekf_delay_s,
+        map_home: Some(frame.home()),
+        ..SimServerConfig::at(home)
+    };
+    let server =
+        SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).or_exit(Kind::Runtime)?;
+    let port = server
+        .local_addr()
+        .map(|a| a.port())
+        .ok_or_else(|| runtime("the simulator has no local address"))?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let (tx, notes) = mpsc::channel();
+    let world = BoxWorld::new(&map.boxes);
+    let thread_stop = Arc::clone(&stop);
+    let thread = std::thread::spawn(move || {
+        server.run(Some(&world), &thread_stop, |n| {
+            let _ = tx.send(n);
+        })
+    });
+    println!(
+        "sim        simulated multicopter on tcp:127.0.0.1:{port}, {}× real time, at lat {:.7}, lon {:.7}",
+        args.speedup, home.lat_deg, home.lon_deg
+    );
+    Ok((
+        Address::TcpOut(format!("127.0.0.1:{port}")),
+        InProcessSim {
+            stop,
+            thread,
+            notes,
+        },
+    ))
+}
+
+/// The simulator's track report and the flight's exit: 0 only when landed and disarmed with
+/// every waypoint reached and, on the simulator, no collision.
+fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Instant) -> Result<()> {
+    let report = report.cloned();
     if let Some(r) = &report {
         let clearance = r
             .track
@@ -477,6 +501,31 @@ fn fly(
         return fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c)
             .map(|(log, o)| (log, Ended::Flight(o)));
     }
+    fly_uploaded(
+        &mut gcs,
+        a,
+        frame,
+        mission,
+        &info,
+        request.alt_m.unwrap_or(5.0),
+        (&targets, config),
+        (sim, ctrl_c),
+    )
+}
+
+/// `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
+/// then flown in AUTO.
+#[allow(clippy::too_many_arguments)]
+fn fly_uploaded(
+    gcs: &mut GroundStation,
+    a: &FlyView,
+    frame: &LocalFrame,
+    mission: &skyplan_mission::Mission,
+    info: &skyplan_link::ground::VehicleInfo,
+    alt_m: f64,
+    (targets, config): (&[Target], ExecutorConfig),
+    (sim, ctrl_c): (Option<&InProcessSim>, &CtrlC),
+) -> Result<(Vec<LogRow>, Ended)> {
     // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
     // The plan's headings are from the map's grid north; the vehicle's are from true north.
     let waypoints: Vec<GlobalWaypoint> = mission
@@ -506,7 +555,7 @@ fn fly(
         "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
         if home.is_some() { "home, " } else { "" },
-        request.alt_m.unwrap_or(5.0),
+        alt_m,
         targets.len(),
         if condition_yaw {
             " (each after a CONDITION_YAW to its heading)"
@@ -526,8 +575,8 @@ fn fly(
         return Ok((Vec::new(), Ended::Uploaded));
     }
     let mut ex =
-        AutoExecutor::new(&targets, MissionLayout::from(&items), config).map_err(bad_input)?;
-    fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c).map(|(log, o)| (log, Ended::Flight(o)))
+        AutoExecutor::new(targets, MissionLayout::from(&items), config).map_err(bad_input)?;
+    fly_with(gcs, &mut ex, frame, sim, ctrl_c).map(|(log, o)| (log, Ended::Flight(o)))
 }
 
 /// Waits for the vehicle (heartbeat, EKF origin, position) up to `--wait-s` vehicle seconds,
