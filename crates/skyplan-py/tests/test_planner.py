@@ -22,15 +22,15 @@ def cli_plan(cli, tmp_path, *args):
 
 REQUESTS = [
     ({}, []),
-    ({"planner": "astar", "goal_ne": (-200.0, 310.0), "alt_m": 10, "safety_m": 3},
-     ["--planner", "astar", "--goal-ne=-200,310", "--alt-m", "10", "--safety-m", "3"]),
-    ({"planner": "theta", "start_ne": (12.5, -40.0), "goal_ne": (300.0, -150.0)},
-     ["--planner", "theta", "--start-ne=12.5,-40", "--goal-ne", "300,-150"]),
+    ({"planner": "astar", "goal_ne": (-191.5, 319.5), "alt_m": 10, "safety_m": 3},
+     ["--planner", "astar", "--goal-ne=-191.5,319.5", "--alt-m", "10", "--safety-m", "3"]),
+    ({"planner": "theta", "start_ne": (12.5, -40.0), "goal_ne": (298.5, -160.5)},
+     ["--planner", "theta", "--start-ne=12.5,-40", "--goal-ne", "298.5,-160.5"]),
     ({"planner": "jps-plus", "connectivity": 4}, ["--planner", "jps-plus", "--connectivity", "4"]),
     ({"planner": "rrt-connect", "goal_alt_m": 30, "seed": 7},
      ["--planner", "rrt-connect", "--goal-alt-m", "30", "--seed", "7"]),
-    ({"planner": "voronoi", "goal_lla": (37.7955, -122.3937)},
-     ["--planner", "voronoi", "--goal-lla", "37.7955,-122.3937"]),
+    ({"planner": "voronoi", "goal_lla": (37.79518, -122.39925)},
+     ["--planner", "voronoi", "--goal-lla", "37.79518,-122.39925"]),
     ({"planner": "wavefront", "cell_m": 2}, ["--planner", "wavefront", "--cell-m", "2"]),
 ]
 
@@ -53,8 +53,8 @@ def test_plan_equals_the_cli(city, cli, tmp_path, options, args):
 
 
 def test_positional_start_goal_are_north_east(city, cli, tmp_path):
-    want, _ = cli_plan(cli, tmp_path, "--start-ne=-100,20", "--goal-ne", "250,-300")
-    plan = city.plan((-100, 20), (250, -300))
+    want, _ = cli_plan(cli, tmp_path, "--start-ne=-101.5,21.5", "--goal-ne", "250,-300")
+    plan = city.plan((-101.5, 21.5), (250, -300))
     assert np.array_equal(plan.waypoints, np.array(want["waypoints"]))
 
 
@@ -99,31 +99,34 @@ def test_movingai_map_equals_the_cli(cli, tmp_path):
     planner = skyplan.Planner(str(path))
     assert planner.kind == "moving_ai"
     text = run_cli(
-        cli, "plan", "--map", str(path), "--start-ne", "10.5,20.5", "--goal-ne", "60.5,70.5",
+        cli, "plan", "--map", str(path), "--start-ne", "10.5,20.5", "--goal-ne", "61.5,58.5",
         "--json", cwd=tmp_path,
     )
     want = json.loads(text)
-    plan = planner.plan((10.5, 20.5), (60.5, 70.5))
+    plan = planner.plan((10.5, 20.5), (61.5, 58.5))
     assert np.array_equal(plan.waypoints, np.array(want["waypoints"]))
     assert plan.lla is None
     with pytest.raises(skyplan.BadInput, match="geodetic home"):
         plan.to_file(tmp_path / "x.json")
-    homed = skyplan.Planner(path, home=(37.79, -122.39)).plan((10.5, 20.5), (60.5, 70.5))
+    homed = skyplan.Planner(path, home=(37.79, -122.39)).plan((10.5, 20.5), (61.5, 58.5))
     assert homed.lla.shape == (len(homed), 2)
 
 
 def test_colliders_file_and_numpy_grid(colliders):
     from_file = skyplan.Planner(COLLIDERS)
     assert from_file.kind == "colliders"
-    assert np.array_equal(from_file.plan().waypoints, skyplan.Planner().plan().waypoints)
+    # The same boxes as the bundled map; a file has no default goal.
+    assert np.array_equal(
+        from_file.plan(goal=(420.0, 390.0)).waypoints, skyplan.Planner().plan().waypoints
+    )
     # A numpy grid placed as FCND's grid: row = north - north_offset.
     grid, north_offset, east_offset = skyplan.create_grid(colliders, 5, 5)
     planner = skyplan.Planner(grid, origin_ne=(north_offset, east_offset))
     assert planner.kind == "grid"
     assert planner.bounds_ne == (north_offset, north_offset + 921, east_offset, east_offset + 921)
-    plan = planner.plan((0.5, 0.5), (120.5, 95.5), planner="astar")
+    plan = planner.plan((0.5, 0.5), (100.5, 100.5), planner="astar")
     path, cost = skyplan.a_star(grid, (-north_offset, -east_offset),
-                                (-north_offset + 120, -east_offset + 95), corner_cutting=False)
+                                (-north_offset + 100, -east_offset + 100), corner_cutting=False)
     assert plan.cost_m == pytest.approx(cost, abs=1e-9)
     for n, e in plan.waypoints[:, :2]:
         assert grid[int(np.floor(n - north_offset)), int(np.floor(e - east_offset))] == 0
