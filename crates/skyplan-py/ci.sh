@@ -14,7 +14,7 @@ cd "$(dirname "$0")/../.."
 py() { "$SKYPLAN_PYTHON" "$@"; }
 pip() { py -m pip --disable-pip-version-check "$@"; }
 
-pip install --quiet maturin pytest numpy
+pip install --quiet maturin pytest numpy mypy
 # pyastar2d is the peer astar_path is compared with; if it cannot be installed here, those two
 # tests are reported as skipped (the Dijkstra comparison still runs).
 pip install --quiet pyastar2d || echo "pyastar2d did not install: its comparison will be skipped"
@@ -25,6 +25,8 @@ cargo build --release --quiet -p skyplan-cli
 # The wheel, built by maturin through pip (PEP 517), as a user installs it.
 pip install --quiet --force-reinstall --no-deps ./crates/skyplan-py
 py -c "import skyplan; print('skyplan', skyplan.__version__, 'from', skyplan.__file__)"
+# The type stubs match the module (mypy's cache under target/, git-ignored).
+MYPY_CACHE_DIR="$PWD/target/mypy_cache" py -m mypy.stubtest skyplan
 
 cd crates/skyplan-py
 PYTHONDONTWRITEBYTECODE=1 SKYPLAN_CLI="$PWD/../../target/release/skyplan" \

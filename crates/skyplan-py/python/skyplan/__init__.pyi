@@ -1,7 +1,7 @@
 """Type stubs for skyplan (the extension module skyplan._skyplan and its Python half)."""
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar, Union, overload
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -14,6 +14,23 @@ from ._errors import PlanError as PlanError
 from ._errors import Timeout as Timeout
 
 __version__: str
+__all__ = [
+    "BadInput",
+    "InvalidGoal",
+    "InvalidStart",
+    "NoPath",
+    "Plan",
+    "PlanError",
+    "Planner",
+    "Timeout",
+    "__version__",
+    "a_star",
+    "astar_path",
+    "bresenham_prune",
+    "create_grid",
+    "planners",
+    "prune_path",
+]
 
 _Cell = Tuple[int, int]
 _CellLike = Union[Tuple[int, int], Sequence[int], npt.NDArray[np.integer[Any]]]
@@ -71,6 +88,7 @@ def astar_path(
 def planners() -> List[Dict[str, Any]]:
     """Every planner: ``name``, ``label``, ``dims``, ``optimality``, ``maps``, ``summary``."""
 
+@final
 class Plan:
     """A planned route, every segment re-checked against the map."""
 
@@ -95,11 +113,12 @@ class Plan:
         """Writes the waypoints (.json .csv .h5 .geojson .plan, or ``format=``)."""
     def __len__(self) -> int: ...
 
+@final
 class Planner:
     """A map loaded once, and every skyplan planner on it; safe to share between threads."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         map: Union[None, _PathLike, npt.ArrayLike] = None,
         *,
         home: Optional[Tuple[float, float]] = None,
@@ -107,7 +126,7 @@ class Planner:
         unknown_free: bool = False,
         origin_ne: Optional[Tuple[float, float]] = None,
         cell_m: Optional[float] = None,
-    ) -> None: ...
+    ) -> "Planner": ...
     @property
     def name(self) -> str: ...
     @property
