@@ -1,0 +1,168 @@
+"""Per-query times on the FCND city: skyplan from Python, the CLI, and FCND's own A*.
+
+    python crates/skyplan-py/bench.py [--runs 20] [--fcnd-runs 3] [--cli target/release/skyplan]
+
+The query is FCND's: the home cell to the city's default goal (420 m north, 390 m east) at 5 m
+altitude with a 5 m margin. FCND's create_grid and a_star are reproduced here from FCND's
+planning_utils.py (A* with diagonal moves and the Euclidean heuristic), in plain Python.
+"""
+
+import argparse
+import json
+import math
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from queue import PriorityQueue
+
+import numpy as np
+
+import skyplan
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def fcnd_create_grid(data, drone_altitude, safety_distance):
+    north_min = np.floor(np.min(data[:, 0] - data[:, 3]))
+    north_max = np.ceil(np.max(data[:, 0] + data[:, 3]))
+    east_min = np.floor(np.min(data[:, 1] - data[:, 4]))
+    east_max = np.ceil(np.max(data[:, 1] + data[:, 4]))
+    north_size = int(np.ceil(north_max - north_min))
+    east_size = int(np.ceil(east_max - east_min))
+    grid = np.zeros((north_size, east_size))
+    for i in range(data.shape[0]):
+        north, east, alt, d_north, d_east, d_alt = data[i, :]
+        if alt + d_alt + safety_distance > drone_altitude:
+            o = [
+                int(np.clip(north - d_north - safety_distance - north_min, 0, north_size - 1)),
+                int(np.clip(north + d_north + safety_distance - north_min, 0, north_size - 1)),
+                int(np.clip(east - d_east - safety_distance - east_min, 0, east_size - 1)),
+                int(np.clip(east + d_east + safety_distance - east_min, 0, east_size - 1)),
+            ]
+            grid[o[0] : o[1] + 1, o[2] : o[3] + 1] = 1
+    return grid, int(north_min), int(east_min)
+
+
+def heuristic(position, goal_position):
+    return np.linalg.norm(np.array(position) - np.array(goal_position))
+
+
+FCND_ACTIONS = [(0, -1, 1), (0, 1, 1), (-1, 0, 1), (1, 0, 1)] + [
+    (dr, dc, math.sqrt(2)) for dr in (-1, 1) for dc in (-1, 1)
+]
+
+
+def fcnd_a_star(grid, h, start, goal):
+    """FCND's a_star with diagonal actions (valid_actions: target on the grid and not 1)."""
+    n, m = grid.shape[0] - 1, grid.shape[1] - 1
+    queue = PriorityQueue()
+    queue.put((0, start))
+    visited = {start}
+    branch = {}
+    found = False
+    while not queue.empty():
+        current = queue.get()[1]
+        current_cost = 0.0 if current == start else branch[current][0]
+        if current == goal:
+            found = True
+            break
+        for dr, dc, cost in FCND_ACTIONS:
+            x, y = current[0] + dr, current[1] + dc
+            if x < 0 or x > n or y < 0 or y > m or grid[x, y] == 1:
+                continue
+            nxt = (x, y)
+            branch_cost = current_cost + cost
+            if nxt not in visited:
+                visited.add(nxt)
+                branch[nxt] = (branch_cost, current)
+                queue.put((branch_cost + h(nxt, goal), nxt))
+    if not found:
+        return [], 0
+    path, node = [goal], goal
+    while branch[node][1] != start:
+        node = branch[node][1]
+        path.append(node)
+    path.append(start)
+    return path[::-1], branch[goal][0]
+
+
+def median_ms(fn, runs):
+    times = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        fn()
+        times.append((time.perf_counter() - t0) * 1000)
+    return statistics.median(times)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=20)
+    ap.add_argument("--fcnd-runs", type=int, default=3)
+    ap.add_argument("--cli", default=str(REPO / "target" / "release" / "skyplan"))
+    args = ap.parse_args()
+
+    data = np.loadtxt(REPO / "data" / "colliders.csv", delimiter=",", dtype="float64", skiprows=2)
+    grid, n0, e0 = skyplan.create_grid(data, 5, 5)
+    start = (-n0, -e0)
+    goal = (start[0] + 420, start[1] + 390)
+    rows = []
+
+    rows.append(("create_grid, skyplan", median_ms(lambda: skyplan.create_grid(data, 5, 5), args.runs), ""))
+    rows.append(("create_grid, FCND (numpy)", median_ms(lambda: fcnd_create_grid(data, 5, 5), 3), ""))
+
+    _, cost = skyplan.a_star(grid, heuristic, start, goal)
+    rows.append((
+        "skyplan.a_star (FCND API, grid → path)",
+        median_ms(lambda: skyplan.a_star(grid, heuristic, start, goal), args.runs),
+        f"cost {cost:.3f}",
+    ))
+    planner = skyplan.Planner()
+    for name in ("jps", "jps-plus", "astar"):
+        planner.plan(planner=name)  # the session's grid and tables, built once
+        plan = planner.plan(planner=name)
+        rows.append((
+            f"Planner.plan(planner={name!r})",
+            median_ms(lambda: planner.plan(planner=name), args.runs),
+            f"cost {plan.cost_m:.3f} m, search {plan.stats['search_time_us'] / 1000:.2f} ms",
+        ))
+
+    cli = Path(args.cli)
+    if cli.exists():
+        with tempfile.TemporaryDirectory() as tmp:
+            def run_cli():
+                out = subprocess.run(
+                    [str(cli), "plan", "--json", "--out", f"{tmp}/w.json"],
+                    capture_output=True, text=True, check=True,
+                )
+                return json.loads(out.stdout)
+
+            report = run_cli()
+            rows.append((
+                "CLI `skyplan plan --json` (process)",
+                median_ms(run_cli, max(3, args.runs // 2)),
+                f"cost {report['cost_m']:.3f} m, in-process total {report['timings_us']['total_us'] / 1000:.2f} ms",
+            ))
+    else:
+        rows.append(("CLI", float("nan"), f"{cli} missing: cargo build --release"))
+
+    fcnd = []
+    for _ in range(args.fcnd_runs):
+        t0 = time.perf_counter()
+        _, fcnd_cost = fcnd_a_star(grid, heuristic, start, goal)
+        fcnd.append((time.perf_counter() - t0) * 1000)
+    rows.append((
+        "FCND a_star (plain Python)",
+        statistics.median(fcnd),
+        f"cost {fcnd_cost:.3f} ({(fcnd_cost / cost - 1) * 100:+.1f} % vs optimal)",
+    ))
+
+    print(f"FCND city, home cell {start} → {goal}, 5 m altitude, 5 m margin (median ms per query)")
+    for what, ms, note in rows:
+        print(f"  {what:42s} {ms:10.2f} ms  {note}")
+
+
+if __name__ == "__main__":
+    main()

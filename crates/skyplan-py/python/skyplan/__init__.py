@@ -1,0 +1,49 @@
+"""skyplan: drone motion planning in Rust, for Python.
+
+FCND drop-ins (replace ``from planning_utils import ...`` by ``from skyplan import ...``):
+
+* :func:`create_grid` -- FCND's grid, bit for bit, with its offsets;
+* :func:`a_star` -- exactly optimal, FCND's move model, FCND's call ``a_star(grid, h, start, goal)``;
+* :func:`prune_path` and :func:`bresenham_prune`.
+
+pyastar2d's contract: :func:`astar_path` (float32 weights >= 1, ``np.inf`` walls).
+
+The whole planner: :class:`Planner` loads a map once (the bundled FCND city, a colliders.csv,
+an occupancy image, a MovingAI map or a numpy grid) and plans with any skyplan planner
+(grid search, Theta*, wavefront, cost map, Voronoi, PRM/RRT/voxel in 3D); :class:`Plan` holds
+the waypoints as numpy arrays.
+
+Failures raise :class:`PlanError` subclasses: :class:`InvalidStart`, :class:`InvalidGoal`,
+:class:`NoPath`, :class:`Timeout`, :class:`BadInput`. The GIL is released while planning.
+"""
+
+from ._errors import BadInput, InvalidGoal, InvalidStart, NoPath, PlanError, Timeout
+from ._skyplan import (
+    Plan,
+    Planner,
+    __version__,
+    a_star,
+    astar_path,
+    bresenham_prune,
+    create_grid,
+    planners,
+    prune_path,
+)
+
+__all__ = [
+    "BadInput",
+    "InvalidGoal",
+    "InvalidStart",
+    "NoPath",
+    "Plan",
+    "PlanError",
+    "Planner",
+    "Timeout",
+    "__version__",
+    "a_star",
+    "astar_path",
+    "bresenham_prune",
+    "create_grid",
+    "planners",
+    "prune_path",
+]

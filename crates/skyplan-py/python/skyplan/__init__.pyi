@@ -1,0 +1,156 @@
+"""Type stubs for skyplan (the extension module skyplan._skyplan and its Python half)."""
+
+import os
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar, Union, final, overload
+
+import numpy as np
+import numpy.typing as npt
+
+from ._errors import BadInput as BadInput
+from ._errors import InvalidGoal as InvalidGoal
+from ._errors import InvalidStart as InvalidStart
+from ._errors import NoPath as NoPath
+from ._errors import PlanError as PlanError
+from ._errors import Timeout as Timeout
+
+__version__: str
+__all__ = [
+    "BadInput",
+    "InvalidGoal",
+    "InvalidStart",
+    "NoPath",
+    "Plan",
+    "PlanError",
+    "Planner",
+    "Timeout",
+    "__version__",
+    "a_star",
+    "astar_path",
+    "bresenham_prune",
+    "create_grid",
+    "planners",
+    "prune_path",
+]
+
+_Cell = Tuple[int, int]
+_CellLike = Union[Tuple[int, int], Sequence[int], npt.NDArray[np.integer[Any]]]
+_Point = TypeVar("_Point")
+_PathLike = Union[str, "os.PathLike[str]"]
+
+def create_grid(
+    data: npt.ArrayLike, drone_altitude: float, safety_distance: float
+) -> Tuple[npt.NDArray[np.float64], int, int]:
+    """FCND's ``create_grid``, bit for bit: ``(grid, north_offset, east_offset)``.
+
+    ``data``: the (n, 6) colliders array (north, east, alt, d_north, d_east, d_alt).
+    ``grid``: float64, 1.0 = blocked, row = north - north_offset, column = east - east_offset.
+    """
+
+@overload
+def a_star(
+    grid: npt.ArrayLike,
+    start: _CellLike,
+    goal: _CellLike,
+    *,
+    diagonal: bool = True,
+    corner_cutting: bool = True,
+) -> Tuple[List[_Cell], float]: ...
+@overload
+def a_star(
+    grid: npt.ArrayLike,
+    heuristic: Callable[..., float],
+    start: _CellLike,
+    goal: _CellLike,
+    *,
+    diagonal: bool = True,
+    corner_cutting: bool = True,
+) -> Tuple[List[_Cell], float]:
+    """Exactly optimal grid path ``(path, cost)`` with FCND's move model by default.
+
+    FCND's ``heuristic`` argument is accepted and ignored. ``path``: ``(row, col)`` tuples from
+    start to goal; ``cost`` in cells. Raises NoPath, InvalidStart, InvalidGoal, BadInput.
+    """
+
+def prune_path(path: Sequence[_Point], epsilon: float = 1e-6) -> List[_Point]:
+    """FCND's collinearity pruning: drops the middle of three collinear points."""
+
+def bresenham_prune(grid: npt.ArrayLike, path: Sequence[_Point]) -> List[_Point]:
+    """Line-of-sight pruning along Bresenham lines (nonzero = blocked)."""
+
+def astar_path(
+    weights: npt.NDArray[np.float32],
+    start: _CellLike,
+    goal: _CellLike,
+    allow_diagonal: bool = False,
+) -> Optional[npt.NDArray[np.int32]]:
+    """pyastar2d's ``astar_path``: (N, 2) int32 path over float32 weights >= 1, or None."""
+
+def planners() -> List[Dict[str, Any]]:
+    """Every planner: ``name``, ``label``, ``dims``, ``optimality``, ``maps``, ``summary``."""
+
+@final
+class Plan:
+    """A planned route, every segment re-checked against the map."""
+
+    @property
+    def waypoints(self) -> npt.NDArray[np.float64]:
+        """(n, 4) ``[north_m, east_m, alt_m, heading_rad]`` (FCND's layout)."""
+    @property
+    def lla(self) -> Optional[npt.NDArray[np.float64]]:
+        """(n, 2) ``[lat_deg, lon_deg]``, None on maps without a geodetic home."""
+    @property
+    def cost_m(self) -> float:
+        """Route length of the planner, metres."""
+    @property
+    def planner(self) -> str:
+        """The planner's CLI name."""
+    @property
+    def stats(self) -> Dict[str, Any]:
+        """The CLI's ``--json`` fields besides the waypoints."""
+    def to_json(self) -> str:
+        """The whole plan as JSON text."""
+    def to_file(self, path: _PathLike, format: Optional[str] = None) -> None:
+        """Writes the waypoints (.json .csv .h5 .geojson .plan, or ``format=``)."""
+    def __len__(self) -> int: ...
+
+@final
+class Planner:
+    """A map loaded once, and every skyplan planner on it; safe to share between threads."""
+
+    def __new__(
+        cls,
+        map: Union[None, _PathLike, npt.ArrayLike] = None,
+        *,
+        home: Optional[Tuple[float, float]] = None,
+        resolution_m: Optional[float] = None,
+        unknown_free: bool = False,
+        origin_ne: Optional[Tuple[float, float]] = None,
+        cell_m: Optional[float] = None,
+    ) -> "Planner": ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def bounds_ne(self) -> Tuple[float, float, float, float]:
+        """``(north_min_m, north_max_m, east_min_m, east_max_m)``."""
+    def plan(
+        self,
+        start: Optional[Tuple[float, float]] = None,
+        goal: Optional[Tuple[float, float]] = None,
+        *,
+        planner: Optional[str] = None,
+        alt_m: Optional[float] = None,
+        safety_m: Optional[float] = None,
+        cell_m: Optional[float] = None,
+        start_ne: Optional[Tuple[float, float]] = None,
+        goal_ne: Optional[Tuple[float, float]] = None,
+        start_lla: Optional[Tuple[float, float]] = None,
+        goal_lla: Optional[Tuple[float, float]] = None,
+        start_alt_m: Optional[float] = None,
+        goal_alt_m: Optional[float] = None,
+        time_limit_ms: Optional[int] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> Plan:
+        """Plans a route from ``start`` to ``goal`` ((north_m, east_m)); options as the CLI's."""

@@ -1,0 +1,417 @@
+//! `Planner`: one world loaded once, planned on by the planning API's sessions; `Plan`: its
+//! answer as numpy arrays and a dict.
+
+use crate::arrays::{describe, float_pair, map2, to_json};
+use crate::errors::{bad_input, to_py};
+use numpy::PyArray2;
+use numpy::ndarray::Array2;
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+use serde_json::{Map, Value};
+use skyplan_cspace::{Grid2, GridFrame};
+use skyplan_export::Format;
+use skyplan_plan::{MapYaml, PlanFailure, PlanRequest, PlannerId, Session, World};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// A file's error as the matching `OSError`, naming the file.
+fn io_error(path: &Path, e: std::io::Error) -> PyErr {
+    let message = format!("{}: {e}", path.display());
+    match e.kind() {
+        std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+        _ => PyOSError::new_err(message),
+    }
+}
+
+fn read_text(path: &Path) -> PyResult<String> {
+    std::fs::read_to_string(path).map_err(|e| io_error(path, e))
+}
+
+fn read_bytes(path: &Path) -> PyResult<Vec<u8>> {
+    std::fs::read(path).map_err(|e| io_error(path, e))
+}
+
+fn has_ext(path: &Path, exts: &[&str]) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// A map file by its extension, as the CLI's `--map` reads it.
+fn load_file(path: &Path, resolution_m: Option<f64>, unknown_free: bool) -> PyResult<World> {
+    let name = path.display().to_string();
+    if resolution_m.is_some() && !has_ext(path, &["png", "pgm"]) {
+        return Err(bad_input(
+            "resolution_m: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)",
+        ));
+    }
+    let world = if has_ext(path, &["csv"]) {
+        World::from_colliders_csv(&name, &read_text(path)?)
+    } else if has_ext(path, &["yaml", "yml"]) {
+        let meta =
+            MapYaml::parse(&read_text(path)?).map_err(|e| bad_input(format!("{name}: {e}")))?;
+        let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
+        let bytes = read_bytes(&image)?;
+        World::from_image(&image.display().to_string(), &bytes, &meta, unknown_free)
+    } else if has_ext(path, &["png", "pgm"]) {
+        let resolution = resolution_m.ok_or_else(|| {
+            bad_input(format!(
+                "{name}: a bare image needs resolution_m= (metres per pixel), or use a map_server .yaml"
+            ))
+        })?;
+        World::from_image(
+            &name,
+            &read_bytes(path)?,
+            &MapYaml::bare(resolution),
+            unknown_free,
+        )
+    } else if has_ext(path, &["map"]) {
+        World::from_movingai(&name, &read_text(path)?)
+    } else {
+        return Err(bad_input(format!(
+            "{name}: unknown map type; expected .csv (FCND colliders), .yaml (map_server), .png/.pgm (with resolution_m=) or .map (MovingAI)"
+        )));
+    };
+    world.map_err(to_py)
+}
+
+/// A numpy occupancy grid (row 0 the southern edge, nonzero = blocked) as a world.
+fn grid_world(grid: &Bound<'_, PyAny>, origin_ne: [f64; 2], cell_m: f64) -> PyResult<World> {
+    let mut nan = false;
+    let (rows, cols, blocked) = map2(grid, "map", |v| {
+        nan |= v.is_nan();
+        v != 0.0
+    })?;
+    if nan {
+        return Err(bad_input(
+            "map: NaN cells (expected 0 for free, nonzero for blocked)",
+        ));
+    }
+    if !(cell_m.is_finite() && cell_m > 0.0) {
+        return Err(bad_input(format!(
+            "cell_m {cell_m}: expected a size above 0"
+        )));
+    }
+    let too_large = || bad_input(format!("map: a {rows} × {cols} grid is too large"));
+    let frame = GridFrame {
+        origin_north_m: origin_ne[0],
+        origin_east_m: origin_ne[1],
+        cell_m,
+    };
+    let grid = Grid2::new(
+        u32::try_from(rows).map_err(|_| too_large())?,
+        u32::try_from(cols).map_err(|_| too_large())?,
+        blocked,
+        frame,
+    )
+    .map_err(|e| bad_input(format!("map: {e}")))?;
+    Ok(World::from_grid(&format!("numpy grid {rows}x{cols}"), grid))
+}
+
+/// A JSON value as a Python object (through the `json` module).
+fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value)
+        .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// The planners there are: a list of dicts (`name`, `label`, `dims`, `optimality`, `maps`,
+/// `summary`), in registry order. Every name is a valid `planner=` option.
+#[pyfunction]
+pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    let infos: Vec<_> = PlannerId::ALL.iter().map(|p| p.info()).collect();
+    let value = serde_json::to_value(infos)
+        .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
+    json_to_py(py, &value)
+}
+
+/// A map loaded once, and every skyplan planner on it.
+///
+/// `map`: `None` for the bundled FCND city; a path (str or `os.PathLike`) to an FCND
+/// `colliders.csv`, a ROS map_server `.yaml`, a bare `.png`/`.pgm` image (with `resolution_m=`)
+/// or a MovingAI `.map`; or a 2-D numpy array (nonzero = blocked, row 0 the southern edge, as
+/// `create_grid` makes it), placed by `origin_ne=(north_m, east_m)` of its corner (for an FCND
+/// grid, `(north_offset, east_offset)`) and `cell_m=` (1).
+///
+/// `home=(lat_deg, lon_deg)` gives a map without a geodetic home one (colliders maps carry
+/// their own): waypoints then get lat/lon and `to_file` works. `unknown_free=True` reads an
+/// image's unknown pixels as free.
+///
+/// A `Planner` may be shared between threads: each concurrent `plan` gets its own session of
+/// the planning API (grids, roadmaps and sessions are kept for the next calls), and the GIL is
+/// released while planning.
+#[pyclass(module = "skyplan", frozen)]
+pub struct Planner {
+    world: World,
+    idle: Mutex<Vec<Session>>,
+}
+
+impl Planner {
+    fn take_session(&self) -> Session {
+        let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
+        idle.pop()
+            .unwrap_or_else(|| Session::new(self.world.clone()))
+    }
+
+    fn give_back(&self, session: Session) {
+        let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
+        idle.push(session);
+    }
+}
+
+#[pymethods]
+impl Planner {
+    #[new]
+    #[pyo3(signature = (map = None, *, home = None, resolution_m = None, unknown_free = false, origin_ne = None, cell_m = None))]
+    fn new(
+        map: Option<&Bound<'_, PyAny>>,
+        home: Option<&Bound<'_, PyAny>>,
+        resolution_m: Option<f64>,
+        unknown_free: bool,
+        origin_ne: Option<&Bound<'_, PyAny>>,
+        cell_m: Option<f64>,
+    ) -> PyResult<Self> {
+        let is_path = map.is_some_and(|m| {
+            m.is_instance_of::<PyString>() || m.hasattr("__fspath__").unwrap_or(false)
+        });
+        if !map.is_some_and(|m| !is_path && !m.is_none())
+            && (origin_ne.is_some() || cell_m.is_some())
+        {
+            return Err(bad_input(
+                "origin_ne, cell_m: only a numpy grid map takes them (files carry their own placement)",
+            ));
+        }
+        let world = match map {
+            None => World::fcnd_city(),
+            Some(m) if m.is_none() => World::fcnd_city(),
+            Some(m) if is_path => {
+                let path: PathBuf = m
+                    .extract()
+                    .map_err(|_| bad_input(format!("map: expected a path, got {}", describe(m))))?;
+                load_file(&path, resolution_m, unknown_free)?
+            }
+            Some(m) => {
+                let origin = match origin_ne {
+                    Some(o) => float_pair(o, "origin_ne")?,
+                    None => [0.0, 0.0],
+                };
+                grid_world(m, origin, cell_m.unwrap_or(1.0))?
+            }
+        };
+        let world = match home {
+            Some(h) => {
+                let [lat, lon] = float_pair(h, "home")?;
+                world.with_home(lat, lon).map_err(to_py)?
+            }
+            None => world,
+        };
+        Ok(Self {
+            world,
+            idle: Mutex::new(Vec::new()),
+        })
+    }
+
+    /// The map's name (its path, or the bundled map's).
+    #[getter]
+    fn name(&self) -> String {
+        self.world.name().to_string()
+    }
+
+    /// What the map was loaded from: `colliders`, `image`, `moving_ai`, `random` or `grid`.
+    #[getter]
+    fn kind(&self) -> String {
+        serde_json::to_value(self.world.kind())
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default()
+    }
+
+    /// The horizontal extent every planner accepts at 1 m cells:
+    /// `(north_min_m, north_max_m, east_min_m, east_max_m)`.
+    #[getter]
+    fn bounds_ne(&self) -> (f64, f64, f64, f64) {
+        let b = self.world.bounds_ne(1.0);
+        (b.north_min_m, b.north_max_m, b.east_min_m, b.east_max_m)
+    }
+
+    /// Plans a route.
+    ///
+    /// `start`, `goal`: `(north_m, east_m)` of the map's local frame (the map's defaults when
+    /// left out: on the bundled city the home and a far street corner). Geodetic positions go
+    /// as `start_lla=(lat, lon)` / `goal_lla=(lat, lon)`. Every other keyword is a planning
+    /// option, named as the CLI's long options with underscores: `planner` ("jps", "jps-plus",
+    /// "astar", "dijkstra", "theta", "wavefront", "costmap", "voronoi", "prm", "lazy-prm",
+    /// "rrt-connect", "rrt-star", "voxel"), `alt_m`, `safety_m`, `cell_m`, `start_alt_m`,
+    /// `goal_alt_m`, `time_limit_ms`, `seed`, `connectivity`, `corner_cutting`, … — unknown
+    /// names and options the planner does not use raise `skyplan.BadInput`.
+    ///
+    /// Raises `InvalidStart`, `InvalidGoal`, `NoPath`, `Timeout` or `BadInput` (all
+    /// `skyplan.PlanError`s) with the planning API's message.
+    #[pyo3(signature = (start = None, goal = None, **options))]
+    fn plan(
+        &self,
+        py: Python<'_>,
+        start: Option<&Bound<'_, PyAny>>,
+        goal: Option<&Bound<'_, PyAny>>,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Plan> {
+        let mut fields = Map::new();
+        if let Some(opts) = options {
+            for (k, v) in opts.iter() {
+                let key: String = k.extract()?;
+                let value = to_json(&v, &key)?;
+                fields.insert(key, value);
+            }
+        }
+        for (which, given) in [("start", start), ("goal", goal)] {
+            let Some(point) = given.filter(|p| !p.is_none()) else {
+                continue;
+            };
+            if fields.contains_key(&format!("{which}_ne"))
+                || fields.contains_key(&format!("{which}_lla"))
+            {
+                return Err(bad_input(format!(
+                    "{which}: given twice (positionally and as {which}_ne= or {which}_lla=)"
+                )));
+            }
+            let [n, e] = float_pair(point, which)?;
+            fields.insert(format!("{which}_ne"), serde_json::json!([n, e]));
+        }
+        let request: PlanRequest = serde_json::from_value(Value::Object(fields))
+            .map_err(|e| bad_input(format!("options: {e}")))?;
+        let mut session = self.take_session();
+        let outcome = py.detach(|| {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| session.plan(&request)))
+                .map(|result| (result, session))
+        });
+        match outcome {
+            Ok((result, session)) => {
+                self.give_back(session);
+                result.map(|inner| Plan { inner }).map_err(to_py)
+            }
+            // A panic is a bug: its session is dropped, and Python gets a PlanError.
+            Err(_) => Err(to_py(PlanFailure::internal(
+                "internal error while planning (a panic); please report this with the request",
+            ))),
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        format!("skyplan.Planner({:?})", self.world.name())
+    }
+}
+
+/// A planned route: every segment re-checked against the map.
+///
+/// `waypoints`: (n, 4) float64 `[north_m, east_m, alt_m, heading_rad]` (FCND's waypoint
+/// layout); `lla`: (n, 2) `[lat_deg, lon_deg]` or None on maps without a geodetic home;
+/// `cost_m`; `stats`: everything else the planner reports, as a dict.
+#[pyclass(module = "skyplan", frozen)]
+pub struct Plan {
+    inner: skyplan_plan::Plan,
+}
+
+#[pymethods]
+impl Plan {
+    /// (n, 4) float64 array: `[north_m, east_m, alt_m, heading_rad]` per waypoint.
+    #[getter]
+    fn waypoints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w = &self.inner.waypoints;
+        let flat: Vec<f64> = w.iter().flatten().copied().collect();
+        let a = Array2::from_shape_vec((w.len(), 4), flat)
+            .map_err(|e| to_py(PlanFailure::internal(format!("waypoints: {e}"))))?;
+        Ok(numpy::IntoPyArray::into_pyarray(a, py))
+    }
+
+    /// (n, 2) float64 array of `[lat_deg, lon_deg]`, or None (map without a geodetic home).
+    #[getter]
+    fn lla<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        let Some(ll) = &self.inner.waypoints_lla else {
+            return Ok(None);
+        };
+        let flat: Vec<f64> = ll.iter().flatten().copied().collect();
+        let a = Array2::from_shape_vec((ll.len(), 2), flat)
+            .map_err(|e| to_py(PlanFailure::internal(format!("lla: {e}"))))?;
+        Ok(Some(numpy::IntoPyArray::into_pyarray(a, py)))
+    }
+
+    /// The planner's route length, metres (octile cost of a grid path; Euclidean length of
+    /// any-angle, roadmap and 3D routes).
+    #[getter]
+    fn cost_m(&self) -> f64 {
+        self.inner.cost_m
+    }
+
+    /// The planner that made the route (CLI spelling).
+    #[getter]
+    fn planner(&self) -> &'static str {
+        self.inner.planner.name()
+    }
+
+    /// Everything the planner reports besides the waypoints (map, grid, start, goal, cost,
+    /// expansions, timings in microseconds, planner details) — the CLI's `--json` fields.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let mut value = serde_json::to_value(&self.inner)
+            .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
+        if let Some(obj) = value.as_object_mut() {
+            obj.remove("waypoints");
+            obj.remove("waypoints_lla");
+        }
+        json_to_py(py, &value)
+    }
+
+    /// The whole plan as JSON text (the CLI's `plan --json` document without its `outputs`).
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.inner)
+            .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))
+    }
+
+    /// Writes the waypoints to `path` in the format its extension names, as the CLI's `--out`:
+    /// `.json`, `.csv`, `.h5`/`.hdf5` (FCND's `data` dataset), `.geojson`, `.plan`
+    /// (QGroundControl); `format=` overrides the extension. Needs a map with a geodetic home.
+    #[pyo3(signature = (path, format = None))]
+    fn to_file(&self, path: PathBuf, format: Option<&str>) -> PyResult<()> {
+        let format = match format {
+            Some(name) => Format::from_name(name).ok_or_else(|| {
+                bad_input(format!("format: expected json, csv, hdf5, geojson or plan, got {name:?}"))
+            })?,
+            None => Format::from_path(&path).ok_or_else(|| {
+                bad_input(format!(
+                    "{}: cannot tell the format from the extension; use .json .csv .h5 .geojson .plan or format=",
+                    path.display()
+                ))
+            })?,
+        };
+        let mission = self.inner.mission.as_ref().ok_or_else(|| {
+            bad_input(format!(
+                "{}: waypoint files carry lat/lon; {} has no geodetic home: Planner(..., home=(lat, lon))",
+                path.display(),
+                self.inner.map
+            ))
+        })?;
+        let summary = serde_json::json!({
+            "map": self.inner.map,
+            "planner": self.inner.planner,
+            "cost_m": self.inner.cost_m,
+        });
+        let bytes = skyplan_export::encode(format, mission, &summary)
+            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        std::fs::write(&path, bytes).map_err(|e| io_error(&path, e))
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.waypoints.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "skyplan.Plan(planner={:?}, waypoints={}, cost_m={:.2})",
+            self.inner.planner.name(),
+            self.inner.waypoints.len(),
+            self.inner.cost_m
+        )
+    }
+}

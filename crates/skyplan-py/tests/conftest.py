@@ -1,0 +1,131 @@
+"""Shared fixtures: the real FCND map, the release CLI, and independent reference algorithms.
+
+The references here are written from FCND's and textbook definitions, in plain Python/numpy,
+with no code from skyplan: the tests compare skyplan against them.
+"""
+
+import heapq
+import math
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[3]
+COLLIDERS = REPO / "data" / "colliders.csv"
+MOVINGAI = REPO / "data" / "movingai"
+
+
+@pytest.fixture(scope="session")
+def colliders():
+    """The real FCND map as FCND loads it."""
+    return np.loadtxt(COLLIDERS, delimiter=",", dtype="float64", skiprows=2)
+
+
+def fcnd_create_grid(data, drone_altitude, safety_distance):
+    """FCND's create_grid, in plain numpy, as planning_utils.py defines it."""
+    north_min = np.floor(np.min(data[:, 0] - data[:, 3]))
+    north_max = np.ceil(np.max(data[:, 0] + data[:, 3]))
+    east_min = np.floor(np.min(data[:, 1] - data[:, 4]))
+    east_max = np.ceil(np.max(data[:, 1] + data[:, 4]))
+    north_size = int(np.ceil(north_max - north_min))
+    east_size = int(np.ceil(east_max - east_min))
+    grid = np.zeros((north_size, east_size))
+    for i in range(data.shape[0]):
+        north, east, alt, d_north, d_east, d_alt = data[i, :]
+        if alt + d_alt + safety_distance > drone_altitude:
+            rows = (
+                int(np.clip(north - d_north - safety_distance - north_min, 0, north_size - 1)),
+                int(np.clip(north + d_north + safety_distance - north_min, 0, north_size - 1)),
+            )
+            cols = (
+                int(np.clip(east - d_east - safety_distance - east_min, 0, east_size - 1)),
+                int(np.clip(east + d_east + safety_distance - east_min, 0, east_size - 1)),
+            )
+            grid[rows[0] : rows[1] + 1, cols[0] : cols[1] + 1] = 1
+    return grid, int(north_min), int(east_min)
+
+
+SQRT2 = math.sqrt(2.0)
+
+
+def moves(diagonal, corner_cutting):
+    """The move set: (d_row, d_col, cost, needs both side cells free)."""
+    out = [(-1, 0, 1.0, False), (1, 0, 1.0, False), (0, -1, 1.0, False), (0, 1, 1.0, False)]
+    if diagonal:
+        for dr in (-1, 1):
+            for dc in (-1, 1):
+                out.append((dr, dc, SQRT2, not corner_cutting))
+    return out
+
+
+def dijkstra_cost(grid, start, goal, diagonal=True, corner_cutting=True):
+    """Textbook Dijkstra (heapq) over free cells (grid == 0); None when unreachable."""
+    rows, cols = grid.shape
+    blocked = grid != 0
+
+    def free(r, c):
+        return 0 <= r < rows and 0 <= c < cols and not blocked[r, c]
+
+    if not free(*start) or not free(*goal):
+        return None
+    dist = {start: 0.0}
+    heap = [(0.0, start)]
+    steps = moves(diagonal, corner_cutting)
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if (r, c) == goal:
+            return d
+        if d > dist[(r, c)]:
+            continue
+        for dr, dc, cost, sides in steps:
+            nr, nc = r + dr, c + dc
+            if not free(nr, nc):
+                continue
+            if sides and not (free(r + dr, c) and free(r, c + dc)):
+                continue
+            nd = d + cost
+            if nd < dist.get((nr, nc), math.inf):
+                dist[(nr, nc)] = nd
+                heapq.heappush(heap, (nd, (nr, nc)))
+    return None
+
+
+def path_cost_checked(grid, path, diagonal=True, corner_cutting=True):
+    """The length of a cell path, asserting every cell free and every step a legal move."""
+    rows, cols = grid.shape
+    allowed = {(dr, dc): (cost, sides) for dr, dc, cost, sides in moves(diagonal, corner_cutting)}
+    total = 0.0
+    for r, c in path:
+        assert 0 <= r < rows and 0 <= c < cols and grid[r, c] == 0, (r, c)
+    for (r0, c0), (r1, c1) in zip(path, path[1:]):
+        step = (r1 - r0, c1 - c0)
+        assert step in allowed, f"illegal move {step}"
+        cost, sides = allowed[step]
+        if sides:
+            assert grid[r0 + step[0], c0] == 0 and grid[r0, c0 + step[1]] == 0, "cut corner"
+        total += cost
+    return total
+
+
+def random_grid(rng, rows, cols, density):
+    return (rng.random((rows, cols)) < density).astype(np.float64)
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """The release CLI (built by ci.sh, or `cargo build --release` in the repository)."""
+    path = Path(os.environ.get("SKYPLAN_CLI", REPO / "target" / "release" / "skyplan"))
+    if not path.exists():
+        pytest.fail(f"{path} is missing: build it with `cargo build --release` (ci.sh does)")
+    return path
+
+
+def run_cli(cli, *args, cwd):
+    out = subprocess.run(
+        [str(cli), *args], cwd=cwd, capture_output=True, text=True, timeout=300, check=False
+    )
+    assert out.returncode == 0, out.stderr
+    return out.stdout
