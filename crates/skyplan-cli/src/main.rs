@@ -14,6 +14,7 @@ mod picture;
 mod plan_cmd;
 mod report;
 mod scen_cmd;
+mod serve_cmd;
 mod show;
 mod sim_cmd;
 mod world_load;
@@ -31,6 +32,7 @@ fn main() -> ExitCode {
         args::Command::Navigate(a) => navigate_cmd::run_navigate(*a),
         args::Command::Fly(a) => fly_cmd::run(*a),
         args::Command::Sim(a) => sim_cmd::run(a),
+        args::Command::Serve(a) => serve_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
