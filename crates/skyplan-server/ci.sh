@@ -63,7 +63,7 @@ PY
 # The event stream never ends: it is tested in the browser and the Rust tests instead.
 (cd "$tmp" && "$st" run "http://127.0.0.1:$port/api/openapi.json" \
   --checks not_a_server_error,status_code_conformance,content_type_conformance,response_schema_conformance \
-  --exclude-path /api/events --max-examples "${SKYPLAN_SCHEMATHESIS_EXAMPLES:-40}" --seed 1 \
+  --exclude-path /api/events --max-examples "${SKYPLAN_SCHEMATHESIS_EXAMPLES:-100}" --seed 1 \
   --workers 1 --request-timeout 30 --generation-database none --no-color)
 kill "$server_pid"
 wait "$server_pid" 2>/dev/null || true

@@ -17,12 +17,17 @@ export function freePort() {
 /** Starts `bin serve --bind 127.0.0.1:PORT …`; resolves once it prints its address. */
 export async function startServer(bin, extraArgs = []) {
   const port = await freePort();
-  const proc = spawn(bin, ["serve", "--bind", `127.0.0.1:${port}`, ...extraArgs], {
+  return startProcess(bin, ["serve", "--bind", `127.0.0.1:${port}`, ...extraArgs]);
+}
+
+/** Starts a program that prints `http://ADDR/` once it serves; resolves with that address. */
+export async function startProcess(bin, args) {
+  const proc = spawn(bin, args, {
     stdio: ["ignore", "pipe", "inherit"],
   });
   const url = await new Promise((resolve, reject) => {
     let out = "";
-    const timer = setTimeout(() => reject(new Error(`skyplan serve printed nothing in 20 s: ${out}`)), 20000);
+    const timer = setTimeout(() => reject(new Error(`${bin} printed no address in 20 s: ${out}`)), 20000);
     proc.stdout.on("data", (d) => {
       out += d;
       const m = out.match(/http:\/\/[0-9.:]+\//);
@@ -31,7 +36,7 @@ export async function startServer(bin, extraArgs = []) {
         resolve(m[0]);
       }
     });
-    proc.on("exit", (code) => reject(new Error(`skyplan serve exited with ${code}: ${out}`)));
+    proc.on("exit", (code) => reject(new Error(`${bin} exited with ${code}: ${out}`)));
   });
   proc.stdout.resume();
   return { url, proc, pid: proc.pid, stop: () => proc.kill("SIGTERM") };

@@ -3,7 +3,7 @@
 //! from any thread.
 
 use serde::Serialize;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use tokio::sync::broadcast;
 
 /// One event of the stream. In the server-sent-events stream the SSE event name is `type`
@@ -96,9 +96,13 @@ pub(crate) struct Encoded {
 
 /// Publishes [`ViewEvent`]s to every connected `/api/events` client. Cheap to clone; callable
 /// from any thread, async or not. Events published with no client connected are dropped.
+///
+/// The latest `route` and `flight` events are kept and sent first to clients that connect
+/// later, so a page opened mid-flight shows the route and the vehicle at once.
 #[derive(Debug, Clone)]
 pub struct EventSink {
     pub(crate) tx: broadcast::Sender<Arc<Encoded>>,
+    retained: Arc<Mutex<Vec<Arc<Encoded>>>>,
 }
 
 /// How many events a slow client may fall behind before it skips some.
@@ -107,18 +111,41 @@ const EVENT_BUFFER: usize = 256;
 impl EventSink {
     pub(crate) fn new() -> Self {
         let (tx, _) = broadcast::channel(EVENT_BUFFER);
-        Self { tx }
+        Self {
+            tx,
+            retained: Arc::new(Mutex::new(Vec::new())),
+        }
+    }
+
+    /// A new client's receiver, and the retained events to send it first.
+    pub(crate) fn subscribe(&self) -> (broadcast::Receiver<Arc<Encoded>>, Vec<Arc<Encoded>>) {
+        let retained = self.lock_retained();
+        (self.tx.subscribe(), retained.clone())
+    }
+
+    fn lock_retained(&self) -> std::sync::MutexGuard<'_, Vec<Arc<Encoded>>> {
+        // Only whole values are stored under the lock: a poisoned one is still consistent.
+        self.retained.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Sends `event` to every connected client (none: dropped).
     pub fn publish(&self, event: &ViewEvent) {
         // Serialising plain numbers and strings cannot fail; a failure would drop one event.
         if let Ok(json) = serde_json::to_string(event) {
-            // An error only means nobody is listening.
-            let _ = self.tx.send(Arc::new(Encoded {
+            let encoded = Arc::new(Encoded {
                 name: event.name(),
                 json,
-            }));
+            });
+            if !matches!(event, ViewEvent::Plan(_)) {
+                // Under the lock, so that a client subscribing now gets it once or retained.
+                let mut retained = self.lock_retained();
+                retained.retain(|e| e.name != encoded.name);
+                retained.push(Arc::clone(&encoded));
+                let _ = self.tx.send(encoded);
+                return;
+            }
+            // An error only means nobody is listening.
+            let _ = self.tx.send(encoded);
         }
     }
 

@@ -212,6 +212,7 @@ pub(crate) async fn plan(
 /// Keeps an event-stream slot while the stream lives: dropped when the client goes.
 struct Subscription {
     rx: broadcast::Receiver<Arc<Encoded>>,
+    first: std::vec::IntoIter<Arc<Encoded>>,
     _slot: tokio::sync::OwnedSemaphorePermit,
 }
 
@@ -234,11 +235,16 @@ pub(crate) async fn events(
                 ),
             )
         })?;
+    let (rx, retained) = s.events.subscribe();
     let sub = Subscription {
-        rx: s.events.tx.subscribe(),
+        rx,
+        first: retained.into_iter(),
         _slot: slot,
     };
     let stream = futures_util::stream::unfold(sub, |mut sub| async move {
+        if let Some(e) = sub.first.next() {
+            return Some((Ok(sse_event(&e)), sub));
+        }
         match sub.rx.recv().await {
             Ok(e) => Some((Ok(sse_event(&e)), sub)),
             Err(broadcast::error::RecvError::Lagged(n)) => {

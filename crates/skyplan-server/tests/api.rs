@@ -6,7 +6,7 @@ use axum::body::Body;
 use axum::http::{Request, StatusCode};
 use serde_json::{Value, json};
 use skyplan_plan::{PlanRequest, PlannerId, Session, World};
-use skyplan_server::{FlightEvent, ServerConfig, ViewEvent, ViewServer, app, router};
+use skyplan_server::{FlightEvent, RouteEvent, ServerConfig, ViewEvent, ViewServer, app, router};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
@@ -464,9 +464,22 @@ fn events_stream_plans_and_flights_and_disconnected_clients_are_freed() {
         std::thread::sleep(Duration::from_millis(50));
     }
     assert_eq!(view.sink().clients(), 0);
-    // Their slots are free again.
-    let (code, _again) = open_events(addr);
+    // Their slots are free again, and a late client gets the latest route and flight state
+    // first.
+    view.publish(&ViewEvent::Route(RouteEvent {
+        reason: "plan".into(),
+        planner: "jps".into(),
+        waypoints: vec![[0.0, 0.0, 5.0], [10.0, 0.0, 5.0]],
+    }));
+    let (code, mut again) = open_events(addr);
     assert_eq!(code, 200);
+    let flight: Value = serde_json::from_str(&next_event(&mut again, "flight")).expect("JSON");
+    assert_eq!(flight["state"], "MANUAL");
+    let route: Value = serde_json::from_str(&next_event(&mut again, "route")).expect("JSON");
+    assert_eq!(
+        route["waypoints"],
+        json!([[0.0, 0.0, 5.0], [10.0, 0.0, 5.0]])
+    );
 }
 
 #[tokio::test]
