@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # skyplan serve, end to end: the page in a real browser (Debian's chromium driven by
-# playwright-core), schemathesis against /api/openapi.json, and a load test on loopback.
+# playwright-core) planning on clicks and following a flight, schemathesis against
+# /api/openapi.json, and a load test on loopback.
 #
 #   SKYPLAN_PYTHON=.ci-venv/bin/python bash crates/skyplan-server/ci.sh
 #
@@ -8,12 +9,12 @@
 # $SKYPLAN_PYTHON, a virtual environment's python (schemathesis is installed into it). Installs
 # chromium with apt when missing and playwright-core into browser/node_modules (git-ignored).
 # Leaves the work tree as it found it: the screenshot goes to a temporary folder unless
-# SKYPLAN_SCREENSHOT=1, which writes docs/serve.png.
+# SKYPLAN_SCREENSHOT=1, which writes docs/serve.png and docs/serve-flight.png.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 bin="${SKYPLAN_BIN:-$root/target/release/skyplan}"
-py="${SKYPLAN_PYTHON:?set SKYPLAN_PYTHON to a virtual environment's python}"
+py="${SKYPLAN_PYTHON:?set SKYPLAN_PYTHON to the python of a virtual environment}"
 step() { printf '\n== %s ==\n' "$*"; }
 tmp="$(mktemp -d)"
 server_pid=""
@@ -42,6 +43,12 @@ step "serve: the page in chromium ($("$chromium_bin" --version 2>/dev/null | hea
 shot="$tmp/serve.png"
 if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then shot="$root/docs/serve.png"; fi
 node "$here/browser/page.test.mjs" "$bin" "$shot"
+
+step "serve: a flight on the page (the view_flight example: what fly --view publishes)"
+(cd "$root" && cargo build -p skyplan-server --example view_flight --quiet)
+flight_shot="$tmp/serve-flight.png"
+if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then flight_shot="$root/docs/serve-flight.png"; fi
+node "$here/browser/flight.test.mjs" "$root/target/debug/examples/view_flight" "$flight_shot"
 
 step "serve: schemathesis against /api/openapi.json"
 "$py" -m pip install --quiet --disable-pip-version-check schemathesis

@@ -23,8 +23,8 @@ const browser = await chromium.launch({ executablePath: browserPath, args: ["--n
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1 });
   const consoleErrors = [];
-  // The 422s the invalid start below asks for are logged by the browser: expected.
-  page.on("console", (m) => { if (m.type() === "error" && !/status of 422/.test(m.text())) consoleErrors.push(m.text()); });
+  // The browser logs the 422s the invalid start below asks for, and the 503s the page retries.
+  page.on("console", (m) => { if (m.type() === "error" && !/status of (422|503)/.test(m.text())) consoleErrors.push(m.text()); });
   page.on("pageerror", (e) => consoleErrors.push(String(e)));
   await page.goto(server.url);
   await page.waitForFunction(() => window.skyplanView && window.skyplanView.state.ready, null, { timeout: 20000 });
@@ -109,7 +109,12 @@ try {
     const { x, y } = await page.evaluate(([n, e]) => window.skyplanView.toClient(n, e), p);
     await page.mouse.click(x, y);
   }
-  await page.waitForFunction(() => { const p = window.skyplanView.state.plan; return p && p.planner === "voronoi"; }, null, { timeout: 30000 });
+  try {
+    await page.waitForFunction(() => { const p = window.skyplanView.state.plan; return p && p.planner === "voronoi"; }, null, { timeout: 30000 });
+  } catch (e) {
+    console.log("STATUS", await page.textContent("#status"), JSON.stringify(await page.evaluate(() => window.skyplanView.state.lastRequest)));
+    throw e;
+  }
   await page.screenshot({ path: screenshot, fullPage: true });
   check("a screenshot was saved", fs.statSync(screenshot).size > 20000, screenshot);
   check("no errors in the page's console", consoleErrors.length === 0, consoleErrors.join("; "));
