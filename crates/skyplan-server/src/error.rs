@@ -14,6 +14,9 @@ pub enum ErrorKind {
     Plan(FailureKind),
     /// The request body is larger than the limit (413).
     TooLarge,
+    /// The request body is not declared `application/json` (415). Browsers cannot send JSON to
+    /// another origin without asking first, so other pages cannot make this server plan.
+    NotJson,
     /// Every planning worker (or event stream slot) is busy (503).
     Busy,
     /// The request's time budget ran out (504).
@@ -30,6 +33,7 @@ impl ErrorKind {
         match self {
             ErrorKind::Plan(k) => k.name(),
             ErrorKind::TooLarge => "too_large",
+            ErrorKind::NotJson => "not_json",
             ErrorKind::Busy => "busy",
             ErrorKind::OverBudget => "over_budget",
             ErrorKind::NotFound => "not_found",
@@ -45,6 +49,7 @@ impl ErrorKind {
     /// | `invalid_start`, `invalid_goal`, `no_path`, `timeout` (valid request, no route) | 422 |
     /// | `internal` | 500 |
     /// | `too_large` | 413 |
+    /// | `not_json` | 415 |
     /// | `busy` | 503 |
     /// | `over_budget` | 504 |
     pub fn status(self) -> StatusCode {
@@ -58,6 +63,7 @@ impl ErrorKind {
             ) => StatusCode::UNPROCESSABLE_ENTITY,
             ErrorKind::Plan(FailureKind::Internal) => StatusCode::INTERNAL_SERVER_ERROR,
             ErrorKind::TooLarge => StatusCode::PAYLOAD_TOO_LARGE,
+            ErrorKind::NotJson => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             ErrorKind::Busy => StatusCode::SERVICE_UNAVAILABLE,
             ErrorKind::OverBudget => StatusCode::GATEWAY_TIMEOUT,
             ErrorKind::NotFound => StatusCode::NOT_FOUND,

@@ -87,6 +87,39 @@ async fn malformed_requests_get_400_naming_the_field() {
 }
 
 #[tokio::test]
+async fn plan_requests_must_say_they_are_json() {
+    for content_type in [
+        Some("text/plain"),
+        Some("application/x-www-form-urlencoded"),
+        None,
+    ] {
+        let mut request = Request::post("/api/plan");
+        if let Some(c) = content_type {
+            request = request.header("content-type", c);
+        }
+        let response = city()
+            .oneshot(request.body(Body::from("{}")).expect("request"))
+            .await
+            .expect("answer");
+        assert_eq!(
+            response.status(),
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "{content_type:?}"
+        );
+    }
+    let response = city()
+        .oneshot(
+            Request::post("/api/plan")
+                .header("content-type", "Application/JSON; charset=utf-8")
+                .body(Body::from("{}"))
+                .expect("request"),
+        )
+        .await
+        .expect("answer");
+    assert_eq!(response.status(), StatusCode::OK);
+}
+
+#[tokio::test]
 async fn an_unknown_planner_gets_400_listing_the_planners() {
     let (status, v) = post_plan(city(), json!({ "planner": "rrt" })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
@@ -293,7 +326,7 @@ async fn the_openapi_document_matches_the_handlers() {
     let responses = doc["paths"]["/api/plan"]["post"]["responses"]
         .as_object()
         .expect("responses");
-    for code in ["200", "400", "413", "422", "503", "504"] {
+    for code in ["200", "400", "413", "415", "422", "503", "504"] {
         assert!(responses.contains_key(code), "{code} undocumented");
     }
 }
@@ -448,19 +481,21 @@ fn events_stream_plans_and_flights_and_disconnected_clients_are_freed() {
     // Both clients hang up: their receivers are dropped (noticed at the next write at the latest).
     drop(stream);
     drop(_other);
+    let landed = ViewEvent::Flight(FlightEvent {
+        time_s: 2.0,
+        north_m: 0.0,
+        east_m: 0.0,
+        alt_m: 0.0,
+        heading_deg: 0.0,
+        speed_m_s: 0.0,
+        state: "MANUAL".into(),
+        waypoint_index: None,
+        armed: false,
+    });
+    view.publish(&landed);
     let t0 = Instant::now();
     while view.sink().clients() > 0 && t0.elapsed() < Duration::from_secs(5) {
-        view.publish(&ViewEvent::Flight(FlightEvent {
-            time_s: 2.0,
-            north_m: 0.0,
-            east_m: 0.0,
-            alt_m: 0.0,
-            heading_deg: 0.0,
-            speed_m_s: 0.0,
-            state: "MANUAL".into(),
-            waypoint_index: None,
-            armed: false,
-        }));
+        view.publish(&landed);
         std::thread::sleep(Duration::from_millis(50));
     }
     assert_eq!(view.sink().clients(), 0);
