@@ -36,6 +36,8 @@ pub enum Command {
     /// Make maps: `skyplan map tile` copies a colliders map K × K times (big test worlds).
     #[command(subcommand)]
     Map(MapCommand),
+    /// Serve the planning API over HTTP (JSON, server-sent events, OpenAPI) and the live-view page.
+    Serve(ServeArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -421,4 +423,20 @@ pub struct SimArgs {
     /// Fault injection for tests: go silent after this many simulated seconds.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true)]
     pub drop_link_after_s: Option<f64>,
+}
+
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    /// Map to serve: .csv (colliders), .yaml (map_server), .map (MovingAI) [default: the bundled city].
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// Address to listen on; only loopback unless another address is named.
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:8080")]
+    pub bind: std::net::SocketAddr,
+    /// Plans computed at once; more requests get 503 [default: the number of cores].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub max_concurrent: Option<u16>,
+    /// Time budget of one request, milliseconds; past it the answer is 504.
+    #[arg(long, value_name = "MS", default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
+    pub timeout_ms: u64,
 }

@@ -15,6 +15,7 @@ mod picture;
 mod plan_cmd;
 mod report;
 mod scen_cmd;
+mod serve_cmd;
 mod show;
 mod sim_cmd;
 mod world_load;
@@ -33,6 +34,7 @@ fn main() -> ExitCode {
         args::Command::Fly(a) => fly_cmd::run(*a),
         args::Command::Sim(a) => sim_cmd::run(a),
         args::Command::Map(args::MapCommand::Tile(a)) => map_cmd::tile(a),
+        args::Command::Serve(a) => serve_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,33 @@
+//! `skyplan serve`: the planning API over HTTP and the live-view page (skyplan-server).
+
+use crate::args::ServeArgs;
+use crate::exit::{Result, runtime};
+use crate::grid_args::GridMapArgs;
+use skyplan_server::ServerConfig;
+use std::time::Duration;
+
+pub fn run(args: ServeArgs) -> Result<()> {
+    let limits = skyplan_plan::Limits {
+        max_memory_bytes: crate::args::default_max_memory(),
+    };
+    let world =
+        crate::world_load::load_world(args.map.as_deref(), &GridMapArgs::default(), &limits)?;
+    let mut config = ServerConfig {
+        timeout: Duration::from_millis(args.timeout_ms),
+        ..ServerConfig::default()
+    };
+    if let Some(n) = args.max_concurrent {
+        config.max_concurrent = usize::from(n);
+    }
+    let (name, workers, budget_ms) = (
+        world.name().to_string(),
+        config.max_concurrent,
+        args.timeout_ms,
+    );
+    skyplan_server::run(world, config, args.bind, |addr| {
+        println!(
+            "skyplan serve: http://{addr}/ ({name}; {workers} concurrent plans, {budget_ms} ms per request; Ctrl-C stops)"
+        );
+    })
+    .map_err(|e| runtime(format!("serve on {}: {e}", args.bind)))
+}

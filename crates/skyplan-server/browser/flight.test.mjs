@@ -1,0 +1,53 @@
+// A flight on the page: the view_flight example (what `fly --view` will do) serves the page
+// and publishes a route and the vehicle's state at 10 Hz; the page shows the route, moves the
+// marker, draws the trail and shows the state until MANUAL after landing.
+// Usage: node flight.test.mjs VIEW_FLIGHT_BIN SCREENSHOT.png
+import { chromium } from "playwright-core";
+import fs from "node:fs";
+import { freePort, startProcess } from "./common.mjs";
+
+const [bin, screenshot] = process.argv.slice(2);
+if (!bin || !screenshot) throw new Error("usage: node flight.test.mjs VIEW_FLIGHT_BIN SCREENSHOT.png");
+let passed = 0, failed = 0;
+function check(name, ok, detail = "") {
+  if (ok) { passed++; console.log(`ok   ${name}`); }
+  else { failed++; console.log(`FAIL ${name} ${detail}`); }
+}
+
+const port = await freePort();
+const flight = await startProcess(bin, [`127.0.0.1:${port}`, "10"]);
+const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || "/usr/bin/chromium", args: ["--no-sandbox"] });
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1 });
+  await page.goto(flight.url);
+  await page.waitForFunction(() => window.skyplanView && window.skyplanView.state.ready, null, { timeout: 20000 });
+  await page.waitForFunction(() => document.getElementById("v-state").textContent.startsWith("WAYPOINT"), null, { timeout: 20000 });
+  const route = await page.evaluate(() => window.skyplanView.state.route);
+  check("the route being flown is shown", Array.isArray(route) && route.length >= 2, JSON.stringify(route));
+  const states = [];
+  const seen = await page.evaluate(() => new Promise((resolve) => {
+    const seen = [];
+    const es = new EventSource("/api/events");
+    es.addEventListener("flight", (m) => {
+      const s = JSON.parse(m.data).state;
+      if (seen[seen.length - 1] !== s) seen.push(s);
+      if (s === "MANUAL") { es.close(); resolve(seen); }
+    });
+    setTimeout(() => resolve(seen), 60000);
+  }));
+  states.push(...seen);
+  check("the states run on to MANUAL after landing", states.join(" ").endsWith("LANDING MANUAL"), states.join(" "));
+  await page.waitForFunction(() => document.getElementById("v-state").textContent === "MANUAL", null, { timeout: 5000 });
+  check("the page shows MANUAL", true);
+  const trail = await page.evaluate(() => window.skyplanView.state.trail.length);
+  check("the trail was drawn from the updates", trail > 50, String(trail));
+  const log = await page.textContent("#log");
+  check("the state changes are logged", /vehicle LANDING/.test(log) && /vehicle MANUAL/.test(log), log.slice(0, 300));
+  await page.screenshot({ path: screenshot, fullPage: true });
+  check("a screenshot was saved", fs.statSync(screenshot).size > 20000, screenshot);
+} finally {
+  await browser.close();
+  flight.stop();
+}
+console.log(`flight: ${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);

@@ -1,0 +1,90 @@
+// Load test on loopback: 200 concurrent POST /api/plan between random far-apart free points of
+// the city, answered 200 or 503 (never anything else); then the same 200 with clients that
+// retry on 503, all answered 200. Prints p50/p99 latency and the server's peak RSS (VmHWM).
+// Usage: node load.mjs SKYPLAN_BIN [N]
+import fs from "node:fs";
+import { startServer, loadGrid, connectedClearCells, rng } from "./common.mjs";
+
+const [bin, nArg] = process.argv.slice(2);
+if (!bin) throw new Error("usage: node load.mjs SKYPLAN_BIN [N]");
+const N = Number(nArg || 200);
+let passed = 0, failed = 0;
+function check(name, ok, detail = "") {
+  if (ok) { passed++; console.log(`ok   ${name}`); }
+  else { failed++; console.log(`FAIL ${name} ${detail}`); }
+}
+const pct = (xs, p) => { const s = [...xs].sort((a, b) => a - b); return s[Math.min(s.length - 1, Math.floor(p * s.length))]; };
+const vm = (pid, key) => {
+  const m = fs.readFileSync(`/proc/${pid}/status`, "utf8").match(new RegExp(`${key}:\\s+(\\d+) kB`));
+  return m ? Number(m[1]) / 1024 : NaN;
+};
+
+const server = await startServer(bin);
+try {
+  const grid = await loadGrid(server.url, 5, 5);
+  const cells = connectedClearCells(grid, [0, 0], 1);
+  const rand = rng(11);
+  const pairs = [];
+  while (pairs.length < N) {
+    const a = cells[Math.floor(rand() * cells.length)], b = cells[Math.floor(rand() * cells.length)];
+    if (Math.hypot(a[0] - b[0], a[1] - b[1]) >= 500) pairs.push([a, b]);
+  }
+  const planners = ["jps", "jps-plus", "theta", "astar"];
+  const body = (i) => JSON.stringify({ planner: planners[i % planners.length], start_ne: pairs[i][0], goal_ne: pairs[i][1] });
+  const rssBefore = vm(server.pid, "VmRSS");
+
+  async function once(i) {
+    const t0 = performance.now();
+    try {
+      const res = await fetch(`${server.url}api/plan`, { method: "POST", headers: { "content-type": "application/json" }, body: body(i) });
+      const json = await res.json();
+      return { status: res.status, ms: performance.now() - t0, json };
+    } catch (e) {
+      return { status: 0, ms: performance.now() - t0, json: { message: String(e) } };
+    }
+  }
+
+  // Phase 1: all at once, no retries.
+  const t1 = performance.now();
+  const first = await Promise.all(pairs.map((_, i) => once(i)));
+  const wall1 = performance.now() - t1;
+  const counts = {};
+  for (const r of first) counts[r.status] = (counts[r.status] || 0) + 1;
+  const bad = first.filter((r) => r.status !== 200 && r.status !== 503);
+  check(`${N} concurrent requests answered 200 or 503`, bad.length === 0,
+    bad.slice(0, 3).map((r) => `${r.status} ${JSON.stringify(r.json).slice(0, 200)}`).join(" | "));
+  check("503s say busy", first.filter((r) => r.status === 503).every((r) => r.json.kind === "busy"));
+  check("some requests were planned", (counts[200] || 0) > 0);
+  const ok1 = first.filter((r) => r.status === 200).map((r) => r.ms);
+  const all1 = first.map((r) => r.ms);
+  console.log(`phase 1 (no retries): ${JSON.stringify(counts)} in ${wall1.toFixed(0)} ms; latency p50 ${pct(all1, 0.5).toFixed(1)} ms, p99 ${pct(all1, 0.99).toFixed(1)} ms (200s: p50 ${pct(ok1, 0.5).toFixed(1)} ms, p99 ${pct(ok1, 0.99).toFixed(1)} ms)`);
+
+  // Phase 2: the same requests from clients that retry on 503 after a short pause.
+  async function untilPlanned(i) {
+    const t0 = performance.now();
+    for (let attempt = 0; attempt < 2000; attempt++) {
+      const r = await once(i);
+      if (r.status !== 503) return { ...r, ms: performance.now() - t0, attempts: attempt + 1 };
+      await new Promise((res) => setTimeout(res, 5 + rand() * 20));
+    }
+    return { status: 503, ms: performance.now() - t0 };
+  }
+  const t2 = performance.now();
+  const second = await Promise.all(pairs.map((_, i) => untilPlanned(i)));
+  const wall2 = performance.now() - t2;
+  const notOk = second.filter((r) => r.status !== 200);
+  check(`${N} retrying clients all planned (200)`, notOk.length === 0,
+    notOk.slice(0, 3).map((r) => `${r.status} ${JSON.stringify(r.json).slice(0, 200)}`).join(" | "));
+  const costs = second.filter((r) => r.status === 200).map((r) => r.json.cost_m);
+  check("every route is at least its straight line", second.every((r) => r.status !== 200 || r.json.cost_m >= r.json.straight_line_m - 1e-6));
+  const all2 = second.map((r) => r.ms);
+  const plans = second.map((r) => r.json.timings_us ? r.json.timings_us.total_us / 1000 : 0);
+  const hwm = vm(server.pid, "VmHWM");
+  console.log(`phase 2 (retry on 503): ${second.length} planned in ${wall2.toFixed(0)} ms (${(1000 * second.length / wall2).toFixed(1)} plans/s); latency p50 ${pct(all2, 0.5).toFixed(1)} ms, p99 ${pct(all2, 0.99).toFixed(1)} ms; planning alone p50 ${pct(plans, 0.5).toFixed(1)} ms, p99 ${pct(plans, 0.99).toFixed(1)} ms; mean route ${(costs.reduce((a, b) => a + b, 0) / costs.length).toFixed(0)} m`);
+  console.log(`server memory: RSS ${rssBefore.toFixed(1)} MiB after loading the map, peak (VmHWM) ${hwm.toFixed(1)} MiB`);
+  check("peak RSS under 1 GiB", hwm < 1024, `${hwm} MiB`);
+} finally {
+  server.stop();
+}
+console.log(`load: ${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);

@@ -1,0 +1,158 @@
+//! # skyplan's planning service and live view
+//!
+//! The planning API ([`skyplan_plan`]) over HTTP, and one embedded page that draws the map,
+//! plans on click and shows flights live:
+//!
+//! | endpoint | what |
+//! |---|---|
+//! | `GET /` | the page (HTML, inline JS/CSS, 2D canvas; no CDN) |
+//! | `GET /api/map` | name, home, bounds, obstacles; `?alt_m=&safety_m=&cell_m=` adds the grid as run-length rows |
+//! | `POST /api/plan` | a `PlanRequest` (the CLI's long options with underscores) → the `Plan` as `skyplan plan --json` prints it |
+//! | `GET /api/planners` | the planner registry |
+//! | `GET /api/events` | server-sent events: plan results, flight states, routes ([`ViewEvent`]) |
+//! | `GET /api/openapi.json` | the OpenAPI 3 description of all of this |
+//!
+//! Safe by default: request bodies over 1 MiB get 413, at most N plans run at once (503
+//! beyond), each request has a time budget (504 past it), clients never name files.
+//!
+//! ```
+//! use skyplan_server::{ServerConfig, router};
+//! use skyplan_plan::World;
+//! let app = router(World::fcnd_city(), ServerConfig::default());
+//! # drop(app);
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod error;
+mod events;
+mod handlers;
+mod map;
+mod pool;
+mod view;
+
+pub use error::{ApiError, ErrorKind};
+pub use events::{EventSink, FlightEvent, PlanEvent, RouteEvent, ViewEvent};
+pub use map::MAX_GRID_CELLS;
+pub use view::{ViewError, ViewServer};
+
+use axum::Router;
+use axum::extract::DefaultBodyLimit;
+use axum::routing::{get, post};
+use skyplan_plan::World;
+use std::sync::Arc;
+use std::sync::atomic::AtomicU64;
+use std::time::Duration;
+
+/// Largest request body, bytes (1 MiB); larger bodies get 413.
+pub const MAX_BODY_BYTES: usize = 1 << 20;
+
+/// The page, compiled in.
+pub const PAGE_HTML: &str = include_str!("../page/index.html");
+
+/// The OpenAPI 3 description, compiled in.
+pub const OPENAPI_JSON: &str = include_str!("../openapi.json");
+
+/// How the server runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServerConfig {
+    /// Plans (and grids) computed at once; more get 503. Defaults to the number of cores.
+    pub max_concurrent: usize,
+    /// Time budget of one request; past it the answer is 504. Default 10 s.
+    pub timeout: Duration,
+    /// Event-stream clients at once; more get 503. Default 64.
+    pub max_event_clients: usize,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self {
+            max_concurrent: std::thread::available_parallelism().map_or(1, usize::from),
+            timeout: Duration::from_secs(10),
+            max_event_clients: 64,
+        }
+    }
+}
+
+/// What every handler shares.
+pub(crate) struct Shared {
+    pub pool: Arc<pool::Pool>,
+    pub config: ServerConfig,
+    pub events: EventSink,
+    pub event_slots: Arc<tokio::sync::Semaphore>,
+    pub map_info: serde_json::Value,
+    pub planners: serde_json::Value,
+    pub next_request_id: AtomicU64,
+}
+
+/// The server's state: cheap to clone.
+pub(crate) type AppState = Arc<Shared>;
+
+/// A router and the event sink that feeds its `/api/events`.
+pub struct App {
+    /// The router, ready for `axum::serve` or `tower::ServiceExt::oneshot`.
+    pub router: Router,
+    /// Publishes events to the router's `/api/events` clients.
+    pub events: EventSink,
+}
+
+/// The whole API and page over `world`, with its event sink.
+pub fn app(world: World, config: ServerConfig) -> App {
+    let events = EventSink::new();
+    let shared = Arc::new(Shared {
+        pool: Arc::new(pool::Pool::new(
+            world.clone(),
+            config.max_concurrent,
+            config.timeout,
+        )),
+        map_info: map::map_info(&world),
+        planners: handlers::planners_json(&world),
+        event_slots: Arc::new(tokio::sync::Semaphore::new(config.max_event_clients)),
+        config,
+        events: events.clone(),
+        next_request_id: AtomicU64::new(1),
+    });
+    let router = Router::new()
+        .route("/", get(handlers::page))
+        .route("/api/map", get(handlers::map))
+        .route("/api/plan", post(handlers::plan))
+        .route("/api/planners", get(handlers::planners))
+        .route("/api/events", get(handlers::events))
+        .route("/api/openapi.json", get(handlers::openapi))
+        .fallback(handlers::not_found)
+        .method_not_allowed_fallback(handlers::method_not_allowed)
+        .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))
+        .with_state(shared);
+    App { router, events }
+}
+
+/// The whole API and page over `world`.
+pub fn router(world: World, config: ServerConfig) -> Router {
+    app(world, config).router
+}
+
+/// Serves `app` on `listener` until the process ends (or the future is dropped).
+pub async fn serve(listener: tokio::net::TcpListener, app: Router) -> std::io::Result<()> {
+    axum::serve(listener, app).await
+}
+
+/// Binds `addr`, calls `on_listening` with the bound address (port 0 picks one), then serves
+/// the API and page over `world` until the process ends. For programs that are not async (the
+/// CLI): it builds its own runtime.
+pub fn run(
+    world: World,
+    config: ServerConfig,
+    addr: std::net::SocketAddr,
+    on_listening: impl FnOnce(std::net::SocketAddr),
+) -> std::io::Result<()> {
+    let threads = config.max_concurrent.clamp(1, 4);
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(threads)
+        .enable_all()
+        .build()?;
+    runtime.block_on(async move {
+        let listener = tokio::net::TcpListener::bind(addr).await?;
+        on_listening(listener.local_addr()?);
+        serve(listener, router(world, config)).await
+    })
+}
