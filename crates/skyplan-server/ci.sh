@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # skyplan serve, end to end: the page in a real browser (Debian's chromium driven by
 # playwright-core) planning on clicks and following a flight, schemathesis against
-# /api/openapi.json, and a load test on loopback.
+# /api/openapi.json, MCAP recordings read back in Python, and a load test on loopback.
 #
 #   SKYPLAN_PYTHON=.ci-venv/bin/python bash crates/skyplan-server/ci.sh
 #
 # Needs the release binary (target/release/skyplan; built here if missing), Node with npm, and
-# $SKYPLAN_PYTHON, a virtual environment's python (schemathesis is installed into it). Installs
+# $SKYPLAN_PYTHON, the python of a virtual environment (schemathesis and mcap go into it). Installs
 # chromium with apt when missing and playwright-core into browser/node_modules (git-ignored).
 # Leaves the work tree as it found it: the screenshot goes to a temporary folder unless
 # SKYPLAN_SCREENSHOT=1, which writes docs/serve.png and docs/serve-flight.png.
@@ -75,6 +75,10 @@ PY
 kill "$server_pid"
 wait "$server_pid" 2>/dev/null || true
 server_pid=""
+
+step "serve: MCAP recordings read back with the Python mcap package"
+"$py" -m pip install --quiet --disable-pip-version-check mcap
+(cd "$root" && SKYPLAN_PYTHON="$py" SKYPLAN_REQUIRE_MCAP=1 cargo test -p skyplan-server --test record --quiet -- --include-ignored)
 
 step "serve: load test, 200 concurrent plans on loopback"
 node "$here/browser/load.mjs" "$bin" 200

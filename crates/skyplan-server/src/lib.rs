@@ -12,6 +12,9 @@
 //! | `GET /api/events` | server-sent events: plan results, flight states, routes ([`ViewEvent`]) |
 //! | `GET /api/openapi.json` | the OpenAPI 3 description of all of this |
 //!
+//! [`ViewServer`] serves the same page from a background thread of `fly`/`sim` (`--view`), and
+//! [`Recorder`] writes the same events as an MCAP file for Foxglove and Lichtblick (`--record`).
+//!
 //! Safe by default: request bodies over 1 MiB get 413, at most N plans run at once (503
 //! beyond), each request has a time budget (504 past it), clients never name files.
 //!
@@ -29,11 +32,13 @@ mod events;
 mod handlers;
 mod map;
 mod pool;
+mod record;
 mod view;
 
 pub use error::{ApiError, ErrorKind};
 pub use events::{EventSink, FlightEvent, PlanEvent, RouteEvent, ViewEvent};
 pub use map::MAX_GRID_CELLS;
+pub use record::{RecordError, Recorder};
 pub use view::{ViewError, ViewServer};
 
 use axum::Router;
