@@ -19,15 +19,17 @@ pip install --quiet maturin pytest numpy mypy
 # tests are reported as skipped (the Dijkstra comparison still runs).
 pip install --quiet pyastar2d || echo "pyastar2d did not install: its comparison will be skipped"
 
-# The release CLI that Planner.plan is compared with.
+# The release CLI that Planner.plan is compared with (in cargo's target directory, wherever
+# CARGO_TARGET_DIR puts it).
 cargo build --release --quiet -p skyplan-cli
+target=$(cargo metadata --format-version 1 --no-deps | py -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 
 # The wheel, built by maturin through pip (PEP 517), as a user installs it.
 pip install --quiet --force-reinstall --no-deps ./crates/skyplan-py
 py -c "import skyplan; print('skyplan', skyplan.__version__, 'from', skyplan.__file__)"
 # The type stubs match the module (mypy's cache under target/, git-ignored).
-MYPY_CACHE_DIR="$PWD/target/mypy_cache" py -m mypy.stubtest skyplan
+MYPY_CACHE_DIR="$target/mypy_cache" py -m mypy.stubtest skyplan
 
 cd crates/skyplan-py
-PYTHONDONTWRITEBYTECODE=1 SKYPLAN_CLI="$PWD/../../target/release/skyplan" \
+PYTHONDONTWRITEBYTECODE=1 SKYPLAN_CLI="$target/release/skyplan" \
   py -m pytest -p no:cacheprovider -q -rs tests
