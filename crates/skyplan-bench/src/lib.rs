@@ -2,14 +2,15 @@
 //! the same queries, statistics, and the Rust peer (the `pathfinding` crate's A\*).
 //!
 //! ```
-//! use skyplan_bench::{random_far_queries, run, BenchPlanner};
+//! use skyplan_bench::{random_far_queries, run, Contender};
+//! use skyplan_plan::PlannerId;
 //! use skyplan_cspace::Grid2;
 //! use skyplan_search::MoveModel;
 //! let grid = Grid2::from_ascii(&"..........\n".repeat(10))?;
 //! let queries = random_far_queries(&grid, MoveModel::Octile, 5, 42, 6.0);
 //! assert_eq!(queries.len(), 5);
-//! let jps = run(&grid, MoveModel::Octile, BenchPlanner::JpsPlus, &queries, |_| {});
-//! let astar = run(&grid, MoveModel::Octile, BenchPlanner::AStar, &queries, |_| {});
+//! let jps = run(&grid, MoveModel::Octile, Contender::Skyplan(PlannerId::JpsPlus), &queries, |_| {});
+//! let astar = run(&grid, MoveModel::Octile, Contender::Skyplan(PlannerId::Astar), &queries, |_| {});
 //! for (a, b) in jps.records.iter().zip(&astar.records) {
 //!     assert_eq!(a.cost, b.cost);
 //! }

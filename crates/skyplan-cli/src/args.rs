@@ -369,6 +369,13 @@ pub struct FlyArgs {
     /// Waypoint deadband, horizontal metres.
     #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
     pub deadband_m: f64,
+    /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the route and the
+    /// vehicle (position, heading, trail, state, waypoint) at 5 updates per second.
+    #[arg(long, value_name = "ADDR")]
+    pub view: Option<String>,
+    /// Record the flight (route, vehicle pose and state) as MCAP with Foxglove's JSON schemas.
+    #[arg(long, value_name = "FILE.mcap")]
+    pub record: Option<PathBuf>,
     /// Upload the plan as a mission (take-off, waypoints with headings, land) and fly it in AUTO.
     #[arg(long)]
     pub upload: bool,

@@ -203,7 +203,9 @@ pub fn run(args: FlyArgs) -> Result<()> {
             None,
         )
     };
+    let live = crate::live::Live::start(&world, args.view.as_deref(), args.record.as_deref())?;
     let plan_with = FlyPlan {
+        live,
         world,
         limits,
         request,
@@ -211,6 +213,13 @@ pub fn run(args: FlyArgs) -> Result<()> {
         out,
     };
     let result = fly(&view, &address, &frame, plan_with, sim.as_ref(), &ctrl_c);
+    let (result, live) = match result {
+        Ok((log, ended, live)) => (Ok((log, ended)), Some(live)),
+        Err(e) => (Err(e), None),
+    };
+    if let Some(live) = live {
+        live.finish()?;
+    }
     let report = sim.and_then(InProcessSim::finish);
     let (log, ended) = result?;
     let outcome = match ended {
@@ -405,6 +414,7 @@ fn args_view(a: &FlyArgs) -> FlyView {
 
 /// What `fly` plans: the world, the request, whether the start was given, the waypoint file.
 struct FlyPlan {
+    live: crate::live::Live,
     world: World,
     limits: skyplan_plan::Limits,
     request: PlanRequest,
@@ -419,7 +429,8 @@ fn fly(
     p: FlyPlan,
     sim: Option<&InProcessSim>,
     ctrl_c: &CtrlC,
-) -> Result<(Vec<LogRow>, Ended)> {
+) -> Result<(Vec<LogRow>, Ended, crate::live::Live)> {
+    let mut live = p.live;
     let ground = GroundConfig {
         speedup: a.speedup,
         link_timeout_s: a.link_timeout_s,
@@ -460,6 +471,7 @@ fn fly(
     }
     let t_plan = Instant::now();
     let plan = Session::new(p.world).with_limits(p.limits).plan(&request)?;
+    live.route(&plan, "plan");
     let mission = plan
         .mission
         .as_ref()
@@ -498,8 +510,8 @@ fn fly(
     };
     if !a.upload {
         let mut ex = MissionExecutor::new(&targets, config).map_err(bad_input)?;
-        return fly_with(&mut gcs, &mut ex, frame, sim, ctrl_c)
-            .map(|(log, o)| (log, Ended::Flight(o)));
+        return fly_with(&mut gcs, &mut ex, frame, (sim, ctrl_c, &mut live))
+            .map(|(log, o)| (log, Ended::Flight(o), live));
     }
     fly_uploaded(
         &mut gcs,
@@ -509,8 +521,9 @@ fn fly(
         &info,
         request.alt_m.unwrap_or(5.0),
         (&targets, config),
-        (sim, ctrl_c),
+        (sim, ctrl_c, &mut live),
     )
+    .map(|(log, ended)| (log, ended, live))
 }
 
 /// `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
@@ -524,7 +537,7 @@ fn fly_uploaded(
     info: &skyplan_link::ground::VehicleInfo,
     alt_m: f64,
     (targets, config): (&[Target], ExecutorConfig),
-    (sim, ctrl_c): (Option<&InProcessSim>, &CtrlC),
+    (sim, ctrl_c, live): (Option<&InProcessSim>, &CtrlC, &mut crate::live::Live),
 ) -> Result<(Vec<LogRow>, Ended)> {
     // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
     // The plan's headings are from the map's grid north; the vehicle's are from true north.
@@ -576,7 +589,7 @@ fn fly_uploaded(
     }
     let mut ex =
         AutoExecutor::new(targets, MissionLayout::from(&items), config).map_err(bad_input)?;
-    fly_with(gcs, &mut ex, frame, sim, ctrl_c).map(|(log, o)| (log, Ended::Flight(o)))
+    fly_with(gcs, &mut ex, frame, (sim, ctrl_c, live)).map(|(log, o)| (log, Ended::Flight(o)))
 }
 
 /// Waits for the vehicle (heartbeat, EKF origin, position) up to `--wait-s` vehicle seconds,
@@ -658,8 +671,7 @@ fn fly_with<E: FlightExecutor>(
     gcs: &mut GroundStation,
     ex: &mut E,
     frame: &LocalFrame,
-    sim: Option<&InProcessSim>,
-    ctrl_c: &CtrlC,
+    (sim, ctrl_c, live): (Option<&InProcessSim>, &CtrlC, &mut crate::live::Live),
 ) -> Result<(Vec<LogRow>, Option<Outcome>)> {
     let n = ex.targets().len();
     let bar = progress_bar(n);
@@ -693,6 +705,7 @@ fn fly_with<E: FlightExecutor>(
             )),
             Update::Mode(m) => say(&format!("mode       {m}")),
             Update::Progress(p) => {
+                live.progress(&p);
                 bar.set_prefix(p.state.name());
                 bar.set_position(p.reached as u64);
                 bar.set_message(progress_message(&p));
@@ -867,6 +880,7 @@ mod tests {
             reached: 2,
             waypoints: 5,
             distance_left_m: 123.45,
+            telemetry: None,
         };
         assert_eq!(progress_message(&p), "123.5 m left  t 12.3 s");
         assert_eq!(

@@ -9,6 +9,7 @@ mod exit;
 mod files;
 mod fly_cmd;
 mod grid_args;
+mod live;
 mod map_cmd;
 mod navigate_cmd;
 mod picture;

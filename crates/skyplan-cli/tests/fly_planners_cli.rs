@@ -76,3 +76,66 @@ fn fly_refuses_maps_without_boxes() {
     assert_eq!(code, Some(2), "{text}");
     assert!(text.contains("colliders map"), "{text}");
 }
+
+/// `fly --record`: an MCAP file (magic bytes), read back by the Python `mcap` package with
+/// Foxglove's schemas: the route once, the vehicle's location, pose and state along the flight.
+#[test]
+#[ignore = "needs Python with mcap (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
+fn a_flight_recording_reads_back_with_python_mcap() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .current_dir(dir.path())
+        .args([
+            "fly",
+            "--sim",
+            "--speedup",
+            "5",
+            "--goal-ne",
+            "60,40",
+            "--record",
+            "flight.mcap",
+            "--view",
+            "127.0.0.1:0",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("view       http://127.0.0.1:"), "{text}");
+    let path = dir.path().join("flight.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(&bytes[..8], b"\x89MCAP0\r\n");
+    let python = std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string());
+    let script = r#"
+import sys, collections
+from mcap.reader import make_reader
+c = collections.Counter()
+for schema, channel, msg in make_reader(open(sys.argv[1], 'rb')).iter_messages():
+    c[schema.name] += 1
+print(dict(c))
+"#;
+    let read = std::process::Command::new(python)
+        .args(["-c", script])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let counts = String::from_utf8_lossy(&read.stdout);
+    assert!(
+        read.status.success(),
+        "{}",
+        String::from_utf8_lossy(&read.stderr)
+    );
+    assert!(counts.contains("'foxglove.PosesInFrame': 1"), "{counts}");
+    let fixes: usize = counts
+        .split("'foxglove.LocationFix': ")
+        .nth(1)
+        .and_then(|r| r.split([',', '}']).next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap_or(0);
+    assert!(fixes >= 10, "{counts}");
+}

@@ -227,6 +227,8 @@ pub struct Progress {
     pub waypoints: usize,
     /// Horizontal distance still to fly along the route, metres.
     pub distance_left_m: f64,
+    /// The vehicle's latest telemetry in the map's frame (for live views and recordings).
+    pub telemetry: Option<Telemetry>,
 }
 
 /// The flight's account.
@@ -809,6 +811,7 @@ impl GroundStation {
                     reached: ex.reached().len(),
                     waypoints: ex.targets().len(),
                     distance_left_m: ex.distance_left_m(),
+                    telemetry: ex.last_telemetry().cloned(),
                 }));
             }
             if let Some(t) = aborted_at
