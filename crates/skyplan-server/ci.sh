@@ -50,6 +50,9 @@ flight_shot="$tmp/serve-flight.png"
 if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then flight_shot="$root/docs/serve-flight.png"; fi
 node "$here/browser/flight.test.mjs" "$root/target/debug/examples/view_flight" "$flight_shot"
 
+step "serve: skyplan fly --sim --view, live on the page until the vehicle is back in MANUAL"
+SKYPLAN_BIN="$bin" node "$here/browser/flight.test.mjs" "$here/browser/fly_sim.sh" "$tmp/fly-view.png"
+
 step "serve: schemathesis against /api/openapi.json"
 "$py" -m pip install --quiet --disable-pip-version-check schemathesis
 st="$(dirname "$py")/schemathesis"

@@ -715,6 +715,7 @@ fn fly_with<E: FlightExecutor>(
     ctrl_c.in_flight.store(false, Ordering::SeqCst);
     bar.finish_and_clear();
     let summary = flown.or_exit(Kind::Runtime)?;
+    live.last(summary.time_s, ex.state(), ex.last_telemetry());
     let reached = ex.reached();
     let worst_h = reached
         .iter()

@@ -83,8 +83,31 @@ impl Live {
         self.send(&event, p.time_s);
     }
 
-    /// Closes the recording (renamed into place) and says where it is.
+    /// The vehicle at the end of the flight (the last state, often MANUAL after the disarm, can
+    /// fall between two progress reports).
+    pub fn last(
+        &mut self,
+        time_s: f64,
+        state: skyplan_flight::executor::FlightState,
+        telemetry: Option<&skyplan_flight::executor::Telemetry>,
+    ) {
+        let p = Progress {
+            time_s,
+            state,
+            reached: 0,
+            waypoints: 0,
+            distance_left_m: 0.0,
+            telemetry: telemetry.copied(),
+        };
+        self.progress(&p);
+    }
+
+    /// Closes the recording (renamed into place) and says where it is; a live view keeps
+    /// serving for a moment so that open pages see the end of the flight.
     pub fn finish(self) -> Result<()> {
+        if self.view.is_some() {
+            std::thread::sleep(std::time::Duration::from_secs(2));
+        }
         if let Some((target, tmp, recorder)) = self.record {
             recorder
                 .finish()

@@ -1,7 +1,7 @@
-// A flight on the page: the view_flight example (what `fly --view` will do) serves the page
+// A flight on the page: the view_flight example, or `skyplan fly --sim --view` (browser/fly_sim.sh), serves the page
 // and publishes a route and the vehicle's state at 10 Hz; the page shows the route, moves the
 // marker, draws the trail and shows the state until MANUAL after landing.
-// Usage: node flight.test.mjs VIEW_FLIGHT_BIN SCREENSHOT.png
+// Usage: node flight.test.mjs VIEW_FLIGHT_BIN|fly_sim.sh SCREENSHOT.png
 import { chromium } from "playwright-core";
 import fs from "node:fs";
 import { freePort, startProcess } from "./common.mjs";
@@ -36,7 +36,7 @@ try {
     setTimeout(() => resolve(seen), 60000);
   }));
   states.push(...seen);
-  check("the states run on to MANUAL after landing", states.join(" ").endsWith("LANDING MANUAL"), states.join(" "));
+  check("the states run on to MANUAL after landing", /LANDING( DISARMING)? MANUAL$/.test(states.join(" ")), states.join(" "));
   await page.waitForFunction(() => document.getElementById("v-state").textContent === "MANUAL", null, { timeout: 5000 });
   check("the page shows MANUAL", true);
   const trail = await page.evaluate(() => window.skyplanView.state.trail.length);
