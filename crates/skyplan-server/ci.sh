@@ -46,12 +46,13 @@ node "$here/browser/page.test.mjs" "$bin" "$shot"
 
 step "serve: a flight on the page (the view_flight example: what fly --view publishes)"
 (cd "$root" && cargo build -p skyplan-server --example view_flight --quiet)
-flight_shot="$tmp/serve-flight.png"
-if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then flight_shot="$root/docs/serve-flight.png"; fi
+flight_shot="$tmp/view-flight.png"
 node "$here/browser/flight.test.mjs" "$root/target/debug/examples/view_flight" "$flight_shot"
 
 step "serve: skyplan fly --sim --view, live on the page until the vehicle is back in MANUAL"
-SKYPLAN_BIN="$bin" node "$here/browser/flight.test.mjs" "$here/browser/fly_sim.sh" "$tmp/fly-view.png"
+fly_shot="$tmp/serve-flight.png"
+if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then fly_shot="$root/docs/serve-flight.png"; fi
+SKYPLAN_BIN="$bin" node "$here/browser/flight.test.mjs" "$here/browser/fly_sim.sh" "$fly_shot"
 
 step "serve: schemathesis against /api/openapi.json"
 "$py" -m pip install --quiet --disable-pip-version-check schemathesis
