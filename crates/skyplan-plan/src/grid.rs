@@ -172,6 +172,17 @@ pub(crate) fn waypoint_points(
     points.into_iter().map(|(n, e)| [n, e, alt_m]).collect()
 }
 
+/// The centres of `cells` at an altitude, as route points.
+pub(crate) fn centres_at(grid: &Grid2, cells: &[Cell], alt_m: f64) -> Vec<[f64; 3]> {
+    cells
+        .iter()
+        .map(|&c| {
+            let (n, e) = grid.center_ne(c);
+            [n, e, alt_m]
+        })
+        .collect()
+}
+
 /// A*, Dijkstra, JPS, JPS+ or Theta\* on the grid, then the passes.
 pub(crate) fn plan(
     session: &mut Session,
@@ -244,14 +255,7 @@ pub(crate) fn plan(
         },
     ));
     if r.geometry {
-        route.geometry.raw_path = path
-            .cells
-            .iter()
-            .map(|&c| {
-                let (n, e) = grid.center_ne(c);
-                [n, e, r.alt_m]
-            })
-            .collect();
+        route.geometry.raw_path = centres_at(&grid, &path.cells, r.alt_m);
     }
     route.grid = Some(grid);
     Ok(route)

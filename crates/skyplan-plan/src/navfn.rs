@@ -87,14 +87,7 @@ fn finish(
         },
     ));
     if q.r.geometry {
-        route.geometry.raw_path = found
-            .cells
-            .iter()
-            .map(|&c| {
-                let (n, e) = grid.center_ne(c);
-                [n, e, q.r.alt_m]
-            })
-            .collect();
+        route.geometry.raw_path = crate::grid::centres_at(&grid, &found.cells, q.r.alt_m);
     }
     route.grid = Some(grid);
     route
