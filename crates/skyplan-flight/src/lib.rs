@@ -6,6 +6,7 @@
 //!   yaw-rate limits, ArduCopter-like modes, take-off, landing, position targets, missions).
 //! - [`collision`]: the flown track checked against the map's obstacle boxes.
 //! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
+//! - [`sensing`]: range-sensor readings and the [`sensing::RouteWatcher`] hook that replans in flight.
 //! - [`auto`]: flying the uploaded mission in AUTO (`skyplan fly --upload`), same states and
 //!   outcomes as [`executor`].
 //!
@@ -19,6 +20,7 @@ pub mod collision;
 pub mod executor;
 pub mod flat_earth;
 pub mod sim;
+pub mod sensing;
 pub mod upload;
 
 #[cfg(test)]
