@@ -19,8 +19,8 @@ pub mod auto;
 pub mod collision;
 pub mod executor;
 pub mod flat_earth;
-pub mod sim;
 pub mod sensing;
+pub mod sim;
 pub mod upload;
 
 #[cfg(test)]

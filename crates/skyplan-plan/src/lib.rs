@@ -76,6 +76,7 @@ mod navfn;
 mod plan;
 mod planner_id;
 mod request;
+mod ride;
 mod session;
 mod three_d;
 mod voronoi;
@@ -86,6 +87,7 @@ pub use failure::{FailureKind, PlanFailure};
 pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, WaypointCounts};
 pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};
+pub use ride::{Ride, RideChange, RideLeg, RidePlace, RideRequest};
 pub use session::Session;
 pub use skyplan_imagemap::MapYaml;
 pub use world::{

@@ -16,7 +16,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// A navigation-function error as a failure: unreachable → no path, the rest → bad request.
-fn failure(e: NavError, grid: &Grid2) -> PlanFailure {
+pub(crate) fn failure(e: NavError, grid: &Grid2) -> PlanFailure {
     let at = |c: Cell| {
         let (n, e) = grid.center_ne(c);
         format!("N {n:.2} m, E {e:.2} m")
@@ -38,8 +38,28 @@ fn failure(e: NavError, grid: &Grid2) -> PlanFailure {
 }
 
 /// JSON has no infinity: a clearance on a map without obstacles is `null`.
-fn finite_or_null(v: f64) -> Value {
+pub(crate) fn finite_or_null(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// Nav2-style inflation parameters, with the defaults: ten cells of inflation, cost decaying to
+/// e⁻³ at its edge.
+pub(crate) fn inflation(
+    cell_m: f64,
+    inscribed_radius_m: f64,
+    inflation_radius_m: Option<f64>,
+    cost_scaling: Option<f64>,
+) -> Inflation {
+    let inflation_radius_m = inflation_radius_m.unwrap_or(10.0 * cell_m);
+    Inflation {
+        inscribed_radius_m,
+        inflation_radius_m,
+        cost_scaling_factor: cost_scaling.unwrap_or(if inflation_radius_m > 0.0 {
+            3.0 / inflation_radius_m
+        } else {
+            0.0
+        }),
+    }
 }
 
 struct Found {
@@ -143,16 +163,12 @@ pub(crate) fn costmap(session: &mut Session, q: &Query) -> Result<Route, PlanFai
     let start = end_cell(&grid, q, "start", q.start_ne)?;
     let goal = end_cell(&grid, q, "goal", q.goal_ne)?;
     let cell_m = grid.frame().cell_m;
-    let inflation_radius_m = r.inflation_radius_m.unwrap_or(10.0 * cell_m);
-    let params = Inflation {
-        inscribed_radius_m: r.inscribed_radius_m,
-        inflation_radius_m,
-        cost_scaling_factor: r.cost_scaling.unwrap_or(if inflation_radius_m > 0.0 {
-            3.0 / inflation_radius_m
-        } else {
-            0.0
-        }),
-    };
+    let params = inflation(
+        cell_m,
+        r.inscribed_radius_m,
+        r.inflation_radius_m,
+        r.cost_scaling,
+    );
     let t = Instant::now();
     let costmap = Costmap::inflate(&grid, params).map_err(|e| failure(e, &grid))?;
     let found = cost_search(&costmap, start, goal, r.model, r.cost_weight, true)
