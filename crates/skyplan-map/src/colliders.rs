@@ -37,6 +37,20 @@ pub struct ObstacleBox {
 }
 
 impl ObstacleBox {
+    /// A box from the six numbers of a `colliders.csv` row, in the file's column order: centre
+    /// north, east, up, then half sizes north, east, up (metres).
+    pub fn from_row(
+        [north_m, east_m, up_m, half_north_m, half_east_m, half_up_m]: [f64; 6],
+    ) -> Self {
+        Self {
+            north_m,
+            east_m,
+            up_m,
+            half_north_m,
+            half_east_m,
+            half_up_m,
+        }
+    }
     /// Height of the top face above home, metres.
     pub fn top_m(&self) -> f64 {
         self.up_m + self.half_up_m
@@ -237,14 +251,7 @@ fn parse_box(line_no: usize, line: &str) -> Result<ObstacleBox, ParseError> {
             ));
         }
     }
-    Ok(ObstacleBox {
-        north_m: v[0],
-        east_m: v[1],
-        up_m: v[2],
-        half_north_m: v[3],
-        half_east_m: v[4],
-        half_up_m: v[5],
-    })
+    Ok(ObstacleBox::from_row(v))
 }
 
 /// Parses a finite float; the error says what kind of number was expected.
