@@ -49,6 +49,35 @@ impl Descent {
     }
 }
 
+/// The finite value of `cell` in row-major `values` over `grid`; `None` if infinite or off the
+/// grid.
+pub(crate) fn finite_value(grid: &Grid2, values: &[f64], cell: Cell) -> Option<f64> {
+    if !grid.contains(cell) {
+        return None;
+    }
+    let v = values[grid.index(cell)];
+    v.is_finite().then_some(v)
+}
+
+/// Checks that a descent can start at `source`: on the grid, free, and with a finite value in
+/// `values`. Returns the error a descent reports if it gets stuck ("path could not be found").
+pub(crate) fn check_descent_source(
+    grid: &Grid2,
+    values: &[f64],
+    goal: Cell,
+    source: Cell,
+) -> Result<NavError, NavError> {
+    check_endpoint(grid, source, Endpoint::Source)?;
+    let unreachable = NavError::Unreachable {
+        source_cell: source,
+        destination_cell: goal,
+    };
+    match finite_value(grid, values, source) {
+        Some(_) => Ok(unreachable),
+        None => Err(unreachable),
+    }
+}
+
 pub(crate) fn check_endpoint(grid: &Grid2, cell: Cell, which: Endpoint) -> Result<(), NavError> {
     if !grid.contains(cell) {
         return Err(NavError::Outside {
@@ -158,11 +187,7 @@ impl DistanceField {
     }
     /// The distance of a cell to the goal, `None` for obstacles, unreachable and off-grid cells.
     pub fn value(&self, cell: Cell) -> Option<f64> {
-        if !self.grid.contains(cell) {
-            return None;
-        }
-        let v = self.values[self.grid.index(cell)];
-        v.is_finite().then_some(v)
+        finite_value(&self.grid, &self.values, cell)
     }
     /// Number of free cells from which the goal cannot be reached.
     pub fn unreachable_count(&self) -> usize {
@@ -181,14 +206,7 @@ impl DistanceField {
     ///
     /// Errors: the source off the grid, at an obstacle, or unreachable ("path could not be found").
     pub fn descend(&self, source: Cell) -> Result<Descent, NavError> {
-        check_endpoint(&self.grid, source, Endpoint::Source)?;
-        let unreachable = NavError::Unreachable {
-            source_cell: source,
-            destination_cell: self.goal,
-        };
-        if self.value(source).is_none() {
-            return Err(unreachable);
-        }
+        let unreachable = check_descent_source(&self.grid, &self.values, self.goal, source)?;
         let mut descent = Descent {
             cells: vec![source],
             straight_moves: 0,
