@@ -30,25 +30,13 @@ impl Run {
 
     /// Asserts that stdout holds each of `lines`.
     fn stdout_has(&self, lines: &[&str]) -> &Self {
-        for line in lines {
-            assert!(
-                self.stdout.contains(line),
-                "missing {line:?}:\n{}",
-                self.stdout
-            );
-        }
+        assert_holds("stdout", &self.stdout, lines);
         self
     }
 
     /// Asserts that stderr holds each of `needles`.
     fn stderr_has(&self, needles: &[&str]) -> &Self {
-        for needle in needles {
-            assert!(
-                self.stderr.contains(needle),
-                "missing {needle:?}:\n{}",
-                self.stderr
-            );
-        }
+        assert_holds("stderr", &self.stderr, needles);
         self
     }
 
@@ -77,6 +65,16 @@ impl Run {
             );
         }
         n
+    }
+}
+
+/// Asserts that `text` (a run's `what`) holds each of `needles`.
+fn assert_holds(what: &str, text: &str, needles: &[&str]) {
+    for needle in needles {
+        assert!(
+            text.contains(needle),
+            "missing {needle:?} in {what}:\n{text}"
+        );
     }
 }
 
@@ -192,13 +190,7 @@ fn fly_sim_upload_flies_the_mission_in_auto() {
 
 #[test]
 fn upload_only_uploads_to_a_separate_sim_and_exits() {
-    let sim = SimProcess::start("20");
-    let dir = tempfile::tempdir().unwrap();
-    let line = format!(
-        "fly --connect {} --upload-only --goal-ne 60,30",
-        sim.address
-    );
-    run(dir.path(), &line)
+    fly_a_separate_sim("--upload-only --goal-ne 60,30")
         .expect_code(0)
         .stdout_has(&[
             "upload     accepted:",
@@ -302,6 +294,14 @@ impl SimProcess {
     }
 }
 
+/// Runs `skyplan fly --connect ADDRESS LINE` in a new directory against `skyplan sim` (20×) in
+/// its own process.
+fn fly_a_separate_sim(line: &str) -> Run {
+    let sim = SimProcess::start("20");
+    let dir = tempfile::tempdir().unwrap();
+    run(dir.path(), &format!("fly --connect {} {line}", sim.address))
+}
+
 impl Drop for SimProcess {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -311,13 +311,7 @@ impl Drop for SimProcess {
 
 #[test]
 fn fly_connects_to_a_separate_sim_process() {
-    let sim = SimProcess::start("20");
-    let dir = tempfile::tempdir().unwrap();
-    let line = format!(
-        "fly --connect {} --speedup 20 --goal-ne 60,30 --timeout-s 60",
-        sim.address
-    );
-    run(dir.path(), &line)
+    fly_a_separate_sim("--speedup 20 --goal-ne 60,30 --timeout-s 60")
         .expect_code(0)
         .stdout_has(&["result     landed and disarmed after reaching all"]);
 }
@@ -339,18 +333,20 @@ fn pymavlink_drives_skyplan_sim() {
         t0.elapsed().as_secs_f64(),
         String::from_utf8_lossy(&out.stderr)
     );
-    for expected in [
-        "no telemetry before it is requested",
-        "refusal reason: Takeoff: vehicle not armed",
-        "mission upload accepted after 4 items",
-        "took off to 95 % of 5 m",
-        "position target reached",
-        "landed and disarmed",
-        "mission items reached: [1, 2, 3]",
-        "OK",
-    ] {
-        assert!(stdout.contains(expected), "missing {expected:?}:\n{stdout}");
-    }
+    assert_holds(
+        "the pymavlink peer's output",
+        &stdout,
+        &[
+            "no telemetry before it is requested",
+            "refusal reason: Takeoff: vehicle not armed",
+            "mission upload accepted after 4 items",
+            "took off to 95 % of 5 m",
+            "position target reached",
+            "landed and disarmed",
+            "mission items reached: [1, 2, 3]",
+            "OK",
+        ],
+    );
 }
 
 #[test]

@@ -95,17 +95,10 @@ for schema, channel, msg in make_reader(open(sys.argv[1], 'rb')).iter_messages()
     c[schema.name] += 1
 print(dict(c))
 "#;
-    let read = std::process::Command::new(python())
+    let read = ok(assert_cmd::Command::new(python())
         .args(["-c", script])
-        .arg(&path)
-        .output()
-        .unwrap();
+        .arg(&path));
     let counts = String::from_utf8_lossy(&read.stdout);
-    assert!(
-        read.status.success(),
-        "{}",
-        String::from_utf8_lossy(&read.stderr)
-    );
     assert!(counts.contains("'foxglove.PosesInFrame': 1"), "{counts}");
     let fixes: usize = counts
         .split("'foxglove.LocationFix': ")

@@ -5,9 +5,8 @@ use serde_json::Value;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
-use std::path::Path;
 mod common;
-use common::{cmd, fails_with, json_of, ok_json, succeed};
+use common::{cmd, dir_with, fails_with, json_of, ok_json, succeed};
 
 /// The non-empty lines of a picture, trimmed, top line first.
 fn picture_lines(picture: &str) -> Vec<&str> {
@@ -19,7 +18,7 @@ fn picture_lines(picture: &str) -> Vec<&str> {
 }
 
 /// A picture, top line = north, `#` black (occupied), `.` white (free), as a plain PGM.
-fn write_pgm(dir: &Path, name: &str, picture: &str) {
+fn pgm(picture: &str) -> String {
     let lines = picture_lines(picture);
     let mut text = format!("P2\n{} {}\n255\n", lines[0].len(), lines.len());
     for line in &lines {
@@ -30,7 +29,12 @@ fn write_pgm(dir: &Path, name: &str, picture: &str) {
         text.push_str(&px.join(" "));
         text.push('\n');
     }
-    std::fs::write(dir.join(name), text).unwrap();
+    text
+}
+
+/// A new temporary directory holding the picture as the PGM `name`.
+fn pgm_dir(name: &str, picture: &str) -> tempfile::TempDir {
+    dir_with(&[(name, &pgm(picture))])
 }
 
 /// The same picture as a grid, independently of the crate: row 0 = the LAST line.
@@ -50,14 +54,14 @@ const U_WALL: &str = "
 
 #[test]
 fn wavefront_cost_equals_the_astar_optimum_on_an_image_map() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(dir.path(), "u.pgm", U_WALL);
-    std::fs::write(
-        dir.path().join("u.yaml"),
-        "image: u.pgm\nresolution: 2.0\norigin: [100.0, 50.0, 0.0]\nnegate: 0\n\
-         occupied_thresh: 0.65\nfree_thresh: 0.196\n",
-    )
-    .unwrap();
+    let dir = dir_with(&[
+        ("u.pgm", &pgm(U_WALL)),
+        (
+            "u.yaml",
+            "image: u.pgm\nresolution: 2.0\norigin: [100.0, 50.0, 0.0]\nnegate: 0\n\
+             occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+        ),
+    ]);
     // Source south of the U's bottom (image row 6, x 4), destination inside it (row 2, x 4):
     // north = 50 + (6 − 1 − y + 0.5)·2, east = 100 + (x + 0.5)·2.
     let (start, goal) = ("51,109", "59,109");
@@ -91,8 +95,7 @@ fn wavefront_cost_equals_the_astar_optimum_on_an_image_map() {
 #[test]
 fn image_axes_north_is_up_east_is_right() {
     // An obstacle only in the top-left (north-west) corner of a 6 × 4 image of 1 m pixels.
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(dir.path(), "corner.pgm", "##....\n#.....\n......\n......");
+    let dir = pgm_dir("corner.pgm", "##....\n#.....\n......\n......");
     let plan = |start: &str| {
         format!(
             "plan --map corner.pgm --resolution 1 --planner wavefront \
@@ -120,12 +123,7 @@ fn image_axes_north_is_up_east_is_right() {
 
 #[test]
 fn enclosed_destination_exits_3_and_show_marks_unreachable_cells() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(
-        dir.path(),
-        "box.pgm",
-        ".......\n.#####.\n.#...#.\n.#####.\n.......",
-    );
+    let dir = pgm_dir("box.pgm", ".......\n.#####.\n.#...#.\n.#####.\n.......");
     let ends = "--start-ne 0.5,0.5 --goal-ne 2.5,3.5";
     let box_map = "plan --map box.pgm --resolution 1";
     let out = cmd(
@@ -156,9 +154,7 @@ fn enclosed_destination_exits_3_and_show_marks_unreachable_cells() {
 
 #[test]
 fn workshop_show_prints_workspace_matrix_and_path() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(
-        dir.path(),
+    let dir = pgm_dir(
         "corridor.pgm",
         "....#....\n....#....\n.........\n....#....\n....#....",
     );
@@ -196,9 +192,7 @@ fn costmap_keeps_clearance_and_plots_a_heat_map() {
 
 #[test]
 fn navigate_reports_reached_steps_distance_and_clearance() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(
-        dir.path(),
+    let dir = pgm_dir(
         "open.pgm",
         "..........\n..........\n....##....\n..........\n..........",
     );
@@ -226,19 +220,18 @@ fn navigate_reports_reached_steps_distance_and_clearance() {
 
 #[test]
 fn bad_maps_name_the_file_and_field() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(dir.path(), "a.pgm", "..\n..");
-    std::fs::write(
-        dir.path().join("bad.yaml"),
-        "image: a.pgm\nresolution: -2\norigin: [0, 0, 0]\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("missing.yaml"),
-        "image: nope.png\nresolution: 1\norigin: [0, 0, 0]\n",
-    )
-    .unwrap();
-    std::fs::write(dir.path().join("empty.png"), b"").unwrap();
+    let dir = dir_with(&[
+        ("a.pgm", &pgm("..\n..")),
+        (
+            "bad.yaml",
+            "image: a.pgm\nresolution: -2\norigin: [0, 0, 0]\n",
+        ),
+        (
+            "missing.yaml",
+            "image: nope.png\nresolution: 1\norigin: [0, 0, 0]\n",
+        ),
+        ("empty.png", ""),
+    ]);
     let cases = [
         ("a.pgm", "a.pgm: a bare image needs --resolution"),
         (
@@ -260,12 +253,10 @@ fn bad_maps_name_the_file_and_field() {
 
 #[test]
 fn movingai_maps_are_north_up() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("m.map"),
+    let dir = dir_with(&[(
+        "m.map",
         "type octile\nheight 3\nwidth 4\nmap\n@...\n.@..\n....\n",
-    )
-    .unwrap();
+    )]);
     // MovingAI (x 0, y 0) — the first line's first character — is the north-west cell (row 2).
     let m = "plan --map m.map --planner wavefront";
     fails_with(

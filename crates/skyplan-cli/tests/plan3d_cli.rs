@@ -2,7 +2,7 @@
 //! re-checked here against every box with the brute-force checker.
 
 mod common;
-use common::{CITY_CSV, checked_path_3d, num, plan_json};
+use common::{CITY_CSV, assert_no_waypoints, checked_path_3d, num, plan_json};
 
 const PLANNERS: [&str; 3] = ["prm", "rrt-connect", "rrt-star"];
 
@@ -87,10 +87,7 @@ fn goal_in_a_building_is_bad_input_and_an_enclosed_goal_is_no_path() {
         );
         assert_eq!(code, 3, "{planner}: {v}");
         assert_eq!(v["status"], "no_path");
-        assert!(
-            !dir.path().join("waypoints.json").exists(),
-            "nothing written on failure"
-        );
+        assert_no_waypoints(dir.path(), "nothing written on failure");
     }
 }
 

@@ -6,7 +6,9 @@ use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
 use std::path::Path;
 mod common;
-use common::{CITY_CSV, assert_segments_free, cmd, fails_with, ok_json, rows};
+use common::{
+    CITY_CSV, assert_no_waypoints, assert_segments_free, cmd, dir_with, fails_with, ok_json, rows,
+};
 
 /// `skyplan plan --json LINE`, which must succeed: its JSON.
 fn run_json(dir: &Path, line: &str) -> Value {
@@ -179,12 +181,10 @@ fn plots_are_real_png_and_svg_files() {
 
 #[test]
 fn config_file_supplies_defaults_and_flags_win() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("fcnd.toml"),
+    let dir = dir_with(&[(
+        "fcnd.toml",
         "target_altitude = 10.0\nsafety_distance = 3.0\ngoal_ne = [99.5, 0.5]\nmethod = \"dijkstra\"\nout = \"cfg.csv\"\n",
-    )
-    .unwrap();
+    )]);
     let v = run_json(dir.path(), "--config fcnd.toml --safety-m 4");
     assert_eq!(v["grid"]["alt_m"], 10.0);
     assert_eq!(v["grid"]["safety_m"], 4.0);
@@ -237,10 +237,7 @@ fn bad_map_input_names_file_line_and_column() {
         assert!(!err.contains("panicked"), "{err}");
     }
     fails_with(dir.path(), "plan --map missing.csv", 2, &["missing.csv"]);
-    assert!(
-        !dir.path().join("waypoints.json").exists(),
-        "no output after bad input"
-    );
+    assert_no_waypoints(dir.path(), "no output after bad input");
 }
 
 #[test]
@@ -292,7 +289,7 @@ fn an_enclosed_goal_is_reported_unreachable_with_exit_3() {
         msg.contains("unreachable") && msg.contains("goal's") && msg.contains("cells"),
         "{msg}"
     );
-    assert!(!dir.path().join("waypoints.json").exists());
+    assert_no_waypoints(dir.path(), "no output without a path");
 }
 
 #[test]

@@ -3,7 +3,9 @@
 
 use skyplan_cspace::{Grid2, GridSpec, Touch};
 mod common;
-use common::{CITY_CSV as CITY, assert_segments_free, cmd, code_of, ok_json, rows};
+use common::{
+    CITY_CSV as CITY, assert_no_waypoints, assert_segments_free, cmd, code_of, ok_json, rows,
+};
 
 /// `skyplan plan --planner voronoi` to the default goal, with JSON and `--out OUT`.
 const TO_GOAL: &str = "plan --planner voronoi --goal-ne 420,390 --json --out";
@@ -40,7 +42,7 @@ fn voronoi_refuses_a_start_inside_a_margin() {
         .arg(format!("{},{}", b.north_m, b.east_m))
         .assert()
         .code(2);
-    assert!(!dir.path().join("waypoints.json").exists());
+    assert_no_waypoints(dir.path(), "nothing written on bad input");
 }
 
 #[test]
@@ -67,8 +69,5 @@ fn voronoi_plot_draws_the_graph_connectors_and_route() {
         code_of(dir.path(), "plan --planner voronoi --plot voronoi.jpg"),
         Some(2)
     );
-    assert!(
-        !dir.path().join("waypoints.json").exists(),
-        "nothing written on bad input"
-    );
+    assert_no_waypoints(dir.path(), "nothing written on bad input");
 }

@@ -179,3 +179,17 @@ pub fn assert_segments_free(
 pub fn python() -> String {
     std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string())
 }
+
+/// Asserts that no waypoint file was written in `dir` (`why` in the message).
+pub fn assert_no_waypoints(dir: &Path, why: &str) {
+    assert!(!dir.join("waypoints.json").exists(), "{why}");
+}
+
+/// A new temporary directory holding `files` (name, text).
+pub fn dir_with(files: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    dir
+}
