@@ -59,23 +59,46 @@ pub(crate) fn finite_value(grid: &Grid2, values: &[f64], cell: Cell) -> Option<f
     v.is_finite().then_some(v)
 }
 
-/// Checks that a descent can start at `source`: on the grid, free, and with a finite value in
-/// `values`. Returns the error a descent reports if it gets stuck ("path could not be found").
-pub(crate) fn check_descent_source(
+/// A descent from `source` to `goal` over the row-major `values` on `grid`, one `step` (next
+/// cell, diagonal, cost) at a time: the cells with their move counts, and the sum of the steps'
+/// costs. Errors: the source off the grid or at an obstacle; its value infinite, or a step that
+/// finds no lower neighbour ("path could not be found").
+pub(crate) fn descend_by(
     grid: &Grid2,
     values: &[f64],
     goal: Cell,
     source: Cell,
-) -> Result<NavError, NavError> {
+    mut step: impl FnMut(Cell) -> Option<(Cell, bool, f64)>,
+) -> Result<(Descent, f64), NavError> {
     check_endpoint(grid, source, Endpoint::Source)?;
     let unreachable = NavError::Unreachable {
         source_cell: source,
         destination_cell: goal,
     };
-    match finite_value(grid, values, source) {
-        Some(_) => Ok(unreachable),
-        None => Err(unreachable),
+    if finite_value(grid, values, source).is_none() {
+        return Err(unreachable);
     }
+    let mut descent = Descent {
+        cells: vec![source],
+        straight_moves: 0,
+        diagonal_moves: 0,
+    };
+    let mut total = 0.0;
+    let mut cell = source;
+    while cell != goal {
+        let Some((next, diagonal, cost)) = step(cell) else {
+            return Err(unreachable);
+        };
+        if diagonal {
+            descent.diagonal_moves += 1;
+        } else {
+            descent.straight_moves += 1;
+        }
+        total += cost;
+        descent.cells.push(next);
+        cell = next;
+    }
+    Ok((descent, total))
 }
 
 pub(crate) fn check_endpoint(grid: &Grid2, cell: Cell, which: Endpoint) -> Result<(), NavError> {
@@ -206,14 +229,7 @@ impl DistanceField {
     ///
     /// Errors: the source off the grid, at an obstacle, or unreachable ("path could not be found").
     pub fn descend(&self, source: Cell) -> Result<Descent, NavError> {
-        let unreachable = check_descent_source(&self.grid, &self.values, self.goal, source)?;
-        let mut descent = Descent {
-            cells: vec![source],
-            straight_moves: 0,
-            diagonal_moves: 0,
-        };
-        let mut cell = source;
-        while cell != self.goal {
+        let step = |cell: Cell| {
             let here = self.values[self.grid.index(cell)];
             let mut best: Option<(f64, Cell, bool)> = None;
             for_each_move(&self.grid, cell, self.model, |next, diagonal| {
@@ -221,28 +237,20 @@ impl DistanceField {
                 if v >= here {
                     return;
                 }
-                let step = match self.metric {
+                let length = match self.metric {
                     FieldMetric::Length if diagonal => SQRT_2,
                     _ => 1.0,
                 };
-                let score = v + step;
+                let score = v + length;
                 if best.is_none_or(|(b, _, _)| score < b) {
                     best = Some((score, next, diagonal));
                 }
             });
             // A reachable non-goal cell always has a lower neighbour (its predecessor in the
             // wavefront); the guard keeps the loop finite even if it had none.
-            let Some((_, next, diagonal)) = best else {
-                return Err(unreachable);
-            };
-            if diagonal {
-                descent.diagonal_moves += 1;
-            } else {
-                descent.straight_moves += 1;
-            }
-            descent.cells.push(next);
-            cell = next;
-        }
+            best.map(|(_, next, diagonal)| (next, diagonal, 0.0))
+        };
+        let (descent, _) = descend_by(&self.grid, &self.values, self.goal, source, step)?;
         Ok(descent)
     }
 }
