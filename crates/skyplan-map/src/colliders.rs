@@ -8,7 +8,7 @@
 //! `posX` is north, `posY` east, `posZ` up, all in metres about the home; the half sizes are
 //! non-negative. The header line is optional (a numeric line 2 is read as a box).
 
-use crate::{ParseError, shown};
+use crate::{ParseError, numbered_lines, shown};
 
 /// The geodetic home of a map: the origin of its local NED frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,10 +92,7 @@ pub const COLUMNS: [&str; 6] = [
 /// assert!(err.to_string().contains("halfSizeY"));
 /// ```
 pub fn parse_colliders(text: &str) -> Result<CollidersMap, ParseError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = numbered_lines(text);
     let home = match lines.next() {
         Some((_, first)) => parse_home(first)?,
         None => {
@@ -108,10 +105,7 @@ pub fn parse_colliders(text: &str) -> Result<CollidersMap, ParseError> {
         }
     };
     let mut boxes = Vec::new();
-    for (line_no, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
+    for (line_no, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         if line_no == 2 && looks_like_header(line) {
             check_header(line)?;
             continue;
