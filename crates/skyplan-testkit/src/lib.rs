@@ -45,8 +45,8 @@ pub fn box_world(
     BoxWorld3::new(boxes, &spec(safety_m, max_alt_m, margin_bounds_m)).expect("valid spec")
 }
 
-/// The bundled city's boxes grown by `safety_m`, from the ground to `max_alt_m`, bounds at the
-/// grown boxes.
+/// The bundled city's boxes grown by `safety_m`, from the ground to `max_alt_m`, no margin
+/// added around the bounds.
 pub fn city_world(safety_m: f64, max_alt_m: f64) -> BoxWorld3 {
     let map = skyplan_map::colliders::parse_colliders(CITY_CSV).unwrap();
     box_world(&map.boxes, safety_m, max_alt_m, 0.0)
