@@ -25,12 +25,8 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let times: u32 = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(10);
     let map = skyplan_map::colliders::parse_colliders(CITY).expect("bundled map parses");
-    let spec = GridSpec {
-        alt_m: 5.0,
-        safety_m: 5.0,
-        cell_m: 1.0,
-    };
-    let one = Grid2::from_colliders(&map, spec).expect("city grid");
+    // The bench's grid: 5 m altitude, 5 m margin, 1 m cells.
+    let one = Grid2::from_colliders(&map, GridSpec::default()).expect("city grid");
     let pitch_m = f64::from(one.rows());
     // The first bench query of one tile, its goal moved to the far tile.
     let diagonal = f64::from(one.rows()).hypot(f64::from(one.cols()));
@@ -39,7 +35,7 @@ fn main() {
     drop(one);
     let t = Instant::now();
     let big = skyplan_map::tile(&map, times, pitch_m);
-    let grid = Grid2::from_colliders(&big, spec).expect("tiled grid");
+    let grid = Grid2::from_colliders(&big, GridSpec::default()).expect("tiled grid");
     println!(
         "K = {times}: {} boxes, grid {} x {} ({:.1} M cells) in {:.2} s, peak RSS {:.0} MB",
         big.boxes.len(),

@@ -28,12 +28,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     let map = skyplan_map::colliders::parse_colliders(CITY).expect("bundled map parses");
-    let spec = GridSpec {
-        alt_m: 5.0,
-        safety_m: 5.0,
-        cell_m: 1.0,
-    };
-    let grid = Grid2::from_colliders(&map, spec).expect("city grid");
+    // The bench's grid: 5 m altitude, 5 m margin, 1 m cells.
+    let grid = Grid2::from_colliders(&map, GridSpec::default()).expect("city grid");
     let diagonal = f64::from(grid.rows()).hypot(f64::from(grid.cols()));
     let queries = random_far_queries(&grid, MoveModel::Octile, 26, 1, 0.5 * diagonal);
     println!(

@@ -13,12 +13,8 @@ const CITY: &str = include_str!("../../../data/colliders.csv");
 #[test]
 fn city_queries_beat_theta_star_and_stay_in_free_space() {
     let map = skyplan_map::colliders::parse_colliders(CITY).expect("bundled map parses");
-    let spec = GridSpec {
-        alt_m: 5.0,
-        safety_m: 5.0,
-        cell_m: 1.0,
-    };
-    let grid = Grid2::from_colliders(&map, spec).expect("city grid");
+    // The bench's grid: 5 m altitude, 5 m margin, 1 m cells.
+    let grid = Grid2::from_colliders(&map, GridSpec::default()).expect("city grid");
     assert_eq!((grid.rows(), grid.cols()), (921, 921));
     let diagonal = f64::from(grid.rows()).hypot(f64::from(grid.cols()));
     let queries = random_far_queries(&grid, MoveModel::Octile, 26, 1, 0.5 * diagonal);
@@ -45,7 +41,7 @@ fn city_queries_beat_theta_star_and_stay_in_free_space() {
         );
         assert!(path.length_cells < octile);
         assert!(path.length_cells >= straight);
-        assert!((path.length_m - path.length_cells * spec.cell_m).abs() < 1e-9);
+        assert!((path.length_m - path.length_cells * GridSpec::default().cell_m).abs() < 1e-9);
         for (w, ne) in path.points.windows(2).zip(path.points_ne.windows(2)) {
             assert!(segment_is_free_any_angle(&grid, w[0], w[1]));
             assert!(grid.segment_is_free_ne(ne[0], ne[1], Touch::Open));

@@ -1,22 +1,13 @@
 //! `skyplan bench --3d` without OMPL: every skyplan 3D planner solves every query, and every
 //! returned path re-checks free against every box (the bench's own brute-force re-check).
 
-use assert_cmd::Command;
-use serde_json::Value;
+mod common;
+use common::ok_json;
 
 #[test]
 fn bench_3d_solves_and_rechecks_every_query() {
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .args(["bench", "--3d", "--random", "2", "--seed", "3", "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let v = ok_json(dir.path(), "bench --3d --random 2 --seed 3 --json");
     // The FCND route plus the two random queries.
     let queries = v["queries"].as_u64().unwrap();
     assert_eq!(queries, 3, "{v}");

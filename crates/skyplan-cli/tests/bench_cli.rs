@@ -1,39 +1,25 @@
 //! `skyplan bench`: every skyplan planner and the Rust peer agree on every cost; the Python
 //! textbook A* (an independent implementation) agrees too; records are written.
 
-use assert_cmd::Command;
 use serde_json::Value;
+use std::path::Path;
+mod common;
+use common::{cmd, json_of, ok};
 
-fn bench(args: &[&str]) -> Value {
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .arg("bench")
-        .arg("--json")
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+/// `skyplan bench --json LINE EXTRA` in `dir`, which must succeed: its JSON.
+fn bench(dir: &Path, line: &str, extra: &[&str]) -> Value {
+    json_of(&ok(cmd(dir, &format!("bench --json {line}")).args(extra)))
 }
 
 #[test]
 fn all_optimal_planners_agree_on_the_city_map() {
     let dir = tempfile::tempdir().unwrap();
     let records = dir.path().join("records.csv");
-    let v = bench(&[
-        "--random",
-        "4",
-        "--seed",
-        "7",
-        "--planners",
-        "jps-plus,jps,astar,dijkstra,rust-pathfinding-astar",
-        "--out",
-        records.to_str().unwrap(),
-    ]);
+    let v = bench(
+        dir.path(),
+        "--random 4 --seed 7 --planners jps-plus,jps,astar,dijkstra,rust-pathfinding-astar --out",
+        &[records.to_str().unwrap()],
+    );
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 5);
     for r in rows {
@@ -54,19 +40,12 @@ fn python_textbook_astar_agrees_with_the_optimum() {
         "/../../data/movingai/den312d.map"
     );
     let scen = format!("{map}.scen");
-    let v = bench(&[
-        "--map",
-        map,
-        "--scen",
-        &scen,
-        "--random",
-        "5",
-        "--planners",
-        "jps-plus",
-        "--peers",
-        "--peer-budget-s",
-        "20",
-    ]);
+    let dir = tempfile::tempdir().unwrap();
+    let v = bench(
+        dir.path(),
+        "--random 5 --planners jps-plus --peers --peer-budget-s 20",
+        &["--map", map, "--scen", &scen],
+    );
     let rows = v["rows"].as_array().unwrap();
     let textbook = rows
         .iter()

@@ -1,18 +1,13 @@
 //! `skyplan fly` and `skyplan sim` end to end: the real binary, the built-in simulator over
 //! loopback TCP, and an independent MAVLink peer (Python pymavlink).
 
-use assert_cmd::Command;
 use std::collections::BTreeSet;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
-
-fn skyplan(dir: &Path) -> Command {
-    let mut cmd = Command::cargo_bin("skyplan").unwrap();
-    cmd.current_dir(dir);
-    cmd
-}
+mod common;
+use common::{python, skyplan, words};
 
 struct Run {
     code: Option<i32>,
@@ -20,9 +15,73 @@ struct Run {
     stderr: String,
 }
 
-fn run(dir: &Path, args: &[&str]) -> Run {
+impl Run {
+    /// Asserts the exit code (both streams in the message).
+    fn expect_code(&self, code: i32) -> &Self {
+        assert_eq!(
+            self.code,
+            Some(code),
+            "stdout:\n{}\nstderr:\n{}",
+            self.stdout,
+            self.stderr
+        );
+        self
+    }
+
+    /// Asserts that stdout holds each of `lines`.
+    fn stdout_has(&self, lines: &[&str]) -> &Self {
+        assert_holds("stdout", &self.stdout, lines);
+        self
+    }
+
+    /// Asserts that stderr holds each of `needles`.
+    fn stderr_has(&self, needles: &[&str]) -> &Self {
+        assert_holds("stderr", &self.stderr, needles);
+        self
+    }
+
+    /// Asserts that stdout does not hold `text`.
+    fn stdout_lacks(&self, text: &str) -> &Self {
+        assert!(!self.stdout.contains(text), "{text:?} in:\n{}", self.stdout);
+        self
+    }
+
+    /// The N of "landed and disarmed after reaching all N", asserted ≥ 2, with every one of the
+    /// N waypoints reported reached.
+    fn waypoints_reached(&self) -> usize {
+        let n: usize = self
+            .stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("result     landed and disarmed after reaching all "))
+            .and_then(|rest| rest.split_whitespace().next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no result line:\n{}", self.stdout));
+        assert!(n >= 2);
+        for k in 1..=n {
+            assert!(
+                self.stdout.contains(&format!(" {k} of {n} reached")),
+                "waypoint {k}:\n{}",
+                self.stdout
+            );
+        }
+        n
+    }
+}
+
+/// Asserts that `text` (a run's `what`) holds each of `needles`.
+fn assert_holds(what: &str, text: &str, needles: &[&str]) {
+    for needle in needles {
+        assert!(
+            text.contains(needle),
+            "missing {needle:?} in {what}:\n{text}"
+        );
+    }
+}
+
+/// Runs `skyplan LINE` (split into words) in `dir`, for at most two minutes.
+fn run(dir: &Path, line: &str) -> Run {
     let out = skyplan(dir)
-        .args(args)
+        .args(words(line))
         .timeout(Duration::from_secs(120))
         .output()
         .unwrap();
@@ -44,60 +103,44 @@ fn read_log(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     (header, rows)
 }
 
+/// A logged number.
+fn f(s: &str) -> f64 {
+    s.parse().unwrap()
+}
+
+/// Asserts that the log's last row is on the ground (altitude < 0.3 m) within 1.5 m of
+/// `north_east`.
+fn assert_landed_near(rows: &[Vec<String>], north_east: [f64; 2]) {
+    let last = rows.last().unwrap();
+    assert!(
+        (f(&last[2]) - north_east[0]).hypot(f(&last[3]) - north_east[1]) < 1.5,
+        "{last:?} vs {north_east:?}"
+    );
+    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+}
+
+/// The lines of a flight from MANUAL through every state back to MANUAL.
+const ALL_STATES: [&str; 6] = [
+    "MANUAL → ARMING",
+    "ARMING → TAKEOFF",
+    "TAKEOFF → WAYPOINT",
+    "WAYPOINT → LANDING",
+    "LANDING → DISARMING",
+    "DISARMING → MANUAL",
+];
+
+/// The bundled route, 50× real time, logged to `flight.csv`.
+const FLY_SIM_50: &str = "fly --sim --speedup 50 --log flight.csv --timeout-s 60";
+
 #[test]
 fn fly_sim_flies_the_fcnd_route_on_the_bundled_map() {
     let dir = tempfile::tempdir().unwrap();
     // Home → the default goal across the city (the README route), 50× real time.
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "50",
-            "--log",
-            "flight.csv",
-            "--timeout-s",
-            "60",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    let n: usize = r
-        .stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("result     landed and disarmed after reaching all "))
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no result line:\n{}", r.stdout));
-    assert!(n >= 2);
-    for state in [
-        "MANUAL → ARMING",
-        "ARMING → TAKEOFF",
-        "TAKEOFF → WAYPOINT",
-        "WAYPOINT → LANDING",
-        "LANDING → DISARMING",
-        "DISARMING → MANUAL",
-    ] {
-        assert!(r.stdout.contains(state), "missing {state}:\n{}", r.stdout);
-    }
-    for k in 1..=n {
-        assert!(
-            r.stdout.contains(&format!(" {k} of {n} reached")),
-            "waypoint {k}:\n{}",
-            r.stdout
-        );
-    }
-    assert!(
-        r.stdout.contains("no collision with the map's obstacles"),
-        "{}",
-        r.stdout
-    );
+    let r = run(dir.path(), FLY_SIM_50);
+    r.expect_code(0)
+        .stdout_has(&ALL_STATES)
+        .stdout_has(&["no collision with the map's obstacles"]);
+    let n = r.waypoints_reached();
 
     // The log: every state, every waypoint targeted, ends on the ground at the goal.
     let (header, rows) = read_log(&dir.path().join("flight.csv"));
@@ -113,13 +156,7 @@ fn fly_sim_flies_the_fcnd_route_on_the_bundled_map() {
     // Waypoint 1 is the start, reached the moment take-off ends; every other one is flown to.
     let targeted: BTreeSet<usize> = rows.iter().filter_map(|r| r[7].parse().ok()).collect();
     assert_eq!(targeted, (2..=n).collect());
-    let f = |s: &str| s.parse::<f64>().unwrap();
-    let last = rows.last().unwrap();
-    assert!(
-        (f(&last[2]) - 420.0).abs() < 1.5 && (f(&last[3]) - 390.0).abs() < 1.5,
-        "{last:?}"
-    );
-    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+    assert_landed_near(&rows, [420.0, 390.0]);
     let times: Vec<f64> = rows.iter().map(|r| f(&r[0])).collect();
     assert!(times.windows(2).all(|w| w[0] <= w[1]));
     let max_alt = rows.iter().map(|r| f(&r[4])).fold(0.0, f64::max);
@@ -129,154 +166,50 @@ fn fly_sim_flies_the_fcnd_route_on_the_bundled_map() {
 #[test]
 fn fly_sim_upload_flies_the_mission_in_auto() {
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--upload",
-            "--speedup",
-            "50",
-            "--log",
-            "flight.csv",
-            "--timeout-s",
-            "60",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    let n: usize = r
-        .stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("result     landed and disarmed after reaching all "))
-        .and_then(|rest| rest.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no result line:\n{}", r.stdout));
-    assert!(n >= 2);
+    let r = run(dir.path(), &format!("{FLY_SIM_50} --upload"));
+    r.expect_code(0);
+    let n = r.waypoints_reached();
     // Home, take-off, each waypoint and its CONDITION_YAW (ArduPilot), land: every item requested
     // once and acknowledged.
     let items = 2 * n + 3;
-    assert!(
-        r.stdout
-            .contains(&format!("upload     accepted: {items} items in"))
-            && r.stdout
-                .contains(&format!("({items} requests answered, 0 resends)")),
-        "{}",
-        r.stdout
-    );
-    assert!(
-        r.stdout
-            .contains(&format!("sim        mission of {items} items received")),
-        "{}",
-        r.stdout
-    );
-    for line in [
-        "MANUAL → ARMING",
-        "ARMING → TAKEOFF",
-        "TAKEOFF → WAYPOINT",
-        "WAYPOINT → LANDING",
-        "LANDING → DISARMING",
-        "DISARMING → MANUAL",
+    r.stdout_has(&[
+        &format!("upload     accepted: {items} items in"),
+        &format!("({items} requests answered, 0 resends)"),
+        &format!("sim        mission of {items} items received"),
+    ])
+    .stdout_has(&ALL_STATES)
+    .stdout_has(&[
         "sim        mode AUTO",
         // The vehicle flew it: no position target was streamed.
         "0 position targets sent",
         "no collision with the map's obstacles",
-    ] {
-        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
-    }
-    for k in 1..=n {
-        assert!(
-            r.stdout.contains(&format!(" {k} of {n} reached")),
-            "waypoint {k}:\n{}",
-            r.stdout
-        );
-    }
+    ]);
     let (_, rows) = read_log(&dir.path().join("flight.csv"));
-    let f = |s: &str| s.parse::<f64>().unwrap();
-    let last = rows.last().unwrap();
-    assert!(
-        (f(&last[2]) - 420.0).abs() < 1.5 && (f(&last[3]) - 390.0).abs() < 1.5,
-        "{last:?}"
-    );
-    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+    assert_landed_near(&rows, [420.0, 390.0]);
 }
 
 #[test]
 fn upload_only_uploads_to_a_separate_sim_and_exits() {
-    let sim = SimProcess::start("20");
-    let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--connect",
-            &sim.address,
-            "--upload-only",
-            "--goal-ne",
-            "60,30",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    assert!(r.stdout.contains("upload     accepted:"), "{}", r.stdout);
-    assert!(
-        r.stdout
-            .contains("result     mission uploaded (--upload-only: not flown)"),
-        "{}",
-        r.stdout
-    );
-    assert!(!r.stdout.contains("→ ARMING"), "{}", r.stdout);
+    fly_a_separate_sim("--upload-only --goal-ne 60,30")
+        .expect_code(0)
+        .stdout_has(&[
+            "upload     accepted:",
+            "result     mission uploaded (--upload-only: not flown)",
+        ])
+        .stdout_lacks("→ ARMING");
 }
+
+/// A hop to (60, 30) on the built-in simulator at 20×, its link dropped after 12 s.
+const DROPPED_LINK: &str = "fly --sim --speedup 20 --goal-ne 60,30 --sim-drop-link-after-s 12 \
+                            --link-timeout-s 1 --log flight.csv";
 
 #[test]
 fn a_link_lost_mid_flight_is_reported_with_a_nonzero_exit() {
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "20",
-            "--goal-ne",
-            "60,30",
-            "--sim-drop-link-after-s",
-            "12",
-            "--link-timeout-s",
-            "1",
-            "--log",
-            "flight.csv",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    assert!(
-        r.stdout
-            .contains("injected fault: the vehicle stops talking"),
-        "{}",
-        r.stdout
-    );
-    assert!(
-        r.stderr
-            .contains("flight failed: link lost in WAYPOINT: no heartbeat from the vehicle for"),
-        "{}",
-        r.stderr
-    );
+    run(dir.path(), DROPPED_LINK)
+        .expect_code(1)
+        .stdout_has(&["injected fault: the vehicle stops talking"])
+        .stderr_has(&["flight failed: link lost in WAYPOINT: no heartbeat from the vehicle for"]);
     // The log of what was flown is still written.
     let (_, rows) = read_log(&dir.path().join("flight.csv"));
     assert!(rows.iter().any(|r| r[1] == "WAYPOINT"));
@@ -285,63 +218,44 @@ fn a_link_lost_mid_flight_is_reported_with_a_nonzero_exit() {
 #[test]
 fn the_overall_timeout_lands_the_vehicle_and_fails() {
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &["fly", "--sim", "--speedup", "20", "--timeout-s", "1.5"],
-    );
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    assert!(
-        r.stdout.contains("timeout    1.5 s wall exceeded: landing"),
-        "{}",
-        r.stdout
-    );
-    assert!(
-        r.stdout.contains("→ LANDING") && r.stdout.contains("DISARMING → MANUAL"),
-        "{}",
-        r.stdout
-    );
-    assert!(
-        r.stderr
-            .contains("aborted (--timeout-s 1.5 exceeded); the vehicle landed"),
-        "{}",
-        r.stderr
-    );
+    run(dir.path(), "fly --sim --speedup 20 --timeout-s 1.5")
+        .expect_code(1)
+        .stdout_has(&[
+            "timeout    1.5 s wall exceeded: landing",
+            "→ LANDING",
+            "DISARMING → MANUAL",
+        ])
+        .stderr_has(&["aborted (--timeout-s 1.5 exceeded); the vehicle landed"]);
 }
 
 #[test]
 fn bad_addresses_and_missing_vehicles_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &["fly", "--connect", "serial:/dev/ttyUSB0:57600"],
-    );
-    assert_eq!(r.code, Some(2), "{}", r.stderr);
-    assert!(
-        r.stderr.contains("serial ports are not built in"),
-        "{}",
-        r.stderr
-    );
-    let r = run(dir.path(), &["fly", "--connect", "tcp:127.0.0.1"]);
-    assert_eq!(r.code, Some(2), "{}", r.stderr);
-    // Nothing listens on port 1.
-    let r = run(dir.path(), &["fly", "--connect", "tcp:127.0.0.1:1"]);
-    assert_eq!(r.code, Some(1), "{}", r.stderr);
-    assert!(
-        r.stderr.contains("cannot open tcpout:127.0.0.1:1"),
-        "{}",
-        r.stderr
-    );
-    let r = run(dir.path(), &["fly", "--sim", "--speedup", "0"]);
-    assert_eq!(r.code, Some(2), "{}", r.stderr);
-    let r = run(dir.path(), &["sim", "--listen", "tcpout:127.0.0.1:5760"]);
-    assert_eq!(r.code, Some(1), "{}", r.stderr);
-    assert!(r.stderr.contains("the simulator listens"), "{}", r.stderr);
+    let cases: [(&str, i32, &[&str]); 5] = [
+        (
+            "fly --connect serial:/dev/ttyUSB0:57600",
+            2,
+            &["serial ports are not built in"],
+        ),
+        ("fly --connect tcp:127.0.0.1", 2, &[]),
+        // Nothing listens on port 1.
+        (
+            "fly --connect tcp:127.0.0.1:1",
+            1,
+            &["cannot open tcpout:127.0.0.1:1"],
+        ),
+        ("fly --sim --speedup 0", 2, &[]),
+        (
+            "sim --listen tcpout:127.0.0.1:5760",
+            1,
+            &["the simulator listens"],
+        ),
+    ];
+    for (line, code, needles) in cases {
+        let r = run(dir.path(), line);
+        assert_eq!(r.code, Some(code), "{line}: {}", r.stderr);
+        r.stderr_has(needles);
+    }
 }
 
 /// `skyplan sim` on a free port, with its address read from its first line.
@@ -381,6 +295,14 @@ impl SimProcess {
     }
 }
 
+/// Runs `skyplan fly --connect ADDRESS LINE` in a new directory against `skyplan sim` (20×) in
+/// its own process.
+fn fly_a_separate_sim(line: &str) -> Run {
+    let sim = SimProcess::start("20");
+    let dir = tempfile::tempdir().unwrap();
+    run(dir.path(), &format!("fly --connect {} {line}", sim.address))
+}
+
 impl Drop for SimProcess {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -390,41 +312,9 @@ impl Drop for SimProcess {
 
 #[test]
 fn fly_connects_to_a_separate_sim_process() {
-    let sim = SimProcess::start("20");
-    let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--connect",
-            &sim.address,
-            "--speedup",
-            "20",
-            "--goal-ne",
-            "60,30",
-            "--timeout-s",
-            "60",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    assert!(
-        r.stdout
-            .contains("result     landed and disarmed after reaching all"),
-        "{}",
-        r.stdout
-    );
-}
-
-/// The Python with the peers: `SKYPLAN_PYTHON` (`.ci/run` sets its virtual environment), else
-/// `python3`.
-fn python() -> String {
-    std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string())
+    fly_a_separate_sim("--speedup 20 --goal-ne 60,30 --timeout-s 60")
+        .expect_code(0)
+        .stdout_has(&["result     landed and disarmed after reaching all"]);
 }
 
 #[test]
@@ -444,18 +334,20 @@ fn pymavlink_drives_skyplan_sim() {
         t0.elapsed().as_secs_f64(),
         String::from_utf8_lossy(&out.stderr)
     );
-    for expected in [
-        "no telemetry before it is requested",
-        "refusal reason: Takeoff: vehicle not armed",
-        "mission upload accepted after 4 items",
-        "took off to 95 % of 5 m",
-        "position target reached",
-        "landed and disarmed",
-        "mission items reached: [1, 2, 3]",
-        "OK",
-    ] {
-        assert!(stdout.contains(expected), "missing {expected:?}:\n{stdout}");
-    }
+    assert_holds(
+        "the pymavlink peer's output",
+        &stdout,
+        &[
+            "no telemetry before it is requested",
+            "refusal reason: Takeoff: vehicle not armed",
+            "mission upload accepted after 4 items",
+            "took off to 95 % of 5 m",
+            "position target reached",
+            "landed and disarmed",
+            "mission items reached: [1, 2, 3]",
+            "OK",
+        ],
+    );
 }
 
 #[test]
@@ -488,16 +380,7 @@ fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
     let reader = std::thread::spawn(move || lines.map_while(|l| l.ok()).collect::<Vec<_>>());
     let r = run(
         dir.path(),
-        &[
-            "fly",
-            "--connect",
-            &format!("udpout:127.0.0.1:{port}"),
-            "--upload-only",
-            "--out",
-            "plan.json",
-            "--wait-s",
-            "20",
-        ],
+        &format!("fly --connect udpout:127.0.0.1:{port} --upload-only --out plan.json --wait-s 20"),
     );
     let status = peer.wait().unwrap();
     let peer_out = reader.join().unwrap().join("\n");
@@ -518,13 +401,13 @@ fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
     assert!(n_items >= 5, "{peer_out}");
 }
 
-/// Starts `skyplan fly` with `args`, sends it SIGINT (`kill -INT`, as a terminal's Ctrl-C
-/// does) once its output shows `trigger`, and returns how it ended.
-fn fly_and_interrupt(args: &[&str], trigger: &str) -> Run {
+/// Starts `skyplan LINE` (split into words), sends it SIGINT (`kill -INT`, as a terminal's
+/// Ctrl-C does) once its output shows `trigger`, and returns how it ended.
+fn fly_and_interrupt(line: &str, trigger: &str) -> Run {
     let dir = tempfile::tempdir().unwrap();
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
         .current_dir(dir.path())
-        .args(args)
+        .args(words(line))
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -588,104 +471,48 @@ fn fly_and_interrupt(args: &[&str], trigger: &str) -> Run {
 
 #[test]
 fn ctrl_c_in_flight_lands_reports_and_fails() {
-    let r = fly_and_interrupt(&["fly", "--sim", "--speedup", "20"], "TAKEOFF → WAYPOINT");
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    for line in [
-        "interrupt  Ctrl-C: landing",
-        "WAYPOINT → LANDING",
-        "LANDING → DISARMING",
-        "DISARMING → MANUAL",
-        "result     FAILED: aborted (interrupted by Ctrl-C); the vehicle landed",
-        "sim        touched down",
-    ] {
-        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
-    }
-    assert!(
-        r.stderr
-            .contains("flight failed: aborted (interrupted by Ctrl-C); the vehicle landed"),
-        "{}",
-        r.stderr
-    );
-    assert!(!r.stdout.contains("result     landed and disarmed"));
+    fly_and_interrupt("fly --sim --speedup 20", "TAKEOFF → WAYPOINT")
+        .expect_code(1)
+        .stdout_has(&[
+            "interrupt  Ctrl-C: landing",
+            "WAYPOINT → LANDING",
+            "LANDING → DISARMING",
+            "DISARMING → MANUAL",
+            "result     FAILED: aborted (interrupted by Ctrl-C); the vehicle landed",
+            "sim        touched down",
+        ])
+        .stderr_has(&["flight failed: aborted (interrupted by Ctrl-C); the vehicle landed"])
+        .stdout_lacks("result     landed and disarmed");
 }
 
 #[test]
 fn ctrl_c_with_on_interrupt_hold_leaves_the_vehicle_loitering() {
-    let r = fly_and_interrupt(
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "20",
-            "--upload",
-            "--on-interrupt",
-            "hold",
-        ],
+    fly_and_interrupt(
+        "fly --sim --speedup 20 --upload --on-interrupt hold",
         "TAKEOFF → WAYPOINT",
-    );
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    for line in [
+    )
+    .expect_code(1)
+    .stdout_has(&[
         "interrupt  Ctrl-C: holding position (LOITER)",
         "sim        mode LOITER",
         "ARMED, state WAYPOINT",
-    ] {
-        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
-    }
-    assert!(
-        r.stderr.contains(
-            "stopped in WAYPOINT (interrupted by Ctrl-C); the vehicle is holding its position in the air: take over"
-        ),
-        "{}",
-        r.stderr
-    );
-    assert!(!r.stdout.contains("→ LANDING"), "{}", r.stdout);
+    ])
+    .stderr_has(&[
+        "stopped in WAYPOINT (interrupted by Ctrl-C); the vehicle is holding its position in the air: take over",
+    ])
+    .stdout_lacks("→ LANDING");
 }
 
 #[test]
 fn failsafe_rtl_is_commanded_when_a_lost_link_comes_back() {
     let dir = tempfile::tempdir().unwrap();
     // Silent from 12 s to 52 s of vehicle time (2 s wall at 20×): lost after 1 s, back after ~2 s.
-    let r = run(
+    run(
         dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "20",
-            "--goal-ne",
-            "60,30",
-            "--sim-drop-link-after-s",
-            "12",
-            "--sim-link-gap-s",
-            "40",
-            "--link-timeout-s",
-            "1",
-            "--failsafe",
-            "rtl",
-            "--log",
-            "flight.csv",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    for line in [
+        &format!("{DROPPED_LINK} --sim-link-gap-s 40 --failsafe rtl"),
+    )
+    .expect_code(1)
+    .stdout_has(&[
         "injected fault: the vehicle stops talking",
         "lost in WAYPOINT: no heartbeat for",
         "waiting up to 6.0 s for it to return (--failsafe rtl)",
@@ -696,27 +523,15 @@ fn failsafe_rtl_is_commanded_when_a_lost_link_comes_back() {
         "DISARMING → MANUAL",
         "sim        touched down",
         "no collision with the map's obstacles",
-    ] {
-        assert!(r.stdout.contains(line), "missing {line}:\n{}", r.stdout);
-    }
-    assert!(
-        r.stderr
-            .contains("flight failed: aborted (link lost in WAYPOINT for")
-            && r.stderr
-                .contains("--failsafe rtl on its return); the vehicle landed"),
-        "{}",
-        r.stderr
-    );
+    ])
+    .stderr_has(&[
+        "flight failed: aborted (link lost in WAYPOINT for",
+        "--failsafe rtl on its return); the vehicle landed",
+    ]);
     // It landed back where it took off.
     let (_, rows) = read_log(&dir.path().join("flight.csv"));
-    let f = |s: &str| s.parse::<f64>().unwrap();
     let first = &rows[0];
-    let last = rows.last().unwrap();
-    assert!(
-        (f(&last[2]) - f(&first[2])).hypot(f(&last[3]) - f(&first[3])) < 1.5,
-        "{first:?} → {last:?}"
-    );
-    assert!(f(&last[4]).abs() < 0.3, "{last:?}");
+    assert_landed_near(&rows, [f(&first[2]), f(&first[3])]);
 }
 
 /// The bundled map's frame (its home), to turn the vehicle's latitude/longitude into map metres.
@@ -789,28 +604,7 @@ fn on_a_long_route_the_true_track_stays_on_the_planned_segments() {
     // ellipsoid's: targets sent in the vehicle's LOCAL_NED frame would drift 0.4 % of the
     // distance from home (~3.4 m at the goal); lat/lon targets keep it within the deadband.
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "50",
-            "--log",
-            "flight.csv",
-            "--out",
-            "route.json",
-            "--timeout-s",
-            "60",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
+    run(dir.path(), &format!("{FLY_SIM_50} --out route.json")).expect_code(0);
     let (track, plan) = true_track_and_plan(dir.path());
     assert!(plan.len() >= 5, "{plan:?}");
     let route_m: f64 = plan
@@ -867,38 +661,16 @@ fn a_hop_at_40_m_in_auto_lands_in_landing_and_disarms() {
     // ArduCopter-like simulator: no stream until requested, the EKF ready after 5 s, and no
     // MISSION_ITEM_REACHED for NAV_LAND before the touchdown.
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
+    run(
         dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--upload",
-            "--goal-ne",
-            "10,0",
-            "--alt-m",
-            "40",
-            "--speedup",
-            "50",
-            "--log",
-            "flight.csv",
-            "--timeout-s",
-            "60",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    assert!(r.stdout.contains("WAYPOINT → LANDING"), "{}", r.stdout);
-    assert!(
-        r.stdout.contains("result     landed and disarmed"),
-        "{}",
-        r.stdout
-    );
-    assert!(r.stdout.contains("CONDITION_YAW"), "{}", r.stdout);
+        &format!("{FLY_SIM_50} --upload --goal-ne 10,0 --alt-m 40"),
+    )
+    .expect_code(0)
+    .stdout_has(&[
+        "WAYPOINT → LANDING",
+        "result     landed and disarmed",
+        "CONDITION_YAW",
+    ]);
     let (header, rows) = read_log(&dir.path().join("flight.csv"));
     let alt = header.iter().position(|h| h == "alt_m").unwrap();
     // The descent from 40 m is logged as LANDING, not WAYPOINT.
@@ -923,69 +695,19 @@ fn a_slow_ekf_is_waited_for_and_named_when_it_never_comes() {
     // The EKF needs 40 s of vehicle time (as ArduCopter SITL at boot): the default wait (90 s)
     // covers it and says what it waits for…
     let dir = tempfile::tempdir().unwrap();
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--sim-ekf-delay-s",
-            "40",
-            "--goal-ne",
-            "10,0",
-            "--speedup",
-            "50",
-            "--timeout-s",
-            "60",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    for waiting in [
-        "for the vehicle's EKF origin (GPS_GLOBAL_ORIGIN)",
-        "for the vehicle's position (GLOBAL_POSITION_INT, LOCAL_POSITION_NED)",
-    ] {
-        assert!(
-            r.stdout.contains(waiting),
-            "missing {waiting:?}:\n{}",
-            r.stdout
-        );
-    }
-    assert!(r.stdout.contains("EKF origin lat 37.79"), "{}", r.stdout);
+    let slow_ekf = "fly --sim --sim-ekf-delay-s 40 --goal-ne 10,0 --speedup 50";
+    run(dir.path(), &format!("{slow_ekf} --timeout-s 60"))
+        .expect_code(0)
+        .stdout_has(&[
+            "for the vehicle's EKF origin (GPS_GLOBAL_ORIGIN)",
+            "for the vehicle's position (GLOBAL_POSITION_INT, LOCAL_POSITION_NED)",
+            "EKF origin lat 37.79",
+        ]);
     // …and a wait shorter than the EKF names what never came.
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--sim-ekf-delay-s",
-            "40",
-            "--wait-s",
-            "30",
-            "--goal-ne",
-            "10,0",
-            "--speedup",
-            "50",
-        ],
-    );
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
-    assert!(
-        r.stderr
-            .contains("no GLOBAL_POSITION_INT, no LOCAL_POSITION_NED within 0.6 s")
-            && r.stderr
-                .contains("the EKF has its origin but is not using GPS yet"),
-        "{}",
-        r.stderr
-    );
+    let r = run(dir.path(), &format!("{slow_ekf} --wait-s 30"));
+    r.expect_code(1).stderr_has(&[
+        "no GLOBAL_POSITION_INT, no LOCAL_POSITION_NED within 0.6 s",
+        "the EKF has its origin but is not using GPS yet",
+    ]);
     assert!(!r.stderr.contains("no EKF origin"), "{}", r.stderr);
 }

@@ -1,17 +1,19 @@
 //! `skyplan fly --planner P` flies any planner's route on the built-in simulator: landed,
 //! disarmed, every waypoint reached, no collision with the map's boxes.
 
-use assert_cmd::Command;
+mod common;
+use common::{cmd, ok, python};
 
-fn fly(args: &[&str]) -> (Option<i32>, String) {
+/// `skyplan fly --sim --speedup 50 --timeout-s 120 LINE` in a new directory: exit code, stdout
+/// and stderr together.
+fn fly(line: &str) -> (Option<i32>, String) {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .current_dir(dir.path())
-        .args(["fly", "--sim", "--speedup", "50", "--timeout-s", "120"])
-        .args(args)
-        .output()
-        .unwrap();
+    let out = cmd(
+        dir.path(),
+        &format!("fly --sim --speedup 50 --timeout-s 120 {line}"),
+    )
+    .output()
+    .unwrap();
     let text = format!(
         "{}{}",
         String::from_utf8_lossy(&out.stdout),
@@ -37,7 +39,7 @@ fn every_route_producing_planner_flies_to_landing() {
         "rrt-star",
         "voxel",
     ] {
-        let (code, text) = fly(&["--planner", planner, "--goal-ne", "60,40"]);
+        let (code, text) = fly(&format!("--planner {planner} --goal-ne 60,40"));
         assert_eq!(code, Some(0), "{planner}: {text}");
         assert!(
             text.contains("result     landed and disarmed after reaching all"),
@@ -52,14 +54,7 @@ fn every_route_producing_planner_flies_to_landing() {
 
 #[test]
 fn a_3d_route_is_flown_at_its_altitudes() {
-    let (code, text) = fly(&[
-        "--planner",
-        "rrt-connect",
-        "--goal-ne",
-        "150,-80",
-        "--goal-alt-m",
-        "25",
-    ]);
+    let (code, text) = fly("--planner rrt-connect --goal-ne 150,-80 --goal-alt-m 25");
     assert_eq!(code, Some(0), "{text}");
     let max_alt: f64 = text
         .lines()
@@ -72,7 +67,7 @@ fn a_3d_route_is_flown_at_its_altitudes() {
 
 #[test]
 fn fly_refuses_maps_without_boxes() {
-    let (code, text) = fly(&["--random", "20x20", "--planner", "jps"]);
+    let (code, text) = fly("--random 20x20 --planner jps");
     assert_eq!(code, Some(2), "{text}");
     assert!(text.contains("colliders map"), "{text}");
 }
@@ -83,34 +78,15 @@ fn fly_refuses_maps_without_boxes() {
 #[ignore = "needs Python with mcap (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn a_flight_recording_reads_back_with_python_mcap() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .current_dir(dir.path())
-        .args([
-            "fly",
-            "--sim",
-            "--speedup",
-            "5",
-            "--goal-ne",
-            "60,40",
-            "--record",
-            "flight.mcap",
-            "--view",
-            "127.0.0.1:0",
-        ])
-        .output()
-        .unwrap();
+    let out = ok(&mut cmd(
+        dir.path(),
+        "fly --sim --speedup 5 --goal-ne 60,40 --record flight.mcap --view 127.0.0.1:0",
+    ));
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(text.contains("view       http://127.0.0.1:"), "{text}");
     let path = dir.path().join("flight.mcap");
     let bytes = std::fs::read(&path).unwrap();
     assert_eq!(&bytes[..8], b"\x89MCAP0\r\n");
-    let python = std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string());
     let script = r#"
 import sys, collections
 from mcap.reader import make_reader
@@ -119,17 +95,10 @@ for schema, channel, msg in make_reader(open(sys.argv[1], 'rb')).iter_messages()
     c[schema.name] += 1
 print(dict(c))
 "#;
-    let read = std::process::Command::new(python)
+    let read = ok(assert_cmd::Command::new(python())
         .args(["-c", script])
-        .arg(&path)
-        .output()
-        .unwrap();
+        .arg(&path));
     let counts = String::from_utf8_lossy(&read.stdout);
-    assert!(
-        read.status.success(),
-        "{}",
-        String::from_utf8_lossy(&read.stderr)
-    );
     assert!(counts.contains("'foxglove.PosesInFrame': 1"), "{counts}");
     let fixes: usize = counts
         .split("'foxglove.LocationFix': ")

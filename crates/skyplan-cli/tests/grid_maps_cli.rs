@@ -1,22 +1,25 @@
 //! `skyplan plan --planner wavefront|costmap` and `skyplan navigate` on image, MovingAI and
 //! random maps: the CLI contract (maps by extension, north = up the image, JSON fields, exit codes).
 
-use predicates::prelude::*;
 use serde_json::Value;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
-use std::path::Path;
 mod common;
-use common::skyplan;
+use common::{cmd, dir_with, fails_with, json_of, ok_json, succeed};
 
-/// A picture, top line = north, `#` black (occupied), `.` white (free), as a plain PGM.
-fn write_pgm(dir: &Path, name: &str, picture: &str) {
-    let lines: Vec<&str> = picture
+/// The non-empty lines of a picture, trimmed, top line first.
+fn picture_lines(picture: &str) -> Vec<&str> {
+    picture
         .lines()
         .map(str::trim)
         .filter(|l| !l.is_empty())
-        .collect();
+        .collect()
+}
+
+/// A picture, top line = north, `#` black (occupied), `.` white (free), as a plain PGM.
+fn pgm(picture: &str) -> String {
+    let lines = picture_lines(picture);
     let mut text = format!("P2\n{} {}\n255\n", lines[0].len(), lines.len());
     for line in &lines {
         let px: Vec<&str> = line
@@ -26,17 +29,17 @@ fn write_pgm(dir: &Path, name: &str, picture: &str) {
         text.push_str(&px.join(" "));
         text.push('\n');
     }
-    std::fs::write(dir.join(name), text).unwrap();
+    text
+}
+
+/// A new temporary directory holding the picture as the PGM `name`.
+fn pgm_dir(name: &str, picture: &str) -> tempfile::TempDir {
+    dir_with(&[(name, &pgm(picture))])
 }
 
 /// The same picture as a grid, independently of the crate: row 0 = the LAST line.
 fn grid_of(picture: &str) -> Grid2 {
-    let lines: Vec<&str> = picture
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .collect();
-    let flipped: Vec<&str> = lines.into_iter().rev().collect();
+    let flipped: Vec<&str> = picture_lines(picture).into_iter().rev().collect();
     Grid2::from_ascii(&flipped.join("\n")).unwrap()
 }
 
@@ -49,26 +52,16 @@ const U_WALL: &str = "
     ..........
     ..........";
 
-fn json_of(out: &std::process::Output) -> Value {
-    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!(
-            "{e}: stdout {:?} stderr {:?}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        )
-    })
-}
-
 #[test]
 fn wavefront_cost_equals_the_astar_optimum_on_an_image_map() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(dir.path(), "u.pgm", U_WALL);
-    std::fs::write(
-        dir.path().join("u.yaml"),
-        "image: u.pgm\nresolution: 2.0\norigin: [100.0, 50.0, 0.0]\nnegate: 0\n\
-         occupied_thresh: 0.65\nfree_thresh: 0.196\n",
-    )
-    .unwrap();
+    let dir = dir_with(&[
+        ("u.pgm", &pgm(U_WALL)),
+        (
+            "u.yaml",
+            "image: u.pgm\nresolution: 2.0\norigin: [100.0, 50.0, 0.0]\nnegate: 0\n\
+             occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+        ),
+    ]);
     // Source south of the U's bottom (image row 6, x 4), destination inside it (row 2, x 4):
     // north = 50 + (6 − 1 − y + 0.5)·2, east = 100 + (x + 0.5)·2.
     let (start, goal) = ("51,109", "59,109");
@@ -77,24 +70,13 @@ fn wavefront_cost_equals_the_astar_optimum_on_an_image_map() {
         let truth = dijkstra_exact(&grid, Cell::new(0, 4), Cell::new(4, 4), model).unwrap();
         let mut costs = Vec::new();
         for planner in ["wavefront", "astar", "jps"] {
-            let out = skyplan(dir.path())
-                .args(["plan", "--map", "u.yaml", "--planner", planner, "--json"])
-                .args([
-                    "--start-ne",
-                    start,
-                    "--goal-ne",
-                    goal,
-                    "--connectivity",
-                    connectivity,
-                ])
-                .output()
-                .unwrap();
-            assert!(
-                out.status.success(),
-                "{planner}: {}",
-                String::from_utf8_lossy(&out.stderr)
+            let v = ok_json(
+                dir.path(),
+                &format!(
+                    "plan --map u.yaml --planner {planner} --json \
+                     --start-ne {start} --goal-ne {goal} --connectivity {connectivity}"
+                ),
             );
-            let v = json_of(&out);
             assert_eq!(v["status"], "ok");
             assert_eq!(v["start"]["cell"], serde_json::json!([0, 4]));
             assert_eq!(v["goal"]["cell"], serde_json::json!([4, 4]));
@@ -113,100 +95,74 @@ fn wavefront_cost_equals_the_astar_optimum_on_an_image_map() {
 #[test]
 fn image_axes_north_is_up_east_is_right() {
     // An obstacle only in the top-left (north-west) corner of a 6 × 4 image of 1 m pixels.
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(dir.path(), "corner.pgm", "##....\n#.....\n......\n......");
+    let dir = pgm_dir("corner.pgm", "##....\n#.....\n......\n......");
     let plan = |start: &str| {
-        skyplan(dir.path())
-            .args([
-                "plan",
-                "--map",
-                "corner.pgm",
-                "--resolution",
-                "1",
-                "--planner",
-                "wavefront",
-            ])
-            .args(["--start-ne", start, "--goal-ne", "0.5,5.5"])
-            .output()
-            .unwrap()
+        format!(
+            "plan --map corner.pgm --resolution 1 --planner wavefront \
+             --start-ne {start} --goal-ne 0.5,5.5"
+        )
     };
     // North 3.5 m, east 0.5 m is the top-left pixel: an obstacle.
-    let out = plan("3.5,0.5");
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("start N 3.50 m, E 0.50 m (row 3, col 0) is at an obstacle"),
-        "{err}"
+    fails_with(
+        dir.path(),
+        &plan("3.5,0.5"),
+        2,
+        &["start N 3.50 m, E 0.50 m (row 3, col 0) is at an obstacle"],
     );
     // The bottom-left pixel (north 0.5) is free; so is the top-right (east 5.5).
-    assert!(plan("0.5,0.5").status.success());
-    assert!(plan("3.5,5.5").status.success());
+    succeed(dir.path(), &plan("0.5,0.5"));
+    succeed(dir.path(), &plan("3.5,5.5"));
     // Off the map.
-    let out = plan("4.5,0.5");
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&out.stderr)
-            .contains("off the map (north 0.00..4.00 m, east 0.00..6.00 m)")
+    fails_with(
+        dir.path(),
+        &plan("4.5,0.5"),
+        2,
+        &["off the map (north 0.00..4.00 m, east 0.00..6.00 m)"],
     );
 }
 
 #[test]
 fn enclosed_destination_exits_3_and_show_marks_unreachable_cells() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(
+    let dir = pgm_dir("box.pgm", ".......\n.#####.\n.#...#.\n.#####.\n.......");
+    let ends = "--start-ne 0.5,0.5 --goal-ne 2.5,3.5";
+    let box_map = "plan --map box.pgm --resolution 1";
+    let out = cmd(
         dir.path(),
-        "box.pgm",
-        ".......\n.#####.\n.#...#.\n.#####.\n.......",
+        &format!("{box_map} --planner wavefront --show {ends}"),
+    )
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains(
+        "path could not be found: the destination (row 2, col 3) is unreachable from the source (row 0, col 0)"
+    ), "{err}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains(" 2 x#.D.#x") && text.contains(" 0 Sxxxxxx"),
+        "{text}"
     );
-    skyplan(dir.path())
-        .args(["plan", "--map", "box.pgm", "--resolution", "1", "--planner", "wavefront", "--show"])
-        .args(["--start-ne", "0.5,0.5", "--goal-ne", "2.5,3.5"])
-        .assert()
-        .code(3)
-        .stderr(predicate::str::contains(
-            "path could not be found: the destination (row 2, col 3) is unreachable from the source (row 0, col 0)",
-        ))
-        .stdout(predicate::str::contains(" 2 x#.D.#x").and(predicate::str::contains(" 0 Sxxxxxx")));
-    skyplan(dir.path())
-        .args([
-            "plan",
-            "--map",
-            "box.pgm",
-            "--resolution",
-            "1",
-            "--planner",
-            "costmap",
-            "--json",
-        ])
-        .args(["--start-ne", "0.5,0.5", "--goal-ne", "2.5,3.5"])
-        .assert()
-        .code(3)
-        .stdout(predicate::str::contains("\"status\":\"no_path\""));
+    let out = cmd(
+        dir.path(),
+        &format!("{box_map} --planner costmap --json {ends}"),
+    )
+    .output()
+    .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("\"status\":\"no_path\""));
 }
 
 #[test]
 fn workshop_show_prints_workspace_matrix_and_path() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(
-        dir.path(),
+    let dir = pgm_dir(
         "corridor.pgm",
         "....#....\n....#....\n.........\n....#....\n....#....",
     );
-    let out = skyplan(dir.path())
-        .args([
-            "plan",
-            "--map",
-            "corridor.pgm",
-            "--resolution",
-            "1",
-            "--planner",
-            "wavefront",
-        ])
-        .args(["--connectivity", "4", "--field", "steps", "--show"])
-        .args(["--start-ne", "2.5,0.5", "--goal-ne", "2.5,8.5"])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    let out = succeed(
+        dir.path(),
+        "plan --map corridor.pgm --resolution 1 --planner wavefront \
+         --connectivity 4 --field steps --show --start-ne 2.5,0.5 --goal-ne 2.5,8.5",
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains(" 2 S*******D"), "{text}");
     assert!(text.contains("distance matrix"));
@@ -217,27 +173,11 @@ fn workshop_show_prints_workspace_matrix_and_path() {
 #[test]
 fn costmap_keeps_clearance_and_plots_a_heat_map() {
     let dir = tempfile::tempdir().unwrap();
-    let out = skyplan(dir.path())
-        .args([
-            "plan",
-            "--random",
-            "60x40",
-            "--density",
-            "0.08",
-            "--seed",
-            "4",
-            "--planner",
-            "costmap",
-        ])
-        .args(["--json", "--plot", "heat.png", "--home", "37.79,-122.39"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let random = "plan --random 60x40 --density 0.08 --seed 4 --planner costmap --json";
+    let v = ok_json(
+        dir.path(),
+        &format!("{random} --plot heat.png --home 37.79,-122.39"),
     );
-    let v = json_of(&out);
     assert!(v["costmap"]["min_clearance_m"].as_f64().unwrap() >= 1.0);
     assert_eq!(
         v["waypoints"].as_array().unwrap().len(),
@@ -246,51 +186,21 @@ fn costmap_keeps_clearance_and_plots_a_heat_map() {
     let png = std::fs::read(dir.path().join("heat.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     // Reproducible: the same seed gives the same answer.
-    let again = skyplan(dir.path())
-        .args([
-            "plan",
-            "--random",
-            "60x40",
-            "--density",
-            "0.08",
-            "--seed",
-            "4",
-            "--planner",
-            "costmap",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(json_of(&again)["waypoints"], v["waypoints"]);
+    let again = json_of(&cmd(dir.path(), random).output().unwrap());
+    assert_eq!(again["waypoints"], v["waypoints"]);
 }
 
 #[test]
 fn navigate_reports_reached_steps_distance_and_clearance() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(
-        dir.path(),
+    let dir = pgm_dir(
         "open.pgm",
         "..........\n..........\n....##....\n..........\n..........",
     );
-    let out = skyplan(dir.path())
-        .args([
-            "navigate",
-            "--map",
-            "open.pgm",
-            "--resolution",
-            "1",
-            "--json",
-        ])
-        .args(["--start-ne", "0.5,0.5", "--targets", "4.5,9.5;0.5,9.5"])
-        .args(["--change-target-at", "3:4.5,0.5"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let open = "navigate --map open.pgm --resolution 1 --start-ne 0.5,0.5";
+    let v = ok_json(
+        dir.path(),
+        &format!("{open} --json --targets 4.5,9.5;0.5,9.5 --change-target-at 3:4.5,0.5"),
     );
-    let v = json_of(&out);
     assert_eq!(v["reached"], true);
     let legs = v["legs"].as_array().unwrap();
     assert_eq!(legs.len(), 3);
@@ -300,100 +210,64 @@ fn navigate_reports_reached_steps_distance_and_clearance() {
     assert!(v["distance_m"].as_f64().unwrap() >= v["steps"].as_f64().unwrap());
     assert!(v["min_clearance_m"].as_f64().unwrap() >= 1.0);
     // A target inside an obstacle is bad input; an enclosed one is "no path".
-    skyplan(dir.path())
-        .args(["navigate", "--map", "open.pgm", "--resolution", "1"])
-        .args(["--start-ne", "0.5,0.5", "--targets", "2.5,4.5"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains(
-            "target 1 N 2.5 m, E 4.5 m (row 2, col 4) is at an obstacle",
-        ));
+    fails_with(
+        dir.path(),
+        &format!("{open} --targets 2.5,4.5"),
+        2,
+        &["target 1 N 2.5 m, E 4.5 m (row 2, col 4) is at an obstacle"],
+    );
 }
 
 #[test]
 fn bad_maps_name_the_file_and_field() {
-    let dir = tempfile::tempdir().unwrap();
-    write_pgm(dir.path(), "a.pgm", "..\n..");
-    std::fs::write(
-        dir.path().join("bad.yaml"),
-        "image: a.pgm\nresolution: -2\norigin: [0, 0, 0]\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("missing.yaml"),
-        "image: nope.png\nresolution: 1\norigin: [0, 0, 0]\n",
-    )
-    .unwrap();
-    std::fs::write(dir.path().join("empty.png"), b"").unwrap();
-    let cases: [(&[&str], &str); 5] = [
+    let dir = dir_with(&[
+        ("a.pgm", &pgm("..\n..")),
         (
-            &["--map", "a.pgm"],
-            "a.pgm: a bare image needs --resolution",
+            "bad.yaml",
+            "image: a.pgm\nresolution: -2\norigin: [0, 0, 0]\n",
         ),
         (
-            &["--map", "bad.yaml"],
+            "missing.yaml",
+            "image: nope.png\nresolution: 1\norigin: [0, 0, 0]\n",
+        ),
+        ("empty.png", ""),
+    ]);
+    let cases = [
+        ("a.pgm", "a.pgm: a bare image needs --resolution"),
+        (
+            "bad.yaml",
             "bad.yaml: resolution: expected metres per pixel > 0, found -2",
         ),
+        ("missing.yaml", "missing.yaml: field image: cannot read"),
         (
-            &["--map", "missing.yaml"],
-            "missing.yaml: field image: cannot read",
-        ),
-        (
-            &["--map", "empty.png", "--resolution", "1"],
+            "empty.png --resolution 1",
             "empty.png: not a PNG or PGM image",
         ),
-        (&["--map", "x.tif"], "x.tif: unknown map type"),
+        ("x.tif", "x.tif: unknown map type"),
     ];
-    for (args, expected) in cases {
-        skyplan(dir.path())
-            .arg("plan")
-            .args(args)
-            .args(["--start-ne", "0.5,0.5", "--goal-ne", "1.5,1.5"])
-            .assert()
-            .code(2)
-            .stderr(predicate::str::contains(expected));
+    for (map, expected) in cases {
+        let line = format!("plan --map {map} --start-ne 0.5,0.5 --goal-ne 1.5,1.5");
+        fails_with(dir.path(), &line, 2, &[expected]);
     }
 }
 
 #[test]
 fn movingai_maps_are_north_up() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("m.map"),
+    let dir = dir_with(&[(
+        "m.map",
         "type octile\nheight 3\nwidth 4\nmap\n@...\n.@..\n....\n",
-    )
-    .unwrap();
+    )]);
     // MovingAI (x 0, y 0) — the first line's first character — is the north-west cell (row 2).
-    skyplan(dir.path())
-        .args([
-            "plan",
-            "--map",
-            "m.map",
-            "--planner",
-            "wavefront",
-            "--start-ne",
-            "2.5,0.5",
-            "--goal-ne",
-            "0.5,3.5",
-        ])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("(row 2, col 0) is at an obstacle"));
-    let out = skyplan(dir.path())
-        .args([
-            "plan",
-            "--map",
-            "m.map",
-            "--planner",
-            "wavefront",
-            "--json",
-            "--start-ne",
-            "0.5,0.5",
-            "--goal-ne",
-            "2.5,3.5",
-        ])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    assert_eq!(json_of(&out)["cost_m"], 2.0 + 2f64.sqrt() + 1.0);
+    let m = "plan --map m.map --planner wavefront";
+    fails_with(
+        dir.path(),
+        &format!("{m} --start-ne 2.5,0.5 --goal-ne 0.5,3.5"),
+        2,
+        &["(row 2, col 0) is at an obstacle"],
+    );
+    let v = ok_json(
+        dir.path(),
+        &format!("{m} --json --start-ne 0.5,0.5 --goal-ne 2.5,3.5"),
+    );
+    assert_eq!(v["cost_m"], 2.0 + 2f64.sqrt() + 1.0);
 }

@@ -1,32 +1,14 @@
 //! `skyplan map tile`: the copies are the map, shifted; the result plans.
 
-use assert_cmd::Command;
+mod common;
+use common::{code_of, succeed};
 
 #[test]
 fn tiled_city_has_k_squared_copies_and_plans_across_them() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |args: &[&str]| {
-        Command::cargo_bin("skyplan")
-            .unwrap()
-            .current_dir(dir.path())
-            .args(args)
-            .output()
-            .unwrap()
-    };
-    let out = run(&[
-        "map",
-        "tile",
-        "--times",
-        "2",
-        "--pitch-m",
-        "1000",
-        "--out",
-        "city2.csv",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        dir.path(),
+        "map tile --times 2 --pitch-m 1000 --out city2.csv",
     );
     let small = skyplan_map::colliders::parse_colliders(skyplan_plan::FCND_CITY_CSV).unwrap();
     let text = std::fs::read_to_string(dir.path().join("city2.csv")).unwrap();
@@ -40,21 +22,12 @@ fn tiled_city_has_k_squared_copies_and_plans_across_them() {
         (orig.north_m + 1000.0, orig.east_m + 1000.0)
     );
     // Across the copies: the default goal of the north-east copy.
-    let out = run(&[
-        "plan",
-        "--map",
-        "city2.csv",
-        "--goal-ne",
-        "1420,1390",
-        "--json",
-        "--out",
-        "w.json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        dir.path(),
+        "plan --map city2.csv --goal-ne 1420,1390 --json --out w.json",
     );
-    let bad = run(&["map", "tile", "--times", "0", "--out", "x.csv"]);
-    assert_eq!(bad.status.code(), Some(2));
+    assert_eq!(
+        code_of(dir.path(), "map tile --times 0 --out x.csv"),
+        Some(2)
+    );
 }

@@ -1,9 +1,10 @@
 //! MovingAI replay against the published optimal lengths (`data/movingai`, MovingAI benchmarks by N. Sturtevant).
 //! A fast subset here; `.ci/run` replays every scenario of every map with the release binary.
 
-use assert_cmd::Command;
 use serde_json::Value;
 use std::path::PathBuf;
+mod common;
+use common::{ok, skyplan};
 
 fn movingai_dir() -> Option<PathBuf> {
     Some(PathBuf::from(concat!(
@@ -40,19 +41,11 @@ fn scenarios_match_published_optimal_lengths() {
     ] {
         let map_path = data.join(format!("{map}.map"));
         let scen = head(&data.join(format!("{map}.map.scen")), n, tmp.path());
-        let out = Command::cargo_bin("skyplan")
-            .unwrap()
+        let out = ok(skyplan(tmp.path())
             .arg("scen")
             .arg(&map_path)
             .arg(&scen)
-            .arg("--json")
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{map}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+            .arg("--json"));
         let lines: Vec<Value> = String::from_utf8(out.stdout)
             .unwrap()
             .lines()
@@ -85,8 +78,7 @@ fn a_wrong_optimal_length_is_caught() {
     fields[8] = "1.5".into();
     lines[1] = fields.join("\t");
     std::fs::write(&scen, lines.join("\n")).unwrap();
-    Command::cargo_bin("skyplan")
-        .unwrap()
+    skyplan(tmp.path())
         .arg("scen")
         .arg(data.join("den312d.map"))
         .arg(&scen)

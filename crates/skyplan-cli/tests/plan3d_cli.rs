@@ -2,7 +2,7 @@
 //! re-checked here against every box with the brute-force checker.
 
 mod common;
-use common::{CITY_CSV, checked_path_3d, num, plan_json};
+use common::{CITY_CSV, assert_no_waypoints, checked_path_3d, num, plan_json};
 
 const PLANNERS: [&str; 3] = ["prm", "rrt-connect", "rrt-star"];
 
@@ -14,38 +14,17 @@ fn every_3d_planner_returns_an_exactly_free_path_on_the_city() {
         // Climb from 5 m at the home to 40 m across the city.
         let (code, v) = plan_json(
             dir.path(),
-            &[
-                "--planner",
-                planner,
-                "--goal-alt-m",
-                "40",
-                "--seed",
-                "3",
-                "--time-limit-ms",
-                "400",
-            ],
+            &format!("--planner {planner} --goal-alt-m 40 --seed 3 --time-limit-ms 400"),
         );
         assert_eq!(code, 0, "{planner}: {v}");
         checked_path_3d(text, &v, 5.0, [0.0, 0.0, 5.0], [420.0, 390.0, 40.0]);
         // Low ceiling: the route must weave between the buildings at 0–15 m.
         let (code, v) = plan_json(
             dir.path(),
-            &[
-                "--planner",
-                planner,
-                "--max-alt-m",
-                "15",
-                "--start-ne",
-                "0,0",
-                "--goal-ne",
-                "420,390",
-                "--seed",
-                "5",
-                "--time-limit-ms",
-                "3000",
-                "--out",
-                "route.csv",
-            ],
+            &format!(
+                "--planner {planner} --max-alt-m 15 --start-ne 0,0 --goal-ne 420,390 \
+                 --seed 5 --time-limit-ms 3000 --out route.csv"
+            ),
         );
         assert_eq!(code, 0, "{planner}: {v}");
         checked_path_3d(text, &v, 5.0, [0.0, 0.0, 5.0], [420.0, 390.0, 5.0]);
@@ -60,18 +39,9 @@ fn every_3d_planner_returns_an_exactly_free_path_on_the_city() {
 #[test]
 fn same_seed_same_route() {
     let dir = tempfile::tempdir().unwrap();
-    let args = [
-        "--planner",
-        "prm",
-        "--goal-alt-m",
-        "20",
-        "--seed",
-        "11",
-        "--out",
-        "a.json",
-    ];
-    let (_, a) = plan_json(dir.path(), &args);
-    let (_, b) = plan_json(dir.path(), &args);
+    let line = "--planner prm --goal-alt-m 20 --seed 11 --out a.json";
+    let (_, a) = plan_json(dir.path(), line);
+    let (_, b) = plan_json(dir.path(), line);
     assert_eq!(a["waypoints"], b["waypoints"]);
 }
 
@@ -81,14 +51,7 @@ fn goal_in_a_building_is_bad_input_and_an_enclosed_goal_is_no_path() {
     // The bundled map has a box at N −310.2, E −439.2 rising to 171 m.
     let (code, v) = plan_json(
         dir.path(),
-        &[
-            "--planner",
-            "rrt-connect",
-            "--goal-ne",
-            "-310.2389,-439.2315",
-            "--goal-alt-m",
-            "20",
-        ],
+        "--planner rrt-connect --goal-ne -310.2389,-439.2315 --goal-alt-m 20",
     );
     assert_eq!(code, 2, "{v}");
     assert_eq!(v["status"], "bad_input");
@@ -117,36 +80,21 @@ fn goal_in_a_building_is_bad_input_and_an_enclosed_goal_is_no_path() {
     for planner in PLANNERS {
         let (code, v) = plan_json(
             dir.path(),
-            &[
-                "--planner",
-                planner,
-                "--map",
-                "cage.csv",
-                "--safety-m",
-                "0",
-                "--start-ne",
-                "0,0",
-                "--goal-ne",
-                "50,50",
-                "--goal-alt-m",
-                "20",
-                "--time-limit-ms",
-                "150",
-            ],
+            &format!(
+                "--planner {planner} --map cage.csv --safety-m 0 --start-ne 0,0 --goal-ne 50,50 \
+                 --goal-alt-m 20 --time-limit-ms 150"
+            ),
         );
         assert_eq!(code, 3, "{planner}: {v}");
         assert_eq!(v["status"], "no_path");
-        assert!(
-            !dir.path().join("waypoints.json").exists(),
-            "nothing written on failure"
-        );
+        assert_no_waypoints(dir.path(), "nothing written on failure");
     }
 }
 
 #[test]
 fn three_d_options_need_a_three_d_planner() {
     let dir = tempfile::tempdir().unwrap();
-    let (code, v) = plan_json(dir.path(), &["--goal-alt-m", "30"]);
+    let (code, v) = plan_json(dir.path(), "--goal-alt-m 30");
     assert_eq!(code, 2);
     assert!(v["error"].as_str().unwrap().contains("3D planner"), "{v}");
 }

@@ -1,63 +1,49 @@
 //! The real `skyplan` binary in temporary directories, on the bundled map and small fixtures.
 
-use predicates::prelude::*;
 use serde_json::Value;
-use skyplan_cspace::{Grid2, GridSpec, Touch};
+use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
 use std::path::Path;
 mod common;
-use common::skyplan;
+use common::{
+    CITY_CSV, assert_no_waypoints, assert_segments_free, cmd, dir_with, fails_with, ok_json, rows,
+};
 
-const CITY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/colliders.csv");
-
-fn run_json(dir: &Path, args: &[&str]) -> Value {
-    let out = skyplan(dir)
-        .arg("plan")
-        .arg("--json")
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+/// `skyplan plan --json LINE`, which must succeed: its JSON.
+fn run_json(dir: &Path, line: &str) -> Value {
+    ok_json(dir, &format!("plan --json {line}"))
 }
 
 fn city_grid(spec: GridSpec) -> Grid2 {
-    let map =
-        skyplan_map::colliders::parse_colliders(&std::fs::read_to_string(CITY).unwrap()).unwrap();
+    let map = skyplan_map::colliders::parse_colliders(CITY_CSV).unwrap();
     Grid2::from_colliders(&map, spec).unwrap()
 }
 
-fn rows(v: &Value) -> Vec<[f64; 4]> {
-    serde_json::from_value(v["waypoints"].clone()).unwrap()
+/// The grid cell of a JSON start or goal.
+fn cell(p: &Value) -> Cell {
+    Cell::new(
+        p["cell"][0].as_u64().unwrap() as u32,
+        p["cell"][1].as_u64().unwrap() as u32,
+    )
+}
+
+/// A JSON file in `dir`.
+fn read_json(dir: &Path, name: &str) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join(name)).unwrap()).unwrap()
 }
 
 /// The default job: optimal against the exact oracle, every flown segment free, FCND headings.
 #[test]
 fn default_plan_is_optimal_free_and_headed() {
     let dir = tempfile::tempdir().unwrap();
-    let v = run_json(dir.path(), &[]);
+    let v = run_json(dir.path(), "");
     assert_eq!(v["status"], "ok");
     assert_eq!(v["grid"]["rows"], 921);
     assert_eq!(v["grid"]["blocked_cells"], 519_210);
     let grid = city_grid(GridSpec::default());
-    let cell = |p: &Value| {
-        skyplan_cspace::Cell::new(
-            p["cell"][0].as_u64().unwrap() as u32,
-            p["cell"][1].as_u64().unwrap() as u32,
-        )
-    };
-    let truth = dijkstra_exact(
-        &grid,
-        cell(&v["start"]),
-        cell(&v["goal"]),
-        MoveModel::Octile,
-    )
-    .unwrap();
+    let (start, goal) = (cell(&v["start"]), cell(&v["goal"]));
+    let truth = dijkstra_exact(&grid, start, goal, MoveModel::Octile).unwrap();
     assert_eq!(v["cost_m"].as_f64().unwrap(), truth.to_f64());
 
     let wps = rows(&v);
@@ -70,11 +56,8 @@ fn default_plan_is_optimal_free_and_headed() {
     let last = wps[wps.len() - 1];
     assert_eq!((last[0], last[1]), (420.0, 390.0));
     assert_eq!(wps[0][3], 0.0);
+    assert_segments_free(&grid, &wps, Touch::Closed);
     for w in wps.windows(2) {
-        assert!(
-            grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed),
-            "{w:?}"
-        );
         assert_eq!(w[1][2], 5.0);
         let heading = (w[1][1] - w[0][1]).atan2(w[1][0] - w[0][0]);
         assert!((w[1][3] - heading).abs() < 1e-12);
@@ -83,9 +66,7 @@ fn default_plan_is_optimal_free_and_headed() {
     assert!(counts["after_shortcut"].as_u64() <= counts["after_pruning"].as_u64());
     assert!(counts["after_pruning"].as_u64() < counts["grid_path"].as_u64());
     assert!(v["search_time_us"].as_u64().is_some());
-    let file: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("waypoints.json")).unwrap())
-            .unwrap();
+    let file = read_json(dir.path(), "waypoints.json");
     assert_eq!(
         rows(&file),
         wps,
@@ -96,10 +77,7 @@ fn default_plan_is_optimal_free_and_headed() {
 #[test]
 fn lat_lon_goal_and_start_give_the_same_plan_as_local_ones() {
     let dir = tempfile::tempdir().unwrap();
-    let local = run_json(
-        dir.path(),
-        &["--start-ne", "-100,-50", "--goal-ne", "199.5,-298.5"],
-    );
+    let local = run_json(dir.path(), "--start-ne -100,-50 --goal-ne 199.5,-298.5");
     let geo = |p: &Value| {
         format!(
             "{},{}",
@@ -109,12 +87,11 @@ fn lat_lon_goal_and_start_give_the_same_plan_as_local_ones() {
     };
     let global = run_json(
         dir.path(),
-        &[
-            "--start-lla",
-            &geo(&local["start"]),
-            "--goal-lla",
-            &geo(&local["goal"]),
-        ],
+        &format!(
+            "--start-lla {} --goal-lla {}",
+            geo(&local["start"]),
+            geo(&local["goal"])
+        ),
     );
     assert_eq!(local["start"]["cell"], global["start"]["cell"]);
     assert_eq!(local["goal"]["cell"], global["goal"]["cell"]);
@@ -134,30 +111,13 @@ fn move_models_and_planners_agree_with_the_oracle() {
         safety_m: 3.0,
         cell_m: 2.0,
     });
-    let common = [
-        "--alt-m",
-        "20",
-        "--safety-m",
-        "3",
-        "--cell-m",
-        "2",
-        "--start-ne",
-        "-251,-370",
-        "--goal-ne",
-        "550,420",
-    ];
+    let common = "--alt-m 20 --safety-m 3 --cell-m 2 --start-ne -251,-370 --goal-ne 550,420";
     for (extra, model) in [
-        (vec!["--connectivity", "4"], MoveModel::FourConnected),
-        (vec!["--corner-cutting"], MoveModel::OctileCornerCutting),
-        (vec!["--planner", "dijkstra"], MoveModel::Octile),
+        ("--connectivity 4", MoveModel::FourConnected),
+        ("--corner-cutting", MoveModel::OctileCornerCutting),
+        ("--planner dijkstra", MoveModel::Octile),
     ] {
-        let v = run_json(dir.path(), &[&common[..], &extra[..]].concat());
-        let cell = |p: &Value| {
-            skyplan_cspace::Cell::new(
-                p["cell"][0].as_u64().unwrap() as u32,
-                p["cell"][1].as_u64().unwrap() as u32,
-            )
-        };
+        let v = run_json(dir.path(), &format!("{common} {extra}"));
         let truth = dijkstra_exact(&grid, cell(&v["start"]), cell(&v["goal"]), model).unwrap();
         assert_eq!(
             v["cost_m"].as_f64().unwrap(),
@@ -169,9 +129,7 @@ fn move_models_and_planners_agree_with_the_oracle() {
         } else {
             Touch::Closed
         };
-        for w in rows(&v).windows(2) {
-            assert!(grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch));
-        }
+        assert_segments_free(&grid, &rows(&v), touch);
     }
 }
 
@@ -179,8 +137,7 @@ fn move_models_and_planners_agree_with_the_oracle() {
 fn every_output_format_is_written_by_extension_and_by_flag() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["w.json", "w.csv", "w.h5", "w.geojson", "w.plan"] {
-        skyplan(dir.path())
-            .args(["plan", "--out", name])
+        cmd(dir.path(), &format!("plan --out {name}"))
             .assert()
             .success();
         assert!(
@@ -188,15 +145,12 @@ fn every_output_format_is_written_by_extension_and_by_flag() {
             "{name}"
         );
     }
-    skyplan(dir.path())
-        .args(["plan", "--out", "route.txt", "--format", "csv"])
+    cmd(dir.path(), "plan --out route.txt --format csv")
         .assert()
         .success();
     let csv = std::fs::read_to_string(dir.path().join("route.txt")).unwrap();
     assert!(csv.starts_with("north_m,east_m,alt_m,heading_rad,lat_deg,lon_deg"));
-    let geo: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("w.geojson")).unwrap())
-            .unwrap();
+    let geo = read_json(dir.path(), "w.geojson");
     let first = &geo["features"][0]["geometry"]["coordinates"][0];
     assert!(
         (first[0].as_f64().unwrap() + 122.39745).abs() < 1e-9,
@@ -216,45 +170,34 @@ fn every_output_format_is_written_by_extension_and_by_flag() {
 #[test]
 fn plots_are_real_png_and_svg_files() {
     let dir = tempfile::tempdir().unwrap();
-    skyplan(dir.path())
-        .args(["plan", "--plot", "p.png"])
-        .assert()
-        .success();
+    cmd(dir.path(), "plan --plot p.png").assert().success();
     let png = std::fs::read(dir.path().join("p.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
-    skyplan(dir.path())
-        .args(["plan", "--plot", "p.svg"])
-        .assert()
-        .success();
+    cmd(dir.path(), "plan --plot p.svg").assert().success();
     let svg = std::fs::read_to_string(dir.path().join("p.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("NORTH") && svg.contains("EAST"));
-    skyplan(dir.path())
-        .args(["plan", "--plot", "p.gif"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains(".png or .svg"));
+    fails_with(dir.path(), "plan --plot p.gif", 2, &[".png or .svg"]);
 }
 
 #[test]
 fn config_file_supplies_defaults_and_flags_win() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("fcnd.toml"),
+    let dir = dir_with(&[(
+        "fcnd.toml",
         "target_altitude = 10.0\nsafety_distance = 3.0\ngoal_ne = [99.5, 0.5]\nmethod = \"dijkstra\"\nout = \"cfg.csv\"\n",
-    )
-    .unwrap();
-    let v = run_json(dir.path(), &["--config", "fcnd.toml", "--safety-m", "4"]);
+    )]);
+    let v = run_json(dir.path(), "--config fcnd.toml --safety-m 4");
     assert_eq!(v["grid"]["alt_m"], 10.0);
     assert_eq!(v["grid"]["safety_m"], 4.0);
     assert_eq!(v["planner"], "dijkstra");
     assert_eq!(v["goal"]["north_m"], 99.5);
     assert!(dir.path().join("cfg.csv").exists());
     std::fs::write(dir.path().join("bad.toml"), "alt_m = 5\nsafty_m = 3\n").unwrap();
-    skyplan(dir.path())
-        .args(["plan", "--config", "bad.toml"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("bad.toml").and(predicate::str::contains("safty_m")));
+    fails_with(
+        dir.path(),
+        "plan --config bad.toml",
+        2,
+        &["bad.toml", "safty_m"],
+    );
 }
 
 #[test]
@@ -269,7 +212,7 @@ fn bad_map_input_names_file_line_and_column() {
         (
             "cols.csv",
             "lat0 37.79, lon0 -122.39\n1,2,3,4,5\n",
-            "nohome",
+            "cols.csv: line 2, column 5",
         ),
         (
             "nan.csv",
@@ -290,65 +233,39 @@ fn bad_map_input_names_file_line_and_column() {
     ];
     for (name, text, needle) in cases {
         std::fs::write(dir.path().join(name), text).unwrap();
-        let needle = if needle == "nohome" {
-            "cols.csv: line 2, column 5"
-        } else {
-            needle
-        };
-        skyplan(dir.path())
-            .args(["plan", "--map", name])
-            .assert()
-            .code(2)
-            .stderr(predicate::str::contains(needle))
-            .stderr(predicate::str::contains("panicked").not());
+        let err = fails_with(dir.path(), &format!("plan --map {name}"), 2, &[needle]);
+        assert!(!err.contains("panicked"), "{err}");
     }
-    skyplan(dir.path())
-        .args(["plan", "--map", "missing.csv"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("missing.csv"));
-    assert!(
-        !dir.path().join("waypoints.json").exists(),
-        "no output after bad input"
-    );
+    fails_with(dir.path(), "plan --map missing.csv", 2, &["missing.csv"]);
+    assert_no_waypoints(dir.path(), "no output after bad input");
 }
 
 #[test]
 fn bad_positions_say_which_where_and_the_nearest_free_cell() {
     let dir = tempfile::tempdir().unwrap();
     // (0, -310) lies inside the first building of the map plus its margin.
-    skyplan(dir.path())
-        .args(["plan", "--goal-ne", "-310.2,-439.2"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("goal N -310.20 m, E -439.20 m"))
-        .stderr(predicate::str::contains("inside an obstacle"))
-        .stderr(predicate::str::contains("nearest free cell centre is N"))
-        .stderr(predicate::str::contains("lat 37."));
-    skyplan(dir.path())
-        .args(["plan", "--start-ne", "5000,0"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("start N 5000.00 m, E 0.00 m"))
-        .stderr(predicate::str::contains("off the map"));
-    skyplan(dir.path())
-        .args(["plan", "--goal-lla", "37.79,-110.0"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("UTM zone 12"));
-    skyplan(dir.path())
-        .args(["plan", "--alt-m", "nan"])
-        .assert()
-        .code(2);
-    skyplan(dir.path())
-        .args(["plan", "--connectivity", "6"])
-        .assert()
-        .code(2);
-    skyplan(dir.path())
-        .args(["plan", "--out", "w.xyz"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("extension"));
+    let cases: [(&str, &[&str]); 6] = [
+        (
+            "--goal-ne -310.2,-439.2",
+            &[
+                "goal N -310.20 m, E -439.20 m",
+                "inside an obstacle",
+                "nearest free cell centre is N",
+                "lat 37.",
+            ],
+        ),
+        (
+            "--start-ne 5000,0",
+            &["start N 5000.00 m, E 0.00 m", "off the map"],
+        ),
+        ("--goal-lla 37.79,-110.0", &["UTM zone 12"]),
+        ("--alt-m nan", &[]),
+        ("--connectivity 6", &[]),
+        ("--out w.xyz", &["extension"]),
+    ];
+    for (line, needles) in cases {
+        fails_with(dir.path(), &format!("plan {line}"), 2, needles);
+    }
 }
 
 #[test]
@@ -358,21 +275,12 @@ fn an_enclosed_goal_is_reported_unreachable_with_exit_3() {
     let map = "lat0 37.79, lon0 -122.39\n\
                10,0,5,1,11,5\n-10,0,5,1,11,5\n0,10,5,11,1,5\n0,-10,5,11,1,5\n40,40,1,1,1,1\n-40,-40,1,1,1,1\n";
     std::fs::write(dir.path().join("yard.csv"), map).unwrap();
-    let out = skyplan(dir.path())
-        .args([
-            "plan",
-            "--json",
-            "--map",
-            "yard.csv",
-            "--safety-m",
-            "1",
-            "--start-ne",
-            "30,30",
-            "--goal-ne",
-            "0,0",
-        ])
-        .output()
-        .unwrap();
+    let out = cmd(
+        dir.path(),
+        "plan --json --map yard.csv --safety-m 1 --start-ne 30,30 --goal-ne 0,0",
+    )
+    .output()
+    .unwrap();
     assert_eq!(out.status.code(), Some(3));
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["status"], "no_path");
@@ -381,23 +289,24 @@ fn an_enclosed_goal_is_reported_unreachable_with_exit_3() {
         msg.contains("unreachable") && msg.contains("goal's") && msg.contains("cells"),
         "{msg}"
     );
-    assert!(!dir.path().join("waypoints.json").exists());
+    assert_no_waypoints(dir.path(), "no output without a path");
 }
 
 #[test]
 fn unwritable_output_fails_cleanly() {
     let dir = tempfile::tempdir().unwrap();
-    skyplan(dir.path())
-        .args(["plan", "--out", "no/such/dir/w.json"])
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("no/such/dir/w.json"));
+    fails_with(
+        dir.path(),
+        "plan --out no/such/dir/w.json",
+        2,
+        &["no/such/dir/w.json"],
+    );
 }
 
 #[test]
 fn theta_star_is_shorter_than_the_octile_optimum_and_still_free() {
     let dir = tempfile::tempdir().unwrap();
-    let v = run_json(dir.path(), &["--planner", "theta"]);
+    let v = run_json(dir.path(), "--planner theta");
     let (cost, octile, straight) = (
         v["cost_m"].as_f64().unwrap(),
         v["octile_optimum_m"].as_f64().unwrap(),
@@ -408,10 +317,5 @@ fn theta_star_is_shorter_than_the_octile_optimum_and_still_free() {
         "{straight} ≤ {cost} < {octile}"
     );
     let grid = city_grid(GridSpec::default());
-    for w in rows(&v).windows(2) {
-        assert!(
-            grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed),
-            "{w:?}"
-        );
-    }
+    assert_segments_free(&grid, &rows(&v), Touch::Closed);
 }

@@ -3,46 +3,32 @@
 
 use skyplan_cspace::{Grid2, GridSpec, Touch};
 mod common;
-use common::skyplan;
+use common::{
+    CITY_CSV as CITY, assert_no_waypoints, assert_segments_free, cmd, code_of, ok_json, rows,
+};
 
-const CITY: &str = include_str!("../../../data/colliders.csv");
+/// `skyplan plan --planner voronoi` to the default goal, with JSON and `--out OUT`.
+const TO_GOAL: &str = "plan --planner voronoi --goal-ne 420,390 --json --out";
 
 #[test]
 fn voronoi_json_route_is_free_and_ends_where_asked() {
     let dir = tempfile::tempdir().unwrap();
-    let out = skyplan(dir.path())
-        .args([
-            "plan",
-            "--planner",
-            "voronoi",
-            "--goal-ne",
-            "420,390",
-            "--json",
-        ])
-        .args(["--out", "route.csv"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = ok_json(dir.path(), &format!("{TO_GOAL} route.csv"));
     assert_eq!(v["status"], "ok");
     assert!(v["fallback"].is_null());
     // The city's roadmap at 5 m / 5 m margin (pinned: 12,349 nodes in 95 components).
     assert_eq!(v["components"].as_u64(), Some(95));
     assert_eq!(v["nodes"].as_u64(), Some(12_349));
-    let rows: Vec<[f64; 4]> = serde_json::from_value(v["waypoints"].clone()).unwrap();
+    let rows = rows(&v);
     assert_eq!(&rows[0][..3], &[0.0, 0.0, 5.0]);
     assert_eq!(&rows.last().unwrap()[..3], &[420.0, 390.0, 5.0]);
     let map = skyplan_map::colliders::parse_colliders(CITY).unwrap();
     let grid = Grid2::from_colliders(&map, GridSpec::default()).unwrap();
-    let mut length = 0.0;
-    for w in rows.windows(2) {
-        assert!(grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed));
-        length += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
-    }
+    assert_segments_free(&grid, &rows, Touch::Closed);
+    let length: f64 = rows
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum();
     assert!((length - v["cost_m"].as_f64().unwrap()).abs() < 1e-6);
     assert!(dir.path().join("route.csv").exists());
 }
@@ -52,12 +38,11 @@ fn voronoi_refuses_a_start_inside_a_margin() {
     let dir = tempfile::tempdir().unwrap();
     let map = skyplan_map::colliders::parse_colliders(CITY).unwrap();
     let b = &map.boxes[0];
-    skyplan(dir.path())
-        .args(["plan", "--planner", "voronoi", "--start-ne"])
+    cmd(dir.path(), "plan --planner voronoi --start-ne")
         .arg(format!("{},{}", b.north_m, b.east_m))
         .assert()
         .code(2);
-    assert!(!dir.path().join("waypoints.json").exists());
+    assert_no_waypoints(dir.path(), "nothing written on bad input");
 }
 
 #[test]
@@ -67,24 +52,7 @@ fn voronoi_plot_draws_the_graph_connectors_and_route() {
         ("voronoi.svg", &b"<svg"[..]),
         ("voronoi.png", &b"\x89PNG"[..]),
     ] {
-        let out = skyplan(dir.path())
-            .args([
-                "plan",
-                "--planner",
-                "voronoi",
-                "--goal-ne",
-                "420,390",
-                "--json",
-            ])
-            .args(["--out", "route.json", "--plot", name])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let v = ok_json(dir.path(), &format!("{TO_GOAL} route.json --plot {name}"));
         assert_eq!(v["outputs"]["plot"], name);
         let bytes = std::fs::read(dir.path().join(name)).unwrap();
         assert!(bytes.starts_with(magic), "{name}");
@@ -97,13 +65,9 @@ fn voronoi_plot_draws_the_graph_connectors_and_route() {
             assert!(svg.contains("waypoints ("), "legend");
         }
     }
-    let out = skyplan(dir.path())
-        .args(["plan", "--planner", "voronoi", "--plot", "voronoi.jpg"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(
-        !dir.path().join("waypoints.json").exists(),
-        "nothing written on bad input"
+    assert_eq!(
+        code_of(dir.path(), "plan --planner voronoi --plot voronoi.jpg"),
+        Some(2)
     );
+    assert_no_waypoints(dir.path(), "nothing written on bad input");
 }

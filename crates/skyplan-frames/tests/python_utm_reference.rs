@@ -13,13 +13,22 @@ use skyplan_frames::{Lla, LocalFrame, Ned};
 
 const TOL_M: f64 = 1e-3;
 
+/// A point by latitude, longitude (degrees) and altitude (metres).
+fn lla(lat_deg: f64, lon_deg: f64, alt_m: f64) -> Lla {
+    Lla {
+        lat_deg,
+        lon_deg,
+        alt_m,
+    }
+}
+
+/// The local frame about a home at sea level.
+fn frame_at(lat_deg: f64, lon_deg: f64) -> LocalFrame {
+    LocalFrame::new(lla(lat_deg, lon_deg, 0.0)).unwrap()
+}
+
 fn fcnd_home() -> LocalFrame {
-    LocalFrame::new(Lla {
-        lat_deg: 37.792480,
-        lon_deg: -122.397450,
-        alt_m: 0.0,
-    })
-    .unwrap()
+    frame_at(37.792480, -122.397450)
 }
 
 #[test]
@@ -43,13 +52,7 @@ fn ned_from_lla_matches_python_utm() {
     ];
     let frame = fcnd_home();
     for (lat_deg, lon_deg, north_m, east_m) in reference {
-        let ned = frame
-            .ned_from_lla(Lla {
-                lat_deg,
-                lon_deg,
-                alt_m: 7.5,
-            })
-            .unwrap();
+        let ned = frame.ned_from_lla(lla(lat_deg, lon_deg, 7.5)).unwrap();
         assert!(
             (ned.north_m - north_m).abs() < TOL_M,
             "north at {lat_deg},{lon_deg}: {ned:?}"
@@ -89,23 +92,12 @@ fn lla_from_ned_matches_python_utm() {
 #[test]
 fn neighbouring_zone_is_projected_into_the_home_zone_like_python_force_zone() {
     // Home in zone 10 just west of the 10/11 border at -120°; points in zone 11.
-    let frame = LocalFrame::new(Lla {
-        lat_deg: 37.5,
-        lon_deg: -120.01,
-        alt_m: 0.0,
-    })
-    .unwrap();
+    let frame = frame_at(37.5, -120.01);
     for (lat_deg, lon_deg, north_m, east_m) in [
         (37.5, -119.99, 56.420240, 1768.433968),
         (37.52, -119.95, 2390.068093, 5233.311713),
     ] {
-        let ned = frame
-            .ned_from_lla(Lla {
-                lat_deg,
-                lon_deg,
-                alt_m: 0.0,
-            })
-            .unwrap();
+        let ned = frame.ned_from_lla(lla(lat_deg, lon_deg, 0.0)).unwrap();
         assert!((ned.north_m - north_m).abs() < TOL_M, "{ned:?}");
         assert!((ned.east_m - east_m).abs() < TOL_M, "{ned:?}");
     }

@@ -8,7 +8,7 @@
 //! `posX` is north, `posY` east, `posZ` up, all in metres about the home; the half sizes are
 //! non-negative. The header line is optional (a numeric line 2 is read as a box).
 
-use crate::{ParseError, shown};
+use crate::{ParseError, numbered_lines, shown};
 
 /// The geodetic home of a map: the origin of its local NED frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,6 +37,20 @@ pub struct ObstacleBox {
 }
 
 impl ObstacleBox {
+    /// A box from the six numbers of a `colliders.csv` row, in the file's column order: centre
+    /// north, east, up, then half sizes north, east, up (metres).
+    pub fn from_row(
+        [north_m, east_m, up_m, half_north_m, half_east_m, half_up_m]: [f64; 6],
+    ) -> Self {
+        Self {
+            north_m,
+            east_m,
+            up_m,
+            half_north_m,
+            half_east_m,
+            half_up_m,
+        }
+    }
     /// Height of the top face above home, metres.
     pub fn top_m(&self) -> f64 {
         self.up_m + self.half_up_m
@@ -78,10 +92,7 @@ pub const COLUMNS: [&str; 6] = [
 /// assert!(err.to_string().contains("halfSizeY"));
 /// ```
 pub fn parse_colliders(text: &str) -> Result<CollidersMap, ParseError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = numbered_lines(text);
     let home = match lines.next() {
         Some((_, first)) => parse_home(first)?,
         None => {
@@ -94,10 +105,7 @@ pub fn parse_colliders(text: &str) -> Result<CollidersMap, ParseError> {
         }
     };
     let mut boxes = Vec::new();
-    for (line_no, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
+    for (line_no, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         if line_no == 2 && looks_like_header(line) {
             check_header(line)?;
             continue;
@@ -237,14 +245,7 @@ fn parse_box(line_no: usize, line: &str) -> Result<ObstacleBox, ParseError> {
             ));
         }
     }
-    Ok(ObstacleBox {
-        north_m: v[0],
-        east_m: v[1],
-        up_m: v[2],
-        half_north_m: v[3],
-        half_east_m: v[4],
-        half_up_m: v[5],
-    })
+    Ok(ObstacleBox::from_row(v))
 }
 
 /// Parses a finite float; the error says what kind of number was expected.

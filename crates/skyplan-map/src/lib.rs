@@ -74,6 +74,13 @@ impl fmt::Display for ParseError {
     }
 }
 
+/// The lines of `text` numbered from 1, each without a trailing `\r`.
+pub(crate) fn numbered_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
+}
+
 /// Shortens a token for an error message so that a garbled file cannot flood the terminal.
 pub(crate) fn shown(token: &str) -> String {
     const MAX: usize = 40;

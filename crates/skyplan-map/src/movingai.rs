@@ -5,7 +5,7 @@
 //! followed by tab-separated rows `bucket map width height start_x start_y goal_x goal_y
 //! optimal_length`, where x is the column and y the row, counted from the top-left.
 
-use crate::{ParseError, colliders::parse_finite, shown};
+use crate::{ParseError, colliders::parse_finite, numbered_lines, shown};
 
 /// A MovingAI grid: `passable[y * width + x]`, row 0 at the top.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -51,10 +51,7 @@ const HEADER_KEYS: [&str; 4] = ["type", "height", "width", "map"];
 /// # Ok::<(), skyplan_map::ParseError>(())
 /// ```
 pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = numbered_lines(text);
     let mut width = 0usize;
     let mut height = 0usize;
     for key in HEADER_KEYS {
@@ -160,10 +157,7 @@ pub fn parse_map(text: &str) -> Result<MovingAiMap, ParseError> {
 /// # Ok::<(), skyplan_map::ParseError>(())
 /// ```
 pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, ParseError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let mut lines = numbered_lines(text);
     match lines.next() {
         Some((_, l))
             if l.split_whitespace().eq(["version", "1"])
@@ -197,10 +191,7 @@ pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, ParseError> {
         "optimal_length",
     ];
     let mut out = Vec::new();
-    for (no, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
+    for (no, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         let f: Vec<&str> = line.split('\t').map(str::trim).collect();
         if f.len() != NAMES.len() {
             return Err(ParseError::new(

@@ -130,14 +130,7 @@ mod tests {
                 home: GeodeticHome { lat_deg, lon_deg },
                 boxes: boxes
                     .into_iter()
-                    .map(|(n, e, u, hn, he, hu)| ObstacleBox {
-                        north_m: n,
-                        east_m: e,
-                        up_m: u,
-                        half_north_m: hn,
-                        half_east_m: he,
-                        half_up_m: hu,
-                    })
+                    .map(|(n, e, u, hn, he, hu)| ObstacleBox::from_row([n, e, u, hn, he, hu]))
                     .collect(),
             })
     }

@@ -4,7 +4,7 @@
 //! the path length plus `weight` times the path integral of the normalised cost. Cells of cost
 //! ≥ [`INSCRIBED`](crate::INSCRIBED) are impassable. With weight 0 this is the plain octile length.
 
-use crate::field::check_endpoint;
+use crate::field::{check_endpoint, descend_by, finite_value};
 use crate::moves::{for_each_move, key};
 use crate::{Costmap, Endpoint, MAX_NON_OBSTACLE, NavError};
 use skyplan_cspace::{Cell, Grid2};
@@ -238,6 +238,10 @@ impl CostToGo {
     pub fn goal(&self) -> Cell {
         self.goal
     }
+    /// The cost-to-go of a cell, `None` if blocked, unreachable or off the grid.
+    pub fn value(&self, cell: Cell) -> Option<f64> {
+        finite_value(&self.grid, &self.values, cell)
+    }
     /// The grid the vehicle moves in (cells of cost ≥ 253 blocked).
     pub fn grid(&self) -> &Grid2 {
         &self.grid
@@ -245,14 +249,6 @@ impl CostToGo {
     /// Row-major values in cells; `f64::INFINITY` where the goal cannot be reached.
     pub fn values(&self) -> &[f64] {
         &self.values
-    }
-    /// The cost-to-go of a cell, `None` if blocked, unreachable or off the grid.
-    pub fn value(&self, cell: Cell) -> Option<f64> {
-        if !self.grid.contains(cell) {
-            return None;
-        }
-        let v = self.values[self.grid.index(cell)];
-        v.is_finite().then_some(v)
     }
 
     /// One gradient step from `cell`: the neighbour minimising `value + move cost` among those with
@@ -278,35 +274,16 @@ impl CostToGo {
     /// Follows the gradient from `source` to the goal. Each step strictly lowers the value, so the
     /// descent never oscillates and ends after at most as many steps as there are cells.
     pub fn descend(&self, source: Cell) -> Result<CostPath, NavError> {
-        check_endpoint(&self.grid, source, Endpoint::Source)?;
-        let unreachable = NavError::Unreachable {
-            source_cell: source,
-            destination_cell: self.goal,
-        };
-        if self.value(source).is_none() {
-            return Err(unreachable);
-        }
-        let mut path = CostPath {
-            cells: vec![source],
-            straight_moves: 0,
-            diagonal_moves: 0,
-            objective_cells: 0.0,
+        let (descent, objective_cells) =
+            descend_by(&self.grid, &self.values, self.goal, source, |cell| {
+                self.step(cell)
+            })?;
+        Ok(CostPath {
+            cells: descent.cells,
+            straight_moves: descent.straight_moves,
+            diagonal_moves: descent.diagonal_moves,
+            objective_cells,
             expansions: 0,
-        };
-        let mut cell = source;
-        while cell != self.goal {
-            let Some((next, diagonal, cost)) = self.step(cell) else {
-                return Err(unreachable);
-            };
-            if diagonal {
-                path.diagonal_moves += 1;
-            } else {
-                path.straight_moves += 1;
-            }
-            path.objective_cells += cost;
-            path.cells.push(next);
-            cell = next;
-        }
-        Ok(path)
+        })
     }
 }

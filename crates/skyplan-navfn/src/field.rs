@@ -49,6 +49,58 @@ impl Descent {
     }
 }
 
+/// The finite value of `cell` in row-major `values` over `grid`; `None` if infinite or off the
+/// grid.
+pub(crate) fn finite_value(grid: &Grid2, values: &[f64], cell: Cell) -> Option<f64> {
+    if !grid.contains(cell) {
+        return None;
+    }
+    let v = values[grid.index(cell)];
+    v.is_finite().then_some(v)
+}
+
+/// A descent from `source` to `goal` over the row-major `values` on `grid`, one `step` (next
+/// cell, diagonal, cost) at a time: the cells with their move counts, and the sum of the steps'
+/// costs. Errors: the source off the grid or at an obstacle; its value infinite, or a step that
+/// finds no lower neighbour ("path could not be found").
+pub(crate) fn descend_by(
+    grid: &Grid2,
+    values: &[f64],
+    goal: Cell,
+    source: Cell,
+    mut step: impl FnMut(Cell) -> Option<(Cell, bool, f64)>,
+) -> Result<(Descent, f64), NavError> {
+    check_endpoint(grid, source, Endpoint::Source)?;
+    let unreachable = NavError::Unreachable {
+        source_cell: source,
+        destination_cell: goal,
+    };
+    if finite_value(grid, values, source).is_none() {
+        return Err(unreachable);
+    }
+    let mut descent = Descent {
+        cells: vec![source],
+        straight_moves: 0,
+        diagonal_moves: 0,
+    };
+    let mut total = 0.0;
+    let mut cell = source;
+    while cell != goal {
+        let Some((next, diagonal, cost)) = step(cell) else {
+            return Err(unreachable);
+        };
+        if diagonal {
+            descent.diagonal_moves += 1;
+        } else {
+            descent.straight_moves += 1;
+        }
+        total += cost;
+        descent.cells.push(next);
+        cell = next;
+    }
+    Ok((descent, total))
+}
+
 pub(crate) fn check_endpoint(grid: &Grid2, cell: Cell, which: Endpoint) -> Result<(), NavError> {
     if !grid.contains(cell) {
         return Err(NavError::Outside {
@@ -158,11 +210,7 @@ impl DistanceField {
     }
     /// The distance of a cell to the goal, `None` for obstacles, unreachable and off-grid cells.
     pub fn value(&self, cell: Cell) -> Option<f64> {
-        if !self.grid.contains(cell) {
-            return None;
-        }
-        let v = self.values[self.grid.index(cell)];
-        v.is_finite().then_some(v)
+        finite_value(&self.grid, &self.values, cell)
     }
     /// Number of free cells from which the goal cannot be reached.
     pub fn unreachable_count(&self) -> usize {
@@ -181,21 +229,7 @@ impl DistanceField {
     ///
     /// Errors: the source off the grid, at an obstacle, or unreachable ("path could not be found").
     pub fn descend(&self, source: Cell) -> Result<Descent, NavError> {
-        check_endpoint(&self.grid, source, Endpoint::Source)?;
-        let unreachable = NavError::Unreachable {
-            source_cell: source,
-            destination_cell: self.goal,
-        };
-        if self.value(source).is_none() {
-            return Err(unreachable);
-        }
-        let mut descent = Descent {
-            cells: vec![source],
-            straight_moves: 0,
-            diagonal_moves: 0,
-        };
-        let mut cell = source;
-        while cell != self.goal {
+        let step = |cell: Cell| {
             let here = self.values[self.grid.index(cell)];
             let mut best: Option<(f64, Cell, bool)> = None;
             for_each_move(&self.grid, cell, self.model, |next, diagonal| {
@@ -203,28 +237,20 @@ impl DistanceField {
                 if v >= here {
                     return;
                 }
-                let step = match self.metric {
+                let length = match self.metric {
                     FieldMetric::Length if diagonal => SQRT_2,
                     _ => 1.0,
                 };
-                let score = v + step;
+                let score = v + length;
                 if best.is_none_or(|(b, _, _)| score < b) {
                     best = Some((score, next, diagonal));
                 }
             });
             // A reachable non-goal cell always has a lower neighbour (its predecessor in the
             // wavefront); the guard keeps the loop finite even if it had none.
-            let Some((_, next, diagonal)) = best else {
-                return Err(unreachable);
-            };
-            if diagonal {
-                descent.diagonal_moves += 1;
-            } else {
-                descent.straight_moves += 1;
-            }
-            descent.cells.push(next);
-            cell = next;
-        }
+            best.map(|(_, next, diagonal)| (next, diagonal, 0.0))
+        };
+        let (descent, _) = descend_by(&self.grid, &self.values, self.goal, source, step)?;
         Ok(descent)
     }
 }

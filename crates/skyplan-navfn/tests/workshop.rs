@@ -2,6 +2,8 @@
 //! and an enclosed destination ("path could not be found").
 
 use skyplan_cspace::{Cell, Grid2};
+use skyplan_navfn::FieldMetric::{Length, Steps};
+use skyplan_navfn::MoveModel::{FourConnected, Octile, OctileCornerCutting};
 use skyplan_navfn::{FieldMetric, MoveModel, NavError, distance_field, show};
 use skyplan_search::oracle::dijkstra_exact;
 use skyplan_search::{GridSearch, Planner, check_path};
@@ -57,13 +59,7 @@ fn around_a_u_shaped_wall() {
     );
     let (source, destination) = (Cell::new(0, 4), Cell::new(4, 4));
     assert_matches_astar(&grid, source, destination);
-    let field = distance_field(
-        &grid,
-        destination,
-        MoveModel::FourConnected,
-        FieldMetric::Steps,
-    )
-    .unwrap();
+    let field = distance_field(&grid, destination, FourConnected, Steps).unwrap();
     let path = field.descend(source).unwrap();
     // By hand: 1 up, 4 sideways, 5 up past the wall, 2 + 2 sideways back in, 2 down = 16 moves.
     assert_eq!(path.straight_moves, 16);
@@ -139,24 +135,12 @@ fn enclosed_destination_has_no_path_and_unreachable_cells_are_marked() {
 #[test]
 fn endpoint_at_an_obstacle_or_off_the_grid_is_named() {
     let grid = north_up("..#\n...");
-    let err = distance_field(
-        &grid,
-        Cell::new(1, 2),
-        MoveModel::Octile,
-        FieldMetric::Length,
-    )
-    .unwrap_err();
+    let err = distance_field(&grid, Cell::new(1, 2), Octile, Length).unwrap_err();
     assert_eq!(
         err.to_string(),
         "the destination (row 1, col 2) is at an obstacle"
     );
-    let field = distance_field(
-        &grid,
-        Cell::new(0, 0),
-        MoveModel::Octile,
-        FieldMetric::Length,
-    )
-    .unwrap();
+    let field = distance_field(&grid, Cell::new(0, 0), Octile, Length).unwrap();
     assert_eq!(
         field.descend(Cell::new(5, 0)).unwrap_err().to_string(),
         "the source (row 5, col 0) is outside the 2 × 3 grid"
@@ -177,13 +161,7 @@ fn corner_rule_decides_a_diagonal_gap() {
         let field = distance_field(&grid, destination, model, FieldMetric::Length).unwrap();
         assert!(field.descend(source).is_err(), "{model:?}");
     }
-    let field = distance_field(
-        &grid,
-        destination,
-        MoveModel::OctileCornerCutting,
-        FieldMetric::Length,
-    )
-    .unwrap();
+    let field = distance_field(&grid, destination, OctileCornerCutting, Length).unwrap();
     let path = field.descend(source).unwrap();
     assert_eq!(path.diagonal_moves, 2);
 }

@@ -297,6 +297,7 @@ fn run_plan(
     request: &Request,
     edges: Option<&mut Vec<(Neu, Neu)>>,
 ) -> Solution {
+    let (start, goal, budget) = (request.start, request.goal, request.budget);
     let mut solution = match kind {
         PlannerKind::Prm | PlannerKind::LazyPrm => {
             let config = prm::PrmConfig {
@@ -304,13 +305,7 @@ fn run_plan(
                 lazy: kind == PlannerKind::LazyPrm,
                 ..prm::PrmConfig::default()
             };
-            let (roadmap, solution) = prm::solve(
-                checker,
-                request.start,
-                request.goal,
-                &config,
-                request.budget,
-            );
+            let (roadmap, solution) = prm::solve(checker, start, goal, &config, budget);
             if let Some(edges) = edges {
                 let points = roadmap.vertices();
                 edges.extend(
@@ -327,26 +322,7 @@ fn run_plan(
                 seed: request.seed,
                 range_m: request.range_m,
             };
-            match edges {
-                Some(edges) => {
-                    let (solution, tree) = rrt_connect::solve_with_tree(
-                        checker,
-                        request.start,
-                        request.goal,
-                        &config,
-                        request.budget,
-                    );
-                    edges.extend(tree);
-                    solution
-                }
-                None => rrt_connect::solve(
-                    checker,
-                    request.start,
-                    request.goal,
-                    &config,
-                    request.budget,
-                ),
-            }
+            rrt_connect::run(checker, start, goal, &config, budget, edges)
         }
         PlannerKind::RrtStar => {
             let config = rrt_star::RrtStarConfig {
@@ -354,26 +330,7 @@ fn run_plan(
                 range_m: request.range_m,
                 ..rrt_star::RrtStarConfig::default()
             };
-            match edges {
-                Some(edges) => {
-                    let (solution, tree) = rrt_star::solve_with_tree(
-                        checker,
-                        request.start,
-                        request.goal,
-                        &config,
-                        request.budget,
-                    );
-                    edges.extend(tree);
-                    solution
-                }
-                None => rrt_star::solve(
-                    checker,
-                    request.start,
-                    request.goal,
-                    &config,
-                    request.budget,
-                ),
-            }
+            rrt_star::run(checker, start, goal, &config, budget, edges)
         }
     };
     if request.simplify && solution.status == Status::Exact {

@@ -104,7 +104,7 @@ pub fn solve_with_tree(
     (solution, edges)
 }
 
-fn run(
+pub(crate) fn run(
     checker: &impl CollisionChecker,
     start: Neu,
     goal: Neu,

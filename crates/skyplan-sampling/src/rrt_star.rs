@@ -174,7 +174,7 @@ pub fn solve_with_tree(
     (solution, edges)
 }
 
-fn run(
+pub(crate) fn run(
     checker: &impl CollisionChecker,
     start: Neu,
     goal: Neu,

@@ -2,20 +2,10 @@
 //! against every box; the optimising planner must not be worse than the first-solution one.
 
 use skyplan_sampling::{Budget, PlannerKind, Request, Status, plan};
-use skyplan_world3::{
-    BoxWorld3, CollisionChecker, Neu, WorldSpec, distance_m, first_blocked_segment,
-};
+use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, distance_m, first_blocked_segment};
 
 fn city() -> BoxWorld3 {
-    let text = include_str!("../../../data/colliders.csv");
-    let map = skyplan_map::colliders::parse_colliders(text).unwrap();
-    let spec = WorldSpec {
-        safety_m: 5.0,
-        min_alt_m: 0.0,
-        max_alt_m: 100.0,
-        margin_bounds_m: 0.0,
-    };
-    BoxWorld3::new(&map.boxes, &spec).unwrap()
+    skyplan_testkit::city_world(5.0, 100.0)
 }
 
 /// Free points ≥ 300 m apart, start at 5 m and goal at 40 m, from a fixed low-discrepancy walk.

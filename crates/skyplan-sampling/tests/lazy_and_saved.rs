@@ -8,54 +8,14 @@ use proptest::prelude::*;
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_sampling::prm::{PrmConfig, Roadmap, RoadmapFileError, solve};
 use skyplan_sampling::{Budget, PlannerKind, Request, Status, plan};
-use skyplan_world3::{
-    BoxWorld3, CollisionChecker, Neu, WorldSpec, distance_m, first_blocked_segment, path_length_m,
-};
+use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, distance_m, first_blocked_segment};
 use std::time::Instant;
 
-fn arb_box() -> impl Strategy<Value = ObstacleBox> {
-    (
-        0.0..100.0,
-        0.0..100.0,
-        0.0..25.0,
-        1.0..12.0,
-        1.0..12.0,
-        1.0..25.0,
-    )
-        .prop_map(|(n, e, u, hn, he, hu)| ObstacleBox {
-            north_m: n,
-            east_m: e,
-            up_m: u,
-            half_north_m: hn,
-            half_east_m: he,
-            half_up_m: hu,
-        })
-}
-
-fn arb_point() -> impl Strategy<Value = Neu> {
-    (0.0..100.0f64, 0.0..100.0f64, 0.0..45.0f64).prop_map(|(n, e, a)| [n, e, a])
-}
-
-fn world(boxes: &[ObstacleBox], safety_m: f64) -> BoxWorld3 {
-    let spec = WorldSpec {
-        safety_m,
-        min_alt_m: 0.0,
-        max_alt_m: 45.0,
-        margin_bounds_m: 15.0,
-    };
-    BoxWorld3::new(boxes, &spec).expect("valid spec")
-}
+mod common;
+use common::{arb_box, arb_case, arb_point, caged_goal, check_solution, world};
 
 fn city(safety_m: f64) -> BoxWorld3 {
-    let text = include_str!("../../../data/colliders.csv");
-    let map = skyplan_map::colliders::parse_colliders(text).unwrap();
-    let spec = WorldSpec {
-        safety_m,
-        min_alt_m: 0.0,
-        max_alt_m: 100.0,
-        margin_bounds_m: 0.0,
-    };
-    BoxWorld3::new(&map.boxes, &spec).unwrap()
+    skyplan_testkit::city_world(safety_m, 100.0)
 }
 
 fn config(seed: u64, samples: usize, lazy: bool) -> PrmConfig {
@@ -72,29 +32,15 @@ proptest! {
 
     #[test]
     fn lazy_prm_paths_are_exactly_free_and_end_where_asked(
-        boxes in prop::collection::vec(arb_box(), 1..14),
+        (boxes, start, goal, seed) in arb_case(1..14),
         safety_m in 0.0..3.0f64,
-        start in arb_point(),
-        goal in arb_point(),
-        seed in 0u64..1000,
     ) {
         let w = world(&boxes, safety_m);
-        let bf = w.brute_force();
         let request = Request { start, goal, seed, budget: Budget::iterations(1500), ..Request::default() };
         let s = plan(&w, PlannerKind::LazyPrm, &request);
-        match s.status {
-            Status::InvalidStart => prop_assert!(!bf.is_free(start)),
-            Status::InvalidGoal => prop_assert!(bf.is_free(start) && !bf.is_free(goal)),
-            Status::Timeout => prop_assert!(s.path.is_empty()),
-            Status::Approximate => prop_assert!(false, "lazy PRM is exact or nothing"),
-            Status::Exact => {
-                prop_assert_eq!(s.path.first(), Some(&start));
-                prop_assert_eq!(s.path.last(), Some(&goal));
-                prop_assert_eq!(first_blocked_segment(&bf, &s.path), None, "path {:?}", s.path);
-                prop_assert!((s.cost_m - path_length_m(&s.path)).abs() <= 1e-9 * (1.0 + s.cost_m));
-            }
-        }
-        if bf.segment_is_free(start, goal) {
+        prop_assert_ne!(s.status, Status::Approximate, "lazy PRM is exact or nothing");
+        check_solution(&w, &request, &s)?;
+        if w.brute_force().segment_is_free(start, goal) {
             prop_assert_eq!(s.status, Status::Exact);
         }
         prop_assert_eq!(&plan(&w, PlannerKind::LazyPrm, &request).path, &s.path);
@@ -102,10 +48,7 @@ proptest! {
 
     #[test]
     fn lazy_prm_tests_no_more_edges_than_prm_on_the_same_roadmap(
-        boxes in prop::collection::vec(arb_box(), 1..14),
-        start in arb_point(),
-        goal in arb_point(),
-        seed in 0u64..1000,
+        (boxes, start, goal, seed) in arb_case(1..14),
     ) {
         let w = world(&boxes, 1.0);
         let eager = Roadmap::build(&w, &config(seed, 300, false));
@@ -133,23 +76,7 @@ proptest! {
         start in arb_point(),
         seed in 0u64..1000,
     ) {
-        let c: Neu = [70.0, 70.0, 20.0];
-        prop_assume!((0..3).any(|i| (start[i] - c[i]).abs() > 9.0));
-        let slab = |dn: f64, de: f64, du: f64, hn: f64, he: f64, hu: f64| ObstacleBox {
-            north_m: c[0] + dn, east_m: c[1] + de, up_m: c[2] + du,
-            half_north_m: hn, half_east_m: he, half_up_m: hu,
-        };
-        let mut all: Vec<ObstacleBox> = boxes
-            .into_iter()
-            .filter(|b| (b.north_m - c[0]).abs() > b.half_north_m + 12.0 || (b.east_m - c[1]).abs() > b.half_east_m + 12.0)
-            .collect();
-        all.extend([
-            slab(-8.0, 0.0, 0.0, 1.0, 9.0, 9.0), slab(8.0, 0.0, 0.0, 1.0, 9.0, 9.0),
-            slab(0.0, -8.0, 0.0, 9.0, 1.0, 9.0), slab(0.0, 8.0, 0.0, 9.0, 1.0, 9.0),
-            slab(0.0, 0.0, -8.0, 9.0, 9.0, 1.0), slab(0.0, 0.0, 8.0, 9.0, 9.0, 1.0),
-        ]);
-        let w = world(&all, 0.0);
-        prop_assert!(w.is_free(c));
+        let (w, c) = caged_goal(boxes, start)?;
         let request = Request { start, goal: c, seed, budget: Budget::iterations(800), ..Request::default() };
         let s = plan(&w, PlannerKind::LazyPrm, &request);
         prop_assert_ne!(s.status, Status::Exact, "lazy PRM reached an enclosed goal");
@@ -160,10 +87,7 @@ proptest! {
 
     #[test]
     fn saved_roadmaps_load_back_identically(
-        boxes in prop::collection::vec(arb_box(), 1..10),
-        start in arb_point(),
-        goal in arb_point(),
-        seed in 0u64..1000,
+        (boxes, start, goal, seed) in arb_case(1..10),
         lazy in any::<bool>(),
     ) {
         let w = world(&boxes, 1.0);
@@ -190,14 +114,7 @@ proptest! {
 
 #[test]
 fn a_roadmap_for_another_world_is_refused() {
-    let boxes = [ObstacleBox {
-        north_m: 50.0,
-        east_m: 50.0,
-        up_m: 10.0,
-        half_north_m: 10.0,
-        half_east_m: 10.0,
-        half_up_m: 10.0,
-    }];
+    let boxes = [ObstacleBox::from_row([50.0, 50.0, 10.0, 10.0, 10.0, 10.0])];
     let w = world(&boxes, 1.0);
     let bytes = Roadmap::build(&w, &config(3, 100, false)).to_json(&w);
     assert!(Roadmap::from_json(&bytes, &w).is_ok());
@@ -213,16 +130,7 @@ fn a_roadmap_for_another_world_is_refused() {
         matches!(&err, RoadmapFileError::OtherWorld(m) if m.contains("another map")),
         "{err}"
     );
-    let higher = BoxWorld3::new(
-        &boxes,
-        &WorldSpec {
-            safety_m: 1.0,
-            min_alt_m: 0.0,
-            max_alt_m: 60.0,
-            margin_bounds_m: 15.0,
-        },
-    )
-    .unwrap();
+    let higher = skyplan_testkit::box_world(&boxes, 1.0, 60.0, 15.0);
     let err = Roadmap::from_json(&bytes, &higher).unwrap_err();
     assert!(
         matches!(&err, RoadmapFileError::OtherWorld(m) if m.contains("flight volume")),

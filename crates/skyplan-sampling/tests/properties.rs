@@ -6,10 +6,8 @@ use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use skyplan_map::colliders::ObstacleBox;
-use skyplan_sampling::{Budget, PlannerKind, Request, Solution, Status, plan, shortcut};
-use skyplan_world3::{
-    BoxWorld3, CollisionChecker, Neu, WorldSpec, first_blocked_segment, path_length_m,
-};
+use skyplan_sampling::{Budget, PlannerKind, Request, Status, plan, shortcut};
+use skyplan_world3::{CollisionChecker, first_blocked_segment, path_length_m};
 
 const KINDS: [PlannerKind; 3] = [
     PlannerKind::Prm,
@@ -17,79 +15,16 @@ const KINDS: [PlannerKind; 3] = [
     PlannerKind::RrtStar,
 ];
 
-fn arb_box() -> impl Strategy<Value = ObstacleBox> {
-    (
-        0.0..100.0,
-        0.0..100.0,
-        0.0..25.0,
-        1.0..12.0,
-        1.0..12.0,
-        1.0..25.0,
-    )
-        .prop_map(|(n, e, u, hn, he, hu)| ObstacleBox {
-            north_m: n,
-            east_m: e,
-            up_m: u,
-            half_north_m: hn,
-            half_east_m: he,
-            half_up_m: hu,
-        })
-}
-
-fn arb_point() -> impl Strategy<Value = Neu> {
-    (0.0..100.0f64, 0.0..100.0f64, 0.0..45.0f64).prop_map(|(n, e, a)| [n, e, a])
-}
-
-fn world(boxes: &[ObstacleBox], safety_m: f64) -> BoxWorld3 {
-    let spec = WorldSpec {
-        safety_m,
-        min_alt_m: 0.0,
-        max_alt_m: 45.0,
-        margin_bounds_m: 15.0,
-    };
-    BoxWorld3::new(boxes, &spec).expect("valid spec")
-}
-
-/// The checks every solution must pass, whatever its status.
-fn check_solution(w: &BoxWorld3, request: &Request, s: &Solution) -> Result<(), TestCaseError> {
-    let bf = w.brute_force();
-    match s.status {
-        Status::InvalidStart => prop_assert!(!bf.is_free(request.start)),
-        Status::InvalidGoal => {
-            prop_assert!(bf.is_free(request.start));
-            prop_assert!(!bf.is_free(request.goal));
-        }
-        Status::Timeout => prop_assert!(s.path.is_empty()),
-        Status::Exact | Status::Approximate => {
-            prop_assert_eq!(s.path.first(), Some(&request.start));
-            prop_assert_eq!(
-                first_blocked_segment(&bf, &s.path),
-                None,
-                "path {:?}",
-                s.path
-            );
-            prop_assert!((s.cost_m - path_length_m(&s.path)).abs() <= 1e-9 * (1.0 + s.cost_m));
-            if s.status == Status::Exact {
-                prop_assert_eq!(s.path.last(), Some(&request.goal));
-                prop_assert!(
-                    s.cost_m + 1e-9 >= skyplan_world3::distance_m(request.start, request.goal)
-                );
-            }
-        }
-    }
-    Ok(())
-}
+mod common;
+use common::{arb_box, arb_case, arb_point, caged_goal, check_solution, world};
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
     #[test]
     fn paths_are_exactly_free_and_end_where_asked(
-        boxes in prop::collection::vec(arb_box(), 1..14),
+        (boxes, start, goal, seed) in arb_case(1..14),
         safety_m in 0.0..3.0f64,
-        start in arb_point(),
-        goal in arb_point(),
-        seed in 0u64..1000,
     ) {
         let w = world(&boxes, safety_m);
         for kind in KINDS {
@@ -111,25 +46,7 @@ proptest! {
         start in arb_point(),
         seed in 0u64..1000,
     ) {
-        // A closed hollow cube (six 1 m slabs, no margin) around the goal at (70, 70, 20).
-        let c: Neu = [70.0, 70.0, 20.0];
-        // A start inside the cage could of course reach the goal.
-        prop_assume!((0..3).any(|i| (start[i] - c[i]).abs() > 9.0));
-        let slab = |dn: f64, de: f64, du: f64, hn: f64, he: f64, hu: f64| ObstacleBox {
-            north_m: c[0] + dn, east_m: c[1] + de, up_m: c[2] + du,
-            half_north_m: hn, half_east_m: he, half_up_m: hu,
-        };
-        let mut all: Vec<ObstacleBox> = boxes
-            .into_iter()
-            .filter(|b| (b.north_m - c[0]).abs() > b.half_north_m + 12.0 || (b.east_m - c[1]).abs() > b.half_east_m + 12.0)
-            .collect();
-        all.extend([
-            slab(-8.0, 0.0, 0.0, 1.0, 9.0, 9.0), slab(8.0, 0.0, 0.0, 1.0, 9.0, 9.0),
-            slab(0.0, -8.0, 0.0, 9.0, 1.0, 9.0), slab(0.0, 8.0, 0.0, 9.0, 1.0, 9.0),
-            slab(0.0, 0.0, -8.0, 9.0, 9.0, 1.0), slab(0.0, 0.0, 8.0, 9.0, 9.0, 1.0),
-        ]);
-        let w = world(&all, 0.0);
-        prop_assert!(w.is_free(c));
+        let (w, c) = caged_goal(boxes, start)?;
         for kind in KINDS {
             let request = Request { start, goal: c, seed, budget: Budget::iterations(800), ..Request::default() };
             let s = plan(&w, kind, &request);
@@ -143,10 +60,7 @@ proptest! {
 
     #[test]
     fn simplify_never_lengthens_and_stays_free(
-        boxes in prop::collection::vec(arb_box(), 1..10),
-        start in arb_point(),
-        goal in arb_point(),
-        seed in 0u64..1000,
+        (boxes, start, goal, seed) in arb_case(1..10),
     ) {
         let w = world(&boxes, 1.0);
         let request = Request { start, goal, seed, simplify: false, budget: Budget::iterations(1500), ..Request::default() };
@@ -164,14 +78,7 @@ proptest! {
 
 #[test]
 fn invalid_start_and_goal_are_reported() {
-    let tower = ObstacleBox {
-        north_m: 50.0,
-        east_m: 50.0,
-        up_m: 20.0,
-        half_north_m: 10.0,
-        half_east_m: 10.0,
-        half_up_m: 20.0,
-    };
+    let tower = ObstacleBox::from_row([50.0, 50.0, 20.0, 10.0, 10.0, 20.0]);
     let w = world(&[tower], 2.0);
     for kind in KINDS {
         let inside = [50.0, 50.0, 10.0];

@@ -4,24 +4,11 @@
 
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_sampling::{Budget, PlannerKind, Request, Status, plan, plan_with_tree};
-use skyplan_world3::{BoxWorld3, CollisionChecker, WorldSpec};
+use skyplan_world3::{BoxWorld3, CollisionChecker};
 
 fn world() -> BoxWorld3 {
-    let wall = ObstacleBox {
-        north_m: 50.0,
-        east_m: 50.0,
-        up_m: 20.0,
-        half_north_m: 5.0,
-        half_east_m: 40.0,
-        half_up_m: 20.0,
-    };
-    let spec = WorldSpec {
-        safety_m: 2.0,
-        min_alt_m: 0.0,
-        max_alt_m: 50.0,
-        margin_bounds_m: 40.0,
-    };
-    BoxWorld3::new(&[wall], &spec).unwrap()
+    let wall = ObstacleBox::from_row([50.0, 50.0, 20.0, 5.0, 40.0, 20.0]);
+    skyplan_testkit::box_world(&[wall], 2.0, 50.0, 40.0)
 }
 
 #[test]

@@ -4,9 +4,7 @@
 use proptest::prelude::*;
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_voxel::{End, Query, VoxelError, VoxelGrid, VoxelSpec, edge_cost, path_cost};
-use skyplan_world3::{
-    BoxWorld3, BruteForce, CollisionChecker, Neu, WorldSpec, first_blocked_segment,
-};
+use skyplan_world3::{BoxWorld3, BruteForce, CollisionChecker, Neu, first_blocked_segment};
 
 /// O(V²) Dijkstra over the explicit graph: lattice points free by brute force, 26-neighbour edges
 /// free by brute force, start/goal joined to every free lattice point within one step per axis,
@@ -68,25 +66,13 @@ fn boxes_strategy() -> impl Strategy<Value = Vec<ObstacleBox>> {
     )
     .prop_map(|v| {
         v.into_iter()
-            .map(|(n, e, hn, he, hu)| ObstacleBox {
-                north_m: n,
-                east_m: e,
-                up_m: hu,
-                half_north_m: hn,
-                half_east_m: he,
-                half_up_m: hu,
-            })
+            .map(|(n, e, hn, he, hu)| ObstacleBox::from_row([n, e, hu, hn, he, hu]))
             .collect()
     })
 }
 
 fn world_of(boxes: &[ObstacleBox], safety_m: f64) -> BoxWorld3 {
-    let spec = WorldSpec {
-        safety_m,
-        min_alt_m: 0.0,
-        max_alt_m: 40.0,
-        margin_bounds_m: 0.0,
-    };
+    let spec = skyplan_testkit::spec(safety_m, 40.0, 0.0);
     let bounds = skyplan_world3::Aabb {
         min: [0.0, 0.0, 0.0],
         max: [60.0, 60.0, 40.0],
@@ -146,36 +132,15 @@ proptest! {
 #[test]
 fn enclosed_goal_is_no_path() {
     // A hollow cage around the goal: four walls, a floor-to-ceiling column each side, and a lid.
-    let wall = |n: f64, e: f64, hn: f64, he: f64| ObstacleBox {
-        north_m: n,
-        east_m: e,
-        up_m: 20.0,
-        half_north_m: hn,
-        half_east_m: he,
-        half_up_m: 20.0,
-    };
+    let wall = |n: f64, e: f64, hn: f64, he: f64| ObstacleBox::from_row([n, e, 20.0, hn, he, 20.0]);
     let mut boxes = vec![
         wall(20.0, 30.0, 1.0, 11.0),
         wall(40.0, 30.0, 1.0, 11.0),
         wall(30.0, 20.0, 11.0, 1.0),
         wall(30.0, 40.0, 11.0, 1.0),
     ];
-    boxes.push(ObstacleBox {
-        north_m: 30.0,
-        east_m: 30.0,
-        up_m: 39.0,
-        half_north_m: 11.0,
-        half_east_m: 11.0,
-        half_up_m: 1.0,
-    });
-    boxes.push(ObstacleBox {
-        north_m: 2.0,
-        east_m: 2.0,
-        up_m: 1.0,
-        half_north_m: 1.0,
-        half_east_m: 1.0,
-        half_up_m: 1.0,
-    });
+    boxes.push(ObstacleBox::from_row([30.0, 30.0, 39.0, 11.0, 11.0, 1.0]));
+    boxes.push(ObstacleBox::from_row([2.0, 2.0, 1.0, 1.0, 1.0, 1.0]));
     let world = world_of(&boxes, 0.5);
     let grid = VoxelGrid::build(&world, &VoxelSpec::default()).unwrap();
     let q = Query {
@@ -190,14 +155,7 @@ fn enclosed_goal_is_no_path() {
 #[test]
 fn climbing_weight_trades_detour_for_climb() {
     // A low, wide block: w = 0 goes over it, a heavy climb weight goes around.
-    let block = ObstacleBox {
-        north_m: 30.0,
-        east_m: 30.0,
-        up_m: 4.0,
-        half_north_m: 4.0,
-        half_east_m: 22.0,
-        half_up_m: 4.0,
-    };
+    let block = ObstacleBox::from_row([30.0, 30.0, 4.0, 4.0, 22.0, 4.0]);
     let world = world_of(&[block], 1.0);
     let grid = VoxelGrid::build(&world, &VoxelSpec::default()).unwrap();
     let q = |w| Query {
@@ -216,14 +174,7 @@ fn climbing_weight_trades_detour_for_climb() {
 #[test]
 fn goal_on_a_rooftop() {
     // Goal 1 m above the margin over a 20 m roof.
-    let tower = ObstacleBox {
-        north_m: 40.0,
-        east_m: 40.0,
-        up_m: 10.0,
-        half_north_m: 8.0,
-        half_east_m: 8.0,
-        half_up_m: 10.0,
-    };
+    let tower = ObstacleBox::from_row([40.0, 40.0, 10.0, 8.0, 8.0, 10.0]);
     let world = world_of(&[tower], 2.0);
     let grid = VoxelGrid::build(&world, &VoxelSpec::default()).unwrap();
     let goal = [40.0, 40.0, 23.0];

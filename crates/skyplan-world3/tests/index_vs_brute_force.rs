@@ -6,22 +6,7 @@ use skyplan_map::colliders::ObstacleBox;
 use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, WorldSpec, lerp, segment_hits_box};
 
 fn arb_box() -> impl Strategy<Value = ObstacleBox> {
-    (
-        0.0..100.0,
-        0.0..100.0,
-        0.0..30.0,
-        0.5..15.0,
-        0.5..15.0,
-        0.5..30.0,
-    )
-        .prop_map(|(n, e, u, hn, he, hu)| ObstacleBox {
-            north_m: n,
-            east_m: e,
-            up_m: u,
-            half_north_m: hn,
-            half_east_m: he,
-            half_up_m: hu,
-        })
+    skyplan_testkit::arb_box(0.0..30.0, 0.5..15.0, 0.5..30.0)
 }
 
 fn arb_point() -> impl Strategy<Value = Neu> {
@@ -46,13 +31,7 @@ fn arb_point() -> impl Strategy<Value = Neu> {
 }
 
 fn world(boxes: &[ObstacleBox], safety_m: f64) -> BoxWorld3 {
-    let spec = WorldSpec {
-        safety_m,
-        min_alt_m: 0.0,
-        max_alt_m: 60.0,
-        margin_bounds_m: 5.0,
-    };
-    BoxWorld3::new(boxes, &spec).expect("valid spec")
+    skyplan_testkit::box_world(boxes, safety_m, 60.0, 5.0)
 }
 
 proptest! {
@@ -112,21 +91,8 @@ proptest! {
 
 #[test]
 fn margin_applies_in_all_three_axes() {
-    let b = ObstacleBox {
-        north_m: 50.0,
-        east_m: 50.0,
-        up_m: 10.0,
-        half_north_m: 5.0,
-        half_east_m: 5.0,
-        half_up_m: 10.0,
-    };
-    let spec = WorldSpec {
-        safety_m: 3.0,
-        min_alt_m: 0.0,
-        max_alt_m: 60.0,
-        margin_bounds_m: 30.0,
-    };
-    let w = BoxWorld3::new(&[b], &spec).unwrap();
+    let b = ObstacleBox::from_row([50.0, 50.0, 10.0, 5.0, 5.0, 10.0]);
+    let w = skyplan_testkit::box_world(&[b], 3.0, 60.0, 30.0);
     assert!(w.is_free([30.0, 42.0, 23.0]) && w.is_free([70.0, 42.0, 23.0]));
     assert!(!w.is_free([50.0, 50.0, 23.0])); // roof 20 + 3: touching is a collision
     assert!(w.is_free([50.0, 50.0, 23.001]));
@@ -139,14 +105,7 @@ fn margin_applies_in_all_three_axes() {
 
 #[test]
 fn ground_and_bounds_are_obstacles() {
-    let b = ObstacleBox {
-        north_m: 50.0,
-        east_m: 50.0,
-        up_m: 10.0,
-        half_north_m: 5.0,
-        half_east_m: 5.0,
-        half_up_m: 10.0,
-    };
+    let b = ObstacleBox::from_row([50.0, 50.0, 10.0, 5.0, 5.0, 10.0]);
     let spec = WorldSpec {
         safety_m: 1.0,
         min_alt_m: 2.0,
@@ -174,15 +133,7 @@ fn ground_and_bounds_are_obstacles() {
 
 #[test]
 fn city_map_agrees_with_brute_force_on_long_segments() {
-    let text = include_str!("../../../data/colliders.csv");
-    let map = skyplan_map::colliders::parse_colliders(text).unwrap();
-    let spec = WorldSpec {
-        safety_m: 5.0,
-        min_alt_m: 0.0,
-        max_alt_m: 250.0,
-        margin_bounds_m: 0.0,
-    };
-    let w = BoxWorld3::new(&map.boxes, &spec).unwrap();
+    let w = skyplan_testkit::city_world(5.0, 250.0);
     let bf = w.brute_force();
     let bounds = w.bounds();
     // A deterministic low-discrepancy walk over the map.

@@ -29,9 +29,10 @@ pub fn run(dir: &Path, args: &[&str]) -> (i32, Value, String) {
     )
 }
 
-/// Runs `skyplan plan --json ARGS`: exit code and the JSON object (stdout must be JSON).
-pub fn plan_json(dir: &Path, args: &[&str]) -> (i32, Value) {
-    let (code, v, err) = run(dir, &[&["plan", "--json"], args].concat());
+/// Runs `skyplan plan --json LINE` (split into words): exit code and the JSON object (stdout
+/// must be JSON).
+pub fn plan_json(dir: &Path, line: &str) -> (i32, Value) {
+    let (code, v, err) = run(dir, &[&["plan", "--json"], &words(line)[..]].concat());
     assert!(!v.is_null(), "stdout is not JSON; stderr: {err}");
     (code, v)
 }
@@ -88,4 +89,107 @@ pub fn checked_path_3d(
     );
     assert!(cost + 1e-9 >= num(&v["straight_line_m"]));
     path
+}
+
+/// The words of a command line, split at white space (no argument in these tests holds a space).
+pub fn words(line: &str) -> Vec<&str> {
+    line.split_whitespace().collect()
+}
+
+/// `skyplan LINE` in `dir`, LINE split into words.
+pub fn cmd(dir: &Path, line: &str) -> Command {
+    let mut cmd = skyplan(dir);
+    cmd.args(words(line));
+    cmd
+}
+
+/// Runs `cmd` and asserts that it succeeded (its stderr in the message).
+pub fn ok(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs `skyplan LINE` in `dir` and asserts that it succeeded (its stderr in the message).
+pub fn succeed(dir: &Path, line: &str) -> std::process::Output {
+    ok(&mut cmd(dir, line))
+}
+
+/// Runs `skyplan LINE` in `dir`, asserts that it succeeded, and returns its stdout as JSON.
+pub fn ok_json(dir: &Path, line: &str) -> Value {
+    json_of(&succeed(dir, line))
+}
+
+/// A run's stdout as JSON (the panic shows both streams).
+pub fn json_of(out: &std::process::Output) -> Value {
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{e}: stdout {:?} stderr {:?}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+/// The exit code of `skyplan LINE` in `dir`.
+pub fn code_of(dir: &Path, line: &str) -> Option<i32> {
+    cmd(dir, line).output().unwrap().status.code()
+}
+
+/// Runs `skyplan LINE` in `dir`: it must exit with `code`, its stderr holding each of `needles`.
+/// Returns the stderr.
+pub fn fails_with(dir: &Path, line: &str, code: i32, needles: &[&str]) -> String {
+    let out = cmd(dir, line).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "skyplan {line}: {err}");
+    for needle in needles {
+        assert!(
+            err.contains(needle),
+            "skyplan {line}: no {needle:?} in {err}"
+        );
+    }
+    err.into_owned()
+}
+
+/// The waypoints of a JSON answer (or waypoint file) as rows north, east, altitude, heading.
+pub fn rows(v: &Value) -> Vec<[f64; 4]> {
+    serde_json::from_value(v["waypoints"].clone()).unwrap()
+}
+
+/// Asserts that every segment between consecutive rows is free on `grid` under `touch`.
+pub fn assert_segments_free(
+    grid: &skyplan_cspace::Grid2,
+    rows: &[[f64; 4]],
+    touch: skyplan_cspace::Touch,
+) {
+    for w in rows.windows(2) {
+        assert!(
+            grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch),
+            "{w:?}"
+        );
+    }
+}
+
+/// The Python with the peers: `SKYPLAN_PYTHON` (`.ci/run` sets its virtual environment), else
+/// `python3`.
+pub fn python() -> String {
+    std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string())
+}
+
+/// Asserts that no waypoint file was written in `dir` (`why` in the message).
+pub fn assert_no_waypoints(dir: &Path, why: &str) {
+    assert!(!dir.join("waypoints.json").exists(), "{why}");
+}
+
+/// A new temporary directory holding `files` (name, text).
+pub fn dir_with(files: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    dir
 }

@@ -1,0 +1,77 @@
+//! Test helpers shared by the tests of skyplan's 3D crates (a dev-dependency only): proptest
+//! strategies for random box worlds, box worlds from a few numbers, and the bundled city.
+
+use proptest::prelude::*;
+use skyplan_map::colliders::ObstacleBox;
+use skyplan_world3::{BoxWorld3, Neu, WorldSpec};
+use std::ops::Range;
+
+/// The bundled FCND city map's text (`data/colliders.csv`).
+pub const CITY_CSV: &str = include_str!("../../../data/colliders.csv");
+
+/// Random boxes with their centre north and east in 0..100 m, centre up in `up`, half sizes north
+/// and east in `half`, half height in `half_up`.
+pub fn arb_box(
+    up: Range<f64>,
+    half: Range<f64>,
+    half_up: Range<f64>,
+) -> impl Strategy<Value = ObstacleBox> {
+    (0.0..100.0, 0.0..100.0, up, half.clone(), half, half_up)
+        .prop_map(|(n, e, u, hn, he, hu)| ObstacleBox::from_row([n, e, u, hn, he, hu]))
+}
+
+/// Random points with north and east in 0..100 m and altitude in `alt`.
+pub fn arb_point(alt: Range<f64>) -> impl Strategy<Value = Neu> {
+    (0.0..100.0f64, 0.0..100.0f64, alt).prop_map(|(n, e, a)| [n, e, a])
+}
+
+/// A world spec from the ground (0 m) to `max_alt_m`.
+pub fn spec(safety_m: f64, max_alt_m: f64, margin_bounds_m: f64) -> WorldSpec {
+    WorldSpec {
+        safety_m,
+        min_alt_m: 0.0,
+        max_alt_m,
+        margin_bounds_m,
+    }
+}
+
+/// The world of `boxes` under [`spec`].
+pub fn box_world(
+    boxes: &[ObstacleBox],
+    safety_m: f64,
+    max_alt_m: f64,
+    margin_bounds_m: f64,
+) -> BoxWorld3 {
+    BoxWorld3::new(boxes, &spec(safety_m, max_alt_m, margin_bounds_m)).expect("valid spec")
+}
+
+/// The bundled city's boxes grown by `safety_m`, from the ground to `max_alt_m`, no margin
+/// added around the bounds.
+pub fn city_world(safety_m: f64, max_alt_m: f64) -> BoxWorld3 {
+    let map = skyplan_map::colliders::parse_colliders(CITY_CSV).unwrap();
+    box_world(&map.boxes, safety_m, max_alt_m, 0.0)
+}
+
+/// `boxes` that stand clear of a cage around `c` (more than 12 m off it in north or east), plus
+/// the cage: a closed hollow cube of six 1 m thick slabs, 18 m across, centred on `c`.
+pub fn caged(boxes: Vec<ObstacleBox>, c: Neu) -> Vec<ObstacleBox> {
+    let slab = |d: [f64; 3], h: [f64; 3]| {
+        ObstacleBox::from_row([c[0] + d[0], c[1] + d[1], c[2] + d[2], h[0], h[1], h[2]])
+    };
+    let mut all: Vec<ObstacleBox> = boxes
+        .into_iter()
+        .filter(|b| {
+            (b.north_m - c[0]).abs() > b.half_north_m + 12.0
+                || (b.east_m - c[1]).abs() > b.half_east_m + 12.0
+        })
+        .collect();
+    all.extend([
+        slab([-8.0, 0.0, 0.0], [1.0, 9.0, 9.0]),
+        slab([8.0, 0.0, 0.0], [1.0, 9.0, 9.0]),
+        slab([0.0, -8.0, 0.0], [9.0, 1.0, 9.0]),
+        slab([0.0, 8.0, 0.0], [9.0, 1.0, 9.0]),
+        slab([0.0, 0.0, -8.0], [9.0, 9.0, 1.0]),
+        slab([0.0, 0.0, 8.0], [9.0, 9.0, 1.0]),
+    ]);
+    all
+}
