@@ -78,6 +78,7 @@ mod planner_id;
 mod request;
 mod ride;
 mod session;
+mod summary;
 mod three_d;
 mod voronoi;
 mod world;

@@ -1,0 +1,194 @@
+//! The human-readable summary of a plan (`skyplan plan` without `--json`): `Display for Plan`.
+
+use crate::plan::Plan;
+use crate::planner_id::Family;
+use serde_json::Value;
+use std::fmt;
+
+fn ms(us: u64) -> f64 {
+    us as f64 / 1000.0
+}
+
+impl fmt::Display for Plan {
+    /// The human summary, a line per aspect (map, grid, ends, path, details, waypoints).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        summary(self, f)
+    }
+}
+
+fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let info = plan.planner.info();
+    match (plan.obstacles, &plan.home) {
+        (Some(n), Some(h)) => writeln!(
+            f,
+            "map        {}: {n} obstacles, home lat {:.6}, lon {:.6}",
+            plan.map, h.lat_deg, h.lon_deg
+        ),
+        _ => writeln!(f, "map        {}", plan.map),
+    }?;
+    if let Some(g) = &plan.grid {
+        let at = match plan.obstacles {
+            Some(_) => format!(" at {} m altitude, {} m margin", g.alt_m, g.safety_m),
+            None => String::new(),
+        };
+        writeln!(
+            f,
+            "grid       {} × {} cells of {} m{at}: {} blocked ({:.1} %), built in {:.2} ms",
+            g.rows,
+            g.cols,
+            g.cell_m,
+            g.blocked_cells,
+            100.0 * g.blocked_cells as f64 / (f64::from(g.rows) * f64::from(g.cols)).max(1.0),
+            ms(plan.timings_us.grid_build_us)
+        )?;
+    }
+    if let Some(v) = plan.details.get("flight_volume") {
+        let (lo, hi) = (&v["min"], &v["max"]);
+        let num = |x: &Value| x.as_f64().unwrap_or(f64::NAN);
+        writeln!(
+            f,
+            "volume     N {:.1}..{:.1} m, E {:.1}..{:.1} m, altitude {:.1}..{:.1} m, {} m margin around every box",
+            num(&lo[0]),
+            num(&hi[0]),
+            num(&lo[1]),
+            num(&hi[1]),
+            num(&lo[2]),
+            num(&hi[2]),
+            num(&plan.details["safety_m"])
+        )?;
+    }
+    writeln!(
+        f,
+        "start      {}{}",
+        plan.start,
+        altitude(plan, plan.start.alt_m)
+    )?;
+    writeln!(
+        f,
+        "goal       {}{}",
+        plan.goal,
+        altitude(plan, plan.goal.alt_m)
+    )?;
+    path_line(plan, f)?;
+    if let Some(octile_m) = plan.octile_optimum_m {
+        writeln!(
+            f,
+            "any-angle  {:.2} m: {:.1} % shorter than the octile optimum {octile_m:.2} m; straight line {:.2} m",
+            plan.cost_m,
+            100.0 * (1.0 - plan.cost_m / octile_m),
+            plan.straight_line_m
+        )?;
+    }
+    details(plan, f)?;
+    match (&plan.waypoint_counts, info.family) {
+        (Some(c), Family::Grid(_)) => writeln!(
+            f,
+            "waypoints  {} → {} after pruning → {} after line-of-sight shortcut; mission of {} waypoints, {:.2} m flown",
+            c.grid_path, c.after_pruning, c.after_shortcut, c.mission, plan.mission_length_m
+        ),
+        (Some(c), _) => writeln!(
+            f,
+            "waypoints  {} → {} after pruning (cell centres); {} waypoints, {:.2} m flown",
+            c.grid_path, c.after_pruning, c.mission, plan.mission_length_m
+        ),
+        (None, _) => writeln!(
+            f,
+            "waypoints  {}, {:.2} m flown; every segment re-checked against the map",
+            plan.waypoints.len(),
+            plan.mission_length_m
+        ),
+    }?;
+    Ok(())
+}
+
+fn altitude(plan: &Plan, alt_m: f64) -> String {
+    if plan.planner.info().dims == 3 {
+        format!(", altitude {alt_m:.2} m")
+    } else {
+        String::new()
+    }
+}
+
+fn path_line(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let info = plan.planner.info();
+    let model = plan.move_model.map(|m| format!(" {m}")).unwrap_or_default();
+    let shape = match (plan.path_cells, plan.straight_moves, plan.diagonal_moves) {
+        (Some(n), _, _) if plan.octile_optimum_m.is_some() => format!("{n} turning points"),
+        (Some(n), Some(s), Some(d)) => format!("{n} cells ({s} straight, {d} diagonal)"),
+        _ => format!("{} waypoints", plan.waypoints.len()),
+    };
+    let unit = if info.dims == 3 && !matches!(info.family, Family::Voxel) {
+        "samples"
+    } else {
+        "expansions"
+    };
+    writeln!(
+        f,
+        "path       {}{model}: {:.2} m, {shape}, {} {unit}, {:.2} ms",
+        info.label,
+        plan.cost_m,
+        plan.expansions,
+        ms(plan.search_time_us)
+    )
+}
+
+fn details(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let d = &plan.details;
+    if let Some(c) = d.get("costmap") {
+        writeln!(
+            f,
+            "costmap    objective {:.2} m (length + {} · cost), min clearance {}",
+            c["objective_m"].as_f64().unwrap_or(f64::NAN),
+            c["cost_weight"],
+            c["min_clearance_m"]
+                .as_f64()
+                .map_or("none within range".to_string(), |m| format!("{m:.2} m"))
+        )?;
+    }
+    if let Some(n) = d.get("nodes") {
+        let fallback = match d.get("fallback").and_then(Value::as_str) {
+            Some(why) => format!("; grid fallback: {why}"),
+            None => String::new(),
+        };
+        writeln!(
+            f,
+            "roadmap    Voronoi of {} boundary samples: {n} nodes, {} exactly free edges, {} components (largest {}), {:.2} ms{fallback}",
+            d["sites"],
+            d["edges"],
+            d["components"],
+            d["largest_component"],
+            d["build_time_us"].as_f64().unwrap_or(0.0) / 1000.0
+        )?;
+    }
+    if let Some(r) = d.get("roadmap") {
+        let file = |k: &str, label: &str| {
+            r[k].as_str()
+                .map(|p| format!(", {label} {p}"))
+                .unwrap_or_default()
+        };
+        writeln!(
+            f,
+            "roadmap    {} vertices, {} edges ({} unchecked), {} edge tests, {} edges removed{}",
+            r["vertices"],
+            r["edges"],
+            r["unchecked_edges"],
+            r["edges_tested"],
+            r["edges_removed"],
+            file("loaded_from", "loaded from")
+        )?;
+    }
+    if let Some(v) = d.get("voxel") {
+        writeln!(
+            f,
+            "voxels     {} of {} m × {} m layers ({} blocked), built in {:.2} ms; climbed {:.1} m, climb weight {}",
+            v["voxels"],
+            v["cell_m"],
+            v["layer_m"],
+            v["blocked"],
+            v["build_us"].as_f64().unwrap_or(0.0) / 1000.0,
+            v["climb_m"].as_f64().unwrap_or(0.0),
+            v["climb_weight"]
+        )?;
+    }
+    Ok(())
+}
