@@ -272,3 +272,35 @@ fn registry_families_cover_every_planner_and_help_lists_them() {
         assert_eq!(info.dims == 3, three_d, "{p}");
     }
 }
+
+/// The human summary states the plan's own numbers: its length, its waypoints, its ends.
+#[test]
+fn the_summary_tells_the_plans_numbers() {
+    for planner in [
+        PlannerId::JpsPlus,
+        PlannerId::RrtConnect,
+        PlannerId::Costmap,
+    ] {
+        let plan = city()
+            .plan(&PlanRequest {
+                planner: Some(planner),
+                goal_ne: Some([60.0, 40.0]),
+                seed: Some(3),
+                ..PlanRequest::default()
+            })
+            .unwrap();
+        let text = plan.to_string();
+        let path = text.lines().find(|l| l.starts_with("path ")).unwrap();
+        assert!(path.contains(&format!("{:.2} m", plan.cost_m)), "{path}");
+        let waypoints = text.lines().find(|l| l.starts_with("waypoints ")).unwrap();
+        assert!(
+            waypoints.contains(&format!("{:.2} m flown", plan.mission_length_m)),
+            "{waypoints}"
+        );
+        assert!(
+            text.contains(&format!("goal       {}", plan.goal)),
+            "{text}"
+        );
+        assert!(!text.contains("Some(") && !text.contains("None"), "{text}");
+    }
+}
