@@ -140,7 +140,18 @@ pub(crate) fn unreachable(
 /// Local points of the route: the exact start, the centres of the kept cells, the exact goal.
 /// The exact start replaces its cell's centre when the first segment stays free from there
 /// (likewise the goal); otherwise it is added as a short hop inside its own free cell.
-pub(crate) fn waypoint_points(
+///
+/// Public so that replanning in flight turns its cell paths into waypoints the same way.
+///
+/// ```
+/// use skyplan_cspace::{Cell, Grid2, Touch};
+/// let grid = Grid2::from_ascii("...\n...")?;
+/// let cells = [Cell::new(0, 0), Cell::new(0, 2)];
+/// let points = skyplan_plan::waypoint_points(&grid, &cells, [0.2, 0.3], [0.5, 2.9], Touch::Closed, 5.0);
+/// assert_eq!(points, vec![[0.2, 0.3, 5.0], [0.5, 2.9, 5.0]]);
+/// # Ok::<(), skyplan_cspace::GridError>(())
+/// ```
+pub fn waypoint_points(
     grid: &Grid2,
     cells: &[Cell],
     start: [f64; 2],

@@ -523,6 +523,28 @@ pub(crate) fn model_name(model: MoveModel) -> &'static str {
     }
 }
 
+/// The session's final re-check of a 2D grid route, for routes made outside a session (replanning
+/// in flight): every segment of `points` (north, east, alt) against `grid` under `touch`.
+///
+/// ```
+/// use skyplan_cspace::{Grid2, Touch};
+/// let grid = Grid2::from_ascii("...\n.#.\n...")?;
+/// assert!(skyplan_plan::recheck_grid_route(&grid, &[[0.5, 0.5, 5.0], [0.5, 2.5, 5.0]], Touch::Closed).is_ok());
+/// assert!(skyplan_plan::recheck_grid_route(&grid, &[[0.5, 0.5, 5.0], [2.5, 2.5, 5.0]], Touch::Closed).is_err());
+/// # Ok::<(), skyplan_cspace::GridError>(())
+/// ```
+pub fn recheck_grid_route(
+    grid: &Grid2,
+    points: &[[f64; 3]],
+    touch: Touch,
+) -> Result<(), PlanFailure> {
+    let check = Check::Grid {
+        grid: Arc::new(grid.clone()),
+        touch,
+    };
+    recheck(&Route::new(points.to_vec(), 0.0, check))
+}
+
 /// The final, independent re-check of every segment: no caller can skip it.
 fn recheck(route: &Route) -> Result<(), PlanFailure> {
     let p = &route.points;

@@ -1,0 +1,565 @@
+//! [`Replanner`]: the [`RouteWatcher`] that learns from readings and replans the route still to
+//! fly.
+
+use crate::dstar::DStarLite;
+use crate::world_model::WorldModel;
+use skyplan_cspace::{Cell, Grid2, GridFrame, Touch};
+use skyplan_flight::executor::Target;
+use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteDecision, RouteWatcher};
+use skyplan_plan::{Plan, PlanFailure, PlanRequest, Session};
+use skyplan_postprocess::{prune_collinear, shortcut, touch_for};
+use skyplan_search::{GridSearch, MoveModel, Planner};
+use std::fmt;
+use std::str::FromStr;
+use std::time::Instant;
+
+/// Which search replans.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum ReplannerKind {
+    /// D\* Lite, one search kept and repaired across replans (`dstar-lite`).
+    #[default]
+    DStarLite,
+    /// JPS from scratch on the known and learned grid at every replan (`scratch`).
+    Scratch,
+}
+
+impl ReplannerKind {
+    /// The name users type (`dstar-lite`, `scratch`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ReplannerKind::DStarLite => "dstar-lite",
+            ReplannerKind::Scratch => "scratch",
+        }
+    }
+}
+
+impl fmt::Display for ReplannerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A replanner name that is neither `dstar-lite` nor `scratch`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown replanner `{0}`: expected dstar-lite or scratch")]
+pub struct UnknownReplanner(pub String);
+
+impl FromStr for ReplannerKind {
+    type Err = UnknownReplanner;
+    /// ```
+    /// use skyplan_replan::ReplannerKind;
+    /// assert_eq!("scratch".parse(), Ok(ReplannerKind::Scratch));
+    /// assert!("dstar".parse::<ReplannerKind>().is_err());
+    /// ```
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "dstar-lite" => Ok(ReplannerKind::DStarLite),
+            "scratch" => Ok(ReplannerKind::Scratch),
+            other => Err(UnknownReplanner(other.to_string())),
+        }
+    }
+}
+
+/// Options of a [`Replanner`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReplanOptions {
+    /// The search that replans at the flight altitude.
+    pub replanner: ReplannerKind,
+    /// Highest altitude a replanned route may climb to, metres above home.
+    pub max_alt_m: f64,
+    /// Altitude step between the layers tried when climbing, metres.
+    pub climb_step_m: f64,
+}
+
+impl Default for ReplanOptions {
+    fn default() -> Self {
+        Self {
+            replanner: ReplannerKind::DStarLite,
+            max_alt_m: 30.0,
+            climb_step_m: 5.0,
+        }
+    }
+}
+
+/// What the replanner did so far (for the flight summary and `bench --replan`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReplanStats {
+    /// Readings received.
+    pub readings: u64,
+    /// Routes replaced.
+    pub replans: u64,
+    /// Holds decided.
+    pub holds: u64,
+    /// Wall-clock time of each replan, milliseconds.
+    pub latencies_ms: Vec<f64>,
+    /// Search expansions of each replan.
+    pub expansions: Vec<u64>,
+}
+
+impl ReplanStats {
+    /// The `p`-th percentile (0–100, nearest rank) of the replan latencies, milliseconds.
+    ///
+    /// ```
+    /// let stats = skyplan_replan::ReplanStats { latencies_ms: vec![3.0, 1.0, 2.0], ..Default::default() };
+    /// assert_eq!(stats.latency_percentile_ms(50.0), Some(2.0));
+    /// assert_eq!(stats.latency_percentile_ms(100.0), Some(3.0));
+    /// ```
+    pub fn latency_percentile_ms(&self, p: f64) -> Option<f64> {
+        percentile(&self.latencies_ms, p)
+    }
+}
+
+/// The `p`-th percentile (nearest rank) of `values`.
+pub(crate) fn percentile(values: &[f64], p: f64) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let rank = ((p.clamp(0.0, 100.0) / 100.0) * v.len() as f64).ceil() as usize;
+    v.get(rank.saturating_sub(1).min(v.len() - 1)).copied()
+}
+
+/// One altitude the replanner may fly at: the map's grid there and what was learned there.
+struct Layer {
+    alt_m: f64,
+    world: WorldModel,
+}
+
+/// A route found at one layer.
+struct Found {
+    points: Vec<[f64; 3]>,
+    expansions: u64,
+    planner: String,
+}
+
+/// The replanning brain: a [`RouteWatcher`] over a world model per flight altitude.
+///
+/// Built from a [`Session`] and the flight's [`PlanRequest`] (a 2D grid planner); it plans the
+/// first route itself ([`Replanner::initial_plan`]). On each reading it learns, and if a learned
+/// cell lies on the route still to fly (its segments against the learned cells, which are grown
+/// by the margin) it replans from the vehicle to the goal at the flight altitude (D\* Lite or JPS
+/// from scratch), else climbs (layers `alt + k · climb_step_m` up to `max_alt_m`), else holds.
+/// Every new route passes the planning API's grid re-check against the map's grid and against
+/// the known and learned grid of its altitude.
+///
+/// ```
+/// use skyplan_flight::sensing::{ObstacleReading, RouteDecision, RouteWatcher, SectorRange};
+/// use skyplan_plan::{PlanRequest, Session, World};
+/// use skyplan_replan::{ReplanOptions, Replanner};
+/// // A straight leg of the city's default route.
+/// let request = PlanRequest { start_ne: Some([250.5, -38.5]), goal_ne: Some([390.5, -58.5]), ..Default::default() };
+/// let mut replanner = Replanner::new(Session::new(World::fcnd_city()), &request, ReplanOptions::default())?;
+/// let route = replanner.initial_targets();
+/// assert_eq!(route.len(), 2);
+/// // Something 15 m ahead (bearing 350°), right on the route.
+/// let mut ranges = vec![SectorRange::Clear; 72];
+/// ranges[70] = SectorRange::Obstacle(15.0);
+/// let reading = ObstacleReading { time_s: 1.0, position_ned: [250.5, -38.5, -5.0], first_bearing_rad: 0.0,
+///     increment_rad: 5f64.to_radians(), min_range_m: 0.2, max_range_m: 30.0, ranges };
+/// match replanner.on_reading(&reading, &route) {
+///     RouteDecision::Replace { targets, event } => {
+///         assert!(event.reason.contains("learned obstacle"), "{}", event.reason);
+///         assert_eq!(event.planner, "dstar-lite");
+///         let last = targets.last().map(|t| (t.north_m, t.east_m));
+///         assert_eq!(last, Some((390.5, -58.5)));
+///         assert!(targets.len() > 2);
+///     }
+///     other => panic!("expected a new route, got {other:?}"),
+/// }
+/// # Ok::<(), skyplan_plan::PlanFailure>(())
+/// ```
+pub struct Replanner {
+    session: Session,
+    plan: Plan,
+    options: ReplanOptions,
+    model: MoveModel,
+    touch: Touch,
+    safety_m: f64,
+    goal_ne: [f64; 2],
+    layers: Vec<Layer>,
+    dstar: Option<DStarLite>,
+    pending: Vec<(Cell, bool)>,
+    search: GridSearch,
+    stats: ReplanStats,
+}
+
+impl Replanner {
+    /// Plans the first route with `request` (which must use a 2D grid planner, on a colliders
+    /// map or a grid map) and prepares the layers and, for D\* Lite, the search.
+    pub fn new(
+        mut session: Session,
+        request: &PlanRequest,
+        options: ReplanOptions,
+    ) -> Result<Self, PlanFailure> {
+        if !(options.max_alt_m.is_finite() && options.climb_step_m.is_finite())
+            || options.climb_step_m <= 0.0
+        {
+            return Err(PlanFailure::bad_request(format!(
+                "replanning: max_alt_m {} and climb_step_m {}: expected finite numbers, the step > 0",
+                options.max_alt_m, options.climb_step_m
+            )));
+        }
+        let plan = session.plan(request)?;
+        let Some(info) = plan.grid else {
+            return Err(PlanFailure::bad_request(format!(
+                "replanning needs a 2D grid planner (jps, jps-plus, a-star, …), not {}",
+                plan.planner
+            )));
+        };
+        let model = match (request.connectivity, request.corner_cutting) {
+            (Some(4), _) => MoveModel::FourConnected,
+            (_, Some(true)) => MoveModel::OctileCornerCutting,
+            _ => MoveModel::Octile,
+        };
+        let touch = touch_for(model);
+        let goal_ne = [plan.goal.north_m, plan.goal.east_m];
+        let mut layers = Vec::new();
+        let mut k = 0u32;
+        loop {
+            let alt_m = info.alt_m + f64::from(k) * options.climb_step_m;
+            if k > 0 && alt_m > options.max_alt_m + 1e-9 {
+                break;
+            }
+            let known = session.grid(alt_m, info.safety_m, info.cell_m)?;
+            layers.push(Layer {
+                alt_m,
+                world: WorldModel::new(known, info.safety_m),
+            });
+            k += 1;
+            if k > 1000 {
+                break;
+            }
+        }
+        let base = &layers[0].world;
+        let dstar = match options.replanner {
+            ReplannerKind::DStarLite => {
+                let grid = base.grid();
+                let start = cell_near(grid, [plan.start.north_m, plan.start.east_m]);
+                let goal = grid.cell_at_ne(goal_ne[0], goal_ne[1]);
+                match (start, goal) {
+                    (Some(s), Some(g)) => {
+                        let mut d = DStarLite::new(grid, s, g, model)
+                            .map_err(|e| PlanFailure::internal(format!("replanning: {e}")))?;
+                        d.compute();
+                        Some(d)
+                    }
+                    _ => None,
+                }
+            }
+            ReplannerKind::Scratch => None,
+        };
+        Ok(Self {
+            session,
+            plan,
+            options,
+            model,
+            touch,
+            safety_m: info.safety_m,
+            goal_ne,
+            layers,
+            dstar,
+            pending: Vec::new(),
+            search: GridSearch::new(),
+            stats: ReplanStats::default(),
+        })
+    }
+
+    /// The first route, as the session planned it.
+    pub fn initial_plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The first route's waypoints as targets (north, east, alt, heading).
+    pub fn initial_targets(&self) -> Vec<Target> {
+        self.plan
+            .waypoints
+            .iter()
+            .map(|w| Target {
+                north_m: w[0],
+                east_m: w[1],
+                alt_m: w[2],
+                heading_rad: w[3],
+            })
+            .collect()
+    }
+
+    /// The session (its world and caches).
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    /// Where the grids lie: origin and cell size (every layer shares it).
+    pub fn grid_frame(&self) -> GridFrame {
+        self.layers[0].world.known().frame()
+    }
+
+    /// The world model at the flight altitude.
+    pub fn world(&self) -> &WorldModel {
+        &self.layers[0].world
+    }
+
+    /// Learned cells at every layer: altitude, then the cells' centres (north, east, metres).
+    pub fn learned_points_ne(&self) -> Vec<(f64, Vec<[f64; 2]>)> {
+        self.layers
+            .iter()
+            .map(|l| (l.alt_m, l.world.learned_points_ne()))
+            .filter(|(_, p)| !p.is_empty())
+            .collect()
+    }
+
+    /// Cells learned as occupied, summed over the layers.
+    pub fn learned_count(&self) -> usize {
+        self.layers.iter().map(|l| l.world.learned_count()).sum()
+    }
+
+    /// What was done so far.
+    pub fn stats(&self) -> &ReplanStats {
+        &self.stats
+    }
+
+    /// The layer an altitude belongs to (nearest).
+    fn layer_of(&self, alt_m: f64) -> usize {
+        let k = ((alt_m - self.layers[0].alt_m) / self.options.climb_step_m).round();
+        if k.is_finite() && k > 0.0 {
+            (k as usize).min(self.layers.len() - 1)
+        } else {
+            0
+        }
+    }
+
+    /// The first learned cell on the route still to fly, and the index of the target whose leg
+    /// it blocks.
+    fn blocked_leg(&self, from_ne: [f64; 3], route: &[Target]) -> Option<(Cell, usize, usize)> {
+        let mut prev = from_ne;
+        for (i, t) in route.iter().enumerate() {
+            let next = [t.north_m, t.east_m, t.alt_m];
+            let (la, lb) = (self.layer_of(prev[2]), self.layer_of(next[2]));
+            if la == lb && (prev[0], prev[1]) != (next[0], next[1]) {
+                let world = &self.layers[la].world;
+                if !world.grid().segment_is_free_ne(
+                    (prev[0], prev[1]),
+                    (next[0], next[1]),
+                    self.touch,
+                ) && let Some(cell) =
+                    first_learned_on(world, [prev[0], prev[1]], [next[0], next[1]], self.touch)
+                {
+                    return Some((cell, i, la));
+                }
+            }
+            prev = next;
+        }
+        None
+    }
+
+    /// A route from `from` to the goal at layer `k`, checked; `None` if there is none.
+    fn route_at(&mut self, k: usize, from: [f64; 2]) -> Option<Found> {
+        let grid = self.layers[k].world.grid();
+        let start = cell_near(grid, from)?;
+        let goal = grid.cell_at_ne(self.goal_ne[0], self.goal_ne[1])?;
+        let (cells, expansions, planner) = match (&mut self.dstar, k) {
+            (Some(d), 0) => {
+                let before = d.expansions();
+                d.update_cells(&self.pending);
+                self.pending.clear();
+                d.move_start(start);
+                let path = d.compute()?;
+                (
+                    path.cells,
+                    d.expansions() - before,
+                    "dstar-lite".to_string(),
+                )
+            }
+            _ => {
+                let path = self
+                    .search
+                    .search(grid, start, goal, self.model, Planner::Jps)
+                    .ok()?;
+                let name = if k == 0 { "scratch" } else { "scratch-climb" };
+                (path.cells, path.expansions, name.to_string())
+            }
+        };
+        let alt_m = self.layers[k].alt_m;
+        let kept = shortcut(grid, &prune_collinear(&cells), self.touch);
+        let points =
+            skyplan_plan::waypoint_points(grid, &kept, from, self.goal_ne, self.touch, alt_m);
+        // The re-checks: the map's grid (the planning API's check), then known and learned; a
+        // first hop out of a learned margin the vehicle is already in is exempt from the latter.
+        let known = self.layers[k].world.known();
+        skyplan_plan::recheck_grid_route(known, &points, self.touch).ok()?;
+        let inside = grid
+            .cell_at_ne(from[0], from[1])
+            .is_none_or(|c| grid.is_blocked(c));
+        let checked = if inside && points.len() > 2 {
+            &points[1..]
+        } else {
+            &points[..]
+        };
+        skyplan_plan::recheck_grid_route(grid, checked, self.touch).ok()?;
+        Some(Found {
+            points,
+            expansions,
+            planner,
+        })
+    }
+
+    fn replan(&mut self, reading: &ObstacleReading, reason: String, t0: Instant) -> RouteDecision {
+        let [n, e, d] = reading.position_ned;
+        let alt_m = -d;
+        let from = [n, e];
+        let here = self.layer_of(alt_m);
+        let mut tried = Vec::new();
+        for k in here..self.layers.len() {
+            tried.push(format!("{:.1}", self.layers[k].alt_m));
+            let Some(found) = self.route_at(k, from) else {
+                continue;
+            };
+            let mut points = found.points;
+            if k != here || (alt_m - self.layers[k].alt_m).abs() > 0.5 {
+                // Climb over where the vehicle is first.
+                points.insert(0, [n, e, self.layers[k].alt_m]);
+                if points.len() > 1 && (points[1][0], points[1][1]) == (n, e) {
+                    points.remove(1);
+                }
+            }
+            let targets = targets_from(&points, [n, e]);
+            let route_length_m = length_m([n, e, alt_m], &points);
+            let latency_ms = t0.elapsed().as_secs_f64() * 1e3;
+            self.stats.replans += 1;
+            self.stats.latencies_ms.push(latency_ms);
+            self.stats.expansions.push(found.expansions);
+            let reason = if k == here {
+                reason
+            } else {
+                format!(
+                    "{reason}; no way round at {:.1} m, climbing to {:.1} m",
+                    self.layers[here].alt_m, self.layers[k].alt_m
+                )
+            };
+            return RouteDecision::Replace {
+                targets,
+                event: ReplanEvent {
+                    time_s: reading.time_s,
+                    position_ned: reading.position_ned,
+                    reason,
+                    planner: found.planner,
+                    latency_ms,
+                    expansions: found.expansions,
+                    route_length_m,
+                    learned_cells: self.learned_count(),
+                },
+            };
+        }
+        self.stats.holds += 1;
+        RouteDecision::Hold {
+            reason: format!(
+                "{reason}, and no route to the goal (N {:.1} E {:.1}) was found from N {n:.1} E {e:.1}: planned at {} m (up to the limit of {:.1} m) with the {:.1} m margin around the map's obstacles and {} learned cells",
+                self.goal_ne[0],
+                self.goal_ne[1],
+                tried.join(", "),
+                self.options.max_alt_m,
+                self.safety_m,
+                self.learned_count()
+            ),
+        }
+    }
+}
+
+impl RouteWatcher for Replanner {
+    fn on_reading(&mut self, reading: &ObstacleReading, route: &[Target]) -> RouteDecision {
+        let t0 = Instant::now();
+        self.stats.readings += 1;
+        let [n, e, d] = reading.position_ned;
+        if !(n.is_finite() && e.is_finite() && d.is_finite()) {
+            return RouteDecision::Keep;
+        }
+        let k = self.layer_of(-d);
+        let changed = self.layers[k].world.apply(reading);
+        if k == 0 && self.dstar.is_some() {
+            self.pending.extend(changed);
+        }
+        let Some((cell, target, layer)) = self.blocked_leg([n, e, -d], route) else {
+            return RouteDecision::Keep;
+        };
+        let (cn, ce) = self.layers[layer].world.known().center_ne(cell);
+        let t = &route[target];
+        let reason = format!(
+            "learned obstacle at N {cn:.1} E {ce:.1} blocks the leg to waypoint {} (N {:.1} E {:.1}, {} still to fly)",
+            target + 1,
+            t.north_m,
+            t.east_m,
+            route.len()
+        );
+        self.replan(reading, reason, t0)
+    }
+}
+
+/// The free cell holding `ne`, else the nearest free cell.
+fn cell_near(grid: &Grid2, ne: [f64; 2]) -> Option<Cell> {
+    match grid.cell_at_ne(ne[0], ne[1]) {
+        Some(c) if !grid.is_blocked(c) => Some(c),
+        _ => grid.nearest_free_ne(ne[0], ne[1]),
+    }
+}
+
+/// The first learned cell along the cells a segment crosses (in order from `a`).
+fn first_learned_on(world: &WorldModel, a: [f64; 2], b: [f64; 2], touch: Touch) -> Option<Cell> {
+    let grid = world.known();
+    let (ca, cb) = (grid.cell_at_ne(a[0], a[1])?, grid.cell_at_ne(b[0], b[1])?);
+    let mut found = None;
+    Grid2::supercover(ca, cb, touch, |r, c| {
+        if let Some(cell) = grid.checked_cell(r, c)
+            && world.is_learned(cell)
+        {
+            found = Some(cell);
+            return false;
+        }
+        true
+    });
+    found
+}
+
+/// Targets with FCND headings (towards each target from the one before; kept when climbing).
+fn targets_from(points: &[[f64; 3]], from_ne: [f64; 2]) -> Vec<Target> {
+    let mut prev = (from_ne[0], from_ne[1]);
+    let mut heading: Option<f64> = None;
+    let mut out: Vec<Target> = points
+        .iter()
+        .map(|p| {
+            let here = (p[0], p[1]);
+            if here != prev {
+                heading = Some(skyplan_mission::heading_rad(prev, here));
+            }
+            prev = here;
+            Target {
+                north_m: p[0],
+                east_m: p[1],
+                alt_m: p[2],
+                heading_rad: heading.unwrap_or(f64::NAN),
+            }
+        })
+        .collect();
+    // Targets before the first horizontal move take its heading.
+    let first = out
+        .iter()
+        .map(|t| t.heading_rad)
+        .find(|h| !h.is_nan())
+        .unwrap_or(0.0);
+    for t in &mut out {
+        if t.heading_rad.is_nan() {
+            t.heading_rad = first;
+        }
+    }
+    out
+}
+
+fn length_m(from: [f64; 3], points: &[[f64; 3]]) -> f64 {
+    let mut prev = from;
+    let mut total = 0.0;
+    for p in points {
+        total +=
+            ((p[0] - prev[0]).powi(2) + (p[1] - prev[1]).powi(2) + (p[2] - prev[2]).powi(2)).sqrt();
+        prev = *p;
+    }
+    total
+}

@@ -1,0 +1,184 @@
+//! End to end without a network: fly the city's default route with buildings the map does not
+//! know, sensing them with a simulated range sensor, and replanning around them.
+
+mod common;
+
+use common::{fly, segment_meets_box};
+use skyplan_map::colliders::{ObstacleBox, parse_colliders};
+use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
+use skyplan_replan::hidden::{HiddenSpec, place_hidden, true_world};
+use skyplan_replan::{ReplanOptions, Replanner, ReplannerKind};
+use skyplan_search::MoveModel;
+
+const SAFETY_M: f64 = 5.0;
+const ALT_M: f64 = 5.0;
+
+fn replanner(kind: ReplannerKind) -> Replanner {
+    let options = ReplanOptions {
+        replanner: kind,
+        ..Default::default()
+    };
+    Replanner::new(
+        Session::new(World::fcnd_city()),
+        &PlanRequest::default(),
+        options,
+    )
+    .expect("the default request plans")
+}
+
+/// Hidden buildings across the default route: one hand-placed across the long northbound leg,
+/// plus random ones (seeded) on or near the route.
+fn hidden_across_route(r: &Replanner) -> Vec<ObstacleBox> {
+    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
+    let route_ne: Vec<[f64; 2]> = r
+        .initial_plan()
+        .waypoints
+        .iter()
+        .map(|w| [w[0], w[1]])
+        .collect();
+    let spec = HiddenSpec {
+        count: 4,
+        seed: 11,
+        route_ne,
+        start_ne: [0.0, 0.0],
+        goal_ne: FCND_DEFAULT_GOAL_NE,
+        alt_m: ALT_M,
+        safety_m: SAFETY_M,
+        cell_m: 1.0,
+        model: MoveModel::Octile,
+    };
+    let mut hidden = place_hidden(&map, &spec).expect("room for the hidden buildings");
+    hidden.push(ObstacleBox {
+        north_m: 320.0,
+        east_m: -48.0,
+        up_m: 20.0,
+        half_north_m: 4.0,
+        half_east_m: 7.0,
+        half_up_m: 20.0,
+    });
+    hidden
+}
+
+fn flies_around_hidden_buildings(kind: ReplannerKind) {
+    let mut r = replanner(kind);
+    let hidden = hidden_across_route(&r);
+    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
+    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&hidden).copied().collect();
+    // The first plan flies through at least one hidden building: the test means something.
+    let first: Vec<[f64; 3]> = r
+        .initial_plan()
+        .waypoints
+        .iter()
+        .map(|w| [w[0], w[1], w[2]])
+        .collect();
+    let crosses = first
+        .windows(2)
+        .any(|w| hidden.iter().any(|b| segment_meets_box(w[0], w[1], b, 0.0)));
+    assert!(crosses, "no hidden building lies across the first plan");
+    let targets = r.initial_targets();
+    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 900.0);
+    assert!(flight.hold.is_none(), "held: {:?}", flight.hold);
+    assert!(
+        flight.reached_goal,
+        "did not reach the goal; last at {:?}",
+        flight.track.last()
+    );
+    let end = flight.track.last().copied().unwrap_or_default();
+    assert!((end[0] - FCND_DEFAULT_GOAL_NE[0]).hypot(end[1] - FCND_DEFAULT_GOAL_NE[1]) < 1e-6);
+    assert!(!flight.replans.is_empty(), "never replanned");
+    for e in &flight.replans {
+        assert_eq!(e.planner, kind.name(), "{}", e.reason);
+        assert!(
+            e.reason.starts_with("learned obstacle at N "),
+            "{}",
+            e.reason
+        );
+        assert!(e.route_length_m > 0.0 && e.learned_cells > 0);
+    }
+    // Never inside a true obstacle grown by half the margin.
+    for w in flight.track.windows(2) {
+        if let Some(b) = truth
+            .iter()
+            .find(|b| segment_meets_box(w[0], w[1], b, SAFETY_M / 2.0))
+        {
+            panic!(
+                "track {:?} → {:?} meets the box at N {} E {} grown by {} m",
+                w[0],
+                w[1],
+                b.north_m,
+                b.east_m,
+                SAFETY_M / 2.0
+            );
+        }
+    }
+    assert_eq!(r.stats().replans as usize, flight.replans.len());
+    // The flown track is no shorter than the optimum with full knowledge of the true world.
+    let flown: f64 = flight
+        .track
+        .windows(2)
+        .map(|w| {
+            ((w[1][0] - w[0][0]).powi(2)
+                + (w[1][1] - w[0][1]).powi(2)
+                + (w[1][2] - w[0][2]).powi(2))
+            .sqrt()
+        })
+        .sum();
+    let mut true_session =
+        Session::new(true_world(&World::fcnd_city(), &hidden).expect("true world"));
+    let optimum = true_session
+        .plan(&PlanRequest::default())
+        .expect("the true world has a path");
+    assert!(
+        flown >= optimum.cost_m * 0.99,
+        "flown {flown} m < full-knowledge octile optimum {} m",
+        optimum.cost_m
+    );
+}
+
+#[test]
+fn dstar_lite_flies_around_hidden_buildings_to_the_goal() {
+    flies_around_hidden_buildings(ReplannerKind::DStarLite);
+}
+
+#[test]
+fn scratch_flies_around_hidden_buildings_to_the_goal() {
+    flies_around_hidden_buildings(ReplannerKind::Scratch);
+}
+
+#[test]
+fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
+    let mut r = replanner(ReplannerKind::DStarLite);
+    let [gn, ge] = FCND_DEFAULT_GOAL_NE;
+    let wall = |dn: f64, de: f64, hn: f64, he: f64| ObstacleBox {
+        north_m: gn + dn,
+        east_m: ge + de,
+        up_m: 100.0,
+        half_north_m: hn,
+        half_east_m: he,
+        half_up_m: 100.0,
+    };
+    let ring = [
+        wall(16.0, 0.0, 1.0, 17.0),
+        wall(-16.0, 0.0, 1.0, 17.0),
+        wall(0.0, 16.0, 17.0, 1.0),
+        wall(0.0, -16.0, 17.0, 1.0),
+    ];
+    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
+    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&ring).copied().collect();
+    let targets = r.initial_targets();
+    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    assert!(!flight.reached_goal);
+    let reason = flight.hold.expect("a hold");
+    assert!(reason.contains("no route to the goal"), "{reason}");
+    assert!(
+        reason.contains("30.0"),
+        "the hold names the altitudes tried: {reason}"
+    );
+    for w in flight.track.windows(2) {
+        assert!(
+            !truth
+                .iter()
+                .any(|b| segment_meets_box(w[0], w[1], b, SAFETY_M / 2.0))
+        );
+    }
+}
