@@ -42,7 +42,12 @@ fn short_name(name: &str) -> &str {
 }
 
 /// Renders the picture of `plan` (which was planned with `geometry`).
-pub fn render(world: &World, plan: &Plan, kind: &PictureKind) -> Result<Vec<u8>> {
+pub fn render(
+    world: &World,
+    plan: &Plan,
+    kind: &PictureKind,
+    flight: Option<&skyplan_plot::FlightLayers>,
+) -> Result<Vec<u8>> {
     let geometry = plan.geometry.clone().unwrap_or_default();
     let info = plan.planner.info();
     let grid = plan.grid_used.as_deref();
@@ -92,6 +97,7 @@ pub fn render(world: &World, plan: &Plan, kind: &PictureKind) -> Result<Vec<u8>>
                 goal_ne: Some((plan.goal.north_m, plan.goal.east_m)),
                 graph_ne: &graph,
                 connectors_ne: &connectors,
+                flight,
             };
             skyplan_plot::render(&scene, *format, 1000, 1000).or_exit(Kind::Runtime)
         }

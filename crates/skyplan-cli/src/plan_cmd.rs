@@ -168,7 +168,7 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
         written.waypoints = Some((path.display().to_string(), format.name()));
     }
     if let Some((path, target, kind)) = &outputs.plot {
-        write_target(target, &crate::picture::render(world, plan, kind)?)?;
+        write_target(target, &crate::picture::render(world, plan, kind, None)?)?;
         written.plot = Some(path.display().to_string());
     }
     if let (Some((path, target)), Some(bytes)) = (&outputs.roadmap, &plan.saved_roadmap) {

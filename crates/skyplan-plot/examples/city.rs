@@ -74,6 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         goal_ne: Some(goal),
         graph_ne: &[],
         connectors_ne: &[],
+        flight: None,
     };
 
     let t = Instant::now();

@@ -21,6 +21,10 @@ const GOAL_COLOR: RGBColor = RGBColor(222, 30, 30);
 const GRID_LINE_COLOR: RGBColor = RGBColor(230, 230, 230);
 const FRAME_COLOR: RGBColor = RGBColor(40, 40, 40);
 const LEGEND_BORDER_COLOR: RGBColor = RGBColor(175, 175, 175);
+const HIDDEN_COLOR: RGBColor = RGBColor(150, 30, 40);
+const LEARNED_COLOR: RGBColor = RGBColor(230, 60, 150);
+const REPLANNED_COLOR: RGBColor = RGBColor(140, 70, 200);
+const TRACK_COLOR: RGBColor = RGBColor(20, 20, 20);
 
 fn err<E: std::fmt::Display>(e: E) -> PlotError {
     PlotError::Draw(e.to_string())
@@ -96,6 +100,28 @@ pub(crate) fn draw<DB: DrawingBackend>(
 
     // Paths: the raw grid path thin, the pruned one thick with a circle at each waypoint.
     let en = |&(n, e): &(f64, f64)| (e, n);
+    let flight_styles = (
+        REPLANNED_COLOR.stroke_width(px(2.4 * k)),
+        TRACK_COLOR.stroke_width(px(1.4 * k)),
+        px(2.5 * k),
+    );
+    if let Some(f) = scene.flight {
+        chart
+            .draw_series(f.hidden.iter().map(|o| {
+                let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
+                let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
+                Rectangle::new([nw, se], HIDDEN_COLOR.filled())
+            }))
+            .map_err(err)?;
+        let r = flight_styles.2;
+        chart
+            .draw_series(
+                f.learned_ne
+                    .iter()
+                    .map(|p| Circle::new(en(p), r, LEARNED_COLOR.filled())),
+            )
+            .map_err(err)?;
+    }
     let raw_style = RAW_COLOR.stroke_width(px(1.6 * k));
     let pruned_style = PRUNED_COLOR.stroke_width(px(3.0 * k));
     let (r_wp, r_end) = (px(4.5 * k), px(8.0 * k));
@@ -120,6 +146,16 @@ pub(crate) fn draw<DB: DrawingBackend>(
                 .map(|p| waypoint_marker(en(p), r_wp)),
         )
         .map_err(err)?;
+    if let Some(f) = scene.flight {
+        for route in f.replanned_ne {
+            chart
+                .draw_series(LineSeries::new(route.iter().map(en), flight_styles.0))
+                .map_err(err)?;
+        }
+        chart
+            .draw_series(LineSeries::new(f.track_ne.iter().map(en), flight_styles.1))
+            .map_err(err)?;
+    }
     if let Some(p) = scene.start_ne {
         chart
             .draw_series(std::iter::once(start_marker(en(&p), r_end)))
@@ -227,16 +263,30 @@ pub(crate) fn draw<DB: DrawingBackend>(
             },
         )?;
     }
-    let styles = [graph_style, connector_style, raw_style, pruned_style];
-    draw_legend(root, l, mode, styles, (r_wp, r_end))
+    let styles = [
+        graph_style,
+        connector_style,
+        raw_style,
+        pruned_style,
+        flight_styles.0,
+        flight_styles.1,
+    ];
+    draw_legend(root, l, mode, styles, (r_wp, r_end, flight_styles.2))
 }
 
 fn draw_legend<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     l: &PlotLayout,
     mode: TextMode,
-    [graph_style, connector_style, raw_style, pruned_style]: [ShapeStyle; 4],
-    (r_wp, r_end): (u32, u32),
+    [
+        graph_style,
+        connector_style,
+        raw_style,
+        pruned_style,
+        replanned_style,
+        track_style,
+    ]: [ShapeStyle; 6],
+    (r_wp, r_end, r_learned): (u32, u32, u32),
 ) -> Result<(), PlotError> {
     let legend = &l.legend;
     if legend.entries.is_empty() {
@@ -270,6 +320,12 @@ fn draw_legend<DB: DrawingBackend>(
                 .and_then(|()| root.draw(&waypoint_marker((cx, cy), r_wp))),
             LegendKind::Start => root.draw(&start_marker((cx, cy), r_end)),
             LegendKind::Goal => root.draw(&goal_marker((cx, cy), r_end)),
+            LegendKind::Hidden => root.draw(&swatch(HIDDEN_COLOR)),
+            LegendKind::Learned => {
+                root.draw(&Circle::new((cx, cy), r_learned, LEARNED_COLOR.filled()))
+            }
+            LegendKind::Replanned => root.draw(&line(replanned_style)),
+            LegendKind::Track => root.draw(&line(track_style)),
         }
         .map_err(err)?;
         let at = (x + sw + legend.text_gap, cy);

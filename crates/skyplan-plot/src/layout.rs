@@ -71,6 +71,10 @@ pub(crate) enum LegendKind {
     Pruned,
     Start,
     Goal,
+    Hidden,
+    Learned,
+    Replanned,
+    Track,
 }
 
 impl PlotLayout {
@@ -117,7 +121,7 @@ impl PlotLayout {
     /// let grid = Grid2::from_ascii("....\n....")?;
     /// let scene = Scene {
     ///     title: String::new(), grid: &grid, obstacles: &[], raw_path_ne: &[],
-    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[],
+    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[], flight: None,
     /// };
     /// let l = layout(&scene, 800, 600)?;
     /// let (x0, y0, _w, h) = l.plot_area();
@@ -295,6 +299,29 @@ fn legend_entries(scene: &Scene) -> Vec<LegendEntry> {
             LegendKind::Pruned,
             format!("waypoints ({})", points(scene.pruned_path_ne.len())),
         );
+    }
+    if let Some(f) = scene.flight {
+        if !f.hidden.is_empty() {
+            push(
+                LegendKind::Hidden,
+                format!("hidden obstacles ({})", f.hidden.len()),
+            );
+        }
+        if !f.learned_ne.is_empty() {
+            push(
+                LegendKind::Learned,
+                format!("learned cells ({})", f.learned_ne.len()),
+            );
+        }
+        if !f.replanned_ne.is_empty() {
+            push(
+                LegendKind::Replanned,
+                format!("replanned routes ({})", f.replanned_ne.len()),
+            );
+        }
+        if !f.track_ne.is_empty() {
+            push(LegendKind::Track, "flown track".into());
+        }
     }
     if scene.start_ne.is_some() {
         push(LegendKind::Start, "start".into());

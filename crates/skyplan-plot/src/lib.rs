@@ -33,6 +33,7 @@
 //!     goal_ne: Some(path[2]),
 //!     graph_ne: &[],
 //!     connectors_ne: &[],
+//!     flight: None,
 //! };
 //! let png = render_png(&scene, 640, 480)?;
 //! assert_eq!(&png[1..4], b"PNG");
@@ -91,6 +92,22 @@ pub struct Scene<'a> {
     pub graph_ne: &'a [Segment],
     /// Connectors from the start and the goal to the roadmap, drawn thin; empty for none.
     pub connectors_ne: &'a [Segment],
+    /// What a flight added (hidden obstacles, learned cells, replanned routes, the flown
+    /// track), for `skyplan fly --plot`; `None` for a plan.
+    pub flight: Option<&'a FlightLayers<'a>>,
+}
+
+/// A flight drawn over its plan: what the map did not show and what the vehicle did about it.
+#[derive(Debug, Clone, Default)]
+pub struct FlightLayers<'a> {
+    /// Obstacles present in the (simulated) world but absent from the map, drawn dark red.
+    pub hidden: &'a [ObstacleBox],
+    /// Centres of the cells the vehicle learned as occupied, (north, east).
+    pub learned_ne: &'a [(f64, f64)],
+    /// Each replanned route, (north, east) points from where the vehicle was to the goal.
+    pub replanned_ne: &'a [Vec<(f64, f64)>],
+    /// The flown track, (north, east).
+    pub track_ne: &'a [(f64, f64)],
 }
 
 /// A segment between two (north, east) points, metres.
@@ -110,6 +127,13 @@ impl Scene<'_> {
                     .chain(self.connectors_ne)
                     .flat_map(|&(a, b)| [a, b]),
             )
+            .chain(self.flight.into_iter().flat_map(|f| {
+                f.track_ne
+                    .iter()
+                    .chain(f.learned_ne)
+                    .chain(f.replanned_ne.iter().flatten())
+                    .copied()
+            }))
     }
 }
 

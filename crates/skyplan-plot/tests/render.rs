@@ -77,6 +77,7 @@ fn scene(f: &Fixture) -> Scene<'_> {
         goal_ne: f.pruned.last().copied(),
         graph_ne: &[],
         connectors_ne: &[],
+        flight: None,
     }
 }
 
@@ -217,6 +218,7 @@ fn north_is_up_east_is_right_and_scales_are_equal() {
         goal_ne: None,
         graph_ne: &[],
         connectors_ne: &[],
+        flight: None,
     };
     let (w, h) = (500, 500);
     let l = layout(&scene, w, h).unwrap();
@@ -381,6 +383,7 @@ fn empty_scene_and_points_outside_the_grid_still_render() {
         goal_ne: None,
         graph_ne: &[],
         connectors_ne: &[],
+        flight: None,
     };
     Image::decode(&render_png(&empty, 300, 300).unwrap());
     let f = fixture();
@@ -417,5 +420,66 @@ fn tick_labels_do_not_crowd() {
             .map(|&e| l.pixel_of_ne(0.0, e).0)
             .collect();
         assert!(xs.windows(2).all(|p| p[1] - p[0] >= 30), "{w}x{h}: {xs:?}");
+    }
+}
+
+/// A flight over its plan: the hidden box dark red where it stands, the learned cells and the
+/// replanned route and the track drawn where the layout puts them, all four in the legend.
+#[test]
+fn flight_layers_are_drawn_where_they_are_and_named_in_the_legend() {
+    let f = fixture();
+    let hidden = [ObstacleBox {
+        north_m: 5.0,
+        east_m: -15.0,
+        up_m: 10.0,
+        half_north_m: 2.0,
+        half_east_m: 2.0,
+        half_up_m: 10.0,
+    }];
+    let learned = [(5.0, -18.0)];
+    // The replanned route runs due east along N -10, the track due north along E 20: far from
+    // everything else drawn.
+    let replanned = [vec![(-10.0, -25.0), (-10.0, 0.0)]];
+    let track = [(-15.0, 20.0), (15.0, 20.0)];
+    let layers = skyplan_plot::FlightLayers {
+        hidden: &hidden,
+        learned_ne: &learned,
+        replanned_ne: &replanned,
+        track_ne: &track,
+    };
+    let mut s = scene(&f);
+    s.flight = Some(&layers);
+    let (w, h) = (800, 600);
+    let img = Image::decode(&render_png(&s, w, h).unwrap());
+    let l = layout(&s, w, h).unwrap();
+    let px = |(n, e): (f64, f64)| l.pixel_of_ne(n, e);
+    let hidden_px = img.at(px((5.0, -15.0)));
+    assert!(
+        hidden_px[0] > 120 && hidden_px[1] < 60 && hidden_px[2] < 70,
+        "hidden box {hidden_px:?}"
+    );
+    let learned_px = img.at(px(learned[0]));
+    assert!(
+        learned_px[0] > 200 && learned_px[2] > 120 && learned_px[1] < 100,
+        "learned cell {learned_px:?}"
+    );
+    let route_px = img.at(px((-10.0, -12.0)));
+    assert!(
+        route_px[2] > 170 && route_px[0] > 110 && route_px[1] < 100,
+        "replanned route {route_px:?}"
+    );
+    let track_px = img.at(px((0.0, 20.0)));
+    assert!(track_px.iter().all(|&c| c < 60), "track {track_px:?}");
+    // Where nothing of the flight is drawn, the picture is what it was without it.
+    let plain = Image::decode(&render_png(&scene(&f), w, h).unwrap());
+    assert!(is_white(plain.at(px((0.0, 20.0)))));
+    let svg = render_svg(&s, w, h).unwrap();
+    for label in [
+        "hidden obstacles (1)",
+        "learned cells (1)",
+        "replanned routes (1)",
+        "flown track",
+    ] {
+        assert!(svg.contains(label), "legend lacks {label}");
     }
 }
