@@ -58,6 +58,33 @@ pub struct GridInfo {
     pub blocked_cells: usize,
 }
 
+impl GridInfo {
+    /// The facts of `grid`, a slice at `alt_m` with obstacles grown by `safety_m`.
+    ///
+    /// ```
+    /// use skyplan_cspace::{Grid2, GridFrame};
+    /// let frame = GridFrame { origin_north_m: -2.0, origin_east_m: 0.0, cell_m: 0.5 };
+    /// let grid = Grid2::new(2, 3, vec![false, true, false, false, false, true], frame)?;
+    /// let info = skyplan_plan::GridInfo::of(&grid, 5.0, 3.0);
+    /// assert_eq!((info.rows, info.cols, info.blocked_cells), (2, 3, 2));
+    /// assert_eq!((info.origin_north_m, info.cell_m, info.alt_m), (-2.0, 0.5, 5.0));
+    /// # Ok::<(), skyplan_cspace::GridError>(())
+    /// ```
+    pub fn of(grid: &skyplan_cspace::Grid2, alt_m: f64, safety_m: f64) -> Self {
+        let f = grid.frame();
+        GridInfo {
+            rows: grid.rows(),
+            cols: grid.cols(),
+            cell_m: f.cell_m,
+            origin_north_m: f.origin_north_m,
+            origin_east_m: f.origin_east_m,
+            alt_m,
+            safety_m,
+            blocked_cells: grid.blocked_count(),
+        }
+    }
+}
+
 /// Latitude and longitude of the map's home.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Home {

@@ -423,19 +423,11 @@ fn assemble(
         .map(|w| skyplan_world3::distance_m(w[0], w[1]))
         .sum();
     let straight_line_m = skyplan_world3::distance_m(first, last);
-    let grid_info = route.grid.as_ref().filter(|_| info.dims == 2).map(|g| {
-        let f = g.frame();
-        GridInfo {
-            rows: g.rows(),
-            cols: g.cols(),
-            cell_m: f.cell_m,
-            origin_north_m: f.origin_north_m,
-            origin_east_m: f.origin_east_m,
-            alt_m: r.alt_m,
-            safety_m: r.safety_m,
-            blocked_cells: g.blocked_count(),
-        }
-    });
+    let grid_info = route
+        .grid
+        .as_ref()
+        .filter(|_| info.dims == 2)
+        .map(|g| GridInfo::of(g, r.alt_m, r.safety_m));
     let grid_planner = matches!(
         info.family,
         Family::Grid(_) | Family::Wavefront | Family::Costmap

@@ -66,14 +66,8 @@ pub(crate) fn check_grid_size(world: &World, cell_m: f64, what: &str) -> Result<
 /// alternating free and blocked cells, starting with free (a row starting blocked begins with 0).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct GridRuns {
-    pub rows: u32,
-    pub cols: u32,
-    pub cell_m: f64,
-    pub origin_north_m: f64,
-    pub origin_east_m: f64,
-    pub alt_m: f64,
-    pub safety_m: f64,
-    pub blocked_cells: usize,
+    #[serde(flatten)]
+    pub info: skyplan_plan::GridInfo,
     pub runs: Vec<Vec<u32>>,
 }
 
@@ -100,16 +94,8 @@ impl GridRuns {
                 out
             })
             .collect();
-        let f = grid.frame();
         Self {
-            rows: grid.rows(),
-            cols: grid.cols(),
-            cell_m: f.cell_m,
-            origin_north_m: f.origin_north_m,
-            origin_east_m: f.origin_east_m,
-            alt_m,
-            safety_m,
-            blocked_cells: grid.blocked_count(),
+            info: skyplan_plan::GridInfo::of(grid, alt_m, safety_m),
             runs,
         }
     }
