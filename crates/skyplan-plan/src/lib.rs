@@ -70,6 +70,7 @@
 
 mod any_angle;
 mod cell_search;
+mod config;
 mod failure;
 mod grid;
 mod navfn;
@@ -82,6 +83,7 @@ mod voronoi;
 mod world;
 
 pub use cell_search::CellSearch;
+pub use config::{ConfigError, ConfigText, parse_config_toml};
 pub use failure::{FailureKind, PlanFailure};
 pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, WaypointCounts};
 pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};
