@@ -33,6 +33,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+#[doc(hidden)]
+pub mod fuzzing;
+
 /// The messages the flight needs and their rates, Hz: GLOBAL_POSITION_INT, LOCAL_POSITION_NED,
 /// ATTITUDE, EXTENDED_SYS_STATE, MISSION_CURRENT, MISSION_ITEM_REACHED, GPS_GLOBAL_ORIGIN.
 pub const STREAM_RATES_HZ: [(u32, f64); 7] = [

@@ -32,6 +32,9 @@ use std::net::{SocketAddr, TcpListener};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+#[doc(hidden)]
+pub mod fuzzing;
+
 /// Simulated seconds after boot until the simulated EKF has a position, by default.
 pub const DEFAULT_EKF_DELAY_S: f64 = 5.0;
 
