@@ -697,6 +697,10 @@ fn handle_message(
         out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
         note(SimNote::Refused(text));
     };
+    // Addressed to another system (vehicles may share a network): not ours to obey.
+    if mavlink::Message::target_system_id(&message).is_some_and(|t| t != 0 && t != SYSTEM_ID) {
+        return out;
+    }
     match message {
         MavMessage::HEARTBEAT(h)
             if h.mavtype == MavType::MAV_TYPE_GCS

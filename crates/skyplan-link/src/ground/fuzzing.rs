@@ -68,7 +68,9 @@ impl GroundHarness {
             message,
         };
         let mut events: Vec<Event> = self.station.absorb(&r).into_iter().collect();
-        if let MavMessage::GLOBAL_POSITION_INT(g) = &r.message {
+        if let MavMessage::GLOBAL_POSITION_INT(g) = &r.message
+            && self.station.is_from_vehicle(&r)
+        {
             let at = global_lla(g);
             if let (Ok(convergence_rad), Ok(ned)) = (
                 grid_convergence_rad(&self.frame, at),
@@ -98,6 +100,11 @@ impl GroundHarness {
                 let _ = self.station.send(c, &self.frame, 0.0);
             }
         }
+    }
+
+    /// The executor's last telemetry, in the map's frame (for tests).
+    pub fn last_telemetry(&self) -> Option<Telemetry> {
+        self.executor.last_telemetry().cloned()
     }
 
     /// The executor's state now (for tests).
