@@ -29,34 +29,23 @@ impl Config {
     pub fn load(path: &Path) -> Result<Self> {
         let text = crate::files::read_text(path)?;
         let name = path.display();
-        let mut table: toml::Table =
-            toml::from_str(&text).map_err(|e| bad_input(format!("{name}: invalid config: {e}")))?;
+        let parsed = skyplan_plan::parse_config_toml(&text)
+            .map_err(|e| bad_input(format!("{name}: {e}")))?;
         let base = path.parent().unwrap_or(Path::new(""));
-        let mut take = |key: &str| -> Result<Option<String>> {
-            match table.remove(key) {
-                None => Ok(None),
-                Some(toml::Value::String(s)) => Ok(Some(s)),
-                Some(other) => Err(bad_input(format!(
-                    "{name}: {key}: expected a string, found {other}"
-                ))),
-            }
-        };
         let relative = |p: Option<String>| {
             p.map(|p| {
                 let p = PathBuf::from(p);
                 if p.is_relative() { base.join(p) } else { p }
             })
         };
-        let map = relative(take("map")?);
-        let out = relative(take("out")?);
-        let plot = relative(take("plot")?);
-        let format = take("format")?;
-        let request: PlanRequest = table
-            .try_into()
-            .map_err(|e| bad_input(format!("{name}: invalid config: {e}")))?;
-        if request.geometry.is_some() {
-            return Err(bad_input(format!("{name}: geometry is not a config key")));
-        }
+        let skyplan_plan::ConfigText {
+            request,
+            map,
+            out,
+            format,
+            plot,
+        } = parsed;
+        let (map, out, plot) = (relative(map), relative(out), relative(plot));
         Ok(Config {
             request,
             map,

@@ -74,10 +74,12 @@ pub fn output_target(option: &str, path: &Path) -> Result<Target> {
 /// file beside it, then a rename), so a reader never sees a half-written file.
 pub fn write_target(target: &Target, bytes: &[u8]) -> Result<()> {
     match target {
-        Target::Stdout => std::io::stdout()
-            .write_all(bytes)
-            .context("writing to standard output")
-            .or_exit(Kind::Runtime),
+        Target::Stdout => match std::io::stdout().write_all(bytes) {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => crate::exit_closed_stdout(),
+            other => other
+                .context("writing to standard output")
+                .or_exit(Kind::Runtime),
+        },
         Target::File(path) => write_atomic(path, bytes),
     }
 }

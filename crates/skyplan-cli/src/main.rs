@@ -25,7 +25,38 @@ use clap::Parser;
 use exit::Failure;
 use std::process::ExitCode;
 
+/// Exit status when standard output was closed by its reader (`skyplan … | head -1`): 128 +
+/// SIGPIPE, as `cat` or `grep` end in the same pipeline.
+pub const CLOSED_STDOUT_EXIT: i32 = 141;
+
+/// Ends the process quietly: the reader of standard output has gone, nobody is listening.
+pub fn exit_closed_stdout() -> ! {
+    std::process::exit(CLOSED_STDOUT_EXIT)
+}
+
+/// `print!` panics when standard output is a closed pipe (Rust ignores SIGPIPE and reports
+/// EPIPE as an error). That one panic ends the process quietly instead; every other panic keeps
+/// the default report.
+fn quiet_on_closed_stdout() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        // EPIPE is 32 on Linux and the BSDs; std's message ends with the OS error's text.
+        let epipe = std::io::Error::from_raw_os_error(32).to_string();
+        if message.starts_with("failed printing to std") && message.ends_with(&epipe) {
+            exit_closed_stdout();
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    quiet_on_closed_stdout();
     let cli = args::Cli::parse();
     let result = match cli.command {
         args::Command::Plan(a) => plan_cmd::run(*a),

@@ -23,6 +23,26 @@ fn skyplan(dir: &Path, args: &[&str]) -> (Option<i32>, String, String) {
 fn bad_input_table() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("bad.toml"), "alt_m = \"high\"\n").unwrap();
+    let city = skyplan_plan::FCND_CITY_CSV
+        .lines()
+        .take(3)
+        .collect::<Vec<_>>();
+    std::fs::write(
+        dir.path().join("far.csv"),
+        format!("{}\n1e308,0,10,5,5,5\n", city.join("\n")),
+    )
+    .unwrap();
+    // A scenario whose goal (2,0) is on the wall `@`.
+    std::fs::write(
+        dir.path().join("w.map"),
+        "type octile\nheight 3\nwidth 4\nmap\n..@.\n....\n....\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("w.scen"),
+        "version 1\n0\tw.map\t4\t3\t0\t0\t2\t0\t2.0\n",
+    )
+    .unwrap();
     let cases: &[(&[&str], i32, &str)] = &[
         (
             &["plan", "--alt-m", "-5"],
@@ -80,6 +100,29 @@ fn bad_input_table() {
         ),
         (&["bench", "--random", "0"], 2, "--random 0"),
         (&["plan", "--goal-ne", "5000,0"], 2, "off the map"),
+        // An overflowing box position names the file, line and field (was "a
+        // 18446744073709551615 × 921 grid has more than 400000000 cells").
+        (
+            &["plan", "--map", "far.csv"],
+            2,
+            "far.csv: line 4, column 1 (posX): expected metres within ±1000000",
+        ),
+        // Not "cost Some(7.41…)": the scenario's line and the blocked end.
+        (
+            &["scen", "w.map", "w.scen"],
+            1,
+            "line 2: no path: the start or goal is on a blocked cell",
+        ),
+        (
+            &["plan", "--goal-lla", "95,0"],
+            2,
+            "goal: invalid position: latitude 95° must be within ±84°",
+        ),
+        (
+            &["plan", "--random", "100000x100000", "--max-memory", "1G"],
+            2,
+            "a random 100000x100000 workspace needs about",
+        ),
     ];
     for (args, code, phrase) in cases {
         let (got, _, err) = skyplan(dir.path(), args);
@@ -87,6 +130,18 @@ fn bad_input_table() {
         assert!(err.contains(phrase), "{args:?}: {err:?} lacks {phrase:?}");
         for debug in ["Some(", "None", "panicked", "Error {"] {
             assert!(!err.contains(debug), "{args:?}: {err}");
+        }
+        // No repeated text ("invalid position …: invalid position …").
+        let first_line = err.lines().next().unwrap_or("");
+        for part in first_line.split(": ").filter(|p| p.len() > 12) {
+            assert_eq!(
+                first_line.matches(part).count(),
+                1,
+                "{args:?} repeats {part:?}: {err}"
+            );
+        }
+        if phrase.contains("random 100000x100000") {
+            assert!(!err.contains("cell size"), "{args:?}: {err}");
         }
         // A failing command writes nothing.
         assert!(
@@ -183,4 +238,65 @@ fn outputs_that_are_not_regular_files_survive() {
     );
     assert_eq!(code, Some(0), "{err}");
     assert!(out.lines().count() > 3, "{out}");
+}
+
+#[test]
+fn a_refused_connection_is_said_once() {
+    // A port nobody listens on: bind one, note it, close it.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let dir = tempfile::tempdir().unwrap();
+    let address = format!("tcp:127.0.0.1:{port}");
+    let (code, _, err) = skyplan(dir.path(), &["fly", "--connect", &address]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains(&format!("cannot open tcpout:127.0.0.1:{port}")),
+        "{err}"
+    );
+    assert_eq!(err.matches("Connection refused").count(), 1, "{err}");
+}
+
+/// `skyplan … | head -1`: the reader is gone before skyplan writes. Every command that prints
+/// ends quietly with 141 (128 + SIGPIPE, as `cat` does), never a panic.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[&[&str]] = &[
+        &["plan", "--random", "30x20", "--seed", "2", "--show"],
+        &["plan", "--random", "30x20", "--seed", "2", "--json"],
+        &[
+            "plan",
+            "--random",
+            "30x20",
+            "--seed",
+            "2",
+            "--home",
+            "37.79,-122.39",
+            "--out",
+            "-",
+            "--format",
+            "csv",
+        ],
+        &["plan", "--random", "30x20", "--seed", "2"],
+    ];
+    for args in cases {
+        // A pipe whose read end is closed before skyplan starts: every write meets EPIPE.
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_skyplan"))
+            .current_dir(dir.path())
+            .args(*args)
+            .stdout(writer)
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(141), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
 }

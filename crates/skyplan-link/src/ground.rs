@@ -33,6 +33,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+#[doc(hidden)]
+pub mod fuzzing;
+
 /// The messages the flight needs and their rates, Hz: GLOBAL_POSITION_INT, LOCAL_POSITION_NED,
 /// ATTITUDE, EXTENDED_SYS_STATE, MISSION_CURRENT, MISSION_ITEM_REACHED, GPS_GLOBAL_ORIGIN.
 pub const STREAM_RATES_HZ: [(u32, f64); 7] = [
@@ -576,11 +579,15 @@ impl GroundStation {
         }))
     }
 
+    /// The message comes from our vehicle (or any, before one has been heard).
+    fn is_from_vehicle(&self, r: &Received) -> bool {
+        self.vehicle
+            .is_none_or(|(sys, _)| u32::from(sys) == r.header.system_id)
+    }
+
     /// Updates what we know from one message; returns an executor event for acks and texts.
     fn absorb(&mut self, r: &Received) -> Option<Event> {
-        let from_vehicle = self
-            .vehicle
-            .is_none_or(|(sys, _)| u32::from(sys) == r.header.system_id);
+        let from_vehicle = self.is_from_vehicle(r);
         // Telemetry arrives: the stream requests work.
         self.streaming |= from_vehicle
             && matches!(
@@ -736,6 +743,7 @@ impl GroundStation {
                     events.push(e);
                 }
                 if let MavMessage::GLOBAL_POSITION_INT(g) = &r.message
+                    && self.is_from_vehicle(&r)
                     && last_global_ms != Some(g.time_boot_ms)
                     && (g.lat != 0 || g.lon != 0)
                     && let Ok(ned) = frame.ned_from_lla(global_lla(g))

@@ -37,7 +37,7 @@ pub enum LinkError {
         message: String,
     },
     /// Connecting, binding or accepting failed.
-    #[error("cannot open {address}: {source}")]
+    #[error("cannot open {address}")]
     Open {
         /// The address.
         address: String,

@@ -32,6 +32,9 @@ use std::net::{SocketAddr, TcpListener};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+#[doc(hidden)]
+pub mod fuzzing;
+
 /// Simulated seconds after boot until the simulated EKF has a position, by default.
 pub const DEFAULT_EKF_DELAY_S: f64 = 5.0;
 
@@ -694,6 +697,10 @@ fn handle_message(
         out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
         note(SimNote::Refused(text));
     };
+    // Addressed to another system (vehicles may share a network): not ours to obey.
+    if mavlink::Message::target_system_id(&message).is_some_and(|t| t != 0 && t != SYSTEM_ID) {
+        return out;
+    }
     match message {
         MavMessage::HEARTBEAT(h)
             if h.mavtype == MavType::MAV_TYPE_GCS

@@ -210,6 +210,9 @@ fn check_header(line: &str) -> Result<(), ParseError> {
     Ok(())
 }
 
+/// Largest |position| or half size of a box, metres: a map reaches 1000 km from its home at most.
+pub const MAX_EXTENT_M: f64 = 1.0e6;
+
 fn parse_box(line_no: usize, line: &str) -> Result<ObstacleBox, ParseError> {
     let fields: Vec<&str> = line.split(',').collect();
     if fields.len() != COLUMNS.len() {
@@ -236,6 +239,17 @@ fn parse_box(line_no: usize, line: &str) -> Result<ObstacleBox, ParseError> {
                 format!("expected {what} metres, found {}", shown(token)),
             )
         })?;
+        if v[i].abs() > MAX_EXTENT_M {
+            return Err(ParseError::new(
+                line_no,
+                Some(i + 1),
+                name,
+                format!(
+                    "expected metres within ±{MAX_EXTENT_M} (1000 km of the home), found {}",
+                    shown(token)
+                ),
+            ));
+        }
         if i >= 3 && v[i] < 0.0 {
             return Err(ParseError::new(
                 line_no,
@@ -266,6 +280,20 @@ mod tests {
 
     fn err(text: &str) -> ParseError {
         parse_colliders(text).expect_err("input should be rejected")
+    }
+
+    #[test]
+    fn a_box_a_thousand_km_away_is_refused_naming_line_and_field() {
+        let e = err(&format!("{HOME}{HEADER}1,2,3,4,5,6\n1e308,0,10,5,5,5\n"));
+        assert_eq!((e.line, e.column, e.field.as_str()), (4, Some(1), "posX"));
+        assert!(e.message.contains("within ±1000000"), "{e}");
+        let e = err(&format!("{HOME}{HEADER}0,0,0,5,2e6,5\n"));
+        assert_eq!(
+            (e.line, e.column, e.field.as_str()),
+            (3, Some(5), "halfSizeY")
+        );
+        let ok = parse_colliders(&format!("{HOME}{HEADER}-1e6,1e6,0,5,5,5\n")).unwrap();
+        assert_eq!(ok.boxes[0].north_m, -1e6);
     }
 
     #[test]

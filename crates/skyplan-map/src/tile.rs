@@ -103,7 +103,12 @@ mod tests {
     fn finite() -> impl Strategy<Value = f64> {
         prop_oneof![
             -1e6f64..1e6,
-            any::<f64>().prop_filter("finite", |x| x.is_finite()),
+            // Every bit pattern the parser accepts (finite, within the map's extent).
+            (-crate::colliders::MAX_EXTENT_M..=crate::colliders::MAX_EXTENT_M)
+                .prop_map(|x| x * 0.5f64.powi(60)),
+            any::<f64>().prop_filter("finite, within the extent", |x| {
+                x.abs() <= crate::colliders::MAX_EXTENT_M
+            }),
             Just(-0.0),
             Just(f64::MIN_POSITIVE),
             Just(5e-324),

@@ -70,6 +70,7 @@
 
 mod any_angle;
 mod cell_search;
+mod config;
 mod failure;
 mod grid;
 mod navfn;
@@ -84,6 +85,7 @@ mod voronoi;
 mod world;
 
 pub use cell_search::CellSearch;
+pub use config::{ConfigError, ConfigText, parse_config_toml};
 pub use failure::{FailureKind, PlanFailure};
 pub use grid::waypoint_points;
 pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, WaypointCounts};
