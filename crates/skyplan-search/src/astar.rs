@@ -1,10 +1,9 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
-use crate::nodes::PagedNodes;
+use crate::nodes::{PagedNodes, counts_cost};
 use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
-use std::f64::consts::SQRT_2;
 
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
@@ -186,6 +185,10 @@ impl GridSearch {
 
     /// A\* (Dijkstra without `HEURISTIC`), one copy per move model: `DIAGONALS` and
     /// `CORNER_CUTTING` are decided at compile time, not per node.
+    ///
+    /// Costs are kept as move counts (straight, diagonal) and turned into floats the same way
+    /// every time ([`counts_cost`]), so two equal costs — the many cells on open ground whose
+    /// `f` equals the optimum — have equal bits and take the queue's O(1) tie stack.
     fn astar<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
         &mut self,
         grid: &Grid2,
@@ -194,75 +197,77 @@ impl GridSearch {
     ) -> Result<GridPath, SearchError> {
         self.reset(grid, true);
         let blocked = grid.blocked_cells();
-        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
-        let (goal_r, goal_c) = (i64::from(goal.row), i64::from(goal.col));
-        let h = |r: i64, c: i64| -> f64 {
+        let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
+        let (goal_r, goal_c) = (goal.row as usize, goal.col as usize);
+        // The heuristic as move counts (straight, diagonal).
+        let h = |r: usize, c: usize| -> (u32, u32) {
             if !HEURISTIC {
-                return 0.0;
+                return (0, 0);
             }
-            let dr = (r - goal_r).abs() as f64;
-            let dc = (c - goal_c).abs() as f64;
+            let dr = r.abs_diff(goal_r) as u32;
+            let dc = c.abs_diff(goal_c) as u32;
             if DIAGONALS {
                 let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
-                (hi - lo) + lo * SQRT_2
+                (hi - lo, lo)
             } else {
-                dr + dc
+                (dr + dc, 0)
             }
         };
         let start_i = grid.index(start);
         let goal_i = grid.index(goal) as u32;
-        self.offer(
-            start_i,
-            0.0,
-            h(i64::from(start.row), i64::from(start.col)),
-            NO_PARENT,
-        );
-        let ucols = cols as usize;
+        let (sr, sc) = (start.row as usize, start.col as usize);
+        self.nodes.relax_counts(sr, sc, 0, 0, NO_PARENT);
+        let (hs, hd) = h(sr, sc);
+        self.queue
+            .push(key(counts_cost(hs, hd), 0.0, start_i as u32));
         let mut expansions = 0u64;
         while let Some(k) = self.queue.pop() {
             let index = key_index(k);
             let i = index as usize;
-            let (ur, uc) = self.nodes.rc(i);
-            let Some(g) = self.nodes.close(ur, uc) else {
+            let (r, c) = self.nodes.rc(i);
+            let Some((s, d)) = self.nodes.close_counts(r, c) else {
                 continue;
             };
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
             }
-            let (r, c) = (ur as i64, uc as i64);
             // Which neighbours are on the grid; away from the border all of them.
             let (has_s, has_n, has_w, has_e) = (r > 0, r + 1 < rows, c > 0, c + 1 < cols);
             let free = |ok: bool, j: usize| ok && !blocked[j];
-            let n = free(has_n, i + ucols);
-            let s = free(has_s, i.wrapping_sub(ucols));
+            let n = free(has_n, i + cols);
+            let so = free(has_s, i.wrapping_sub(cols));
             let e = free(has_e, i + 1);
             let w = free(has_w, i.wrapping_sub(1));
-            let g1 = g + 1.0;
             // A macro, not a closure: inlined for sure.
             macro_rules! try_move {
-                ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ng:expr) => {{
-                    let j: usize = $j;
-                    if $ok && self.nodes.relax($nr as usize, $nc as usize, $ng, index) {
-                        self.queue.push(key($ng + h($nr, $nc), $ng, j as u32));
+                ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr) => {{
+                    let (nr, nc): (usize, usize) = ($nr, $nc);
+                    if $ok && self.nodes.relax_counts(nr, nc, $ns, $nd, index) {
+                        let (hs, hd) = h(nr, nc);
+                        self.queue.push(key(
+                            counts_cost($ns + hs, $nd + hd),
+                            counts_cost($ns, $nd),
+                            $j as u32,
+                        ));
                     }
                 }};
             }
-            try_move!(n, i + ucols, r + 1, c, g1);
-            try_move!(s, i.wrapping_sub(ucols), r - 1, c, g1);
-            try_move!(e, i + 1, r, c + 1, g1);
-            try_move!(w, i.wrapping_sub(1), r, c - 1, g1);
+            try_move!(n, i + cols, r + 1, c, s + 1, d);
+            try_move!(so, i.wrapping_sub(cols), r.wrapping_sub(1), c, s + 1, d);
+            try_move!(e, i + 1, r, c + 1, s + 1, d);
+            try_move!(w, i.wrapping_sub(1), r, c.wrapping_sub(1), s + 1, d);
             if DIAGONALS {
-                let gd = g + SQRT_2;
                 let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
-                let ne = has_n && has_e && corner(n, e) && free(true, i + ucols + 1);
-                let nw = has_n && has_w && corner(n, w) && free(true, i + ucols - 1);
-                let se = has_s && has_e && corner(s, e) && free(true, i + 1 - ucols);
-                let sw = has_s && has_w && corner(s, w) && free(true, i - 1 - ucols);
-                try_move!(ne, i + ucols + 1, r + 1, c + 1, gd);
-                try_move!(nw, i + ucols - 1, r + 1, c - 1, gd);
-                try_move!(se, (i + 1).wrapping_sub(ucols), r - 1, c + 1, gd);
-                try_move!(sw, i.wrapping_sub(1).wrapping_sub(ucols), r - 1, c - 1, gd);
+                let ne = has_n && has_e && corner(n, e) && free(true, i + cols + 1);
+                let nw = has_n && has_w && corner(n, w) && free(true, i + cols - 1);
+                let se = has_s && has_e && corner(so, e) && free(true, i + 1 - cols);
+                let sw = has_s && has_w && corner(so, w) && free(true, i - 1 - cols);
+                try_move!(ne, i + cols + 1, r + 1, c + 1, s, d + 1);
+                try_move!(nw, i + cols - 1, r + 1, c.wrapping_sub(1), s, d + 1);
+                let (rs, ce, cw) = (r.wrapping_sub(1), c + 1, c.wrapping_sub(1));
+                try_move!(se, (i + 1).wrapping_sub(cols), rs, ce, s, d + 1);
+                try_move!(sw, i.wrapping_sub(1 + cols), rs, cw, s, d + 1);
             }
         }
         Err(SearchError::Unreachable { expansions })

@@ -10,6 +10,12 @@
 
 use crate::astar::NO_PARENT;
 
+/// `straight + √2 · diagonal`, always computed the same way: equal counts give equal bits.
+#[inline(always)]
+pub(crate) fn counts_cost(straight: u32, diagonal: u32) -> f64 {
+    f64::from(straight) + f64::from(diagonal) * std::f64::consts::SQRT_2
+}
+
 /// Tile side, as a shift: 8 cells.
 const SHIFT: usize = 3;
 const SIDE: usize = 1 << SHIFT;
@@ -191,6 +197,48 @@ impl PagedNodes {
             stamp: open,
         };
         true
+    }
+
+    /// Like [`PagedNodes::relax`] for A\*, which keeps a cost as its move counts (`straight`,
+    /// `diagonal`) in the node's `g` slot (so equal costs are equal bits, module
+    /// [`crate::astar`]); [`PagedNodes::g`] means nothing for such nodes.
+    #[inline(always)]
+    pub(crate) fn relax_counts(
+        &mut self,
+        r: usize,
+        c: usize,
+        straight: u32,
+        diagonal: u32,
+        parent: u32,
+    ) -> bool {
+        let open = self.open_stamp;
+        let n = self.node_mut(r, c);
+        if n.stamp == open + 1 {
+            return false;
+        }
+        let bits = (u64::from(diagonal) << 32) | u64::from(straight);
+        if n.stamp == open {
+            let old = n.g.to_bits();
+            if counts_cost(straight, diagonal) >= counts_cost(old as u32, (old >> 32) as u32) {
+                return false;
+            }
+        }
+        *n = Node {
+            g: f64::from_bits(bits),
+            parent,
+            stamp: open,
+        };
+        true
+    }
+
+    /// Like [`PagedNodes::close`] for nodes written by [`PagedNodes::relax_counts`]: the move
+    /// counts (straight, diagonal).
+    #[inline(always)]
+    pub(crate) fn close_counts(&mut self, r: usize, c: usize) -> Option<(u32, u32)> {
+        self.close(r, c).map(|g| {
+            let bits = g.to_bits();
+            (bits as u32, (bits >> 32) as u32)
+        })
     }
 
     /// Marks cell (r, c) expanded and returns its best cost, or `None` if it was expanded
