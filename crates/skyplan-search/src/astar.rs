@@ -1,6 +1,6 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
-use crate::nodes::{PagedNodes, counts_cost};
+use crate::nodes::{Node, PagedNodes, counts_cost};
 use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
@@ -12,6 +12,8 @@ pub struct GridSearch {
     /// ones (memory grows with the area searched, not with the map).
     pub(crate) nodes: PagedNodes,
     queue: BucketQueue,
+    /// The grid's blocked cells with a blocked one-cell border (flat A\*, [`PagedNodes::padded`]).
+    bordered: Vec<bool>,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
@@ -167,20 +169,155 @@ impl GridSearch {
         let dijkstra = planner == Planner::Dijkstra;
         match (model, dijkstra) {
             (MoveModel::FourConnected, false) => {
-                self.astar::<false, false, true>(grid, start, goal)
+                self.astar_any::<false, false, true>(grid, start, goal)
             }
             (MoveModel::FourConnected, true) => {
-                self.astar::<false, false, false>(grid, start, goal)
+                self.astar_any::<false, false, false>(grid, start, goal)
             }
-            (MoveModel::Octile, false) => self.astar::<true, false, true>(grid, start, goal),
-            (MoveModel::Octile, true) => self.astar::<true, false, false>(grid, start, goal),
+            (MoveModel::Octile, false) => self.astar_any::<true, false, true>(grid, start, goal),
+            (MoveModel::Octile, true) => self.astar_any::<true, false, false>(grid, start, goal),
             (MoveModel::OctileCornerCutting, false) => {
-                self.astar::<true, true, true>(grid, start, goal)
+                self.astar_any::<true, true, true>(grid, start, goal)
             }
             (MoveModel::OctileCornerCutting, true) => {
-                self.astar::<true, true, false>(grid, start, goal)
+                self.astar_any::<true, true, false>(grid, start, goal)
             }
         }
+    }
+
+    /// A\* on the flat node array (grids up to the flat limit), or on pages ([`GridSearch::astar`]).
+    fn astar_any<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
+        self.reset(grid, true);
+        match self.astar_flat::<DIAGONALS, CORNER_CUTTING, HEURISTIC>(grid, start, goal) {
+            Some(Ok(expansions)) => Ok(self.reconstruct(grid, grid.index(goal) as u32, expansions)),
+            Some(Err(expansions)) => Err(SearchError::Unreachable { expansions }),
+            None => self.astar::<DIAGONALS, CORNER_CUTTING, HEURISTIC>(grid, start, goal),
+        }
+    }
+
+    /// [`GridSearch::astar`] on the flat node array with a blocked border: every cell has eight
+    /// neighbours in the array, so there are no edge tests; a cell is its bordered index
+    /// everywhere (queue, nodes) but in `parent`, which holds grid indices. `None` if the nodes
+    /// are paged; else the expansions, `Ok` when the goal was reached.
+    fn astar_flat<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+    ) -> Option<Result<u64, u64>> {
+        let GridSearch {
+            nodes,
+            queue,
+            bordered,
+        } = self;
+        let (pool, open) = nodes.flat_pool()?;
+        let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
+        let w = cols + 2;
+        bordered.clear();
+        bordered.resize(w * (rows + 2), true);
+        for (r, row) in grid.blocked_cells().chunks_exact(cols).enumerate() {
+            let at = (r + 1) * w + 1;
+            bordered[at..at + cols].copy_from_slice(row);
+        }
+        let blocked = &bordered[..];
+        let closed = open + 1;
+        // Bordered coordinates: the goal's differences are the grid's.
+        let (goal_r, goal_c) = (goal.row as usize + 1, goal.col as usize + 1);
+        let h = |r: usize, c: usize| -> (u32, u32) {
+            if !HEURISTIC {
+                return (0, 0);
+            }
+            let dr = r.abs_diff(goal_r) as u32;
+            let dc = c.abs_diff(goal_c) as u32;
+            if DIAGONALS {
+                let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
+                (hi - lo, lo)
+            } else {
+                (dr + dc, 0)
+            }
+        };
+        let bits = |s: u32, d: u32| f64::from_bits((u64::from(d) << 32) | u64::from(s));
+        let start_p = (start.row as usize + 1) * w + start.col as usize + 1;
+        let goal_p = goal_r * w + goal_c;
+        pool[start_p] = Node {
+            g: bits(0, 0),
+            parent: NO_PARENT,
+            stamp: open,
+        };
+        let (hs, hd) = h(start.row as usize + 1, start.col as usize + 1);
+        queue.push(key(counts_cost(hs, hd), 0.0, start_p as u32));
+        let mut expansions = 0u64;
+        while let Some(k) = queue.pop() {
+            let p = key_index(k) as usize;
+            let node = &mut pool[p];
+            if node.stamp == closed {
+                continue;
+            }
+            node.stamp = closed;
+            let g_bits = node.g.to_bits();
+            let (s, d) = (g_bits as u32, (g_bits >> 32) as u32);
+            expansions += 1;
+            if p == goal_p {
+                return Some(Ok(expansions));
+            }
+            let (r, c) = (p / w, p % w);
+            let parent = ((r - 1) * cols + c - 1) as u32;
+            let up = &blocked[p + w - 1..p + w + 2];
+            let mid = &blocked[p - 1..p + 2];
+            let down = &blocked[p - w - 1..p - w + 2];
+            let (n, so, e, we) = (!up[1], !down[1], !mid[2], !mid[0]);
+            macro_rules! try_move {
+                ($ok:expr, $q:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr) => {{
+                    let q: usize = $q;
+                    if $ok {
+                        let (ns, nd): (u32, u32) = ($ns, $nd);
+                        let next = &mut pool[q];
+                        let better = next.stamp != closed
+                            && (next.stamp != open || {
+                                let old = next.g.to_bits();
+                                counts_cost(ns, nd) < counts_cost(old as u32, (old >> 32) as u32)
+                            });
+                        if better {
+                            *next = Node {
+                                g: bits(ns, nd),
+                                parent,
+                                stamp: open,
+                            };
+                            let (hs, hd) = h($nr, $nc);
+                            queue.push(key(
+                                counts_cost(ns + hs, nd + hd),
+                                counts_cost(ns, nd),
+                                q as u32,
+                            ));
+                        }
+                    }
+                }};
+            }
+            try_move!(n, p + w, r + 1, c, s + 1, d);
+            try_move!(so, p - w, r - 1, c, s + 1, d);
+            try_move!(e, p + 1, r, c + 1, s + 1, d);
+            try_move!(we, p - 1, r, c - 1, s + 1, d);
+            if DIAGONALS {
+                let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
+                try_move!(corner(n, e) && !up[2], p + w + 1, r + 1, c + 1, s, d + 1);
+                try_move!(corner(n, we) && !up[0], p + w - 1, r + 1, c - 1, s, d + 1);
+                try_move!(corner(so, e) && !down[2], p - w + 1, r - 1, c + 1, s, d + 1);
+                try_move!(
+                    corner(so, we) && !down[0],
+                    p - w - 1,
+                    r - 1,
+                    c - 1,
+                    s,
+                    d + 1
+                );
+            }
+        }
+        Some(Err(expansions))
     }
 
     /// A\* (Dijkstra without `HEURISTIC`), one copy per move model: `DIAGONALS` and
@@ -195,7 +332,6 @@ impl GridSearch {
         start: Cell,
         goal: Cell,
     ) -> Result<GridPath, SearchError> {
-        self.reset(grid, true);
         let blocked = grid.blocked_cells();
         let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
         let (goal_r, goal_c) = (goal.row as usize, goal.col as usize);

@@ -22,7 +22,8 @@ const SIDE: usize = 1 << SHIFT;
 const PAGE: usize = SIDE * SIDE;
 const NO_PAGE: u32 = u32::MAX;
 
-/// Largest grid (cells) whose nodes are one flat array: 2²² cells (4.2 M), 64 MiB.
+/// Largest grid (cells, with a one-cell border) whose nodes are one flat array: 2²² cells
+/// (4.2 M), 64 MiB.
 pub(crate) const FLAT_MAX_CELLS: usize = 1 << 22;
 
 /// Pool size above which the next query drops every page (256 MiB).
@@ -77,7 +78,7 @@ impl Default for PagedNodes {
 impl PagedNodes {
     /// Starts a query on a `rows × cols` grid.
     pub(crate) fn reset(&mut self, rows: u32, cols: u32) {
-        let cells = rows as usize * cols as usize;
+        let cells = (rows as usize + 2) * (cols as usize + 2);
         let same_grid = self.rows == rows && self.cols == cols as usize && !self.pool.is_empty();
         let too_big = !self.flat && self.pool.len() * std::mem::size_of::<Node>() > KEEP_BYTES;
         if !same_grid || too_big {
@@ -117,6 +118,20 @@ impl PagedNodes {
         )
     }
 
+    /// Flat layout: the index of cell (r, c) in a row-major array with a one-cell border
+    /// (`cols + 2` wide), so that every cell of the grid has eight neighbours in the array.
+    #[inline(always)]
+    pub(crate) fn padded(&self, r: usize, c: usize) -> usize {
+        (r + 1) * (self.cols + 2) + c + 1
+    }
+
+    /// The flat array (with its border, [`PagedNodes::padded`]) and the current query's open
+    /// stamp, or `None` if the nodes are paged.
+    #[inline]
+    pub(crate) fn flat_pool(&mut self) -> Option<(&mut [Node], u32)> {
+        self.flat.then_some((&mut self.pool[..], self.open_stamp))
+    }
+
     /// Row and column of a row-major index.
     #[inline(always)]
     pub(crate) fn rc(&self, i: usize) -> (usize, usize) {
@@ -128,7 +143,7 @@ impl PagedNodes {
     #[inline(always)]
     fn node(&self, r: usize, c: usize) -> Node {
         if self.flat {
-            return self.pool[r * self.cols + c];
+            return self.pool[self.padded(r, c)];
         }
         let (t, o) = self.tile(r, c);
         match self.table[t] {
@@ -141,7 +156,8 @@ impl PagedNodes {
     #[inline(always)]
     fn node_mut(&mut self, r: usize, c: usize) -> &mut Node {
         if self.flat {
-            return &mut self.pool[r * self.cols + c];
+            let p = self.padded(r, c);
+            return &mut self.pool[p];
         }
         let (t, o) = self.tile(r, c);
         let mut p = self.table[t];
