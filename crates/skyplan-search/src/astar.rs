@@ -1,10 +1,9 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
-use crate::nodes::PagedNodes;
+use crate::nodes::{Node, PagedNodes, counts_cost};
 use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
-use std::f64::consts::SQRT_2;
 
 /// Reusable A\*/Dijkstra workspace: create once, run many queries on grids of any size.
 #[derive(Debug, Default)]
@@ -13,6 +12,8 @@ pub struct GridSearch {
     /// ones (memory grows with the area searched, not with the map).
     pub(crate) nodes: PagedNodes,
     queue: BucketQueue,
+    /// The grid's blocked cells with a blocked one-cell border (flat A\*, [`PagedNodes::padded`]).
+    bordered: Vec<bool>,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
@@ -168,101 +169,241 @@ impl GridSearch {
         let dijkstra = planner == Planner::Dijkstra;
         match (model, dijkstra) {
             (MoveModel::FourConnected, false) => {
-                self.astar::<false, false, true>(grid, start, goal)
+                self.astar_any::<false, false, true>(grid, start, goal)
             }
             (MoveModel::FourConnected, true) => {
-                self.astar::<false, false, false>(grid, start, goal)
+                self.astar_any::<false, false, false>(grid, start, goal)
             }
-            (MoveModel::Octile, false) => self.astar::<true, false, true>(grid, start, goal),
-            (MoveModel::Octile, true) => self.astar::<true, false, false>(grid, start, goal),
+            (MoveModel::Octile, false) => self.astar_any::<true, false, true>(grid, start, goal),
+            (MoveModel::Octile, true) => self.astar_any::<true, false, false>(grid, start, goal),
             (MoveModel::OctileCornerCutting, false) => {
-                self.astar::<true, true, true>(grid, start, goal)
+                self.astar_any::<true, true, true>(grid, start, goal)
             }
             (MoveModel::OctileCornerCutting, true) => {
-                self.astar::<true, true, false>(grid, start, goal)
+                self.astar_any::<true, true, false>(grid, start, goal)
             }
         }
     }
 
-    /// A\* (Dijkstra without `HEURISTIC`), one copy per move model: `DIAGONALS` and
-    /// `CORNER_CUTTING` are decided at compile time, not per node.
-    fn astar<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+    /// A\* on the flat node array (grids up to the flat limit), or on pages ([`GridSearch::astar`]).
+    fn astar_any<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
         &mut self,
         grid: &Grid2,
         start: Cell,
         goal: Cell,
     ) -> Result<GridPath, SearchError> {
         self.reset(grid, true);
-        let blocked = grid.blocked_cells();
-        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
-        let (goal_r, goal_c) = (i64::from(goal.row), i64::from(goal.col));
-        let h = |r: i64, c: i64| -> f64 {
+        match self.astar_flat::<DIAGONALS, CORNER_CUTTING, HEURISTIC>(grid, start, goal) {
+            Some(Ok(expansions)) => Ok(self.reconstruct(grid, grid.index(goal) as u32, expansions)),
+            Some(Err(expansions)) => Err(SearchError::Unreachable { expansions }),
+            None => self.astar::<DIAGONALS, CORNER_CUTTING, HEURISTIC>(grid, start, goal),
+        }
+    }
+
+    /// [`GridSearch::astar`] on the flat node array with a blocked border: every cell has eight
+    /// neighbours in the array, so there are no edge tests; a cell is its bordered index
+    /// everywhere (queue, nodes) but in `parent`, which holds grid indices. `None` if the nodes
+    /// are paged; else the expansions, `Ok` when the goal was reached.
+    fn astar_flat<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+    ) -> Option<Result<u64, u64>> {
+        let GridSearch {
+            nodes,
+            queue,
+            bordered,
+        } = self;
+        let (pool, open) = nodes.flat_pool()?;
+        let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
+        let w = cols + 2;
+        bordered.clear();
+        bordered.resize(w * (rows + 2), true);
+        for (r, row) in grid.blocked_cells().chunks_exact(cols).enumerate() {
+            let at = (r + 1) * w + 1;
+            bordered[at..at + cols].copy_from_slice(row);
+        }
+        let blocked = &bordered[..];
+        let closed = open + 1;
+        // Bordered coordinates: the goal's differences are the grid's.
+        let (goal_r, goal_c) = (goal.row as usize + 1, goal.col as usize + 1);
+        let h = |r: usize, c: usize| -> (u32, u32) {
             if !HEURISTIC {
-                return 0.0;
+                return (0, 0);
             }
-            let dr = (r - goal_r).abs() as f64;
-            let dc = (c - goal_c).abs() as f64;
+            let dr = r.abs_diff(goal_r) as u32;
+            let dc = c.abs_diff(goal_c) as u32;
             if DIAGONALS {
                 let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
-                (hi - lo) + lo * SQRT_2
+                (hi - lo, lo)
             } else {
-                dr + dc
+                (dr + dc, 0)
+            }
+        };
+        let bits = |s: u32, d: u32| f64::from_bits((u64::from(d) << 32) | u64::from(s));
+        let start_p = (start.row as usize + 1) * w + start.col as usize + 1;
+        let goal_p = goal_r * w + goal_c;
+        pool[start_p] = Node {
+            g: bits(0, 0),
+            parent: NO_PARENT,
+            stamp: open,
+        };
+        let (hs, hd) = h(start.row as usize + 1, start.col as usize + 1);
+        queue.push(key(counts_cost(hs, hd), 0.0, start_p as u32));
+        let mut expansions = 0u64;
+        while let Some(k) = queue.pop() {
+            let p = key_index(k) as usize;
+            let node = &mut pool[p];
+            if node.stamp == closed {
+                continue;
+            }
+            node.stamp = closed;
+            let g_bits = node.g.to_bits();
+            let (s, d) = (g_bits as u32, (g_bits >> 32) as u32);
+            expansions += 1;
+            if p == goal_p {
+                return Some(Ok(expansions));
+            }
+            let (r, c) = (p / w, p % w);
+            let parent = ((r - 1) * cols + c - 1) as u32;
+            let up = &blocked[p + w - 1..p + w + 2];
+            let mid = &blocked[p - 1..p + 2];
+            let down = &blocked[p - w - 1..p - w + 2];
+            let (n, so, e, we) = (!up[1], !down[1], !mid[2], !mid[0]);
+            macro_rules! try_move {
+                ($ok:expr, $q:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr) => {{
+                    let q: usize = $q;
+                    if $ok {
+                        let (ns, nd): (u32, u32) = ($ns, $nd);
+                        let next = &mut pool[q];
+                        let better = next.stamp != closed
+                            && (next.stamp != open || {
+                                let old = next.g.to_bits();
+                                counts_cost(ns, nd) < counts_cost(old as u32, (old >> 32) as u32)
+                            });
+                        if better {
+                            *next = Node {
+                                g: bits(ns, nd),
+                                parent,
+                                stamp: open,
+                            };
+                            let (hs, hd) = h($nr, $nc);
+                            queue.push(key(
+                                counts_cost(ns + hs, nd + hd),
+                                counts_cost(ns, nd),
+                                q as u32,
+                            ));
+                        }
+                    }
+                }};
+            }
+            try_move!(n, p + w, r + 1, c, s + 1, d);
+            try_move!(so, p - w, r - 1, c, s + 1, d);
+            try_move!(e, p + 1, r, c + 1, s + 1, d);
+            try_move!(we, p - 1, r, c - 1, s + 1, d);
+            if DIAGONALS {
+                let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
+                try_move!(corner(n, e) && !up[2], p + w + 1, r + 1, c + 1, s, d + 1);
+                try_move!(corner(n, we) && !up[0], p + w - 1, r + 1, c - 1, s, d + 1);
+                try_move!(corner(so, e) && !down[2], p - w + 1, r - 1, c + 1, s, d + 1);
+                try_move!(
+                    corner(so, we) && !down[0],
+                    p - w - 1,
+                    r - 1,
+                    c - 1,
+                    s,
+                    d + 1
+                );
+            }
+        }
+        Some(Err(expansions))
+    }
+
+    /// A\* (Dijkstra without `HEURISTIC`), one copy per move model: `DIAGONALS` and
+    /// `CORNER_CUTTING` are decided at compile time, not per node.
+    ///
+    /// Costs are kept as move counts (straight, diagonal) and turned into floats the same way
+    /// every time ([`counts_cost`]), so two equal costs — the many cells on open ground whose
+    /// `f` equals the optimum — have equal bits and take the queue's O(1) tie stack.
+    fn astar<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
+        &mut self,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
+        let blocked = grid.blocked_cells();
+        let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
+        let (goal_r, goal_c) = (goal.row as usize, goal.col as usize);
+        // The heuristic as move counts (straight, diagonal).
+        let h = |r: usize, c: usize| -> (u32, u32) {
+            if !HEURISTIC {
+                return (0, 0);
+            }
+            let dr = r.abs_diff(goal_r) as u32;
+            let dc = c.abs_diff(goal_c) as u32;
+            if DIAGONALS {
+                let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
+                (hi - lo, lo)
+            } else {
+                (dr + dc, 0)
             }
         };
         let start_i = grid.index(start);
         let goal_i = grid.index(goal) as u32;
-        self.offer(
-            start_i,
-            0.0,
-            h(i64::from(start.row), i64::from(start.col)),
-            NO_PARENT,
-        );
-        let ucols = cols as usize;
+        let (sr, sc) = (start.row as usize, start.col as usize);
+        self.nodes.relax_counts(sr, sc, 0, 0, NO_PARENT);
+        let (hs, hd) = h(sr, sc);
+        self.queue
+            .push(key(counts_cost(hs, hd), 0.0, start_i as u32));
         let mut expansions = 0u64;
         while let Some(k) = self.queue.pop() {
             let index = key_index(k);
             let i = index as usize;
-            let (ur, uc) = self.nodes.rc(i);
-            let Some(g) = self.nodes.close(ur, uc) else {
+            let (r, c) = self.nodes.rc(i);
+            let Some((s, d)) = self.nodes.close_counts(r, c) else {
                 continue;
             };
             expansions += 1;
             if index == goal_i {
                 return Ok(self.reconstruct(grid, goal_i, expansions));
             }
-            let (r, c) = (ur as i64, uc as i64);
             // Which neighbours are on the grid; away from the border all of them.
             let (has_s, has_n, has_w, has_e) = (r > 0, r + 1 < rows, c > 0, c + 1 < cols);
             let free = |ok: bool, j: usize| ok && !blocked[j];
-            let n = free(has_n, i + ucols);
-            let s = free(has_s, i.wrapping_sub(ucols));
+            let n = free(has_n, i + cols);
+            let so = free(has_s, i.wrapping_sub(cols));
             let e = free(has_e, i + 1);
             let w = free(has_w, i.wrapping_sub(1));
-            let g1 = g + 1.0;
             // A macro, not a closure: inlined for sure.
             macro_rules! try_move {
-                ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ng:expr) => {{
-                    let j: usize = $j;
-                    if $ok && self.nodes.relax($nr as usize, $nc as usize, $ng, index) {
-                        self.queue.push(key($ng + h($nr, $nc), $ng, j as u32));
+                ($ok:expr, $j:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr) => {{
+                    let (nr, nc): (usize, usize) = ($nr, $nc);
+                    if $ok && self.nodes.relax_counts(nr, nc, $ns, $nd, index) {
+                        let (hs, hd) = h(nr, nc);
+                        self.queue.push(key(
+                            counts_cost($ns + hs, $nd + hd),
+                            counts_cost($ns, $nd),
+                            $j as u32,
+                        ));
                     }
                 }};
             }
-            try_move!(n, i + ucols, r + 1, c, g1);
-            try_move!(s, i.wrapping_sub(ucols), r - 1, c, g1);
-            try_move!(e, i + 1, r, c + 1, g1);
-            try_move!(w, i.wrapping_sub(1), r, c - 1, g1);
+            try_move!(n, i + cols, r + 1, c, s + 1, d);
+            try_move!(so, i.wrapping_sub(cols), r.wrapping_sub(1), c, s + 1, d);
+            try_move!(e, i + 1, r, c + 1, s + 1, d);
+            try_move!(w, i.wrapping_sub(1), r, c.wrapping_sub(1), s + 1, d);
             if DIAGONALS {
-                let gd = g + SQRT_2;
                 let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
-                let ne = has_n && has_e && corner(n, e) && free(true, i + ucols + 1);
-                let nw = has_n && has_w && corner(n, w) && free(true, i + ucols - 1);
-                let se = has_s && has_e && corner(s, e) && free(true, i + 1 - ucols);
-                let sw = has_s && has_w && corner(s, w) && free(true, i - 1 - ucols);
-                try_move!(ne, i + ucols + 1, r + 1, c + 1, gd);
-                try_move!(nw, i + ucols - 1, r + 1, c - 1, gd);
-                try_move!(se, (i + 1).wrapping_sub(ucols), r - 1, c + 1, gd);
-                try_move!(sw, i.wrapping_sub(1).wrapping_sub(ucols), r - 1, c - 1, gd);
+                let ne = has_n && has_e && corner(n, e) && free(true, i + cols + 1);
+                let nw = has_n && has_w && corner(n, w) && free(true, i + cols - 1);
+                let se = has_s && has_e && corner(so, e) && free(true, i + 1 - cols);
+                let sw = has_s && has_w && corner(so, w) && free(true, i - 1 - cols);
+                try_move!(ne, i + cols + 1, r + 1, c + 1, s, d + 1);
+                try_move!(nw, i + cols - 1, r + 1, c.wrapping_sub(1), s, d + 1);
+                let (rs, ce, cw) = (r.wrapping_sub(1), c + 1, c.wrapping_sub(1));
+                try_move!(se, (i + 1).wrapping_sub(cols), rs, ce, s, d + 1);
+                try_move!(sw, i.wrapping_sub(1 + cols), rs, cw, s, d + 1);
             }
         }
         Err(SearchError::Unreachable { expansions })

@@ -10,15 +10,14 @@
 use crate::jps::{DIRS, View, dir_index};
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
+use std::sync::Arc;
 
-/// A JPS+ planner bound to one grid and one corner rule.
+/// A JPS+ planner bound to one grid and one corner rule (a [`JpsPlusTable`] and a search
+/// workspace).
 #[derive(Debug)]
 pub struct JpsPlus<'g> {
     grid: &'g Grid2,
-    model: MoveModel,
-    table: Vec<[i32; 8]>,
-    /// Free-neighbour bit set of every cell (bit `k`: `DIRS[k]`).
-    masks: Vec<u8>,
+    table: JpsPlusTable,
     search: GridSearch,
 }
 
@@ -37,12 +36,51 @@ impl<'g> JpsPlus<'g> {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn new(grid: &'g Grid2, model: MoveModel) -> Self {
+        Self {
+            grid,
+            table: JpsPlusTable::build(Arc::new(grid.clone()), model),
+            search: GridSearch::new(),
+        }
+    }
+
+    /// The grid this planner was built for.
+    pub fn grid(&self) -> &'g Grid2 {
+        self.grid
+    }
+
+    /// Bytes held by the jump table.
+    pub fn table_bytes(&self) -> usize {
+        self.table.table_bytes()
+    }
+
+    /// An optimal path from `start` to `goal` (the same path [`crate::Planner::Jps`] returns).
+    pub fn search(&mut self, start: Cell, goal: Cell) -> Result<GridPath, SearchError> {
+        self.table.search(&mut self.search, start, goal)
+    }
+}
+
+/// The JPS+ preprocessing of one grid under one corner rule, owning its grid (`Arc`), so a
+/// planning session can keep it across requests; saved and loaded with
+/// [`JpsPlusTable::to_bytes`] / [`JpsPlusTable::from_bytes`] (file layout in [`crate::table_file`]).
+#[derive(Debug)]
+pub struct JpsPlusTable {
+    grid: Arc<Grid2>,
+    model: MoveModel,
+    pub(crate) table: Vec<[i32; 8]>,
+    /// Free-neighbour bit set of every cell (bit `k`: `DIRS[k]`).
+    masks: Vec<u8>,
+}
+
+impl JpsPlusTable {
+    /// Precomputes the jump table of `grid` (linear in its cells; `FourConnected` is built as
+    /// [`MoveModel::Octile`]).
+    pub fn build(grid: Arc<Grid2>, model: MoveModel) -> Self {
         let model = if model == MoveModel::FourConnected {
             MoveModel::Octile
         } else {
             model
         };
-        let view = View::new(grid, Cell::new(0, 0), model);
+        let view = View::new(&grid, Cell::new(0, 0), model);
         let (rows, cols) = (view.rows, view.cols);
         let mut table = vec![[0i32; 8]; grid.len()];
         for (k, &(dr, dc)) in DIRS.iter().enumerate() {
@@ -92,23 +130,49 @@ impl<'g> JpsPlus<'g> {
             model,
             table,
             masks,
-            search: GridSearch::new(),
         }
     }
 
-    /// The grid this planner was built for.
-    pub fn grid(&self) -> &'g Grid2 {
-        self.grid
+    /// A table read from a file: the masks are recomputed from the grid.
+    pub(crate) fn from_parts(grid: Arc<Grid2>, model: MoveModel, table: Vec<[i32; 8]>) -> Self {
+        let view = View::new(&grid, Cell::new(0, 0), model);
+        let cols = view.cols;
+        let masks = (0..grid.len() as i64)
+            .map(|i| view.neighbour_mask(i / cols, i % cols))
+            .collect();
+        Self {
+            grid,
+            model,
+            table,
+            masks,
+        }
     }
 
-    /// Bytes held by the jump table.
+    /// The grid this table was built for.
+    pub fn grid(&self) -> &Arc<Grid2> {
+        &self.grid
+    }
+
+    /// The corner rule it was built for ([`MoveModel::Octile`] or
+    /// [`MoveModel::OctileCornerCutting`]).
+    pub fn model(&self) -> MoveModel {
+        self.model
+    }
+
+    /// Bytes held by the jump table (not counting the grid).
     pub fn table_bytes(&self) -> usize {
         self.table.len() * std::mem::size_of::<[i32; 8]>() + self.masks.len()
     }
 
-    /// An optimal path from `start` to `goal` (the same path [`crate::Planner::Jps`] returns).
-    pub fn search(&mut self, start: Cell, goal: Cell) -> Result<GridPath, SearchError> {
-        let grid = self.grid;
+    /// An optimal path from `start` to `goal` on the table's grid (the same path
+    /// [`crate::Planner::Jps`] returns), with `search` as the workspace.
+    pub fn search(
+        &self,
+        search: &mut GridSearch,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
+        let grid = &*self.grid;
         crate::astar::check_endpoints(grid, start, goal)?;
         let view = View::new(grid, goal, self.model);
         let table = &self.table;
@@ -161,7 +225,6 @@ impl<'g> JpsPlus<'g> {
             best.map(|i| (r + i * dr, c + i * dc))
         };
         let masks = &self.masks;
-        self.search
-            .jump_point_search(grid, start, goal, &view, |_, _, i| masks[i], jump)
+        search.jump_point_search(grid, start, goal, &view, |_, _, i| masks[i], jump)
     }
 }

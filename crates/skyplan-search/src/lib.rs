@@ -29,11 +29,12 @@ mod jps_plus;
 mod nodes;
 pub mod oracle;
 mod queue;
+pub mod table_file;
 mod theta;
 
 pub use astar::GridSearch;
 pub use components::Components;
-pub use jps_plus::JpsPlus;
+pub use jps_plus::{JpsPlus, JpsPlusTable};
 
 use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;

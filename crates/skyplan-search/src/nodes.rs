@@ -10,13 +10,20 @@
 
 use crate::astar::NO_PARENT;
 
+/// `straight + √2 · diagonal`, always computed the same way: equal counts give equal bits.
+#[inline(always)]
+pub(crate) fn counts_cost(straight: u32, diagonal: u32) -> f64 {
+    f64::from(straight) + f64::from(diagonal) * std::f64::consts::SQRT_2
+}
+
 /// Tile side, as a shift: 8 cells.
 const SHIFT: usize = 3;
 const SIDE: usize = 1 << SHIFT;
 const PAGE: usize = SIDE * SIDE;
 const NO_PAGE: u32 = u32::MAX;
 
-/// Largest grid (cells) whose nodes are one flat array: 2²² cells (4.2 M), 64 MiB.
+/// Largest grid (cells, with a one-cell border) whose nodes are one flat array: 2²² cells
+/// (4.2 M), 64 MiB.
 pub(crate) const FLAT_MAX_CELLS: usize = 1 << 22;
 
 /// Pool size above which the next query drops every page (256 MiB).
@@ -71,7 +78,7 @@ impl Default for PagedNodes {
 impl PagedNodes {
     /// Starts a query on a `rows × cols` grid.
     pub(crate) fn reset(&mut self, rows: u32, cols: u32) {
-        let cells = rows as usize * cols as usize;
+        let cells = (rows as usize + 2) * (cols as usize + 2);
         let same_grid = self.rows == rows && self.cols == cols as usize && !self.pool.is_empty();
         let too_big = !self.flat && self.pool.len() * std::mem::size_of::<Node>() > KEEP_BYTES;
         if !same_grid || too_big {
@@ -111,6 +118,20 @@ impl PagedNodes {
         )
     }
 
+    /// Flat layout: the index of cell (r, c) in a row-major array with a one-cell border
+    /// (`cols + 2` wide), so that every cell of the grid has eight neighbours in the array.
+    #[inline(always)]
+    pub(crate) fn padded(&self, r: usize, c: usize) -> usize {
+        (r + 1) * (self.cols + 2) + c + 1
+    }
+
+    /// The flat array (with its border, [`PagedNodes::padded`]) and the current query's open
+    /// stamp, or `None` if the nodes are paged.
+    #[inline]
+    pub(crate) fn flat_pool(&mut self) -> Option<(&mut [Node], u32)> {
+        self.flat.then_some((&mut self.pool[..], self.open_stamp))
+    }
+
     /// Row and column of a row-major index.
     #[inline(always)]
     pub(crate) fn rc(&self, i: usize) -> (usize, usize) {
@@ -122,7 +143,7 @@ impl PagedNodes {
     #[inline(always)]
     fn node(&self, r: usize, c: usize) -> Node {
         if self.flat {
-            return self.pool[r * self.cols + c];
+            return self.pool[self.padded(r, c)];
         }
         let (t, o) = self.tile(r, c);
         match self.table[t] {
@@ -135,7 +156,8 @@ impl PagedNodes {
     #[inline(always)]
     fn node_mut(&mut self, r: usize, c: usize) -> &mut Node {
         if self.flat {
-            return &mut self.pool[r * self.cols + c];
+            let p = self.padded(r, c);
+            return &mut self.pool[p];
         }
         let (t, o) = self.tile(r, c);
         let mut p = self.table[t];
@@ -191,6 +213,48 @@ impl PagedNodes {
             stamp: open,
         };
         true
+    }
+
+    /// Like [`PagedNodes::relax`] for A\*, which keeps a cost as its move counts (`straight`,
+    /// `diagonal`) in the node's `g` slot (so equal costs are equal bits, module
+    /// [`crate::astar`]); [`PagedNodes::g`] means nothing for such nodes.
+    #[inline(always)]
+    pub(crate) fn relax_counts(
+        &mut self,
+        r: usize,
+        c: usize,
+        straight: u32,
+        diagonal: u32,
+        parent: u32,
+    ) -> bool {
+        let open = self.open_stamp;
+        let n = self.node_mut(r, c);
+        if n.stamp == open + 1 {
+            return false;
+        }
+        let bits = (u64::from(diagonal) << 32) | u64::from(straight);
+        if n.stamp == open {
+            let old = n.g.to_bits();
+            if counts_cost(straight, diagonal) >= counts_cost(old as u32, (old >> 32) as u32) {
+                return false;
+            }
+        }
+        *n = Node {
+            g: f64::from_bits(bits),
+            parent,
+            stamp: open,
+        };
+        true
+    }
+
+    /// Like [`PagedNodes::close`] for nodes written by [`PagedNodes::relax_counts`]: the move
+    /// counts (straight, diagonal).
+    #[inline(always)]
+    pub(crate) fn close_counts(&mut self, r: usize, c: usize) -> Option<(u32, u32)> {
+        self.close(r, c).map(|g| {
+            let bits = g.to_bits();
+            (bits as u32, (bits >> 32) as u32)
+        })
     }
 
     /// Marks cell (r, c) expanded and returns its best cost, or `None` if it was expanded

@@ -1,4 +1,4 @@
-//! The open list: a bucket queue over `f` whose current bucket is a 4-ary heap of packed keys.
+//! The open list: a bucket queue over `f` whose current bucket is sorted (plus a 4-ary heap of late keys).
 //!
 //! An entry is one `u128` key: the bits of `f` (non-negative floats order like their bit
 //! patterns), then the complement of the high 32 bits of `g`'s bits (larger `g` first on equal
@@ -6,10 +6,18 @@
 //!
 //! A\* with a consistent heuristic pops `f` in non-decreasing order and pushes keys at most a few
 //! cells above the current one, so most entries go to a bucket (`⌊f · BUCKETS_PER_CELL⌋`, an
-//! append to a reused vector) and only the current bucket is a heap. The pop order is exactly the
+//! append to a reused vector) and only the current bucket is ordered: sorted once when it
+//! becomes current, with a 4-ary heap for keys pushed into it later. The pop order is exactly the
 //! keys' order: buckets split `f` monotonically, and the heap orders everything inside the
 //! current bucket. Keys below the current bucket (rounding, inconsistent heuristics) join the
 //! heap, keys beyond the window wait in an overflow heap, so any key sequence pops in order.
+//!
+//! In bucket mode (A\*, Dijkstra) keys whose `f` equals the last popped `f` exactly — most keys
+//! on open ground, where the octile heuristic is exact along a whole fan of cells — go to a
+//! stack of cell indices instead of a heap: push and pop are O(1), and last in, first out among
+//! equal `f` goes deepest first like the `g` tie-break. Pops stay in `f` order (a heap key below
+//! the stack's `f` pops first); among equal `f` the order is the stack's, which A\* allows.
+//! Popped stack keys carry `f` and the index only (callers read `g` from their nodes).
 
 /// Buckets per cell of `f`.
 const BUCKETS_PER_CELL: f64 = 64.0;
@@ -124,9 +132,20 @@ pub(crate) struct BucketQueue {
     /// Bit `s` set iff bucket slot `s` is non-empty: empty buckets are skipped a word at a time.
     occupied: [u64; (WINDOW / 64) as usize],
     current: QuadHeap,
+    /// The keys of bucket `base` when it became current, sorted largest first (popped from the
+    /// end); keys pushed into it later go to `current`.
+    sorted: Vec<u128>,
     /// Keys with a bucket ≥ `base + WINDOW` when pushed.
     far: QuadHeap,
+    /// Bits of the `f` of the last key popped from a heap while `ties` was empty (`NO_TIE`
+    /// before the first): in bucket mode, keys with exactly this `f` skip the heaps.
+    tie_f: u64,
+    /// Cell indices of keys whose `f` is `tie_f`, popped last in, first out (module docs).
+    ties: Vec<u32>,
 }
+
+/// `tie_f` before any pop (no `f` of a key has these bits: keys are non-negative).
+const NO_TIE: u64 = u64::MAX;
 
 impl Default for BucketQueue {
     fn default() -> Self {
@@ -137,7 +156,10 @@ impl Default for BucketQueue {
             use_buckets: true,
             occupied: [0; (WINDOW / 64) as usize],
             current: QuadHeap::default(),
+            sorted: Vec::new(),
             far: QuadHeap::default(),
+            tie_f: NO_TIE,
+            ties: Vec::new(),
         }
     }
 }
@@ -158,12 +180,19 @@ impl BucketQueue {
         self.in_buckets = 0;
         self.base = 0;
         self.current.clear();
+        self.sorted.clear();
         self.far.clear();
+        self.ties.clear();
+        self.tie_f = NO_TIE;
     }
 
     /// Queues a key.
     #[inline(always)]
     pub(crate) fn push(&mut self, key: u128) {
+        if (key >> 64) as u64 == self.tie_f {
+            self.ties.push(key_index(key));
+            return;
+        }
         let b = bucket(key);
         if b <= self.base || !self.use_buckets {
             self.current.push(key);
@@ -205,18 +234,54 @@ impl BucketQueue {
         self.base + 1
     }
 
+    /// The smallest key of the current bucket (`sorted` or `current`).
+    #[inline(always)]
+    fn peek_current(&self) -> Option<u128> {
+        match (self.sorted.last(), self.current.peek()) {
+            (Some(&a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.copied().or(b),
+        }
+    }
+
+    /// Removes the smallest key of the current bucket.
+    #[inline(always)]
+    fn pop_current(&mut self) -> Option<u128> {
+        match (self.sorted.last(), self.current.peek()) {
+            (Some(&a), Some(b)) if b < a => self.current.pop(),
+            (Some(_), _) => self.sorted.pop(),
+            (None, _) => self.current.pop(),
+        }
+    }
+
     /// Removes the smallest key.
     #[inline(always)]
     pub(crate) fn pop(&mut self) -> Option<u128> {
-        if let Some(k) = self.current.pop() {
-            return Some(k);
+        if let Some(&index) = self.ties.last() {
+            // A key below `tie_f` (rounding) still comes first.
+            if self
+                .peek_current()
+                .is_none_or(|top| ((top >> 64) as u64) >= self.tie_f)
+            {
+                self.ties.pop();
+                return Some((u128::from(self.tie_f) << 64) | u128::from(index));
+            }
+            return self.pop_current();
         }
-        self.advance();
-        self.current.pop()
+        let k = match self.pop_current() {
+            Some(k) => k,
+            None => {
+                self.advance();
+                self.pop_current()?
+            }
+        };
+        if self.use_buckets {
+            self.tie_f = (k >> 64) as u64;
+        }
+        Some(k)
     }
 
-    /// Moves `base` to the next non-empty bucket and loads it (and due overflow keys) into the
-    /// current heap.
+    /// Moves `base` to the next non-empty bucket and loads it (and due overflow keys) into
+    /// `sorted`.
     #[cold]
     fn advance(&mut self) {
         loop {
@@ -232,9 +297,7 @@ impl BucketQueue {
                 self.occupied[slot / 64] &= !(1 << (slot % 64));
                 let keys = &mut self.buckets[slot];
                 self.in_buckets -= keys.len();
-                for k in keys.drain(..) {
-                    self.current.push(k);
-                }
+                self.sorted.append(keys);
             }
             while let Some(k) = self.far.peek() {
                 let b = bucket(k);
@@ -243,11 +306,15 @@ impl BucketQueue {
                 }
                 self.far.pop();
                 if b <= self.base {
-                    self.current.push(k);
+                    self.sorted.push(k);
                 } else {
                     // Now inside the window.
                     self.put_in_bucket(b, k);
                 }
+            }
+            if !self.sorted.is_empty() {
+                self.sorted.sort_unstable_by(|a, b| b.cmp(a));
+                return;
             }
             if !self.current.is_empty() {
                 return;
@@ -260,29 +327,62 @@ impl BucketQueue {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use proptest::test_runner::TestCaseError;
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
 
+    /// Pops one key from each queue and checks they have the same `f` (bucket mode may order
+    /// equal-`f` keys differently); `popped` collects (f bits, index) per side.
+    fn pop_both(
+        queue: &mut BucketQueue,
+        heap: &mut BinaryHeap<Reverse<u128>>,
+        popped: &mut [Vec<(u64, u32)>; 2],
+    ) -> Result<Option<f64>, TestCaseError> {
+        let (a, b) = (queue.pop(), heap.pop().map(|Reverse(k)| k));
+        prop_assert_eq!(a.map(key_f), b.map(key_f));
+        if let (Some(a), Some(b)) = (a, b) {
+            popped[0].push(((a >> 64) as u64, key_index(a)));
+            popped[1].push(((b >> 64) as u64, key_index(b)));
+        }
+        Ok(a.map(key_f))
+    }
+
+    fn same_entries(popped: &mut [Vec<(u64, u32)>; 2]) -> Result<(), TestCaseError> {
+        popped[0].sort_unstable();
+        popped[1].sort_unstable();
+        prop_assert_eq!(&popped[0], &popped[1]);
+        popped[0].clear();
+        popped[1].clear();
+        Ok(())
+    }
+
     proptest! {
-        /// Any interleaving of pushes and pops gives a binary heap's order, for keys that mostly
-        /// rise from the last pop (A\*) but also fall below it, tie, or jump far ahead.
+        /// Any interleaving of pushes and pops pops a binary heap's `f` sequence and the same
+        /// entries (the exact key order without buckets), for keys that mostly rise from the
+        /// last pop (A\*) but also fall below it, tie, or jump far ahead.
         #[test]
         fn pops_in_key_order(
             ops in proptest::collection::vec((0u8..4, 0.0f64..3.0, 0u8..3, 0u32..50), 1..400)
         ) {
             let mut queue = BucketQueue::default();
             let mut heap = BinaryHeap::new();
+            let mut popped = [Vec::new(), Vec::new()];
+            let mut buckets = true;
             let mut last_f = 0.0f64;
             for (k, (op, step, g, index)) in ops.into_iter().enumerate() {
                 if op == 0 {
-                    let (a, b) = (queue.pop(), heap.pop().map(|Reverse(k)| k));
-                    prop_assert_eq!(a, b);
-                    if let Some(a) = a { last_f = key_f(a); }
+                    if !buckets {
+                        let (a, b) = (queue.pop(), heap.pop().map(|Reverse(k)| k));
+                        prop_assert_eq!(a, b);
+                        if let Some(a) = a { last_f = key_f(a); }
+                    } else if let Some(f) = pop_both(&mut queue, &mut heap, &mut popped)? {
+                        last_f = f;
+                    }
                 } else {
                     let f = match k % 7 {
                         0 => (last_f - step * 0.01).max(0.0),  // a little below the current key
                         1 => last_f + step * 100.0,            // far ahead, past the window
-                        2 => last_f,                           // a tie
+                        2 | 3 => last_f,                       // a tie
                         _ => last_f + step,
                     };
                     let key = key(f, f64::from(g), index);
@@ -291,14 +391,27 @@ mod tests {
                     heap.push(Reverse(key));
                 }
                 if k % 50 == 49 {
-                    queue.clear(k % 100 == 49);
+                    if k % 200 == 199 {
+                        // Cleared with keys left: nothing to compare.
+                        popped[0].clear();
+                        popped[1].clear();
+                    } else {
+                        while !heap.is_empty() {
+                            pop_both(&mut queue, &mut heap, &mut popped)?;
+                        }
+                        prop_assert!(queue.pop().is_none());
+                        same_entries(&mut popped)?;
+                    }
+                    buckets = k % 100 == 49;
+                    queue.clear(buckets);
                     heap.clear();
                     last_f = 0.0;
                 }
             }
-            while let Some(Reverse(b)) = heap.pop() {
-                prop_assert_eq!(queue.pop(), Some(b));
+            while !heap.is_empty() {
+                pop_both(&mut queue, &mut heap, &mut popped)?;
             }
+            same_entries(&mut popped)?;
             prop_assert!(queue.pop().is_none());
         }
     }
