@@ -10,21 +10,21 @@ use skyplan_export::Format;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FailsafeAction, FlightExecutor, FlightState, MissionExecutor, Note, Outcome,
-    Target,
+    ExecutorConfig, FailsafeAction, FlightExecutor, MissionExecutor, Note, Outcome, Target,
 };
 use skyplan_flight::upload::{GlobalWaypoint, UploadConfig, mission_items};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{
-    Autopilot, GroundConfig, GroundStation, LogRow, Progress, Update, grid_convergence_rad,
+    Autopilot, GroundConfig, GroundStation, LogRow, Update, grid_convergence_rad,
 };
-use skyplan_link::vehicle::{SimNote, SimReport, SimServer, SimServerConfig};
+use skyplan_link::in_process::InProcessSim;
+use skyplan_link::vehicle::{SimReport, SimServerConfig};
+use skyplan_link::words::{log_csv, note_line, progress_message, sim_note_line, tidy, update_line};
 use skyplan_link::{Address, Role};
 use skyplan_plan::{PlanRequest, Session, World};
 use std::io::IsTerminal;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 /// `--on-interrupt`: what Ctrl-C commands in flight.
@@ -104,56 +104,22 @@ impl CtrlC {
     }
 }
 
-/// The in-process simulator: its thread, stop flag and notes.
-struct InProcessSim {
-    stop: Arc<AtomicBool>,
-    thread: std::thread::JoinHandle<SimReport>,
-    notes: mpsc::Receiver<SimNote>,
-}
-
-impl InProcessSim {
-    fn print_notes(&self) {
-        while let Ok(n) = self.notes.try_recv() {
-            if let Some(line) = sim_note_line(&n) {
-                say(&format!("sim        {line}"));
-            }
+/// Prints the simulator's new notes.
+fn print_sim_notes(sim: &InProcessSim) {
+    for n in sim.notes() {
+        if let Some(line) = sim_note_line(&n) {
+            say(&format!("sim        {line}"));
         }
-    }
-
-    fn finish(self) -> Option<SimReport> {
-        self.stop.store(true, Ordering::Relaxed);
-        let InProcessSim { thread, notes, .. } = self;
-        let report = thread.join().ok();
-        while let Ok(n) = notes.try_recv() {
-            if let Some(line) = sim_note_line(&n) {
-                println!("sim        {line}");
-            }
-        }
-        report
     }
 }
 
-/// How the CLI shows a simulator note (`None`: not worth a line).
-pub(crate) fn sim_note_line(n: &SimNote) -> Option<String> {
-    Some(match n {
-        SimNote::Connected(p) => format!("ground station connected from {p}"),
-        SimNote::Disconnected(why) => format!("ground station left ({why})"),
-        SimNote::Mode(m) => format!("mode {m}"),
-        SimNote::Armed(true) => "armed".into(),
-        SimNote::Armed(false) => "disarmed".into(),
-        SimNote::Refused(why) => format!("refused: {why}"),
-        SimNote::Takeoff(alt) => format!("taking off to {alt:.1} m"),
-        SimNote::Landed => "touched down".into(),
-        SimNote::MissionUploaded(n) => format!("mission of {n} items received"),
-        SimNote::MissionItemReached(s) => format!("mission item {s} reached"),
-        SimNote::Collision(c) => format!(
-            "COLLISION at {:.1} s: N {:.2} E {:.2} alt {:.2} m inside obstacle #{}",
-            c.time_s, c.point_ned_m[0], c.point_ned_m[1], -c.point_ned_m[2], c.box_index
-        ),
-        SimNote::Failsafe(why) => format!("failsafe: {why}"),
-        SimNote::LinkDropped => "injected fault: the vehicle stops talking".into(),
-        SimNote::LinkRestored => "injected fault over: the vehicle talks again".into(),
-    })
+/// Stops the simulator, prints its last notes, returns its report.
+fn finish_sim(sim: InProcessSim) -> Option<SimReport> {
+    let (report, notes) = sim.finish();
+    for n in notes.iter().filter_map(sim_note_line) {
+        println!("sim        {n}");
+    }
+    report
 }
 
 pub fn run(args: FlyArgs) -> Result<()> {
@@ -220,7 +186,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
     if let Some(live) = live {
         live.finish()?;
     }
-    let report = sim.and_then(InProcessSim::finish);
+    let report = sim.and_then(finish_sim);
     let (log, ended) = result?;
     let outcome = match ended {
         Ended::Uploaded => {
@@ -230,7 +196,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         Ended::Flight(outcome) => outcome,
     };
     if let Some(path) = &log_path {
-        write_atomic(path, &log_csv(&log)?)?;
+        write_atomic(path, log_csv(&log).as_bytes())?;
         println!(
             "wrote      flight log {} ({} rows)",
             path.display(),
@@ -305,33 +271,15 @@ fn start_sim(
         map_home: Some(frame.home()),
         ..SimServerConfig::at(home)
     };
-    let server =
-        SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).or_exit(Kind::Runtime)?;
-    let port = server
-        .local_addr()
-        .map(|a| a.port())
-        .ok_or_else(|| runtime("the simulator has no local address"))?;
-    let stop = Arc::new(AtomicBool::new(false));
-    let (tx, notes) = mpsc::channel();
-    let world = BoxWorld::new(&map.boxes);
-    let thread_stop = Arc::clone(&stop);
-    let thread = std::thread::spawn(move || {
-        server.run(Some(&world), &thread_stop, |n| {
-            let _ = tx.send(n);
-        })
-    });
+    let sim = InProcessSim::start(config, BoxWorld::new(&map.boxes)).or_exit(Kind::Runtime)?;
     println!(
-        "sim        simulated multicopter on tcp:127.0.0.1:{port}, {}× real time, at lat {:.7}, lon {:.7}",
-        args.speedup, home.lat_deg, home.lon_deg
+        "sim        simulated multicopter on tcp:127.0.0.1:{}, {}× real time, at lat {:.7}, lon {:.7}",
+        sim.port(),
+        args.speedup,
+        home.lat_deg,
+        home.lon_deg
     );
-    Ok((
-        Address::TcpOut(format!("127.0.0.1:{port}")),
-        InProcessSim {
-            stop,
-            thread,
-            notes,
-        },
-    ))
+    Ok((sim.address(), sim))
 }
 
 /// The simulator's track report and the flight's exit: 0 only when landed and disarmed with
@@ -443,7 +391,7 @@ fn fly(
     println!("link       {address}: connected, sending heartbeats at 1 Hz");
     let info = wait_for_vehicle(&mut gcs, a)?;
     if let Some(s) = sim {
-        s.print_notes();
+        print_sim_notes(s);
     }
     println!(
         "vehicle    system {} ({}) at lat {:.7}, lon {:.7}, {:.2} m above home; {}",
@@ -657,15 +605,6 @@ fn progress_bar(waypoints: usize) -> indicatif::ProgressBar {
     bar
 }
 
-/// The progress bar's message: vehicle time and distance left.
-pub(crate) fn progress_message(p: &Progress) -> String {
-    format!(
-        "{:.1} m left  t {:.1} s",
-        p.distance_left_m.max(0.0),
-        p.time_s
-    )
-}
-
 /// Flies with either executor, printing as it goes, and sums the flight up.
 fn fly_with<E: FlightExecutor>(
     gcs: &mut GroundStation,
@@ -678,7 +617,7 @@ fn fly_with<E: FlightExecutor>(
     ctrl_c.in_flight.store(true, Ordering::SeqCst);
     let flown = gcs.fly(ex, frame, |u| {
         if let Some(s) = sim {
-            s.print_notes();
+            print_sim_notes(s);
         }
         match u {
             Update::Notes(t, notes) => {
@@ -691,19 +630,15 @@ fn fly_with<E: FlightExecutor>(
                     }
                 }
             }
-            Update::StatusText(text) => say(&format!("vehicle    says: {text}")),
-            Update::LinkClosed(why) => say(&format!("link       closed: {why}")),
-            Update::TimedOut(limit) => say(&format!("timeout    {limit} s wall exceeded: landing")),
-            Update::Interrupted(action) => say(&format!(
-                "interrupt  Ctrl-C: {}",
-                match action {
-                    FailsafeAction::Land => "landing",
-                    FailsafeAction::ReturnToLaunch => "returning to launch",
-                    FailsafeAction::Hold =>
-                        "holding position (LOITER), then leaving it to the pilot",
+            other @ (Update::StatusText(_)
+            | Update::LinkClosed(_)
+            | Update::TimedOut(_)
+            | Update::Interrupted(_)
+            | Update::Mode(_)) => {
+                if let Some(line) = update_line(&other) {
+                    say(&line);
                 }
-            )),
-            Update::Mode(m) => say(&format!("mode       {m}")),
+            }
             Update::Progress(p) => {
                 live.progress(&p);
                 bar.set_prefix(p.state.name());
@@ -755,142 +690,4 @@ fn fly_with<E: FlightExecutor>(
         None => println!("result     FAILED: gave up waiting for the landing"),
     }
     Ok((summary.log, outcome))
-}
-
-/// How the CLI shows an executor note (`None`: not worth a line).
-pub(crate) fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
-    Some(match note {
-        Note::State { from, to } => format!("state      {t:7.1} s  {from} → {to}"),
-        Note::Reached(r) => format!(
-            "waypoint   {:7.1} s  {} of {n} reached: {:.2} m off, heading off {:.1}°",
-            r.time_s,
-            r.index + 1,
-            r.horizontal_error_m,
-            r.heading_error_rad.to_degrees()
-        ),
-        Note::Refused { command, reason } => format!("refused    {t:7.1} s  {command}: {reason}"),
-        Note::LinkLost {
-            state,
-            silent_s,
-            wait_s,
-            action,
-        } => format!(
-            "link       {t:7.1} s  lost in {state}: no heartbeat for {silent_s:.1} s; sending nothing, waiting up to {wait_s:.1} s for it to return (--failsafe {action})"
-        ),
-        Note::LinkRegained { silent_s, action } => format!(
-            "link       {t:7.1} s  back after {silent_s:.1} s: commanding {}",
-            match action {
-                FailsafeAction::Land => "LAND (--failsafe land)",
-                FailsafeAction::ReturnToLaunch => "RTL (--failsafe rtl)",
-                FailsafeAction::Hold => "LOITER (--failsafe hold)",
-            }
-        ),
-        Note::Finished => return None,
-    })
-}
-
-/// Shows values that round to zero as 0.000, not -0.000.
-fn tidy(x: f64) -> f64 {
-    if x.abs() < 0.0005 { 0.0 } else { x }
-}
-
-fn log_csv(log: &[LogRow]) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    let write =
-        |w: &mut csv::Writer<Vec<u8>>, rec: Vec<String>| w.write_record(rec).or_exit(Kind::Runtime);
-    write(
-        &mut w,
-        [
-            "time_s",
-            "state",
-            "north_m",
-            "east_m",
-            "alt_m",
-            "heading_deg",
-            "ground_speed_m_s",
-            "target_index",
-            "target_north_m",
-            "target_east_m",
-            "target_alt_m",
-            "target_heading_deg",
-            "lat_deg",
-            "lon_deg",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect(),
-    )?;
-    for r in log {
-        let mut rec = vec![
-            format!("{:.3}", r.time_s),
-            FlightState::name(r.state).to_string(),
-            format!("{:.3}", r.north_m),
-            format!("{:.3}", r.east_m),
-            format!("{:.3}", tidy(r.alt_m)),
-            format!("{:.2}", r.yaw_rad.to_degrees()),
-            format!("{:.3}", r.speed_m_s),
-        ];
-        match r.target {
-            Some((i, t)) => rec.extend([
-                (i + 1).to_string(),
-                format!("{:.3}", t.north_m),
-                format!("{:.3}", t.east_m),
-                format!("{:.3}", t.alt_m),
-                format!("{:.2}", t.heading_rad.to_degrees()),
-            ]),
-            None => rec.extend(std::iter::repeat_n(String::new(), 5)),
-        }
-        rec.extend([format!("{:.7}", r.lat_deg), format!("{:.7}", r.lon_deg)]);
-        write(&mut w, rec)?;
-    }
-    w.into_inner()
-        .map_err(|e| anyhow::anyhow!("flight log: {e}"))
-        .or_exit(Kind::Runtime)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use skyplan_flight::executor::FlightState;
-
-    #[test]
-    fn fault_notes_and_progress_read_plainly() {
-        let lost = Note::LinkLost {
-            state: FlightState::Waypoint,
-            silent_s: 1.04,
-            wait_s: 6.0,
-            action: FailsafeAction::ReturnToLaunch,
-        };
-        assert_eq!(
-            note_line(31.4, 3, &lost).unwrap(),
-            "link          31.4 s  lost in WAYPOINT: no heartbeat for 1.0 s; sending nothing, waiting up to 6.0 s for it to return (--failsafe rtl)"
-        );
-        let back = Note::LinkRegained {
-            silent_s: 2.0,
-            action: FailsafeAction::Hold,
-        };
-        assert!(
-            note_line(40.0, 3, &back)
-                .unwrap()
-                .ends_with("back after 2.0 s: commanding LOITER (--failsafe hold)")
-        );
-        assert_eq!(note_line(1.0, 3, &Note::Finished), None);
-        let p = Progress {
-            time_s: 12.34,
-            state: FlightState::Waypoint,
-            reached: 2,
-            waypoints: 5,
-            distance_left_m: 123.45,
-            telemetry: None,
-        };
-        assert_eq!(progress_message(&p), "123.5 m left  t 12.3 s");
-        assert_eq!(
-            FailsafeAction::from(FailsafeArg::Rtl),
-            FailsafeAction::ReturnToLaunch
-        );
-        assert_eq!(
-            FailsafeAction::from(InterruptArg::Hold),
-            FailsafeAction::Hold
-        );
-    }
 }

@@ -3,10 +3,10 @@
 use crate::args::SimArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
 use crate::files::read_text;
-use crate::fly_cmd::sim_note_line;
 use skyplan_flight::collision::BoxWorld;
 use skyplan_frames::Lla;
 use skyplan_link::vehicle::{SimServer, SimServerConfig};
+use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
 use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, FCND_CITY_NAME as BUNDLED_NAME};
 use std::sync::Arc;

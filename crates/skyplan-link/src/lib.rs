@@ -7,13 +7,17 @@
 //!   behind a MAVLink server (heartbeat, commands, position targets, mission upload, telemetry).
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
+//! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
+//! - [`words`]: the flight told in lines (notes, updates) and the flight log as CSV.
 //!
 //! Only the `common` dialect is compiled (build time); ArduPilot's custom modes are numbers.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod ground;
+pub mod in_process;
 pub mod vehicle;
+pub mod words;
 
 use mavlink::dialects::common::MavMessage;
 use mavlink::error::MessageReadError;

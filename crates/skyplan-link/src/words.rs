@@ -1,0 +1,196 @@
+//! A flight told in words and rows: one line per executor note, simulator note and ground-station
+//! update (what `skyplan fly` and `skyplan sim` print), and the flight log as CSV.
+//!
+//! Pure functions: the caller decides where the text goes.
+//!
+//! ```
+//! use skyplan_flight::executor::{FlightState, Note};
+//! let note = Note::State { from: FlightState::Arming, to: FlightState::Takeoff };
+//! assert_eq!(
+//!     skyplan_link::words::note_line(3.5, 4, &note).as_deref(),
+//!     Some("state          3.5 s  ARMING → TAKEOFF")
+//! );
+//! ```
+
+use crate::ground::{LogRow, Progress, Update};
+use crate::vehicle::SimNote;
+use skyplan_flight::executor::{FailsafeAction, FlightState, Note};
+
+/// How an executor note reads (`None`: not worth a line); `n` is the number of waypoints.
+pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
+    Some(match note {
+        Note::State { from, to } => format!("state      {t:7.1} s  {from} → {to}"),
+        Note::Reached(r) => format!(
+            "waypoint   {:7.1} s  {} of {n} reached: {:.2} m off, heading off {:.1}°",
+            r.time_s,
+            r.index + 1,
+            r.horizontal_error_m,
+            r.heading_error_rad.to_degrees()
+        ),
+        Note::Refused { command, reason } => format!("refused    {t:7.1} s  {command}: {reason}"),
+        Note::LinkLost {
+            state,
+            silent_s,
+            wait_s,
+            action,
+        } => format!(
+            "link       {t:7.1} s  lost in {state}: no heartbeat for {silent_s:.1} s; sending nothing, waiting up to {wait_s:.1} s for it to return (--failsafe {action})"
+        ),
+        Note::LinkRegained { silent_s, action } => format!(
+            "link       {t:7.1} s  back after {silent_s:.1} s: commanding {}",
+            match action {
+                FailsafeAction::Land => "LAND (--failsafe land)",
+                FailsafeAction::ReturnToLaunch => "RTL (--failsafe rtl)",
+                FailsafeAction::Hold => "LOITER (--failsafe hold)",
+            }
+        ),
+        Note::Finished => return None,
+    })
+}
+
+/// How a simulator note reads (`None`: not worth a line).
+pub fn sim_note_line(n: &SimNote) -> Option<String> {
+    Some(match n {
+        SimNote::Connected(p) => format!("ground station connected from {p}"),
+        SimNote::Disconnected(why) => format!("ground station left ({why})"),
+        SimNote::Mode(m) => format!("mode {m}"),
+        SimNote::Armed(true) => "armed".into(),
+        SimNote::Armed(false) => "disarmed".into(),
+        SimNote::Refused(why) => format!("refused: {why}"),
+        SimNote::Takeoff(alt) => format!("taking off to {alt:.1} m"),
+        SimNote::Landed => "touched down".into(),
+        SimNote::MissionUploaded(n) => format!("mission of {n} items received"),
+        SimNote::MissionItemReached(s) => format!("mission item {s} reached"),
+        SimNote::Collision(c) => format!(
+            "COLLISION at {:.1} s: N {:.2} E {:.2} alt {:.2} m inside obstacle #{}",
+            c.time_s, c.point_ned_m[0], c.point_ned_m[1], -c.point_ned_m[2], c.box_index
+        ),
+        SimNote::Failsafe(why) => format!("failsafe: {why}"),
+        SimNote::LinkDropped => "injected fault: the vehicle stops talking".into(),
+        SimNote::LinkRestored => "injected fault over: the vehicle talks again".into(),
+    })
+}
+
+/// How a ground-station update reads, for the updates that are told as one line (status texts,
+/// the link closing, time-outs, Ctrl-C, modes); `None` for notes and progress, which the caller
+/// shows its own way.
+pub fn update_line(u: &Update) -> Option<String> {
+    Some(match u {
+        Update::StatusText(text) => format!("vehicle    says: {text}"),
+        Update::LinkClosed(why) => format!("link       closed: {why}"),
+        Update::TimedOut(limit) => format!("timeout    {limit} s wall exceeded: landing"),
+        Update::Interrupted(action) => format!(
+            "interrupt  Ctrl-C: {}",
+            match action {
+                FailsafeAction::Land => "landing",
+                FailsafeAction::ReturnToLaunch => "returning to launch",
+                FailsafeAction::Hold => "holding position (LOITER), then leaving it to the pilot",
+            }
+        ),
+        Update::Mode(m) => format!("mode       {m}"),
+        Update::Notes(..) | Update::Progress(_) => return None,
+    })
+}
+
+/// The progress line: distance left and vehicle time.
+pub fn progress_message(p: &Progress) -> String {
+    format!(
+        "{:.1} m left  t {:.1} s",
+        p.distance_left_m.max(0.0),
+        p.time_s
+    )
+}
+
+/// Shows values that round to zero as 0.000, not -0.000.
+pub fn tidy(x: f64) -> f64 {
+    if x.abs() < 0.0005 { 0.0 } else { x }
+}
+
+/// The CSV header of the flight log.
+pub const LOG_COLUMNS: [&str; 14] = [
+    "time_s",
+    "state",
+    "north_m",
+    "east_m",
+    "alt_m",
+    "heading_deg",
+    "ground_speed_m_s",
+    "target_index",
+    "target_north_m",
+    "target_east_m",
+    "target_alt_m",
+    "target_heading_deg",
+    "lat_deg",
+    "lon_deg",
+];
+
+/// The flight log as CSV: [`LOG_COLUMNS`], then a row per sample (target columns empty when
+/// there is no target; `target_index` counts from 1).
+pub fn log_csv(log: &[LogRow]) -> String {
+    let mut out = LOG_COLUMNS.join(",");
+    out.push('\n');
+    for r in log {
+        let target = match r.target {
+            Some((i, t)) => format!(
+                "{},{:.3},{:.3},{:.3},{:.2}",
+                i + 1,
+                t.north_m,
+                t.east_m,
+                t.alt_m,
+                t.heading_rad.to_degrees()
+            ),
+            None => ",,,,".to_string(),
+        };
+        out.push_str(&format!(
+            "{:.3},{},{:.3},{:.3},{:.3},{:.2},{:.3},{target},{:.7},{:.7}\n",
+            r.time_s,
+            FlightState::name(r.state),
+            r.north_m,
+            r.east_m,
+            tidy(r.alt_m),
+            r.yaw_rad.to_degrees(),
+            r.speed_m_s,
+            r.lat_deg,
+            r.lon_deg
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fault_notes_and_progress_read_plainly() {
+        let lost = Note::LinkLost {
+            state: FlightState::Waypoint,
+            silent_s: 1.04,
+            wait_s: 6.0,
+            action: FailsafeAction::ReturnToLaunch,
+        };
+        assert_eq!(
+            note_line(31.4, 3, &lost).unwrap(),
+            "link          31.4 s  lost in WAYPOINT: no heartbeat for 1.0 s; sending nothing, waiting up to 6.0 s for it to return (--failsafe rtl)"
+        );
+        let back = Note::LinkRegained {
+            silent_s: 2.0,
+            action: FailsafeAction::Hold,
+        };
+        assert!(
+            note_line(40.0, 3, &back)
+                .unwrap()
+                .ends_with("back after 2.0 s: commanding LOITER (--failsafe hold)")
+        );
+        assert_eq!(note_line(1.0, 3, &Note::Finished), None);
+        let p = Progress {
+            time_s: 12.34,
+            state: FlightState::Waypoint,
+            reached: 2,
+            waypoints: 5,
+            distance_left_m: 123.45,
+            telemetry: None,
+        };
+        assert_eq!(progress_message(&p), "123.5 m left  t 12.3 s");
+    }
+}
