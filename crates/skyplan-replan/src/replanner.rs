@@ -249,6 +249,15 @@ impl Replanner {
             }
             ReplannerKind::Scratch => None,
         };
+        // The scratch search's node arrays are allocated here, not during the first replan.
+        let mut search = GridSearch::new();
+        let base = layers[0].world.grid();
+        if let (Some(s), Some(g)) = (
+            cell_near(base, [plan.start.north_m, plan.start.east_m]),
+            base.cell_at_ne(goal_ne[0], goal_ne[1]),
+        ) {
+            let _ = search.search(base, s, g, model, Planner::Jps);
+        }
         Ok(Self {
             session,
             plan,
@@ -260,7 +269,7 @@ impl Replanner {
             layers,
             dstar,
             pending: Vec::new(),
-            search: GridSearch::new(),
+            search,
             stats: ReplanStats::default(),
         })
     }

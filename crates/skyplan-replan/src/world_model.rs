@@ -35,6 +35,7 @@ pub struct WorldModel {
     /// How many hit cells cover each cell (within the margin).
     cover: Vec<u16>,
     hits: BTreeSet<usize>,
+    learned: usize,
     margin_cells: i64,
 }
 
@@ -51,6 +52,7 @@ impl WorldModel {
             combined: (*known).clone(),
             cover: vec![0; known.len()],
             hits: BTreeSet::new(),
+            learned: 0,
             known,
             margin_cells,
         }
@@ -86,7 +88,7 @@ impl WorldModel {
 
     /// How many cells are occupied because of what was learned.
     pub fn learned_count(&self) -> usize {
-        self.cover.iter().filter(|&&c| c > 0).count()
+        self.learned
     }
 
     /// The cells that hold a sensor hit.
@@ -195,11 +197,17 @@ impl WorldModel {
                 let idx = self.known.index(cell);
                 touched.push((idx, self.combined.is_blocked(cell)));
                 let slot = &mut self.cover[idx];
+                let was = *slot > 0;
                 *slot = if add {
                     slot.saturating_add(1)
                 } else {
                     slot.saturating_sub(1)
                 };
+                match (was, *slot > 0) {
+                    (false, true) => self.learned += 1,
+                    (true, false) => self.learned -= 1,
+                    _ => {}
+                }
             }
         }
     }
