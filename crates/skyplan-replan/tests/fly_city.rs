@@ -170,6 +170,19 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
     assert!(!flight.reached_goal);
     let reason = flight.hold.expect("a hold");
     assert!(reason.contains("no route to the goal"), "{reason}");
+    // It climbed to look over the wall before giving up (the wall is 200 m tall, the limit 30 m).
+    assert!(
+        flight
+            .replans
+            .iter()
+            .any(|e| e.reason.contains("climbing to")),
+        "never tried climbing"
+    );
+    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(
+        top > ALT_M + 1.0 && top <= 30.0 + 1e-9,
+        "highest point {top} m"
+    );
     assert!(
         reason.contains("30.0"),
         "the hold names the altitudes tried: {reason}"
