@@ -7,11 +7,29 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
+use skyplan_flight::executor::Target;
+use skyplan_flight::sensing::{ObstacleReading, RouteDecision, RouteWatcher};
 use skyplan_map::colliders::{ObstacleBox, parse_colliders};
 use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
 use skyplan_replan::hidden::{HiddenSpec, place_hidden, true_world};
 use skyplan_replan::{ReplanOptions, Replanner, ReplannerKind};
 use skyplan_search::MoveModel;
+use std::time::Instant;
+
+/// Times every call (readings that keep the route included).
+struct Timed<'a> {
+    inner: &'a mut Replanner,
+    calls_ms: Vec<f64>,
+}
+
+impl RouteWatcher for Timed<'_> {
+    fn on_reading(&mut self, reading: &ObstacleReading, route: &[Target]) -> RouteDecision {
+        let t = Instant::now();
+        let d = self.inner.on_reading(reading, route);
+        self.calls_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        d
+    }
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -26,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (mut latencies, mut expansions, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
         let (mut reached, mut replans) = (0, 0);
         let mut slowest: Option<(f64, u64, String)> = None;
+        let mut calls = Vec::new();
         for seed in 0..seeds {
             let options = ReplanOptions {
                 replanner: kind,
@@ -52,7 +71,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let hidden = place_hidden(&map, &spec)?;
             let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&hidden).copied().collect();
             let targets = r.initial_targets();
-            let flight = common::fly(&mut r, targets, &truth, [0.0, 0.0, 5.0], 5.0, 0.1, 1800.0);
+            let mut timed = Timed {
+                inner: &mut r,
+                calls_ms: Vec::new(),
+            };
+            let flight = common::fly(
+                &mut timed,
+                targets,
+                &truth,
+                [0.0, 0.0, 5.0],
+                5.0,
+                0.1,
+                1800.0,
+            );
+            calls.extend(timed.calls_ms);
             let collided = flight.track.windows(2).any(|w| {
                 truth
                     .iter()
@@ -106,6 +138,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pct(&latencies, 100.0),
             mean(&expansions),
             pct(&ratios, 50.0)
+        );
+        println!(
+            "  every reading (learn + check, replans included): p50 {:.3} ms, p99 {:.3} ms over {} readings",
+            pct(&calls, 50.0),
+            pct(&calls, 99.0),
+            calls.len()
         );
         if let Some((ms, n, why)) = slowest {
             println!("  slowest replan: {ms:.2} ms, {n} expansions ({why})");

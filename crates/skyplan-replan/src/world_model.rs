@@ -34,7 +34,9 @@ pub struct WorldModel {
     combined: Grid2,
     /// How many hit cells cover each cell (within the margin).
     cover: Vec<u16>,
-    hits: BTreeSet<usize>,
+    /// Cells holding a sensor hit.
+    is_hit: Vec<bool>,
+    hit_count: usize,
     learned: usize,
     margin_cells: i64,
 }
@@ -51,7 +53,8 @@ impl WorldModel {
         Self {
             combined: (*known).clone(),
             cover: vec![0; known.len()],
-            hits: BTreeSet::new(),
+            is_hit: vec![false; known.len()],
+            hit_count: 0,
             learned: 0,
             known,
             margin_cells,
@@ -93,7 +96,10 @@ impl WorldModel {
 
     /// The cells that hold a sensor hit.
     pub fn hit_cells(&self) -> Vec<Cell> {
-        self.hits.iter().map(|&i| self.known.cell(i)).collect()
+        (0..self.is_hit.len())
+            .filter(|&i| self.is_hit[i])
+            .map(|i| self.known.cell(i))
+            .collect()
     }
 
     /// The centres of the learned cells, north/east metres (for logs and pictures).
@@ -137,13 +143,17 @@ impl WorldModel {
             let (dn, de) = (b.cos(), b.sin());
             // Walk the free part of the ray in quarter cells; a hit cell is cleared when the ray
             // passes through the inner half of it.
-            let steps = (free_m.max(0.0) / (cell_m * 0.25)).floor() as usize;
+            let steps = if self.hit_count == 0 {
+                0 // nothing learned yet: nothing to clear
+            } else {
+                (free_m.max(0.0) / (cell_m * 0.25)).floor() as usize
+            };
             for k in 0..=steps {
                 let t = k as f64 * cell_m * 0.25;
                 let (n, e) = (pn + t * dn, pe + t * de);
                 if let Some(c) = self.known.cell_at_ne(n, e) {
                     let idx = self.known.index(c);
-                    if self.hits.contains(&idx) {
+                    if self.is_hit[idx] {
                         let (cn, ce) = self.known.center_ne(c);
                         if (cn - n).abs() <= cell_m * 0.25 && (ce - e).abs() <= cell_m * 0.25 {
                             clear.insert(idx);
@@ -159,12 +169,16 @@ impl WorldModel {
             }
         }
         for idx in clear {
-            if !new_hits.contains(&idx) && self.hits.remove(&idx) {
+            if !new_hits.contains(&idx) && self.is_hit[idx] {
+                self.is_hit[idx] = false;
+                self.hit_count -= 1;
                 self.cover_around(idx, false, &mut touched);
             }
         }
         for idx in new_hits {
-            if self.hits.insert(idx) {
+            if !self.is_hit[idx] {
+                self.is_hit[idx] = true;
+                self.hit_count += 1;
                 self.cover_around(idx, true, &mut touched);
             }
         }
