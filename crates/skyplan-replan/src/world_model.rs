@@ -36,7 +36,8 @@ pub struct WorldModel {
     cover: Vec<u16>,
     /// Cells holding a sensor hit.
     is_hit: Vec<bool>,
-    hit_count: usize,
+    /// The same cells, for a quick look at what lies near the vehicle.
+    hit_list: BTreeSet<usize>,
     learned: usize,
     margin_cells: i64,
 }
@@ -54,7 +55,7 @@ impl WorldModel {
             combined: (*known).clone(),
             cover: vec![0; known.len()],
             is_hit: vec![false; known.len()],
-            hit_count: 0,
+            hit_list: BTreeSet::new(),
             learned: 0,
             known,
             margin_cells,
@@ -96,10 +97,7 @@ impl WorldModel {
 
     /// The cells that hold a sensor hit.
     pub fn hit_cells(&self) -> Vec<Cell> {
-        (0..self.is_hit.len())
-            .filter(|&i| self.is_hit[i])
-            .map(|i| self.known.cell(i))
-            .collect()
+        self.hit_list.iter().map(|&i| self.known.cell(i)).collect()
     }
 
     /// The centres of the learned cells, north/east metres (for logs and pictures).
@@ -127,6 +125,12 @@ impl WorldModel {
             return Vec::new();
         }
         let mut new_hits = BTreeSet::new();
+        // Rays only clear hits within their reach: skip the walks when none is near.
+        let reach_m = reading.max_range_m.max(0.0) + 2.0 * cell_m;
+        let any_near = self.hit_list.iter().any(|&i| {
+            let (n, e) = self.known.center_ne(self.known.cell(i));
+            (n - pn).abs() <= reach_m && (e - pe).abs() <= reach_m
+        });
         let mut clear = BTreeSet::new();
         for (i, r) in reading.ranges.iter().enumerate() {
             let b = reading.bearing_rad(i);
@@ -143,8 +147,8 @@ impl WorldModel {
             let (dn, de) = (b.cos(), b.sin());
             // Walk the free part of the ray in quarter cells; a hit cell is cleared when the ray
             // passes through the inner half of it.
-            let steps = if self.hit_count == 0 {
-                0 // nothing learned yet: nothing to clear
+            let steps = if !any_near {
+                0 // nothing learned within reach: nothing to clear
             } else {
                 (free_m.max(0.0) / (cell_m * 0.25)).floor() as usize
             };
@@ -171,14 +175,14 @@ impl WorldModel {
         for idx in clear {
             if !new_hits.contains(&idx) && self.is_hit[idx] {
                 self.is_hit[idx] = false;
-                self.hit_count -= 1;
+                self.hit_list.remove(&idx);
                 self.cover_around(idx, false, &mut touched);
             }
         }
         for idx in new_hits {
             if !self.is_hit[idx] {
                 self.is_hit[idx] = true;
-                self.hit_count += 1;
+                self.hit_list.insert(idx);
                 self.cover_around(idx, true, &mut touched);
             }
         }
