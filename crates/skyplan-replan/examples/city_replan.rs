@@ -20,6 +20,8 @@ use std::time::Instant;
 struct Timed<'a> {
     inner: &'a mut Replanner,
     calls_ms: Vec<f64>,
+    /// A* from scratch on the same grid after each replan (cells expanded), for comparison.
+    astar_expansions: Vec<f64>,
 }
 
 impl RouteWatcher for Timed<'_> {
@@ -27,6 +29,23 @@ impl RouteWatcher for Timed<'_> {
         let t = Instant::now();
         let d = self.inner.on_reading(reading, route);
         self.calls_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        if let RouteDecision::Replace { event, .. } = &d {
+            let grid = self.inner.world().grid();
+            let [n, e, _] = event.position_ned;
+            let from = grid.cell_at_ne(n, e).filter(|&c| !grid.is_blocked(c));
+            let goal = grid.cell_at_ne(FCND_DEFAULT_GOAL_NE[0], FCND_DEFAULT_GOAL_NE[1]);
+            if let (Some(a), Some(b)) = (from, goal)
+                && let Ok(p) = skyplan_search::GridSearch::new().search(
+                    grid,
+                    a,
+                    b,
+                    MoveModel::Octile,
+                    skyplan_search::Planner::AStar,
+                )
+            {
+                self.astar_expansions.push(p.expansions as f64);
+            }
+        }
         d
     }
 }
@@ -45,6 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (mut reached, mut replans) = (0, 0);
         let mut slowest: Option<(f64, u64, String)> = None;
         let mut calls = Vec::new();
+        let mut astar = Vec::new();
         for seed in 0..seeds {
             let options = ReplanOptions {
                 replanner: kind,
@@ -74,6 +94,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut timed = Timed {
                 inner: &mut r,
                 calls_ms: Vec::new(),
+                astar_expansions: Vec::new(),
             };
             let flight = common::fly(
                 &mut timed,
@@ -85,6 +106,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 1800.0,
             );
             calls.extend(timed.calls_ms);
+            astar.extend(timed.astar_expansions);
             let collided = flight.track.windows(2).any(|w| {
                 truth
                     .iter()
@@ -144,6 +166,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pct(&calls, 50.0),
             pct(&calls, 99.0),
             calls.len()
+        );
+        println!(
+            "  expansions per replan: mean {:.0}, p50 {:.0}, p99 {:.0}; A* from scratch at the same replans: mean {:.0}, p50 {:.0}, p99 {:.0}",
+            mean(&expansions),
+            pct(&expansions, 50.0),
+            pct(&expansions, 99.0),
+            mean(&astar),
+            pct(&astar, 50.0),
+            pct(&astar, 99.0)
         );
         if let Some((ms, n, why)) = slowest {
             println!("  slowest replan: {ms:.2} ms, {n} expansions ({why})");
