@@ -422,8 +422,10 @@ impl DStarLite {
     }
 
     fn push(&mut self, i: usize, key: Key) {
-        if self.queued[i].is_none() {
-            self.live += 1;
+        match self.queued[i] {
+            Some(k) if k.cmp(key) == Ordering::Equal => return, // already queued so
+            Some(_) => {}
+            None => self.live += 1,
         }
         self.queued[i] = Some(key);
         self.heap.push(Entry {
