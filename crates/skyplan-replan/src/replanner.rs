@@ -427,7 +427,18 @@ impl Replanner {
         let from = [n, e];
         let here = self.layer_of(alt_m);
         let mut tried = Vec::new();
+        let mut overhead = None;
         for k in here..self.layers.len() {
+            // Climbing goes straight up where the vehicle is: its cell must be free at every
+            // layer on the way (the map's boxes and what was learned there).
+            let column_free = (here + 1..=k).all(|j| {
+                let g = self.layers[j].world.grid();
+                g.cell_at_ne(n, e).is_some_and(|c| !g.is_blocked(c))
+            });
+            if !column_free {
+                overhead = Some(self.layers[k].alt_m);
+                break;
+            }
             tried.push(format!("{:.1}", self.layers[k].alt_m));
             let Some(found) = self.route_at(k, from) else {
                 continue;
@@ -469,9 +480,12 @@ impl Replanner {
             };
         }
         self.stats.holds += 1;
+        let overhead = overhead
+            .map(|a| format!(" (an obstacle above the vehicle at {a:.1} m stops the climb)"))
+            .unwrap_or_default();
         RouteDecision::Hold {
             reason: format!(
-                "{reason}, and no route to the goal (N {:.1} E {:.1}) was found from N {n:.1} E {e:.1}: planned at {} m (up to the limit of {:.1} m) with the {:.1} m margin around the map's obstacles and {} learned cells",
+                "{reason}, and no route to the goal (N {:.1} E {:.1}) was found from N {n:.1} E {e:.1}: planned at {} m (up to the limit of {:.1} m){overhead} with the {:.1} m margin around the map's obstacles and {} learned cells",
                 self.goal_ne[0],
                 self.goal_ne[1],
                 tried.join(", "),
