@@ -49,13 +49,21 @@ pub struct DStarPath {
 }
 
 impl DStarPath {
+    /// The cost in the search's integer units.
+    fn units(&self) -> Cost {
+        let s = i64::try_from(self.straight_moves).unwrap_or(INF);
+        let d = i64::try_from(self.diagonal_moves).unwrap_or(INF);
+        s.saturating_mul(STRAIGHT)
+            .saturating_add(d.saturating_mul(DIAGONAL))
+    }
+
     /// Cost in cells, `straight + √2 · diagonal` (the formula every grid planner uses).
     pub fn cost_cells(&self) -> f64 {
         octile_cost(self.straight_moves, self.diagonal_moves)
     }
 }
 
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Key(Cost, Cost);
 
 impl Key {
@@ -68,6 +76,7 @@ impl Key {
 }
 
 /// A heap entry; the heap is a min-heap on the key (stale entries are skipped on pop).
+#[derive(Debug, Clone)]
 struct Entry {
     key: Key,
     index: u32,
@@ -111,6 +120,7 @@ impl Ord for Entry {
 /// assert!(d.compute().is_some());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
+#[derive(Debug, Clone)]
 pub struct DStarLite {
     grid: Grid2,
     model: MoveModel,
@@ -235,12 +245,32 @@ impl DStarLite {
         if self.grid.is_blocked(self.start) || self.grid.is_blocked(self.goal) {
             return None;
         }
+        self.repair(false);
+        let s = self.grid.index(self.start);
+        match self.path() {
+            Some(p) if p.units() == self.rhs[s] => Some(p),
+            _ if self.rhs[s] == INF => None,
+            _ => {
+                // A state whose key ties the start's was left stale and the walk along g took
+                // it: expand the ties too, then walk again.
+                self.repair(true);
+                self.path()
+            }
+        }
+    }
+
+    /// ComputeShortestPath of the optimized D\* Lite; with `ties`, also expands every state
+    /// whose key equals the start's.
+    fn repair(&mut self, ties: bool) {
         let s = self.grid.index(self.start);
         while let Some((u, k_old)) = self.top() {
             let start_key = self.key(s);
-            // Ties with the start's key are expanded too, so that no successor on the way holds
-            // a stale g-value equal to the truth (path extraction follows g).
-            if start_key.lt(k_old) && self.rhs[s] == self.g[s] {
+            let more = if ties {
+                !start_key.lt(k_old) || self.rhs[s] != self.g[s]
+            } else {
+                k_old.lt(start_key) || self.rhs[s] > self.g[s]
+            };
+            if !more {
                 break;
             }
             let k_new = self.key(u);
@@ -275,7 +305,6 @@ impl DStarLite {
                 });
             }
         }
-        self.path()
     }
 
     /// Follows the best successors from the start to the goal.
@@ -393,8 +422,10 @@ impl DStarLite {
     }
 
     fn push(&mut self, i: usize, key: Key) {
-        if self.queued[i].is_none() {
-            self.live += 1;
+        match self.queued[i] {
+            Some(k) if k.cmp(key) == Ordering::Equal => return, // already queued so
+            Some(_) => {}
+            None => self.live += 1,
         }
         self.queued[i] = Some(key);
         self.heap.push(Entry {

@@ -249,6 +249,15 @@ impl Replanner {
             }
             ReplannerKind::Scratch => None,
         };
+        // The scratch search's node arrays are allocated here, not during the first replan.
+        let mut search = GridSearch::new();
+        let base = layers[0].world.grid();
+        if let (Some(s), Some(g)) = (
+            cell_near(base, [plan.start.north_m, plan.start.east_m]),
+            base.cell_at_ne(goal_ne[0], goal_ne[1]),
+        ) {
+            let _ = search.search(base, s, g, model, Planner::Jps);
+        }
         Ok(Self {
             session,
             plan,
@@ -260,7 +269,7 @@ impl Replanner {
             layers,
             dstar,
             pending: Vec::new(),
-            search: GridSearch::new(),
+            search,
             stats: ReplanStats::default(),
         })
     }
@@ -332,18 +341,27 @@ impl Replanner {
     /// it blocks.
     fn blocked_leg(&self, from_ne: [f64; 3], route: &[Target]) -> Option<(Cell, usize, usize)> {
         let mut prev = from_ne;
+        // True until the first leg that moves horizontally: it starts where the vehicle is.
+        let mut from_vehicle = true;
         for (i, t) in route.iter().enumerate() {
             let next = [t.north_m, t.east_m, t.alt_m];
             let (la, lb) = (self.layer_of(prev[2]), self.layer_of(next[2]));
-            if la == lb && (prev[0], prev[1]) != (next[0], next[1]) {
+            let moves = (prev[0], prev[1]) != (next[0], next[1]);
+            let leaving = from_vehicle;
+            from_vehicle &= !moves;
+            if la == lb && moves {
                 let world = &self.layers[la].world;
                 if !world.grid().segment_is_free_ne(
                     (prev[0], prev[1]),
                     (next[0], next[1]),
                     self.touch,
-                ) && let Some(cell) =
-                    first_learned_on(world, [prev[0], prev[1]], [next[0], next[1]], self.touch)
-                {
+                ) && let Some(cell) = first_learned_on(
+                    world,
+                    [prev[0], prev[1]],
+                    [next[0], next[1]],
+                    self.touch,
+                    leaving,
+                ) {
                     return Some((cell, i, la));
                 }
             }
@@ -409,7 +427,18 @@ impl Replanner {
         let from = [n, e];
         let here = self.layer_of(alt_m);
         let mut tried = Vec::new();
+        let mut overhead = None;
         for k in here..self.layers.len() {
+            // Climbing goes straight up where the vehicle is: its cell must be free at every
+            // layer on the way (the map's boxes and what was learned there).
+            let column_free = (here + 1..=k).all(|j| {
+                let g = self.layers[j].world.grid();
+                g.cell_at_ne(n, e).is_some_and(|c| !g.is_blocked(c))
+            });
+            if !column_free {
+                overhead = Some(self.layers[k].alt_m);
+                break;
+            }
             tried.push(format!("{:.1}", self.layers[k].alt_m));
             let Some(found) = self.route_at(k, from) else {
                 continue;
@@ -451,9 +480,12 @@ impl Replanner {
             };
         }
         self.stats.holds += 1;
+        let overhead = overhead
+            .map(|a| format!(" (an obstacle above the vehicle at {a:.1} m stops the climb)"))
+            .unwrap_or_default();
         RouteDecision::Hold {
             reason: format!(
-                "{reason}, and no route to the goal (N {:.1} E {:.1}) was found from N {n:.1} E {e:.1}: planned at {} m (up to the limit of {:.1} m) with the {:.1} m margin around the map's obstacles and {} learned cells",
+                "{reason}, and no route to the goal (N {:.1} E {:.1}) was found from N {n:.1} E {e:.1}: planned at {} m (up to the limit of {:.1} m){overhead} with the {:.1} m margin around the map's obstacles and {} learned cells",
                 self.goal_ne[0],
                 self.goal_ne[1],
                 tried.join(", "),
@@ -502,17 +534,31 @@ fn cell_near(grid: &Grid2, ne: [f64; 2]) -> Option<Cell> {
     }
 }
 
-/// The first learned cell along the cells a segment crosses (in order from `a`).
-fn first_learned_on(world: &WorldModel, a: [f64; 2], b: [f64; 2], touch: Touch) -> Option<Cell> {
+/// The first learned cell along the cells a segment crosses (in order from `a`). With
+/// `leaving` (the leg from the vehicle), the learned cells around the vehicle's own cell are
+/// skipped until the segment leaves them: flying out of a margin is allowed, back in is not.
+fn first_learned_on(
+    world: &WorldModel,
+    a: [f64; 2],
+    b: [f64; 2],
+    touch: Touch,
+    leaving: bool,
+) -> Option<Cell> {
     let grid = world.known();
     let (ca, cb) = (grid.cell_at_ne(a[0], a[1])?, grid.cell_at_ne(b[0], b[1])?);
+    let mut inside = leaving && world.is_learned(ca);
     let mut found = None;
     Grid2::supercover(ca, cb, touch, |r, c| {
-        if let Some(cell) = grid.checked_cell(r, c)
-            && world.is_learned(cell)
-        {
-            found = Some(cell);
-            return false;
+        let learned = grid
+            .checked_cell(r, c)
+            .filter(|&cell| world.is_learned(cell));
+        match learned {
+            Some(_) if inside => {}
+            Some(cell) => {
+                found = Some(cell);
+                return false;
+            }
+            None => inside = false,
         }
         true
     });
@@ -562,4 +608,111 @@ fn length_m(from: [f64; 3], points: &[[f64; 3]]) -> f64 {
         prev = *p;
     }
     total
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use skyplan_flight::sensing::SectorRange;
+    use skyplan_plan::World;
+    use std::sync::Arc;
+
+    const FROM: [f64; 2] = [250.5, -38.5];
+    const TO: [f64; 2] = [390.5, -58.5];
+
+    fn replanner(kind: ReplannerKind) -> Replanner {
+        let request = PlanRequest {
+            start_ne: Some(FROM),
+            goal_ne: Some(TO),
+            ..Default::default()
+        };
+        let options = ReplanOptions {
+            replanner: kind,
+            ..Default::default()
+        };
+        Replanner::new(Session::new(World::fcnd_city()), &request, options).unwrap()
+    }
+
+    /// One obstacle `range_m` away at sector `sector` (of 72, 5° each, from north).
+    fn reading(sector: usize, range_m: f64) -> ObstacleReading {
+        let mut ranges = vec![SectorRange::Clear; 72];
+        ranges[sector] = SectorRange::Obstacle(range_m);
+        ObstacleReading {
+            time_s: 1.0,
+            position_ned: [FROM[0], FROM[1], -5.0],
+            first_bearing_rad: 0.0,
+            increment_rad: 5f64.to_radians(),
+            min_range_m: 0.2,
+            max_range_m: 30.0,
+            ranges,
+        }
+    }
+
+    #[test]
+    fn an_obstacle_off_the_route_keeps_it() {
+        let mut r = replanner(ReplannerKind::DStarLite);
+        let route = r.initial_targets();
+        assert_eq!(route.len(), 2, "a straight leg");
+        // 12 m to the east or west of the vehicle (the route heads north-north-west), in the
+        // first sector whose hit lands outside the map's obstacles.
+        let known = Arc::clone(r.world().known());
+        let sector = (9..27)
+            .chain(45..63)
+            .find(|&k| {
+                let b = (5.0 * k as f64).to_radians();
+                let at = known.cell_at_ne(FROM[0] + 12.0 * b.cos(), FROM[1] + 12.0 * b.sin());
+                at.is_some_and(|c| !known.is_blocked(c))
+            })
+            .expect("a free sector");
+        assert_eq!(
+            r.on_reading(&reading(sector, 12.0), &route),
+            RouteDecision::Keep
+        );
+        assert!(r.learned_count() > 0);
+        assert_eq!(r.stats().readings, 1);
+        assert_eq!(r.stats().replans, 0);
+    }
+
+    #[test]
+    fn flying_out_of_a_learned_margin_is_not_a_block() {
+        let mut r = replanner(ReplannerKind::Scratch);
+        let route = r.initial_targets();
+        // 3 m due south: the vehicle is inside the learned margin, flying away from it.
+        assert_eq!(r.on_reading(&reading(36, 3.0), &route), RouteDecision::Keep);
+        let here = r.world().known().cell_at_ne(FROM[0], FROM[1]).unwrap();
+        assert!(r.world().is_learned(here));
+    }
+
+    #[test]
+    fn both_replanners_find_routes_of_equal_grid_cost_around_the_same_obstacle() {
+        let mut costs = Vec::new();
+        for kind in [ReplannerKind::DStarLite, ReplannerKind::Scratch] {
+            let mut r = replanner(kind);
+            let route = r.initial_targets();
+            let RouteDecision::Replace { targets, event } =
+                r.on_reading(&reading(70, 15.0), &route)
+            else {
+                panic!("{kind}: expected a new route");
+            };
+            assert_eq!(event.planner, kind.name());
+            assert!(
+                event.reason.contains("blocks the leg to waypoint 2"),
+                "{}",
+                event.reason
+            );
+            let pts: Vec<[f64; 3]> = targets
+                .iter()
+                .map(|t| [t.north_m, t.east_m, t.alt_m])
+                .collect();
+            // Clear of everything learned and known, under the corner rule.
+            assert!(
+                skyplan_plan::recheck_grid_route(r.world().grid(), &pts, Touch::Closed).is_ok()
+            );
+            assert!(pts.iter().all(|p| p[2] == 5.0));
+            // Octile cost of the new grid path, from the search itself.
+            costs.push((kind, event.route_length_m));
+        }
+        // Both are shortcuts of optimal octile paths: within a few metres of each other.
+        assert!((costs[0].1 - costs[1].1).abs() < 5.0, "{costs:?}");
+    }
 }

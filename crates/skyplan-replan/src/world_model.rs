@@ -34,7 +34,11 @@ pub struct WorldModel {
     combined: Grid2,
     /// How many hit cells cover each cell (within the margin).
     cover: Vec<u16>,
-    hits: BTreeSet<usize>,
+    /// Cells holding a sensor hit.
+    is_hit: Vec<bool>,
+    /// The same cells, for a quick look at what lies near the vehicle.
+    hit_list: BTreeSet<usize>,
+    learned: usize,
     margin_cells: i64,
 }
 
@@ -50,7 +54,9 @@ impl WorldModel {
         Self {
             combined: (*known).clone(),
             cover: vec![0; known.len()],
-            hits: BTreeSet::new(),
+            is_hit: vec![false; known.len()],
+            hit_list: BTreeSet::new(),
+            learned: 0,
             known,
             margin_cells,
         }
@@ -86,12 +92,12 @@ impl WorldModel {
 
     /// How many cells are occupied because of what was learned.
     pub fn learned_count(&self) -> usize {
-        self.cover.iter().filter(|&&c| c > 0).count()
+        self.learned
     }
 
     /// The cells that hold a sensor hit.
     pub fn hit_cells(&self) -> Vec<Cell> {
-        self.hits.iter().map(|&i| self.known.cell(i)).collect()
+        self.hit_list.iter().map(|&i| self.known.cell(i)).collect()
     }
 
     /// The centres of the learned cells, north/east metres (for logs and pictures).
@@ -119,6 +125,12 @@ impl WorldModel {
             return Vec::new();
         }
         let mut new_hits = BTreeSet::new();
+        // Rays only clear hits within their reach: skip the walks when none is near.
+        let reach_m = reading.max_range_m.max(0.0) + 2.0 * cell_m;
+        let any_near = self.hit_list.iter().any(|&i| {
+            let (n, e) = self.known.center_ne(self.known.cell(i));
+            (n - pn).abs() <= reach_m && (e - pe).abs() <= reach_m
+        });
         let mut clear = BTreeSet::new();
         for (i, r) in reading.ranges.iter().enumerate() {
             let b = reading.bearing_rad(i);
@@ -135,13 +147,17 @@ impl WorldModel {
             let (dn, de) = (b.cos(), b.sin());
             // Walk the free part of the ray in quarter cells; a hit cell is cleared when the ray
             // passes through the inner half of it.
-            let steps = (free_m.max(0.0) / (cell_m * 0.25)).floor() as usize;
+            let steps = if !any_near {
+                0 // nothing learned within reach: nothing to clear
+            } else {
+                (free_m.max(0.0) / (cell_m * 0.25)).floor() as usize
+            };
             for k in 0..=steps {
                 let t = k as f64 * cell_m * 0.25;
                 let (n, e) = (pn + t * dn, pe + t * de);
                 if let Some(c) = self.known.cell_at_ne(n, e) {
                     let idx = self.known.index(c);
-                    if self.hits.contains(&idx) {
+                    if self.is_hit[idx] {
                         let (cn, ce) = self.known.center_ne(c);
                         if (cn - n).abs() <= cell_m * 0.25 && (ce - e).abs() <= cell_m * 0.25 {
                             clear.insert(idx);
@@ -157,12 +173,16 @@ impl WorldModel {
             }
         }
         for idx in clear {
-            if !new_hits.contains(&idx) && self.hits.remove(&idx) {
+            if !new_hits.contains(&idx) && self.is_hit[idx] {
+                self.is_hit[idx] = false;
+                self.hit_list.remove(&idx);
                 self.cover_around(idx, false, &mut touched);
             }
         }
         for idx in new_hits {
-            if self.hits.insert(idx) {
+            if !self.is_hit[idx] {
+                self.is_hit[idx] = true;
+                self.hit_list.insert(idx);
                 self.cover_around(idx, true, &mut touched);
             }
         }
@@ -195,11 +215,17 @@ impl WorldModel {
                 let idx = self.known.index(cell);
                 touched.push((idx, self.combined.is_blocked(cell)));
                 let slot = &mut self.cover[idx];
+                let was = *slot > 0;
                 *slot = if add {
                     slot.saturating_add(1)
                 } else {
                     slot.saturating_sub(1)
                 };
+                match (was, *slot > 0) {
+                    (false, true) => self.learned += 1,
+                    (true, false) => self.learned -= 1,
+                    _ => {}
+                }
             }
         }
     }

@@ -170,9 +170,67 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
     assert!(!flight.reached_goal);
     let reason = flight.hold.expect("a hold");
     assert!(reason.contains("no route to the goal"), "{reason}");
+    // It climbed to look over the wall before giving up (the wall is 200 m tall, the limit 30 m).
+    assert!(
+        flight
+            .replans
+            .iter()
+            .any(|e| e.reason.contains("climbing to")),
+        "never tried climbing"
+    );
+    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(
+        top > ALT_M + 1.0 && top <= 30.0 + 1e-9,
+        "highest point {top} m"
+    );
     assert!(
         reason.contains("30.0"),
         "the hold names the altitudes tried: {reason}"
+    );
+    for w in flight.track.windows(2) {
+        assert!(
+            !truth
+                .iter()
+                .any(|b| segment_meets_box(w[0], w[1], b, SAFETY_M / 2.0))
+        );
+    }
+}
+
+#[test]
+fn a_low_hidden_wall_around_the_goal_is_climbed_over() {
+    let mut r = replanner(ReplannerKind::DStarLite);
+    let [gn, ge] = FCND_DEFAULT_GOAL_NE;
+    // 12 m tall: walled off at 5 m (and, with the 5 m margin, up to 17 m), open above.
+    let wall = |dn: f64, de: f64, hn: f64, he: f64| ObstacleBox {
+        north_m: gn + dn,
+        east_m: ge + de,
+        up_m: 6.0,
+        half_north_m: hn,
+        half_east_m: he,
+        half_up_m: 6.0,
+    };
+    let ring = [
+        wall(16.0, 0.0, 1.0, 17.0),
+        wall(-16.0, 0.0, 1.0, 17.0),
+        wall(0.0, 16.0, 17.0, 1.0),
+        wall(0.0, -16.0, 17.0, 1.0),
+    ];
+    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
+    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&ring).copied().collect();
+    let targets = r.initial_targets();
+    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    assert!(flight.hold.is_none(), "held: {:?}", flight.hold);
+    assert!(flight.reached_goal);
+    assert!(
+        flight
+            .replans
+            .iter()
+            .any(|e| e.reason.contains("climbing to"))
+    );
+    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(
+        top > 12.0 + SAFETY_M / 2.0 && top <= 30.0 + 1e-9,
+        "highest point {top} m"
     );
     for w in flight.track.windows(2) {
         assert!(
