@@ -12,11 +12,9 @@ use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
     ExecutorConfig, FailsafeAction, FlightExecutor, MissionExecutor, Note, Outcome, Target,
 };
-use skyplan_flight::upload::{GlobalWaypoint, UploadConfig, mission_items};
+use skyplan_flight::upload::UploadConfig;
 use skyplan_frames::{Lla, LocalFrame, Ned};
-use skyplan_link::ground::{
-    Autopilot, GroundConfig, GroundStation, LogRow, Update, grid_convergence_rad,
-};
+use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Update};
 use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
 use skyplan_link::words::{log_csv, note_line, progress_message, sim_note_line, tidy, update_line};
@@ -393,22 +391,7 @@ fn fly(
     if let Some(s) = sim {
         print_sim_notes(s);
     }
-    println!(
-        "vehicle    system {} ({}) at lat {:.7}, lon {:.7}, {:.2} m above home; {}",
-        info.system_id,
-        match info.autopilot {
-            Autopilot::ArduPilot => "ArduPilot",
-            Autopilot::Px4 => "PX4",
-            Autopilot::Other => "another autopilot",
-        },
-        info.position.lat_deg,
-        info.position.lon_deg,
-        info.position.alt_m,
-        match info.ekf_origin {
-            Some(o) => format!("EKF origin lat {:.7}, lon {:.7}", o.lat_deg, o.lon_deg),
-            None => "no EKF origin reported".to_string(),
-        }
-    );
+    println!("vehicle    {}", skyplan_link::mission::vehicle_line(&info));
 
     // PLANNING: the heartbeat thread keeps the link alive meanwhile.
     println!("state      PLANNING");
@@ -487,35 +470,16 @@ fn fly_uploaded(
     (targets, config): (&[Target], ExecutorConfig),
     (sim, ctrl_c, live): (Option<&InProcessSim>, &CtrlC, &mut crate::live::Live),
 ) -> Result<(Vec<LogRow>, Ended)> {
-    // --upload: the plan as a mission; ArduPilot's item 0 is its home (PX4 has none).
-    // The plan's headings are from the map's grid north; the vehicle's are from true north.
-    let waypoints: Vec<GlobalWaypoint> = mission
-        .waypoints
-        .iter()
-        .map(|w| {
-            let at = Lla {
-                lat_deg: w.lat_deg,
-                lon_deg: w.lon_deg,
-                alt_m: 0.0,
-            };
-            let convergence_rad = grid_convergence_rad(frame, at).unwrap_or(0.0);
-            GlobalWaypoint {
-                heading_rad: w.heading_rad + convergence_rad,
-                ..GlobalWaypoint::from(w)
-            }
-        })
-        .collect();
-    let home = match info.autopilot {
-        Autopilot::Px4 => None,
-        _ => Some((info.position.lat_deg, info.position.lon_deg)),
-    };
-    // ArduCopter ignores NAV_WAYPOINT's yaw: a CONDITION_YAW after each waypoint sets it.
-    let condition_yaw = info.autopilot == Autopilot::ArduPilot;
-    let items = mission_items(&waypoints, home, condition_yaw).map_err(bad_input)?;
+    let items = skyplan_link::mission::items_for(mission, frame, info).map_err(bad_input)?;
+    let condition_yaw = items.waypoint_stride == 2;
     println!(
         "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
-        if home.is_some() { "home, " } else { "" },
+        if info.autopilot == Autopilot::Px4 {
+            ""
+        } else {
+            "home, "
+        },
         alt_m,
         targets.len(),
         if condition_yaw {

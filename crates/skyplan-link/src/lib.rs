@@ -8,6 +8,7 @@
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
 //! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
+//! - [`mission`]: a planned mission as a vehicle's autopilot gets it (items, true-north headings).
 //! - [`words`]: the flight told in lines (notes, updates) and the flight log as CSV.
 //!
 //! Only the `common` dialect is compiled (build time); ArduPilot's custom modes are numbers.
@@ -16,6 +17,7 @@
 
 pub mod ground;
 pub mod in_process;
+pub mod mission;
 pub mod vehicle;
 pub mod words;
 
