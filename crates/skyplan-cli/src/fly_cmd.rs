@@ -10,14 +10,15 @@ use skyplan_export::Format;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FailsafeAction, FlightExecutor, MissionExecutor, Note, Outcome, Target,
+    ExecutorConfig, FailsafeAction, FlightExecutor, MissionExecutor, Outcome, Target,
 };
 use skyplan_flight::upload::UploadConfig;
 use skyplan_frames::{Lla, LocalFrame, Ned};
+use skyplan_link::flight::{self, Observer, reached_index};
 use skyplan_link::ground::{Autopilot, GroundConfig, GroundStation, LogRow, Update};
 use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
-use skyplan_link::words::{log_csv, note_line, progress_message, sim_note_line, tidy, update_line};
+use skyplan_link::words::{log_csv, progress_message, sim_note_line};
 use skyplan_link::{Address, Role};
 use skyplan_plan::{PlanRequest, Session, World};
 use std::io::IsTerminal;
@@ -283,26 +284,8 @@ fn start_sim(
 /// The simulator's track report and the flight's exit: 0 only when landed and disarmed with
 /// every waypoint reached and, on the simulator, no collision.
 fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Instant) -> Result<()> {
-    let report = report.cloned();
-    if let Some(r) = &report {
-        let clearance = r
-            .track
-            .min_clearance_m()
-            .map_or("no obstacle within 20 m".to_string(), |c| {
-                format!("closest obstacle {c:.2} m")
-            });
-        match r.track.collision() {
-            Some(c) => println!(
-                "track      COLLISION: {} samples inside obstacles, first at {:.1} s (obstacle #{})",
-                r.track.colliding_samples(),
-                c.time_s,
-                c.box_index
-            ),
-            None => println!(
-                "track      flown {:.1} m, max altitude {:.2} m, no collision with the map's obstacles ({clearance})",
-                r.distance_m, r.max_alt_m
-            ),
-        }
+    if let Some(r) = report {
+        println!("{}", flight::track_line(r));
     }
     println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
     match outcome {
@@ -569,6 +552,39 @@ fn progress_bar(waypoints: usize) -> indicatif::ProgressBar {
     bar
 }
 
+/// The terminal's observer: lines above the progress bar, the live view, the simulator's notes.
+struct Terminal<'a> {
+    sim: Option<&'a InProcessSim>,
+    live: &'a mut crate::live::Live,
+    bar: indicatif::ProgressBar,
+}
+
+impl Observer for Terminal<'_> {
+    fn say(&mut self, line: &str) {
+        say(line);
+    }
+
+    fn update(&mut self, u: &Update) {
+        if let Some(s) = self.sim {
+            print_sim_notes(s);
+        }
+        match u {
+            Update::Notes(_, notes) => {
+                if let Some(i) = notes.iter().rev().find_map(reached_index) {
+                    self.bar.set_position((i + 1) as u64);
+                }
+            }
+            Update::Progress(p) => {
+                self.live.progress(p);
+                self.bar.set_prefix(p.state.name());
+                self.bar.set_position(p.reached as u64);
+                self.bar.set_message(progress_message(p));
+            }
+            _ => {}
+        }
+    }
+}
+
 /// Flies with either executor, printing as it goes, and sums the flight up.
 fn fly_with<E: FlightExecutor>(
     gcs: &mut GroundStation,
@@ -576,82 +592,17 @@ fn fly_with<E: FlightExecutor>(
     frame: &LocalFrame,
     (sim, ctrl_c, live): (Option<&InProcessSim>, &CtrlC, &mut crate::live::Live),
 ) -> Result<(Vec<LogRow>, Option<Outcome>)> {
-    let n = ex.targets().len();
-    let bar = progress_bar(n);
+    let bar = progress_bar(ex.targets().len());
     ctrl_c.in_flight.store(true, Ordering::SeqCst);
-    let flown = gcs.fly(ex, frame, |u| {
-        if let Some(s) = sim {
-            print_sim_notes(s);
-        }
-        match u {
-            Update::Notes(t, notes) => {
-                for note in notes {
-                    if let Some(line) = note_line(t, n, &note) {
-                        say(&line);
-                    }
-                    if let Note::Reached(r) = note {
-                        bar.set_position((r.index + 1) as u64);
-                    }
-                }
-            }
-            other @ (Update::StatusText(_)
-            | Update::LinkClosed(_)
-            | Update::TimedOut(_)
-            | Update::Interrupted(_)
-            | Update::Mode(_)) => {
-                if let Some(line) = update_line(&other) {
-                    say(&line);
-                }
-            }
-            Update::Progress(p) => {
-                live.progress(&p);
-                bar.set_prefix(p.state.name());
-                bar.set_position(p.reached as u64);
-                bar.set_message(progress_message(&p));
-            }
-        }
-    });
+    let mut terminal = Terminal {
+        sim,
+        live,
+        bar: bar.clone(),
+    };
+    let flown = flight::fly(gcs, ex, frame, &mut terminal);
     ctrl_c.in_flight.store(false, Ordering::SeqCst);
     bar.finish_and_clear();
-    let summary = flown.or_exit(Kind::Runtime)?;
-    live.last(summary.time_s, ex.state(), ex.last_telemetry());
-    let reached = ex.reached();
-    let worst_h = reached
-        .iter()
-        .map(|r| r.horizontal_error_m)
-        .fold(0.0, f64::max);
-    let worst_yaw = reached
-        .iter()
-        .map(|r| r.heading_error_rad.to_degrees())
-        .fold(0.0, f64::max);
-    let last = ex.last_telemetry();
-    println!(
-        "flight     {:.1} s simulated/vehicle time, {:.2} s wall; {} of {n} waypoints reached (worst {:.2} m, {:.1}°); {} position targets sent, {} vehicle heartbeats",
-        summary.time_s,
-        summary.wall_time_s,
-        reached.len(),
-        worst_h,
-        worst_yaw,
-        summary.position_targets_sent,
-        summary.heartbeats_received
-    );
-    if let Some(t) = last {
-        println!(
-            "vehicle    at N {:.2} m, E {:.2} m, {:.2} m above home, {}, state {}",
-            t.north_m,
-            t.east_m,
-            tidy(t.alt_m()),
-            if t.armed { "ARMED" } else { "disarmed" },
-            ex.state()
-        );
-    }
-    let outcome = ex.outcome().cloned();
-    match &outcome {
-        Some(Outcome::Completed) => {
-            println!("result     landed and disarmed after reaching all {n} waypoints")
-        }
-        Some(Outcome::Failed(f)) => println!("result     FAILED: {f}"),
-        None => println!("result     FAILED: gave up waiting for the landing"),
-    }
-    Ok((summary.log, outcome))
+    let flown = flown.or_exit(Kind::Runtime)?;
+    live.last(flown.summary.time_s, ex.state(), ex.last_telemetry());
+    Ok((flown.log, flown.outcome))
 }

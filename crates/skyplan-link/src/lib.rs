@@ -7,6 +7,7 @@
 //!   behind a MAVLink server (heartbeat, commands, position targets, mission upload, telemetry).
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
+//! - [`flight`]: one flight, told line by line to an observer and summed up (`fly`, `bench --replan`).
 //! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
 //! - [`mission`]: a planned mission as a vehicle's autopilot gets it (items, true-north headings).
 //! - [`words`]: the flight told in lines (notes, updates) and the flight log as CSV.
@@ -15,6 +16,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod flight;
 pub mod ground;
 pub mod in_process;
 pub mod mission;

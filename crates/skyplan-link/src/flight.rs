@@ -1,0 +1,143 @@
+//! One flight from the ground station's side, for any front end (`skyplan fly`, `skyplan bench
+//! --replan`): fly the executor, tell the story line by line to an [`Observer`], sum it up.
+//!
+//! The observer decides where lines go (a terminal above a progress bar, a live view, nowhere);
+//! this module only makes them.
+
+use crate::ground::{FlightSummary, GroundError, GroundStation, LogRow, Update};
+use crate::vehicle::SimReport;
+use crate::words::{note_line, tidy, update_line};
+use skyplan_flight::executor::{FlightExecutor, Note, Outcome};
+use skyplan_frames::LocalFrame;
+
+/// Where a flight's story goes.
+pub trait Observer {
+    /// One line of the story (a state change, a reached waypoint, a refusal, a replan, …).
+    fn say(&mut self, line: &str);
+    /// Every update as it comes, after its line (progress bars, live views, recorders).
+    fn update(&mut self, _update: &Update) {}
+}
+
+/// An observer that keeps nothing (benchmarks).
+pub struct Quiet;
+
+impl Observer for Quiet {
+    fn say(&mut self, _line: &str) {}
+}
+
+/// A flight flown: its log, how it ended and the ground station's counts.
+pub struct Flown {
+    /// The flight log, one row per telemetry update.
+    pub log: Vec<LogRow>,
+    /// `None` when an aborted flight did not land in time.
+    pub outcome: Option<Outcome>,
+    /// Vehicle time, wall time, messages.
+    pub summary: FlightSummary,
+}
+
+/// Flies `ex` over `gcs`, telling `observer` each note and update; then tells the summary (time,
+/// waypoints reached and their worst errors, where the vehicle is, the result).
+pub fn fly<E: FlightExecutor>(
+    gcs: &mut GroundStation,
+    ex: &mut E,
+    frame: &LocalFrame,
+    observer: &mut dyn Observer,
+) -> Result<Flown, GroundError> {
+    let n = ex.targets().len();
+    let mut summary = gcs.fly(ex, frame, |u| {
+        match &u {
+            Update::Notes(t, notes) => {
+                for line in notes.iter().filter_map(|note| note_line(*t, n, note)) {
+                    observer.say(&line);
+                }
+            }
+            other => {
+                if let Some(line) = update_line(other) {
+                    observer.say(&line);
+                }
+            }
+        }
+        observer.update(&u);
+    })?;
+    for line in summary_lines(&summary, ex) {
+        observer.say(&line);
+    }
+    let log = std::mem::take(&mut summary.log);
+    Ok(Flown {
+        log,
+        outcome: ex.outcome().cloned(),
+        summary,
+    })
+}
+
+/// The flight summed up: times and counts, the vehicle at the end, the result.
+pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<String> {
+    let n = ex.targets().len();
+    let reached = ex.reached();
+    let worst_h = reached
+        .iter()
+        .map(|r| r.horizontal_error_m)
+        .fold(0.0, f64::max);
+    let worst_yaw = reached
+        .iter()
+        .map(|r| r.heading_error_rad.to_degrees())
+        .fold(0.0, f64::max);
+    let mut lines = vec![format!(
+        "flight     {:.1} s simulated/vehicle time, {:.2} s wall; {} of {n} waypoints reached (worst {:.2} m, {:.1}°); {} position targets sent, {} vehicle heartbeats",
+        summary.time_s,
+        summary.wall_time_s,
+        reached.len(),
+        worst_h,
+        worst_yaw,
+        summary.position_targets_sent,
+        summary.heartbeats_received
+    )];
+    if let Some(t) = ex.last_telemetry() {
+        lines.push(format!(
+            "vehicle    at N {:.2} m, E {:.2} m, {:.2} m above home, {}, state {}",
+            t.north_m,
+            t.east_m,
+            tidy(t.alt_m()),
+            if t.armed { "ARMED" } else { "disarmed" },
+            ex.state()
+        ));
+    }
+    lines.push(match ex.outcome() {
+        Some(Outcome::Completed) => {
+            format!("result     landed and disarmed after reaching all {n} waypoints")
+        }
+        Some(Outcome::Failed(f)) => format!("result     FAILED: {f}"),
+        None => "result     FAILED: gave up waiting for the landing".to_string(),
+    });
+    lines
+}
+
+/// The simulator's account of the flown track: its length and clearance, or the collision.
+pub fn track_line(report: &SimReport) -> String {
+    let clearance = report
+        .track
+        .min_clearance_m()
+        .map_or("no obstacle within 20 m".to_string(), |c| {
+            format!("closest obstacle {c:.2} m")
+        });
+    match report.track.collision() {
+        Some(c) => format!(
+            "track      COLLISION: {} samples inside obstacles, first at {:.1} s (obstacle #{})",
+            report.track.colliding_samples(),
+            c.time_s,
+            c.box_index
+        ),
+        None => format!(
+            "track      flown {:.1} m, max altitude {:.2} m, no collision with the map's obstacles ({clearance})",
+            report.distance_m, report.max_alt_m
+        ),
+    }
+}
+
+/// Whether a note moves the progress bar: the index of a reached waypoint.
+pub fn reached_index(note: &Note) -> Option<usize> {
+    match note {
+        Note::Reached(r) => Some(r.index),
+        _ => None,
+    }
+}
