@@ -9,10 +9,12 @@
 //! * [`Replanner`]: the [`skyplan_flight::sensing::RouteWatcher`] that checks the route still to
 //!   fly against what was learned and replans from the vehicle to the goal (D\* Lite or JPS from
 //!   scratch; climbing when the altitude is walled off; holding when nothing can be flown).
+//! * [`bench`]: the scenarios and the numbers of `skyplan bench --replan`; [`bench::SharedReplanner`].
 //! * [`hidden`]: random hidden buildings on or near a route, and the true world they make.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod bench;
 mod dstar;
 pub mod hidden;
 mod replanner;
