@@ -69,6 +69,9 @@ pub struct ReplanOptions {
     pub max_alt_m: f64,
     /// Altitude step between the layers tried when climbing, metres.
     pub climb_step_m: f64,
+    /// D\* Lite: most expansions one replan may spend repairing; over it, that replan searches
+    /// from scratch (JPS) and D\* Lite resumes at the next one. `None`: no limit.
+    pub dstar_budget_expansions: Option<u64>,
 }
 
 impl Default for ReplanOptions {
@@ -77,6 +80,7 @@ impl Default for ReplanOptions {
             replanner: ReplannerKind::DStarLite,
             max_alt_m: 30.0,
             climb_step_m: 5.0,
+            dstar_budget_expansions: Some(10_000),
         }
     }
 }
@@ -375,20 +379,30 @@ impl Replanner {
         let grid = self.layers[k].world.grid();
         let start = cell_near(grid, from)?;
         let goal = grid.cell_at_ne(self.goal_ne[0], self.goal_ne[1])?;
-        let (cells, expansions, planner) = match (&mut self.dstar, k) {
-            (Some(d), 0) => {
-                let before = d.expansions();
-                d.update_cells(&self.pending);
-                self.pending.clear();
-                d.move_start(start);
-                let path = d.compute()?;
-                (
-                    path.cells,
-                    d.expansions() - before,
-                    "dstar-lite".to_string(),
-                )
-            }
-            _ => {
+        let budget = self.options.dstar_budget_expansions.unwrap_or(u64::MAX);
+        let mut repaired = None;
+        if let (Some(d), 0) = (&mut self.dstar, k) {
+            let before = d.expansions();
+            d.update_cells(&self.pending);
+            self.pending.clear();
+            d.move_start(start);
+            let spent = |d: &DStarLite| d.expansions() - before;
+            repaired = Some(match d.compute_within(budget) {
+                Ok(path) => (path?.cells, spent(d), "dstar-lite".to_string()),
+                // Over budget: this once from scratch (D* Lite resumes at the next replan).
+                Err(_) => {
+                    let path = self
+                        .search
+                        .search(grid, start, goal, self.model, Planner::Jps)
+                        .ok()?;
+                    let name = "dstar-lite, over budget: scratch".to_string();
+                    (path.cells, spent(d) + path.expansions, name)
+                }
+            });
+        }
+        let (cells, expansions, planner) = match repaired {
+            Some(r) => r,
+            None => {
                 let path = self
                     .search
                     .search(grid, start, goal, self.model, Planner::Jps)
