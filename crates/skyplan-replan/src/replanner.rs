@@ -222,7 +222,9 @@ impl Replanner {
         let mut k = 0u32;
         loop {
             let alt_m = info.alt_m + f64::from(k) * options.climb_step_m;
-            if k > 0 && alt_m > options.max_alt_m + 1e-9 {
+            // Grid maps have one grid whatever the altitude: nothing to climb to.
+            let flat = session.world().colliders().is_none();
+            if k > 0 && (flat || alt_m > options.max_alt_m + 1e-9) {
                 break;
             }
             let known = session.grid(alt_m, info.safety_m, info.cell_m)?;
@@ -660,6 +662,55 @@ mod tests {
             max_range_m: 30.0,
             ranges,
         }
+    }
+
+    #[test]
+    fn a_wall_across_a_grid_map_holds_without_climbing() {
+        let grid = skyplan_cspace::Grid2::new(
+            21,
+            41,
+            vec![false; 21 * 41],
+            skyplan_cspace::GridFrame::default(),
+        )
+        .unwrap();
+        let request = PlanRequest {
+            start_ne: Some([10.5, 0.5]),
+            goal_ne: Some([10.5, 40.5]),
+            safety_m: Some(1.0),
+            ..Default::default()
+        };
+        let world = World::from_grid("strip", grid);
+        let mut r =
+            Replanner::new(Session::new(world), &request, ReplanOptions::default()).unwrap();
+        let route = r.initial_targets();
+        // A wall 15 m east, from the southern edge to the northern one: 41 sectors of 1 m.
+        let ranges = (0..=20)
+            .map(|row| {
+                let dn = row as f64 - 10.0;
+                let bearing = 15f64.atan2(dn);
+                (bearing, SectorRange::Obstacle(dn.hypot(15.0)))
+            })
+            .collect::<Vec<_>>();
+        for (bearing, range) in ranges {
+            let reading = ObstacleReading {
+                time_s: 1.0,
+                position_ned: [10.5, 0.5, -5.0],
+                first_bearing_rad: bearing,
+                increment_rad: 0.1,
+                min_range_m: 0.2,
+                max_range_m: 30.0,
+                ranges: vec![range],
+            };
+            if let RouteDecision::Hold { reason } = r.on_reading(&reading, &route) {
+                assert!(reason.contains("no route to the goal"), "{reason}");
+                assert!(
+                    reason.contains("planned at 5.0 m"),
+                    "only the grid's altitude: {reason}"
+                );
+                return;
+            }
+        }
+        panic!("no hold after the wall was seen whole");
     }
 
     #[test]
