@@ -59,7 +59,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "replanner   flights  reached  replans/flight  p50_ms  p99_ms  max_ms  expansions/replan  flown/optimum(median)"
     );
-    for kind in [ReplannerKind::DStarLite, ReplannerKind::Scratch] {
+    let configs = [
+        ("dstar-lite", ReplannerKind::DStarLite, Some(10_000)),
+        ("dstar-pure", ReplannerKind::DStarLite, None),
+        ("scratch", ReplannerKind::Scratch, None),
+    ];
+    for (label, kind, budget) in configs {
         let (mut latencies, mut expansions, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
         let (mut reached, mut replans) = (0, 0);
         let mut slowest: Option<(f64, u64, String)> = None;
@@ -68,6 +73,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for seed in 0..seeds {
             let options = ReplanOptions {
                 replanner: kind,
+                dstar_budget_expansions: budget,
                 ..Default::default()
             };
             let mut r = Replanner::new(Session::new(World::fcnd_city()), &request, options)?;
@@ -151,7 +157,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
         println!(
             "{:<11} {:>7}  {:>7}  {:>14.1}  {:>6.2}  {:>6.2}  {:>6.2}  {:>17.0}  {:>8.3}",
-            kind.name(),
+            label,
             seeds,
             reached,
             replans as f64 / seeds as f64,

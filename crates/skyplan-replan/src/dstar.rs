@@ -37,6 +37,11 @@ pub enum DStarError {
     },
 }
 
+/// [`DStarLite::compute_within`] spent its expansions before the path was known.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("D* Lite spent its expansion budget before the path was known")]
+pub struct BudgetSpent;
+
 /// A path found by [`DStarLite::compute`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct DStarPath {
@@ -242,26 +247,49 @@ impl DStarLite {
     /// Repairs the search and returns the shortest path from the start to the goal, or `None`
     /// if there is none (either end blocked, or walled off).
     pub fn compute(&mut self) -> Option<DStarPath> {
+        self.compute_within(u64::MAX).unwrap_or(None)
+    }
+
+    /// [`DStarLite::compute`] that stops after `max_expansions` expansions with `Err` (the
+    /// search stays valid: a later call goes on where this one stopped). For callers with a
+    /// deadline, who then search from scratch for this once.
+    ///
+    /// ```
+    /// use skyplan_cspace::{Cell, Grid2, GridFrame};
+    /// use skyplan_replan::DStarLite;
+    /// use skyplan_search::MoveModel;
+    /// let grid = Grid2::new(50, 50, vec![false; 2500], GridFrame::default())?;
+    /// let mut d = DStarLite::new(&grid, Cell::new(0, 0), Cell::new(49, 49), MoveModel::Octile)?;
+    /// assert!(d.compute_within(10).is_err());
+    /// let path = d.compute_within(u64::MAX).expect("within budget").expect("a path");
+    /// assert_eq!(path.diagonal_moves, 49);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn compute_within(
+        &mut self,
+        max_expansions: u64,
+    ) -> Result<Option<DStarPath>, BudgetSpent> {
         if self.grid.is_blocked(self.start) || self.grid.is_blocked(self.goal) {
-            return None;
+            return Ok(None);
         }
-        self.repair(false);
+        let until = self.expansions.saturating_add(max_expansions);
+        self.repair(false, until)?;
         let s = self.grid.index(self.start);
-        match self.path() {
+        Ok(match self.path() {
             Some(p) if p.units() == self.rhs[s] => Some(p),
             _ if self.rhs[s] == INF => None,
             _ => {
                 // A state whose key ties the start's was left stale and the walk along g took
                 // it: expand the ties too, then walk again.
-                self.repair(true);
+                self.repair(true, until)?;
                 self.path()
             }
-        }
+        })
     }
 
     /// ComputeShortestPath of the optimized D\* Lite; with `ties`, also expands every state
-    /// whose key equals the start's.
-    fn repair(&mut self, ties: bool) {
+    /// whose key equals the start's. Stops with `Err` when the expansions reach `until`.
+    fn repair(&mut self, ties: bool, until: u64) -> Result<(), BudgetSpent> {
         let s = self.grid.index(self.start);
         while let Some((u, k_old)) = self.top() {
             let start_key = self.key(s);
@@ -272,6 +300,9 @@ impl DStarLite {
             };
             if !more {
                 break;
+            }
+            if self.expansions >= until {
+                return Err(BudgetSpent);
             }
             let k_new = self.key(u);
             if k_old.lt(k_new) {
@@ -305,6 +336,7 @@ impl DStarLite {
                 });
             }
         }
+        Ok(())
     }
 
     /// Follows the best successors from the start to the goal.

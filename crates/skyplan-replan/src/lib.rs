@@ -20,6 +20,6 @@ pub mod hidden;
 mod replanner;
 mod world_model;
 
-pub use dstar::{DStarError, DStarLite, DStarPath};
+pub use dstar::{BudgetSpent, DStarError, DStarLite, DStarPath};
 pub use replanner::{ReplanOptions, ReplanStats, Replanner, ReplannerKind, UnknownReplanner};
 pub use world_model::WorldModel;

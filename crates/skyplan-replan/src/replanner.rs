@@ -69,6 +69,9 @@ pub struct ReplanOptions {
     pub max_alt_m: f64,
     /// Altitude step between the layers tried when climbing, metres.
     pub climb_step_m: f64,
+    /// D\* Lite: most expansions one replan may spend repairing; over it, that replan searches
+    /// from scratch (JPS) and D\* Lite resumes at the next one. `None`: no limit.
+    pub dstar_budget_expansions: Option<u64>,
 }
 
 impl Default for ReplanOptions {
@@ -77,6 +80,7 @@ impl Default for ReplanOptions {
             replanner: ReplannerKind::DStarLite,
             max_alt_m: 30.0,
             climb_step_m: 5.0,
+            dstar_budget_expansions: Some(10_000),
         }
     }
 }
@@ -218,7 +222,9 @@ impl Replanner {
         let mut k = 0u32;
         loop {
             let alt_m = info.alt_m + f64::from(k) * options.climb_step_m;
-            if k > 0 && alt_m > options.max_alt_m + 1e-9 {
+            // Grid maps have one grid whatever the altitude: nothing to climb to.
+            let flat = session.world().colliders().is_none();
+            if k > 0 && (flat || alt_m > options.max_alt_m + 1e-9) {
                 break;
             }
             let known = session.grid(alt_m, info.safety_m, info.cell_m)?;
@@ -375,20 +381,30 @@ impl Replanner {
         let grid = self.layers[k].world.grid();
         let start = cell_near(grid, from)?;
         let goal = grid.cell_at_ne(self.goal_ne[0], self.goal_ne[1])?;
-        let (cells, expansions, planner) = match (&mut self.dstar, k) {
-            (Some(d), 0) => {
-                let before = d.expansions();
-                d.update_cells(&self.pending);
-                self.pending.clear();
-                d.move_start(start);
-                let path = d.compute()?;
-                (
-                    path.cells,
-                    d.expansions() - before,
-                    "dstar-lite".to_string(),
-                )
-            }
-            _ => {
+        let budget = self.options.dstar_budget_expansions.unwrap_or(u64::MAX);
+        let mut repaired = None;
+        if let (Some(d), 0) = (&mut self.dstar, k) {
+            let before = d.expansions();
+            d.update_cells(&self.pending);
+            self.pending.clear();
+            d.move_start(start);
+            let spent = |d: &DStarLite| d.expansions() - before;
+            repaired = Some(match d.compute_within(budget) {
+                Ok(path) => (path?.cells, spent(d), "dstar-lite".to_string()),
+                // Over budget: this once from scratch (D* Lite resumes at the next replan).
+                Err(_) => {
+                    let path = self
+                        .search
+                        .search(grid, start, goal, self.model, Planner::Jps)
+                        .ok()?;
+                    let name = "dstar-lite, over budget: scratch".to_string();
+                    (path.cells, spent(d) + path.expansions, name)
+                }
+            });
+        }
+        let (cells, expansions, planner) = match repaired {
+            Some(r) => r,
+            None => {
                 let path = self
                     .search
                     .search(grid, start, goal, self.model, Planner::Jps)
@@ -646,6 +662,55 @@ mod tests {
             max_range_m: 30.0,
             ranges,
         }
+    }
+
+    #[test]
+    fn a_wall_across_a_grid_map_holds_without_climbing() {
+        let grid = skyplan_cspace::Grid2::new(
+            21,
+            41,
+            vec![false; 21 * 41],
+            skyplan_cspace::GridFrame::default(),
+        )
+        .unwrap();
+        let request = PlanRequest {
+            start_ne: Some([10.5, 0.5]),
+            goal_ne: Some([10.5, 40.5]),
+            safety_m: Some(1.0),
+            ..Default::default()
+        };
+        let world = World::from_grid("strip", grid);
+        let mut r =
+            Replanner::new(Session::new(world), &request, ReplanOptions::default()).unwrap();
+        let route = r.initial_targets();
+        // A wall 15 m east, from the southern edge to the northern one: 41 sectors of 1 m.
+        let ranges = (0..=20)
+            .map(|row| {
+                let dn = row as f64 - 10.0;
+                let bearing = 15f64.atan2(dn);
+                (bearing, SectorRange::Obstacle(dn.hypot(15.0)))
+            })
+            .collect::<Vec<_>>();
+        for (bearing, range) in ranges {
+            let reading = ObstacleReading {
+                time_s: 1.0,
+                position_ned: [10.5, 0.5, -5.0],
+                first_bearing_rad: bearing,
+                increment_rad: 0.1,
+                min_range_m: 0.2,
+                max_range_m: 30.0,
+                ranges: vec![range],
+            };
+            if let RouteDecision::Hold { reason } = r.on_reading(&reading, &route) {
+                assert!(reason.contains("no route to the goal"), "{reason}");
+                assert!(
+                    reason.contains("planned at 5.0 m"),
+                    "only the grid's altitude: {reason}"
+                );
+                return;
+            }
+        }
+        panic!("no hold after the wall was seen whole");
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! D* Lite against the exact oracle (`skyplan_search::oracle::dijkstra_exact`, an independent
 //! Dijkstra from scratch) after every batch of random cell edits, with the start moving along
-//! the current path; every path is re-checked under the move model with `check_path`.
+//! the current path (and repairs cut into small budgets half of the time); every path is
+//! re-checked under the move model with `check_path`.
 
 use proptest::prelude::*;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
@@ -38,6 +39,7 @@ proptest! {
             proptest::collection::vec((0u32..1000, 0u32..1000, proptest::bool::weighted(0.6)), 1..8),
             1..6),
         steps in proptest::collection::vec(0usize..4, 6),
+        budget in prop_oneof![Just(u64::MAX), 1u64..40],
     ) {
         let mut grid = Grid2::new(rows, cols, blocked, GridFrame::default()).expect("grid");
         let start = Cell::new(ends.0 % rows, ends.1 % cols);
@@ -46,7 +48,12 @@ proptest! {
         let mut at = start;
         let check = |d: &mut DStarLite, grid: &Grid2, at: Cell| -> Result<Option<Vec<Cell>>, TestCaseError> {
             let truth = dijkstra_exact(grid, at, goal, model);
-            let found = d.compute();
+            // With a small budget, repeated calls resume the same repair until it finishes.
+            let found = loop {
+                if let Ok(found) = d.compute_within(budget) {
+                    break found;
+                }
+            };
             match (&truth, &found) {
                 (None, None) => Ok(None),
                 (Some(t), Some(p)) => {
