@@ -417,6 +417,7 @@ impl GroundStation {
                     count,
                     target_system: sys,
                     target_component: comp,
+                    ..Default::default()
                 }),
                 UploadSend::Item(seq) => {
                     let Some(item) = plan.items.get(usize::from(seq)) else {
@@ -1041,6 +1042,7 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
         frame,
         current: 0,
         autocontinue: 1,
+        ..Default::default()
     })
 }
 

@@ -263,6 +263,7 @@ fn status_text(severity: MavSeverity, text: &str) -> MavMessage {
     MavMessage::STATUSTEXT(STATUSTEXT_DATA {
         severity,
         text: bytes.into(),
+        ..Default::default()
     })
 }
 
@@ -495,6 +496,7 @@ impl SimServer {
                         target_system: 0,
                         target_component: 0,
                         mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
+                        ..Default::default()
                     }));
                     upload = None;
                 } else {
@@ -542,6 +544,7 @@ fn request_int(seq: u16) -> MavMessage {
         seq,
         target_system: 255,
         target_component: 0,
+        ..Default::default()
     })
 }
 
@@ -621,6 +624,7 @@ impl Side {
                     latitude,
                     longitude,
                     altitude: (self.home_alt_m * 1000.0).round() as i32,
+                    ..Default::default()
                 })
             }
             EXTENDED_SYS_STATE_ID => MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
@@ -640,6 +644,7 @@ impl Side {
             MISSION_CURRENT_ID if mission_len > 1 => {
                 MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
                     seq: s.mission_current,
+                    ..Default::default()
                 })
             }
             _ => return None,
@@ -648,7 +653,11 @@ impl Side {
 }
 
 fn ack(command: MavCmd, result: MavResult) -> MavMessage {
-    MavMessage::COMMAND_ACK(COMMAND_ACK_DATA { command, result })
+    MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+        command,
+        result,
+        ..Default::default()
+    })
 }
 
 /// A mission item in the vehicle's frame (the deprecated `_INT` frame is what ArduPilot sends).
@@ -873,6 +882,7 @@ fn mission_ack(result: MavMissionResult) -> MavMessage {
         target_system: 255,
         target_component: 0,
         mavtype: result,
+        ..Default::default()
     })
 }
 
