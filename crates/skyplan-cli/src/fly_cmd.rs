@@ -303,6 +303,11 @@ fn start_sim(
         link_gap_s: args.sim_link_gap_s,
         ekf_delay_s: args.sim_ekf_delay_s,
         map_home: Some(frame.home()),
+        hidden: match &args.hidden {
+            Some(path) => crate::sim_cmd::load_hidden(path, &map.home)?,
+            None => Vec::new(),
+        },
+        sensor_range_m: crate::sim_cmd::sensor_range_m(args.sensor_range_m)?,
         ..SimServerConfig::at(home)
     };
     let server =
@@ -370,6 +375,14 @@ fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Insta
                 )));
             }
             Ok(())
+        }
+        // No route in the true world: the "no path" exit, as for planning.
+        Some(Outcome::Failed(f @ skyplan_flight::executor::Failure::NoRoute { .. })) => {
+            Err(crate::exit::Failure {
+                kind: Kind::NoPath,
+                error: anyhow::anyhow!("flight failed: {f}"),
+                plan_kind: None,
+            })
         }
         Some(Outcome::Failed(f)) => Err(runtime(format!("flight failed: {f}"))),
         None => Err(runtime(
@@ -676,6 +689,7 @@ fn fly_with<E: FlightExecutor>(
     let n = ex.targets().len();
     let bar = progress_bar(n);
     ctrl_c.in_flight.store(true, Ordering::SeqCst);
+    let mut n_route = n;
     let flown = gcs.fly(ex, frame, |u| {
         if let Some(s) = sim {
             s.print_notes();
@@ -683,7 +697,12 @@ fn fly_with<E: FlightExecutor>(
         match u {
             Update::Notes(t, notes) => {
                 for note in notes {
-                    if let Some(line) = note_line(t, n, &note) {
+                    if let Note::Replanned { event, targets } = &note {
+                        n_route = targets.len();
+                        bar.set_length(n_route as u64);
+                        live.replanned(t, targets, event);
+                    }
+                    if let Some(line) = note_line(t, n_route, &note) {
                         say(&line);
                     }
                     if let Note::Reached(r) = note {
@@ -704,6 +723,8 @@ fn fly_with<E: FlightExecutor>(
                 }
             )),
             Update::Mode(m) => say(&format!("mode       {m}")),
+            Update::Reading(r) => live.reading(r),
+            Update::Warning(w) => say(&format!("sensor     {w}")),
             Update::Progress(p) => {
                 live.progress(&p);
                 bar.set_prefix(p.state.name());
@@ -785,6 +806,21 @@ pub(crate) fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
                 FailsafeAction::Hold => "LOITER (--failsafe hold)",
             }
         ),
+        Note::Replanned { event, targets } => format!(
+            "replan     {t:7.1} s  at N {:.1} m, E {:.1} m: {} ({}, {:.2} ms, {} expansions, {} learned cells): new route of {} waypoints, {:.1} m",
+            event.position_ned[0],
+            event.position_ned[1],
+            event.reason,
+            event.planner,
+            event.latency_ms,
+            event.expansions,
+            event.learned_cells,
+            targets.len(),
+            event.route_length_m
+        ),
+        Note::Holding { reason, hold_s } => {
+            format!("hold       {t:7.1} s  no route: {reason}; holding {hold_s:.1} s, then landing")
+        }
         Note::Finished => return None,
     })
 }
@@ -882,6 +918,8 @@ mod tests {
             waypoints: 5,
             distance_left_m: 123.45,
             telemetry: None,
+            readings: 0,
+            replans: 0,
         };
         assert_eq!(progress_message(&p), "123.5 m left  t 12.3 s");
         assert_eq!(

@@ -5,6 +5,7 @@
 //!   keeps sending at 1 Hz whatever the caller does (planning included).
 //! - [`vehicle`]: `skyplan sim`'s vehicle side: the simulated multicopter of `skyplan-flight`
 //!   behind a MAVLink server (heartbeat, commands, position targets, mission upload, telemetry).
+//! - [`obstacle`]: MAVLink `OBSTACLE_DISTANCE` to and from skyplan-flight's `ObstacleReading`.
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
 //!
@@ -13,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod ground;
+pub mod obstacle;
 pub mod vehicle;
 
 use mavlink::dialects::common::MavMessage;
