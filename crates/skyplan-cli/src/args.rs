@@ -397,6 +397,12 @@ pub struct FlyArgs {
     /// Fault injection for tests: the silence lasts this many simulated seconds, then the link comes back.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim_drop_link_after_s")]
     pub sim_link_gap_s: Option<f64>,
+    /// With --sim: obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
+    #[arg(long, value_name = "FILE", requires = "sim")]
+    pub hidden: Option<PathBuf>,
+    /// With --sim: range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
+    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = parse_finite, requires = "sim")]
+    pub sensor_range_m: f64,
     /// Also write the planned waypoints to this file (.json .csv .h5 .geojson .plan).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -430,6 +436,15 @@ pub struct SimArgs {
     /// Fault injection for tests: go silent after this many simulated seconds.
     #[arg(long, value_name = "S", value_parser = parse_finite, hide = true)]
     pub drop_link_after_s: Option<f64>,
+    /// Obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
+    #[arg(long, value_name = "FILE")]
+    pub hidden: Option<PathBuf>,
+    /// Range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
+    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = parse_finite)]
+    pub sensor_range_m: f64,
+    /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the vehicle (position, heading, mode, armed) and what its sensor sees, at 10 updates per second.
+    #[arg(long, value_name = "ADDR")]
+    pub view: Option<String>,
 }
 
 #[derive(Debug, Args)]

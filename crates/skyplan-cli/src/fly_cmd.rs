@@ -10,7 +10,7 @@ use skyplan_export::Format;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FailsafeAction, FlightExecutor, MissionExecutor, Outcome, Target,
+    ExecutorConfig, FailsafeAction, FlightExecutor, MissionExecutor, Note, Outcome, Target,
 };
 use skyplan_flight::upload::UploadConfig;
 use skyplan_frames::{Lla, LocalFrame, Ned};
@@ -268,6 +268,11 @@ fn start_sim(
         link_gap_s: args.sim_link_gap_s,
         ekf_delay_s: args.sim_ekf_delay_s,
         map_home: Some(frame.home()),
+        hidden: match &args.hidden {
+            Some(path) => crate::sim_cmd::load_hidden(path, &map.home)?,
+            None => Vec::new(),
+        },
+        sensor_range_m: crate::sim_cmd::sensor_range_m(args.sensor_range_m)?,
         ..SimServerConfig::at(home)
     };
     let sim = InProcessSim::start(config, BoxWorld::new(&map.boxes)).or_exit(Kind::Runtime)?;
@@ -299,6 +304,14 @@ fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Insta
                 )));
             }
             Ok(())
+        }
+        // No route in the true world: the "no path" exit, as for planning.
+        Some(Outcome::Failed(f @ skyplan_flight::executor::Failure::NoRoute { .. })) => {
+            Err(crate::exit::Failure {
+                kind: Kind::NoPath,
+                error: anyhow::anyhow!("flight failed: {f}"),
+                plan_kind: None,
+            })
         }
         Some(Outcome::Failed(f)) => Err(runtime(format!("flight failed: {f}"))),
         None => Err(runtime(
@@ -557,6 +570,8 @@ struct Terminal<'a> {
     sim: Option<&'a InProcessSim>,
     live: &'a mut crate::live::Live,
     bar: indicatif::ProgressBar,
+    /// The replanned routes, (north, east) points, for the picture.
+    replanned: Vec<Vec<(f64, f64)>>,
 }
 
 impl Observer for Terminal<'_> {
@@ -569,11 +584,20 @@ impl Observer for Terminal<'_> {
             print_sim_notes(s);
         }
         match u {
-            Update::Notes(_, notes) => {
+            Update::Notes(t, notes) => {
+                for note in notes {
+                    if let Note::Replanned { event, targets } = note {
+                        self.bar.set_length(targets.len() as u64);
+                        self.live.replanned(*t, targets, event);
+                        self.replanned
+                            .push(targets.iter().map(|p| (p.north_m, p.east_m)).collect());
+                    }
+                }
                 if let Some(i) = notes.iter().rev().find_map(reached_index) {
                     self.bar.set_position((i + 1) as u64);
                 }
             }
+            Update::Reading(r) => self.live.reading(r),
             Update::Progress(p) => {
                 self.live.progress(p);
                 self.bar.set_prefix(p.state.name());
@@ -598,6 +622,7 @@ fn fly_with<E: FlightExecutor>(
         sim,
         live,
         bar: bar.clone(),
+        replanned: Vec::new(),
     };
     let flown = flight::fly(gcs, ex, frame, &mut terminal);
     ctrl_c.in_flight.store(false, Ordering::SeqCst);

@@ -1,11 +1,16 @@
 //! `fly --view ADDR` and `fly --record FILE.mcap`: the live view (skyplan-server's page) and the
-//! MCAP recording of a flight — the planned route, then the vehicle at 5 updates per second.
+//! MCAP recording of a flight — the planned route, then the vehicle at 5 updates per second,
+//! the obstacle sensor's latest sweep with it, and every replanned route. `sim --view ADDR`
+//! publishes the simulator's state the same way ([`Live::sim_status`]).
 
 use crate::exit::{Classify, Kind, Result, bad_input, runtime};
 use crate::files::{Target, output_target};
+use skyplan_flight::executor::Target as Waypoint;
+use skyplan_flight::sensing::{ObstacleReading, ReplanEvent};
 use skyplan_link::ground::Progress;
+use skyplan_link::vehicle::SimStatus;
 use skyplan_plan::{Plan, World};
-use skyplan_server::{FlightEvent, Recorder, RouteEvent, ViewEvent, ViewServer};
+use skyplan_server::{FlightEvent, Recorder, RouteEvent, SensedEvent, ViewEvent, ViewServer};
 use std::path::{Path, PathBuf};
 
 /// Where a flight's events go.
@@ -13,6 +18,8 @@ use std::path::{Path, PathBuf};
 pub struct Live {
     view: Option<ViewServer>,
     record: Option<(PathBuf, PathBuf, Recorder<std::fs::File>)>,
+    /// The latest sensor reading not yet published.
+    reading: Option<ObstacleReading>,
 }
 
 impl Live {
@@ -64,8 +71,58 @@ impl Live {
         self.send(&event, 0.0);
     }
 
+    /// A sensor reading: kept, and published with the next progress report (5 Hz).
+    pub fn reading(&mut self, r: ObstacleReading) {
+        self.reading = Some(r);
+    }
+
+    /// A route replaced in flight.
+    pub fn replanned(&mut self, time_s: f64, targets: &[Waypoint], event: &ReplanEvent) {
+        let route = ViewEvent::Route(RouteEvent {
+            reason: format!("replan: {}", event.reason),
+            planner: event.planner.clone(),
+            waypoints: targets
+                .iter()
+                .map(|t| [t.north_m, t.east_m, t.alt_m])
+                .collect(),
+        });
+        self.send(&route, time_s);
+    }
+
+    /// The simulator's state (`sim --view`): the vehicle and what its sensor sees.
+    pub fn sim_status(&mut self, s: &SimStatus) {
+        let flight = ViewEvent::Flight(FlightEvent {
+            time_s: s.time_s,
+            north_m: s.position_ned[0],
+            east_m: s.position_ned[1],
+            alt_m: -s.position_ned[2],
+            heading_deg: s.heading_rad.to_degrees(),
+            speed_m_s: s.ground_speed_m_s,
+            state: s.mode.to_string(),
+            waypoint_index: None,
+            armed: s.armed,
+        });
+        self.send(&flight, s.time_s);
+        let sensed = ViewEvent::Sensed(SensedEvent {
+            time_s: s.time_s,
+            vehicle_ne: [s.position_ned[0], s.position_ned[1]],
+            alt_m: -s.position_ned[2],
+            hits_ne: s.hits_ne.clone(),
+        });
+        self.send(&sensed, s.time_s);
+    }
+
     /// The vehicle, from a progress report.
     pub fn progress(&mut self, p: &Progress) {
+        if let Some(r) = self.reading.take() {
+            let sensed = ViewEvent::Sensed(SensedEvent {
+                time_s: r.time_s,
+                vehicle_ne: [r.position_ned[0], r.position_ned[1]],
+                alt_m: -r.position_ned[2],
+                hits_ne: r.hits_ne().collect(),
+            });
+            self.send(&sensed, r.time_s);
+        }
         let Some(t) = p.telemetry else {
             return;
         };
@@ -98,6 +155,8 @@ impl Live {
             waypoints: 0,
             distance_left_m: 0.0,
             telemetry: telemetry.copied(),
+            readings: 0,
+            replans: 0,
         };
         self.progress(&p);
     }

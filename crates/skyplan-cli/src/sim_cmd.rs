@@ -13,6 +13,37 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+/// Reads `--hidden FILE`: boxes in the colliders format whose `lat0/lon0` line must be the
+/// map's home (the boxes are in the map's frame).
+pub(crate) fn load_hidden(
+    path: &std::path::Path,
+    map_home: &skyplan_map::colliders::GeodeticHome,
+) -> Result<Vec<skyplan_map::colliders::ObstacleBox>> {
+    let text = read_text(path)?;
+    let name = path.display();
+    let hidden = skyplan_map::colliders::parse_colliders(&text)
+        .map_err(|e| bad_input(format!("--hidden {name}: {e}")))?;
+    let same = (hidden.home.lat_deg - map_home.lat_deg).abs() < 1e-9
+        && (hidden.home.lon_deg - map_home.lon_deg).abs() < 1e-9;
+    if !same {
+        return Err(bad_input(format!(
+            "--hidden {name}: line 1: its home lat0 {}, lon0 {} is not the map's home lat0 {}, lon0 {} (hidden obstacles are placed in the map's frame: use the map's first line)",
+            hidden.home.lat_deg, hidden.home.lon_deg, map_home.lat_deg, map_home.lon_deg
+        )));
+    }
+    Ok(hidden.boxes)
+}
+
+/// Checks `--sensor-range-m`: 0.5 to 650 m (OBSTACLE_DISTANCE carries centimetres in 16 bits).
+pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
+    if !(0.5..=650.0).contains(&m) {
+        return Err(bad_input(format!(
+            "--sensor-range-m: expected 0.5 to 650 (metres), found {m}"
+        )));
+    }
+    Ok(m)
+}
+
 pub fn run(args: SimArgs) -> Result<()> {
     if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
         return Err(bad_input(format!(
@@ -53,7 +84,14 @@ pub fn run(args: SimArgs) -> Result<()> {
             args.ekf_delay_s
         )));
     }
+    let hidden = match &args.hidden {
+        Some(path) => load_hidden(path, &map.home)?,
+        None => Vec::new(),
+    };
+    let hidden_count = hidden.len();
     let config = SimServerConfig {
+        hidden,
+        sensor_range_m: sensor_range_m(args.sensor_range_m)?,
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
         ekf_delay_s: args.ekf_delay_s,
@@ -71,9 +109,24 @@ pub fn run(args: SimArgs) -> Result<()> {
     };
     println!(
         "sim        simulated multicopter (MAVLink system 1, ArduCopter modes) listening on {shown}, \
-         {}× real time, home lat {:.7}, lon {:.7}; obstacles from {map_name}",
-        args.speedup, home.lat_deg, home.lon_deg
+         {}× real time, home lat {:.7}, lon {:.7}; obstacles from {map_name}{}; OBSTACLE_DISTANCE at 10 Hz, range {} m",
+        args.speedup,
+        home.lat_deg,
+        home.lon_deg,
+        match &args.hidden {
+            Some(p) => format!(" and {hidden_count} hidden ones from {}", p.display()),
+            None => String::new(),
+        },
+        args.sensor_range_m
     );
+    let mut live = match &args.view {
+        Some(addr) => {
+            let world = skyplan_plan::World::from_colliders_csv(&map_name, &text)
+                .map_err(|e| bad_input(format!("{map_name}: {}", e.message)))?;
+            crate::live::Live::start(&world, Some(addr), None)?
+        }
+        None => crate::live::Live::default(),
+    };
     let stop = Arc::new(AtomicBool::new(false));
     if let Some(d) = args.duration_s {
         let stop = Arc::clone(&stop);
@@ -84,17 +137,29 @@ pub fn run(args: SimArgs) -> Result<()> {
         });
     }
     let world = BoxWorld::new(&map.boxes);
-    let report = server.run(Some(&world), &stop, |n| {
-        if let Some(line) = sim_note_line(&n) {
-            println!("sim        {line}");
-        }
-    });
+    let map_boxes = map.boxes.len();
+    let report = server.run_with_state(
+        Some(&world),
+        &stop,
+        |n| {
+            if let Some(line) = sim_note_line(&n) {
+                println!("sim        {line}");
+            }
+        },
+        Duration::from_millis(100),
+        |s| live.sim_status(s),
+    );
     println!(
         "sim        stopped after {:.1} s simulated, {:.1} s wall; flown {:.1} m, {}",
         report.sim_time_s,
         report.wall_time_s,
         report.distance_m,
         match report.track.collision() {
+            Some(c) if c.box_index >= map_boxes => format!(
+                "COLLISION with hidden obstacle #{} at {:.1} s",
+                c.box_index - map_boxes,
+                c.time_s
+            ),
             Some(c) => format!(
                 "COLLISION with obstacle #{} at {:.1} s",
                 c.box_index, c.time_s

@@ -147,6 +147,7 @@ impl AutoMission {
 impl Strategy for AutoMission {
     const DISARM_WAIT_S: f64 = AUTO_DISARM_WAIT_S;
     const COMMANDS_LANDING: bool = false;
+    const REPLANS: bool = false;
 
     fn in_control(&self, core: &Core, t: &Telemetry) -> bool {
         match core.mode {

@@ -60,6 +60,23 @@ impl BoxWorld {
         &self.boxes
     }
 
+    /// Indices of the boxes whose footprint may come within `range_m` of a north/east point
+    /// (a superset from the bucket index, each once, ascending).
+    pub fn boxes_within(&self, north_m: f64, east_m: f64, range_m: f64) -> Vec<usize> {
+        let r = range_m.max(0.0);
+        let mut out = Vec::new();
+        for bn in bucket(north_m - r)..=bucket(north_m + r) {
+            for be in bucket(east_m - r)..=bucket(east_m + r) {
+                if let Some(list) = self.buckets.get(&(bn, be)) {
+                    out.extend(list.iter().map(|&i| i as usize));
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
     /// The first box containing a NED point (faces included), if any.
     pub fn hit(&self, point_ned_m: [f64; 3]) -> Option<usize> {
         let [n, e, d] = point_ned_m;

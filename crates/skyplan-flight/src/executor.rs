@@ -41,3 +41,6 @@ pub use report::{ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Re
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod replan_tests;

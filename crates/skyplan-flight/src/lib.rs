@@ -7,6 +7,7 @@
 //! - [`collision`]: the flown track checked against the map's obstacle boxes.
 //! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
 //! - [`sensing`]: range-sensor readings and the [`sensing::RouteWatcher`] hook that replans in flight.
+//! - [`sensor`]: the simulated range sensor (rays against the true world's boxes).
 //! - [`auto`]: flying the uploaded mission in AUTO (`skyplan fly --upload`), same states and
 //!   outcomes as [`executor`].
 //!
@@ -20,6 +21,7 @@ pub mod collision;
 pub mod executor;
 pub mod flat_earth;
 pub mod sensing;
+pub mod sensor;
 pub mod sim;
 pub mod upload;
 

@@ -43,12 +43,18 @@ pub fn fly<E: FlightExecutor>(
     frame: &LocalFrame,
     observer: &mut dyn Observer,
 ) -> Result<Flown, GroundError> {
-    let n = ex.targets().len();
+    // Waypoints of the route being flown (a replan brings a new route).
+    let mut n = ex.targets().len();
     let mut summary = gcs.fly(ex, frame, |u| {
         match &u {
             Update::Notes(t, notes) => {
-                for line in notes.iter().filter_map(|note| note_line(*t, n, note)) {
-                    observer.say(&line);
+                for note in notes {
+                    if let Note::Replanned { targets, .. } = note {
+                        n = targets.len();
+                    }
+                    if let Some(line) = note_line(*t, n, note) {
+                        observer.say(&line);
+                    }
                 }
             }
             other => {

@@ -16,14 +16,25 @@
 //! (a true-north flat-earth frame about its EKF origin, not the map's UTM grid) is never mixed
 //! in; it only tells that the EKF has a position. Headings are turned between true north and the
 //! map's grid north by the grid convergence at the vehicle.
+//!
+//! **Sensing and replanning.** `OBSTACLE_DISTANCE` from the vehicle's system (the autopilot or a
+//! companion computer) is decoded into an [`ObstacleReading`] at the vehicle's position then
+//! ([`crate::obstacle`]) and reported as [`Update::Reading`]. With a [`RouteWatcher`]
+//! ([`GroundStation::set_watcher`]), each reading taken while the executor flies its waypoints
+//! goes to it with the targets still to fly: [`RouteDecision::Replace`] swaps the route without
+//! landing, [`RouteDecision::Hold`] holds the position, then lands, and the flight fails
+//! ([`skyplan_flight::executor::Failure::NoRoute`]). An uploaded mission (AUTO) cannot be
+//! replanned: [`GroundStation::fly`] refuses a watcher with it.
 
+use crate::obstacle::reading_from_obstacle_distance;
 use crate::{Address, Link, LinkError, Received};
 use mavlink::dialects::common::*;
 use skyplan_flight::executor::wrap_angle_rad;
 use skyplan_flight::executor::{
-    Command, CommandKind, Event, FailsafeAction, FlightExecutor, FlightState, Note, Target,
+    Command, CommandKind, Event, FailsafeAction, FlightExecutor, FlightState, Note, Output, Target,
     Telemetry, VehicleMode,
 };
+use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteDecision, RouteWatcher};
 use skyplan_flight::upload::{
     ItemCommand, MissionItem, MissionPlan, MissionUpload, UploadConfig, UploadEvent, UploadSend,
     UploadStatus,
@@ -111,6 +122,9 @@ pub enum GroundError {
     /// The mission upload failed.
     #[error("mission upload failed: {0}")]
     Upload(String),
+    /// A route watcher was given for a flight that cannot change its route.
+    #[error("replanning in flight: {0}")]
+    Replan(String),
 }
 
 /// How a mission upload went.
@@ -215,6 +229,12 @@ pub enum Update {
     Mode(VehicleMode),
     /// Where the flight stands, every [`GroundConfig::progress_period_s`] (for a progress bar).
     Progress(Progress),
+    /// An `OBSTACLE_DISTANCE` decoded in the map's frame (every one: up to the sensor's rate
+    /// times the speed-up; keep the latest for displays).
+    Reading(ObstacleReading),
+    /// Something was not used, and why: an `OBSTACLE_DISTANCE` that cannot be decoded (once
+    /// per kind of error), or a watcher's route the executor refused.
+    Warning(String),
 }
 
 /// Where the flight stands.
@@ -232,6 +252,10 @@ pub struct Progress {
     pub distance_left_m: f64,
     /// The vehicle's latest telemetry in the map's frame (for live views and recordings).
     pub telemetry: Option<Telemetry>,
+    /// `OBSTACLE_DISTANCE` readings decoded so far.
+    pub readings: usize,
+    /// Routes replaced in flight so far.
+    pub replans: usize,
 }
 
 /// The flight's account.
@@ -247,6 +271,12 @@ pub struct FlightSummary {
     pub position_targets_sent: usize,
     /// Heartbeats received from the vehicle.
     pub heartbeats_received: usize,
+    /// Every route replaced in flight, in order.
+    pub replans: Vec<ReplanEvent>,
+    /// `OBSTACLE_DISTANCE` readings decoded.
+    pub readings: usize,
+    /// Where the latest reading saw obstacles (map frame, north/east metres).
+    pub last_hits_ne: Vec<[f64; 2]>,
 }
 
 /// A connection to one vehicle.
@@ -269,6 +299,7 @@ pub struct GroundStation {
     last_arm_request: CommandKind,
     last_mode_request: CommandKind,
     interrupt: Option<Arc<AtomicBool>>,
+    watcher: Option<Box<dyn RouteWatcher + Send>>,
 }
 
 fn gcs_heartbeat() -> MavMessage {
@@ -306,7 +337,15 @@ impl GroundStation {
             last_arm_request: CommandKind::Arm,
             last_mode_request: CommandKind::TakeControl,
             interrupt: None,
+            watcher: None,
         })
+    }
+
+    /// Hands every reading taken while the vehicle flies its waypoints to `watcher`, which may
+    /// replace the route or hold (see the module documentation). GUIDED flights only:
+    /// [`GroundStation::fly`] refuses it with an uploaded mission.
+    pub fn set_watcher(&mut self, watcher: Box<dyn RouteWatcher + Send>) {
+        self.watcher = Some(watcher);
     }
 
     /// A flag that, once set (by a Ctrl-C handler), aborts the flight: the executor lands.
@@ -420,6 +459,7 @@ impl GroundStation {
                     count,
                     target_system: sys,
                     target_component: comp,
+                    ..Default::default()
                 }),
                 UploadSend::Item(seq) => {
                     let Some(item) = plan.items.get(usize::from(seq)) else {
@@ -696,6 +736,11 @@ impl GroundStation {
         while let Some(r) = self.link.recv_timeout(Duration::ZERO) {
             let _ = self.absorb(&r);
         }
+        if self.watcher.is_some() && !ex.replans() {
+            return Err(GroundError::Replan(
+                "an uploaded mission (AUTO, --upload) cannot change its route in flight; fly it in GUIDED (without --upload) to replan from sensor readings".into(),
+            ));
+        }
         let Some(g) = self.global.clone() else {
             return Err(GroundError::NoVehicle(
                 "call wait_for_vehicle first: no position yet".into(),
@@ -717,11 +762,45 @@ impl GroundStation {
         let mut last_mode = None;
         let mut link_lost = false;
         let mut last_progress: Option<Instant> = None;
+        let mut replans: Vec<ReplanEvent> = Vec::new();
+        let mut readings = 0usize;
+        let mut last_hits_ne: Vec<[f64; 2]> = Vec::new();
+        let mut warned: Vec<String> = Vec::new();
         // The silence clock starts now: planning may have taken a while.
         self.last_heartbeat = Some(Instant::now());
         while ex.outcome().is_none() {
             let mut events = Vec::new();
+            let mut reading = None;
             if let Some(r) = self.link.recv_timeout(Duration::from_millis(5)) {
+                if let MavMessage::OBSTACLE_DISTANCE(o) = &r.message
+                    && self
+                        .vehicle
+                        .is_some_and(|(sys, _)| u32::from(sys) == r.header.system_id)
+                    && let Some(t) = ex.last_telemetry()
+                {
+                    let at = [t.north_m, t.east_m, t.down_m];
+                    match reading_from_obstacle_distance(
+                        o,
+                        now(start),
+                        at,
+                        self.yaw_rad,
+                        convergence_rad,
+                    ) {
+                        Ok(x) => {
+                            readings += 1;
+                            last_hits_ne = x.hits_ne().collect();
+                            on_update(Update::Reading(x.clone()));
+                            reading = Some(x);
+                        }
+                        Err(e) => {
+                            let text = e.to_string();
+                            if !warned.contains(&text) {
+                                warned.push(text.clone());
+                                on_update(Update::Warning(format!("{text}: reading ignored")));
+                            }
+                        }
+                    }
+                }
                 let heard_before = self.last_heartbeat;
                 let event = self.absorb(&r);
                 if link_lost && self.last_heartbeat != heard_before {
@@ -820,6 +899,8 @@ impl GroundStation {
                     waypoints: ex.targets().len(),
                     distance_left_m: ex.distance_left_m(),
                     telemetry: ex.last_telemetry().cloned(),
+                    readings,
+                    replans: replans.len(),
                 }));
             }
             if let Some(t) = aborted_at
@@ -860,6 +941,32 @@ impl GroundStation {
                     });
                 }
             }
+            // The watcher sees the reading with the route still to fly.
+            if let Some(reading) = reading
+                && ex.accepts_route_change()
+                && let Some(watcher) = self.watcher.as_mut()
+            {
+                let t = now(start);
+                let out = match watcher.on_reading(&reading, ex.remaining_targets()) {
+                    RouteDecision::Keep => None,
+                    RouteDecision::Replace { targets, event } => {
+                        match ex.replace_route(t, &targets, event.clone()) {
+                            Ok(out) => {
+                                replans.push(event);
+                                Some(out)
+                            }
+                            Err(e) => {
+                                on_update(Update::Warning(format!("replanned route refused: {e}")));
+                                None
+                            }
+                        }
+                    }
+                    RouteDecision::Hold { reason } => Some(ex.hold_no_route(t, reason)),
+                };
+                if let Some(out) = out {
+                    sent_targets += self.dispatch(out, t, frame, convergence_rad, &mut on_update);
+                }
+            }
         }
         Ok(FlightSummary {
             log,
@@ -867,7 +974,33 @@ impl GroundStation {
             wall_time_s: start.elapsed().as_secs_f64(),
             position_targets_sent: sent_targets,
             heartbeats_received: self.heartbeats,
+            replans,
+            readings,
+            last_hits_ne,
         })
+    }
+
+    /// Sends an executor output's commands and reports its notes; the position targets sent.
+    fn dispatch(
+        &mut self,
+        out: Output,
+        t: f64,
+        frame: &LocalFrame,
+        convergence_rad: f64,
+        on_update: &mut impl FnMut(Update),
+    ) -> usize {
+        let mut gotos = 0;
+        for c in &out.commands {
+            if matches!(c, Command::GoTo { .. }) {
+                gotos += 1;
+            }
+            // A failed send shows up as a lost link; nothing else to do here.
+            let _ = self.send(*c, frame, convergence_rad);
+        }
+        if !out.notes.is_empty() {
+            on_update(Update::Notes(t, out.notes));
+        }
+        gotos
     }
 
     fn send(
@@ -1049,6 +1182,7 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
         frame,
         current: 0,
         autocontinue: 1,
+        ..Default::default()
     })
 }
 

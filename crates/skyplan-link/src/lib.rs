@@ -5,6 +5,7 @@
 //!   keeps sending at 1 Hz whatever the caller does (planning included).
 //! - [`vehicle`]: `skyplan sim`'s vehicle side: the simulated multicopter of `skyplan-flight`
 //!   behind a MAVLink server (heartbeat, commands, position targets, mission upload, telemetry).
+//! - [`obstacle`]: MAVLink `OBSTACLE_DISTANCE` to and from skyplan-flight's `ObstacleReading`.
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
 //! - [`flight`]: one flight, told line by line to an observer and summed up (`fly`, `bench --replan`).
@@ -20,6 +21,7 @@ pub mod flight;
 pub mod ground;
 pub mod in_process;
 pub mod mission;
+pub mod obstacle;
 pub mod vehicle;
 pub mod words;
 

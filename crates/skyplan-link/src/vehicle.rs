@@ -21,13 +21,25 @@
 //!
 //! Like ArduCopter's GCS failsafe, a flying vehicle in GUIDED lands when it has heard no ground
 //! station heartbeat for [`SimServerConfig::gcs_failsafe_s`] wall-clock seconds.
+//!
+//! **The true world and the sensor.** The simulated world is the map's boxes plus
+//! [`SimServerConfig::hidden`] ones the planner does not know; the flown track is checked
+//! against both. Once its EKF has a position, the vehicle sends `OBSTACLE_DISTANCE`
+//! unrequested, as a proximity sensor does, every 0.1 s of vehicle time: 72 sectors of 5°,
+//! `MAV_FRAME_LOCAL_NED` (sector 0 centred on true north), ranges up to
+//! [`SimServerConfig::sensor_range_m`], each a ray cast at the vehicle's altitude against the
+//! true world ([`skyplan_flight::sensor`]; see [`crate::obstacle`] for the encoding).
 
+use crate::obstacle::obstacle_distance;
 use crate::{Address, Link, LinkError};
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
 use skyplan_flight::flat_earth::FlatEarth;
+use skyplan_flight::sensing::SectorRange;
+use skyplan_flight::sensor::RangeSensor;
 use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimVehicle};
 use skyplan_frames::{Lla, LocalFrame};
+use skyplan_map::colliders::ObstacleBox;
 use std::net::{SocketAddr, TcpListener};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -66,6 +78,36 @@ pub struct SimServerConfig {
     pub gcs_failsafe_s: Option<f64>,
     /// Physics step, simulated seconds.
     pub step_s: f64,
+    /// Boxes in the simulated world that the planner's map does not have (the map's frame:
+    /// metres about the map's home). The collision check and the sensor see them.
+    pub hidden: Vec<ObstacleBox>,
+    /// Range of the simulated obstacle sensor, metres (`OBSTACLE_DISTANCE`'s `max_distance`).
+    pub sensor_range_m: f64,
+}
+
+/// The simulated sensor's range by default, metres.
+pub const DEFAULT_SENSOR_RANGE_M: f64 = 30.0;
+
+/// Vehicle seconds between two `OBSTACLE_DISTANCE` sweeps (10 Hz).
+pub const SENSOR_PERIOD_S: f64 = 0.1;
+
+/// The simulator's state for a live view, reported every [`SimServer::run_with_state`] period.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimStatus {
+    /// Simulated seconds since boot.
+    pub time_s: f64,
+    /// Position in the map's frame: metres north, east, down of the map's home.
+    pub position_ned: [f64; 3],
+    /// Heading, radians clockwise from the map's grid north.
+    pub heading_rad: f64,
+    /// Horizontal speed, m/s.
+    pub ground_speed_m_s: f64,
+    /// Flight mode.
+    pub mode: SimMode,
+    /// Motors armed.
+    pub armed: bool,
+    /// The points of the latest sweep where the sensor saw an obstacle (map frame, north/east).
+    pub hits_ne: Vec<[f64; 2]>,
 }
 
 impl SimServerConfig {
@@ -82,6 +124,8 @@ impl SimServerConfig {
             link_gap_s: None,
             gcs_failsafe_s: Some(5.0),
             step_s: 0.02,
+            hidden: Vec::new(),
+            sensor_range_m: DEFAULT_SENSOR_RANGE_M,
         }
     }
 }
@@ -266,6 +310,7 @@ fn status_text(severity: MavSeverity, text: &str) -> MavMessage {
     MavMessage::STATUSTEXT(STATUSTEXT_DATA {
         severity,
         text: bytes.into(),
+        ..Default::default()
     })
 }
 
@@ -316,14 +361,54 @@ impl SimServer {
         self.local
     }
 
-    /// Runs until `stop` is set. `world` enables the collision check of the flown track.
+    /// Runs until `stop` is set. `world` (the map's boxes) enables the collision check of the
+    /// flown track; with [`SimServerConfig::hidden`] boxes, the check and the sensor use both.
     pub fn run(
+        self,
+        world: Option<&BoxWorld>,
+        stop: &AtomicBool,
+        note: impl FnMut(SimNote),
+    ) -> SimReport {
+        self.run_with_state(world, stop, note, Duration::from_secs(3600), |_| {})
+    }
+
+    /// As [`SimServer::run`], and reports the vehicle's state to `state` every `period` of wall
+    /// time (a live view: `skyplan sim --view`).
+    pub fn run_with_state(
         mut self,
         world: Option<&BoxWorld>,
         stop: &AtomicBool,
         mut note: impl FnMut(SimNote),
+        period: Duration,
+        mut state: impl FnMut(&SimStatus),
     ) -> SimReport {
         let cfg = self.config.clone();
+        // The true world: the map's boxes and the hidden ones (their indices follow the map's).
+        let truth = match (world, cfg.hidden.is_empty()) {
+            (Some(w), true) => Some(w.clone()),
+            (Some(w), false) => Some(BoxWorld::new(&[w.boxes(), &cfg.hidden[..]].concat())),
+            (None, false) => Some(BoxWorld::new(&cfg.hidden)),
+            (None, true) => None,
+        };
+        let sensor = RangeSensor {
+            min_range_m: RangeSensor::default().min_range_m,
+            max_range_m: cfg.sensor_range_m.clamp(0.5, 650.0),
+        };
+        // Sector 0 is true north; the map's boxes are in its grid-north frame.
+        let convergence_rad =
+            crate::ground::grid_convergence_rad(&self.map_frame, cfg.home).unwrap_or(0.0);
+        let mut sweeps: Vec<(f64, Vec<SectorRange>)> = Vec::new();
+        let mut next_sweep_s = 0.0;
+        let mut last_status: Option<Instant> = None;
+        let mut status = SimStatus {
+            time_s: 0.0,
+            position_ned: [0.0; 3],
+            heading_rad: 0.0,
+            ground_speed_m_s: 0.0,
+            mode: SimMode::Stabilize,
+            armed: false,
+            hits_ne: Vec::new(),
+        };
         let speedup = cfg.speedup.max(0.1);
         let step_s = cfg.step_s.clamp(0.001, 0.05);
         let mut vehicle = SimVehicle::new(cfg.sim);
@@ -390,17 +475,46 @@ impl SimServer {
                 max_alt_m = max_alt_m.max(-s.position_ned_m[2]);
                 distance_m += (s.position_ned_m[0] - before.position_ned_m[0])
                     .hypot(s.position_ned_m[1] - before.position_ned_m[1]);
-                if let Some(w) = world {
-                    let (lat_deg, lon_deg) = self
-                        .earth
-                        .lat_lon_from_ne(s.position_ned_m[0], s.position_ned_m[1]);
-                    if let Ok(ned) = self.map_frame.ned_from_lla(Lla {
-                        lat_deg,
-                        lon_deg,
-                        alt_m: 0.0,
-                    }) {
-                        let p = [ned.north_m, ned.east_m, s.position_ned_m[2]];
-                        track.add(w, s.time_s, p);
+                let (lat_deg, lon_deg) = self
+                    .earth
+                    .lat_lon_from_ne(s.position_ned_m[0], s.position_ned_m[1]);
+                let map_ned = self.map_frame.ned_from_lla(Lla {
+                    lat_deg,
+                    lon_deg,
+                    alt_m: 0.0,
+                });
+                if let Ok(ned) = &map_ned {
+                    status.position_ned = [ned.north_m, ned.east_m, s.position_ned_m[2]];
+                }
+                if s.time_s >= next_sweep_s {
+                    next_sweep_s = s.time_s + SENSOR_PERIOD_S - 0.5 * step_s;
+                    let sweep = match (&truth, &map_ned) {
+                        (Some(w), Ok(_)) => sensor.scan(w, status.position_ned, -convergence_rad),
+                        _ => vec![SectorRange::Clear; skyplan_flight::sensor::SECTORS],
+                    };
+                    status.hits_ne = sweep
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(i, r)| match r {
+                            SectorRange::Obstacle(d) => {
+                                let b = sensor.increment_rad() * i as f64 - convergence_rad;
+                                Some([
+                                    status.position_ned[0] + d * b.cos(),
+                                    status.position_ned[1] + d * b.sin(),
+                                ])
+                            }
+                            _ => None,
+                        })
+                        .collect();
+                    // Kept until sent (at most 5 s of them when no one listens).
+                    if sweeps.len() >= 50 {
+                        sweeps.remove(0);
+                    }
+                    sweeps.push((s.time_s, sweep));
+                }
+                if let Some(w) = &truth {
+                    if map_ned.is_ok() {
+                        track.add(w, s.time_s, status.position_ned);
                     }
                     if !collided && let Some(c) = track.collision() {
                         collided = true;
@@ -409,6 +523,15 @@ impl SimServer {
                 }
             }
             let s = vehicle.state();
+            if last_status.is_none_or(|t| t.elapsed() >= period) {
+                last_status = Some(Instant::now());
+                status.time_s = s.time_s;
+                status.heading_rad = s.yaw_rad - convergence_rad;
+                status.ground_speed_m_s = s.velocity_ned_m_s[0].hypot(s.velocity_ned_m_s[1]);
+                status.mode = s.mode;
+                status.armed = s.armed;
+                state(&status);
+            }
             if s.mode != last_mode {
                 note(SimNote::Mode(s.mode));
                 last_mode = s.mode;
@@ -498,6 +621,7 @@ impl SimServer {
                         target_system: 0,
                         target_component: 0,
                         mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
+                        ..Default::default()
                     }));
                     upload = None;
                 } else {
@@ -517,6 +641,14 @@ impl SimServer {
             for id in side.streams.due(s.time_s) {
                 if let Some(m) = side.message(id, &s, vehicle.mission().len()) {
                     let _ = l.send(&m);
+                }
+            }
+            // The proximity sensor's sweeps, once the EKF has a position (every one of them:
+            // ≥ 10 Hz of vehicle time at any speed-up).
+            for (time_s, sweep) in sweeps.drain(..) {
+                if side.position_ready(&s) {
+                    let time_usec = (time_s * 1e6) as u64;
+                    let _ = l.send(&obstacle_distance(&sweep, &sensor, time_usec));
                 }
             }
         }
@@ -545,6 +677,7 @@ fn request_int(seq: u16) -> MavMessage {
         seq,
         target_system: 255,
         target_component: 0,
+        ..Default::default()
     })
 }
 
@@ -624,6 +757,7 @@ impl Side {
                     latitude,
                     longitude,
                     altitude: (self.home_alt_m * 1000.0).round() as i32,
+                    ..Default::default()
                 })
             }
             EXTENDED_SYS_STATE_ID => MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
@@ -643,6 +777,7 @@ impl Side {
             MISSION_CURRENT_ID if mission_len > 1 => {
                 MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
                     seq: s.mission_current,
+                    ..Default::default()
                 })
             }
             _ => return None,
@@ -651,7 +786,11 @@ impl Side {
 }
 
 fn ack(command: MavCmd, result: MavResult) -> MavMessage {
-    MavMessage::COMMAND_ACK(COMMAND_ACK_DATA { command, result })
+    MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+        command,
+        result,
+        ..Default::default()
+    })
 }
 
 /// A mission item in the vehicle's frame (the deprecated `_INT` frame is what ArduPilot sends).
@@ -880,6 +1019,7 @@ fn mission_ack(result: MavMissionResult) -> MavMessage {
         target_system: 255,
         target_component: 0,
         mavtype: result,
+        ..Default::default()
     })
 }
 

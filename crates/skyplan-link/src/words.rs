@@ -44,6 +44,21 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
                 FailsafeAction::Hold => "LOITER (--failsafe hold)",
             }
         ),
+        Note::Replanned { event, targets } => format!(
+            "replan     {t:7.1} s  at N {:.1} m, E {:.1} m: {} ({}, {:.2} ms, {} expansions, {} learned cells): new route of {} waypoints, {:.1} m",
+            event.position_ned[0],
+            event.position_ned[1],
+            event.reason,
+            event.planner,
+            event.latency_ms,
+            event.expansions,
+            event.learned_cells,
+            targets.len(),
+            event.route_length_m
+        ),
+        Note::Holding { reason, hold_s } => {
+            format!("hold       {t:7.1} s  no route: {reason}; holding {hold_s:.1} s, then landing")
+        }
         Note::Finished => return None,
     })
 }
@@ -88,7 +103,8 @@ pub fn update_line(u: &Update) -> Option<String> {
             }
         ),
         Update::Mode(m) => format!("mode       {m}"),
-        Update::Notes(..) | Update::Progress(_) => return None,
+        Update::Warning(w) => format!("sensor     {w}"),
+        Update::Notes(..) | Update::Progress(_) | Update::Reading(_) => return None,
     })
 }
 

@@ -144,9 +144,13 @@ fn the_simulator_streams_nothing_until_asked_like_arducopter() {
         }
         names
     };
-    // 0.5 s wall = 10 s of vehicle time: heartbeats only.
+    // 0.5 s wall = 10 s of vehicle time: heartbeats only, and the proximity sensor's
+    // OBSTACLE_DISTANCE (a sensor, or a companion computer, sends it unrequested).
     let first = names(&mut link, 0.5);
-    assert_eq!(first.into_iter().collect::<Vec<_>>(), ["HEARTBEAT"]);
+    assert_eq!(
+        first.into_iter().collect::<Vec<_>>(),
+        ["HEARTBEAT", "OBSTACLE_DISTANCE"]
+    );
     for (id, us) in [(33.0, 1e5), (49.0, 1e6)] {
         link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
             param1: id,

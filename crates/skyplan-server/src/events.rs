@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex};
 use tokio::sync::broadcast;
 
 /// One event of the stream. In the server-sent-events stream the SSE event name is `type`
-/// (`plan`, `flight`, `route`) and the data is this object as JSON.
+/// (`plan`, `flight`, `route`, `sensed`) and the data is this object as JSON.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ViewEvent {
@@ -17,15 +17,18 @@ pub enum ViewEvent {
     Flight(FlightEvent),
     /// The route the vehicle flies: the first plan and every replan.
     Route(RouteEvent),
+    /// What the vehicle's obstacle sensor saw last (`OBSTACLE_DISTANCE`).
+    Sensed(SensedEvent),
 }
 
 impl ViewEvent {
-    /// The SSE event name (`plan`, `flight`, `route`).
+    /// The SSE event name (`plan`, `flight`, `route`, `sensed`).
     pub fn name(&self) -> &'static str {
         match self {
             ViewEvent::Plan(_) => "plan",
             ViewEvent::Flight(_) => "flight",
             ViewEvent::Route(_) => "route",
+            ViewEvent::Sensed(_) => "sensed",
         }
     }
 }
@@ -85,6 +88,19 @@ pub struct RouteEvent {
     pub planner: String,
     /// Waypoints `[north_m, east_m, alt_m]`.
     pub waypoints: Vec<[f64; 3]>,
+}
+
+/// One sweep of the vehicle's obstacle sensor: where it was, and where it saw obstacles.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SensedEvent {
+    /// Seconds since the flight (or the simulator) began.
+    pub time_s: f64,
+    /// The vehicle then: metres north and east of the map's origin.
+    pub vehicle_ne: [f64; 2],
+    /// Altitude above home then, metres (the sweep is horizontal, at this altitude).
+    pub alt_m: f64,
+    /// The points where the sensor saw an obstacle: `[north_m, east_m]`.
+    pub hits_ne: Vec<[f64; 2]>,
 }
 
 /// An event serialised once for every subscriber.

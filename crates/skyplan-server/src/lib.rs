@@ -16,7 +16,9 @@
 //! [`Recorder`] writes the same events as an MCAP file for Foxglove and Lichtblick (`--record`).
 //!
 //! Safe by default: request bodies over 1 MiB get 413, at most N plans run at once (503
-//! beyond), each request has a time budget (504 past it), clients never name files.
+//! beyond), each request has a time budget (504 past it), clients never name files, and a
+//! server bound to loopback answers only requests whose `Host` is its address or `localhost`
+//! (403 otherwise: DNS-rebinding protection, [`with_host_check`]).
 //!
 //! ```
 //! use skyplan_server::{ServerConfig, router};
@@ -30,13 +32,15 @@
 mod error;
 mod events;
 mod handlers;
+mod host;
 mod map;
 mod pool;
 mod record;
 mod view;
 
 pub use error::{ApiError, ErrorKind};
-pub use events::{EventSink, FlightEvent, PlanEvent, RouteEvent, ViewEvent};
+pub use events::{EventSink, FlightEvent, PlanEvent, RouteEvent, SensedEvent, ViewEvent};
+pub use host::{host_allowed, with_host_check};
 pub use map::MAX_GRID_CELLS;
 pub use record::{RecordError, Recorder};
 pub use view::{ViewError, ViewServer};
@@ -136,9 +140,11 @@ pub fn router(world: World, config: ServerConfig) -> Router {
     app(world, config).router
 }
 
-/// Serves `app` on `listener` until the process ends (or the future is dropped).
+/// Serves `app` on `listener` until the process ends (or the future is dropped), with the
+/// `Host` check of [`with_host_check`] for the bound address.
 pub async fn serve(listener: tokio::net::TcpListener, app: Router) -> std::io::Result<()> {
-    axum::serve(listener, app).await
+    let bound = listener.local_addr()?;
+    axum::serve(listener, with_host_check(app, bound)).await
 }
 
 /// Binds `addr`, calls `on_listening` with the bound address (port 0 picks one), then serves

@@ -34,6 +34,7 @@ struct Channels {
     state: u16,
     route: u16,
     plans: u16,
+    sensed: u16,
 }
 
 /// Writes [`ViewEvent`]s to an MCAP file (uncompressed chunks, JSON messages).
@@ -151,6 +152,7 @@ impl<W: Write + Seek> Recorder<W> {
             .library("skyplan")
             .create(writer)?;
         let mut ids = Vec::new();
+        let mut schema_ids = Vec::new();
         let topics = [
             "/vehicle/location",
             "/vehicle/pose",
@@ -160,14 +162,18 @@ impl<W: Write + Seek> Recorder<W> {
         ];
         for ((name, schema), topic) in schemas().into_iter().zip(topics) {
             let schema_id = writer.add_schema(name, "jsonschema", &serde_json::to_vec(&schema)?)?;
+            schema_ids.push(schema_id);
             ids.push(writer.add_channel(schema_id, topic, "json", &BTreeMap::new())?);
         }
+        // The sensed obstacle points: poses (at the hits, no orientation), as the route.
+        let sensed = writer.add_channel(schema_ids[3], "/sensed", "json", &BTreeMap::new())?;
         let channels = Channels {
             location: ids[0],
             pose: ids[1],
             state: ids[2],
             route: ids[3],
             plans: ids[4],
+            sensed,
         };
         Ok(Self {
             writer,
@@ -233,6 +239,16 @@ impl<W: Write + Seek> Recorder<W> {
                     .collect();
                 let m = json!({ "timestamp": timestamp, "frame_id": "map", "poses": poses });
                 self.write(self.channels.route, ns, &m)?;
+            }
+            ViewEvent::Sensed(e) => {
+                let (ns, timestamp) = stamp(e.time_s);
+                let poses: Vec<Value> = e
+                    .hits_ne
+                    .iter()
+                    .map(|h| pose(h[0], h[1], e.alt_m, 0.0))
+                    .collect();
+                let m = json!({ "timestamp": timestamp, "frame_id": "map", "poses": poses });
+                self.write(self.channels.sensed, ns, &m)?;
             }
             ViewEvent::Plan(p) => {
                 let (ns, _) = stamp(log_time_s);

@@ -379,7 +379,7 @@ fn open_events(addr: std::net::SocketAddr) -> (u16, BufReader<TcpStream>) {
         .expect("timeout");
     write!(
         s,
-        "GET /api/events HTTP/1.1\r\nHost: x\r\nAccept: text/event-stream\r\n\r\n"
+        "GET /api/events HTTP/1.1\r\nHost: {addr}\r\nAccept: text/event-stream\r\n\r\n"
     )
     .expect("write");
     let mut r = BufReader::new(s);
@@ -416,10 +416,21 @@ fn next_event(r: &mut BufReader<TcpStream>, name: &str) -> String {
 }
 
 fn http(addr: std::net::SocketAddr, method: &str, path: &str, body: &str) -> (u16, String) {
+    http_as(addr, &addr.to_string(), method, path, body)
+}
+
+/// As [`http`], with this `Host` header.
+fn http_as(
+    addr: std::net::SocketAddr,
+    host: &str,
+    method: &str,
+    path: &str,
+    body: &str,
+) -> (u16, String) {
     let mut s = TcpStream::connect(addr).expect("connect");
     write!(
         s,
-        "{method} {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+        "{method} {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
         body.len()
     )
     .expect("write");
@@ -446,6 +457,12 @@ fn events_stream_plans_and_flights_and_disconnected_clients_are_freed() {
     let (code, page) = http(addr, "GET", "/", "");
     assert_eq!(code, 200);
     assert!(page.contains("<canvas"));
+    // DNS rebinding: another site's name pointed at the loopback address is refused.
+    let (code, text) = http_as(addr, "attacker.example", "GET", "/api/map", "");
+    assert_eq!(code, 403, "{text}");
+    assert!(text.contains("DNS-rebinding"), "{text}");
+    let (code, _) = http_as(addr, &format!("localhost:{}", addr.port()), "GET", "/", "");
+    assert_eq!(code, 200);
 
     let (code, mut stream) = open_events(addr);
     assert_eq!(code, 200);

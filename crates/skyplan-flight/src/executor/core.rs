@@ -7,6 +7,7 @@ use super::io::{
     Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
 };
 use super::report::{ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached};
+use crate::sensing::ReplanEvent;
 use std::fmt;
 
 /// How a mission is flown between the take-off and the landing: the part in which the GUIDED
@@ -19,6 +20,8 @@ pub trait Strategy: Clone + fmt::Debug {
     /// Whether the normal landing (after the last waypoint) is commanded by the executor (GUIDED)
     /// rather than flown by the vehicle from its mission (AUTO).
     const COMMANDS_LANDING: bool;
+    /// Whether the route can be replaced in flight ([`Executor::replace_route`]).
+    const REPLANS: bool;
 
     /// The vehicle is in the mode that obeys us (GUIDED / OFFBOARD).
     fn in_control(&self, core: &Core, t: &Telemetry) -> bool;
@@ -60,6 +63,20 @@ pub struct Core {
     faults: Faults,
     /// A landing the executor commanded (LAND or RTL), re-sent until acknowledged.
     landing_command: Option<Command>,
+    /// Entries of `reached` that belong to routes flown before the current one (replans).
+    pub(crate) route_start: usize,
+    /// Length of the current route's first leg (from the vehicle when it was replanned), metres.
+    first_leg_m: f64,
+    /// No route to fly: holding here before landing.
+    no_route: Option<NoRouteHold>,
+}
+
+/// The hold after a route watcher found no route.
+#[derive(Debug, Clone, PartialEq)]
+struct NoRouteHold {
+    reason: String,
+    since_s: f64,
+    target: Command,
 }
 
 /// An executor: the [`Core`] with a mission strategy. See [`super::MissionExecutor`] (GUIDED)
@@ -109,6 +126,9 @@ impl Core {
             started: false,
             faults: Faults::default(),
             landing_command: None,
+            route_start: 0,
+            first_leg_m: 0.0,
+            no_route: None,
         })
     }
 
@@ -131,6 +151,12 @@ impl Core {
     pub(crate) fn finish(&mut self, outcome: Outcome, out: &mut Output) {
         self.outcome = Some(outcome);
         out.notes.push(Note::Finished);
+    }
+
+    /// Index in the current route of the waypoint being flown to (== its length once all are
+    /// reached).
+    pub(crate) fn next_index(&self) -> usize {
+        self.reached.len() - self.route_start
     }
 
     /// Whether the vehicle accepted the command of this state.
@@ -168,7 +194,7 @@ impl Core {
     /// The budget of the leg to waypoint `i`, seconds.
     pub(crate) fn leg_budget_s(&self, i: usize) -> f64 {
         let leg_m = match i {
-            0 => 0.0,
+            0 => self.first_leg_m,
             _ => self.targets[i - 1].horizontal_distance_m(&self.targets[i]),
         };
         self.config.leg_timeout_base_s + self.config.leg_timeout_per_m_s * leg_m
@@ -337,6 +363,34 @@ impl Core {
         false
     }
 
+    /// One step of the hold after "no route": the held position re-sent, then the landing.
+    fn hold_no_route(&mut self, now_s: f64, out: &mut Output) {
+        let Some(h) = &self.no_route else {
+            return;
+        };
+        if now_s - h.since_s >= self.config.replan_hold_s {
+            let reason = h.reason.clone();
+            self.no_route = None;
+            self.ending = Some(Failure::NoRoute { reason });
+            self.command_landing(now_s, Command::Land, out);
+        } else {
+            let target = h.target;
+            if self.due(now_s, self.config.target_period_s) {
+                out.commands.push(target);
+            }
+        }
+    }
+
+    /// Whether the flight is in WAYPOINT with nothing else going on (no stop, hold, lost link).
+    fn flying_route(&self) -> bool {
+        self.state == FlightState::Waypoint
+            && self.outcome.is_none()
+            && self.ending.is_none()
+            && self.faults.hold.is_none()
+            && self.faults.lost.is_none()
+            && self.no_route.is_none()
+    }
+
     /// Enters LANDING after the last waypoint; the GUIDED strategy commands the landing.
     pub(crate) fn land_after_mission(&mut self, now_s: f64, commanded: bool, out: &mut Output) {
         self.enter(FlightState::Landing, now_s, out);
@@ -385,7 +439,7 @@ impl Core {
                     detail: format!("{detail}; the vehicle then landed and disarmed"),
                 }),
                 Some(failure) => Outcome::Failed(failure),
-                None if self.reached.len() == self.targets.len() => Outcome::Completed,
+                None if self.next_index() == self.targets.len() => Outcome::Completed,
                 None => Outcome::Failed(Failure::Aborted {
                     reason: "landed before the last waypoint".into(),
                 }),
@@ -435,16 +489,118 @@ impl<S: Strategy> Executor<S> {
     pub fn current_target(&self) -> Option<(usize, Target)> {
         match self.core.state {
             FlightState::Waypoint => {
-                let i = self.core.reached.len().min(self.core.targets.len() - 1);
+                let i = self.core.next_index().min(self.core.targets.len() - 1);
                 Some((i, self.core.targets[i]))
             }
             _ => None,
         }
     }
 
-    /// The waypoints reached so far, in order.
+    /// The waypoints reached so far, in order (after a replan, earlier routes' first).
     pub fn reached(&self) -> &[Reached] {
         &self.core.reached
+    }
+
+    /// The targets still to fly (the current one first; empty outside WAYPOINT).
+    pub fn remaining_targets(&self) -> &[Target] {
+        match self.core.state {
+            FlightState::Waypoint if self.core.no_route.is_none() => {
+                let i = self.core.next_index().min(self.core.targets.len() - 1);
+                &self.core.targets[i..]
+            }
+            _ => &[],
+        }
+    }
+
+    /// Whether a route watcher may act now: in WAYPOINT, flying the route (no stop, hold,
+    /// lost link or landing under way), with a strategy that can replace its route.
+    pub fn accepts_route_change(&self) -> bool {
+        S::REPLANS && self.core.flying_route()
+    }
+
+    /// Replaces the route still to fly with `targets` (from where the vehicle is now; the last
+    /// one is the goal) without landing: the current target restarts at the new list's first,
+    /// the leg clock restarts, and a [`Note::Replanned`] tells it. Refused (nothing changes)
+    /// outside WAYPOINT, by a strategy that cannot replan (AUTO), or for an unusable route.
+    pub fn replace_route(
+        &mut self,
+        now_s: f64,
+        targets: &[Target],
+        event: ReplanEvent,
+    ) -> Result<Output, ConfigError> {
+        if !S::REPLANS {
+            return Err(ConfigError(
+                "this mission strategy cannot change its route in flight".into(),
+            ));
+        }
+        if !self.core.flying_route() {
+            return Err(ConfigError(format!(
+                "the route can be replaced only while flying it (WAYPOINT), not in {}",
+                self.core.state
+            )));
+        }
+        if targets.is_empty() {
+            return Err(ConfigError("the new route has no waypoint".into()));
+        }
+        if targets.iter().any(|t| {
+            !(t.north_m.is_finite()
+                && t.east_m.is_finite()
+                && t.alt_m.is_finite()
+                && t.heading_rad.is_finite())
+                || t.alt_m <= self.core.config.landed_alt_m
+        }) {
+            return Err(ConfigError(
+                "the new route has a waypoint that is not finite or not above the ground".into(),
+            ));
+        }
+        let mut out = Output::default();
+        let core = &mut self.core;
+        core.route_start = core.reached.len();
+        core.targets = targets.to_vec();
+        core.first_leg_m = core
+            .last
+            .as_ref()
+            .map_or(0.0, |t| targets[0].horizontal_error_m(t));
+        core.leg_since_s = now_s;
+        core.last_send_s = None;
+        out.notes.push(Note::Replanned {
+            event,
+            targets: targets.to_vec(),
+        });
+        self.step(now_s, &mut out);
+        Ok(out)
+    }
+
+    /// No route can be flown (`reason`): hold the vehicle where it is (its position streamed as
+    /// the target, so it stays in GUIDED) for [`ExecutorConfig::replan_hold_s`], then land; the
+    /// flight ends in [`Failure::NoRoute`]. Ignored outside WAYPOINT.
+    pub fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output {
+        let mut out = Output::default();
+        let core = &mut self.core;
+        if !core.flying_route() {
+            return out;
+        }
+        let Some(t) = core.last else {
+            return out;
+        };
+        let target = Command::GoTo {
+            north_m: t.north_m,
+            east_m: t.east_m,
+            down_m: t.down_m,
+            yaw_rad: t.yaw_rad,
+        };
+        out.notes.push(Note::Holding {
+            reason: reason.clone(),
+            hold_s: core.config.replan_hold_s,
+        });
+        core.no_route = Some(NoRouteHold {
+            reason,
+            since_s: now_s,
+            target,
+        });
+        core.last_send_s = Some(now_s);
+        out.commands.push(target);
+        out
     }
 
     /// How the flight ended, once it has.
@@ -473,7 +629,7 @@ impl<S: Strategy> Executor<S> {
             FlightState::Manual if c.outcome.is_none() => 0,
             FlightState::Manual | FlightState::Landing | FlightState::Disarming => return 0.0,
             FlightState::Arming | FlightState::Takeoff => 0,
-            FlightState::Waypoint => c.reached.len().min(c.targets.len() - 1),
+            FlightState::Waypoint => c.next_index().min(c.targets.len() - 1),
         };
         c.targets[i].horizontal_error_m(t) + route_from(i)
     }
@@ -558,6 +714,10 @@ impl<S: Strategy> Executor<S> {
                 core.arming(&self.strategy, now_s, &t, out) && self.strategy.start(core, now_s, out)
             }
             FlightState::Takeoff => self.strategy.takeoff(core, now_s, &t, out),
+            FlightState::Waypoint if core.no_route.is_some() => {
+                core.hold_no_route(now_s, out);
+                false
+            }
             FlightState::Waypoint => self.strategy.waypoint(core, now_s, &t, out),
             FlightState::Landing => core.landing(now_s, &t, out),
             FlightState::Disarming => {
@@ -590,6 +750,21 @@ pub trait FlightExecutor {
     fn targets(&self) -> &[Target];
     /// Horizontal distance still to fly along the route, metres.
     fn distance_left_m(&self) -> f64;
+    /// The targets still to fly, the current one first (empty outside WAYPOINT).
+    fn remaining_targets(&self) -> &[Target];
+    /// Whether the route can be changed now ([`Executor::accepts_route_change`]).
+    fn accepts_route_change(&self) -> bool;
+    /// Whether this executor can ever change its route in flight (GUIDED: yes; AUTO: no).
+    fn replans(&self) -> bool;
+    /// See [`Executor::replace_route`].
+    fn replace_route(
+        &mut self,
+        now_s: f64,
+        targets: &[Target],
+        event: ReplanEvent,
+    ) -> Result<Output, ConfigError>;
+    /// See [`Executor::hold_no_route`].
+    fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output;
 }
 
 impl<S: Strategy> FlightExecutor for Executor<S> {
@@ -616,5 +791,25 @@ impl<S: Strategy> FlightExecutor for Executor<S> {
     }
     fn distance_left_m(&self) -> f64 {
         Executor::distance_left_m(self)
+    }
+    fn remaining_targets(&self) -> &[Target] {
+        Executor::remaining_targets(self)
+    }
+    fn accepts_route_change(&self) -> bool {
+        Executor::accepts_route_change(self)
+    }
+    fn replans(&self) -> bool {
+        S::REPLANS
+    }
+    fn replace_route(
+        &mut self,
+        now_s: f64,
+        targets: &[Target],
+        event: ReplanEvent,
+    ) -> Result<Output, ConfigError> {
+        Executor::replace_route(self, now_s, targets, event)
+    }
+    fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output {
+        Executor::hold_no_route(self, now_s, reason)
     }
 }

@@ -32,6 +32,7 @@ fn goto(w: &Target) -> Command {
 impl Strategy for GuidedTargets {
     const DISARM_WAIT_S: f64 = 0.0;
     const COMMANDS_LANDING: bool = true;
+    const REPLANS: bool = true;
 
     fn in_control(&self, _core: &Core, t: &Telemetry) -> bool {
         t.guided
@@ -83,24 +84,24 @@ impl Strategy for GuidedTargets {
         }
         let n = core.targets.len();
         // Reach as many waypoints as the vehicle is already at (a repeated point).
-        while let Some(w) = core.targets.get(core.reached.len()) {
+        while let Some(w) = core.targets.get(core.next_index()) {
             let deadband = c.deadband_m + c.deadband_per_speed_s * t.ground_speed_m_s();
             if w.horizontal_error_m(t) <= deadband
                 && w.vertical_error_m(t) <= c.vertical_deadband_m
                 && w.heading_error_rad(t) <= c.heading_tolerance_rad
             {
-                core.reach(now_s, core.reached.len(), out);
+                core.reach(now_s, core.next_index(), out);
                 core.last_send_s = None;
             } else {
                 break;
             }
         }
-        let all = core.reached.len() >= n;
+        let all = core.next_index() >= n;
         if all && t.speed_m_s() < c.land_speed_m_s {
             core.land_after_mission(now_s, Self::COMMANDS_LANDING, out);
             return true;
         }
-        let i = core.reached.len().min(n - 1);
+        let i = core.next_index().min(n - 1);
         let budget_s = core.leg_budget_s(i);
         let w = core.targets[i];
         if now_s - core.leg_since_s > budget_s {

@@ -1,6 +1,7 @@
 //! What an executor reports: notes, reached waypoints, failures and outcomes; its configuration.
 
-use super::io::{Command, CommandKind, FailsafeAction, FlightState, VehicleMode};
+use super::io::{Command, CommandKind, FailsafeAction, FlightState, Target, VehicleMode};
+use crate::sensing::ReplanEvent;
 use std::fmt;
 
 /// What happened to the executor since the last event, for printing and logging.
@@ -42,6 +43,23 @@ pub enum Note {
         /// The action commanded.
         action: FailsafeAction,
     },
+    /// The route still to fly was replaced in flight (a [`crate::sensing::RouteWatcher`]
+    /// replanned it); waypoint indices of later notes count in the new route.
+    Replanned {
+        /// What happened.
+        event: ReplanEvent,
+        /// The new route, first target first.
+        targets: Vec<Target>,
+    },
+    /// No route can be flown: the vehicle holds its position for
+    /// [`ExecutorConfig::replan_hold_s`], then lands, and the flight fails with
+    /// [`Failure::NoRoute`].
+    Holding {
+        /// Why, in the user's words.
+        reason: String,
+        /// How long it holds before landing, seconds.
+        hold_s: f64,
+    },
     /// The flight ended; see [`Executor::outcome`](super::Executor::outcome).
     Finished,
 }
@@ -49,7 +67,7 @@ pub enum Note {
 /// A reached waypoint.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reached {
-    /// Index of the waypoint in the mission.
+    /// Index of the waypoint in the route flown then (after a replan: in the new route).
     pub index: usize,
     /// Executor time when it was reached, seconds.
     pub time_s: f64,
@@ -103,6 +121,11 @@ pub enum Failure {
         /// The state when the hold was commanded.
         state: FlightState,
     },
+    /// The route watcher found no route to fly: the vehicle held its position, then landed.
+    NoRoute {
+        /// Why, in the watcher's words.
+        reason: String,
+    },
     /// The vehicle left AUTO while flying the uploaded mission (a pilot or failsafe took over).
     LeftMission {
         /// The state.
@@ -136,6 +159,9 @@ impl fmt::Display for Failure {
                 f,
                 "stopped in {state} ({reason}); the vehicle is holding its position in the air: take over"
             ),
+            Failure::NoRoute { reason } => {
+                write!(f, "no route to fly ({reason}): held position, then landed")
+            }
             Failure::LeftMission { state, mode } => write!(
                 f,
                 "the vehicle left AUTO for {mode} during {state} (pilot or failsafe took over)"
@@ -211,6 +237,9 @@ pub struct ExecutorConfig {
     /// A commanded hold not confirmed (acknowledged, or the mode reported) within this many
     /// seconds becomes a landing.
     pub hold_confirm_s: f64,
+    /// When a route watcher finds no route, the vehicle holds its position this many seconds
+    /// before landing.
+    pub replan_hold_s: f64,
 }
 
 impl Default for ExecutorConfig {
@@ -236,6 +265,7 @@ impl Default for ExecutorConfig {
             failsafe: None,
             link_regain_wait_s: 30.0,
             hold_confirm_s: 10.0,
+            replan_hold_s: 2.0,
         }
     }
 }

@@ -1,0 +1,203 @@
+//! Obstacles the map does not have (`--hidden`), the simulated sensor's OBSTACLE_DISTANCE read by
+//! an independent MAVLink client (pymavlink), and flights through the true world.
+
+use assert_cmd::Command;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::Stdio;
+use std::time::Duration;
+
+const HEADER: &str =
+    "lat0 37.792480, lon0 -122.397450\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n";
+
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+fn run(dir: &Path, args: &[&str]) -> Run {
+    let out = Command::cargo_bin("skyplan")
+        .unwrap()
+        .current_dir(dir)
+        .args(args)
+        .timeout(Duration::from_secs(120))
+        .output()
+        .unwrap();
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn fly_sim_lands_past_a_hidden_box_off_the_route() {
+    let dir = tempfile::tempdir().unwrap();
+    // 60 m south-west of home: the route to (60, 30) goes north-east.
+    let hidden = write(
+        dir.path(),
+        "hidden.csv",
+        &format!("{HEADER}-40,-40,10,3,3,10\n"),
+    );
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "50",
+            "--goal-ne",
+            "60,30",
+            "--hidden",
+            &hidden,
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(0),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(r.stdout.contains("no collision"), "{}", r.stdout);
+}
+
+#[test]
+fn a_hidden_box_on_the_route_without_a_watcher_is_a_collision_in_the_true_world() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 20 m tower on the goal itself: the vehicle flies into it at 5 m.
+    let hidden = write(
+        dir.path(),
+        "hidden.csv",
+        &format!("{HEADER}60,30,10,3,3,10\n"),
+    );
+    let r = run(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "50",
+            "--goal-ne",
+            "60,30",
+            "--hidden",
+            &hidden,
+            "--timeout-s",
+            "60",
+        ],
+    );
+    assert_eq!(
+        r.code,
+        Some(1),
+        "stdout:\n{}\nstderr:\n{}",
+        r.stdout,
+        r.stderr
+    );
+    assert!(r.stdout.contains("track      COLLISION"), "{}", r.stdout);
+    assert!(r.stderr.contains("hit obstacle"), "{}", r.stderr);
+}
+
+#[test]
+fn hidden_files_must_share_the_maps_home_and_ranges_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let other = write(
+        dir.path(),
+        "other.csv",
+        "lat0 37.0, lon0 -122.0\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n1,1,1,1,1,1\n",
+    );
+    let r = run(dir.path(), &["fly", "--sim", "--hidden", &other]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("other.csv") && r.stderr.contains("not the map's home"),
+        "{}",
+        r.stderr
+    );
+    let bad = write(dir.path(), "bad.csv", &format!("{HEADER}1,2,x,1,1,1\n"));
+    let r = run(dir.path(), &["sim", "--hidden", &bad, "--duration-s", "1"]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("bad.csv") && r.stderr.contains("line 3"),
+        "{}",
+        r.stderr
+    );
+    let r = run(
+        dir.path(),
+        &["sim", "--sensor-range-m", "0", "--duration-s", "1"],
+    );
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("--sensor-range-m"), "{}", r.stderr);
+}
+
+fn python() -> String {
+    std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string())
+}
+
+#[test]
+#[ignore = "needs Python with pymavlink (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
+fn pymavlink_reads_obstacle_distance_from_skyplan_sim() {
+    let dir = tempfile::tempdir().unwrap();
+    // An empty map, and one hidden box whose west face is 25 m due east of home (grid east; the
+    // sector is true east, 0.37° off: 25 / cos 0.37° = 25.0005 m → 2500 cm).
+    let map = write(dir.path(), "empty.csv", HEADER);
+    let hidden = write(
+        dir.path(),
+        "hidden.csv",
+        &format!("{HEADER}0,27,10,10,2,10\n"),
+    );
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
+        .args([
+            "sim",
+            "--listen",
+            "tcp:127.0.0.1:0",
+            "--map",
+            &map,
+            "--hidden",
+            &hidden,
+            "--ekf-delay-s",
+            "0",
+            "--speedup",
+            "2",
+            "--duration-s",
+            "60",
+        ])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let first = lines.next().unwrap().unwrap();
+    let address = first
+        .split_whitespace()
+        .find(|w| w.starts_with("tcp:"))
+        .unwrap_or_else(|| panic!("no address in {first:?}"))
+        .trim_end_matches(',')
+        .to_string();
+    std::thread::spawn(move || for _ in lines {});
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/sensing/obstacle_distance_peer.py"
+    );
+    let out = std::process::Command::new(python())
+        .args([script, &address, "2500", "18"])
+        .output()
+        .unwrap();
+    let _ = child.kill();
+    let _ = child.wait();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for expected in ["east sector reads", "western half reads no obstacle", "OK"] {
+        assert!(stdout.contains(expected), "missing {expected:?}:\n{stdout}");
+    }
+}
