@@ -85,8 +85,11 @@ pub struct Run {
     pub planner: String,
     /// One record per query, in query order.
     pub records: Vec<Record>,
-    /// One-off preparation time (JPS+ table), microseconds.
+    /// One-off preparation time (JPS+ table: built, or loaded from a file), microseconds.
     pub precompute_us: f64,
+    /// Peak resident memory of the process while this planner ran, bytes (measured by the
+    /// caller, e.g. VmHWM after resetting it; `None` if not measured).
+    pub peak_rss_bytes: Option<u64>,
 }
 
 /// `count` reproducible queries between free cells of the largest connected region, at least
@@ -138,12 +141,25 @@ pub fn run(
     model: MoveModel,
     contender: Contender,
     queries: &[(Cell, Cell)],
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
 ) -> Run {
-    let mut engine = match contender {
+    let engine = match contender {
         Contender::Skyplan(p) => CellSearch::new(grid, p, model).ok(),
         Contender::PathfindingCrateAStar => None,
     };
+    run_prepared(grid, model, contender, engine, queries, progress)
+}
+
+/// [`run`] with the skyplan planner already prepared (e.g. JPS+ with a table loaded from a
+/// file: [`CellSearch::with_jps_plus_table`]); `engine` is `None` for the peer.
+pub fn run_prepared(
+    grid: &Grid2,
+    model: MoveModel,
+    contender: Contender,
+    mut engine: Option<CellSearch<'_>>,
+    queries: &[(Cell, Cell)],
+    mut progress: impl FnMut(usize),
+) -> Run {
     let precompute_us = engine.as_ref().map_or(0.0, |e| e.precompute_us() as f64);
     let mut query_once = |start: Cell, goal: Cell| -> (Option<f64>, Option<u64>) {
         match engine.as_mut() {
@@ -177,6 +193,7 @@ pub fn run(
         planner: contender.name().to_string(),
         records,
         precompute_us,
+        peak_rss_bytes: None,
     }
 }
 
@@ -263,6 +280,8 @@ pub struct Row {
     pub median_over_fastest: f64,
     /// One-off preparation (the JPS+ table), milliseconds.
     pub precompute_ms: f64,
+    /// Peak resident memory of the process while the planner ran, MiB (`None`: not measured).
+    pub peak_rss_mib: Option<f64>,
 }
 
 /// The table's rows: each run against the best cost per query over every run, and against the
@@ -314,6 +333,7 @@ pub fn table(runs: &[Run], query_count: usize, cell_m: f64) -> Vec<Row> {
                 cost_over_best: cost_ratio(&costs, &best_same),
                 median_over_fastest: stats.median / fastest,
                 precompute_ms: r.precompute_us / 1e3,
+                peak_rss_mib: r.peak_rss_bytes.map(|b| b as f64 / (1024.0 * 1024.0)),
             })
         })
         .collect()
@@ -322,7 +342,7 @@ pub fn table(runs: &[Run], query_count: usize, cell_m: f64) -> Vec<Row> {
 /// The table as aligned text, times in milliseconds.
 pub fn format_table(rows: &[Row]) -> String {
     let mut s = format!(
-        "{:<34} {:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>10} {:>10}\n",
+        "{:<24} {:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}\n",
         "planner",
         "queries",
         "median ms",
@@ -331,19 +351,17 @@ pub fn format_table(rows: &[Row]) -> String {
         "expansions",
         "mean cost m",
         "cost/best",
-        "×fastest"
+        "×fastest",
+        "prep ms",
+        "peak MiB"
     );
     for r in rows {
-        let name = if r.precompute_ms > 0.0 {
-            format!("{} (+{:.0} ms table)", r.planner, r.precompute_ms)
-        } else {
-            r.planner.clone()
-        };
         let opt =
             |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |x| format!("{x:.digits$}"));
+        let prep = (r.precompute_ms > 0.0).then_some(r.precompute_ms);
         s.push_str(&format!(
-            "{:<34} {:>7} {:>10.3} {:>10.3} {:>10.3} {:>10} {:>11} {:>10} {:>10.1}\n",
-            name,
+            "{:<24} {:>7} {:>10.3} {:>10.3} {:>10.3} {:>10} {:>11} {:>10} {:>10.1} {:>10} {:>9}\n",
+            r.planner,
             r.queries,
             r.median_us / 1e3,
             r.p95_us / 1e3,
@@ -351,7 +369,9 @@ pub fn format_table(rows: &[Row]) -> String {
             opt(r.mean_expansions, 0),
             opt(r.mean_cost_m, 2),
             opt(r.cost_over_best, 6),
-            r.median_over_fastest
+            r.median_over_fastest,
+            opt(prep, 1),
+            opt(r.peak_rss_mib, 1)
         ));
     }
     s
@@ -386,6 +406,7 @@ pub fn parse_peer_lines(text: &str) -> (Vec<Run>, Vec<String>) {
                 planner: peer,
                 records: vec![record],
                 precompute_us: 0.0,
+                peak_rss_bytes: None,
             }),
         }
     }

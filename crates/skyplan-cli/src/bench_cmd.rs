@@ -3,15 +3,17 @@
 
 use crate::args::BenchArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
-use crate::files::{read_text, write_atomic};
+use crate::files::{read_bytes, read_text, write_atomic};
 use anyhow::Context;
 use serde_json::json;
-use skyplan_bench::{Contender, Record, Run, random_far_queries, run};
+use skyplan_bench::{Contender, Record, Run, random_far_queries, run, run_prepared};
 use skyplan_cspace::{Cell, Grid2, GridSpec};
-use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
-use skyplan_search::MoveModel;
-use std::path::PathBuf;
+use skyplan_plan::{CellSearch, FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
+use skyplan_search::{JpsPlusTable, MoveModel};
+use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Arc;
+use std::time::Instant;
 
 /// The Python peers script, compiled in so that `bench --peers` works from any directory.
 const PEERS_PY: &str = include_str!("../../../bench/peers.py");
@@ -238,6 +240,81 @@ fn write_records(out: &std::path::Path, map: &str, described: &str, runs: &[Run]
     write_atomic(out, &bytes)
 }
 
+/// Resets the process's peak resident set (Linux: `5` to /proc/self/clear_refs), so that VmHWM
+/// then measures one planner; false where that is not possible.
+fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// VmHWM of /proc/self/status (the peak resident set since the last reset), bytes.
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line
+        .trim_start_matches("VmHWM:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kib * 1024)
+}
+
+/// The grid's values as a table file's record of how it was built (`NaN` for a MovingAI map).
+fn table_spec(args: &BenchArgs) -> [f64; 3] {
+    match &args.map {
+        Some(path) if path.extension().is_some_and(|e| e == "map") => [f64::NAN; 3],
+        _ => [args.alt_m, args.safety_m, args.cell_m],
+    }
+}
+
+/// Builds the JPS+ table of `grid` and writes it to `path`.
+fn save_table(path: &Path, grid: &Grid2, model: MoveModel, args: &BenchArgs) -> Result<()> {
+    let t = Instant::now();
+    let table = JpsPlusTable::build(Arc::new(grid.clone()), model);
+    let bytes = table.to_bytes(table_spec(args));
+    write_atomic(path, &bytes)?;
+    if !args.json {
+        eprintln!(
+            "saved    JPS+ table ({:.1} MB, built in {:.0} ms) to {}",
+            bytes.len() as f64 / 1e6,
+            t.elapsed().as_secs_f64() * 1e3,
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// JPS+ prepared from the table in `path` (the load time is its preparation time).
+fn load_table<'g>(path: &Path, grid: &'g Grid2, model: MoveModel) -> Result<CellSearch<'g>> {
+    let t = Instant::now();
+    let bytes = read_bytes(path)?;
+    let table = JpsPlusTable::from_bytes(&bytes, Arc::new(grid.clone())).map_err(|e| {
+        bad_input(format!(
+            "--preprocess {}: {e}; rebuild it with --save-preprocess",
+            path.display()
+        ))
+    })?;
+    let rule = |m: MoveModel| {
+        if m == MoveModel::OctileCornerCutting {
+            "with corner cutting (--corner-cutting)"
+        } else {
+            "without corner cutting"
+        }
+    };
+    if table.model() != model {
+        return Err(bad_input(format!(
+            "--preprocess {}: the JPS+ table was built {}; this run is {}",
+            path.display(),
+            rule(table.model()),
+            rule(model)
+        )));
+    }
+    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    CellSearch::with_jps_plus_table(grid, Arc::new(table), us)
+        .map_err(|e| bad_input(format!("--preprocess {}: {e}", path.display())))
+}
+
 pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.three_d {
         return crate::bench3d_cmd::run(args);
@@ -272,10 +349,24 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
+    if let Some(path) = &args.save_preprocess {
+        save_table(path, grid, model, &args)?;
+    }
     let mut runs: Vec<Run> = Vec::new();
     for &planner in &planners {
         progress.set_message(planner.name());
-        runs.push(run(grid, model, planner, &queries, |_| progress.inc(1)));
+        let measured = reset_peak_rss();
+        let mut r = match (&args.preprocess, planner) {
+            (Some(path), Contender::Skyplan(PlannerId::JpsPlus)) => {
+                let engine = load_table(path, grid, model)?;
+                run_prepared(grid, model, planner, Some(engine), &queries, |_| {
+                    progress.inc(1)
+                })
+            }
+            _ => run(grid, model, planner, &queries, |_| progress.inc(1)),
+        };
+        r.peak_rss_bytes = measured.then(peak_rss_bytes).flatten();
+        runs.push(r);
     }
     progress.finish_and_clear();
     let mut notes = Vec::new();

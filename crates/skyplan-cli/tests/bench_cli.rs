@@ -60,3 +60,60 @@ fn python_textbook_astar_agrees_with_the_optimum() {
     let ours = rows.iter().find(|r| r["planner"] == "jps-plus").unwrap();
     assert_eq!(ours["cost_over_best"].as_f64(), Some(1.0));
 }
+
+/// `--save-preprocess` writes the JPS+ table, `--preprocess` loads it: the same optimal costs
+/// as A*; a table of another grid or corner rule is refused naming the file; every row reports
+/// the peak resident memory.
+#[test]
+fn saved_preprocessing_is_reloaded_and_refused_for_another_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = dir.path().join("city.jpsplus");
+    let t = table.to_str().unwrap();
+    let saved = bench(&[
+        "--random",
+        "3",
+        "--planners",
+        "jps-plus,astar",
+        "--save-preprocess",
+        t,
+    ]);
+    assert!(std::fs::metadata(&table).unwrap().len() > 921 * 921 * 32);
+    let loaded = bench(&[
+        "--random",
+        "3",
+        "--planners",
+        "jps-plus,astar",
+        "--preprocess",
+        t,
+    ]);
+    for v in [&saved, &loaded] {
+        for r in v["rows"].as_array().unwrap() {
+            assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
+            let peak = r["peak_rss_mib"].as_f64().unwrap();
+            assert!(peak > 1.0, "{r}");
+        }
+    }
+    let refused = |extra: &[&str], why: &str| {
+        let out = Command::cargo_bin("skyplan")
+            .unwrap()
+            .args([
+                "bench",
+                "--random",
+                "2",
+                "--planners",
+                "jps-plus",
+                "--preprocess",
+                t,
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(t) && err.contains(why), "{err}");
+    };
+    refused(&["--alt-m", "40"], "another map, altitude");
+    refused(&["--corner-cutting"], "this run is with corner cutting");
+    std::fs::write(&table, b"garbage").unwrap();
+    refused(&[], "not a skyplan JPS+ table");
+}

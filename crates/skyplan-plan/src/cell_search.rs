@@ -4,10 +4,11 @@
 use crate::failure::PlanFailure;
 use crate::planner_id::{Family, PlannerId};
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{GridPath, GridSearch, JpsPlus, MoveModel, Planner, SearchError};
+use skyplan_search::{GridPath, GridSearch, JpsPlusTable, MoveModel, Planner, SearchError};
+use std::sync::Arc;
 
-enum Engine<'g> {
-    Plus(Box<JpsPlus<'g>>),
+enum Engine {
+    Plus(Arc<JpsPlusTable>, Box<GridSearch>),
     Online(Box<GridSearch>, Planner),
 }
 
@@ -25,7 +26,7 @@ enum Engine<'g> {
 pub struct CellSearch<'g> {
     grid: &'g Grid2,
     model: MoveModel,
-    engine: Engine<'g>,
+    engine: Engine,
     precompute_us: u64,
 }
 
@@ -46,7 +47,10 @@ impl<'g> CellSearch<'g> {
         };
         let t = std::time::Instant::now();
         let engine = match p {
-            Planner::JpsPlus => Engine::Plus(Box::new(JpsPlus::new(grid, model))),
+            Planner::JpsPlus => Engine::Plus(
+                Arc::new(JpsPlusTable::build(Arc::new(grid.clone()), model)),
+                Box::default(),
+            ),
             other => Engine::Online(Box::new(GridSearch::new()), other),
         };
         Ok(Self {
@@ -57,10 +61,31 @@ impl<'g> CellSearch<'g> {
         })
     }
 
+    /// JPS+ with a table built or loaded before (e.g. from a file, see
+    /// [`skyplan_search::table_file`]); refused unless it was built for exactly `grid`.
+    /// `precompute_us` is what preparing it cost (building or loading).
+    pub fn with_jps_plus_table(
+        grid: &'g Grid2,
+        table: Arc<JpsPlusTable>,
+        precompute_us: u64,
+    ) -> Result<Self, PlanFailure> {
+        if **table.grid() != *grid {
+            return Err(PlanFailure::bad_request(
+                "the JPS+ table was built for another grid",
+            ));
+        }
+        Ok(Self {
+            grid,
+            model: table.model(),
+            engine: Engine::Plus(table, Box::default()),
+            precompute_us,
+        })
+    }
+
     /// One query.
     pub fn search(&mut self, start: Cell, goal: Cell) -> Result<GridPath, SearchError> {
         match &mut self.engine {
-            Engine::Plus(plus) => plus.search(start, goal),
+            Engine::Plus(table, search) => table.search(search, start, goal),
             Engine::Online(search, planner) => {
                 search.search(self.grid, start, goal, self.model, *planner)
             }

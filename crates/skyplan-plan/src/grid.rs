@@ -204,8 +204,20 @@ pub(crate) fn plan(
     let (grid, build_us) = grid_for(session, q)?;
     let start = end_cell(&grid, q, "start", q.start_ne)?;
     let goal = end_cell(&grid, q, "goal", q.goal_ne)?;
+    // JPS+: the session keeps the table (built once per grid, or loaded from a file).
+    let mut build_us = build_us;
+    let mut table_built = None;
+    let table = (planner == Planner::JpsPlus && r.model.has_diagonals()).then(|| {
+        let (table, table_us) = session.jps_plus_table(&grid, r.model);
+        build_us += table_us.unwrap_or(0);
+        table_built = Some(table_us.is_some());
+        table
+    });
     let t = Instant::now();
-    let searched = session.search.search(&grid, start, goal, r.model, planner);
+    let searched = match &table {
+        Some(table) => table.search(&mut session.search, start, goal),
+        None => session.search.search(&grid, start, goal, r.model, planner),
+    };
     let search_us = micros(t.elapsed());
     let path = match searched {
         Ok(p) => p,
@@ -248,6 +260,11 @@ pub(crate) fn plan(
             .map(|p| p.cost_cells() * cell_m),
         _ => None,
     };
+    if let Some(built) = table_built {
+        // Whether this request built the JPS+ table or used the session's (kept or loaded).
+        let how = if built { "built" } else { "reused" };
+        route.details.insert("jps_plus_table".into(), how.into());
+    }
     route.start_cell = Some(start);
     route.goal_cell = Some(goal);
     route.expansions = path.expansions;

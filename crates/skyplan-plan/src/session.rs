@@ -10,7 +10,8 @@ use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
 use skyplan_mission::Mission;
-use skyplan_search::{GridSearch, MoveModel};
+use skyplan_search::table_file::read_header;
+use skyplan_search::{GridSearch, JpsPlusTable, MoveModel};
 use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -125,6 +126,8 @@ pub struct Session {
     pub(crate) prm: HashMap<Key, skyplan_sampling::prm::Roadmap>,
     pub(crate) any_angle: HashMap<Key, Arc<skyplan_anyangle::AnyAngle>>,
     pub(crate) search: GridSearch,
+    /// JPS+ preprocessing kept across requests (built on first use or loaded from a file).
+    jps_plus: Vec<Arc<JpsPlusTable>>,
 }
 
 impl Session {
@@ -139,6 +142,7 @@ impl Session {
             prm: HashMap::new(),
             any_angle: HashMap::new(),
             search: GridSearch::new(),
+            jps_plus: Vec::new(),
         }
     }
 
@@ -188,6 +192,84 @@ impl Session {
             .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
         Ok(put(&mut self.grids, k, Arc::new(grid)))
     }
+
+    // ---- JPS+ preprocessing kept by the session, saved and loaded (issue 14) ----
+
+    /// The JPS+ table of `grid` under `model`: kept from an earlier request or a loaded file,
+    /// or built now (then also the build time in microseconds).
+    pub(crate) fn jps_plus_table(
+        &mut self,
+        grid: &Arc<Grid2>,
+        model: MoveModel,
+    ) -> (Arc<JpsPlusTable>, Option<u64>) {
+        let model = if model == MoveModel::OctileCornerCutting {
+            model
+        } else {
+            MoveModel::Octile
+        };
+        if let Some(t) = self
+            .jps_plus
+            .iter()
+            .find(|t| t.model() == model && Arc::ptr_eq(t.grid(), grid))
+        {
+            return (Arc::clone(t), None);
+        }
+        let t0 = Instant::now();
+        let table = Arc::new(JpsPlusTable::build(Arc::clone(grid), model));
+        let us = micros(t0.elapsed());
+        self.keep_jps_plus(Arc::clone(&table));
+        (table, Some(us))
+    }
+
+    fn keep_jps_plus(&mut self, table: Arc<JpsPlusTable>) {
+        if self.jps_plus.len() >= CACHE_ENTRIES {
+            self.jps_plus.remove(0);
+        }
+        self.jps_plus.push(table);
+    }
+
+    /// The JPS+ table for `request`'s grid and corner rule as file bytes (built unless the
+    /// session has it), for [`Session::load_jps_plus`] in a later run.
+    pub fn save_jps_plus(&mut self, request: &PlanRequest) -> Result<Vec<u8>, PlanFailure> {
+        let r = Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::JpsPlus),
+            ..request.clone()
+        })?;
+        self.check_request_memory(&r)?;
+        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        let (table, _) = self.jps_plus_table(&grid, r.model);
+        let spec = match self.world.source {
+            Source::Grid(_) => [f64::NAN; 3],
+            Source::Colliders(_) => [r.alt_m, r.safety_m, r.cell_m],
+        };
+        Ok(table.to_bytes(spec))
+    }
+
+    /// Loads a JPS+ table saved by [`Session::save_jps_plus`]: later `jps-plus` requests on its
+    /// grid use it instead of building one. Refused (bad request, saying why) unless it was
+    /// built for this world's grid at the altitude, margin and cell size it records.
+    pub fn load_jps_plus(&mut self, bytes: &[u8]) -> Result<(), PlanFailure> {
+        let header = read_header(bytes).map_err(|e| PlanFailure::bad_request(e.to_string()))?;
+        let [alt_m, safety_m, cell_m] = header.spec;
+        let fixed = matches!(self.world.source, Source::Grid(_));
+        let spec_ok = alt_m.is_finite() && safety_m.is_finite() && cell_m > 0.0;
+        if !fixed && !spec_ok {
+            return Err(PlanFailure::bad_request(format!(
+                "JPS+ table was saved for a fixed grid (an image, MovingAI or random map), not for {}",
+                self.world.name()
+            )));
+        }
+        let grid = self.grid(alt_m, safety_m, cell_m)?;
+        let table = JpsPlusTable::from_bytes(bytes, grid).map_err(|e| {
+            PlanFailure::bad_request(format!("{e}; this session's map is {}", self.world.name()))
+        })?;
+        self.jps_plus
+            .retain(|t| !(t.model() == header.model && Arc::ptr_eq(t.grid(), table.grid())));
+        self.keep_jps_plus(Arc::new(table));
+        Ok(())
+    }
+
+    // ---- end of JPS+ preprocessing ----
 
     /// The 3D box world for a request: boxes grown by the margin, the ground, the altitude band,
     /// and horizontal bounds that cover the grid's (so every planner takes the same points).

@@ -143,3 +143,13 @@ def test_small_grid_known_answer():
     # With it: two diagonals past the wall's ends and two straight moves.
     cut = planner.plan((1.5, 0.5), (1.5, 4.5), planner="dijkstra", corner_cutting=True)
     assert cut.cost_m == pytest.approx(2 + 2 * np.sqrt(2))
+
+
+def test_jps_plus_table_is_kept_between_calls(city):
+    """The session keeps the JPS+ table: only the first call on a grid builds it."""
+    first = city.plan(planner="jps-plus", goal_ne=(60.0, 40.0))
+    second = city.plan(planner="jps-plus")
+    jps = city.plan(planner="jps")
+    assert first.stats["jps_plus_table"] in ("built", "reused")
+    assert second.stats["jps_plus_table"] == "reused"
+    assert second.cost_m == jps.cost_m

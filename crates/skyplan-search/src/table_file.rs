@@ -211,13 +211,7 @@ impl JpsPlusTable {
     /// the grid's altitude, margin and cell size in metres (`NaN` for a fixed grid).
     pub fn to_bytes(&self, spec: [f64; 3]) -> Vec<u8> {
         let grid = self.grid();
-        let mut payload = Vec::with_capacity(self.table.len() * 32);
-        for entry in &self.table {
-            for v in entry {
-                payload.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-        let mut out = Vec::with_capacity(HEADER_BYTES + payload.len());
+        let mut out = Vec::with_capacity(HEADER_BYTES + self.table.len() * 32);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&VERSION.to_le_bytes());
         out.extend_from_slice(&model_code(self.model()).to_le_bytes());
@@ -227,8 +221,14 @@ impl JpsPlusTable {
         for v in spec {
             out.extend_from_slice(&v.to_bits().to_le_bytes());
         }
-        out.extend_from_slice(&payload_checksum(&payload).to_le_bytes());
-        out.extend_from_slice(&payload);
+        out.extend_from_slice(&[0; 8]); // the table checksum, written below
+        for entry in &self.table {
+            for v in entry {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let sum = payload_checksum(&out[HEADER_BYTES..]);
+        out[HEADER_BYTES - 8..HEADER_BYTES].copy_from_slice(&sum.to_le_bytes());
         out
     }
 
