@@ -192,10 +192,13 @@ fn write_heat(
 ) -> Result<()> {
     let values: Vec<f64> = costmap.normalised().iter().map(|&c| f64::from(c)).collect();
     let heat = skyplan_plot::Heatmap {
-        rows: grid.rows(),
-        cols: grid.cols(),
+        title: format!(
+            "navigation over the inflated cost map: {} steps",
+            trace.len().saturating_sub(1)
+        ),
+        grid,
         values: &values,
-        blocked: grid.blocked_cells(),
+        measure: "Nav2 cost (0 free to 254 lethal)",
         path: trace,
         start: Some(start),
         goal: Some(goal),
