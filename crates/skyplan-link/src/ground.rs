@@ -288,7 +288,12 @@ impl GroundStation {
     pub fn connect(address: &Address, config: GroundConfig) -> Result<Self, GroundError> {
         let link = Link::open(address, SYSTEM_ID, COMPONENT_ID)?;
         link.start_heartbeat(gcs_heartbeat(), Duration::from_secs(1));
-        Ok(Self {
+        Ok(Self::over(link, config))
+    }
+
+    /// A station over an open link, knowing nothing yet.
+    fn over(link: Link, config: GroundConfig) -> Self {
+        Self {
             link,
             config,
             vehicle: None,
@@ -306,7 +311,7 @@ impl GroundStation {
             last_arm_request: CommandKind::Arm,
             last_mode_request: CommandKind::TakeControl,
             interrupt: None,
-        })
+        }
     }
 
     /// A flag that, once set (by a Ctrl-C handler), aborts the flight: the executor lands.
