@@ -597,7 +597,7 @@ impl Observer for Terminal<'_> {
                     self.bar.set_position((i + 1) as u64);
                 }
             }
-            Update::Reading(r) => self.live.reading(r),
+            Update::Reading(r) => self.live.reading(r.clone()),
             Update::Progress(p) => {
                 self.live.progress(p);
                 self.bar.set_prefix(p.state.name());

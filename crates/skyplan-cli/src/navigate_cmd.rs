@@ -84,10 +84,13 @@ fn print_ride(ride: &Ride) {
 /// The normalised cost map with the ride, as a PNG heat map.
 fn write_heat(target: &crate::files::Target, ride: &Ride) -> Result<()> {
     let heat = skyplan_plot::Heatmap {
-        rows: ride.grid.rows(),
-        cols: ride.grid.cols(),
+        title: format!(
+            "navigation over the inflated cost map: {} steps",
+            ride.trace.len().saturating_sub(1)
+        ),
+        grid: &ride.grid,
         values: &ride.costs,
-        blocked: ride.grid.blocked_cells(),
+        measure: "Nav2 cost (0 free to 254 lethal)",
         path: &ride.trace,
         start: Some(ride.ends.0),
         goal: Some(ride.ends.1),

@@ -60,11 +60,23 @@ pub fn render(
                 Some(v) if v.len() == grid.len() => v,
                 _ => vec![0.0; grid.len()],
             };
+            let measure = match plan.planner {
+                skyplan_plan::PlannerId::Costmap => "cost-to-go (cells of length + weight × cost)",
+                _ if plan.details.get("field").and_then(|v| v.as_str()) == Some("steps") => {
+                    "steps to the goal"
+                }
+                _ => "distance to the goal (cells)",
+            };
             let heat = skyplan_plot::Heatmap {
-                rows: grid.rows(),
-                cols: grid.cols(),
+                title: format!(
+                    "{map}, {}{}: {:.1} m, field of {measure}",
+                    info.label,
+                    grid_at(plan),
+                    plan.cost_m
+                ),
+                grid,
                 values: &values,
-                blocked: grid.blocked_cells(),
+                measure,
                 path: &path,
                 start: plan.start.cell.map(|[r, c]| Cell::new(r, c)),
                 goal: plan.goal.cell.map(|[r, c]| Cell::new(r, c)),

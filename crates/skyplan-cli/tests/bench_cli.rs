@@ -69,23 +69,17 @@ fn saved_preprocessing_is_reloaded_and_refused_for_another_grid() {
     let dir = tempfile::tempdir().unwrap();
     let table = dir.path().join("city.jpsplus");
     let t = table.to_str().unwrap();
-    let saved = bench(&[
-        "--random",
-        "3",
-        "--planners",
-        "jps-plus,astar",
-        "--save-preprocess",
-        t,
-    ]);
+    let saved = bench(
+        dir.path(),
+        "--random 3 --planners jps-plus,astar --save-preprocess",
+        &[t],
+    );
     assert!(std::fs::metadata(&table).unwrap().len() > 921 * 921 * 32);
-    let loaded = bench(&[
-        "--random",
-        "3",
-        "--planners",
-        "jps-plus,astar",
-        "--preprocess",
-        t,
-    ]);
+    let loaded = bench(
+        dir.path(),
+        "--random 3 --planners jps-plus,astar --preprocess",
+        &[t],
+    );
     for v in [&saved, &loaded] {
         for r in v["rows"].as_array().unwrap() {
             assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
@@ -94,20 +88,14 @@ fn saved_preprocessing_is_reloaded_and_refused_for_another_grid() {
         }
     }
     let refused = |extra: &[&str], why: &str| {
-        let out = Command::cargo_bin("skyplan")
-            .unwrap()
-            .args([
-                "bench",
-                "--random",
-                "2",
-                "--planners",
-                "jps-plus",
-                "--preprocess",
-                t,
-            ])
-            .args(extra)
-            .output()
-            .unwrap();
+        let out = cmd(
+            dir.path(),
+            "bench --random 2 --planners jps-plus --preprocess",
+        )
+        .arg(t)
+        .args(extra)
+        .output()
+        .unwrap();
         assert_eq!(out.status.code(), Some(2));
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(t) && err.contains(why), "{err}");

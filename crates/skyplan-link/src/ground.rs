@@ -319,7 +319,12 @@ impl GroundStation {
     pub fn connect(address: &Address, config: GroundConfig) -> Result<Self, GroundError> {
         let link = Link::open(address, SYSTEM_ID, COMPONENT_ID)?;
         link.start_heartbeat(gcs_heartbeat(), Duration::from_secs(1));
-        Ok(Self {
+        Ok(Self::over(link, config))
+    }
+
+    /// A station over an open link, knowing nothing yet.
+    fn over(link: Link, config: GroundConfig) -> Self {
+        Self {
             link,
             config,
             vehicle: None,
@@ -338,7 +343,7 @@ impl GroundStation {
             last_mode_request: CommandKind::TakeControl,
             interrupt: None,
             watcher: None,
-        })
+        }
     }
 
     /// Hands every reading taken while the vehicle flies its waypoints to `watcher`, which may

@@ -206,6 +206,8 @@ mod tests {
             waypoints: 5,
             distance_left_m: 123.45,
             telemetry: None,
+            readings: 0,
+            replans: 0,
         };
         assert_eq!(progress_message(&p), "123.5 m left  t 12.3 s");
     }

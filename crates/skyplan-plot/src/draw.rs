@@ -25,6 +25,8 @@ const HIDDEN_COLOR: RGBColor = RGBColor(150, 30, 40);
 const LEARNED_COLOR: RGBColor = RGBColor(230, 60, 150);
 const REPLANNED_COLOR: RGBColor = RGBColor(140, 70, 200);
 const TRACK_COLOR: RGBColor = RGBColor(20, 20, 20);
+const HEAT_BLOCKED_COLOR: RGBColor = RGBColor(0, 0, 0);
+const NO_VALUE_COLOR: RGBColor = RGBColor(200, 200, 200);
 
 fn err<E: std::fmt::Display>(e: E) -> PlotError {
     PlotError::Draw(e.to_string())
@@ -34,12 +36,15 @@ fn px(v: f64) -> u32 {
     v.round().max(1.0) as u32
 }
 
-/// Draws the scene on the whole picture `root`.
+/// Draws the scene on the whole picture `root`; with `heat`, its colours (one level per cell,
+/// row-major from the southern row; `None`: no value) fill the grid instead of the
+/// configuration space, blocked cells black.
 pub(crate) fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     scene: &Scene,
     l: &PlotLayout,
     mode: TextMode,
+    heat: Option<&[Option<u8>]>,
 ) -> Result<(), PlotError> {
     root.fill(&WHITE).map_err(err)?;
     let (x0, y0, w, h) = l.plot;
@@ -63,10 +68,18 @@ pub(crate) fn draw<DB: DrawingBackend>(
         .build_cartesian_2d(l.east_m.0..l.east_m.1, l.north_m.0..l.north_m.1)
         .map_err(err)?;
 
-    // Configuration space, then the obstacles themselves.
+    if let Some(levels) = heat {
+        draw_heat(root, scene, l, levels)?;
+    }
+    // Configuration space (unless a heat map shows it), then the obstacles themselves.
     let f = scene.grid.frame();
+    let cspace = if heat.is_some() {
+        Vec::new()
+    } else {
+        blocked_rects(scene.grid)
+    };
     chart
-        .draw_series(blocked_rects(scene.grid).into_iter().map(|r| {
+        .draw_series(cspace.into_iter().map(|r| {
             let e0 = f.origin_east_m + f64::from(r.col) * f.cell_m;
             let n0 = f.origin_north_m + f64::from(r.row) * f.cell_m;
             let e1 = e0 + f64::from(r.cols) * f.cell_m;
@@ -274,6 +287,41 @@ pub(crate) fn draw<DB: DrawingBackend>(
     draw_legend(root, l, mode, styles, (r_wp, r_end, flight_styles.2))
 }
 
+/// Paints every pixel of the plot area with the colour of the cell under its centre.
+fn draw_heat<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene,
+    l: &PlotLayout,
+    levels: &[Option<u8>],
+) -> Result<(), PlotError> {
+    let (x0, y0, w, h) = l.plot;
+    let grid = scene.grid;
+    let (de, dn) = (l.east_m.1 - l.east_m.0, l.north_m.1 - l.north_m.0);
+    for py in 0..h {
+        let north = l.north_m.1 - (f64::from(py) + 0.5) / f64::from(h) * dn;
+        for px in 0..w {
+            let east = l.east_m.0 + (f64::from(px) + 0.5) / f64::from(w) * de;
+            let Some(cell) = grid.cell_at_ne(north, east) else {
+                continue;
+            };
+            let i = cell.row as usize * grid.cols() as usize + cell.col as usize;
+            let color = if grid.blocked_cells()[i] {
+                HEAT_BLOCKED_COLOR
+            } else {
+                levels[i].map_or(NO_VALUE_COLOR, heat_color)
+            };
+            root.draw_pixel((x0 + px as i32, y0 + py as i32), &color)
+                .map_err(err)?;
+        }
+    }
+    Ok(())
+}
+
+fn heat_color(level: u8) -> RGBColor {
+    let [r, g, b] = crate::heatmap::viridis(level);
+    RGBColor(r, g, b)
+}
+
 fn draw_legend<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     l: &PlotLayout,
@@ -326,6 +374,10 @@ fn draw_legend<DB: DrawingBackend>(
             }
             LegendKind::Replanned => root.draw(&line(replanned_style)),
             LegendKind::Track => root.draw(&line(track_style)),
+            LegendKind::HeatBlocked => root.draw(&swatch(HEAT_BLOCKED_COLOR)),
+            LegendKind::Heat(level) => root.draw(&swatch(heat_color(level))),
+            LegendKind::NoValue => root.draw(&swatch(NO_VALUE_COLOR)),
+            LegendKind::Caption => Ok(()),
         }
         .map_err(err)?;
         let at = (x + sw + legend.text_gap, cy);

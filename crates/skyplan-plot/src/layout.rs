@@ -75,6 +75,12 @@ pub(crate) enum LegendKind {
     Learned,
     Replanned,
     Track,
+    /// Heat maps: blocked cells (drawn black), a colour of the scale, cells without a value,
+    /// and the scale's caption (no sample).
+    HeatBlocked,
+    Heat(u8),
+    NoValue,
+    Caption,
 }
 
 impl PlotLayout {
@@ -344,6 +350,17 @@ enum Place {
 /// The renderers use exactly this layout, so [`PlotLayout::pixel_of_ne`] tells where a point
 /// of the scene lands on the picture.
 pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout, PlotError> {
+    layout_with(scene, width_px, height_px, None)
+}
+
+/// [`layout`] for a heat map: blocked cells are drawn black, and the colour scale's entries
+/// follow the scene's in the legend.
+pub(crate) fn layout_with(
+    scene: &Scene,
+    width_px: u32,
+    height_px: u32,
+    heat_legend: Option<Vec<LegendEntry>>,
+) -> Result<PlotLayout, PlotError> {
     let size_ok = |v: u32| (MIN_SIZE_PX..=MAX_SIZE_PX).contains(&v);
     if !size_ok(width_px) || !size_ok(height_px) {
         return Err(PlotError::BadSize {
@@ -407,7 +424,17 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
     let right_pad = px(0.5 * widest_x + 6.0 * k).max(outer);
 
     // Legend: a column beside the plot or a row under it.
-    let entries = legend_entries(scene);
+    let mut entries = legend_entries(scene);
+    // A heat map's colour scale reads top to bottom: its legend is a column beside the plot.
+    let column_only = heat_legend.is_some();
+    if let Some(heat) = heat_legend {
+        for e in &mut entries {
+            if e.kind == LegendKind::CSpace {
+                e.kind = LegendKind::HeatBlocked;
+            }
+        }
+        entries.extend(heat);
+    }
     let sample_w = px(32.0 * k);
     let text_gap = px(8.0 * k);
     let row_h = px(1.75 * fonts.legend);
@@ -459,7 +486,7 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
             base_w + right_pad - legend_gap.max(right_pad) - column.0 - outer,
             base_h,
         ));
-        if let Some((_, _, h)) = below {
+        if let Some((_, _, h)) = below.as_ref().filter(|_| !column_only) {
             candidates.push((Place::Below, base_w, base_h - legend_gap - h));
         }
     }

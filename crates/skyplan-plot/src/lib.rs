@@ -234,19 +234,10 @@ pub fn render_png(scene: &Scene, width_px: u32, height_px: u32) -> Result<Vec<u8
             BitMapBackend::<RGBPixel>::with_buffer_and_format(&mut rgb, (width_px, height_px))
                 .map_err(|e| PlotError::Draw(e.to_string()))?;
         let root = backend.into_drawing_area();
-        draw(&root, scene, &layout, TextMode::Glyphs)?;
+        draw(&root, scene, &layout, TextMode::Glyphs, None)?;
         root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
     }
-    let mut out = Vec::with_capacity(rgb.len() / 8);
-    let mut encoder = png::Encoder::new(&mut out, width_px, height_px);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Fast);
-    let enc_err = |e: png::EncodingError| PlotError::Encode(e.to_string());
-    let mut writer = encoder.write_header().map_err(enc_err)?;
-    writer.write_image_data(&rgb).map_err(enc_err)?;
-    writer.finish().map_err(enc_err)?;
-    Ok(out)
+    crate::heatmap::encode_rgb_png(&rgb, width_px, height_px)
 }
 
 /// Renders a scene as an SVG document.
@@ -257,7 +248,7 @@ pub fn render_svg(scene: &Scene, width_px: u32, height_px: u32) -> Result<String
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width_px, height_px)).into_drawing_area();
-        draw(&root, scene, &layout, TextMode::Strings)?;
+        draw(&root, scene, &layout, TextMode::Strings, None)?;
         root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
     }
     Ok(svg)

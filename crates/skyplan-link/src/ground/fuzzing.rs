@@ -1,11 +1,33 @@
 //! Fuzzing and hostile-input tests only (not an API): the ground station's handling of one
 //! received message — `absorb` (what the station learns, which vehicle it listens to), the
 //! position converted to the map's frame, the executor fed, its commands sent — without a
-//! vehicle. The station is connected to a throwaway loopback peer that never speaks.
+//! vehicle. Every station talks over one loopback connection whose peer never speaks and
+//! drains what it is sent (a connection per station would exhaust the ports in TIME_WAIT).
 
 use super::*;
 use skyplan_flight::executor::{ExecutorConfig, MissionExecutor};
+use std::io::Read;
 use std::net::{TcpListener, TcpStream};
+use std::sync::OnceLock;
+
+/// The shared connection's station end (the peer is drained on its own thread).
+fn shared_stream() -> std::io::Result<TcpStream> {
+    static STREAM: OnceLock<Option<TcpStream>> = OnceLock::new();
+    let stream = STREAM.get_or_init(|| {
+        let listener = TcpListener::bind("127.0.0.1:0").ok()?;
+        let ours = TcpStream::connect(listener.local_addr().ok()?).ok()?;
+        let (mut peer, _) = listener.accept().ok()?;
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 65536];
+            while let Ok(1..) = peer.read(&mut buf) {}
+        });
+        Some(ours)
+    });
+    match stream {
+        Some(s) => s.try_clone(),
+        None => Err(std::io::Error::other("no loopback connection")),
+    }
+}
 
 /// A ground station flying a short GUIDED route, driven one message at a time.
 pub struct GroundHarness {
@@ -13,19 +35,14 @@ pub struct GroundHarness {
     executor: MissionExecutor,
     frame: LocalFrame,
     now_s: f64,
-    _peer: TcpStream,
 }
 
 impl GroundHarness {
-    /// A station connected over loopback to a silent peer, with its executor ready.
+    /// A station over the shared loopback connection, with its executor ready.
     pub fn new() -> std::io::Result<Self> {
-        let listener = TcpListener::bind("127.0.0.1:0")?;
-        let address = format!("tcp:{}", listener.local_addr()?);
-        let address = Address::parse(&address, crate::Role::Client)
+        let link = Link::from_tcp_stream(shared_stream()?, SYSTEM_ID, COMPONENT_ID)
             .map_err(|e| std::io::Error::other(e.to_string()))?;
-        let station = GroundStation::connect(&address, GroundConfig::default())
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-        let (peer, _) = listener.accept()?;
+        let station = GroundStation::over(link, GroundConfig::default());
         let home = Lla {
             lat_deg: 37.79248,
             lon_deg: -122.39745,
@@ -53,7 +70,6 @@ impl GroundHarness {
             executor,
             frame,
             now_s: 0.0,
-            _peer: peer,
         })
     }
 
