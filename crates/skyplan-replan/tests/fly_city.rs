@@ -3,7 +3,9 @@
 
 mod common;
 
-use common::{city_hidden_spec, first_collision, fly, route_ne, segment_meets_box, track_length_m};
+use common::{
+    Flight, city_hidden_spec, first_collision, fly, route_ne, segment_meets_box, track_length_m,
+};
 use skyplan_map::colliders::{ObstacleBox, parse_colliders};
 use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
 use skyplan_replan::hidden::{place_hidden, true_world};
@@ -66,6 +68,19 @@ fn ring_around_goal(half_up_m: f64) -> [ObstacleBox; 4] {
         wall(0.0, 16.0, 17.0, 1.0),
         wall(0.0, -16.0, 17.0, 1.0),
     ]
+}
+
+/// Whether a replan of `flight` climbed to another altitude.
+fn tried_climbing(flight: &Flight) -> bool {
+    flight
+        .replans
+        .iter()
+        .any(|e| e.reason.contains("climbing to"))
+}
+
+/// The highest altitude `flight` reached, metres.
+fn highest_m(flight: &Flight) -> f64 {
+    flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max)
 }
 
 fn flies_around_hidden_buildings(kind: ReplannerKind) {
@@ -144,17 +159,11 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
     let targets = r.initial_targets();
     let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
     assert!(!flight.reached_goal);
-    let reason = flight.hold.expect("a hold");
+    let reason = flight.hold.as_deref().expect("a hold");
     assert!(reason.contains("no route to the goal"), "{reason}");
     // It climbed to look over the wall before giving up (the wall is 200 m tall, the limit 30 m).
-    assert!(
-        flight
-            .replans
-            .iter()
-            .any(|e| e.reason.contains("climbing to")),
-        "never tried climbing"
-    );
-    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(tried_climbing(&flight), "never tried climbing");
+    let top = highest_m(&flight);
     assert!(
         top > ALT_M + 1.0 && top <= 30.0 + 1e-9,
         "highest point {top} m"
@@ -175,13 +184,8 @@ fn a_low_hidden_wall_around_the_goal_is_climbed_over() {
     let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
     assert!(flight.hold.is_none(), "held: {:?}", flight.hold);
     assert!(flight.reached_goal);
-    assert!(
-        flight
-            .replans
-            .iter()
-            .any(|e| e.reason.contains("climbing to"))
-    );
-    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(tried_climbing(&flight));
+    let top = highest_m(&flight);
     assert!(
         top > 12.0 + SAFETY_M / 2.0 && top <= 30.0 + 1e-9,
         "highest point {top} m"
