@@ -70,6 +70,16 @@ fn ring_around_goal(half_up_m: f64) -> [ObstacleBox; 4] {
     ]
 }
 
+/// Flies the default route (D* Lite) in the city with [`ring_around_goal`]`(half_up_m)` added;
+/// the flight and the true boxes.
+fn fly_to_walled_goal(half_up_m: f64) -> (Flight, Vec<ObstacleBox>) {
+    let mut r = replanner(ReplannerKind::DStarLite);
+    let truth = city_truth(&ring_around_goal(half_up_m));
+    let targets = r.initial_targets();
+    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    (flight, truth)
+}
+
 /// Whether a replan of `flight` climbed to another altitude.
 fn tried_climbing(flight: &Flight) -> bool {
     flight
@@ -154,10 +164,7 @@ fn scratch_flies_around_hidden_buildings_to_the_goal() {
 
 #[test]
 fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
-    let mut r = replanner(ReplannerKind::DStarLite);
-    let truth = city_truth(&ring_around_goal(100.0));
-    let targets = r.initial_targets();
-    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    let (flight, truth) = fly_to_walled_goal(100.0);
     assert!(!flight.reached_goal);
     let reason = flight.hold.as_deref().expect("a hold");
     assert!(reason.contains("no route to the goal"), "{reason}");
@@ -177,11 +184,8 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
 
 #[test]
 fn a_low_hidden_wall_around_the_goal_is_climbed_over() {
-    let mut r = replanner(ReplannerKind::DStarLite);
     // 12 m tall (half 6 m): walled off at 5 m (and, with the 5 m margin, up to 17 m), open above.
-    let truth = city_truth(&ring_around_goal(6.0));
-    let targets = r.initial_targets();
-    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    let (flight, truth) = fly_to_walled_goal(6.0);
     assert!(flight.hold.is_none(), "held: {:?}", flight.hold);
     assert!(flight.reached_goal);
     assert!(tried_climbing(&flight));
