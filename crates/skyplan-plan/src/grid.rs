@@ -2,7 +2,6 @@
 //! collinearity pruning and the line-of-sight shortcut (the FCND pipeline, made exact).
 
 use crate::failure::{FailureKind, PlanFailure};
-use crate::plan::WaypointCounts;
 use crate::request::Prune;
 use crate::session::{Check, Query, Route, Session, micros};
 use crate::world::grid_bounds;
@@ -248,23 +247,17 @@ pub(crate) fn plan(
             .map(|p| p.cost_cells() * cell_m),
         _ => None,
     };
-    route.start_cell = Some(start);
-    route.goal_cell = Some(goal);
-    route.expansions = path.expansions;
+    let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
+    route.record_grid_search(
+        (start, goal),
+        path.expansions,
+        moves,
+        pruned.len(),
+        kept.len(),
+    );
     route.build_us = build_us;
     route.search_us = search_us;
     route.postprocess_us = postprocess_us;
-    route.grid_stats = Some((
-        path.cells.len(),
-        path.straight_moves,
-        path.diagonal_moves,
-        WaypointCounts {
-            grid_path: path.cells.len(),
-            after_pruning: pruned.len(),
-            after_shortcut: kept.len(),
-            mission: 0,
-        },
-    ));
     if r.geometry {
         route.geometry.raw_path = centres_at(&grid, &path.cells, r.alt_m);
     }
