@@ -248,13 +248,8 @@ pub(crate) fn plan(
         _ => None,
     };
     let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
-    route.record_grid_search(
-        (start, goal),
-        path.expansions,
-        moves,
-        pruned.len(),
-        kept.len(),
-    );
+    let waypoints = (pruned.len(), kept.len());
+    route.record_grid_search((start, goal), path.expansions, moves, waypoints);
     route.build_us = build_us;
     route.search_us = search_us;
     route.postprocess_us = postprocess_us;

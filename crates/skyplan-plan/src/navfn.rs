@@ -90,13 +90,9 @@ fn finish(
         },
     );
     let moves = (found.cells.len(), found.straight, found.diagonal);
-    route.record_grid_search(
-        (start, goal),
-        found.expansions,
-        moves,
-        pruned.len(),
-        pruned.len(),
-    );
+    // No shortcut: the pruned cells are the waypoints.
+    let waypoints = (pruned.len(), pruned.len());
+    route.record_grid_search((start, goal), found.expansions, moves, waypoints);
     route.build_us = build_us;
     route.search_us = search_us;
     if q.r.geometry {

@@ -94,14 +94,13 @@ impl Route {
     }
 
     /// Records a grid search: its end cells and expansions, then `moves` (path cells, straight
-    /// moves, diagonal moves) and the waypoints left after pruning and after the shortcut.
+    /// moves, diagonal moves) and the waypoints left (after pruning, after the shortcut).
     pub(crate) fn record_grid_search(
         &mut self,
         (start, goal): (Cell, Cell),
         expansions: u64,
         moves: (usize, u64, u64),
-        after_pruning: usize,
-        after_shortcut: usize,
+        (after_pruning, after_shortcut): (usize, usize),
     ) {
         self.start_cell = Some(start);
         self.goal_cell = Some(goal);
