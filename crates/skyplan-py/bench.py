@@ -3,89 +3,32 @@
     python crates/skyplan-py/bench.py [--runs 20] [--fcnd-runs 3] [--cli target/release/skyplan]
 
 The query is FCND's: the home cell to the city's default goal (420 m north, 390 m east) at 5 m
-altitude with a 5 m margin. FCND's create_grid and a_star are reproduced here from FCND's
-planning_utils.py (A* with diagonal moves and the Euclidean heuristic), in plain Python.
+altitude with a 5 m margin. FCND's create_grid and a_star are reproduced in
+tests/fcnd_reference.py from FCND's planning_utils.py (A* with diagonal moves and the Euclidean
+heuristic), in plain Python.
 """
 
 import argparse
 import json
-import math
 import statistics
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
-from queue import PriorityQueue
 
 import numpy as np
 
 import skyplan
 
 REPO = Path(__file__).resolve().parents[2]
-
-
-def fcnd_create_grid(data, drone_altitude, safety_distance):
-    north_min = np.floor(np.min(data[:, 0] - data[:, 3]))
-    north_max = np.ceil(np.max(data[:, 0] + data[:, 3]))
-    east_min = np.floor(np.min(data[:, 1] - data[:, 4]))
-    east_max = np.ceil(np.max(data[:, 1] + data[:, 4]))
-    north_size = int(np.ceil(north_max - north_min))
-    east_size = int(np.ceil(east_max - east_min))
-    grid = np.zeros((north_size, east_size))
-    for i in range(data.shape[0]):
-        north, east, alt, d_north, d_east, d_alt = data[i, :]
-        if alt + d_alt + safety_distance > drone_altitude:
-            o = [
-                int(np.clip(north - d_north - safety_distance - north_min, 0, north_size - 1)),
-                int(np.clip(north + d_north + safety_distance - north_min, 0, north_size - 1)),
-                int(np.clip(east - d_east - safety_distance - east_min, 0, east_size - 1)),
-                int(np.clip(east + d_east + safety_distance - east_min, 0, east_size - 1)),
-            ]
-            grid[o[0] : o[1] + 1, o[2] : o[3] + 1] = 1
-    return grid, int(north_min), int(east_min)
+# FCND's create_grid and a_star: the same reproduction the tests compare skyplan with.
+sys.path.insert(0, str(Path(__file__).resolve().parent / "tests"))
+from fcnd_reference import fcnd_a_star, fcnd_create_grid  # noqa: E402
 
 
 def heuristic(position, goal_position):
     return np.linalg.norm(np.array(position) - np.array(goal_position))
-
-
-FCND_ACTIONS = [(0, -1, 1), (0, 1, 1), (-1, 0, 1), (1, 0, 1)] + [
-    (dr, dc, math.sqrt(2)) for dr in (-1, 1) for dc in (-1, 1)
-]
-
-
-def fcnd_a_star(grid, h, start, goal):
-    """FCND's a_star with diagonal actions (valid_actions: target on the grid and not 1)."""
-    n, m = grid.shape[0] - 1, grid.shape[1] - 1
-    queue = PriorityQueue()
-    queue.put((0, start))
-    visited = {start}
-    branch = {}
-    found = False
-    while not queue.empty():
-        current = queue.get()[1]
-        current_cost = 0.0 if current == start else branch[current][0]
-        if current == goal:
-            found = True
-            break
-        for dr, dc, cost in FCND_ACTIONS:
-            x, y = current[0] + dr, current[1] + dc
-            if x < 0 or x > n or y < 0 or y > m or grid[x, y] == 1:
-                continue
-            nxt = (x, y)
-            branch_cost = current_cost + cost
-            if nxt not in visited:
-                visited.add(nxt)
-                branch[nxt] = (branch_cost, current)
-                queue.put((branch_cost + h(nxt, goal), nxt))
-    if not found:
-        return [], 0
-    path, node = [goal], goal
-    while branch[node][1] != start:
-        node = branch[node][1]
-        path.append(node)
-    path.append(start)
-    return path[::-1], branch[goal][0]
 
 
 def median_ms(fn, runs):

@@ -2,7 +2,6 @@
 //! collinearity pruning and the line-of-sight shortcut (the FCND pipeline, made exact).
 
 use crate::failure::{FailureKind, PlanFailure};
-use crate::plan::WaypointCounts;
 use crate::request::Prune;
 use crate::session::{Check, Query, Route, Session, micros};
 use crate::world::grid_bounds;
@@ -265,23 +264,12 @@ pub(crate) fn plan(
         let how = if built { "built" } else { "reused" };
         route.details.insert("jps_plus_table".into(), how.into());
     }
-    route.start_cell = Some(start);
-    route.goal_cell = Some(goal);
-    route.expansions = path.expansions;
+    let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
+    let waypoints = (pruned.len(), kept.len());
+    route.record_grid_search((start, goal), path.expansions, moves, waypoints);
     route.build_us = build_us;
     route.search_us = search_us;
     route.postprocess_us = postprocess_us;
-    route.grid_stats = Some((
-        path.cells.len(),
-        path.straight_moves,
-        path.diagonal_moves,
-        WaypointCounts {
-            grid_path: path.cells.len(),
-            after_pruning: pruned.len(),
-            after_shortcut: kept.len(),
-            mission: 0,
-        },
-    ));
     if r.geometry {
         route.geometry.raw_path = centres_at(&grid, &path.cells, r.alt_m);
     }

@@ -3,7 +3,6 @@
 
 use crate::failure::{FailureKind, PlanFailure};
 use crate::grid::{end_cell, grid_for, waypoint_points};
-use crate::plan::WaypointCounts;
 use crate::request::FieldMode;
 use crate::session::{Check, Query, Route, Session, micros};
 use serde_json::{Value, json};
@@ -90,22 +89,12 @@ fn finish(
             touch,
         },
     );
-    route.start_cell = Some(start);
-    route.goal_cell = Some(goal);
-    route.expansions = found.expansions;
+    let moves = (found.cells.len(), found.straight, found.diagonal);
+    // No shortcut: the pruned cells are the waypoints.
+    let waypoints = (pruned.len(), pruned.len());
+    route.record_grid_search((start, goal), found.expansions, moves, waypoints);
     route.build_us = build_us;
     route.search_us = search_us;
-    route.grid_stats = Some((
-        found.cells.len(),
-        found.straight,
-        found.diagonal,
-        WaypointCounts {
-            grid_path: found.cells.len(),
-            after_pruning: pruned.len(),
-            after_shortcut: pruned.len(),
-            mission: 0,
-        },
-    ));
     if q.r.geometry {
         route.geometry.raw_path = crate::grid::centres_at(&grid, &found.cells, q.r.alt_m);
     }

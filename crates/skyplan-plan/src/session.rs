@@ -93,6 +93,27 @@ impl Route {
             saved_roadmap: None,
         }
     }
+
+    /// Records a grid search: its end cells and expansions, then `moves` (path cells, straight
+    /// moves, diagonal moves) and the waypoints left (after pruning, after the shortcut).
+    pub(crate) fn record_grid_search(
+        &mut self,
+        (start, goal): (Cell, Cell),
+        expansions: u64,
+        moves: (usize, u64, u64),
+        (after_pruning, after_shortcut): (usize, usize),
+    ) {
+        self.start_cell = Some(start);
+        self.goal_cell = Some(goal);
+        self.expansions = expansions;
+        let counts = WaypointCounts {
+            grid_path: moves.0,
+            after_pruning,
+            after_shortcut,
+            mission: 0,
+        };
+        self.grid_stats = Some((moves.0, moves.1, moves.2, counts));
+    }
 }
 
 /// What every planner family gets: the request, resolved, and both ends in local metres.

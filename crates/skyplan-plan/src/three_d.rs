@@ -226,28 +226,14 @@ fn finish(
     world_us: u64,
 ) -> Result<Route, PlanFailure> {
     let (start, goal) = ends(q);
+    let invalid = |kind: FailureKind, end: &str, p: Neu| {
+        let why = why_invalid(world, p, q.r.safety_m);
+        Err(PlanFailure::new(kind, format!("{end} {} is {why}", at(p))))
+    };
     match s.status {
         Status::Exact => {}
-        Status::InvalidStart => {
-            return Err(PlanFailure::new(
-                FailureKind::InvalidStart,
-                format!(
-                    "start {} is {}",
-                    at(start),
-                    why_invalid(world, start, q.r.safety_m)
-                ),
-            ));
-        }
-        Status::InvalidGoal => {
-            return Err(PlanFailure::new(
-                FailureKind::InvalidGoal,
-                format!(
-                    "goal {} is {}",
-                    at(goal),
-                    why_invalid(world, goal, q.r.safety_m)
-                ),
-            ));
-        }
+        Status::InvalidStart => return invalid(FailureKind::InvalidStart, "start", start),
+        Status::InvalidGoal => return invalid(FailureKind::InvalidGoal, "goal", goal),
         Status::Timeout | Status::Approximate => {
             let nearest = if s.status == Status::Approximate {
                 format!(

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fcnd_reference import fcnd_create_grid  # noqa: F401 (the tests import it from here)
 
 REPO = Path(__file__).resolve().parents[3]
 COLLIDERS = REPO / "data" / "colliders.csv"
@@ -22,30 +23,6 @@ MOVINGAI = REPO / "data" / "movingai"
 def colliders():
     """The real FCND map as FCND loads it."""
     return np.loadtxt(COLLIDERS, delimiter=",", dtype="float64", skiprows=2)
-
-
-def fcnd_create_grid(data, drone_altitude, safety_distance):
-    """FCND's create_grid, in plain numpy, as planning_utils.py defines it."""
-    north_min = np.floor(np.min(data[:, 0] - data[:, 3]))
-    north_max = np.ceil(np.max(data[:, 0] + data[:, 3]))
-    east_min = np.floor(np.min(data[:, 1] - data[:, 4]))
-    east_max = np.ceil(np.max(data[:, 1] + data[:, 4]))
-    north_size = int(np.ceil(north_max - north_min))
-    east_size = int(np.ceil(east_max - east_min))
-    grid = np.zeros((north_size, east_size))
-    for i in range(data.shape[0]):
-        north, east, alt, d_north, d_east, d_alt = data[i, :]
-        if alt + d_alt + safety_distance > drone_altitude:
-            rows = (
-                int(np.clip(north - d_north - safety_distance - north_min, 0, north_size - 1)),
-                int(np.clip(north + d_north + safety_distance - north_min, 0, north_size - 1)),
-            )
-            cols = (
-                int(np.clip(east - d_east - safety_distance - east_min, 0, east_size - 1)),
-                int(np.clip(east + d_east + safety_distance - east_min, 0, east_size - 1)),
-            )
-            grid[rows[0] : rows[1] + 1, cols[0] : cols[1] + 1] = 1
-    return grid, int(north_min), int(east_min)
 
 
 SQRT2 = math.sqrt(2.0)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 from conftest import dijkstra_cost, fcnd_create_grid, path_cost_checked, random_grid
+from fcnd_reference import fcnd_a_star
 
 import skyplan
 
@@ -89,43 +90,6 @@ def test_a_star_costs_equal_dijkstra_on_random_grids(diagonal, corner_cutting):
     assert checked >= 30 and unreachable >= 1
 
 
-def fcnd_a_star(grid, h, start, goal):
-    """FCND's a_star (planning_utils.py, diagonal version): visited on push, not optimal."""
-    from queue import PriorityQueue
-
-    steps = [(-1, 0, 1), (1, 0, 1), (0, -1, 1), (0, 1, 1)] + [
-        (dr, dc, math.sqrt(2)) for dr in (-1, 1) for dc in (-1, 1)
-    ]
-    rows, cols = grid.shape
-    queue = PriorityQueue()
-    queue.put((0, start))
-    visited = {start}
-    branch = {}
-    found = False
-    while not queue.empty():
-        node = queue.get()[1]
-        cost = 0.0 if node == start else branch[node][0]
-        if node == goal:
-            found = True
-            break
-        for dr, dc, step in steps:
-            nxt = (node[0] + dr, node[1] + dc)
-            if not (0 <= nxt[0] < rows and 0 <= nxt[1] < cols) or grid[nxt] == 1:
-                continue
-            if nxt not in visited:
-                visited.add(nxt)
-                branch[nxt] = (cost + step, node)
-                queue.put((cost + step + h(nxt, goal), nxt))
-    assert found
-    path = [goal]
-    n = goal
-    while branch[n][1] != start:
-        n = branch[n][1]
-        path.append(n)
-    path.append(start)
-    return path[::-1], branch[goal][0]
-
-
 def euclid(a, b):
     return float(np.linalg.norm(np.array(a) - np.array(b)))
 
@@ -140,6 +104,7 @@ def test_a_star_on_the_city_as_fcnd_calls_it(colliders):
     want = dijkstra_cost(grid, grid_start, grid_goal)
     assert math.isclose(cost, want, abs_tol=1e-9)
     fcnd_path, fcnd_cost = fcnd_a_star(grid, euclid, grid_start, grid_goal)
+    assert fcnd_path, "FCND's a_star found no path"
     assert cost <= fcnd_cost + 1e-9
     assert math.isclose(path_cost_checked(grid, path), cost, abs_tol=1e-9)
 

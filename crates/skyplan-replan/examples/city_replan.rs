@@ -11,7 +11,7 @@ use skyplan_flight::executor::Target;
 use skyplan_flight::sensing::{ObstacleReading, RouteDecision, RouteWatcher};
 use skyplan_map::colliders::{ObstacleBox, parse_colliders};
 use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
-use skyplan_replan::hidden::{HiddenSpec, place_hidden, true_world};
+use skyplan_replan::hidden::{place_hidden, true_world};
 use skyplan_replan::{ReplanOptions, Replanner, ReplannerKind};
 use skyplan_search::MoveModel;
 use std::time::Instant;
@@ -77,23 +77,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ..Default::default()
             };
             let mut r = Replanner::new(Session::new(World::fcnd_city()), &request, options)?;
-            let route_ne = r
-                .initial_plan()
-                .waypoints
-                .iter()
-                .map(|w| [w[0], w[1]])
-                .collect();
-            let spec = HiddenSpec {
+            let spec = common::city_hidden_spec(
+                common::route_ne(&r.initial_plan().waypoints),
                 count,
                 seed,
-                route_ne,
-                start_ne: [0.0, 0.0],
-                goal_ne: FCND_DEFAULT_GOAL_NE,
-                alt_m: 5.0,
-                safety_m: 5.0,
-                cell_m: 1.0,
-                model: MoveModel::Octile,
-            };
+            );
             let hidden = place_hidden(&map, &spec)?;
             let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&hidden).copied().collect();
             let targets = r.initial_targets();
@@ -113,11 +101,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
             calls.extend(timed.calls_ms);
             astar.extend(timed.astar_expansions);
-            let collided = flight.track.windows(2).any(|w| {
-                truth
-                    .iter()
-                    .any(|b| common::segment_meets_box(w[0], w[1], b, 2.5))
-            });
+            let collided = common::first_collision(&flight.track, &truth, 2.5).is_some();
             if flight.reached_goal && !collided {
                 reached += 1;
             }
@@ -129,16 +113,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             latencies.extend(flight.replans.iter().map(|e| e.latency_ms));
             expansions.extend(flight.replans.iter().map(|e| e.expansions as f64));
-            let flown: f64 = flight
-                .track
-                .windows(2)
-                .map(|w| {
-                    ((w[1][0] - w[0][0]).powi(2)
-                        + (w[1][1] - w[0][1]).powi(2)
-                        + (w[1][2] - w[0][2]).powi(2))
-                    .sqrt()
-                })
-                .sum();
+            let flown = common::track_length_m(&flight.track);
             let truth_world = true_world(&World::fcnd_city(), &hidden)?;
             let optimum = Session::new(truth_world).plan(&PlanRequest {
                 planner: Some(skyplan_plan::PlannerId::Jps),

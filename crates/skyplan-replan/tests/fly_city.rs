@@ -3,12 +3,13 @@
 
 mod common;
 
-use common::{fly, segment_meets_box};
+use common::{
+    Flight, city_hidden_spec, first_collision, fly, route_ne, segment_meets_box, track_length_m,
+};
 use skyplan_map::colliders::{ObstacleBox, parse_colliders};
 use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
-use skyplan_replan::hidden::{HiddenSpec, place_hidden, true_world};
+use skyplan_replan::hidden::{place_hidden, true_world};
 use skyplan_replan::{ReplanOptions, Replanner, ReplannerKind};
-use skyplan_search::MoveModel;
 
 const SAFETY_M: f64 = 5.0;
 const ALT_M: f64 = 5.0;
@@ -30,23 +31,8 @@ fn replanner(kind: ReplannerKind) -> Replanner {
 /// plus random ones (seeded) on or near the route.
 fn hidden_across_route(r: &Replanner) -> Vec<ObstacleBox> {
     let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
-    let route_ne: Vec<[f64; 2]> = r
-        .initial_plan()
-        .waypoints
-        .iter()
-        .map(|w| [w[0], w[1]])
-        .collect();
-    let spec = HiddenSpec {
-        count: 4,
-        seed: 11,
-        route_ne,
-        start_ne: [0.0, 0.0],
-        goal_ne: FCND_DEFAULT_GOAL_NE,
-        alt_m: ALT_M,
-        safety_m: SAFETY_M,
-        cell_m: 1.0,
-        model: MoveModel::Octile,
-    };
+    // The spec's altitude and margin are this test's ALT_M and SAFETY_M.
+    let spec = city_hidden_spec(route_ne(&r.initial_plan().waypoints), 4, 11);
     let mut hidden = place_hidden(&map, &spec).expect("room for the hidden buildings");
     hidden.push(ObstacleBox {
         north_m: 320.0,
@@ -59,11 +45,58 @@ fn hidden_across_route(r: &Replanner) -> Vec<ObstacleBox> {
     hidden
 }
 
+/// The city's boxes and `extra` ones: the true world of a flight.
+fn city_truth(extra: &[ObstacleBox]) -> Vec<ObstacleBox> {
+    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
+    map.boxes.iter().chain(extra).copied().collect()
+}
+
+/// Four walls 2 m thick and `half_up_m` × 2 tall in a square 32 m across about the default goal.
+fn ring_around_goal(half_up_m: f64) -> [ObstacleBox; 4] {
+    let [gn, ge] = FCND_DEFAULT_GOAL_NE;
+    let wall = |dn: f64, de: f64, hn: f64, he: f64| ObstacleBox {
+        north_m: gn + dn,
+        east_m: ge + de,
+        up_m: half_up_m,
+        half_north_m: hn,
+        half_east_m: he,
+        half_up_m,
+    };
+    [
+        wall(16.0, 0.0, 1.0, 17.0),
+        wall(-16.0, 0.0, 1.0, 17.0),
+        wall(0.0, 16.0, 17.0, 1.0),
+        wall(0.0, -16.0, 17.0, 1.0),
+    ]
+}
+
+/// Flies the default route (D* Lite) in the city with [`ring_around_goal`]`(half_up_m)` added;
+/// the flight and the true boxes.
+fn fly_to_walled_goal(half_up_m: f64) -> (Flight, Vec<ObstacleBox>) {
+    let mut r = replanner(ReplannerKind::DStarLite);
+    let truth = city_truth(&ring_around_goal(half_up_m));
+    let targets = r.initial_targets();
+    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    (flight, truth)
+}
+
+/// Whether a replan of `flight` climbed to another altitude.
+fn tried_climbing(flight: &Flight) -> bool {
+    flight
+        .replans
+        .iter()
+        .any(|e| e.reason.contains("climbing to"))
+}
+
+/// The highest altitude `flight` reached, metres.
+fn highest_m(flight: &Flight) -> f64 {
+    flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max)
+}
+
 fn flies_around_hidden_buildings(kind: ReplannerKind) {
     let mut r = replanner(kind);
     let hidden = hidden_across_route(&r);
-    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
-    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&hidden).copied().collect();
+    let truth = city_truth(&hidden);
     // The first plan flies through at least one hidden building: the test means something.
     let first: Vec<[f64; 3]> = r
         .initial_plan()
@@ -96,33 +129,17 @@ fn flies_around_hidden_buildings(kind: ReplannerKind) {
         assert!(e.route_length_m > 0.0 && e.learned_cells > 0);
     }
     // Never inside a true obstacle grown by half the margin.
-    for w in flight.track.windows(2) {
-        if let Some(b) = truth
-            .iter()
-            .find(|b| segment_meets_box(w[0], w[1], b, SAFETY_M / 2.0))
-        {
-            panic!(
-                "track {:?} → {:?} meets the box at N {} E {} grown by {} m",
-                w[0],
-                w[1],
-                b.north_m,
-                b.east_m,
-                SAFETY_M / 2.0
-            );
-        }
+    if let Some((a, b, bx)) = first_collision(&flight.track, &truth, SAFETY_M / 2.0) {
+        panic!(
+            "track {a:?} → {b:?} meets the box at N {} E {} grown by {} m",
+            bx.north_m,
+            bx.east_m,
+            SAFETY_M / 2.0
+        );
     }
     assert_eq!(r.stats().replans as usize, flight.replans.len());
     // The flown track is no shorter than the optimum with full knowledge of the true world.
-    let flown: f64 = flight
-        .track
-        .windows(2)
-        .map(|w| {
-            ((w[1][0] - w[0][0]).powi(2)
-                + (w[1][1] - w[0][1]).powi(2)
-                + (w[1][2] - w[0][2]).powi(2))
-            .sqrt()
-        })
-        .sum();
+    let flown = track_length_m(&flight.track);
     let mut true_session =
         Session::new(true_world(&World::fcnd_city(), &hidden).expect("true world"));
     let optimum = true_session
@@ -147,38 +164,13 @@ fn scratch_flies_around_hidden_buildings_to_the_goal() {
 
 #[test]
 fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
-    let mut r = replanner(ReplannerKind::DStarLite);
-    let [gn, ge] = FCND_DEFAULT_GOAL_NE;
-    let wall = |dn: f64, de: f64, hn: f64, he: f64| ObstacleBox {
-        north_m: gn + dn,
-        east_m: ge + de,
-        up_m: 100.0,
-        half_north_m: hn,
-        half_east_m: he,
-        half_up_m: 100.0,
-    };
-    let ring = [
-        wall(16.0, 0.0, 1.0, 17.0),
-        wall(-16.0, 0.0, 1.0, 17.0),
-        wall(0.0, 16.0, 17.0, 1.0),
-        wall(0.0, -16.0, 17.0, 1.0),
-    ];
-    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
-    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&ring).copied().collect();
-    let targets = r.initial_targets();
-    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    let (flight, truth) = fly_to_walled_goal(100.0);
     assert!(!flight.reached_goal);
-    let reason = flight.hold.expect("a hold");
+    let reason = flight.hold.as_deref().expect("a hold");
     assert!(reason.contains("no route to the goal"), "{reason}");
     // It climbed to look over the wall before giving up (the wall is 200 m tall, the limit 30 m).
-    assert!(
-        flight
-            .replans
-            .iter()
-            .any(|e| e.reason.contains("climbing to")),
-        "never tried climbing"
-    );
-    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(tried_climbing(&flight), "never tried climbing");
+    let top = highest_m(&flight);
     assert!(
         top > ALT_M + 1.0 && top <= 30.0 + 1e-9,
         "highest point {top} m"
@@ -187,56 +179,20 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold() {
         reason.contains("30.0"),
         "the hold names the altitudes tried: {reason}"
     );
-    for w in flight.track.windows(2) {
-        assert!(
-            !truth
-                .iter()
-                .any(|b| segment_meets_box(w[0], w[1], b, SAFETY_M / 2.0))
-        );
-    }
+    assert_eq!(first_collision(&flight.track, &truth, SAFETY_M / 2.0), None);
 }
 
 #[test]
 fn a_low_hidden_wall_around_the_goal_is_climbed_over() {
-    let mut r = replanner(ReplannerKind::DStarLite);
-    let [gn, ge] = FCND_DEFAULT_GOAL_NE;
-    // 12 m tall: walled off at 5 m (and, with the 5 m margin, up to 17 m), open above.
-    let wall = |dn: f64, de: f64, hn: f64, he: f64| ObstacleBox {
-        north_m: gn + dn,
-        east_m: ge + de,
-        up_m: 6.0,
-        half_north_m: hn,
-        half_east_m: he,
-        half_up_m: 6.0,
-    };
-    let ring = [
-        wall(16.0, 0.0, 1.0, 17.0),
-        wall(-16.0, 0.0, 1.0, 17.0),
-        wall(0.0, 16.0, 17.0, 1.0),
-        wall(0.0, -16.0, 17.0, 1.0),
-    ];
-    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
-    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&ring).copied().collect();
-    let targets = r.initial_targets();
-    let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1200.0);
+    // 12 m tall (half 6 m): walled off at 5 m (and, with the 5 m margin, up to 17 m), open above.
+    let (flight, truth) = fly_to_walled_goal(6.0);
     assert!(flight.hold.is_none(), "held: {:?}", flight.hold);
     assert!(flight.reached_goal);
-    assert!(
-        flight
-            .replans
-            .iter()
-            .any(|e| e.reason.contains("climbing to"))
-    );
-    let top = flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
+    assert!(tried_climbing(&flight));
+    let top = highest_m(&flight);
     assert!(
         top > 12.0 + SAFETY_M / 2.0 && top <= 30.0 + 1e-9,
         "highest point {top} m"
     );
-    for w in flight.track.windows(2) {
-        assert!(
-            !truth
-                .iter()
-                .any(|b| segment_meets_box(w[0], w[1], b, SAFETY_M / 2.0))
-        );
-    }
+    assert_eq!(first_collision(&flight.track, &truth, SAFETY_M / 2.0), None);
 }

@@ -1,6 +1,9 @@
 //! Hidden buildings: near the route, clear of both ends with the margin, the goal still
 //! reachable in the true world (checked with the exact oracle on the true world's grid).
 
+mod common;
+
+use common::{city_hidden_spec, route_ne};
 use skyplan_map::colliders::parse_colliders;
 use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
 use skyplan_replan::hidden::{HiddenError, HiddenSpec, place_hidden, true_world};
@@ -24,19 +27,10 @@ fn hidden_buildings_lie_on_the_route_leave_both_ends_clear_and_the_goal_reachabl
     let plan = Session::new(World::fcnd_city())
         .plan(&PlanRequest::default())
         .expect("plan");
-    let route_ne: Vec<[f64; 2]> = plan.waypoints.iter().map(|w| [w[0], w[1]]).collect();
+    let route_ne = route_ne(&plan.waypoints);
     for seed in 0..3 {
-        let spec = HiddenSpec {
-            count: 6,
-            seed,
-            route_ne: route_ne.clone(),
-            start_ne: [0.0, 0.0],
-            goal_ne: FCND_DEFAULT_GOAL_NE,
-            alt_m: 5.0,
-            safety_m: 5.0,
-            cell_m: 1.0,
-            model: MoveModel::Octile,
-        };
+        // Start at home, the default goal, 5 m altitude, 5 m margin, 1 m octile cells.
+        let spec = city_hidden_spec(route_ne.clone(), 6, seed);
         let hidden = place_hidden(&map, &spec).expect("room");
         assert_eq!(hidden.len(), 6);
         for b in &hidden {
@@ -82,17 +76,7 @@ fn hidden_buildings_lie_on_the_route_leave_both_ends_clear_and_the_goal_reachabl
 #[test]
 fn bad_specs_are_refused_with_the_field_named() {
     let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
-    let spec = HiddenSpec {
-        count: 1,
-        seed: 1,
-        route_ne: vec![[0.0, 0.0]],
-        start_ne: [0.0, 0.0],
-        goal_ne: FCND_DEFAULT_GOAL_NE,
-        alt_m: 5.0,
-        safety_m: 5.0,
-        cell_m: 1.0,
-        model: MoveModel::Octile,
-    };
+    let spec = city_hidden_spec(vec![[0.0, 0.0]], 1, 1);
     let err = place_hidden(&map, &spec).expect_err("one point is no route");
     assert!(matches!(err, HiddenError::BadSpec(_)));
     assert!(err.to_string().contains("at least two points"), "{err}");

@@ -34,6 +34,7 @@ pub mod prm;
 pub mod rrt_connect;
 pub mod rrt_star;
 pub mod shortcut;
+pub mod tree;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -322,7 +323,7 @@ fn run_plan(
                 seed: request.seed,
                 range_m: request.range_m,
             };
-            rrt_connect::run(checker, start, goal, &config, budget, edges)
+            tree::run(checker, start, goal, &config, budget, edges)
         }
         PlannerKind::RrtStar => {
             let config = rrt_star::RrtStarConfig {
@@ -330,7 +331,7 @@ fn run_plan(
                 range_m: request.range_m,
                 ..rrt_star::RrtStarConfig::default()
             };
-            rrt_star::run(checker, start, goal, &config, budget, edges)
+            tree::run(checker, start, goal, &config, budget, edges)
         }
     };
     if request.simplify && solution.status == Status::Exact {

@@ -19,14 +19,12 @@
 //! ```
 
 use crate::nearest::NearIndex;
-use crate::{
-    Budget, Clock, CollisionChecker, Neu, Solution, Status, default_range_m, sample_in, steer,
-    trace, tree_edges,
-};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+use crate::tree::{Run, TreeConfig};
+pub use crate::tree::{solve, solve_with_tree};
+use crate::{Clock, CollisionChecker, Neu, Solution, Status, sample_in, steer, trace, tree_edges};
 
-/// RRT-Connect settings.
+/// RRT-Connect settings. [`solve`] with them returns `Exact` at the first connection, `Timeout`
+/// if the budget runs out first (an iteration is one random sample).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RrtConnectConfig {
     /// Seed of the samples.
@@ -78,119 +76,80 @@ impl Tree {
     }
 }
 
-/// Plans from `start` to `goal`; `Exact` at the first connection, `Timeout` if the budget runs
-/// out first (an iteration is one random sample).
-pub fn solve(
-    checker: &impl CollisionChecker,
-    start: Neu,
-    goal: Neu,
-    config: &RrtConnectConfig,
-    budget: Budget,
-) -> Solution {
-    run(checker, start, goal, config, budget, None)
-}
+impl TreeConfig for RrtConnectConfig {
+    fn seed_and_range_m(&self) -> (u64, Option<f64>) {
+        (self.seed, self.range_m)
+    }
 
-/// [`solve`], also returning the edges of both trees (child, parent) for pictures; collected
-/// after the run, so the timings are those of [`solve`].
-pub fn solve_with_tree(
-    checker: &impl CollisionChecker,
-    start: Neu,
-    goal: Neu,
-    config: &RrtConnectConfig,
-    budget: Budget,
-) -> (Solution, Vec<(Neu, Neu)>) {
-    let mut edges = Vec::new();
-    let solution = run(checker, start, goal, config, budget, Some(&mut edges));
-    (solution, edges)
-}
-
-pub(crate) fn run(
-    checker: &impl CollisionChecker,
-    start: Neu,
-    goal: Neu,
-    config: &RrtConnectConfig,
-    budget: Budget,
-    mut edges: Option<&mut Vec<(Neu, Neu)>>,
-) -> Solution {
-    let mut keep = |a: &Tree, b: &Tree| {
-        if let Some(edges) = edges.as_deref_mut() {
-            for t in [a, b] {
-                edges.extend(tree_edges(&t.points, &t.parent));
+    fn grow(&self, checker: &impl CollisionChecker, run: Run<'_>) -> Solution {
+        let (start, goal, mut clock, bounds, range_m, mut rng, mut edges) = run.0;
+        let mut keep = |a: &Tree, b: &Tree| {
+            if let Some(edges) = edges.as_deref_mut() {
+                for t in [a, b] {
+                    edges.extend(tree_edges(&t.points, &t.parent));
+                }
             }
+        };
+        let finish = |status, path: Vec<Neu>, clock: &Clock, vertices| {
+            let mut s = Solution::with_path(status, path, goal);
+            s.iterations = clock.iterations();
+            s.vertices = vertices;
+            s.elapsed_us = clock.elapsed_us();
+            s.first_solution_us = Some(s.elapsed_us);
+            s
+        };
+        if start == goal || checker.segment_is_free(start, goal) {
+            let path = if start == goal {
+                vec![start]
+            } else {
+                vec![start, goal]
+            };
+            return finish(Status::Exact, path, &clock, 2);
         }
-    };
-    let mut clock = Clock::start(budget);
-    if !checker.is_free(start) {
-        return Solution::failed(Status::InvalidStart, 0, 0, clock.elapsed_us());
-    }
-    if !checker.is_free(goal) {
-        return Solution::failed(Status::InvalidGoal, 0, 0, clock.elapsed_us());
-    }
-    let bounds = checker.bounds();
-    let range_m = config
-        .range_m
-        .filter(|r| r.is_finite() && *r > 0.0)
-        .unwrap_or_else(|| default_range_m(&bounds));
-    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-    let finish = |status, path: Vec<Neu>, clock: &Clock, vertices| {
-        let mut s = Solution::with_path(status, path, goal);
-        s.iterations = clock.iterations();
-        s.vertices = vertices;
-        s.elapsed_us = clock.elapsed_us();
-        s.first_solution_us = Some(s.elapsed_us);
-        s
-    };
-    if start == goal || checker.segment_is_free(start, goal) {
-        let path = if start == goal {
-            vec![start]
-        } else {
-            vec![start, goal]
-        };
-        return finish(Status::Exact, path, &clock, 2);
-    }
-    // `a` grows this round, `b` answers; `a_is_start` says which tree is which.
-    let mut a = Tree::rooted(start);
-    let mut b = Tree::rooted(goal);
-    let mut a_is_start = true;
-    while clock.tick() {
-        let q = sample_in(&bounds, &mut rng);
-        let new_a = match a.extend(checker, q, range_m) {
-            Extend::Trapped => None,
-            Extend::Advanced(id) | Extend::Reached(id) => Some(id),
-        };
-        if let Some(new_a) = new_a {
-            let target = a.points[new_a as usize];
-            // Connect: extend b towards the new vertex until reached or trapped.
-            loop {
-                match b.extend(checker, target, range_m) {
-                    Extend::Trapped => break,
-                    Extend::Advanced(_) => continue,
-                    Extend::Reached(new_b) => {
-                        let mut from_a = trace(&a.points, &a.parent, new_a);
-                        let mut from_b = trace(&b.points, &b.parent, new_b);
-                        from_b.pop(); // the shared point
-                        from_b.reverse();
-                        from_a.extend(from_b);
-                        if !a_is_start {
-                            from_a.reverse();
+        // `a` grows this round, `b` answers; `a_is_start` says which tree is which.
+        let mut a = Tree::rooted(start);
+        let mut b = Tree::rooted(goal);
+        let mut a_is_start = true;
+        while clock.tick() {
+            let q = sample_in(&bounds, &mut rng);
+            let new_a = match a.extend(checker, q, range_m) {
+                Extend::Trapped => None,
+                Extend::Advanced(id) | Extend::Reached(id) => Some(id),
+            };
+            if let Some(new_a) = new_a {
+                let target = a.points[new_a as usize];
+                // Connect: extend b towards the new vertex until reached or trapped.
+                loop {
+                    match b.extend(checker, target, range_m) {
+                        Extend::Trapped => break,
+                        Extend::Advanced(_) => continue,
+                        Extend::Reached(new_b) => {
+                            let mut from_a = trace(&a.points, &a.parent, new_a);
+                            let mut from_b = trace(&b.points, &b.parent, new_b);
+                            from_b.pop(); // the shared point
+                            from_b.reverse();
+                            from_a.extend(from_b);
+                            if !a_is_start {
+                                from_a.reverse();
+                            }
+                            let vertices = a.points.len() + b.points.len();
+                            let solution = finish(Status::Exact, from_a, &clock, vertices);
+                            keep(&a, &b);
+                            return solution;
                         }
-                        let vertices = a.points.len() + b.points.len();
-                        let solution = finish(Status::Exact, from_a, &clock, vertices);
-                        keep(&a, &b);
-                        return solution;
                     }
                 }
             }
+            std::mem::swap(&mut a, &mut b);
+            a_is_start = !a_is_start;
         }
-        std::mem::swap(&mut a, &mut b);
-        a_is_start = !a_is_start;
+        let solution = Solution::failed(
+            Status::Timeout,
+            clock.iterations(),
+            a.points.len() + b.points.len(),
+            clock.elapsed_us(),
+        );
+        keep(&a, &b);
+        solution
     }
-    let solution = Solution::failed(
-        Status::Timeout,
-        clock.iterations(),
-        a.points.len() + b.points.len(),
-        clock.elapsed_us(),
-    );
-    keep(&a, &b);
-    solution
 }

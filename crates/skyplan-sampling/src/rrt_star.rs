@@ -22,15 +22,16 @@
 //! ```
 
 use crate::nearest::NearIndex;
-use crate::{
-    Budget, Clock, CollisionChecker, Neu, Solution, Status, default_range_m, sample_in, steer,
-    trace, tree_edges,
-};
-use rand::{RngExt, SeedableRng};
+use crate::tree::{Run, TreeConfig};
+pub use crate::tree::{solve, solve_with_tree};
+use crate::{CollisionChecker, Neu, Solution, Status, sample_in, steer, trace, tree_edges};
+use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use skyplan_world3::{Aabb, distance_m};
 
-/// RRT\* settings.
+/// RRT\* settings. [`solve`] with them plans until the budget is spent (an iteration is one
+/// sample): `Exact` with the best path found; otherwise `Approximate` with the branch to the
+/// vertex nearest the goal, or `Timeout` if no vertex is nearer the goal than the start.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RrtStarConfig {
     /// Seed of the samples.
@@ -146,189 +147,150 @@ fn sample_informed(start: Neu, goal: Neu, c_best: f64, bounds: &Aabb, rng: &mut 
     sample_in(bounds, rng)
 }
 
-/// Plans from `start` to `goal` until the budget is spent (an iteration is one sample).
-///
-/// `Exact` with the best path found; otherwise `Approximate` with the branch to the vertex
-/// nearest the goal, or `Timeout` if no vertex is nearer the goal than the start.
-pub fn solve(
-    checker: &impl CollisionChecker,
-    start: Neu,
-    goal: Neu,
-    config: &RrtStarConfig,
-    budget: Budget,
-) -> Solution {
-    run(checker, start, goal, config, budget, None)
-}
+impl TreeConfig for RrtStarConfig {
+    fn seed_and_range_m(&self) -> (u64, Option<f64>) {
+        (self.seed, self.range_m)
+    }
 
-/// [`solve`], also returning the final tree's edges (child, parent) for pictures; collected
-/// after the run, so the timings are those of [`solve`].
-pub fn solve_with_tree(
-    checker: &impl CollisionChecker,
-    start: Neu,
-    goal: Neu,
-    config: &RrtStarConfig,
-    budget: Budget,
-) -> (Solution, Vec<(Neu, Neu)>) {
-    let mut edges = Vec::new();
-    let solution = run(checker, start, goal, config, budget, Some(&mut edges));
-    (solution, edges)
-}
-
-pub(crate) fn run(
-    checker: &impl CollisionChecker,
-    start: Neu,
-    goal: Neu,
-    config: &RrtStarConfig,
-    budget: Budget,
-    edges: Option<&mut Vec<(Neu, Neu)>>,
-) -> Solution {
-    let mut clock = Clock::start(budget);
-    if !checker.is_free(start) {
-        return Solution::failed(Status::InvalidStart, 0, 0, clock.elapsed_us());
-    }
-    if !checker.is_free(goal) {
-        return Solution::failed(Status::InvalidGoal, 0, 0, clock.elapsed_us());
-    }
-    let bounds = checker.bounds();
-    let range_m = config
-        .range_m
-        .filter(|r| r.is_finite() && *r > 0.0)
-        .unwrap_or_else(|| default_range_m(&bounds));
-    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-    let mut tree = Tree {
-        points: Vec::new(),
-        parent: Vec::new(),
-        cost_m: Vec::new(),
-        children: Vec::new(),
-        index: NearIndex::default(),
-    };
-    tree.add(start, 0, 0.0);
-    let mut goal_links: Vec<u32> = Vec::new();
-    let mut first_solution_us = None;
-    let best_link = |tree: &Tree, links: &[u32]| -> Option<(u32, f64)> {
-        links
-            .iter()
-            .map(|&v| {
-                (
-                    v,
-                    tree.cost_m[v as usize] + distance_m(tree.points[v as usize], goal),
-                )
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-    };
-    if start == goal || (distance_m(start, goal) <= range_m && checker.segment_is_free(start, goal))
-    {
-        goal_links.push(0);
-        first_solution_us = Some(clock.elapsed_us());
-    }
-    let k_rrg = std::f64::consts::E * (1.0 + 1.0 / 3.0);
-    let mut c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
-    while clock.tick() {
-        if c_best <= distance_m(start, goal) {
-            break; // the straight line: nothing left to improve
+    fn grow(&self, checker: &impl CollisionChecker, run: Run<'_>) -> Solution {
+        let config = self;
+        let (start, goal, mut clock, bounds, range_m, mut rng, edges) = run.0;
+        let mut tree = Tree {
+            points: Vec::new(),
+            parent: Vec::new(),
+            cost_m: Vec::new(),
+            children: Vec::new(),
+            index: NearIndex::default(),
+        };
+        tree.add(start, 0, 0.0);
+        let mut goal_links: Vec<u32> = Vec::new();
+        let mut first_solution_us = None;
+        let best_link = |tree: &Tree, links: &[u32]| -> Option<(u32, f64)> {
+            links
+                .iter()
+                .map(|&v| {
+                    (
+                        v,
+                        tree.cost_m[v as usize] + distance_m(tree.points[v as usize], goal),
+                    )
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        if start == goal
+            || (distance_m(start, goal) <= range_m && checker.segment_is_free(start, goal))
+        {
+            goal_links.push(0);
+            first_solution_us = Some(clock.elapsed_us());
         }
-        let q = if c_best.is_finite() && config.informed {
-            sample_informed(start, goal, c_best, &bounds, &mut rng)
-        } else if !c_best.is_finite() && rng.random_bool(config.goal_bias.clamp(0.0, 1.0)) {
-            goal
-        } else {
-            sample_in(&bounds, &mut rng)
-        };
-        let Some(nearest) = tree.index.nearest(q) else {
-            break;
-        };
-        let new = steer(tree.points[nearest as usize], q, range_m);
-        if new == goal || new == tree.points[nearest as usize] || !checker.is_free(new) {
-            // The goal is reached through goal links, never added as a vertex.
-            if new == goal
-                && !goal_links.contains(&nearest)
-                && checker.segment_is_free(tree.points[nearest as usize], goal)
-            {
-                goal_links.push(nearest);
-                first_solution_us.get_or_insert(clock.elapsed_us());
-                c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
+        let k_rrg = std::f64::consts::E * (1.0 + 1.0 / 3.0);
+        let mut c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
+        while clock.tick() {
+            if c_best <= distance_m(start, goal) {
+                break; // the straight line: nothing left to improve
             }
-            continue;
-        }
-        let n = tree.points.len() as f64;
-        let k = ((k_rrg * (n + 1.0).ln()).ceil() as usize).max(1);
-        let mut near = tree.index.nearest_n(new, k);
-        if !near.contains(&nearest) {
-            near.push(nearest);
-        }
-        // Choose the parent: cheapest first, the first free one wins.
-        let mut candidates: Vec<(f64, u32)> = near
-            .iter()
-            .map(|&v| {
-                let d = distance_m(tree.points[v as usize], new);
-                (tree.cost_m[v as usize] + d, v)
-            })
-            .collect();
-        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let Some(&(new_cost, parent)) = candidates
-            .iter()
-            .find(|&&(_, v)| checker.segment_is_free(tree.points[v as usize], new))
-        else {
-            continue;
-        };
-        let id = tree.add(new, parent, new_cost);
-        // Rewire: neighbours that become cheaper through the new vertex.
-        let mut changed = false;
-        for &v in &near {
-            if v == parent {
+            let q = if c_best.is_finite() && config.informed {
+                sample_informed(start, goal, c_best, &bounds, &mut rng)
+            } else if !c_best.is_finite() && rng.random_bool(config.goal_bias.clamp(0.0, 1.0)) {
+                goal
+            } else {
+                sample_in(&bounds, &mut rng)
+            };
+            let Some(nearest) = tree.index.nearest(q) else {
+                break;
+            };
+            let new = steer(tree.points[nearest as usize], q, range_m);
+            if new == goal || new == tree.points[nearest as usize] || !checker.is_free(new) {
+                // The goal is reached through goal links, never added as a vertex.
+                if new == goal
+                    && !goal_links.contains(&nearest)
+                    && checker.segment_is_free(tree.points[nearest as usize], goal)
+                {
+                    goal_links.push(nearest);
+                    first_solution_us.get_or_insert(clock.elapsed_us());
+                    c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
+                }
                 continue;
             }
-            let through = new_cost + distance_m(new, tree.points[v as usize]);
-            if through < tree.cost_m[v as usize]
-                && checker.segment_is_free(new, tree.points[v as usize])
-            {
-                tree.reparent(v, id, through);
-                changed = true;
+            let n = tree.points.len() as f64;
+            let k = ((k_rrg * (n + 1.0).ln()).ceil() as usize).max(1);
+            let mut near = tree.index.nearest_n(new, k);
+            if !near.contains(&nearest) {
+                near.push(nearest);
             }
-        }
-        let mut linked = false;
-        if distance_m(new, goal) <= range_m && checker.segment_is_free(new, goal) {
-            goal_links.push(id);
-            first_solution_us.get_or_insert(clock.elapsed_us());
-            linked = true;
-        }
-        if (changed || linked) && !goal_links.is_empty() {
-            c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
-        }
-    }
-    let vertices = tree.points.len();
-    let mut solution = match best_link(&tree, &goal_links) {
-        Some((v, _)) => {
-            let mut path = trace(&tree.points, &tree.parent, v);
-            if path.last() != Some(&goal) {
-                path.push(goal);
-            }
-            Solution::with_path(Status::Exact, path, goal)
-        }
-        None => {
-            let closest = (0..vertices as u32)
-                .min_by(|&a, &b| {
-                    distance_m(tree.points[a as usize], goal)
-                        .total_cmp(&distance_m(tree.points[b as usize], goal))
+            // Choose the parent: cheapest first, the first free one wins.
+            let mut candidates: Vec<(f64, u32)> = near
+                .iter()
+                .map(|&v| {
+                    let d = distance_m(tree.points[v as usize], new);
+                    (tree.cost_m[v as usize] + d, v)
                 })
-                .unwrap_or(0);
-            if closest == 0 {
-                Solution::failed(Status::Timeout, 0, 0, 0)
-            } else {
-                Solution::with_path(
-                    Status::Approximate,
-                    trace(&tree.points, &tree.parent, closest),
-                    goal,
-                )
+                .collect();
+            candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let Some(&(new_cost, parent)) = candidates
+                .iter()
+                .find(|&&(_, v)| checker.segment_is_free(tree.points[v as usize], new))
+            else {
+                continue;
+            };
+            let id = tree.add(new, parent, new_cost);
+            // Rewire: neighbours that become cheaper through the new vertex.
+            let mut changed = false;
+            for &v in &near {
+                if v == parent {
+                    continue;
+                }
+                let through = new_cost + distance_m(new, tree.points[v as usize]);
+                if through < tree.cost_m[v as usize]
+                    && checker.segment_is_free(new, tree.points[v as usize])
+                {
+                    tree.reparent(v, id, through);
+                    changed = true;
+                }
+            }
+            let mut linked = false;
+            if distance_m(new, goal) <= range_m && checker.segment_is_free(new, goal) {
+                goal_links.push(id);
+                first_solution_us.get_or_insert(clock.elapsed_us());
+                linked = true;
+            }
+            if (changed || linked) && !goal_links.is_empty() {
+                c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
             }
         }
-    };
-    solution.iterations = clock.iterations();
-    solution.vertices = vertices;
-    solution.elapsed_us = clock.elapsed_us();
-    solution.first_solution_us = first_solution_us;
-    if let Some(edges) = edges {
-        edges.extend(tree_edges(&tree.points, &tree.parent));
+        let vertices = tree.points.len();
+        let mut solution = match best_link(&tree, &goal_links) {
+            Some((v, _)) => {
+                let mut path = trace(&tree.points, &tree.parent, v);
+                if path.last() != Some(&goal) {
+                    path.push(goal);
+                }
+                Solution::with_path(Status::Exact, path, goal)
+            }
+            None => {
+                let closest = (0..vertices as u32)
+                    .min_by(|&a, &b| {
+                        distance_m(tree.points[a as usize], goal)
+                            .total_cmp(&distance_m(tree.points[b as usize], goal))
+                    })
+                    .unwrap_or(0);
+                if closest == 0 {
+                    Solution::failed(Status::Timeout, 0, 0, 0)
+                } else {
+                    Solution::with_path(
+                        Status::Approximate,
+                        trace(&tree.points, &tree.parent, closest),
+                        goal,
+                    )
+                }
+            }
+        };
+        solution.iterations = clock.iterations();
+        solution.vertices = vertices;
+        solution.elapsed_us = clock.elapsed_us();
+        solution.first_solution_us = first_solution_us;
+        if let Some(edges) = edges {
+            edges.extend(tree_edges(&tree.points, &tree.parent));
+        }
+        solution
     }
-    solution
 }

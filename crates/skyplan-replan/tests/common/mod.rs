@@ -6,6 +6,9 @@
 use skyplan_flight::executor::Target;
 use skyplan_flight::sensing::{ObstacleReading, RouteDecision, RouteWatcher, SectorRange};
 use skyplan_map::colliders::ObstacleBox;
+use skyplan_plan::FCND_DEFAULT_GOAL_NE;
+use skyplan_replan::hidden::HiddenSpec;
+use skyplan_search::MoveModel;
 
 /// Sensor: 72 sectors of 5° from north, 30 m.
 pub const SECTORS: usize = 72;
@@ -184,4 +187,52 @@ pub fn fly(
         track,
         replans,
     }
+}
+
+/// A route's north/east points (from a plan's waypoints).
+pub fn route_ne(waypoints: &[[f64; 4]]) -> Vec<[f64; 2]> {
+    waypoints.iter().map(|w| [w[0], w[1]]).collect()
+}
+
+/// `count` hidden buildings (seeded) on or near `route_ne` in the city: start at home, the default
+/// goal, 5 m altitude, 5 m margin, reachability on 1 m octile cells.
+pub fn city_hidden_spec(route_ne: Vec<[f64; 2]>, count: usize, seed: u64) -> HiddenSpec {
+    HiddenSpec {
+        count,
+        seed,
+        route_ne,
+        start_ne: [0.0, 0.0],
+        goal_ne: FCND_DEFAULT_GOAL_NE,
+        alt_m: 5.0,
+        safety_m: 5.0,
+        cell_m: 1.0,
+        model: MoveModel::Octile,
+    }
+}
+
+/// The length of a flown track, metres (3D).
+pub fn track_length_m(track: &[[f64; 3]]) -> f64 {
+    track
+        .windows(2)
+        .map(|w| {
+            ((w[1][0] - w[0][0]).powi(2)
+                + (w[1][1] - w[0][1]).powi(2)
+                + (w[1][2] - w[0][2]).powi(2))
+            .sqrt()
+        })
+        .sum()
+}
+
+/// The first segment of `track` that meets a box of `boxes` grown by `grow_m`, with that box.
+pub fn first_collision<'a>(
+    track: &[[f64; 3]],
+    boxes: &'a [ObstacleBox],
+    grow_m: f64,
+) -> Option<([f64; 3], [f64; 3], &'a ObstacleBox)> {
+    track.windows(2).find_map(|w| {
+        boxes
+            .iter()
+            .find(|b| segment_meets_box(w[0], w[1], b, grow_m))
+            .map(|b| (w[0], w[1], b))
+    })
 }
