@@ -348,6 +348,12 @@ pub struct BenchArgs {
     /// Build the JPS+ table of this grid and save it to FILE (for --preprocess in later runs).
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
+    /// Replanning mode: fly N seeded flights per replanner (dstar-lite, scratch) on the in-process simulator into hidden buildings, one row each: success, collisions, replans, latency, expansions, flown length over the full-knowledge optimum.
+    #[arg(long, value_name = "N", conflicts_with_all = ["three_d", "scen", "peers", "preprocess", "save_preprocess"])]
+    pub replan: Option<usize>,
+    /// With --replan: hidden buildings per flight.
+    #[arg(long, value_name = "K", default_value_t = 3, requires = "replan")]
+    pub hidden_random: usize,
 }
 
 #[derive(Debug, Args)]
@@ -410,6 +416,15 @@ pub struct FlyArgs {
     /// With --sim: range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
     #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = parse_finite, requires = "sim")]
     pub sensor_range_m: f64,
+    /// With --sim: N random buildings on or near the planned route, unknown to the map (seeded by --seed; never on the ends, never sealing the goal).
+    #[arg(long, value_name = "N", default_value_t = 0, requires = "sim")]
+    pub hidden_random: usize,
+    /// Replan in flight from the vehicle's OBSTACLE_DISTANCE readings (2D grid planners, GUIDED): D* Lite repairing one search, JPS from scratch, or off. --max-alt-m bounds climbing over what blocks the way.
+    #[arg(long, value_enum, default_value_t = crate::replan_cmd::ReplannerArg::DstarLite)]
+    pub replanner: crate::replan_cmd::ReplannerArg,
+    /// Draw the flight (.png/.svg): the map, the first plan, hidden obstacles, learned cells, replanned routes and the flown track.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
     /// Also write the planned waypoints to this file (.json .csv .h5 .geojson .plan).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,

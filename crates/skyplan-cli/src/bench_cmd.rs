@@ -316,6 +316,9 @@ fn load_table<'g>(path: &Path, grid: &'g Grid2, model: MoveModel) -> Result<Cell
 }
 
 pub fn run_bench(args: BenchArgs) -> Result<()> {
+    if let Some(flights) = args.replan {
+        return replan_bench(&args, flights);
+    }
     if args.three_d {
         return crate::bench3d_cmd::run(args);
     }
@@ -415,5 +418,24 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if let Some(out) = &args.out {
         println!("wrote    {}", out.display());
     }
+    Ok(())
+}
+
+/// `bench --replan N`: seeded flights into hidden buildings, one row per replanner.
+fn replan_bench(args: &BenchArgs, flights: usize) -> Result<()> {
+    if flights == 0 {
+        return Err(bad_input("--replan 0: expected at least 1 flight"));
+    }
+    let limits = skyplan_plan::Limits::default();
+    let world = crate::world_load::load_world(args.map.as_deref(), &Default::default(), &limits)?;
+    let spec = skyplan_replan::bench::ScenarioSpec {
+        flights,
+        seed: args.seed,
+        hidden: args.hidden_random,
+        alt_m: args.alt_m,
+        safety_m: args.safety_m,
+        min_distance_m: args.min_distance_m.unwrap_or(300.0),
+    };
+    print!("{}", crate::replan_cmd::bench(&world, &spec, 50.0)?);
     Ok(())
 }

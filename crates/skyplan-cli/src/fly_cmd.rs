@@ -20,6 +20,7 @@ use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
 use skyplan_link::words::{log_csv, progress_message, sim_note_line};
 use skyplan_link::{Address, Role};
+use skyplan_map::colliders::ObstacleBox;
 use skyplan_plan::{PlanRequest, Session, World};
 use std::io::IsTerminal;
 use std::sync::Arc;
@@ -150,6 +151,26 @@ pub fn run(args: FlyArgs) -> Result<()> {
             world.name()
         )));
     };
+    let plot = match &args.plot {
+        Some(path) => {
+            let kind = crate::picture::kind_for(path, skyplan_plan::Family::AnyAngle)?;
+            Some((crate::files::output_target("--plot", path)?, kind))
+        }
+        None => None,
+    };
+    let mut hidden = match &args.hidden {
+        Some(path) => crate::sim_cmd::load_hidden(path, &map.home)?,
+        None => Vec::new(),
+    };
+    if args.hidden_random > 0 {
+        let seed = args.route.grid.seed;
+        let placed = crate::replan_cmd::hidden_random(&world, &request, args.hidden_random, seed)?;
+        println!(
+            "hidden     {} buildings on or near the route (seed {seed}), in the simulated world only",
+            placed.len()
+        );
+        hidden.extend(placed);
+    }
     let map_name = world.name().to_string();
     println!(
         "map        {map_name}: {} obstacles, home lat {:.6}, lon {:.6}",
@@ -160,7 +181,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
 
     // The vehicle: the built-in simulator on a free loopback port, or the given address.
     let (address, sim) = if args.sim {
-        let (address, sim) = start_sim(&args, &request, &frame, &map)?;
+        let (address, sim) = start_sim(&args, &request, &frame, (&map, hidden.clone()))?;
         (address, Some(sim))
     } else {
         (
@@ -169,6 +190,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         )
     };
     let live = crate::live::Live::start(&world, args.view.as_deref(), args.record.as_deref())?;
+    let picture_world = plot.as_ref().map(|_| world.clone());
     let plan_with = FlyPlan {
         live,
         world,
@@ -179,14 +201,29 @@ pub fn run(args: FlyArgs) -> Result<()> {
     };
     let result = fly(&view, &address, &frame, plan_with, sim.as_ref(), &ctrl_c);
     let (result, live) = match result {
-        Ok((log, ended, live)) => (Ok((log, ended)), Some(live)),
+        Ok((log, ended, live, seen)) => (Ok((log, ended, seen)), Some(live)),
         Err(e) => (Err(e), None),
     };
     if let Some(live) = live {
         live.finish()?;
     }
     let report = sim.and_then(finish_sim);
-    let (log, ended) = result?;
+    let (log, ended, seen) = result?;
+    if let Some(w) = &seen.watcher
+        && let Ok(r) = w.0.lock()
+    {
+        println!(
+            "{}",
+            crate::replan_cmd::summary_line(view.replanner_name(), r.stats(), r.learned_count())
+        );
+    }
+    if let (Some((target, kind)), Some(world)) = (&plot, &picture_world) {
+        let bytes = crate::replan_cmd::flight_picture(world, kind, &seen, &hidden, &log)?;
+        write_target(target, &bytes)?;
+        if let Some(path) = &args.plot {
+            println!("wrote      {}", path.display());
+        }
+    }
     let outcome = match ended {
         Ended::Uploaded => {
             println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
@@ -245,7 +282,7 @@ fn start_sim(
     args: &FlyArgs,
     request: &PlanRequest,
     frame: &LocalFrame,
-    map: &skyplan_map::colliders::CollidersMap,
+    (map, hidden): (&skyplan_map::colliders::CollidersMap, Vec<ObstacleBox>),
 ) -> Result<(Address, InProcessSim)> {
     let home = match (request.start_lla, request.start_ne) {
         (Some([lat_deg, lon_deg]), _) => Lla {
@@ -268,10 +305,7 @@ fn start_sim(
         link_gap_s: args.sim_link_gap_s,
         ekf_delay_s: args.sim_ekf_delay_s,
         map_home: Some(frame.home()),
-        hidden: match &args.hidden {
-            Some(path) => crate::sim_cmd::load_hidden(path, &map.home)?,
-            None => Vec::new(),
-        },
+        hidden,
         sensor_range_m: crate::sim_cmd::sensor_range_m(args.sensor_range_m)?,
         ..SimServerConfig::at(home)
     };
@@ -331,6 +365,17 @@ struct FlyView {
     upload_only: bool,
     on_interrupt: FailsafeAction,
     failsafe: Option<FailsafeAction>,
+    replanner: crate::replan_cmd::ReplannerArg,
+}
+
+impl FlyView {
+    fn replanner_name(&self) -> &'static str {
+        match self.replanner {
+            crate::replan_cmd::ReplannerArg::DstarLite => "dstar-lite",
+            crate::replan_cmd::ReplannerArg::Scratch => "scratch",
+            crate::replan_cmd::ReplannerArg::Off => "off",
+        }
+    }
 }
 
 /// How `fly` ended: a flight (with its outcome, `None` if an aborted flight did not land in
@@ -351,6 +396,12 @@ fn args_view(a: &FlyArgs) -> FlyView {
         upload_only: a.upload_only,
         on_interrupt: a.on_interrupt.into(),
         failsafe: a.failsafe.map(FailsafeAction::from),
+        // An uploaded mission is flown by the autopilot: no route swaps.
+        replanner: if a.upload || a.upload_only {
+            crate::replan_cmd::ReplannerArg::Off
+        } else {
+            a.replanner
+        },
     }
 }
 
@@ -371,7 +422,7 @@ fn fly(
     p: FlyPlan,
     sim: Option<&InProcessSim>,
     ctrl_c: &CtrlC,
-) -> Result<(Vec<LogRow>, Ended, crate::live::Live)> {
+) -> Result<(Vec<LogRow>, Ended, crate::live::Live, Seen)> {
     let mut live = p.live;
     let ground = GroundConfig {
         speedup: a.speedup,
@@ -397,7 +448,12 @@ fn fly(
         request.start_ne = None;
     }
     let t_plan = Instant::now();
-    let plan = Session::new(p.world).with_limits(p.limits).plan(&request)?;
+    let session = Session::new(p.world).with_limits(p.limits);
+    let (plan, watcher) =
+        crate::replan_cmd::plan_with_replanner(session, request.clone(), a.replanner)?;
+    if let Some(w) = &watcher {
+        gcs.set_watcher(Box::new(w.clone()));
+    }
     live.route(&plan, "plan");
     let mission = plan
         .mission
@@ -437,8 +493,14 @@ fn fly(
     };
     if !a.upload {
         let mut ex = MissionExecutor::new(&targets, config).map_err(bad_input)?;
-        return fly_with(&mut gcs, &mut ex, frame, (sim, ctrl_c, &mut live))
-            .map(|(log, o)| (log, Ended::Flight(o), live));
+        let (log, outcome, replanned) =
+            fly_with(&mut gcs, &mut ex, frame, (sim, ctrl_c, &mut live))?;
+        let seen = Seen {
+            plan,
+            watcher,
+            replanned,
+        };
+        return Ok((log, Ended::Flight(outcome), live, seen));
     }
     fly_uploaded(
         &mut gcs,
@@ -450,7 +512,27 @@ fn fly(
         (&targets, config),
         (sim, ctrl_c, &mut live),
     )
-    .map(|(log, ended)| (log, ended, live))
+    .map(|(log, ended)| {
+        let seen = Seen {
+            plan: plan.clone(),
+            watcher: None,
+            replanned: Vec::new(),
+        };
+        (log, ended, live, seen)
+    })
+}
+
+/// Routes as (north, east) points.
+type Routes = Vec<Vec<(f64, f64)>>;
+
+/// What a flight leaves for its summary and its picture.
+pub(crate) struct Seen {
+    /// The first plan.
+    pub plan: skyplan_plan::Plan,
+    /// The replanner that watched the flight, if any.
+    pub watcher: Option<skyplan_replan::bench::SharedReplanner>,
+    /// Every replanned route, (north, east).
+    pub replanned: Vec<Vec<(f64, f64)>>,
 }
 
 /// `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
@@ -497,7 +579,7 @@ fn fly_uploaded(
     }
     let mut ex =
         AutoExecutor::new(targets, MissionLayout::from(&items), config).map_err(bad_input)?;
-    fly_with(gcs, &mut ex, frame, (sim, ctrl_c, live)).map(|(log, o)| (log, Ended::Flight(o)))
+    fly_with(gcs, &mut ex, frame, (sim, ctrl_c, live)).map(|(log, o, _)| (log, Ended::Flight(o)))
 }
 
 /// Waits for the vehicle (heartbeat, EKF origin, position) up to `--wait-s` vehicle seconds,
@@ -615,7 +697,7 @@ fn fly_with<E: FlightExecutor>(
     ex: &mut E,
     frame: &LocalFrame,
     (sim, ctrl_c, live): (Option<&InProcessSim>, &CtrlC, &mut crate::live::Live),
-) -> Result<(Vec<LogRow>, Option<Outcome>)> {
+) -> Result<(Vec<LogRow>, Option<Outcome>, Routes)> {
     let bar = progress_bar(ex.targets().len());
     ctrl_c.in_flight.store(true, Ordering::SeqCst);
     let mut terminal = Terminal {
@@ -625,9 +707,10 @@ fn fly_with<E: FlightExecutor>(
         replanned: Vec::new(),
     };
     let flown = flight::fly(gcs, ex, frame, &mut terminal);
+    let replanned = std::mem::take(&mut terminal.replanned);
     ctrl_c.in_flight.store(false, Ordering::SeqCst);
     bar.finish_and_clear();
     let flown = flown.or_exit(Kind::Runtime)?;
     live.last(flown.summary.time_s, ex.state(), ex.last_telemetry());
-    Ok((flown.log, flown.outcome))
+    Ok((flown.log, flown.outcome, replanned))
 }

@@ -14,6 +14,7 @@ mod map_cmd;
 mod navigate_cmd;
 mod picture;
 mod plan_cmd;
+mod replan_cmd;
 mod report;
 mod scen_cmd;
 mod serve_cmd;

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 mod common;
-use common::{python, skyplan, words};
+use common::{cmd, ok, python, skyplan, words};
 
 struct Run {
     code: Option<i32>,
@@ -710,4 +710,67 @@ fn a_slow_ekf_is_waited_for_and_named_when_it_never_comes() {
         "the EKF has its origin but is not using GPS yet",
     ]);
     assert!(!r.stderr.contains("no EKF origin"), "{}", r.stderr);
+}
+
+/// Receding horizon: hidden buildings on the route (unknown to the map) are sensed over
+/// OBSTACLE_DISTANCE, the route is replanned in flight with D* Lite, and the vehicle lands at
+/// the goal without touching any true obstacle; the picture is written.
+#[test]
+fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("flight.png");
+    let out = ok(cmd(
+        dir.path(),
+        "fly --sim --speedup 50 --hidden-random 3 --seed 1 --plot",
+    )
+    .arg(&png));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("hidden     3 buildings"), "{text}");
+    let replans = text.lines().filter(|l| l.starts_with("replan ")).count();
+    assert!(replans >= 1, "no replan:\n{text}");
+    assert!(text.contains("(dstar-lite,"), "{text}");
+    assert!(
+        text.contains("result     landed and disarmed after reaching all"),
+        "{text}"
+    );
+    assert!(
+        text.contains("no collision with the map's obstacles") && !text.contains("COLLISION"),
+        "{text}"
+    );
+    let summary = text.lines().find(|l| l.starts_with("replans    ")).unwrap();
+    assert!(
+        summary.starts_with(&format!("replans    {replans} (dstar-lite)")),
+        "{summary}"
+    );
+    // Landed at the default goal (N 420, E 390).
+    let at = text
+        .lines()
+        .find(|l| l.starts_with("vehicle    at N "))
+        .unwrap();
+    let nums: Vec<f64> = at
+        .split(|c: char| c == ' ' || c == ',')
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert!(
+        (nums[0] - 420.0).abs() < 2.0 && (nums[1] - 390.0).abs() < 2.0,
+        "{at}"
+    );
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+}
+
+/// Without replanning the same flight meets the hidden buildings: the simulator's collision
+/// check (against the true world) reports it and the exit is not 0.
+#[test]
+fn fly_without_replanning_hits_the_hidden_buildings() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = cmd(
+        dir.path(),
+        "fly --sim --speedup 50 --hidden-random 3 --seed 1 --replanner off",
+    )
+    .output()
+    .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_ne!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("COLLISION"), "{text}");
+    assert!(!text.lines().any(|l| l.starts_with("replan ")), "{text}");
 }

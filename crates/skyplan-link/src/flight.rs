@@ -88,11 +88,15 @@ pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<
         .iter()
         .map(|r| r.heading_error_rad.to_degrees())
         .fold(0.0, f64::max);
+    let replans = summary.replans.len();
+    let how_many = match replans {
+        0 => format!("{} of {n}", reached.len()),
+        r => format!("{} (over {} routes)", reached.len(), r + 1),
+    };
     let mut lines = vec![format!(
-        "flight     {:.1} s simulated/vehicle time, {:.2} s wall; {} of {n} waypoints reached (worst {:.2} m, {:.1}°); {} position targets sent, {} vehicle heartbeats",
+        "flight     {:.1} s simulated/vehicle time, {:.2} s wall; {how_many} waypoints reached (worst {:.2} m, {:.1}°); {} position targets sent, {} vehicle heartbeats",
         summary.time_s,
         summary.wall_time_s,
-        reached.len(),
         worst_h,
         worst_yaw,
         summary.position_targets_sent,
