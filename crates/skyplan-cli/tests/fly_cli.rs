@@ -748,7 +748,7 @@ fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
         .find(|l| l.starts_with("vehicle    at N "))
         .unwrap();
     let nums: Vec<f64> = at
-        .split(|c: char| c == ' ' || c == ',')
+        .split([' ', ','])
         .filter_map(|w| w.parse().ok())
         .collect();
     assert!(
