@@ -774,3 +774,37 @@ fn fly_without_replanning_hits_the_hidden_buildings() {
     assert!(text.contains("COLLISION"), "{text}");
     assert!(!text.lines().any(|l| l.starts_with("replan ")), "{text}");
 }
+
+/// A hidden ring of 100 m walls around the goal: no route at the flight altitude nor by climbing
+/// to --max-alt-m. The vehicle holds, lands, and `fly` exits 3 saying why.
+#[test]
+fn a_hidden_wall_sealing_the_goal_ends_in_hold_then_land_exit_3() {
+    let dir = tempfile::tempdir().unwrap();
+    // The default goal is N 420, E 390; walls 14 m from it on four sides, 2 m thick, 100 m high.
+    let mut csv = String::from(
+        "lat0 37.792480, lon0 -122.397450\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n",
+    );
+    for (n, e, hn, he) in [
+        (434.0, 390.0, 1.0, 16.0),
+        (406.0, 390.0, 1.0, 16.0),
+        (420.0, 404.0, 16.0, 1.0),
+        (420.0, 376.0, 16.0, 1.0),
+    ] {
+        csv.push_str(&format!("{n},{e},50,{hn},{he},50\n"));
+    }
+    std::fs::write(dir.path().join("ring.csv"), csv).unwrap();
+    let out = cmd(dir.path(), "fly --sim --speedup 50 --hidden ring.csv")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{text}\n{err}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("hold ") && l.contains("no route")),
+        "{text}"
+    );
+    assert!(text.contains("touched down"), "{text}");
+    assert!(!text.contains("COLLISION"), "{text}");
+    assert!(err.contains("no route"), "{err}");
+}
