@@ -737,6 +737,15 @@ fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
         text.contains("no collision with the map's obstacles") && !text.contains("COLLISION"),
         "{text}"
     );
+    // The track never came within half the 5 m margin of a true (map or hidden) obstacle.
+    let track = text.lines().find(|l| l.starts_with("track ")).unwrap();
+    let closest: f64 = track
+        .split("closest obstacle ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|m| m.parse().ok())
+        .unwrap_or_else(|| panic!("{track}"));
+    assert!(closest >= 2.5, "{track}");
     let summary = text.lines().find(|l| l.starts_with("replans    ")).unwrap();
     assert!(
         summary.starts_with(&format!("replans    {replans} (dstar-lite)")),
