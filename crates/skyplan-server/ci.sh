@@ -54,6 +54,9 @@ fly_shot="$tmp/serve-flight.png"
 if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then fly_shot="$root/docs/serve-flight.png"; fi
 SKYPLAN_BIN="$bin" node "$here/browser/flight.test.mjs" "$here/browser/fly_sim.sh" "$fly_shot"
 
+step "serve: skyplan sim --view: the simulator's vehicle and its sensed obstacle points on the page"
+node "$here/browser/sim_view.test.mjs" "$bin"
+
 step "serve: schemathesis against /api/openapi.json"
 "$py" -m pip install --quiet --disable-pip-version-check schemathesis
 st="$(dirname "$py")/schemathesis"

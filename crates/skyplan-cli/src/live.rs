@@ -95,7 +95,7 @@ impl Live {
             time_s: s.time_s,
             north_m: s.position_ned[0],
             east_m: s.position_ned[1],
-            alt_m: -s.position_ned[2],
+            alt_m: 0.0 - s.position_ned[2], // never -0.0
             heading_deg: s.heading_rad.to_degrees(),
             speed_m_s: s.ground_speed_m_s,
             state: s.mode.to_string(),
@@ -106,7 +106,7 @@ impl Live {
         let sensed = ViewEvent::Sensed(SensedEvent {
             time_s: s.time_s,
             vehicle_ne: [s.position_ned[0], s.position_ned[1]],
-            alt_m: -s.position_ned[2],
+            alt_m: 0.0 - s.position_ned[2], // never -0.0
             hits_ne: s.hits_ne.clone(),
         });
         self.send(&sensed, s.time_s);

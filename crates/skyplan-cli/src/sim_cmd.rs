@@ -114,7 +114,11 @@ pub fn run(args: SimArgs) -> Result<()> {
         home.lat_deg,
         home.lon_deg,
         match &args.hidden {
-            Some(p) => format!(" and {hidden_count} hidden ones from {}", p.display()),
+            Some(p) => format!(
+                " and {hidden_count} hidden obstacle{} from {}",
+                if hidden_count == 1 { "" } else { "s" },
+                p.display()
+            ),
             None => String::new(),
         },
         args.sensor_range_m

@@ -145,9 +145,13 @@ fn python() -> String {
 #[ignore = "needs Python with pymavlink (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn pymavlink_reads_obstacle_distance_from_skyplan_sim() {
     let dir = tempfile::tempdir().unwrap();
-    // An empty map, and one hidden box whose west face is 25 m due east of home (grid east; the
+    // A map with one box far away, and one hidden box whose west face is 25 m due east of home (grid east; the
     // sector is true east, 0.37° off: 25 / cos 0.37° = 25.0005 m → 2500 cm).
-    let map = write(dir.path(), "empty.csv", HEADER);
+    let map = write(
+        dir.path(),
+        "far.csv",
+        &format!("{HEADER}-500,-500,5,1,1,5\n"),
+    );
     let hidden = write(
         dir.path(),
         "hidden.csv",

@@ -152,7 +152,6 @@ impl<W: Write + Seek> Recorder<W> {
             .library("skyplan")
             .create(writer)?;
         let mut ids = Vec::new();
-        let mut schema_ids = Vec::new();
         let topics = [
             "/vehicle/location",
             "/vehicle/pose",
@@ -162,11 +161,25 @@ impl<W: Write + Seek> Recorder<W> {
         ];
         for ((name, schema), topic) in schemas().into_iter().zip(topics) {
             let schema_id = writer.add_schema(name, "jsonschema", &serde_json::to_vec(&schema)?)?;
-            schema_ids.push(schema_id);
             ids.push(writer.add_channel(schema_id, topic, "json", &BTreeMap::new())?);
         }
-        // The sensed obstacle points: poses (at the hits, no orientation), as the route.
-        let sensed = writer.add_channel(schema_ids[3], "/sensed", "json", &BTreeMap::new())?;
+        // The sensed obstacle points: skyplan's own small schema (the SensedEvent as JSON).
+        let sensed_schema = json!({
+            "title": "skyplan.SensedPoints",
+            "type": "object",
+            "properties": {
+                "time_s": { "type": "number" },
+                "vehicle_ne": { "type": "array", "items": { "type": "number" } },
+                "alt_m": { "type": "number" },
+                "hits_ne": { "type": "array", "items": { "type": "array", "items": { "type": "number" } } },
+            },
+        });
+        let sensed_id = writer.add_schema(
+            "skyplan.SensedPoints",
+            "jsonschema",
+            &serde_json::to_vec(&sensed_schema)?,
+        )?;
+        let sensed = writer.add_channel(sensed_id, "/sensed", "json", &BTreeMap::new())?;
         let channels = Channels {
             location: ids[0],
             pose: ids[1],
@@ -241,13 +254,8 @@ impl<W: Write + Seek> Recorder<W> {
                 self.write(self.channels.route, ns, &m)?;
             }
             ViewEvent::Sensed(e) => {
-                let (ns, timestamp) = stamp(e.time_s);
-                let poses: Vec<Value> = e
-                    .hits_ne
-                    .iter()
-                    .map(|h| pose(h[0], h[1], e.alt_m, 0.0))
-                    .collect();
-                let m = json!({ "timestamp": timestamp, "frame_id": "map", "poses": poses });
+                let (ns, _) = stamp(e.time_s);
+                let m = serde_json::to_value(e)?;
                 self.write(self.channels.sensed, ns, &m)?;
             }
             ViewEvent::Plan(p) => {
