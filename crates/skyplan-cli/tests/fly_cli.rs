@@ -200,7 +200,9 @@ fn upload_only_uploads_to_a_separate_sim_and_exits() {
 }
 
 /// A hop to (60, 30) on the built-in simulator at 20×, its link dropped after 12 s.
-const DROPPED_LINK: &str = "fly --sim --speedup 20 --goal-ne 60,30 --sim-drop-link-after-s 12 \
+// A goal ~250 m north (the first leg of the default route) keeps the vehicle in WAYPOINT when the
+// link drops at 20 s of vehicle time, however slowly a loaded machine gets it through TAKEOFF.
+const DROPPED_LINK: &str = "fly --sim --speedup 20 --goal-ne 250.5,-38.5 --sim-drop-link-after-s 20 \
                             --link-timeout-s 1 --log flight.csv";
 
 #[test]
@@ -506,7 +508,7 @@ fn ctrl_c_with_on_interrupt_hold_leaves_the_vehicle_loitering() {
 #[test]
 fn failsafe_rtl_is_commanded_when_a_lost_link_comes_back() {
     let dir = tempfile::tempdir().unwrap();
-    // Silent from 12 s to 52 s of vehicle time (2 s wall at 20×): lost after 1 s, back after ~2 s.
+    // Silent from 20 s to 60 s of vehicle time (2 s wall at 20×): lost after 1 s, back after ~2 s.
     run(
         dir.path(),
         &format!("{DROPPED_LINK} --sim-link-gap-s 40 --failsafe rtl"),
