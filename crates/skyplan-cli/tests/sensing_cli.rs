@@ -37,6 +37,24 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
     path.display().to_string()
 }
 
+/// `fly --sim` at 50× from home to N 60, E 30 with `hidden` in the simulated world.
+fn fly_to_60_30(dir: &Path, hidden: &str) -> Run {
+    let line = [
+        "fly",
+        "--sim",
+        "--speedup",
+        "50",
+        "--goal-ne",
+        "60,30",
+        "--hidden",
+    ];
+    let args: Vec<&str> = line
+        .into_iter()
+        .chain([hidden, "--timeout-s", "60"])
+        .collect();
+    run(dir, &args)
+}
+
 #[test]
 fn fly_sim_lands_past_a_hidden_box_off_the_route() {
     let dir = tempfile::tempdir().unwrap();
@@ -46,21 +64,7 @@ fn fly_sim_lands_past_a_hidden_box_off_the_route() {
         "hidden.csv",
         &format!("{HEADER}-40,-40,10,3,3,10\n"),
     );
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "50",
-            "--goal-ne",
-            "60,30",
-            "--hidden",
-            &hidden,
-            "--timeout-s",
-            "60",
-        ],
-    );
+    let r = fly_to_60_30(dir.path(), &hidden);
     assert_eq!(
         r.code,
         Some(0),
@@ -80,21 +84,7 @@ fn a_hidden_box_on_the_route_without_a_watcher_is_a_collision_in_the_true_world(
         "hidden.csv",
         &format!("{HEADER}60,30,10,3,3,10\n"),
     );
-    let r = run(
-        dir.path(),
-        &[
-            "fly",
-            "--sim",
-            "--speedup",
-            "50",
-            "--goal-ne",
-            "60,30",
-            "--hidden",
-            &hidden,
-            "--timeout-s",
-            "60",
-        ],
-    );
+    let r = fly_to_60_30(dir.path(), &hidden);
     assert_eq!(
         r.code,
         Some(1),
