@@ -232,7 +232,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         Ended::Flight(outcome) => outcome,
     };
     if let Some(path) = &log_path {
-        write_atomic(path, log_csv(&log).as_bytes())?;
+        write_atomic(path, log_csv(&log, &replan_events(&seen)).as_bytes())?;
         println!(
             "wrote      flight log {} ({} rows)",
             path.display(),
@@ -713,4 +713,12 @@ fn fly_with<E: FlightExecutor>(
     let flown = flown.or_exit(Kind::Runtime)?;
     live.last(flown.summary.time_s, ex.state(), ex.last_telemetry());
     Ok((flown.log, flown.outcome, replanned))
+}
+
+/// The replans the flight's watcher made (none without one), for the flight log.
+fn replan_events(seen: &Seen) -> Vec<skyplan_flight::sensing::ReplanEvent> {
+    seen.watcher
+        .as_ref()
+        .and_then(|w| w.0.lock().ok().map(|r| r.events().to_vec()))
+        .unwrap_or_default()
 }

@@ -105,26 +105,7 @@ pub fn hidden_random(
 
 /// The replanner's account: replans, latencies, expansions, learned cells.
 pub fn summary_line(kind: &str, stats: &ReplanStats, learned: usize) -> String {
-    let ms = |p: f64| {
-        stats
-            .latency_percentile_ms(p)
-            .map_or("-".into(), |v| format!("{v:.2}"))
-    };
-    let expansions = match stats.expansions.len() {
-        0 => "-".to_string(),
-        n => format!(
-            "{:.0}",
-            stats.expansions.iter().sum::<u64>() as f64 / n as f64
-        ),
-    };
-    format!(
-        "replans    {} ({kind}) from {} sensor readings: latency p50 {} ms, p99 {} ms, max {} ms; {expansions} expansions per replan; {learned} cells learned",
-        stats.replans,
-        stats.readings,
-        ms(50.0),
-        ms(99.0),
-        ms(100.0),
-    )
+    format!("replans    {}", stats.account(kind, learned))
 }
 
 /// Flies one `bench --replan` scenario on the in-process simulator: the first route planned
@@ -193,9 +174,7 @@ pub fn fly_scenario(
     Ok(FlightResult {
         success: matches!(ex.outcome(), Some(Outcome::Completed)) && at_goal,
         collisions: report.track.colliding_samples(),
-        replans: stats.replans,
-        latencies_ms: stats.latencies_ms,
-        expansions: stats.expansions,
+        stats,
         flown_m: report.distance_m,
         optimum_m: scenario.optimum_m,
     })

@@ -723,7 +723,7 @@ fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
     let png = dir.path().join("flight.png");
     let out = ok(cmd(
         dir.path(),
-        "fly --sim --speedup 50 --hidden-random 3 --seed 1 --plot",
+        "fly --sim --speedup 50 --hidden-random 3 --seed 1 --log flight.csv --plot",
     )
     .arg(&png));
     let text = String::from_utf8_lossy(&out.stdout);
@@ -736,9 +736,35 @@ fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
         "{text}"
     );
     assert!(
-        text.contains("no collision with the map's obstacles") && !text.contains("COLLISION"),
+        text.contains("no collision with the map's obstacles or the 3 hidden buildings")
+            && !text.contains("COLLISION"),
         "{text}"
     );
+    // The flight log has a row per replan, where the printed replan line says it was.
+    let log = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
+    assert!(log.lines().next().unwrap().ends_with(
+        ",replan_planner,replan_latency_ms,replan_cpu_ms,replan_expansions,replan_route_length_m,replan_learned_cells,replan_reason"
+    ));
+    let rows: Vec<&str> = log.lines().filter(|l| l.contains(",REPLAN,")).collect();
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with("replan ")).collect();
+    assert_eq!(rows.len(), lines.len(), "{log}");
+    for (row, line) in rows.iter().zip(&lines) {
+        let f: Vec<&str> = row.split(',').collect();
+        // "replan … at N 123.4 m, E -56.7 m: …" against the row's north and east.
+        let said: Vec<f64> = line
+            .split("at N ")
+            .nth(1)
+            .and_then(|t| t.split(" m:").next())
+            .map(|t| t.split(" m, E ").filter_map(|v| v.parse().ok()).collect())
+            .unwrap_or_default();
+        let (n, e): (f64, f64) = (f[2].parse().unwrap(), f[3].parse().unwrap());
+        assert!(
+            said.len() == 2 && (said[0] - n).abs() <= 0.051 && (said[1] - e).abs() <= 0.051,
+            "{row} vs {line}"
+        );
+        assert!(f[14].starts_with("\"dstar-lite"), "{row}");
+        assert!(row.contains(",\"learned obstacle at N "), "{row}");
+    }
     // The track never came within half the 5 m margin of a true (map or hidden) obstacle.
     let track = text.lines().find(|l| l.starts_with("track ")).unwrap();
     let closest: f64 = track

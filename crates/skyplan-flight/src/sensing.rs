@@ -91,6 +91,9 @@ pub struct ReplanEvent {
     pub planner: String,
     /// Wall-clock time the replan took, milliseconds.
     pub latency_ms: f64,
+    /// CPU time the replanning thread spent on it, milliseconds (`None`: no thread clock on
+    /// this platform). Unlike the latency, it does not grow when the machine is busy.
+    pub cpu_ms: Option<f64>,
     /// Search expansions of the replan.
     pub expansions: u64,
     /// Length of the new route from the vehicle to the goal, metres.

@@ -130,17 +130,30 @@ pub fn track_line(report: &SimReport) -> String {
         .map_or("no obstacle within 20 m".to_string(), |c| {
             format!("closest obstacle {c:.2} m")
         });
+    let hidden = report.hidden_boxes;
     match report.track.collision() {
-        Some(c) => format!(
-            "track      COLLISION: {} samples inside obstacles, first at {:.1} s (obstacle #{})",
-            report.track.colliding_samples(),
-            c.time_s,
-            c.box_index
-        ),
-        None => format!(
-            "track      flown {:.1} m, max altitude {:.2} m, no collision with the map's obstacles ({clearance})",
-            report.distance_m, report.max_alt_m
-        ),
+        Some(c) => {
+            let which = match c.box_index.checked_sub(report.map_boxes) {
+                Some(k) if hidden > 0 => format!("hidden building #{} of {hidden}", k + 1),
+                _ => format!("map obstacle #{}", c.box_index),
+            };
+            format!(
+                "track      COLLISION: {} samples inside obstacles, first at {:.1} s ({which})",
+                report.track.colliding_samples(),
+                c.time_s,
+            )
+        }
+        None => {
+            let what = match hidden {
+                0 => "the map's obstacles".to_string(),
+                1 => "the map's obstacles or the hidden building".to_string(),
+                n => format!("the map's obstacles or the {n} hidden buildings"),
+            };
+            format!(
+                "track      flown {:.1} m, max altitude {:.2} m, no collision with {what} ({clearance})",
+                report.distance_m, report.max_alt_m
+            )
+        }
     }
 }
 

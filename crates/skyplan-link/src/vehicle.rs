@@ -176,6 +176,10 @@ pub struct SimReport {
     pub max_alt_m: f64,
     /// Horizontal distance flown, metres.
     pub distance_m: f64,
+    /// Boxes of the map's world (obstacle numbers below this are the map's).
+    pub map_boxes: usize,
+    /// Hidden boxes (obstacle numbers from `map_boxes` on), absent from the planner's map.
+    pub hidden_boxes: usize,
 }
 
 enum Listener {
@@ -668,6 +672,8 @@ impl SimServer {
             track,
             max_alt_m,
             distance_m,
+            map_boxes: world.map_or(0, |w| w.boxes().len()),
+            hidden_boxes: cfg.hidden.len(),
         }
     }
 }

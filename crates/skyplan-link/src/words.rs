@@ -15,6 +15,7 @@
 use crate::ground::{LogRow, Progress, Update};
 use crate::vehicle::SimNote;
 use skyplan_flight::executor::{FailsafeAction, FlightState, Note};
+use skyplan_flight::sensing::ReplanEvent;
 
 /// How an executor note reads (`None`: not worth a line); `n` is the number of waypoints.
 pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
@@ -45,12 +46,15 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
             }
         ),
         Note::Replanned { event, targets } => format!(
-            "replan     {t:7.1} s  at N {:.1} m, E {:.1} m: {} ({}, {:.2} ms, {} expansions, {} learned cells): new route of {} waypoints, {:.1} m",
+            "replan     {t:7.1} s  at N {:.1} m, E {:.1} m: {} ({}, {:.2} ms{}, {} expansions, {} learned cells): new route of {} waypoints, {:.1} m",
             event.position_ned[0],
             event.position_ned[1],
             event.reason,
             event.planner,
             event.latency_ms,
+            event
+                .cpu_ms
+                .map_or(String::new(), |c| format!(", CPU {c:.2} ms")),
             event.expansions,
             event.learned_cells,
             targets.len(),
@@ -122,8 +126,8 @@ pub fn tidy(x: f64) -> f64 {
     if x.abs() < 0.0005 { 0.0 } else { x }
 }
 
-/// The CSV header of the flight log.
-pub const LOG_COLUMNS: [&str; 14] = [
+/// The CSV header of the flight log: the telemetry columns, then the replan columns.
+pub const LOG_COLUMNS: [&str; 21] = [
     "time_s",
     "state",
     "north_m",
@@ -138,14 +142,40 @@ pub const LOG_COLUMNS: [&str; 14] = [
     "target_heading_deg",
     "lat_deg",
     "lon_deg",
+    "replan_planner",
+    "replan_latency_ms",
+    "replan_cpu_ms",
+    "replan_expansions",
+    "replan_route_length_m",
+    "replan_learned_cells",
+    "replan_reason",
 ];
 
-/// The flight log as CSV: [`LOG_COLUMNS`], then a row per sample (target columns empty when
-/// there is no target; `target_index` counts from 1).
-pub fn log_csv(log: &[LogRow]) -> String {
+/// The flight log as CSV: [`LOG_COLUMNS`], then a row per telemetry sample (target columns
+/// empty when there is no target; `target_index` counts from 1; replan columns empty) and, in
+/// time order among them, a row per replan (state `REPLAN`, where the vehicle was, and the
+/// replan's planner, latency, CPU time, expansions, new route length, learned cells and reason;
+/// the other columns empty).
+///
+/// ```
+/// use skyplan_flight::sensing::ReplanEvent;
+/// let replan = ReplanEvent { time_s: 2.0, position_ned: [10.0, 5.0, -5.0],
+///     reason: "learned obstacle at N 20.5 E 5.5 blocks the leg to waypoint 2".into(),
+///     planner: "dstar-lite".into(), latency_ms: 0.8, cpu_ms: Some(0.7), expansions: 300,
+///     route_length_m: 120.0, learned_cells: 9 };
+/// let csv = skyplan_link::words::log_csv(&[], &[replan]);
+/// let row = csv.lines().nth(1).unwrap();
+/// assert_eq!(row, "2.000,REPLAN,10.000,5.000,5.000,,,,,,,,,,\"dstar-lite\",0.800,0.700,300,120.0,9,\
+///     \"learned obstacle at N 20.5 E 5.5 blocks the leg to waypoint 2\"");
+/// ```
+pub fn log_csv(log: &[LogRow], replans: &[ReplanEvent]) -> String {
     let mut out = LOG_COLUMNS.join(",");
     out.push('\n');
+    let mut events = replans.iter().peekable();
     for r in log {
+        while let Some(e) = events.next_if(|e| e.time_s <= r.time_s) {
+            out.push_str(&replan_row(e));
+        }
         let target = match r.target {
             Some((i, t)) => format!(
                 "{},{:.3},{:.3},{:.3},{:.2}",
@@ -158,7 +188,7 @@ pub fn log_csv(log: &[LogRow]) -> String {
             None => ",,,,".to_string(),
         };
         out.push_str(&format!(
-            "{:.3},{},{:.3},{:.3},{:.3},{:.2},{:.3},{target},{:.7},{:.7}\n",
+            "{:.3},{},{:.3},{:.3},{:.3},{:.2},{:.3},{target},{:.7},{:.7},,,,,,,\n",
             r.time_s,
             FlightState::name(r.state),
             r.north_m,
@@ -170,7 +200,32 @@ pub fn log_csv(log: &[LogRow]) -> String {
             r.lon_deg
         ));
     }
+    for e in events {
+        out.push_str(&replan_row(e));
+    }
     out
+}
+
+/// One replan as a flight-log row (see [`log_csv`]).
+fn replan_row(e: &ReplanEvent) -> String {
+    let [n, east, d] = e.position_ned;
+    format!(
+        "{:.3},REPLAN,{n:.3},{east:.3},{:.3},,,,,,,,,,{},{:.3},{},{},{:.1},{},{}\n",
+        e.time_s,
+        tidy(-d),
+        quoted(&e.planner),
+        e.latency_ms,
+        e.cpu_ms.map_or(String::new(), |c| format!("{c:.3}")),
+        e.expansions,
+        e.route_length_m,
+        e.learned_cells,
+        quoted(&e.reason)
+    )
+}
+
+/// A CSV field in double quotes (inner quotes doubled).
+fn quoted(s: &str) -> String {
+    format!("\"{}\"", s.replace('"', "\"\""))
 }
 
 #[cfg(test)]

@@ -62,6 +62,7 @@ impl RouteWatcher for Once {
                 reason: "test".into(),
                 planner: "test".into(),
                 latency_ms: 0.0,
+                cpu_ms: None,
                 expansions: 0,
                 route_length_m: 25.0,
                 learned_cells: 0,

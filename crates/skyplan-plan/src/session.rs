@@ -633,25 +633,20 @@ pub fn recheck_grid_route(
     points: &[[f64; 3]],
     touch: Touch,
 ) -> Result<(), PlanFailure> {
-    let check = Check::Grid {
-        grid: Arc::new(grid.clone()),
-        touch,
-    };
-    recheck(&Route::new(points.to_vec(), 0.0, check))
+    verdict(points, first_blocked_grid_segment(grid, points, touch))
+}
+
+/// The first segment of `p` that `grid` blocks under `touch`.
+fn first_blocked_grid_segment(grid: &Grid2, p: &[[f64; 3]], touch: Touch) -> Option<usize> {
+    p.windows(2)
+        .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch))
 }
 
 /// The final, independent re-check of every segment: no caller can skip it.
 fn recheck(route: &Route) -> Result<(), PlanFailure> {
     let p = &route.points;
-    if p.is_empty() {
-        return Err(PlanFailure::internal(
-            "internal check failed: the route is empty; please report this with the request",
-        ));
-    }
     let bad = match &route.check {
-        Check::Grid { grid, touch } => p
-            .windows(2)
-            .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), *touch)),
+        Check::Grid { grid, touch } => first_blocked_grid_segment(grid, p, *touch),
         Check::Boxes(world) => skyplan_world3::first_blocked_segment(&world.brute_force(), p),
         Check::AnyAngle(grid) => {
             let at = |q: [f64; 3]| skyplan_anyangle::GridPoint::from_ne(grid.frame(), q[0], q[1]);
@@ -660,6 +655,16 @@ fn recheck(route: &Route) -> Result<(), PlanFailure> {
             })
         }
     };
+    verdict(p, bad)
+}
+
+/// The re-check's answer for route `p` whose segment `bad` (if any) is blocked.
+fn verdict(p: &[[f64; 3]], bad: Option<usize>) -> Result<(), PlanFailure> {
+    if p.is_empty() {
+        return Err(PlanFailure::internal(
+            "internal check failed: the route is empty; please report this with the request",
+        ));
+    }
     match bad {
         None => Ok(()),
         Some(k) => Err(PlanFailure::internal(format!(

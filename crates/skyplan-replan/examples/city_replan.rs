@@ -60,7 +60,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "replanner   flights  reached  replans/flight  p50_ms  p99_ms  max_ms  expansions/replan  flown/optimum(median)"
     );
     let configs = [
-        ("dstar-lite", ReplannerKind::DStarLite, Some(10_000)),
+        ("dstar-lite", ReplannerKind::DStarLite, Some(2_000)),
+        ("dstar-10k", ReplannerKind::DStarLite, Some(10_000)),
         ("dstar-pure", ReplannerKind::DStarLite, None),
         ("scratch", ReplannerKind::Scratch, None),
     ];
@@ -69,6 +70,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (mut reached, mut replans) = (0, 0);
         let mut slowest: Option<(f64, u64, String)> = None;
         let mut calls = Vec::new();
+        let mut cpu = Vec::new();
         let mut astar = Vec::new();
         for seed in 0..seeds {
             let options = ReplanOptions {
@@ -112,6 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
             latencies.extend(flight.replans.iter().map(|e| e.latency_ms));
+            cpu.extend(flight.replans.iter().filter_map(|e| e.cpu_ms));
             expansions.extend(flight.replans.iter().map(|e| e.expansions as f64));
             let flown = common::track_length_m(&flight.track);
             let truth_world = true_world(&World::fcnd_city(), &hidden)?;
@@ -156,6 +159,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mean(&astar),
             pct(&astar, 50.0),
             pct(&astar, 99.0)
+        );
+        println!(
+            "  replan CPU time: p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms",
+            pct(&cpu, 50.0),
+            pct(&cpu, 99.0),
+            pct(&cpu, 100.0)
         );
         if let Some((ms, n, why)) = slowest {
             println!("  slowest replan: {ms:.2} ms, {n} expansions ({why})");

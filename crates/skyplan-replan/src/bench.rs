@@ -3,7 +3,7 @@
 //! row per replanner. The flights themselves need a vehicle and a link, so the caller flies them.
 
 use crate::hidden::{HiddenSpec, place_hidden, true_world};
-use crate::replanner::{Replanner, ReplannerKind, percentile};
+use crate::replanner::{ReplanStats, Replanner, ReplannerKind, percentile};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use skyplan_flight::executor::Target;
@@ -146,12 +146,8 @@ pub struct FlightResult {
     pub success: bool,
     /// Simulator track samples inside a true obstacle (0 for a clean flight).
     pub collisions: usize,
-    /// Routes replaced in flight.
-    pub replans: u64,
-    /// Wall time of each replan, milliseconds.
-    pub latencies_ms: Vec<f64>,
-    /// Expansions of each replan.
-    pub expansions: Vec<u64>,
+    /// What the replanner did: replans, their latencies, CPU times and expansions.
+    pub stats: ReplanStats,
     /// Horizontal distance flown, metres.
     pub flown_m: f64,
     /// The scenario's full-knowledge optimum, metres.
@@ -177,6 +173,13 @@ pub struct ReplanRow {
     pub latency_p99_ms: Option<f64>,
     /// Largest replan latency, milliseconds.
     pub latency_max_ms: Option<f64>,
+    /// Replan CPU time percentiles over every replan (the replanning thread's own work,
+    /// whatever else the machine runs), milliseconds.
+    pub cpu_p50_ms: Option<f64>,
+    /// 99th percentile.
+    pub cpu_p99_ms: Option<f64>,
+    /// Largest replan CPU time, milliseconds.
+    pub cpu_max_ms: Option<f64>,
     /// Expansions per replan, mean.
     pub expansions_per_replan: Option<f64>,
     /// Median over successful flights of flown length ÷ full-knowledge optimum.
@@ -186,33 +189,41 @@ pub struct ReplanRow {
 /// Sums up `results` of one replanner.
 ///
 /// ```
-/// use skyplan_replan::ReplannerKind;
+/// use skyplan_replan::{ReplanStats, ReplannerKind};
 /// use skyplan_replan::bench::{FlightResult, summarise};
 /// let r = |replans: u64, flown_m: f64| FlightResult {
-///     success: true, collisions: 0, replans, latencies_ms: vec![1.0; replans as usize],
-///     expansions: vec![10; replans as usize], flown_m, optimum_m: 100.0,
+///     success: true, collisions: 0,
+///     stats: ReplanStats { replans, latencies_ms: vec![1.0; replans as usize],
+///         cpu_ms: vec![0.5; replans as usize], expansions: vec![10; replans as usize],
+///         ..Default::default() },
+///     flown_m, optimum_m: 100.0,
 /// };
 /// let row = summarise(ReplannerKind::DStarLite, &[r(1, 110.0), r(3, 120.0), r(0, 100.0)]);
 /// assert_eq!((row.flights, row.success_pct, row.replans_per_flight), (3, 100.0, 4.0 / 3.0));
 /// assert_eq!(row.flown_over_optimum_median, Some(1.1));
 /// assert_eq!(row.expansions_per_replan, Some(10.0));
+/// assert_eq!((row.latency_p99_ms, row.cpu_p99_ms), (Some(1.0), Some(0.5)));
 /// ```
 pub fn summarise(replanner: ReplannerKind, results: &[FlightResult]) -> ReplanRow {
     let n = results.len();
-    let latencies: Vec<f64> = results
-        .iter()
-        .flat_map(|r| r.latencies_ms.iter().copied())
-        .collect();
+    let all = |f: fn(&ReplanStats) -> &Vec<f64>| -> Vec<f64> {
+        results
+            .iter()
+            .flat_map(|r| f(&r.stats).iter().copied())
+            .collect()
+    };
+    let latencies = all(|s| &s.latencies_ms);
+    let cpu = all(|s| &s.cpu_ms);
     let expansions: Vec<u64> = results
         .iter()
-        .flat_map(|r| r.expansions.iter().copied())
+        .flat_map(|r| r.stats.expansions.iter().copied())
         .collect();
     let ratios: Vec<f64> = results
         .iter()
         .filter(|r| r.success && r.optimum_m > 0.0)
         .map(|r| r.flown_m / r.optimum_m)
         .collect();
-    let replans: u64 = results.iter().map(|r| r.replans).sum();
+    let replans: u64 = results.iter().map(|r| r.stats.replans).sum();
     ReplanRow {
         replanner,
         flights: n,
@@ -222,6 +233,9 @@ pub fn summarise(replanner: ReplannerKind, results: &[FlightResult]) -> ReplanRo
         latency_p50_ms: percentile(&latencies, 50.0),
         latency_p99_ms: percentile(&latencies, 99.0),
         latency_max_ms: latencies.iter().copied().reduce(f64::max),
+        cpu_p50_ms: percentile(&cpu, 50.0),
+        cpu_p99_ms: percentile(&cpu, 99.0),
+        cpu_max_ms: cpu.iter().copied().reduce(f64::max),
         expansions_per_replan: (!expansions.is_empty())
             .then(|| expansions.iter().sum::<u64>() as f64 / expansions.len() as f64),
         flown_over_optimum_median: percentile(&ratios, 50.0),
@@ -233,7 +247,7 @@ pub fn format_rows(rows: &[ReplanRow]) -> String {
     let opt =
         |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |x| format!("{x:.digits$}"));
     let mut s = format!(
-        "{:<11} {:>7} {:>9} {:>10} {:>8} {:>8} {:>8} {:>8} {:>12} {:>14}\n",
+        "{:<11} {:>7} {:>9} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>11} {:>14}\n",
         "replanner",
         "flights",
         "success",
@@ -242,12 +256,15 @@ pub fn format_rows(rows: &[ReplanRow]) -> String {
         "p50 ms",
         "p99 ms",
         "max ms",
+        "cpu p50",
+        "cpu p99",
+        "cpu max",
         "expansions",
         "flown/optimum"
     );
     for r in rows {
         s.push_str(&format!(
-            "{:<11} {:>7} {:>8.0}% {:>10} {:>8.2} {:>8} {:>8} {:>8} {:>12} {:>14}\n",
+            "{:<11} {:>7} {:>8.0}% {:>10} {:>8.2} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>11} {:>14}\n",
             r.replanner.name(),
             r.flights,
             r.success_pct,
@@ -256,6 +273,9 @@ pub fn format_rows(rows: &[ReplanRow]) -> String {
             opt(r.latency_p50_ms, 2),
             opt(r.latency_p99_ms, 2),
             opt(r.latency_max_ms, 2),
+            opt(r.cpu_p50_ms, 2),
+            opt(r.cpu_p99_ms, 2),
+            opt(r.cpu_max_ms, 2),
             opt(r.expansions_per_replan, 0),
             opt(r.flown_over_optimum_median, 3),
         ));

@@ -11,15 +11,17 @@
 //!   scratch; climbing when the altitude is walled off; holding when nothing can be flown).
 //! * [`bench`]: the scenarios and the numbers of `skyplan bench --replan`; [`bench::SharedReplanner`].
 //! * [`hidden`]: random hidden buildings on or near a route, and the true world they make.
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod bench;
+mod clock;
 mod dstar;
 pub mod hidden;
 mod replanner;
 mod world_model;
 
+pub use clock::thread_cpu_s;
 pub use dstar::{BudgetSpent, DStarError, DStarLite, DStarPath};
 pub use replanner::{ReplanOptions, ReplanStats, Replanner, ReplannerKind, UnknownReplanner};
 pub use world_model::WorldModel;

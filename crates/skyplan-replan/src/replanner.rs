@@ -69,8 +69,9 @@ pub struct ReplanOptions {
     pub max_alt_m: f64,
     /// Altitude step between the layers tried when climbing, metres.
     pub climb_step_m: f64,
-    /// D\* Lite: most expansions one replan may spend repairing; over it, that replan searches
-    /// from scratch (JPS) and D\* Lite resumes at the next one. `None`: no limit.
+    /// D\* Lite: most expansions one reading may spend repairing (about 1 µs each); over it,
+    /// that replan searches from scratch (JPS) and D\* Lite goes on repairing, within the same
+    /// budget, at the readings that follow until it has caught up. `None`: no limit.
     pub dstar_budget_expansions: Option<u64>,
 }
 
@@ -80,7 +81,7 @@ impl Default for ReplanOptions {
             replanner: ReplannerKind::DStarLite,
             max_alt_m: 30.0,
             climb_step_m: 5.0,
-            dstar_budget_expansions: Some(10_000),
+            dstar_budget_expansions: Some(2_000),
         }
     }
 }
@@ -94,8 +95,11 @@ pub struct ReplanStats {
     pub replans: u64,
     /// Holds decided.
     pub holds: u64,
-    /// Wall-clock time of each replan, milliseconds.
+    /// Wall-clock time of each replan (from the reading to the new route), milliseconds.
     pub latencies_ms: Vec<f64>,
+    /// CPU time of each replan on the replanning thread, milliseconds (empty where the
+    /// platform has no thread clock).
+    pub cpu_ms: Vec<f64>,
     /// Search expansions of each replan.
     pub expansions: Vec<u64>,
 }
@@ -110,6 +114,69 @@ impl ReplanStats {
     /// ```
     pub fn latency_percentile_ms(&self, p: f64) -> Option<f64> {
         percentile(&self.latencies_ms, p)
+    }
+
+    /// The account in one sentence: replans, readings, latency and CPU percentiles,
+    /// expansions per replan, learned cells (`kind` names the replanner).
+    ///
+    /// ```
+    /// let stats = skyplan_replan::ReplanStats { readings: 40, replans: 2,
+    ///     latencies_ms: vec![1.0, 3.0], cpu_ms: vec![0.5, 2.0], expansions: vec![10, 30], ..Default::default() };
+    /// assert_eq!(stats.account("dstar-lite", 12),
+    ///     "2 (dstar-lite) from 40 sensor readings: latency p50 1.00 ms, p99 3.00 ms, max 3.00 ms \
+    ///      (CPU p50 0.50 ms, p99 2.00 ms); 20 expansions per replan; 12 cells learned");
+    /// ```
+    pub fn account(&self, kind: &str, learned_cells: usize) -> String {
+        let ms = |v: &[f64], p: f64| percentile(v, p).map_or("-".into(), |v| format!("{v:.2}"));
+        let expansions = match self.expansions.len() {
+            0 => "-".to_string(),
+            n => format!(
+                "{:.0}",
+                self.expansions.iter().sum::<u64>() as f64 / n as f64
+            ),
+        };
+        let cpu = if self.cpu_ms.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (CPU p50 {} ms, p99 {} ms)",
+                ms(&self.cpu_ms, 50.0),
+                ms(&self.cpu_ms, 99.0)
+            )
+        };
+        format!(
+            "{} ({kind}) from {} sensor readings: latency p50 {} ms, p99 {} ms, max {} ms{cpu}; {expansions} expansions per replan; {learned_cells} cells learned",
+            self.replans,
+            self.readings,
+            ms(&self.latencies_ms, 50.0),
+            ms(&self.latencies_ms, 99.0),
+            ms(&self.latencies_ms, 100.0),
+        )
+    }
+}
+
+/// When a reading's handling started, by the wall clock and the thread's CPU clock.
+#[derive(Clone, Copy)]
+struct Started {
+    wall: Instant,
+    cpu_s: Option<f64>,
+}
+
+impl Started {
+    fn now() -> Self {
+        Self {
+            wall: Instant::now(),
+            cpu_s: crate::clock::thread_cpu_s(),
+        }
+    }
+
+    /// Wall-clock and CPU milliseconds since then.
+    fn elapsed_ms(&self) -> (f64, Option<f64>) {
+        let cpu = match (self.cpu_s, crate::clock::thread_cpu_s()) {
+            (Some(a), Some(b)) => Some((b - a).max(0.0) * 1e3),
+            _ => None,
+        };
+        (self.wall.elapsed().as_secs_f64() * 1e3, cpu)
     }
 }
 
@@ -183,9 +250,12 @@ pub struct Replanner {
     goal_ne: [f64; 2],
     layers: Vec<Layer>,
     dstar: Option<DStarLite>,
+    /// D\* Lite spent its budget before it was consistent: it catches up at later readings.
+    dstar_behind: bool,
     pending: Vec<(Cell, bool)>,
     search: GridSearch,
     stats: ReplanStats,
+    events: Vec<ReplanEvent>,
 }
 
 impl Replanner {
@@ -274,9 +344,11 @@ impl Replanner {
             goal_ne,
             layers,
             dstar,
+            dstar_behind: false,
             pending: Vec::new(),
             search,
             stats: ReplanStats::default(),
+            events: Vec::new(),
         })
     }
 
@@ -331,6 +403,11 @@ impl Replanner {
     /// What was done so far.
     pub fn stats(&self) -> &ReplanStats {
         &self.stats
+    }
+
+    /// Every replan so far, in order (what the flight log's replan rows show).
+    pub fn events(&self) -> &[ReplanEvent] {
+        &self.events
     }
 
     /// The layer an altitude belongs to (nearest).
@@ -389,9 +466,11 @@ impl Replanner {
             self.pending.clear();
             d.move_start(start);
             let spent = |d: &DStarLite| d.expansions() - before;
-            repaired = Some(match d.compute_within(budget) {
+            let result = d.compute_within(budget);
+            self.dstar_behind = result.is_err();
+            repaired = Some(match result {
                 Ok(path) => (path?.cells, spent(d), "dstar-lite".to_string()),
-                // Over budget: this once from scratch (D* Lite resumes at the next replan).
+                // Over budget: this once from scratch (D* Lite catches up at later readings).
                 Err(_) => {
                     let path = self
                         .search
@@ -437,7 +516,26 @@ impl Replanner {
         })
     }
 
-    fn replan(&mut self, reading: &ObstacleReading, reason: String, t0: Instant) -> RouteDecision {
+    /// D\* Lite went over budget at a replan: repair on (within the budget) from where the
+    /// vehicle is, so the next replan finds the search consistent.
+    fn catch_up(&mut self, from_ne: [f64; 2]) {
+        if !self.dstar_behind {
+            return;
+        }
+        let grid = self.layers[0].world.grid();
+        let Some(start) = cell_near(grid, from_ne) else {
+            return;
+        };
+        let budget = self.options.dstar_budget_expansions.unwrap_or(u64::MAX);
+        if let Some(d) = &mut self.dstar {
+            d.update_cells(&self.pending);
+            self.pending.clear();
+            d.move_start(start);
+            self.dstar_behind = d.compute_within(budget).is_err();
+        }
+    }
+
+    fn replan(&mut self, reading: &ObstacleReading, reason: String, t0: Started) -> RouteDecision {
         let [n, e, d] = reading.position_ned;
         let alt_m = -d;
         let from = [n, e];
@@ -469,9 +567,10 @@ impl Replanner {
             }
             let targets = targets_from(&points, [n, e]);
             let route_length_m = length_m([n, e, alt_m], &points);
-            let latency_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let (latency_ms, cpu_ms) = t0.elapsed_ms();
             self.stats.replans += 1;
             self.stats.latencies_ms.push(latency_ms);
+            self.stats.cpu_ms.extend(cpu_ms);
             self.stats.expansions.push(found.expansions);
             let reason = if k == here {
                 reason
@@ -481,19 +580,19 @@ impl Replanner {
                     self.layers[here].alt_m, self.layers[k].alt_m
                 )
             };
-            return RouteDecision::Replace {
-                targets,
-                event: ReplanEvent {
-                    time_s: reading.time_s,
-                    position_ned: reading.position_ned,
-                    reason,
-                    planner: found.planner,
-                    latency_ms,
-                    expansions: found.expansions,
-                    route_length_m,
-                    learned_cells: self.learned_count(),
-                },
+            let event = ReplanEvent {
+                time_s: reading.time_s,
+                position_ned: reading.position_ned,
+                reason,
+                planner: found.planner,
+                latency_ms,
+                cpu_ms,
+                expansions: found.expansions,
+                route_length_m,
+                learned_cells: self.learned_count(),
             };
+            self.events.push(event.clone());
+            return RouteDecision::Replace { targets, event };
         }
         self.stats.holds += 1;
         let overhead = overhead
@@ -515,7 +614,7 @@ impl Replanner {
 
 impl RouteWatcher for Replanner {
     fn on_reading(&mut self, reading: &ObstacleReading, route: &[Target]) -> RouteDecision {
-        let t0 = Instant::now();
+        let t0 = Started::now();
         self.stats.readings += 1;
         let [n, e, d] = reading.position_ned;
         if !(n.is_finite() && e.is_finite() && d.is_finite()) {
@@ -527,6 +626,7 @@ impl RouteWatcher for Replanner {
             self.pending.extend(changed);
         }
         let Some((cell, target, layer)) = self.blocked_leg([n, e, -d], route) else {
+            self.catch_up([n, e]);
             return RouteDecision::Keep;
         };
         let (cn, ce) = self.layers[layer].world.known().center_ne(cell);

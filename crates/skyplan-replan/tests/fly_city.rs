@@ -15,10 +15,13 @@ const SAFETY_M: f64 = 5.0;
 const ALT_M: f64 = 5.0;
 
 fn replanner(kind: ReplannerKind) -> Replanner {
-    let options = ReplanOptions {
+    replanner_with(ReplanOptions {
         replanner: kind,
         ..Default::default()
-    };
+    })
+}
+
+fn replanner_with(options: ReplanOptions) -> Replanner {
     Replanner::new(
         Session::new(World::fcnd_city()),
         &PlanRequest::default(),
@@ -93,8 +96,11 @@ fn highest_m(flight: &Flight) -> f64 {
     flight.track.iter().map(|p| p[2]).fold(f64::MIN, f64::max)
 }
 
-fn flies_around_hidden_buildings(kind: ReplannerKind) {
-    let mut r = replanner(kind);
+/// Flies the default route into [`hidden_across_route`] and checks the flight: at the goal, no
+/// collision, every replan explained; returns the flight.
+fn flies_around_hidden_buildings(options: ReplanOptions) -> Flight {
+    let kind = options.replanner;
+    let mut r = replanner_with(options);
     let hidden = hidden_across_route(&r);
     let truth = city_truth(&hidden);
     // The first plan flies through at least one hidden building: the test means something.
@@ -150,16 +156,60 @@ fn flies_around_hidden_buildings(kind: ReplannerKind) {
         "flown {flown} m < full-knowledge octile optimum {} m",
         optimum.cost_m
     );
+    flight
 }
 
 #[test]
 fn dstar_lite_flies_around_hidden_buildings_to_the_goal() {
-    flies_around_hidden_buildings(ReplannerKind::DStarLite);
+    flies_around_hidden_buildings(ReplanOptions::default());
 }
 
 #[test]
 fn scratch_flies_around_hidden_buildings_to_the_goal() {
-    flies_around_hidden_buildings(ReplannerKind::Scratch);
+    flies_around_hidden_buildings(ReplanOptions {
+        replanner: ReplannerKind::Scratch,
+        ..Default::default()
+    });
+}
+
+#[test]
+fn dstar_lite_over_its_budget_falls_back_and_catches_up() {
+    // A budget far too small for some repairs: those replans search from scratch, and D* Lite
+    // repairs on at the readings that follow, so a later replan is its own again.
+    const BUDGET: u64 = 300;
+    let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
+    let (mut fell_back, mut caught_up) = (0, 0);
+    for seed in 0..4 {
+        let mut r = replanner_with(ReplanOptions {
+            dstar_budget_expansions: Some(BUDGET),
+            ..Default::default()
+        });
+        let spec = city_hidden_spec(route_ne(&r.initial_plan().waypoints), 5, seed);
+        let hidden = place_hidden(&map, &spec).expect("room for the hidden buildings");
+        let truth = city_truth(&hidden);
+        let targets = r.initial_targets();
+        let flight = fly(&mut r, targets, &truth, [0.0, 0.0, ALT_M], 5.0, 0.1, 1800.0);
+        assert!(flight.reached_goal && flight.hold.is_none(), "seed {seed}");
+        assert_eq!(first_collision(&flight.track, &truth, SAFETY_M / 2.0), None);
+        let planners: Vec<&str> = flight.replans.iter().map(|e| e.planner.as_str()).collect();
+        if let Some(k) = planners
+            .iter()
+            .position(|p| *p == "dstar-lite, over budget: scratch")
+        {
+            fell_back += 1;
+            caught_up += usize::from(planners[k + 1..].contains(&"dstar-lite"));
+        }
+        for e in &flight.replans {
+            if e.planner == "dstar-lite" {
+                assert!(e.expansions <= BUDGET, "{} expansions", e.expansions);
+            }
+        }
+    }
+    assert!(fell_back > 0, "no replan went over the budget");
+    assert!(
+        caught_up > 0,
+        "D* Lite never caught up after going over its budget"
+    );
 }
 
 #[test]

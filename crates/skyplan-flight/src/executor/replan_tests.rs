@@ -13,6 +13,7 @@ fn event(t: f64) -> ReplanEvent {
         reason: "learned cells block leg 3".into(),
         planner: "test".into(),
         latency_ms: 0.1,
+        cpu_ms: Some(0.1),
         expansions: 7,
         route_length_m: 0.0,
         learned_cells: 3,
