@@ -528,3 +528,72 @@ impl GridSearch {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use skyplan_cspace::GridFrame;
+
+    #[test]
+    fn reciprocal_division_is_exact() {
+        for d in (1..300).chain([1023, 1024, 1025, 2047, 2050, 4099]) {
+            for below in [1usize, 2, 1000, 1 << 16, 1 << 22] {
+                let div = DivBy::new(d, below);
+                let step = (below / 5000).max(1);
+                for n in (0..below).step_by(step).chain([below - 1]) {
+                    assert_eq!(div.div_rem(n), (n / d, n % d), "{n} / {d} (below {below})");
+                }
+            }
+        }
+        // The largest case: 2³¹ numbers, odd and power-of-two divisors.
+        for d in [3, 7, 1000, 4096, 65_537] {
+            let div = DivBy::new(d, 1 << 31);
+            for n in [0, 1, d - 1, d, (1 << 31) - 1, (1 << 31) - d, 1_234_567_891] {
+                assert_eq!(div.div_rem(n), (n / d, n % d), "{n} / {d}");
+            }
+        }
+    }
+
+    proptest! {
+        /// A cell's mask allows exactly the moves the model allows: onto a free cell of the
+        /// grid, diagonals past the corner only as the model says; blocked cells allow none.
+        #[test]
+        fn masks_allow_the_models_moves(
+            rows in 1u32..12, cols in 1u32..12,
+            seed in proptest::collection::vec(proptest::bool::weighted(0.3), 144),
+        ) {
+            let grid = Grid2::new(rows, cols, seed[..(rows * cols) as usize].to_vec(), GridFrame::default())
+                .expect("size");
+            let w = cols as usize + 2;
+            let dirs: [(u32, i64, i64); 8] =
+                [(N, 1, 0), (S, -1, 0), (E, 0, 1), (W, 0, -1), (NE, 1, 1), (NW, 1, -1), (SE, -1, 1), (SW, -1, -1)];
+            for model in [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting] {
+                let mut masks = MoveMasks::default();
+                let cc = model == MoveModel::OctileCornerCutting;
+                let m = masks.get(&grid, model.has_diagonals(), cc).to_vec();
+                prop_assert_eq!(m.len(), w * (rows as usize + 2));
+                for r in 0..rows {
+                    for c in 0..cols {
+                        let cell = Cell::new(r, c);
+                        let bits = m[(r as usize + 1) * w + c as usize + 1];
+                        for &(bit, dr, dc) in &dirs {
+                            let (nr, nc) = (i64::from(r) + dr, i64::from(c) + dc);
+                            let diagonal = dr != 0 && dc != 0;
+                            let allowed = !grid.is_blocked(cell)
+                                && grid.is_free_at(nr, nc)
+                                && (!diagonal || (model.has_diagonals() && model.corner_ok(&grid, cell, dr, dc)));
+                            prop_assert_eq!(bits & (1 << bit) != 0, allowed, "{:?} {:?} bit {}", model, cell, bit);
+                        }
+                    }
+                }
+                // Border cells allow nothing.
+                for r in 0..rows as usize + 2 {
+                    prop_assert_eq!(m[r * w], 0);
+                    prop_assert_eq!(m[r * w + w - 1], 0);
+                }
+                prop_assert!(m[..w].iter().chain(&m[m.len() - w..]).all(|&b| b == 0));
+            }
+        }
+    }
+}
