@@ -376,10 +376,11 @@ impl GridSearch {
             let (r, c) = div.div_rem(p);
             let parent = ((r - 1) * cols + c - 1) as u32;
             let m = moves[p];
-            // The two costs a move gives, each computed once.
+            // The two costs a move gives (as floats and as the node's counts), each computed once.
             let (g_straight, g_diagonal) = (counts_cost(s + 1, d), counts_cost(s, d + 1));
+            let (bits_straight, bits_diagonal) = (bits(s + 1, d), bits(s, d + 1));
             macro_rules! try_move {
-                ($bit:expr, $q:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr, $g:expr) => {{
+                ($bit:expr, $q:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr, $g:expr, $g_bits:expr) => {{
                     if m & (1 << $bit) != 0 {
                         let q: usize = $q;
                         let (ns, nd, g): (u32, u32, f64) = ($ns, $nd, $g);
@@ -391,7 +392,7 @@ impl GridSearch {
                             });
                         if better {
                             *next = Node {
-                                g: bits(ns, nd),
+                                g: $g_bits,
                                 parent,
                                 stamp: open,
                             };
@@ -401,17 +402,17 @@ impl GridSearch {
                     }
                 }};
             }
-            let gs = g_straight;
-            try_move!(N, p + w, r + 1, c, s + 1, d, gs);
-            try_move!(S, p - w, r - 1, c, s + 1, d, gs);
-            try_move!(E, p + 1, r, c + 1, s + 1, d, gs);
-            try_move!(W, p - 1, r, c - 1, s + 1, d, gs);
+            let (gs, bs) = (g_straight, bits_straight);
+            try_move!(N, p + w, r + 1, c, s + 1, d, gs, bs);
+            try_move!(S, p - w, r - 1, c, s + 1, d, gs, bs);
+            try_move!(E, p + 1, r, c + 1, s + 1, d, gs, bs);
+            try_move!(W, p - 1, r, c - 1, s + 1, d, gs, bs);
             if DIAGONALS {
-                let gd = g_diagonal;
-                try_move!(NE, p + w + 1, r + 1, c + 1, s, d + 1, gd);
-                try_move!(NW, p + w - 1, r + 1, c - 1, s, d + 1, gd);
-                try_move!(SE, p - w + 1, r - 1, c + 1, s, d + 1, gd);
-                try_move!(SW, p - w - 1, r - 1, c - 1, s, d + 1, gd);
+                let (gd, bd) = (g_diagonal, bits_diagonal);
+                try_move!(NE, p + w + 1, r + 1, c + 1, s, d + 1, gd, bd);
+                try_move!(NW, p + w - 1, r + 1, c - 1, s, d + 1, gd, bd);
+                try_move!(SE, p - w + 1, r - 1, c + 1, s, d + 1, gd, bd);
+                try_move!(SW, p - w - 1, r - 1, c - 1, s, d + 1, gd, bd);
             }
         }
         Some(Err(expansions))

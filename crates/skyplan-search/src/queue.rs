@@ -134,7 +134,8 @@ impl QuadHeap {
 pub(crate) struct BucketQueue {
     /// `WINDOW` buckets; bucket `b` (absolute) lives at `b % WINDOW`.
     buckets: Vec<Vec<u128>>,
-    /// Absolute bucket of `current`; every key in `current` has a bucket ≤ `base`.
+    /// Absolute bucket of `current`; every key in `current` has a bucket ≤ `base` (`u64::MAX`
+    /// without buckets).
     base: u64,
     /// Keys in `buckets`.
     in_buckets: usize,
@@ -189,7 +190,7 @@ impl BucketQueue {
         }
         self.occupied = [0; (WINDOW / 64) as usize];
         self.in_buckets = 0;
-        self.base = 0;
+        self.base = if buckets { 0 } else { u64::MAX };
         self.current.clear();
         self.sorted.clear();
         self.far.clear();
@@ -205,7 +206,8 @@ impl BucketQueue {
             return;
         }
         let b = bucket(key);
-        if b <= self.base || !self.use_buckets {
+        // Without buckets `base` is `u64::MAX`: every key goes to `current`.
+        if b <= self.base {
             self.current.push(key);
         } else if b - self.base < WINDOW {
             self.put_in_bucket(b, key);
