@@ -161,7 +161,9 @@ impl GridSearch {
     /// Heap bytes of the search state. Grids of up to 2²² (4.2 M) cells use one flat array (16 bytes per
     /// cell, the fastest layout); bigger grids keep nodes in 8 × 8-cell pages allocated on touch
     /// (plus a page table of 4 bytes per page), so the state grows with the area searches visit,
-    /// not with the map's area. Pages are kept between queries up to 256 MiB.
+    /// not with the map's area. Pages are kept between queries up to 256 MiB. A\* and Dijkstra
+    /// on a flat grid also keep 2 bytes per cell outside this count: the grid's per-cell move
+    /// masks and the blocked cells they were built from (rebuilt only when the grid changes).
     ///
     /// ```
     /// use skyplan_cspace::{Cell, Grid2, GridFrame};
@@ -314,7 +316,10 @@ impl GridSearch {
     /// `None` if the nodes are paged; else the expansions, `Ok` when the goal was reached.
     ///
     /// Neighbours are tried in the paged A\*'s order with the same keys, so both expand the
-    /// same cells.
+    /// same cells. The loop per expansion: pop, close, one mask byte, then per allowed move one
+    /// node compare and, if better, a push; the row and column (for the heuristic) come from a
+    /// multiply by the width's reciprocal ([`DivBy`]), not a divide. Not inlined, so that
+    /// callgrind reports it as one function (`examples/city_astar.rs`).
     #[inline(never)]
     fn astar_flat<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
         &mut self,
