@@ -12,11 +12,119 @@ pub struct GridSearch {
     /// ones (memory grows with the area searched, not with the map).
     pub(crate) nodes: PagedNodes,
     queue: BucketQueue,
-    /// The grid's blocked cells with a blocked one-cell border (flat A\*, [`PagedNodes::padded`]).
-    bordered: Vec<bool>,
+    /// The moves each cell allows, on the flat A\*'s bordered layout ([`PagedNodes::padded`]).
+    masks: MoveMasks,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
+
+/// Move mask bits: north (row + 1), south, east (column + 1), west, then the diagonals.
+const N: u32 = 0;
+const S: u32 = 1;
+const E: u32 = 2;
+const W: u32 = 3;
+const NE: u32 = 4;
+const NW: u32 = 5;
+const SE: u32 = 6;
+const SW: u32 = 7;
+
+/// For each cell of a grid with a one-cell border (row-major, `cols + 2` wide), the moves the
+/// move model allows from it: bit `N`…`SW` set iff that neighbour is free and, for a diagonal
+/// without corner cutting, both cells beside it too. Blocked and border cells allow nothing, so
+/// no move leaves the grid. Built once per grid and model, kept while queries use the same grid
+/// (checked by comparing its blocked cells, a memory compare).
+#[derive(Debug, Default)]
+struct MoveMasks {
+    /// `(rows, cols, diagonals, corner cutting)` the masks were built for.
+    shape: Option<(u32, u32, bool, bool)>,
+    /// The grid's blocked cells when built.
+    blocked: Vec<bool>,
+    masks: Vec<u8>,
+}
+
+impl MoveMasks {
+    /// The masks of `grid` under the model, rebuilt if the grid or model changed.
+    fn get(&mut self, grid: &Grid2, diagonals: bool, corner_cutting: bool) -> &[u8] {
+        let shape = Some((grid.rows(), grid.cols(), diagonals, corner_cutting));
+        if self.shape != shape || self.blocked != grid.blocked_cells() {
+            self.build(grid, diagonals, corner_cutting);
+            self.shape = shape;
+        }
+        &self.masks
+    }
+
+    #[cold]
+    fn build(&mut self, grid: &Grid2, diagonals: bool, corner_cutting: bool) {
+        let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
+        let w = cols + 2;
+        self.blocked.clear();
+        self.blocked.extend_from_slice(grid.blocked_cells());
+        // 1 for a free cell, 0 for a blocked or border one.
+        let mut free = vec![0u8; w * (rows + 2)];
+        for (r, row) in self.blocked.chunks_exact(cols).enumerate() {
+            let at = (r + 1) * w + 1;
+            for (f, &b) in free[at..at + cols].iter_mut().zip(row) {
+                *f = u8::from(!b);
+            }
+        }
+        self.masks.clear();
+        self.masks.resize(free.len(), 0);
+        // Row by row, over whole rows (branch-free byte arithmetic the compiler vectorises):
+        // `x[k]` is the cell `k` columns left of the mask's cell.
+        for r in 1..=rows {
+            let row = |dr: isize| {
+                let at = (r as isize + dr) as usize * w;
+                &free[at..at + w]
+            };
+            let (below, here, above) = (row(-1), row(0), row(1));
+            let out = &mut self.masks[r * w + 1..r * w + 1 + cols];
+            for (c, m) in out.iter_mut().enumerate() {
+                let (n, s) = (above[c + 1], below[c + 1]);
+                let (e, west) = (here[c + 2], here[c]);
+                let mut bits = n << N | s << S | e << E | west << W;
+                if diagonals {
+                    let rule = |a: u8, b: u8| if corner_cutting { 1 } else { a & b };
+                    bits |= (rule(n, e) & above[c + 2]) << NE;
+                    bits |= (rule(n, west) & above[c]) << NW;
+                    bits |= (rule(s, e) & below[c + 2]) << SE;
+                    bits |= (rule(s, west) & below[c]) << SW;
+                }
+                // Nothing from a blocked cell.
+                *m = bits & here[c + 1].wrapping_neg();
+            }
+        }
+    }
+}
+
+/// Division by a fixed `d` of numbers below `2^bits` as a multiply and a shift (Granlund and
+/// Montgomery, 1994, theorem 4.2: with `2^(l-1) < d ≤ 2^l` and `m = ⌈2^(bits+l) / d⌉`,
+/// `⌊n·m / 2^(bits+l)⌋ = ⌊n / d⌋` for every `n < 2^bits`). A hardware divide takes 20–40 cycles.
+#[derive(Debug, Clone, Copy)]
+struct DivBy {
+    d: usize,
+    m: u64,
+    shift: u32,
+}
+
+impl DivBy {
+    /// Division by `d` of numbers below `below` (at most 2³¹, so that `n·m` fits in 64 bits).
+    fn new(d: usize, below: usize) -> Self {
+        assert!(d > 0 && below <= 1 << 31);
+        let bits = usize::BITS - below.saturating_sub(1).leading_zeros();
+        let l = usize::BITS - (d - 1).leading_zeros();
+        let shift = bits + l;
+        let m = (1u128 << shift).div_ceil(d as u128) as u64;
+        Self { d, m, shift }
+    }
+
+    /// `(n / d, n % d)`.
+    #[inline(always)]
+    fn div_rem(self, n: usize) -> (usize, usize) {
+        let q = ((n as u64 * self.m) >> self.shift) as usize;
+        debug_assert_eq!(q, n / self.d);
+        (q, n - q * self.d)
+    }
+}
 
 /// The endpoint checks every planner makes first.
 pub(crate) fn check_endpoints(grid: &Grid2, start: Cell, goal: Cell) -> Result<(), SearchError> {
@@ -53,7 +161,9 @@ impl GridSearch {
     /// Heap bytes of the search state. Grids of up to 2²² (4.2 M) cells use one flat array (16 bytes per
     /// cell, the fastest layout); bigger grids keep nodes in 8 × 8-cell pages allocated on touch
     /// (plus a page table of 4 bytes per page), so the state grows with the area searches visit,
-    /// not with the map's area. Pages are kept between queries up to 256 MiB.
+    /// not with the map's area. Pages are kept between queries up to 256 MiB. A\* and Dijkstra
+    /// on a flat grid also keep 2 bytes per cell outside this count: the grid's per-cell move
+    /// masks and the blocked cells they were built from (rebuilt only when the grid changes).
     ///
     /// ```
     /// use skyplan_cspace::{Cell, Grid2, GridFrame};
@@ -200,10 +310,17 @@ impl GridSearch {
         }
     }
 
-    /// [`GridSearch::astar`] on the flat node array with a blocked border: every cell has eight
-    /// neighbours in the array, so there are no edge tests; a cell is its bordered index
-    /// everywhere (queue, nodes) but in `parent`, which holds grid indices. `None` if the nodes
-    /// are paged; else the expansions, `Ok` when the goal was reached.
+    /// [`GridSearch::astar`] on the flat node array, whose one-cell border the move masks
+    /// ([`MoveMasks`]) never enter: no edge tests, no corner rule in the loop. A cell is its
+    /// bordered index everywhere (queue, nodes) but in `parent`, which holds grid indices.
+    /// `None` if the nodes are paged; else the expansions, `Ok` when the goal was reached.
+    ///
+    /// Neighbours are tried in the paged A\*'s order with the same keys, so both expand the
+    /// same cells. The loop per expansion: pop, close, one mask byte, then per allowed move one
+    /// node compare and, if better, a push; the row and column (for the heuristic) come from a
+    /// multiply by the width's reciprocal ([`DivBy`]), not a divide. Not inlined, so that
+    /// callgrind reports it as one function (`examples/city_astar.rs`).
+    #[inline(never)]
     fn astar_flat<const DIAGONALS: bool, const CORNER_CUTTING: bool, const HEURISTIC: bool>(
         &mut self,
         grid: &Grid2,
@@ -213,18 +330,14 @@ impl GridSearch {
         let GridSearch {
             nodes,
             queue,
-            bordered,
+            masks,
         } = self;
         let (pool, open) = nodes.flat_pool()?;
+        let moves = masks.get(grid, DIAGONALS, CORNER_CUTTING);
         let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
         let w = cols + 2;
-        bordered.clear();
-        bordered.resize(w * (rows + 2), true);
-        for (r, row) in grid.blocked_cells().chunks_exact(cols).enumerate() {
-            let at = (r + 1) * w + 1;
-            bordered[at..at + cols].copy_from_slice(row);
-        }
-        let blocked = &bordered[..];
+        assert!(pool.len() == w * (rows + 2) && moves.len() == pool.len());
+        let div = DivBy::new(w, pool.len());
         let closed = open + 1;
         // Bordered coordinates: the goal's differences are the grid's.
         let (goal_r, goal_c) = (goal.row as usize + 1, goal.col as usize + 1);
@@ -265,56 +378,46 @@ impl GridSearch {
             if p == goal_p {
                 return Some(Ok(expansions));
             }
-            let (r, c) = (p / w, p % w);
+            let (r, c) = div.div_rem(p);
             let parent = ((r - 1) * cols + c - 1) as u32;
-            let up = &blocked[p + w - 1..p + w + 2];
-            let mid = &blocked[p - 1..p + 2];
-            let down = &blocked[p - w - 1..p - w + 2];
-            let (n, so, e, we) = (!up[1], !down[1], !mid[2], !mid[0]);
+            let m = moves[p];
+            // The two costs a move gives (as floats and as the node's counts), each computed once.
+            let (g_straight, g_diagonal) = (counts_cost(s + 1, d), counts_cost(s, d + 1));
+            let (bits_straight, bits_diagonal) = (bits(s + 1, d), bits(s, d + 1));
             macro_rules! try_move {
-                ($ok:expr, $q:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr) => {{
-                    let q: usize = $q;
-                    if $ok {
-                        let (ns, nd): (u32, u32) = ($ns, $nd);
+                ($bit:expr, $q:expr, $nr:expr, $nc:expr, $ns:expr, $nd:expr, $g:expr, $g_bits:expr) => {{
+                    if m & (1 << $bit) != 0 {
+                        let q: usize = $q;
+                        let (ns, nd, g): (u32, u32, f64) = ($ns, $nd, $g);
                         let next = &mut pool[q];
                         let better = next.stamp != closed
                             && (next.stamp != open || {
                                 let old = next.g.to_bits();
-                                counts_cost(ns, nd) < counts_cost(old as u32, (old >> 32) as u32)
+                                g < counts_cost(old as u32, (old >> 32) as u32)
                             });
                         if better {
                             *next = Node {
-                                g: bits(ns, nd),
+                                g: $g_bits,
                                 parent,
                                 stamp: open,
                             };
                             let (hs, hd) = h($nr, $nc);
-                            queue.push(key(
-                                counts_cost(ns + hs, nd + hd),
-                                counts_cost(ns, nd),
-                                q as u32,
-                            ));
+                            queue.push(key(counts_cost(ns + hs, nd + hd), g, q as u32));
                         }
                     }
                 }};
             }
-            try_move!(n, p + w, r + 1, c, s + 1, d);
-            try_move!(so, p - w, r - 1, c, s + 1, d);
-            try_move!(e, p + 1, r, c + 1, s + 1, d);
-            try_move!(we, p - 1, r, c - 1, s + 1, d);
+            let (gs, bs) = (g_straight, bits_straight);
+            try_move!(N, p + w, r + 1, c, s + 1, d, gs, bs);
+            try_move!(S, p - w, r - 1, c, s + 1, d, gs, bs);
+            try_move!(E, p + 1, r, c + 1, s + 1, d, gs, bs);
+            try_move!(W, p - 1, r, c - 1, s + 1, d, gs, bs);
             if DIAGONALS {
-                let corner = |a: bool, b: bool| CORNER_CUTTING || (a && b);
-                try_move!(corner(n, e) && !up[2], p + w + 1, r + 1, c + 1, s, d + 1);
-                try_move!(corner(n, we) && !up[0], p + w - 1, r + 1, c - 1, s, d + 1);
-                try_move!(corner(so, e) && !down[2], p - w + 1, r - 1, c + 1, s, d + 1);
-                try_move!(
-                    corner(so, we) && !down[0],
-                    p - w - 1,
-                    r - 1,
-                    c - 1,
-                    s,
-                    d + 1
-                );
+                let (gd, bd) = (g_diagonal, bits_diagonal);
+                try_move!(NE, p + w + 1, r + 1, c + 1, s, d + 1, gd, bd);
+                try_move!(NW, p + w - 1, r + 1, c - 1, s, d + 1, gd, bd);
+                try_move!(SE, p - w + 1, r - 1, c + 1, s, d + 1, gd, bd);
+                try_move!(SW, p - w - 1, r - 1, c - 1, s, d + 1, gd, bd);
             }
         }
         Some(Err(expansions))
@@ -428,6 +531,75 @@ impl GridSearch {
             diagonal_moves,
             expansions,
             any_angle_cells: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use skyplan_cspace::GridFrame;
+
+    #[test]
+    fn reciprocal_division_is_exact() {
+        for d in (1..300).chain([1023, 1024, 1025, 2047, 2050, 4099]) {
+            for below in [1usize, 2, 1000, 1 << 16, 1 << 22] {
+                let div = DivBy::new(d, below);
+                let step = (below / 5000).max(1);
+                for n in (0..below).step_by(step).chain([below - 1]) {
+                    assert_eq!(div.div_rem(n), (n / d, n % d), "{n} / {d} (below {below})");
+                }
+            }
+        }
+        // The largest case: 2³¹ numbers, odd and power-of-two divisors.
+        for d in [3, 7, 1000, 4096, 65_537] {
+            let div = DivBy::new(d, 1 << 31);
+            for n in [0, 1, d - 1, d, (1 << 31) - 1, (1 << 31) - d, 1_234_567_891] {
+                assert_eq!(div.div_rem(n), (n / d, n % d), "{n} / {d}");
+            }
+        }
+    }
+
+    proptest! {
+        /// A cell's mask allows exactly the moves the model allows: onto a free cell of the
+        /// grid, diagonals past the corner only as the model says; blocked cells allow none.
+        #[test]
+        fn masks_allow_the_models_moves(
+            rows in 1u32..12, cols in 1u32..12,
+            seed in proptest::collection::vec(proptest::bool::weighted(0.3), 144),
+        ) {
+            let grid = Grid2::new(rows, cols, seed[..(rows * cols) as usize].to_vec(), GridFrame::default())
+                .expect("size");
+            let w = cols as usize + 2;
+            let dirs: [(u32, i64, i64); 8] =
+                [(N, 1, 0), (S, -1, 0), (E, 0, 1), (W, 0, -1), (NE, 1, 1), (NW, 1, -1), (SE, -1, 1), (SW, -1, -1)];
+            for model in [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting] {
+                let mut masks = MoveMasks::default();
+                let cc = model == MoveModel::OctileCornerCutting;
+                let m = masks.get(&grid, model.has_diagonals(), cc).to_vec();
+                prop_assert_eq!(m.len(), w * (rows as usize + 2));
+                for r in 0..rows {
+                    for c in 0..cols {
+                        let cell = Cell::new(r, c);
+                        let bits = m[(r as usize + 1) * w + c as usize + 1];
+                        for &(bit, dr, dc) in &dirs {
+                            let (nr, nc) = (i64::from(r) + dr, i64::from(c) + dc);
+                            let diagonal = dr != 0 && dc != 0;
+                            let allowed = !grid.is_blocked(cell)
+                                && grid.is_free_at(nr, nc)
+                                && (!diagonal || (model.has_diagonals() && model.corner_ok(&grid, cell, dr, dc)));
+                            prop_assert_eq!(bits & (1 << bit) != 0, allowed, "{:?} {:?} bit {}", model, cell, bit);
+                        }
+                    }
+                }
+                // Border cells allow nothing.
+                for r in 0..rows as usize + 2 {
+                    prop_assert_eq!(m[r * w], 0);
+                    prop_assert_eq!(m[r * w + w - 1], 0);
+                }
+                prop_assert!(m[..w].iter().chain(&m[m.len() - w..]).all(|&b| b == 0));
+            }
         }
     }
 }

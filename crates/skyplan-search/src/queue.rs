@@ -1,28 +1,34 @@
-//! The open list: a bucket queue over `f` whose current bucket is sorted (plus a 4-ary heap of late keys).
+//! The open list: a bucket queue over `f` (plus a 4-ary heap of late keys and an O(1) stack of
+//! exact ties).
 //!
 //! An entry is one `u128` key: the bits of `f` (non-negative floats order like their bit
 //! patterns), then the complement of the high 32 bits of `g`'s bits (larger `g` first on equal
 //! `f`: deepest first), then the cell index. One integer compare orders two entries.
 //!
 //! A\* with a consistent heuristic pops `f` in non-decreasing order and pushes keys at most a few
-//! cells above the current one, so most entries go to a bucket (`⌊f · BUCKETS_PER_CELL⌋`, an
-//! append to a reused vector) and only the current bucket is ordered: sorted once when it
-//! becomes current, with a 4-ary heap for keys pushed into it later. The pop order is exactly the
-//! keys' order: buckets split `f` monotonically, and the heap orders everything inside the
+//! cells above the current one, so most entries go to a bucket (`f · BUCKETS_PER_CELL` rounded,
+//! an append to a reused vector) and only the current bucket is ordered. Buckets are fine (1/1024
+//! of a cell): on the city nearly every bucket holds a single `f`, and such a bucket goes
+//! straight to the tie stack below, unsorted; a bucket with several `f` is sorted once when it
+//! becomes current, with a 4-ary heap for keys pushed into it later. The pop order is exactly
+//! the order of `f`: buckets split `f` monotonically, and the heap orders everything inside the
 //! current bucket. Keys below the current bucket (rounding, inconsistent heuristics) join the
 //! heap, keys beyond the window wait in an overflow heap, so any key sequence pops in order.
 //!
 //! In bucket mode (A\*, Dijkstra) keys whose `f` equals the last popped `f` exactly — most keys
 //! on open ground, where the octile heuristic is exact along a whole fan of cells — go to a
 //! stack of cell indices instead of a heap: push and pop are O(1), and last in, first out among
-//! equal `f` goes deepest first like the `g` tie-break. Pops stay in `f` order (a heap key below
-//! the stack's `f` pops first); among equal `f` the order is the stack's, which A\* allows.
-//! Popped stack keys carry `f` and the index only (callers read `g` from their nodes).
+//! equal `f` goes deepest first like the `g` tie-break (a single-`f` bucket is stacked with its
+//! first-pushed key on top). Pops stay in `f` order (a heap key below the stack's `f` pops
+//! first); among equal `f` the order is the stack's, which A\* allows. Popped stack keys carry
+//! `f` and the index only (callers read `g` from their nodes). Without buckets (JPS, Theta\*)
+//! keys pop in exact key order from the heap.
 
 /// Buckets per cell of `f`.
-const BUCKETS_PER_CELL: f64 = 64.0;
-/// Buckets in the circular window (a power of two): keys up to 16 cells above the current one.
-const WINDOW: u64 = 1024;
+const BUCKETS_PER_CELL: f64 = 1024.0;
+/// Buckets in the circular window (a power of two): keys up to 4 cells above the current one (an
+/// A\* move raises `f` by at most 2√2 cells; farther keys wait in the overflow heap).
+const WINDOW: u64 = 4096;
 
 /// The packed key of an entry (module docs).
 #[inline(always)]
@@ -44,10 +50,15 @@ pub(crate) fn key_index(key: u128) -> u32 {
     key as u32
 }
 
+/// The bucket of a key: `f · BUCKETS_PER_CELL` rounded to the nearest integer, by adding 2⁵²
+/// (whose ulp is 1) and reading the bits: four instructions instead of a saturating cast. Any
+/// non-decreasing function of `f` keeps the pop order exact; this one is, for every `f ≥ 0`
+/// (beyond 2⁵² it stops being the rounded value but stays non-decreasing, and such keys wait in
+/// `far`).
 #[inline(always)]
 fn bucket(key: u128) -> u64 {
-    // f ≥ 0; the cast saturates for huge keys, which then wait in `far`.
-    (key_f(key) * BUCKETS_PER_CELL) as u64
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    (key_f(key) * BUCKETS_PER_CELL + TWO_52).to_bits() - TWO_52.to_bits()
 }
 
 /// A 4-ary min-heap of keys.
@@ -123,7 +134,8 @@ impl QuadHeap {
 pub(crate) struct BucketQueue {
     /// `WINDOW` buckets; bucket `b` (absolute) lives at `b % WINDOW`.
     buckets: Vec<Vec<u128>>,
-    /// Absolute bucket of `current`; every key in `current` has a bucket ≤ `base`.
+    /// Absolute bucket of `current`; every key in `current` has a bucket ≤ `base` (`u64::MAX`
+    /// without buckets).
     base: u64,
     /// Keys in `buckets`.
     in_buckets: usize,
@@ -133,7 +145,7 @@ pub(crate) struct BucketQueue {
     occupied: [u64; (WINDOW / 64) as usize],
     current: QuadHeap,
     /// The keys of bucket `base` when it became current, sorted largest first (popped from the
-    /// end); keys pushed into it later go to `current`.
+    /// end) unless they all went to `ties`; keys pushed into it later go to `current`.
     sorted: Vec<u128>,
     /// Keys with a bucket ≥ `base + WINDOW` when pushed.
     far: QuadHeap,
@@ -178,7 +190,7 @@ impl BucketQueue {
         }
         self.occupied = [0; (WINDOW / 64) as usize];
         self.in_buckets = 0;
-        self.base = 0;
+        self.base = if buckets { 0 } else { u64::MAX };
         self.current.clear();
         self.sorted.clear();
         self.far.clear();
@@ -194,7 +206,8 @@ impl BucketQueue {
             return;
         }
         let b = bucket(key);
-        if b <= self.base || !self.use_buckets {
+        // Without buckets `base` is `u64::MAX`: every key goes to `current`.
+        if b <= self.base {
             self.current.push(key);
         } else if b - self.base < WINDOW {
             self.put_in_bucket(b, key);
@@ -256,39 +269,39 @@ impl BucketQueue {
     /// Removes the smallest key.
     #[inline(always)]
     pub(crate) fn pop(&mut self) -> Option<u128> {
-        if let Some(&index) = self.ties.last() {
-            // A key below `tie_f` (rounding) still comes first.
-            if self
-                .peek_current()
-                .is_none_or(|top| ((top >> 64) as u64) >= self.tie_f)
-            {
-                self.ties.pop();
-                return Some((u128::from(self.tie_f) << 64) | u128::from(index));
+        loop {
+            if let Some(&index) = self.ties.last() {
+                // A key below `tie_f` (rounding) still comes first.
+                if self
+                    .peek_current()
+                    .is_none_or(|top| ((top >> 64) as u64) >= self.tie_f)
+                {
+                    self.ties.pop();
+                    return Some((u128::from(self.tie_f) << 64) | u128::from(index));
+                }
+                return self.pop_current();
             }
-            return self.pop_current();
-        }
-        let k = match self.pop_current() {
-            Some(k) => k,
-            None => {
-                self.advance();
-                self.pop_current()?
+            if let Some(k) = self.pop_current() {
+                if self.use_buckets {
+                    self.tie_f = (k >> 64) as u64;
+                }
+                return Some(k);
             }
-        };
-        if self.use_buckets {
-            self.tie_f = (k >> 64) as u64;
+            if !self.advance() {
+                return None;
+            }
         }
-        Some(k)
     }
 
     /// Moves `base` to the next non-empty bucket and loads it (and due overflow keys) into
-    /// `sorted`.
+    /// `sorted`, or onto the tie stack if they all have one `f`; false if the queue is empty.
     #[cold]
-    fn advance(&mut self) {
+    fn advance(&mut self) -> bool {
         loop {
             if self.in_buckets == 0 {
                 // Nothing in the window: jump to the overflow's first bucket.
                 let Some(top) = self.far.peek() else {
-                    return;
+                    return false;
                 };
                 self.base = self.base.max(bucket(top));
             } else {
@@ -297,7 +310,8 @@ impl BucketQueue {
                 self.occupied[slot / 64] &= !(1 << (slot % 64));
                 let keys = &mut self.buckets[slot];
                 self.in_buckets -= keys.len();
-                self.sorted.append(keys);
+                // `sorted` is empty here: take the bucket's vector (its keys), leave it ours.
+                std::mem::swap(&mut self.sorted, keys);
             }
             while let Some(k) = self.far.peek() {
                 let b = bucket(k);
@@ -313,11 +327,21 @@ impl BucketQueue {
                 }
             }
             if !self.sorted.is_empty() {
+                let f = (self.sorted[0] >> 64) as u64;
+                if self.use_buckets && self.sorted.iter().all(|&k| (k >> 64) as u64 == f) {
+                    // One `f` (the usual case with fine buckets): no sort, the tie stack takes
+                    // them, the first pushed on top.
+                    self.ties
+                        .extend(self.sorted.iter().rev().map(|&k| key_index(k)));
+                    self.tie_f = f;
+                    self.sorted.clear();
+                    return true;
+                }
                 self.sorted.sort_unstable_by(|a, b| b.cmp(a));
-                return;
+                return true;
             }
             if !self.current.is_empty() {
-                return;
+                return true;
             }
         }
     }
@@ -383,6 +407,7 @@ mod tests {
                         0 => (last_f - step * 0.01).max(0.0),  // a little below the current key
                         1 => last_f + step * 100.0,            // far ahead, past the window
                         2 | 3 => last_f,                       // a tie
+                        4 => last_f + step * 1e-3,             // another f in the same bucket
                         _ => last_f + step,
                     };
                     let key = key(f, f64::from(g), index);
@@ -413,6 +438,52 @@ mod tests {
             }
             same_entries(&mut popped)?;
             prop_assert!(queue.pop().is_none());
+        }
+    }
+
+    proptest! {
+        /// Octile costs `s + d√2` (the A\* keys: many exact ties, distinct `f` closer than a
+        /// bucket) pushed in any order and popped at any time: the `f` sequence of a binary
+        /// heap, and the same entries.
+        #[test]
+        fn octile_costs_pop_in_f_order(
+            ops in proptest::collection::vec((any::<bool>(), 0u32..30, 0u32..30, 0u32..1000), 1..500)
+        ) {
+            let mut queue = BucketQueue::default();
+            let mut heap = BinaryHeap::new();
+            let mut popped = [Vec::new(), Vec::new()];
+            for (pop, s, d, index) in ops {
+                if pop {
+                    pop_both(&mut queue, &mut heap, &mut popped)?;
+                } else {
+                    let f = crate::nodes::counts_cost(s, d);
+                    let g = crate::nodes::counts_cost(s / 2, d / 2);
+                    queue.push(key(f, g, index));
+                    heap.push(Reverse(key(f, g, index)));
+                }
+            }
+            while !heap.is_empty() {
+                pop_both(&mut queue, &mut heap, &mut popped)?;
+            }
+            prop_assert!(queue.pop().is_none());
+            same_entries(&mut popped)?;
+        }
+    }
+
+    #[test]
+    fn bucket_is_monotone_in_f() {
+        let mut last = 0;
+        for k in 0..100_000u32 {
+            let f = f64::from(k) * 0.013_7;
+            let b = bucket(key(f, 0.0, 0));
+            assert!(b >= last, "f {f}");
+            assert_eq!(b, (f * BUCKETS_PER_CELL).round_ties_even() as u64);
+            last = b;
+        }
+        for f in [1e12, 1e15, 1e300, f64::MAX] {
+            let b = bucket(key(f, 0.0, 0));
+            assert!(b >= last);
+            last = b;
         }
     }
 
