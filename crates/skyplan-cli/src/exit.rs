@@ -101,3 +101,22 @@ pub fn runtime(message: impl std::fmt::Display) -> Failure {
         plan_kind: None,
     }
 }
+
+impl From<skyplan_link::runner::RunError> for Failure {
+    fn from(e: skyplan_link::runner::RunError) -> Self {
+        use skyplan_link::runner::RunError;
+        match e {
+            RunError::BadInput(m) => bad_input(m),
+            RunError::Plan(f) => f.into(),
+            other => Failure {
+                kind: Kind::Runtime,
+                error: match other {
+                    RunError::Ground(g) => g.into(),
+                    RunError::Link(l) => l.into(),
+                    other => anyhow::anyhow!("{other}"),
+                },
+                plan_kind: None,
+            },
+        }
+    }
+}

@@ -1,10 +1,11 @@
 //! Obstacles the map does not have (`--hidden`), the simulated sensor's OBSTACLE_DISTANCE read by
 //! an independent MAVLink client (pymavlink), and flights through the true world.
 
+mod common;
+
 use assert_cmd::Command;
-use std::io::{BufRead, BufReader};
+use common::{SimProcess, python};
 use std::path::Path;
-use std::process::Stdio;
 use std::time::Duration;
 
 const HEADER: &str =
@@ -127,10 +128,6 @@ fn hidden_files_must_share_the_maps_home_and_ranges_are_checked() {
     assert!(r.stderr.contains("--sensor-range-m"), "{}", r.stderr);
 }
 
-fn python() -> String {
-    std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
 #[test]
 #[ignore = "needs Python with pymavlink (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn pymavlink_reads_obstacle_distance_from_skyplan_sim() {
@@ -147,44 +144,27 @@ fn pymavlink_reads_obstacle_distance_from_skyplan_sim() {
         "hidden.csv",
         &format!("{HEADER}0,27,10,10,2,10\n"),
     );
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
-        .args([
-            "sim",
-            "--listen",
-            "tcp:127.0.0.1:0",
-            "--map",
-            &map,
-            "--hidden",
-            &hidden,
-            "--ekf-delay-s",
-            "0",
-            "--speedup",
-            "2",
-            "--duration-s",
-            "60",
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let first = lines.next().unwrap().unwrap();
-    let address = first
-        .split_whitespace()
-        .find(|w| w.starts_with("tcp:"))
-        .unwrap_or_else(|| panic!("no address in {first:?}"))
-        .trim_end_matches(',')
-        .to_string();
-    std::thread::spawn(move || for _ in lines {});
+    let sim = SimProcess::start(&[
+        "--map",
+        &map,
+        "--hidden",
+        &hidden,
+        "--ekf-delay-s",
+        "0",
+        "--speedup",
+        "2",
+        "--duration-s",
+        "60",
+    ]);
     let script = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/sensing/obstacle_distance_peer.py"
     );
     let out = std::process::Command::new(python())
-        .args([script, &address, "2500", "18"])
+        .args([script, &sim.address, "2500", "18"])
         .output()
         .unwrap();
-    let _ = child.kill();
-    let _ = child.wait();
+    drop(sim);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),

@@ -88,11 +88,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
         }))
         .map_err(err)?;
     chart
-        .draw_series(scene.obstacles.iter().map(|o| {
-            let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
-            let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
-            Rectangle::new([nw, se], OBSTACLE_COLOR.filled())
-        }))
+        .draw_series(scene.obstacles.iter().map(|o| footprint(o, OBSTACLE_COLOR)))
         .map_err(err)?;
 
     // A roadmap's edges thin and light, its connectors a little stronger.
@@ -120,11 +116,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
     );
     if let Some(f) = scene.flight {
         chart
-            .draw_series(f.hidden.iter().map(|o| {
-                let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
-                let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
-                Rectangle::new([nw, se], HIDDEN_COLOR.filled())
-            }))
+            .draw_series(f.hidden.iter().map(|o| footprint(o, HIDDEN_COLOR)))
             .map_err(err)?;
         let r = flight_styles.2;
         chart
@@ -399,6 +391,13 @@ type TwoDots<C, DB> = ComposedElement<C, DB, Dot, Dot>;
 type Star<C, DB> = ComposedElement<C, DB, Polygon<(i32, i32)>, PathElement<(i32, i32)>>;
 
 /// A waypoint: a white disc ringed in the pruned path's blue.
+/// A box's footprint (east right, north up), filled.
+fn footprint(o: &skyplan_map::colliders::ObstacleBox, color: RGBColor) -> Rectangle<(f64, f64)> {
+    let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
+    let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
+    Rectangle::new([nw, se], color.filled())
+}
+
 fn waypoint_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
     let inner = r - (f64::from(r) * 0.45).round().max(1.0) as u32;
     EmptyElement::at(at)

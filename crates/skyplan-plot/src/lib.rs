@@ -47,6 +47,7 @@
 mod draw;
 mod heatmap;
 mod layout;
+pub mod plan_picture;
 mod profile;
 mod rects;
 mod text;

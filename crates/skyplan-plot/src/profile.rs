@@ -276,47 +276,34 @@ impl Panel {
     ) -> Result<(), PlotError> {
         let (x1, y1) = (self.x0 + self.w, self.y0 + self.h);
         let tick = (font * 0.45).round() as i32;
+        // A tick from `from` to `to`, its value at `at`, anchored (h, v).
+        let tick_mark = |v: f64, [from, to, at]: [(i32, i32); 3], (h, va): (HPos, VAlign)| {
+            root.draw(&PathElement::new(vec![from, to], FRAME_COLOR))
+                .map_err(err)?;
+            let text = format!("{v:.0}");
+            let label = Label {
+                text: &text,
+                size: font * 0.85,
+                at,
+                h,
+                v: va,
+                vertical: false,
+            };
+            draw_label(root, mode, &label)
+        };
         for x in ticks(self.xr.0, self.xr.1, f64::from(self.w) / (font * 6.0)) {
             let (px, _) = self.px(x, self.yr.0);
-            root.draw(&PathElement::new(
-                vec![(px, y1), (px, y1 + tick)],
-                FRAME_COLOR,
-            ))
-            .map_err(err)?;
-            let text = format!("{x:.0}");
-            draw_label(
-                root,
-                mode,
-                &Label {
-                    text: &text,
-                    size: font * 0.85,
-                    at: (px, y1 + tick + 3),
-                    h: HPos::Center,
-                    v: VAlign::Top,
-                    vertical: false,
-                },
-            )?;
+            let at = [(px, y1), (px, y1 + tick), (px, y1 + tick + 3)];
+            tick_mark(x, at, (HPos::Center, VAlign::Top))?;
         }
         for y in ticks(self.yr.0, self.yr.1, f64::from(self.h) / (font * 3.0)) {
             let (_, py) = self.px(self.xr.0, y);
-            root.draw(&PathElement::new(
-                vec![(self.x0 - tick, py), (self.x0, py)],
-                FRAME_COLOR,
-            ))
-            .map_err(err)?;
-            let text = format!("{y:.0}");
-            draw_label(
-                root,
-                mode,
-                &Label {
-                    text: &text,
-                    size: font * 0.85,
-                    at: (self.x0 - tick - 4, py),
-                    h: HPos::Right,
-                    v: VAlign::Middle,
-                    vertical: false,
-                },
-            )?;
+            let at = [
+                (self.x0 - tick, py),
+                (self.x0, py),
+                (self.x0 - tick - 4, py),
+            ];
+            tick_mark(y, at, (HPos::Right, VAlign::Middle))?;
         }
         root.draw(&Rectangle::new([(self.x0, self.y0), (x1, y1)], FRAME_COLOR))
             .map_err(err)?;
