@@ -108,13 +108,10 @@ impl From<skyplan_link::runner::RunError> for Failure {
         match e {
             RunError::BadInput(m) => bad_input(m),
             RunError::Plan(f) => f.into(),
+            // Transparent over the link's errors: their causes stay in the chain.
             other => Failure {
                 kind: Kind::Runtime,
-                error: match other {
-                    RunError::Ground(g) => g.into(),
-                    RunError::Link(l) => l.into(),
-                    other => anyhow::anyhow!("{other}"),
-                },
+                error: other.into(),
                 plan_kind: None,
             },
         }

@@ -246,12 +246,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
 
 /// Flight options out of range are bad input.
 fn check_flight_args(args: &FlyArgs) -> Result<()> {
-    if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
-        return Err(bad_input(format!(
-            "--speedup: expected 0.1 to 1000, found {}",
-            args.speedup
-        )));
-    }
+    crate::sim_cmd::check_speedup(args.speedup)?;
     for (name, v) in [
         ("--link-timeout-s", args.link_timeout_s),
         ("--wait-s", args.wait_s),

@@ -7,7 +7,7 @@ use crate::exit::{Failure, Result, bad_input};
 use crate::files::read_text;
 use crate::grid_args::NavigateArgs;
 use skyplan_cspace::Grid2;
-use skyplan_plan::{Ride, RideChange, RideRequest, Session};
+use skyplan_plan::{RideChange, RideRequest, Session};
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -42,43 +42,6 @@ pub fn run_navigate(args: NavigateArgs) -> Result<()> {
         Some(stopped_short) => Err(stopped_short),
         None => Ok(()),
     }
-}
-
-/// The human summary of a ride.
-fn print_ride(ride: &Ride) {
-    let grid = &ride.grid;
-    println!(
-        "map        {}: {} × {} cells of {} m",
-        ride.map,
-        grid.rows(),
-        grid.cols(),
-        grid.frame().cell_m
-    );
-    for (k, l) in ride.legs.iter().enumerate() {
-        let (n, e) = (l.target.north_m, l.target.east_m);
-        let how = match (l.reached, l.replaced) {
-            (true, _) => "reached",
-            (false, true) => "replaced",
-            (false, false) => "not reached",
-        };
-        println!(
-            "leg {:<6} N {n:.2} m, E {e:.2} m: steps {}..{}, {how}",
-            k + 1,
-            l.from_step,
-            l.to_step
-        );
-    }
-    println!(
-        "ride       {}: {} steps, {:.2} m travelled, min clearance {}",
-        if ride.reached { "reached" } else { "stopped" },
-        ride.steps,
-        ride.distance_m,
-        ride.min_clearance_m
-            .as_f64()
-            .map_or("unbounded (no obstacles)".to_string(), |m| format!(
-                "{m:.2} m"
-            ))
-    );
 }
 
 /// A position from the option, else the map's default, else a prompt on a terminal.
@@ -199,7 +162,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
             serde_json::to_string(&ride).map_err(crate::exit::runtime)?
         );
     } else {
-        print_ride(&ride);
+        print!("{ride}");
     }
     Ok(ride.stopped_short().map(Failure::from))
 }

@@ -7,27 +7,9 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 mod common;
-use common::{SimProcess, cmd, ok, python, skyplan, words};
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
+use common::{Run, SimProcess, cmd, ok, python, run_args, words};
 
 impl Run {
-    /// Asserts the exit code (both streams in the message).
-    fn expect_code(&self, code: i32) -> &Self {
-        assert_eq!(
-            self.code,
-            Some(code),
-            "stdout:\n{}\nstderr:\n{}",
-            self.stdout,
-            self.stderr
-        );
-        self
-    }
-
     /// Asserts that stdout holds each of `lines`.
     fn stdout_has(&self, lines: &[&str]) -> &Self {
         assert_holds("stdout", &self.stdout, lines);
@@ -80,16 +62,7 @@ fn assert_holds(what: &str, text: &str, needles: &[&str]) {
 
 /// Runs `skyplan LINE` (split into words) in `dir`, for at most two minutes.
 fn run(dir: &Path, line: &str) -> Run {
-    let out = skyplan(dir)
-        .args(words(line))
-        .timeout(Duration::from_secs(120))
-        .output()
-        .unwrap();
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    run_args(dir, &words(line))
 }
 
 /// The flight log as (header, rows).

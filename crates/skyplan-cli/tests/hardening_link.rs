@@ -141,16 +141,21 @@ fn read_messages(stream: TcpStream) -> mpsc::Receiver<(u32, MavMessage)> {
     rx
 }
 
-#[test]
-fn the_simulator_survives_a_hostile_peer_and_obeys_only_its_own_commands() {
-    let mut sim = SimProcess::start(&[
+/// `skyplan sim` at 5×, its EKF ready after 1 s, for long enough.
+fn hostile_sim() -> SimProcess {
+    SimProcess::start(&[
         "--speedup",
         "5",
         "--duration-s",
         "3000",
         "--ekf-delay-s",
         "1",
-    ]);
+    ])
+}
+
+#[test]
+fn the_simulator_survives_a_hostile_peer_and_obeys_only_its_own_commands() {
+    let mut sim = hostile_sim();
     let mut s = TcpStream::connect(("127.0.0.1", sim.port)).unwrap();
     let rx = read_messages(s.try_clone().unwrap());
     let mut seed = 0x9E37_79B9_7F4A_7C15;
@@ -283,14 +288,7 @@ impl Drop for Proxy {
 
 #[test]
 fn fly_completes_its_flight_through_a_hostile_link() {
-    let sim = SimProcess::start(&[
-        "--speedup",
-        "5",
-        "--duration-s",
-        "3000",
-        "--ekf-delay-s",
-        "1",
-    ]);
+    let sim = hostile_sim();
     let proxy = Proxy::start(sim.port);
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_skyplan"))

@@ -3,34 +3,11 @@
 
 mod common;
 
-use assert_cmd::Command;
-use common::{SimProcess, python};
+use common::{Run, SimProcess, python, run_args as run};
 use std::path::Path;
-use std::time::Duration;
 
 const HEADER: &str =
     "lat0 37.792480, lon0 -122.397450\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n";
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn run(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .current_dir(dir)
-        .args(args)
-        .timeout(Duration::from_secs(120))
-        .output()
-        .unwrap();
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let path = dir.join(name);
@@ -38,8 +15,10 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
     path.display().to_string()
 }
 
-/// `fly --sim` at 50× from home to N 60, E 30 with `hidden` in the simulated world.
-fn fly_to_60_30(dir: &Path, hidden: &str) -> Run {
+/// `fly --sim` at 50× from home to N 60, E 30 with one hidden box (a colliders line) in the
+/// simulated world; the exit code must be `code`.
+fn fly_to_60_30(dir: &Path, hidden_box: &str, code: i32) -> Run {
+    let hidden = &write(dir, "hidden.csv", &format!("{HEADER}{hidden_box}\n"));
     let line = [
         "fly",
         "--sim",
@@ -53,26 +32,16 @@ fn fly_to_60_30(dir: &Path, hidden: &str) -> Run {
         .into_iter()
         .chain([hidden, "--timeout-s", "60"])
         .collect();
-    run(dir, &args)
+    let r = run(dir, &args);
+    r.expect_code(code);
+    r
 }
 
 #[test]
 fn fly_sim_lands_past_a_hidden_box_off_the_route() {
     let dir = tempfile::tempdir().unwrap();
     // 60 m south-west of home: the route to (60, 30) goes north-east.
-    let hidden = write(
-        dir.path(),
-        "hidden.csv",
-        &format!("{HEADER}-40,-40,10,3,3,10\n"),
-    );
-    let r = fly_to_60_30(dir.path(), &hidden);
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
+    let r = fly_to_60_30(dir.path(), "-40,-40,10,3,3,10", 0);
     assert!(r.stdout.contains("no collision"), "{}", r.stdout);
 }
 
@@ -80,19 +49,7 @@ fn fly_sim_lands_past_a_hidden_box_off_the_route() {
 fn a_hidden_box_on_the_route_without_a_watcher_is_a_collision_in_the_true_world() {
     let dir = tempfile::tempdir().unwrap();
     // A 20 m tower on the goal itself: the vehicle flies into it at 5 m.
-    let hidden = write(
-        dir.path(),
-        "hidden.csv",
-        &format!("{HEADER}60,30,10,3,3,10\n"),
-    );
-    let r = fly_to_60_30(dir.path(), &hidden);
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
+    let r = fly_to_60_30(dir.path(), "60,30,10,3,3,10", 1);
     assert!(r.stdout.contains("track      COLLISION"), "{}", r.stdout);
     assert!(r.stderr.contains("hit obstacle"), "{}", r.stderr);
 }

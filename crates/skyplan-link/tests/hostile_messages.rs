@@ -11,6 +11,12 @@ use skyplan_link::messages::{
 };
 use skyplan_link::vehicle::fuzzing::SimHarness;
 
+/// Arm! to `target_system`.
+fn arm(target_system: u8) -> MavMessage {
+    let p = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    command_long((target_system, 1), MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, p)
+}
+
 #[test]
 fn the_simulator_obeys_only_messages_addressed_to_it() {
     let mut sim = SimHarness::new();
@@ -19,14 +25,7 @@ fn the_simulator_obeys_only_messages_addressed_to_it() {
     // Addressed to system 9: ignored (this was obeyed for SET_MODE before).
     let _ = sim.handle(set_mode(9, 4), 0.1);
     assert_eq!(sim.state().mode, SimMode::Stabilize);
-    let replies = sim.handle(
-        command_long(
-            (9, 1),
-            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
-            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        ),
-        0.1,
-    );
+    let replies = sim.handle(arm(9), 0.1);
     assert!(!sim.state().armed);
     assert!(
         !replies
@@ -37,14 +36,7 @@ fn the_simulator_obeys_only_messages_addressed_to_it() {
     // Addressed to us (1) or to everyone (0): obeyed.
     let _ = sim.handle(set_mode(1, 4), 0.1);
     assert_eq!(sim.state().mode, SimMode::Guided);
-    let replies = sim.handle(
-        command_long(
-            (0, 1),
-            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
-            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        ),
-        0.1,
-    );
+    let replies = sim.handle(arm(0), 0.1);
     assert!(sim.state().armed);
     assert!(replies.iter().any(|m| matches!(
         m,

@@ -7,7 +7,7 @@ use plotters::style::text_anchor::HPos;
 
 use crate::layout::{LegendKind, PlotLayout};
 use crate::rects::blocked_rects;
-use crate::text::{Label, TextMode, VAlign, draw_label};
+use crate::text::{Label, TextMode, VAlign, draw_label, draw_tick};
 use crate::{PlotError, Scene};
 
 const CSPACE_COLOR: RGBColor = RGBColor(204, 207, 212);
@@ -181,47 +181,25 @@ pub(crate) fn draw<DB: DrawingBackend>(
     let tick_size = l.fonts.tick;
     for &e in &l.x_ticks {
         let x = l.pixel_of_ne(l.north_m.0, e).0;
-        root.draw(&PathElement::new(
-            vec![(x, y1), (x, y1 + l.tick_len)],
-            FRAME_COLOR,
-        ))
-        .map_err(err)?;
+        let at = [
+            (x, y1),
+            (x, y1 + l.tick_len),
+            (x, y1 + l.tick_len + l.tick_gap),
+        ];
         let text = l.tick_label(e);
-        let at = (x, y1 + l.tick_len + l.tick_gap);
-        draw_label(
-            root,
-            mode,
-            &Label {
-                text: &text,
-                size: tick_size,
-                at,
-                h: HPos::Center,
-                v: VAlign::Top,
-                vertical: false,
-            },
-        )?;
+        let anchor = (HPos::Center, VAlign::Top);
+        draw_tick(root, mode, (at, FRAME_COLOR), (&text, tick_size), anchor)?;
     }
     for &n in &l.y_ticks {
         let y = l.pixel_of_ne(n, l.east_m.0).1;
-        root.draw(&PathElement::new(
-            vec![(x0 - l.tick_len, y), (x0, y)],
-            FRAME_COLOR,
-        ))
-        .map_err(err)?;
+        let at = [
+            (x0 - l.tick_len, y),
+            (x0, y),
+            (x0 - l.tick_len - l.tick_gap, y),
+        ];
         let text = l.tick_label(n);
-        let at = (x0 - l.tick_len - l.tick_gap, y);
-        draw_label(
-            root,
-            mode,
-            &Label {
-                text: &text,
-                size: tick_size,
-                at,
-                h: HPos::Right,
-                v: VAlign::Middle,
-                vertical: false,
-            },
-        )?;
+        let anchor = (HPos::Right, VAlign::Middle);
+        draw_tick(root, mode, (at, FRAME_COLOR), (&text, tick_size), anchor)?;
     }
 
     // Axis titles and the picture's title.

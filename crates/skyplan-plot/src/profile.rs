@@ -7,7 +7,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
 use skyplan_map::colliders::ObstacleBox;
 
-use crate::text::{Label, TextMode, VAlign, draw_label, ensure_font};
+use crate::text::{Label, TextMode, VAlign, draw_label, draw_tick, ensure_font};
 use crate::{MAX_SIZE_PX, MIN_SIZE_PX, PlotError, PlotFormat};
 
 const ROUTE_COLOR: RGBColor = RGBColor(31, 96, 196);
@@ -276,25 +276,12 @@ impl Panel {
     ) -> Result<(), PlotError> {
         let (x1, y1) = (self.x0 + self.w, self.y0 + self.h);
         let tick = (font * 0.45).round() as i32;
-        // A tick from `from` to `to`, its value at `at`, anchored (h, v).
-        let tick_mark = |v: f64, [from, to, at]: [(i32, i32); 3], (h, va): (HPos, VAlign)| {
-            root.draw(&PathElement::new(vec![from, to], FRAME_COLOR))
-                .map_err(err)?;
-            let text = format!("{v:.0}");
-            let label = Label {
-                text: &text,
-                size: font * 0.85,
-                at,
-                h,
-                v: va,
-                vertical: false,
-            };
-            draw_label(root, mode, &label)
-        };
         for x in ticks(self.xr.0, self.xr.1, f64::from(self.w) / (font * 6.0)) {
             let (px, _) = self.px(x, self.yr.0);
             let at = [(px, y1), (px, y1 + tick), (px, y1 + tick + 3)];
-            tick_mark(x, at, (HPos::Center, VAlign::Top))?;
+            let text = format!("{x:.0}");
+            let anchor = (HPos::Center, VAlign::Top);
+            draw_tick(root, mode, (at, FRAME_COLOR), (&text, font * 0.85), anchor)?;
         }
         for y in ticks(self.yr.0, self.yr.1, f64::from(self.h) / (font * 3.0)) {
             let (_, py) = self.px(self.xr.0, y);
@@ -303,7 +290,9 @@ impl Panel {
                 (self.x0, py),
                 (self.x0 - tick - 4, py),
             ];
-            tick_mark(y, at, (HPos::Right, VAlign::Middle))?;
+            let text = format!("{y:.0}");
+            let anchor = (HPos::Right, VAlign::Middle);
+            draw_tick(root, mode, (at, FRAME_COLOR), (&text, font * 0.85), anchor)?;
         }
         root.draw(&Rectangle::new([(self.x0, self.y0), (x1, y1)], FRAME_COLOR))
             .map_err(err)?;
