@@ -116,11 +116,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
-    let out = match args.out.clone().or(config.out.clone()) {
+    let out = match args.out.clone().or(config.path(&config.text.out)) {
         Some(path) => {
             let (target, format) = crate::plan_cmd::output_file(
                 &path,
-                args.format.as_deref().or(config.format.as_deref()),
+                args.format.as_deref().or(config.text.format.as_deref()),
             )?;
             Some((path, target, format))
         }
