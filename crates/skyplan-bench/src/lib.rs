@@ -19,7 +19,9 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod grid_bench;
 mod peer_pathfinding;
+pub mod python_peers;
 pub mod replay;
 pub mod three_d;
 
@@ -380,7 +382,35 @@ pub fn format_table(rows: &[Row]) -> String {
 /// The Python peers' output (one JSON object per line: `peer`, `query`, `time_s`, `cost`, or
 /// `unavailable`) as runs, and notes for the unavailable ones.
 pub fn parse_peer_lines(text: &str) -> (Vec<Run>, Vec<String>) {
-    let mut runs: Vec<Run> = Vec::new();
+    let (runs, notes) = peer_lines(text, |v| (v["query"].as_u64().unwrap_or(0) as usize, v));
+    let runs = runs
+        .into_iter()
+        .map(|(peer, recs)| Run {
+            records: recs
+                .into_iter()
+                .map(|(query, v)| Record {
+                    planner: peer.clone(),
+                    query,
+                    time_us: v["time_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
+                    expansions: None,
+                    cost: v["cost"].as_f64(),
+                })
+                .collect(),
+            planner: peer,
+            precompute_us: 0.0,
+            peak_rss_bytes: None,
+        })
+        .collect();
+    (runs, notes)
+}
+
+/// Peers' JSON lines grouped by `peer` in order of appearance, each line made a record by
+/// `record`; a line with `unavailable` becomes a note instead.
+pub(crate) fn peer_lines<R>(
+    text: &str,
+    record: impl Fn(serde_json::Value) -> R,
+) -> (Vec<(String, Vec<R>)>, Vec<String>) {
+    let mut runs: Vec<(String, Vec<R>)> = Vec::new();
     let mut notes = Vec::new();
     for line in text.lines() {
         let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
@@ -393,21 +423,10 @@ pub fn parse_peer_lines(text: &str) -> (Vec<Run>, Vec<String>) {
             ));
             continue;
         }
-        let record = Record {
-            planner: peer.clone(),
-            query: v["query"].as_u64().unwrap_or(0) as usize,
-            time_us: v["time_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
-            expansions: None,
-            cost: v["cost"].as_f64(),
-        };
-        match runs.iter_mut().find(|r| r.planner == peer) {
-            Some(r) => r.records.push(record),
-            None => runs.push(Run {
-                planner: peer,
-                records: vec![record],
-                precompute_us: 0.0,
-                peak_rss_bytes: None,
-            }),
+        let rec = record(v);
+        match runs.iter_mut().find(|(n, _)| *n == peer) {
+            Some((_, r)) => r.push(rec),
+            None => runs.push((peer, vec![rec])),
         }
     }
     (runs, notes)

@@ -140,29 +140,54 @@ pub fn format_table(rows: &[Row3]) -> String {
 
 /// The OMPL peers' output (one JSON object per line) as runs and notes.
 pub fn parse_peer_lines(text: &str) -> (Vec<(String, Vec<Rec3>)>, Vec<String>) {
-    let mut runs: Vec<(String, Vec<Rec3>)> = Vec::new();
-    let mut notes = Vec::new();
-    for line in text.lines() {
-        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
-            continue;
-        };
-        let peer = v["peer"].as_str().unwrap_or("?").to_string();
-        if let Some(why) = v["unavailable"].as_str() {
-            notes.push(format!(
-                "{peer} unavailable ({why}); run bench/setup-peers.sh"
-            ));
-            continue;
-        }
+    crate::peer_lines(text, |v| {
         let solved = v["solved"].as_bool().unwrap_or(false);
-        let rec = Rec3 {
+        Rec3 {
             time_us: v["time_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
             length_m: if solved { v["length_m"].as_f64() } else { None },
             recheck_ok: v["recheck_ok"].as_bool().unwrap_or(false),
-        };
-        match runs.iter_mut().find(|(n, _)| *n == peer) {
-            Some((_, r)) => r.push(rec),
-            None => runs.push((peer, vec![rec])),
         }
+    })
+}
+
+/// skyplan's RRT-Connect, PRM and RRT\* through the planning API on `qs` (seeds `seed + k`),
+/// each within `budget_s` (the API re-checks every path exactly: a route that failed it would
+/// be an internal failure, never a solved row).
+pub fn skyplan_runs(
+    session: &mut skyplan_plan::Session,
+    qs: &[(Neu, Neu)],
+    safety_m: f64,
+    seed: u64,
+    budget_s: f64,
+) -> Vec<(String, Vec<Rec3>)> {
+    use skyplan_plan::{PlanRequest, PlannerId};
+    let mut runs = Vec::new();
+    for planner in [PlannerId::RrtConnect, PlannerId::Prm, PlannerId::RrtStar] {
+        let mut recs = Vec::new();
+        for (k, &(start, goal)) in qs.iter().enumerate() {
+            let request = PlanRequest {
+                planner: Some(planner),
+                start_ne: Some([start[0], start[1]]),
+                goal_ne: Some([goal[0], goal[1]]),
+                start_alt_m: Some(start[2]),
+                goal_alt_m: Some(goal[2]),
+                safety_m: Some(safety_m),
+                seed: Some(seed + k as u64),
+                time_limit_ms: Some((budget_s * 1e3) as u64),
+                ..Default::default()
+            };
+            let plan = session.plan(&request).ok();
+            let first_us = plan
+                .as_ref()
+                .and_then(|p| p.details.get("first_solution_us"))
+                .and_then(|v| v.as_f64());
+            recs.push(Rec3 {
+                time_us: first_us.unwrap_or(budget_s * 1e6),
+                length_m: plan.as_ref().map(|p| p.mission_length_m),
+                recheck_ok: plan.is_some(),
+            });
+        }
+        runs.push((format!("skyplan {planner}"), recs));
     }
-    (runs, notes)
+    runs
 }

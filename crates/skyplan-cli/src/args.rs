@@ -293,15 +293,9 @@ pub struct ScenArgs {
     pub planner: PlannerId,
 }
 
+/// Where a colliders map is sliced into a grid (`bench`, `navigate`).
 #[derive(Debug, Args)]
-pub struct BenchArgs {
-    /// 3D mode: skyplan's PRM, RRT-Connect and RRT* (and OMPL's with --peers) on random free 3D
-    /// queries plus the FCND route, among the boxes grown by --safety-m.
-    #[arg(long = "3d")]
-    pub three_d: bool,
-    /// Map: FCND colliders .csv (default: the bundled city map) or MovingAI .map.
-    #[arg(long, value_name = "FILE")]
-    pub map: Option<PathBuf>,
+pub struct SliceArgs {
     /// Flight altitude for colliders maps, metres.
     #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
     pub alt_m: f64,
@@ -311,6 +305,29 @@ pub struct BenchArgs {
     /// Cell size for colliders maps, metres.
     #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
     pub cell_m: f64,
+}
+
+impl SliceArgs {
+    pub fn spec(&self) -> skyplan_cspace::GridSpec {
+        skyplan_cspace::GridSpec {
+            alt_m: self.alt_m,
+            safety_m: self.safety_m,
+            cell_m: self.cell_m,
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// 3D mode: skyplan's PRM, RRT-Connect and RRT* (and OMPL's with --peers) on random free 3D
+    /// queries plus the FCND route, among the boxes grown by --safety-m.
+    #[arg(long = "3d")]
+    pub three_d: bool,
+    /// Map: FCND colliders .csv (default: the bundled city map) or MovingAI .map.
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    #[command(flatten)]
+    pub slice: SliceArgs,
     /// Number of random far-apart queries (with --scen: at most this many scenarios) [default: 26].
     #[arg(long, value_name = "N")]
     pub random: Option<usize>,

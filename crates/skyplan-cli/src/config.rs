@@ -11,47 +11,28 @@
 //! ```
 
 use crate::exit::{Result, bad_input};
-use skyplan_plan::PlanRequest;
+use skyplan_plan::ConfigText;
 use std::path::{Path, PathBuf};
 
-/// A config file: the request and the CLI's own keys.
+/// A config file's keys and where it is: its file keys are relative to its directory.
 #[derive(Debug, Default)]
 pub struct Config {
-    pub request: PlanRequest,
-    pub map: Option<PathBuf>,
-    pub out: Option<PathBuf>,
-    pub format: Option<String>,
-    pub plot: Option<PathBuf>,
+    pub text: ConfigText,
+    dir: PathBuf,
 }
 
 impl Config {
-    /// Reads a config file; paths inside it become relative to its directory.
+    /// Reads a config file.
     pub fn load(path: &Path) -> Result<Self> {
         let text = crate::files::read_text(path)?;
-        let name = path.display();
-        let parsed = skyplan_plan::parse_config_toml(&text)
-            .map_err(|e| bad_input(format!("{name}: {e}")))?;
-        let base = path.parent().unwrap_or(Path::new(""));
-        let relative = |p: Option<String>| {
-            p.map(|p| {
-                let p = PathBuf::from(p);
-                if p.is_relative() { base.join(p) } else { p }
-            })
-        };
-        let skyplan_plan::ConfigText {
-            request,
-            map,
-            out,
-            format,
-            plot,
-        } = parsed;
-        let (map, out, plot) = (relative(map), relative(out), relative(plot));
-        Ok(Config {
-            request,
-            map,
-            out,
-            format,
-            plot,
-        })
+        let text = skyplan_plan::parse_config_toml(&text)
+            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        Ok(Config { text, dir })
+    }
+
+    /// A file key (`map`, `out`, `plot`) as a path: a relative one from the config's directory.
+    pub fn path(&self, key: &Option<String>) -> Option<PathBuf> {
+        key.as_ref().map(|p| self.dir.join(p))
     }
 }

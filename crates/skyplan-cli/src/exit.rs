@@ -101,3 +101,19 @@ pub fn runtime(message: impl std::fmt::Display) -> Failure {
         plan_kind: None,
     }
 }
+
+impl From<skyplan_link::runner::RunError> for Failure {
+    fn from(e: skyplan_link::runner::RunError) -> Self {
+        use skyplan_link::runner::RunError;
+        match e {
+            RunError::BadInput(m) => bad_input(m),
+            RunError::Plan(f) => f.into(),
+            // Transparent over the link's errors: their causes stay in the chain.
+            other => Failure {
+                kind: Kind::Runtime,
+                error: other.into(),
+                plan_kind: None,
+            },
+        }
+    }
+}

@@ -135,15 +135,8 @@ pub struct NavigateArgs {
     /// [default: the bundled FCND city map].
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
-    /// Flight altitude for colliders maps, metres.
-    #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
-    pub alt_m: f64,
-    /// Safety margin for colliders maps, metres.
-    #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
-    pub safety_m: f64,
-    /// Cell size for colliders maps, metres.
-    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
-    pub cell_m: f64,
+    #[command(flatten)]
+    pub slice: crate::args::SliceArgs,
     /// Where the vehicle starts, metres north,east of the map's origin.
     #[arg(long, value_name = "N,E", value_parser = parse_pair, allow_hyphen_values = true)]
     pub start_ne: Option<Pair>,

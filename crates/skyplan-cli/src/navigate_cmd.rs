@@ -7,7 +7,7 @@ use crate::exit::{Failure, Result, bad_input};
 use crate::files::read_text;
 use crate::grid_args::NavigateArgs;
 use skyplan_cspace::Grid2;
-use skyplan_plan::{Ride, RideChange, RideRequest, Session};
+use skyplan_plan::{RideChange, RideRequest, Session};
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -44,61 +44,6 @@ pub fn run_navigate(args: NavigateArgs) -> Result<()> {
     }
 }
 
-/// The human summary of a ride.
-fn print_ride(ride: &Ride) {
-    let grid = &ride.grid;
-    println!(
-        "map        {}: {} × {} cells of {} m",
-        ride.map,
-        grid.rows(),
-        grid.cols(),
-        grid.frame().cell_m
-    );
-    for (k, l) in ride.legs.iter().enumerate() {
-        let (n, e) = (l.target.north_m, l.target.east_m);
-        let how = match (l.reached, l.replaced) {
-            (true, _) => "reached",
-            (false, true) => "replaced",
-            (false, false) => "not reached",
-        };
-        println!(
-            "leg {:<6} N {n:.2} m, E {e:.2} m: steps {}..{}, {how}",
-            k + 1,
-            l.from_step,
-            l.to_step
-        );
-    }
-    println!(
-        "ride       {}: {} steps, {:.2} m travelled, min clearance {}",
-        if ride.reached { "reached" } else { "stopped" },
-        ride.steps,
-        ride.distance_m,
-        ride.min_clearance_m
-            .as_f64()
-            .map_or("unbounded (no obstacles)".to_string(), |m| format!(
-                "{m:.2} m"
-            ))
-    );
-}
-
-/// The normalised cost map with the ride, as a PNG heat map.
-fn write_heat(target: &crate::files::Target, ride: &Ride) -> Result<()> {
-    let heat = skyplan_plot::Heatmap {
-        title: format!(
-            "navigation over the inflated cost map: {} steps",
-            ride.trace.len().saturating_sub(1)
-        ),
-        grid: &ride.grid,
-        values: &ride.costs,
-        measure: "Nav2 cost (0 free to 254 lethal)",
-        path: &ride.trace,
-        start: Some(ride.ends.0),
-        goal: Some(ride.ends.1),
-    };
-    let bytes = skyplan_plot::render_heatmap_png(&heat, 1000).map_err(crate::exit::runtime)?;
-    crate::files::write_target(target, &bytes)
-}
-
 /// A position from the option, else the map's default, else a prompt on a terminal.
 fn endpoint(
     session: &mut Session,
@@ -113,7 +58,7 @@ fn endpoint(
         (None, Some([n, e])) => Pair(n, e),
         (None, None) if std::io::stdin().is_terminal() => {
             let grid: std::sync::Arc<Grid2> =
-                session.grid(args.alt_m, args.safety_m, args.cell_m)?;
+                session.grid(args.slice.alt_m, args.slice.safety_m, args.slice.cell_m)?;
             crate::show::ask_position(&grid, which)?
         }
         (None, None) => {
@@ -163,9 +108,9 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
                 target_ne: [c.target.0, c.target.1],
             })
             .collect(),
-        alt_m: args.alt_m,
-        safety_m: args.safety_m,
-        cell_m: args.cell_m,
+        alt_m: args.slice.alt_m,
+        safety_m: args.slice.safety_m,
+        cell_m: args.slice.cell_m,
         connectivity: args.connectivity,
         corner_cutting: args.corner_cutting,
         inscribed_radius_m: g.inscribed_radius_m,
@@ -207,7 +152,9 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         crate::show::print(&ride.grid, start, goal, &ride.trace, ride.model, false);
     }
     if let Some(target) = &plot {
-        write_heat(target, &ride)?;
+        let bytes =
+            skyplan_plot::plan_picture::ride_heatmap_png(&ride).map_err(crate::exit::runtime)?;
+        crate::files::write_target(target, &bytes)?;
     }
     if args.json {
         println!(
@@ -215,7 +162,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
             serde_json::to_string(&ride).map_err(crate::exit::runtime)?
         );
     } else {
-        print_ride(&ride);
+        print!("{ride}");
     }
     Ok(ride.stopped_short().map(Failure::from))
 }

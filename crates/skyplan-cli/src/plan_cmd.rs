@@ -42,8 +42,8 @@ fn check_outputs(
     world: &World,
     planner: PlannerId,
 ) -> Result<Outputs> {
-    let given_out = args.out.clone().or(cfg.out.clone());
-    let format = args.format.clone().or(cfg.format.clone());
+    let given_out = args.out.clone().or(cfg.path(&cfg.text.out));
+    let format = args.format.clone().or(cfg.text.format.clone());
     let waypoints = match (given_out, world.frame()) {
         (Some(out), None) => {
             return Err(bad_input(format!(
@@ -59,7 +59,7 @@ fn check_outputs(
         }
         (None, None) => None,
     };
-    let plot = match args.plot.clone().or(cfg.plot.clone()) {
+    let plot = match args.plot.clone().or(cfg.path(&cfg.text.plot)) {
         Some(p) => {
             let kind = crate::picture::kind_for(&p, planner.info().family)?;
             Some((p.clone(), output_target("--plot", &p)?, kind))

@@ -34,6 +34,16 @@ pub(crate) fn load_hidden(
     Ok(hidden.boxes)
 }
 
+/// Checks `--speedup`: 0.1 to 1000 simulated seconds per wall second.
+pub(crate) fn check_speedup(k: f64) -> Result<()> {
+    if !(0.1..=1000.0).contains(&k) {
+        return Err(bad_input(format!(
+            "--speedup: expected 0.1 to 1000, found {k}"
+        )));
+    }
+    Ok(())
+}
+
 /// Checks `--sensor-range-m`: 0.5 to 650 m (OBSTACLE_DISTANCE carries centimetres in 16 bits).
 pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
     if !(0.5..=650.0).contains(&m) {
@@ -45,12 +55,7 @@ pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
 }
 
 pub fn run(args: SimArgs) -> Result<()> {
-    if !(args.speedup >= 0.1 && args.speedup <= 1000.0) {
-        return Err(bad_input(format!(
-            "--speedup: expected 0.1 to 1000, found {}",
-            args.speedup
-        )));
-    }
+    check_speedup(args.speedup)?;
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
     let (map_name, text) = match &args.map {
         Some(path) => (path.display().to_string(), read_text(path)?),
@@ -154,22 +159,8 @@ pub fn run(args: SimArgs) -> Result<()> {
         |s| live.sim_status(s),
     );
     println!(
-        "sim        stopped after {:.1} s simulated, {:.1} s wall; flown {:.1} m, {}",
-        report.sim_time_s,
-        report.wall_time_s,
-        report.distance_m,
-        match report.track.collision() {
-            Some(c) if c.box_index >= map_boxes => format!(
-                "COLLISION with hidden obstacle #{} at {:.1} s",
-                c.box_index - map_boxes,
-                c.time_s
-            ),
-            Some(c) => format!(
-                "COLLISION with obstacle #{} at {:.1} s",
-                c.box_index, c.time_s
-            ),
-            None => "no collision".into(),
-        }
+        "{}",
+        skyplan_link::flight::sim_stopped_line(&report, map_boxes)
     );
     Ok(())
 }

@@ -141,12 +141,12 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
         Some(path) => Config::load(path)?,
         None => Config::default(),
     };
-    let map: Option<PathBuf> = a.map.clone().or(config.map.clone());
+    let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
     let limits = Limits {
         max_memory_bytes: a.max_memory.unwrap_or_else(crate::args::default_max_memory),
     };
     let world = load_world(map.as_deref(), &a.grid, &limits)?;
-    let request = typed_request(a).or(config.request.clone());
+    let request = typed_request(a).or(config.text.request.clone());
     Ok(Resolved {
         world,
         limits,

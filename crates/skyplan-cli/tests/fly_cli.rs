@@ -7,27 +7,9 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 mod common;
-use common::{cmd, ok, python, skyplan, words};
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
+use common::{Run, SimProcess, cmd, ok, python, run_args, words};
 
 impl Run {
-    /// Asserts the exit code (both streams in the message).
-    fn expect_code(&self, code: i32) -> &Self {
-        assert_eq!(
-            self.code,
-            Some(code),
-            "stdout:\n{}\nstderr:\n{}",
-            self.stdout,
-            self.stderr
-        );
-        self
-    }
-
     /// Asserts that stdout holds each of `lines`.
     fn stdout_has(&self, lines: &[&str]) -> &Self {
         assert_holds("stdout", &self.stdout, lines);
@@ -80,16 +62,7 @@ fn assert_holds(what: &str, text: &str, needles: &[&str]) {
 
 /// Runs `skyplan LINE` (split into words) in `dir`, for at most two minutes.
 fn run(dir: &Path, line: &str) -> Run {
-    let out = skyplan(dir)
-        .args(words(line))
-        .timeout(Duration::from_secs(120))
-        .output()
-        .unwrap();
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    run_args(dir, &words(line))
 }
 
 /// The flight log as (header, rows).
@@ -260,56 +233,12 @@ fn bad_addresses_and_missing_vehicles_are_clear_errors() {
     }
 }
 
-/// `skyplan sim` on a free port, with its address read from its first line.
-struct SimProcess {
-    child: std::process::Child,
-    address: String,
-}
-
-impl SimProcess {
-    fn start(speedup: &str) -> Self {
-        let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
-            .args([
-                "sim",
-                "--listen",
-                "tcp:127.0.0.1:0",
-                "--speedup",
-                speedup,
-                "--duration-s",
-                "120",
-            ])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .unwrap();
-        let stdout = child.stdout.take().unwrap();
-        let mut lines = BufReader::new(stdout).lines();
-        let first = lines.next().unwrap().unwrap();
-        let address = first
-            .split_whitespace()
-            .find(|w| w.starts_with("tcp:"))
-            .unwrap_or_else(|| panic!("no address in {first:?}"))
-            .trim_end_matches(',')
-            .to_string();
-        // Keep draining its output so that it never blocks on a full pipe.
-        std::thread::spawn(move || for _ in lines {});
-        Self { child, address }
-    }
-}
-
 /// Runs `skyplan fly --connect ADDRESS LINE` in a new directory against `skyplan sim` (20×) in
 /// its own process.
 fn fly_a_separate_sim(line: &str) -> Run {
-    let sim = SimProcess::start("20");
+    let sim = SimProcess::start(&["--speedup", "20", "--duration-s", "120"]);
     let dir = tempfile::tempdir().unwrap();
     run(dir.path(), &format!("fly --connect {} {line}", sim.address))
-}
-
-impl Drop for SimProcess {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 #[test]
@@ -322,7 +251,7 @@ fn fly_connects_to_a_separate_sim_process() {
 #[test]
 #[ignore = "needs Python with pymavlink (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn pymavlink_drives_skyplan_sim() {
-    let sim = SimProcess::start("10");
+    let sim = SimProcess::start(&["--speedup", "10", "--duration-s", "120"]);
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fly/pymavlink_peer.py");
     let t0 = Instant::now();
     let out = std::process::Command::new(python())

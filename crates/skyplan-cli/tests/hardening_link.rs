@@ -4,66 +4,20 @@
 //! lasts 2 s here (the issue says 10 s: the behaviour is the same — every message of the flood
 //! is read and dropped as not ours — and 10 s would only make the test slower).
 
+mod common;
+
+use common::SimProcess;
 use mavlink::dialects::common::*;
-use mavlink::{MavHeader, MavlinkVersion};
-use std::io::{BufRead, BufReader, Read, Write};
+use skyplan_link::messages::{command_long, frame_v2, gcs_heartbeat, vehicle_heartbeat};
+use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
 const FLOOD_RATE_HZ: usize = 10_000;
 const FLOOD_S: f64 = 2.0;
-
-/// `skyplan sim` on a free port; its address from its first line.
-struct Sim {
-    child: Child,
-    port: u16,
-}
-
-impl Sim {
-    fn start(speedup: &str) -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_skyplan"))
-            .args(["sim", "--listen", "tcp:127.0.0.1:0", "--speedup", speedup])
-            .args(["--duration-s", "3000", "--ekf-delay-s", "1"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .unwrap();
-        let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-        let first = lines.next().unwrap().unwrap();
-        let port = first
-            .split_whitespace()
-            .find_map(|w| w.trim_end_matches(',').strip_prefix("tcp:127.0.0.1:"))
-            .and_then(|p| p.parse().ok())
-            .unwrap_or_else(|| panic!("no address in {first:?}"));
-        std::thread::spawn(move || for _ in lines {});
-        Self { child, port }
-    }
-
-    fn running(&mut self) -> bool {
-        self.child.try_wait().unwrap().is_none()
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn frame(system_id: u8, message: &MavMessage) -> Vec<u8> {
-    let mut out = Vec::new();
-    let header = MavHeader {
-        system_id: u32::from(system_id),
-        component_id: 1,
-        sequence: 0,
-    };
-    mavlink::write_versioned_msg(&mut out, MavlinkVersion::V2, header, message).unwrap();
-    out
-}
 
 /// Deterministic garbage (xorshift), salted with MAVLink's start bytes so the parser has to
 /// resynchronise on false starts.
@@ -82,43 +36,6 @@ fn garbage(seed: &mut u64, n: usize) -> Vec<u8> {
         .collect()
 }
 
-fn quad_heartbeat(armed: bool) -> MavMessage {
-    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: 4,
-        mavtype: MavType::MAV_TYPE_QUADROTOR,
-        autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
-        base_mode: if armed {
-            MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED | MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-        } else {
-            MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-        },
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-    })
-}
-
-fn gcs_heartbeat() -> MavMessage {
-    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        mavtype: MavType::MAV_TYPE_GCS,
-        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-        ..Default::default()
-    })
-}
-
-fn command(target_system: u8, command: MavCmd, p1: f32, p2: f32, p7: f32) -> MavMessage {
-    MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-        target_system,
-        target_component: 1,
-        command,
-        param1: p1,
-        param2: p2,
-        param7: p7,
-        ..Default::default()
-    })
-}
-
 /// One batch of hostility: garbage, frames cut short, and messages from system 42 — it claims
 /// to be an armed vehicle 25 km away, and commands system 9 to arm, switch to GUIDED, take off.
 fn hostile_batch(seed: &mut u64) -> Vec<u8> {
@@ -131,11 +48,29 @@ fn hostile_batch(seed: &mut u64) -> Vec<u8> {
         relative_alt: 100_000,
         ..Default::default()
     });
-    let arm9 = command(9, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0, 0.0);
-    let guided9 = command(9, MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 4.0, 0.0);
-    let takeoff9 = command(9, MavCmd::MAV_CMD_NAV_TAKEOFF, 0.0, 0.0, 50.0);
-    for m in [&quad_heartbeat(true), &far, &arm9, &guided9, &takeoff9] {
-        let f = frame(42, m);
+    let arm9 = command_long(
+        (9, 1),
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    );
+    let guided9 = command_long(
+        (9, 1),
+        MavCmd::MAV_CMD_DO_SET_MODE,
+        [1.0, 4.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    );
+    let takeoff9 = command_long(
+        (9, 1),
+        MavCmd::MAV_CMD_NAV_TAKEOFF,
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 50.0],
+    );
+    for m in [
+        &vehicle_heartbeat(true, 4),
+        &far,
+        &arm9,
+        &guided9,
+        &takeoff9,
+    ] {
+        let f = frame_v2(42, m);
         // Truncated copy first, then the whole frame.
         out.extend_from_slice(&f[..f.len() / 2]);
         out.extend_from_slice(&f);
@@ -152,13 +87,17 @@ fn flood_slice() -> Vec<u8> {
         ..Default::default()
     });
     let messages = [
-        quad_heartbeat(true),
+        vehicle_heartbeat(true, 4),
         far,
-        command(9, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0, 0.0),
+        command_long(
+            (9, 1),
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        ),
         MavMessage::STATUSTEXT(STATUSTEXT_DATA::default()),
     ];
     (0..FLOOD_RATE_HZ / 100)
-        .flat_map(|i| frame(42, &messages[i % messages.len()]))
+        .flat_map(|i| frame_v2(42, &messages[i % messages.len()]))
         .collect()
 }
 
@@ -202,13 +141,25 @@ fn read_messages(stream: TcpStream) -> mpsc::Receiver<(u32, MavMessage)> {
     rx
 }
 
+/// `skyplan sim` at 5×, its EKF ready after 1 s, for long enough.
+fn hostile_sim() -> SimProcess {
+    SimProcess::start(&[
+        "--speedup",
+        "5",
+        "--duration-s",
+        "3000",
+        "--ekf-delay-s",
+        "1",
+    ])
+}
+
 #[test]
 fn the_simulator_survives_a_hostile_peer_and_obeys_only_its_own_commands() {
-    let mut sim = Sim::start("5");
+    let mut sim = hostile_sim();
     let mut s = TcpStream::connect(("127.0.0.1", sim.port)).unwrap();
     let rx = read_messages(s.try_clone().unwrap());
     let mut seed = 0x9E37_79B9_7F4A_7C15;
-    s.write_all(&frame(255, &gcs_heartbeat())).unwrap();
+    s.write_all(&frame_v2(255, &gcs_heartbeat())).unwrap();
     for _ in 0..20 {
         s.write_all(&hostile_batch(&mut seed)).unwrap();
     }
@@ -219,18 +170,16 @@ fn the_simulator_survives_a_hostile_peer_and_obeys_only_its_own_commands() {
     );
     assert!(sim.running(), "the simulator died under the flood");
     // Now a real request, addressed to the vehicle: answered, and the vehicle still obeys.
-    let interval = command(
-        1,
+    let interval = command_long(
+        (1, 1),
         MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
-        33.0,
-        100_000.0,
-        0.0,
+        [33.0, 100_000.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     );
     let deadline = Instant::now() + Duration::from_secs(30);
     let (mut acked, mut positions, mut last_heartbeat) = (false, 0, None);
     while Instant::now() < deadline && !(acked && positions >= 3 && last_heartbeat.is_some()) {
-        s.write_all(&frame(255, &gcs_heartbeat())).unwrap();
-        s.write_all(&frame(255, &interval)).unwrap();
+        s.write_all(&frame_v2(255, &gcs_heartbeat())).unwrap();
+        s.write_all(&frame_v2(255, &interval)).unwrap();
         let round = Instant::now() + Duration::from_millis(200);
         while let Some(left) = round.checked_duration_since(Instant::now()) {
             let Ok((sys, m)) = rx.recv_timeout(left) else {
@@ -339,7 +288,7 @@ impl Drop for Proxy {
 
 #[test]
 fn fly_completes_its_flight_through_a_hostile_link() {
-    let sim = Sim::start("5");
+    let sim = hostile_sim();
     let proxy = Proxy::start(sim.port);
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_skyplan"))

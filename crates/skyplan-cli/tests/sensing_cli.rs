@@ -1,35 +1,13 @@
 //! Obstacles the map does not have (`--hidden`), the simulated sensor's OBSTACLE_DISTANCE read by
 //! an independent MAVLink client (pymavlink), and flights through the true world.
 
-use assert_cmd::Command;
-use std::io::{BufRead, BufReader};
+mod common;
+
+use common::{Run, SimProcess, python, run_args as run};
 use std::path::Path;
-use std::process::Stdio;
-use std::time::Duration;
 
 const HEADER: &str =
     "lat0 37.792480, lon0 -122.397450\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n";
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn run(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::cargo_bin("skyplan")
-        .unwrap()
-        .current_dir(dir)
-        .args(args)
-        .timeout(Duration::from_secs(120))
-        .output()
-        .unwrap();
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let path = dir.join(name);
@@ -37,8 +15,10 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
     path.display().to_string()
 }
 
-/// `fly --sim` at 50× from home to N 60, E 30 with `hidden` in the simulated world.
-fn fly_to_60_30(dir: &Path, hidden: &str) -> Run {
+/// `fly --sim` at 50× from home to N 60, E 30 with one hidden box (a colliders line) in the
+/// simulated world; the exit code must be `code`.
+fn fly_to_60_30(dir: &Path, hidden_box: &str, code: i32) -> Run {
+    let hidden = &write(dir, "hidden.csv", &format!("{HEADER}{hidden_box}\n"));
     let line = [
         "fly",
         "--sim",
@@ -52,26 +32,16 @@ fn fly_to_60_30(dir: &Path, hidden: &str) -> Run {
         .into_iter()
         .chain([hidden, "--timeout-s", "60"])
         .collect();
-    run(dir, &args)
+    let r = run(dir, &args);
+    r.expect_code(code);
+    r
 }
 
 #[test]
 fn fly_sim_lands_past_a_hidden_box_off_the_route() {
     let dir = tempfile::tempdir().unwrap();
     // 60 m south-west of home: the route to (60, 30) goes north-east.
-    let hidden = write(
-        dir.path(),
-        "hidden.csv",
-        &format!("{HEADER}-40,-40,10,3,3,10\n"),
-    );
-    let r = fly_to_60_30(dir.path(), &hidden);
-    assert_eq!(
-        r.code,
-        Some(0),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
+    let r = fly_to_60_30(dir.path(), "-40,-40,10,3,3,10", 0);
     assert!(r.stdout.contains("no collision"), "{}", r.stdout);
 }
 
@@ -79,19 +49,7 @@ fn fly_sim_lands_past_a_hidden_box_off_the_route() {
 fn a_hidden_box_on_the_route_without_a_watcher_is_a_collision_in_the_true_world() {
     let dir = tempfile::tempdir().unwrap();
     // A 20 m tower on the goal itself: the vehicle flies into it at 5 m.
-    let hidden = write(
-        dir.path(),
-        "hidden.csv",
-        &format!("{HEADER}60,30,10,3,3,10\n"),
-    );
-    let r = fly_to_60_30(dir.path(), &hidden);
-    assert_eq!(
-        r.code,
-        Some(1),
-        "stdout:\n{}\nstderr:\n{}",
-        r.stdout,
-        r.stderr
-    );
+    let r = fly_to_60_30(dir.path(), "60,30,10,3,3,10", 1);
     assert!(r.stdout.contains("track      COLLISION"), "{}", r.stdout);
     assert!(r.stderr.contains("hit obstacle"), "{}", r.stderr);
 }
@@ -127,10 +85,6 @@ fn hidden_files_must_share_the_maps_home_and_ranges_are_checked() {
     assert!(r.stderr.contains("--sensor-range-m"), "{}", r.stderr);
 }
 
-fn python() -> String {
-    std::env::var("SKYPLAN_PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
 #[test]
 #[ignore = "needs Python with pymavlink (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn pymavlink_reads_obstacle_distance_from_skyplan_sim() {
@@ -147,44 +101,27 @@ fn pymavlink_reads_obstacle_distance_from_skyplan_sim() {
         "hidden.csv",
         &format!("{HEADER}0,27,10,10,2,10\n"),
     );
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
-        .args([
-            "sim",
-            "--listen",
-            "tcp:127.0.0.1:0",
-            "--map",
-            &map,
-            "--hidden",
-            &hidden,
-            "--ekf-delay-s",
-            "0",
-            "--speedup",
-            "2",
-            "--duration-s",
-            "60",
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let first = lines.next().unwrap().unwrap();
-    let address = first
-        .split_whitespace()
-        .find(|w| w.starts_with("tcp:"))
-        .unwrap_or_else(|| panic!("no address in {first:?}"))
-        .trim_end_matches(',')
-        .to_string();
-    std::thread::spawn(move || for _ in lines {});
+    let sim = SimProcess::start(&[
+        "--map",
+        &map,
+        "--hidden",
+        &hidden,
+        "--ekf-delay-s",
+        "0",
+        "--speedup",
+        "2",
+        "--duration-s",
+        "60",
+    ]);
     let script = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/sensing/obstacle_distance_peer.py"
     );
     let out = std::process::Command::new(python())
-        .args([script, &address, "2500", "18"])
+        .args([script, &sim.address, "2500", "18"])
         .output()
         .unwrap();
-    let _ = child.kill();
-    let _ = child.wait();
+    drop(sim);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),

@@ -1,6 +1,6 @@
 //! CSV waypoint table.
 
-use skyplan_mission::Mission;
+use skyplan_mission::{Mission, Waypoint};
 
 use crate::{ExportError, check_finite};
 
@@ -24,19 +24,23 @@ pub fn to_csv(mission: &Mission) -> Result<String, ExportError> {
     let mut writer = csv::Writer::from_writer(Vec::new());
     writer.write_record(CSV_HEADER)?;
     for w in &mission.waypoints {
-        let fields = [
-            w.north_m,
-            w.east_m,
-            w.alt_m,
-            w.heading_rad,
-            w.lat_deg,
-            w.lon_deg,
-        ];
-        writer.write_record(fields.iter().map(f64::to_string))?;
+        writer.write_record(csv_row(w).iter().map(f64::to_string))?;
     }
     let bytes = writer
         .into_inner()
         .map_err(|e| csv::Error::from(e.into_error()))?;
     // Every field is the ASCII header or a formatted number, so nothing is lossy here.
     Ok(String::from_utf8_lossy(&bytes).into_owned())
+}
+
+/// A waypoint's values in [`CSV_HEADER`]'s order.
+pub fn csv_row(w: &Waypoint) -> [f64; 6] {
+    [
+        w.north_m,
+        w.east_m,
+        w.alt_m,
+        w.heading_rad,
+        w.lat_deg,
+        w.lon_deg,
+    ]
 }

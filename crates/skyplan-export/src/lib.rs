@@ -44,7 +44,7 @@ use std::str::FromStr;
 
 use skyplan_mission::Mission;
 
-pub use fmt_csv::{CSV_HEADER, to_csv};
+pub use fmt_csv::{CSV_HEADER, csv_row, to_csv};
 pub use fmt_geojson::to_geojson;
 pub use fmt_hdf5::{HDF5_DATASET, to_hdf5};
 pub use fmt_json::{JSON_COLUMNS, JSON_FORMAT_ID, JSON_FORMAT_VERSION, to_json};

@@ -1,7 +1,7 @@
 mod common;
 
 use proptest::prelude::*;
-use skyplan_export::{CSV_HEADER, to_csv};
+use skyplan_export::{CSV_HEADER, csv_row, to_csv};
 use skyplan_mission::{Mission, Waypoint};
 
 /// Parses CSV text back into `[north, east, alt, heading, lat, lon]` rows, checking the header.
@@ -25,24 +25,13 @@ fn read_back(text: &str) -> Vec<[f64; 6]> {
         .collect()
 }
 
-fn as_row(w: &Waypoint) -> [f64; 6] {
-    [
-        w.north_m,
-        w.east_m,
-        w.alt_m,
-        w.heading_rad,
-        w.lat_deg,
-        w.lon_deg,
-    ]
-}
-
 #[test]
 fn csv_round_trip_is_exact() {
     let mission = common::sample();
     let text = to_csv(&mission).unwrap();
     assert!(text.starts_with("north_m,east_m,alt_m,heading_rad,lat_deg,lon_deg\n"));
     let rows = read_back(&text);
-    let want: Vec<_> = mission.waypoints.iter().map(as_row).collect();
+    let want: Vec<_> = mission.waypoints.iter().map(csv_row).collect();
     // Bitwise equality, not just ==, so -0.0 survives too.
     let bits = |rows: &[[f64; 6]]| rows.iter().map(|r| r.map(f64::to_bits)).collect::<Vec<_>>();
     assert_eq!(bits(&rows), bits(&want));

@@ -157,6 +157,29 @@ pub fn track_line(report: &SimReport) -> String {
     }
 }
 
+/// The simulator's account when it stops (`skyplan sim`): times, distance, and any collision
+/// (with a map box, or with a hidden one: those come after the map's `map_boxes`).
+pub fn sim_stopped_line(report: &SimReport, map_boxes: usize) -> String {
+    format!(
+        "sim        stopped after {:.1} s simulated, {:.1} s wall; flown {:.1} m, {}",
+        report.sim_time_s,
+        report.wall_time_s,
+        report.distance_m,
+        match report.track.collision() {
+            Some(c) if c.box_index >= map_boxes => format!(
+                "COLLISION with hidden obstacle #{} at {:.1} s",
+                c.box_index - map_boxes,
+                c.time_s
+            ),
+            Some(c) => format!(
+                "COLLISION with obstacle #{} at {:.1} s",
+                c.box_index, c.time_s
+            ),
+            None => "no collision".into(),
+        }
+    )
+}
+
 /// Whether a note moves the progress bar: the index of a reached waypoint.
 pub fn reached_index(note: &Note) -> Option<usize> {
     match note {

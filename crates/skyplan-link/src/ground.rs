@@ -302,23 +302,12 @@ pub struct GroundStation {
     watcher: Option<Box<dyn RouteWatcher + Send>>,
 }
 
-fn gcs_heartbeat() -> MavMessage {
-    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: 0,
-        mavtype: MavType::MAV_TYPE_GCS,
-        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
-        base_mode: MavModeFlag::empty(),
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-    })
-}
-
 impl GroundStation {
     /// Connects and starts sending heartbeats at 1 Hz (from their own thread, so planning or
     /// waiting never starves them).
     pub fn connect(address: &Address, config: GroundConfig) -> Result<Self, GroundError> {
         let link = Link::open(address, SYSTEM_ID, COMPONENT_ID)?;
-        link.start_heartbeat(gcs_heartbeat(), Duration::from_secs(1));
+        link.start_heartbeat(crate::messages::gcs_heartbeat(), Duration::from_secs(1));
         Ok(Self::over(link, config))
     }
 
@@ -608,20 +597,9 @@ impl GroundStation {
     }
 
     fn send_command(&self, command: MavCmd, p: [f32; 7]) -> Result<(), LinkError> {
-        let (sys, comp) = self.vehicle.unwrap_or((1, 1));
-        self.link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-            param1: p[0],
-            param2: p[1],
-            param3: p[2],
-            param4: p[3],
-            param5: p[4],
-            param6: p[5],
-            param7: p[6],
-            command,
-            target_system: sys,
-            target_component: comp,
-            confirmation: 0,
-        }))
+        let vehicle = self.vehicle.unwrap_or((1, 1));
+        self.link
+            .send(&crate::messages::command_long(vehicle, command, p))
     }
 
     /// The message comes from our vehicle (or any, before one has been heard).

@@ -32,8 +32,12 @@ pub struct InProcessSim {
 
 impl InProcessSim {
     /// Binds a free loopback TCP port and starts the simulator; `world` (the true world: the
-    /// map's boxes and any hidden ones) is what the flown track is checked against.
-    pub fn start(config: SimServerConfig, world: BoxWorld) -> Result<Self, LinkError> {
+    /// map's boxes and any hidden ones), if any, is what the flown track is checked against.
+    pub fn start(
+        config: SimServerConfig,
+        world: impl Into<Option<BoxWorld>>,
+    ) -> Result<Self, LinkError> {
+        let world = world.into();
         let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config)?;
         let port = server
             .local_addr()
@@ -46,7 +50,7 @@ impl InProcessSim {
         let (tx, notes) = mpsc::channel();
         let thread_stop = Arc::clone(&stop);
         let thread = std::thread::spawn(move || {
-            server.run(Some(&world), &thread_stop, |n| {
+            server.run(world.as_ref(), &thread_stop, |n| {
                 let _ = tx.send(n);
             })
         });

@@ -10,7 +10,10 @@
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
 //! - [`flight`]: one flight, told line by line to an observer and summed up (`fly`, `bench --replan`).
 //! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
+//! - [`messages`]: MAVLink messages built in one place (commands, heartbeats, frames).
 //! - [`mission`]: a planned mission as a vehicle's autopilot gets it (items, true-north headings).
+//! - [`runner`]: a whole run for any front end: the simulator started, the vehicle waited for,
+//!   the plan (a replanner watching), the upload or the flight; `bench --replan`'s flights.
 //! - [`words`]: the flight told in lines (notes, updates) and the flight log as CSV.
 //!
 //! Only the `common` dialect is compiled (build time); ArduPilot's custom modes are numbers.
@@ -20,8 +23,10 @@
 pub mod flight;
 pub mod ground;
 pub mod in_process;
+pub mod messages;
 pub mod mission;
 pub mod obstacle;
+pub mod runner;
 pub mod vehicle;
 pub mod words;
 

@@ -5,10 +5,8 @@ use skyplan_flight::executor::{
 };
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_link::ground::{GroundConfig, GroundStation, Update};
-use skyplan_link::vehicle::{SimNote, SimServer, SimServerConfig};
-use skyplan_link::{Address, Role};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use skyplan_link::in_process::InProcessSim;
+use skyplan_link::vehicle::{SimNote, SimServerConfig};
 use std::time::Duration;
 
 const HOME: Lla = Lla {
@@ -35,14 +33,8 @@ struct Run {
 }
 
 fn fly(config: SimServerConfig, ground: GroundConfig) -> Run {
-    let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).unwrap();
-    let port = server.local_addr().unwrap().port();
-    let stop = Arc::new(AtomicBool::new(false));
-    let notes = Arc::new(Mutex::new(Vec::new()));
-    let (s2, n2) = (Arc::clone(&stop), Arc::clone(&notes));
-    let sim = std::thread::spawn(move || server.run(None, &s2, |n| n2.lock().unwrap().push(n)));
-    let address = Address::parse(&format!("tcp:127.0.0.1:{port}"), Role::Client).unwrap();
-    let mut gcs = GroundStation::connect(&address, ground).unwrap();
+    let sim = InProcessSim::start(config, None).unwrap();
+    let mut gcs = GroundStation::connect(&sim.address(), ground).unwrap();
     let info = gcs
         .wait_for_vehicle(Duration::from_secs(10), |_, _| {})
         .unwrap();
@@ -60,10 +52,8 @@ fn fly(config: SimServerConfig, ground: GroundConfig) -> Run {
         }
     })
     .unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let report = sim.join().unwrap();
-    assert!(report.sim_time_s > 0.0);
-    let sim_notes = notes.lock().unwrap().clone();
+    let (report, sim_notes) = sim.finish();
+    assert!(report.unwrap().sim_time_s > 0.0);
     Run {
         outcome: ex.outcome().cloned(),
         states,
@@ -121,18 +111,15 @@ fn a_silent_vehicle_is_a_lost_link() {
 #[test]
 fn the_simulator_streams_nothing_until_asked_like_arducopter() {
     use skyplan_link::Link;
-    use skyplan_link::mavlink::dialects::common::{COMMAND_LONG_DATA, MavCmd, MavMessage};
+    use skyplan_link::mavlink::dialects::common::MavCmd;
+    use skyplan_link::messages::command_long;
     let config = SimServerConfig {
         speedup: 20.0,
         ekf_delay_s: 2.0,
         ..SimServerConfig::at(HOME)
     };
-    let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).unwrap();
-    let port = server.local_addr().unwrap().port();
-    let stop = Arc::new(AtomicBool::new(false));
-    let s2 = Arc::clone(&stop);
-    let sim = std::thread::spawn(move || server.run(None, &s2, |_| {}));
-    let address = Address::TcpOut(format!("127.0.0.1:{port}"));
+    let sim = InProcessSim::start(config, None).unwrap();
+    let address = sim.address();
     let mut link = Link::open(&address, 250, 190).unwrap();
     let names = |link: &mut Link, wall_s: f64| {
         let until = std::time::Instant::now() + Duration::from_secs_f64(wall_s);
@@ -152,19 +139,12 @@ fn the_simulator_streams_nothing_until_asked_like_arducopter() {
         ["HEARTBEAT", "OBSTACLE_DISTANCE"]
     );
     for (id, us) in [(33.0, 1e5), (49.0, 1e6)] {
-        link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-            param1: id,
-            param2: us,
-            param3: 0.0,
-            param4: 0.0,
-            param5: 0.0,
-            param6: 0.0,
-            param7: 0.0,
-            command: MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
-            target_system: 1,
-            target_component: 1,
-            confirmation: 0,
-        }))
+        let p = [id, us, 0.0, 0.0, 0.0, 0.0, 0.0];
+        link.send(&command_long(
+            (1, 1),
+            MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+            p,
+        ))
         .unwrap();
     }
     let then = names(&mut link, 0.5);
@@ -180,6 +160,5 @@ fn the_simulator_streams_nothing_until_asked_like_arducopter() {
         !then.contains("LOCAL_POSITION_NED") && !then.contains("ATTITUDE"),
         "{then:?}"
     );
-    stop.store(true, Ordering::Relaxed);
-    sim.join().unwrap();
+    assert!(sim.finish().0.is_some());
 }

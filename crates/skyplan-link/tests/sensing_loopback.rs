@@ -8,10 +8,9 @@ use skyplan_flight::sensing::{
 };
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_link::ground::{FlightSummary, GroundConfig, GroundStation, Update};
-use skyplan_link::vehicle::{SimReport, SimServer, SimServerConfig};
-use skyplan_link::{Address, Role};
+use skyplan_link::in_process::InProcessSim;
+use skyplan_link::vehicle::{SimReport, SimServerConfig};
 use skyplan_map::colliders::ObstacleBox;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -84,12 +83,8 @@ fn fly(hidden: Vec<ObstacleBox>, route: &[Target], watcher: Option<Once>) -> Run
         hidden,
         ..SimServerConfig::at(HOME)
     };
-    let server = SimServer::bind(&Address::TcpIn("127.0.0.1:0".into()), config).unwrap();
-    let port = server.local_addr().unwrap().port();
-    let stop = Arc::new(AtomicBool::new(false));
-    let s2 = Arc::clone(&stop);
-    let sim = std::thread::spawn(move || server.run(None, &s2, |_| {}));
-    let address = Address::parse(&format!("tcp:127.0.0.1:{port}"), Role::Client).unwrap();
+    let sim = InProcessSim::start(config, None).unwrap();
+    let address = sim.address();
     let ground = GroundConfig {
         speedup: 20.0,
         timeout_s: Some(60.0),
@@ -112,8 +107,7 @@ fn fly(hidden: Vec<ObstacleBox>, route: &[Target], watcher: Option<Once>) -> Run
             _ => {}
         })
         .unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let report = sim.join().unwrap();
+    let report = sim.finish().0.unwrap();
     Run {
         ex,
         summary,

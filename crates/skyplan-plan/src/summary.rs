@@ -192,3 +192,46 @@ fn details(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     }
     Ok(())
 }
+
+impl fmt::Display for crate::ride::Ride {
+    /// The human summary of a ride (`skyplan navigate` without `--json`): the map, a line per
+    /// leg, the ride.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let grid = &self.grid;
+        writeln!(
+            f,
+            "map        {}: {} × {} cells of {} m",
+            self.map,
+            grid.rows(),
+            grid.cols(),
+            grid.frame().cell_m
+        )?;
+        for (k, l) in self.legs.iter().enumerate() {
+            let (n, e) = (l.target.north_m, l.target.east_m);
+            let how = match (l.reached, l.replaced) {
+                (true, _) => "reached",
+                (false, true) => "replaced",
+                (false, false) => "not reached",
+            };
+            writeln!(
+                f,
+                "leg {:<6} N {n:.2} m, E {e:.2} m: steps {}..{}, {how}",
+                k + 1,
+                l.from_step,
+                l.to_step
+            )?;
+        }
+        writeln!(
+            f,
+            "ride       {}: {} steps, {:.2} m travelled, min clearance {}",
+            if self.reached { "reached" } else { "stopped" },
+            self.steps,
+            self.distance_m,
+            self.min_clearance_m
+                .as_f64()
+                .map_or("unbounded (no obstacles)".to_string(), |m| format!(
+                    "{m:.2} m"
+                ))
+        )
+    }
+}

@@ -7,7 +7,7 @@ use plotters::style::text_anchor::HPos;
 
 use crate::layout::{LegendKind, PlotLayout};
 use crate::rects::blocked_rects;
-use crate::text::{Label, TextMode, VAlign, draw_label};
+use crate::text::{Label, TextMode, VAlign, draw_label, draw_tick};
 use crate::{PlotError, Scene};
 
 const CSPACE_COLOR: RGBColor = RGBColor(204, 207, 212);
@@ -88,11 +88,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
         }))
         .map_err(err)?;
     chart
-        .draw_series(scene.obstacles.iter().map(|o| {
-            let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
-            let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
-            Rectangle::new([nw, se], OBSTACLE_COLOR.filled())
-        }))
+        .draw_series(scene.obstacles.iter().map(|o| footprint(o, OBSTACLE_COLOR)))
         .map_err(err)?;
 
     // A roadmap's edges thin and light, its connectors a little stronger.
@@ -120,11 +116,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
     );
     if let Some(f) = scene.flight {
         chart
-            .draw_series(f.hidden.iter().map(|o| {
-                let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
-                let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
-                Rectangle::new([nw, se], HIDDEN_COLOR.filled())
-            }))
+            .draw_series(f.hidden.iter().map(|o| footprint(o, HIDDEN_COLOR)))
             .map_err(err)?;
         let r = flight_styles.2;
         chart
@@ -189,47 +181,25 @@ pub(crate) fn draw<DB: DrawingBackend>(
     let tick_size = l.fonts.tick;
     for &e in &l.x_ticks {
         let x = l.pixel_of_ne(l.north_m.0, e).0;
-        root.draw(&PathElement::new(
-            vec![(x, y1), (x, y1 + l.tick_len)],
-            FRAME_COLOR,
-        ))
-        .map_err(err)?;
+        let at = [
+            (x, y1),
+            (x, y1 + l.tick_len),
+            (x, y1 + l.tick_len + l.tick_gap),
+        ];
         let text = l.tick_label(e);
-        let at = (x, y1 + l.tick_len + l.tick_gap);
-        draw_label(
-            root,
-            mode,
-            &Label {
-                text: &text,
-                size: tick_size,
-                at,
-                h: HPos::Center,
-                v: VAlign::Top,
-                vertical: false,
-            },
-        )?;
+        let anchor = (HPos::Center, VAlign::Top);
+        draw_tick(root, mode, (at, FRAME_COLOR), (&text, tick_size), anchor)?;
     }
     for &n in &l.y_ticks {
         let y = l.pixel_of_ne(n, l.east_m.0).1;
-        root.draw(&PathElement::new(
-            vec![(x0 - l.tick_len, y), (x0, y)],
-            FRAME_COLOR,
-        ))
-        .map_err(err)?;
+        let at = [
+            (x0 - l.tick_len, y),
+            (x0, y),
+            (x0 - l.tick_len - l.tick_gap, y),
+        ];
         let text = l.tick_label(n);
-        let at = (x0 - l.tick_len - l.tick_gap, y);
-        draw_label(
-            root,
-            mode,
-            &Label {
-                text: &text,
-                size: tick_size,
-                at,
-                h: HPos::Right,
-                v: VAlign::Middle,
-                vertical: false,
-            },
-        )?;
+        let anchor = (HPos::Right, VAlign::Middle);
+        draw_tick(root, mode, (at, FRAME_COLOR), (&text, tick_size), anchor)?;
     }
 
     // Axis titles and the picture's title.
@@ -399,6 +369,13 @@ type TwoDots<C, DB> = ComposedElement<C, DB, Dot, Dot>;
 type Star<C, DB> = ComposedElement<C, DB, Polygon<(i32, i32)>, PathElement<(i32, i32)>>;
 
 /// A waypoint: a white disc ringed in the pruned path's blue.
+/// A box's footprint (east right, north up), filled.
+fn footprint(o: &skyplan_map::colliders::ObstacleBox, color: RGBColor) -> Rectangle<(f64, f64)> {
+    let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
+    let se = (o.east_m + o.half_east_m, o.north_m - o.half_north_m);
+    Rectangle::new([nw, se], color.filled())
+}
+
 fn waypoint_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
     let inner = r - (f64::from(r) * 0.45).round().max(1.0) as u32;
     EmptyElement::at(at)

@@ -138,14 +138,10 @@ pub fn render_heatmap_png(map: &Heatmap<'_>, edge_px: u32) -> Result<Vec<u8>, Pl
     let scene = Scene {
         title: map.title.clone(),
         grid,
-        obstacles: &[],
         raw_path_ne: &path_ne,
-        pruned_path_ne: &[],
         start_ne: map.start.map(centre),
         goal_ne: map.goal.map(centre),
-        graph_ne: &[],
-        connectors_ne: &[],
-        flight: None,
+        ..Scene::of_grid(grid)
     };
     let height = edge_px.clamp(crate::MIN_SIZE_PX, crate::MAX_SIZE_PX);
     let width = (height + height / 4).min(crate::MAX_SIZE_PX);
@@ -228,15 +224,10 @@ mod tests {
         assert_eq!((w, h), (1000, 800));
         let scene = Scene {
             title: map.title.clone(),
-            grid: &grid,
-            obstacles: &[],
             raw_path_ne: &[(101.0, 51.0), (101.0, 53.0)],
-            pruned_path_ne: &[],
             start_ne: Some((101.0, 51.0)),
             goal_ne: Some((107.0, 51.0)),
-            graph_ne: &[],
-            connectors_ne: &[],
-            flight: None,
+            ..Scene::of_grid(&grid)
         };
         let entries = scale_entries(&values, map.measure);
         let l = layout_with(&scene, w, h, Some(entries.clone())).unwrap();

@@ -47,6 +47,7 @@
 mod draw;
 mod heatmap;
 mod layout;
+pub mod plan_picture;
 mod profile;
 mod rects;
 mod text;
@@ -113,7 +114,23 @@ pub struct FlightLayers<'a> {
 /// A segment between two (north, east) points, metres.
 pub type Segment = ((f64, f64), (f64, f64));
 
-impl Scene<'_> {
+impl<'a> Scene<'a> {
+    /// `grid` alone, untitled, nothing drawn on it (the base of a struct update).
+    pub fn of_grid(grid: &'a Grid2) -> Self {
+        Scene {
+            title: String::new(),
+            grid,
+            obstacles: &[],
+            raw_path_ne: &[],
+            pruned_path_ne: &[],
+            start_ne: None,
+            goal_ne: None,
+            graph_ne: &[],
+            connectors_ne: &[],
+            flight: None,
+        }
+    }
+
     fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.raw_path_ne
             .iter()

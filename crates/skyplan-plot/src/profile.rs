@@ -7,7 +7,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
 use skyplan_map::colliders::ObstacleBox;
 
-use crate::text::{Label, TextMode, VAlign, draw_label, ensure_font};
+use crate::text::{Label, TextMode, VAlign, draw_label, draw_tick, ensure_font};
 use crate::{MAX_SIZE_PX, MIN_SIZE_PX, PlotError, PlotFormat};
 
 const ROUTE_COLOR: RGBColor = RGBColor(31, 96, 196);
@@ -278,45 +278,21 @@ impl Panel {
         let tick = (font * 0.45).round() as i32;
         for x in ticks(self.xr.0, self.xr.1, f64::from(self.w) / (font * 6.0)) {
             let (px, _) = self.px(x, self.yr.0);
-            root.draw(&PathElement::new(
-                vec![(px, y1), (px, y1 + tick)],
-                FRAME_COLOR,
-            ))
-            .map_err(err)?;
+            let at = [(px, y1), (px, y1 + tick), (px, y1 + tick + 3)];
             let text = format!("{x:.0}");
-            draw_label(
-                root,
-                mode,
-                &Label {
-                    text: &text,
-                    size: font * 0.85,
-                    at: (px, y1 + tick + 3),
-                    h: HPos::Center,
-                    v: VAlign::Top,
-                    vertical: false,
-                },
-            )?;
+            let anchor = (HPos::Center, VAlign::Top);
+            draw_tick(root, mode, (at, FRAME_COLOR), (&text, font * 0.85), anchor)?;
         }
         for y in ticks(self.yr.0, self.yr.1, f64::from(self.h) / (font * 3.0)) {
             let (_, py) = self.px(self.xr.0, y);
-            root.draw(&PathElement::new(
-                vec![(self.x0 - tick, py), (self.x0, py)],
-                FRAME_COLOR,
-            ))
-            .map_err(err)?;
+            let at = [
+                (self.x0 - tick, py),
+                (self.x0, py),
+                (self.x0 - tick - 4, py),
+            ];
             let text = format!("{y:.0}");
-            draw_label(
-                root,
-                mode,
-                &Label {
-                    text: &text,
-                    size: font * 0.85,
-                    at: (self.x0 - tick - 4, py),
-                    h: HPos::Right,
-                    v: VAlign::Middle,
-                    vertical: false,
-                },
-            )?;
+            let anchor = (HPos::Right, VAlign::Middle);
+            draw_tick(root, mode, (at, FRAME_COLOR), (&text, font * 0.85), anchor)?;
         }
         root.draw(&Rectangle::new([(self.x0, self.y0), (x1, y1)], FRAME_COLOR))
             .map_err(err)?;

@@ -75,6 +75,27 @@ pub(crate) struct Label<'a> {
     pub vertical: bool,
 }
 
+/// An axis tick from `from` to `to` in `color`, and its value `text` anchored at `at` by `anchor`.
+pub(crate) fn draw_tick<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    mode: TextMode,
+    ([from, to, at], color): ([(i32, i32); 3], RGBColor),
+    (text, size): (&str, f64),
+    (h, v): (HPos, VAlign),
+) -> Result<(), PlotError> {
+    root.draw(&PathElement::new(vec![from, to], color))
+        .map_err(|e| PlotError::Draw(e.to_string()))?;
+    let label = Label {
+        text,
+        size,
+        at,
+        h,
+        v,
+        vertical: false,
+    };
+    draw_label(root, mode, &label)
+}
+
 /// Draws a label on the whole-picture area.
 pub(crate) fn draw_label<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,

@@ -208,18 +208,7 @@ fn north_is_up_east_is_right_and_scales_are_equal() {
         cell_m: 2.0,
     };
     let grid = Grid2::new(rows as u32, cols as u32, blocked, frame).unwrap();
-    let scene = Scene {
-        title: String::new(),
-        grid: &grid,
-        obstacles: &[],
-        raw_path_ne: &[],
-        pruned_path_ne: &[],
-        start_ne: None,
-        goal_ne: None,
-        graph_ne: &[],
-        connectors_ne: &[],
-        flight: None,
-    };
+    let scene = Scene::of_grid(&grid);
     let (w, h) = (500, 500);
     let l = layout(&scene, w, h).unwrap();
     let (x0, y0, pw, ph) = l.plot_area();
@@ -373,18 +362,7 @@ fn rejects_bad_sizes_and_non_finite_points() {
 fn empty_scene_and_points_outside_the_grid_still_render() {
     let grid = Grid2::new(0, 0, vec![], FRAME).unwrap();
     let path = [(0.0, 0.0), (10.0, 5.0)];
-    let empty = Scene {
-        title: String::new(),
-        grid: &grid,
-        obstacles: &[],
-        raw_path_ne: &[],
-        pruned_path_ne: &[],
-        start_ne: None,
-        goal_ne: None,
-        graph_ne: &[],
-        connectors_ne: &[],
-        flight: None,
-    };
+    let empty = Scene::of_grid(&grid);
     Image::decode(&render_png(&empty, 300, 300).unwrap());
     let f = fixture();
     let outside = Scene {

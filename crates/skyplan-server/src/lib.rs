@@ -13,7 +13,9 @@
 //! | `GET /api/openapi.json` | the OpenAPI 3 description of all of this |
 //!
 //! [`ViewServer`] serves the same page from a background thread of `fly`/`sim` (`--view`), and
-//! [`Recorder`] writes the same events as an MCAP file for Foxglove and Lichtblick (`--record`).
+//! [`Recorder`] writes the same events as an MCAP file for Foxglove and Lichtblick (`--record`);
+//! [`live::Live`] turns a flight (progress, sensor readings, replans, the simulator's state) into
+//! those events for both.
 //!
 //! Safe by default: request bodies over 1 MiB get 413, at most N plans run at once (503
 //! beyond), each request has a time budget (504 past it), clients never name files, and a
@@ -33,6 +35,7 @@ mod error;
 mod events;
 mod handlers;
 mod host;
+pub mod live;
 mod map;
 mod pool;
 mod record;

@@ -193,3 +193,88 @@ pub fn dir_with(files: &[(&str, &str)]) -> tempfile::TempDir {
     }
     dir
 }
+
+/// `skyplan sim --listen tcp:127.0.0.1:0 ARGS` in its own process, its address read from its
+/// first line and the rest of its output drained (it never blocks on a full pipe); killed when
+/// dropped.
+pub struct SimProcess {
+    pub child: std::process::Child,
+    /// `tcp:127.0.0.1:PORT`
+    pub address: String,
+    pub port: u16,
+}
+
+impl SimProcess {
+    pub fn start(args: &[&str]) -> Self {
+        use std::io::{BufRead, BufReader};
+        let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("skyplan"))
+            .args(["sim", "--listen", "tcp:127.0.0.1:0"])
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::inherit())
+            .spawn()
+            .unwrap();
+        let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+        let first = lines.next().unwrap().unwrap();
+        let address = first
+            .split_whitespace()
+            .find(|w| w.starts_with("tcp:"))
+            .unwrap_or_else(|| panic!("no address in {first:?}"))
+            .trim_end_matches(',')
+            .to_string();
+        let port = address.rsplit(':').next().unwrap().parse().unwrap();
+        std::thread::spawn(move || for _ in lines {});
+        Self {
+            child,
+            address,
+            port,
+        }
+    }
+
+    /// The process has not exited.
+    pub fn running(&mut self) -> bool {
+        self.child.try_wait().unwrap().is_none()
+    }
+}
+
+impl Drop for SimProcess {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A finished run of the binary: its exit code and both streams.
+pub struct Run {
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+impl Run {
+    /// Asserts the exit code (both streams in the message).
+    pub fn expect_code(&self, code: i32) -> &Self {
+        assert_eq!(
+            self.code,
+            Some(code),
+            "stdout:\n{}\nstderr:\n{}",
+            self.stdout,
+            self.stderr
+        );
+        self
+    }
+}
+
+/// Runs the binary with `args` in `dir`, for at most two minutes.
+pub fn run_args(dir: &Path, args: &[&str]) -> Run {
+    let out = skyplan(dir)
+        .args(args)
+        .timeout(std::time::Duration::from_secs(120))
+        .output()
+        .unwrap();
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}

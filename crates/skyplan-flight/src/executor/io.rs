@@ -86,6 +86,18 @@ impl From<&skyplan_mission::Waypoint> for Target {
     }
 }
 
+impl From<[f64; 4]> for Target {
+    /// A plan's waypoint: north, east, altitude, heading.
+    fn from([north_m, east_m, alt_m, heading_rad]: [f64; 4]) -> Self {
+        Target {
+            north_m,
+            east_m,
+            alt_m,
+            heading_rad,
+        }
+    }
+}
+
 /// What the vehicle reports, merged from its telemetry, in the mission's local frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Telemetry {

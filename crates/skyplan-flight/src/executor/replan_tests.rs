@@ -93,16 +93,21 @@ fn fly(
     run
 }
 
+/// After the second waypoint (20, 0), round by the south to the last.
+fn detour_south() -> Vec<Target> {
+    vec![
+        wp(20.0, -10.0, -90.0),
+        wp(-10.0, -10.0, 180.0),
+        wp(-10.0, 15.0, 90.0),
+    ]
+}
+
 #[test]
 fn a_replaced_route_is_flown_to_its_end_without_landing_in_between() {
     let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
     let mut v = SimVehicle::new(SimConfig::default());
     // After the second waypoint (20, 0), heading for (20, 20): go round by the south instead.
-    let detour = vec![
-        wp(20.0, -10.0, -90.0),
-        wp(-10.0, -10.0, 180.0),
-        wp(-10.0, 15.0, 90.0),
-    ];
+    let detour = detour_south();
     let run = fly(
         &mut ex,
         &mut v,
@@ -155,11 +160,7 @@ fn a_replaced_route_is_flown_to_its_end_without_landing_in_between() {
 fn distance_left_counts_the_new_route_from_the_vehicle() {
     let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
     let mut v = SimVehicle::new(SimConfig::default());
-    let detour = vec![
-        wp(20.0, -10.0, -90.0),
-        wp(-10.0, -10.0, 180.0),
-        wp(-10.0, 15.0, 90.0),
-    ];
+    let detour = detour_south();
     // Act, then stop at the first telemetry after it: fly until just after the replan.
     let mut ex2 = ex.clone();
     let mut v2 = v.clone();

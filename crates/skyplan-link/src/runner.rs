@@ -1,0 +1,500 @@
+//! A whole flight for any front end (`skyplan fly`, `skyplan bench --replan`): start the
+//! simulator in-process, wait for the vehicle, plan from where it is (a replanner watching),
+//! upload or fly, and sum it up. Lines go to a [`RunObserver`]; nothing here prints or writes
+//! files.
+
+use crate::flight::{self, Observer, Quiet};
+use crate::ground::{Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, Waiting};
+use crate::in_process::InProcessSim;
+use crate::vehicle::SimServerConfig;
+use crate::words::sim_note_line;
+use crate::{Address, LinkError};
+use skyplan_flight::auto::{AutoExecutor, MissionLayout};
+use skyplan_flight::collision::BoxWorld;
+use skyplan_flight::executor::{
+    ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, Target, Telemetry,
+};
+use skyplan_flight::upload::UploadConfig;
+use skyplan_frames::{Lla, LocalFrame, Ned};
+use skyplan_map::colliders::{CollidersMap, ObstacleBox};
+use skyplan_plan::{Family, Limits, Plan, PlanFailure, PlanRequest, Session, World};
+use skyplan_replan::bench::{FlightResult, Scenario, ScenarioSpec, SharedReplanner};
+use skyplan_replan::hidden::{HiddenSpec, place_hidden};
+use skyplan_replan::{ReplanOptions, ReplanStats, Replanner, ReplannerKind};
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A lost link is waited for this many times the link timeout when a failsafe is set.
+pub const LINK_REGAIN_FACTOR: f64 = 6.0;
+
+/// Why a run stopped before its flight ended.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The options, the map or a position do not make a flight.
+    #[error("{0}")]
+    BadInput(String),
+    /// Planning failed.
+    #[error(transparent)]
+    Plan(#[from] PlanFailure),
+    /// The ground station failed (link, vehicle, upload).
+    #[error(transparent)]
+    Ground(#[from] GroundError),
+    /// The simulator could not start.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// Anything else at run time.
+    #[error("{0}")]
+    Runtime(String),
+}
+
+fn bad(e: impl std::fmt::Display) -> RunError {
+    RunError::BadInput(e.to_string())
+}
+
+/// Where a run's story goes: the flight's lines and updates ([`Observer`]), and the moments a
+/// front end draws or writes something at.
+pub trait RunObserver: Observer {
+    /// The error a front end's [`RunObserver::planned`] may stop the run with.
+    type Error: From<RunError>;
+    /// Still waiting for the vehicle's `waiting`, `vehicle_s` vehicle seconds so far.
+    fn waiting(&mut self, _waiting: Waiting, _vehicle_s: f64) {}
+    /// The first plan, told before anything flies (write it, show it); an error stops the run.
+    fn planned(&mut self, _plan: &Plan) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    /// The flight starts with this many waypoints (`Some`), or has ended, well or not (`None`).
+    fn flying(&mut self, _waypoints: Option<usize>) {}
+    /// The vehicle at the end of a flight: vehicle time, last state and telemetry.
+    fn landed(&mut self, _time_s: f64, _state: FlightState, _telemetry: Option<&Telemetry>) {}
+}
+
+/// Starts the simulator in-process on a free loopback port at the request's start (its
+/// lat/lon, its north/east, else the map's home), `map`'s boxes and `config.hidden` its world;
+/// `config`'s home and map home are set here. Returns it and where it starts.
+pub fn start_sim(
+    map: &CollidersMap,
+    frame: &LocalFrame,
+    request: &PlanRequest,
+    config: SimServerConfig,
+) -> Result<(InProcessSim, Lla), RunError> {
+    let home = match (request.start_lla, request.start_ne) {
+        (Some([lat_deg, lon_deg]), _) => Lla {
+            lat_deg,
+            lon_deg,
+            alt_m: 0.0,
+        },
+        (None, Some([north_m, east_m])) => frame
+            .lla_from_ned(Ned {
+                north_m,
+                east_m,
+                down_m: 0.0,
+            })
+            .map_err(|e| bad(format!("start: {e}")))?,
+        (None, None) => frame.home(),
+    };
+    let config = SimServerConfig {
+        home,
+        map_home: Some(frame.home()),
+        ..config
+    };
+    Ok((
+        InProcessSim::start(config, BoxWorld::new(&map.boxes))?,
+        home,
+    ))
+}
+
+/// How a mission is flown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Position targets in GUIDED, this replanner watching (2D grid planners only).
+    Guided(Option<ReplannerKind>),
+    /// Uploaded as a mission, then flown in AUTO (`fly`), or not (an upload only).
+    Upload {
+        /// Fly it after the upload.
+        fly: bool,
+    },
+}
+
+/// How a run flies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlyOptions {
+    /// The ground station: speedup, link timeout, flight budget, what an interrupt commands.
+    pub ground: GroundConfig,
+    /// The executor: deadband, failsafe and how long a lost link is waited for.
+    pub executor: ExecutorConfig,
+    /// How long to wait for the vehicle, vehicle seconds.
+    pub wait_s: f64,
+    /// GUIDED with a replanner, or an upload.
+    pub mode: Mode,
+    /// The request gives the start; otherwise the plan starts where the vehicle is.
+    pub user_start: bool,
+}
+
+/// How a run ended: a flight (its outcome, `None` if an aborted flight did not land in time),
+/// or an upload without a flight.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ended {
+    /// Flown.
+    Flight(Option<Outcome>),
+    /// Uploaded only.
+    Uploaded,
+}
+
+/// A run's result: what its summary, flight log and picture need.
+pub struct Flight {
+    /// The flight log (empty for an upload only).
+    pub log: Vec<LogRow>,
+    /// How it ended.
+    pub ended: Ended,
+    /// The first plan.
+    pub plan: Plan,
+    /// The replanner that watched the flight, if any.
+    pub watcher: Option<SharedReplanner>,
+    /// Every replanned route as (north, east) points.
+    pub replanned: Vec<Vec<(f64, f64)>>,
+}
+
+impl Flight {
+    /// The replans the flight's watcher made, in order (none without one): the flight log's
+    /// replan rows.
+    pub fn replan_events(&self) -> Vec<skyplan_flight::sensing::ReplanEvent> {
+        self.watcher
+            .as_ref()
+            .and_then(|w| w.0.lock().ok().map(|r| r.events().to_vec()))
+            .unwrap_or_default()
+    }
+}
+
+/// Connects to the vehicle at `address`, waits for it, plans `request` on `world` from where it
+/// is (unless the request gives the start), then flies the plan in GUIDED (or uploads it and
+/// flies it in AUTO), telling `observer` all along. `interrupt`, once set, lands or holds.
+#[allow(clippy::too_many_arguments)]
+pub fn fly_mission<O: RunObserver>(
+    address: &Address,
+    frame: &LocalFrame,
+    (world, limits, mut request): (World, Limits, PlanRequest),
+    o: &FlyOptions,
+    sim: Option<&InProcessSim>,
+    interrupt: Arc<AtomicBool>,
+    observer: &mut O,
+) -> Result<Flight, O::Error> {
+    let speedup = o.ground.speedup;
+    let mut gcs = GroundStation::connect(address, o.ground).map_err(RunError::from)?;
+    gcs.set_interrupt(interrupt);
+    observer.say(&format!(
+        "link       {address}: connected, sending heartbeats at 1 Hz"
+    ));
+    let mut last = None;
+    let wall = Duration::from_secs_f64(o.wait_s / speedup);
+    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
+        if last != Some(waiting) {
+            last = Some(waiting);
+            observer.say(&format!(
+                "wait       {:7.1} s  for the vehicle's {waiting}",
+                wall_s * speedup
+            ));
+        }
+        observer.waiting(waiting, wall_s * speedup);
+    });
+    let info = info.map_err(RunError::from)?;
+    sim_notes(sim, observer);
+    observer.say(&format!(
+        "vehicle    {}",
+        crate::mission::vehicle_line(&info)
+    ));
+
+    // PLANNING: the heartbeat thread keeps the link alive meanwhile.
+    observer.say("state      PLANNING");
+    if !o.user_start {
+        request.start_lla = Some([info.position.lat_deg, info.position.lon_deg]);
+        request.start_ne = None;
+    }
+    let t_plan = Instant::now();
+    let session = Session::new(world).with_limits(limits);
+    let replanner = match o.mode {
+        Mode::Guided(replanner) => replanner,
+        Mode::Upload { .. } => None,
+    };
+    let (plan, watcher) =
+        plan_with_replanner(session, request.clone(), replanner).map_err(RunError::from)?;
+    if let Some(w) = &watcher {
+        gcs.set_watcher(Box::new(w.clone()));
+    }
+    let mission = plan
+        .mission
+        .as_ref()
+        .ok_or_else(|| RunError::Runtime("the plan has no geodetic waypoints".into()))?;
+    let alts = mission.waypoints.iter().map(|w| w.alt_m);
+    observer.say(&format!(
+        "plan       {}: {} → {}: {} waypoints, {:.1} m, altitudes {:.1}..{:.1} m, planned in {:.1} ms",
+        plan.planner,
+        plan.start,
+        plan.goal,
+        mission.waypoints.len(),
+        mission.length_3d_m(),
+        alts.clone().fold(f64::INFINITY, f64::min),
+        alts.fold(f64::NEG_INFINITY, f64::max),
+        t_plan.elapsed().as_secs_f64() * 1000.0
+    ));
+    observer.planned(&plan)?;
+    let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
+    let config = o.executor;
+    let Mode::Upload { fly } = o.mode else {
+        let mut ex = MissionExecutor::new(&targets, config).map_err(bad)?;
+        let (log, outcome, replanned) = fly_with(&mut gcs, &mut ex, frame, sim, observer)?;
+        return Ok(Flight {
+            log,
+            ended: Ended::Flight(outcome),
+            plan,
+            watcher,
+            replanned,
+        });
+    };
+    // `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
+    // then flown in AUTO.
+    let items = crate::mission::items_for(mission, frame, &info).map_err(bad)?;
+    observer.say(&format!(
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        items.items.len(),
+        if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
+        request.alt_m.unwrap_or(5.0),
+        targets.len(),
+        if items.waypoint_stride == 2 {
+            " (each after a CONDITION_YAW to its heading)"
+        } else {
+            ""
+        }
+    ));
+    let report = gcs
+        .upload_mission(&items, UploadConfig::default())
+        .map_err(RunError::from)?;
+    observer.say(&format!(
+        "upload     accepted: {} items in {:.3} s wall ({} requests answered, {} resends)",
+        report.items, report.wall_time_s, report.requests, report.resends
+    ));
+    let (log, ended) = if !fly {
+        observer.say("result     mission uploaded (--upload-only: not flown)");
+        (Vec::new(), Ended::Uploaded)
+    } else {
+        let layout = MissionLayout::from(&items);
+        let mut ex = AutoExecutor::new(&targets, layout, config).map_err(bad)?;
+        let (log, outcome, _) = fly_with(&mut gcs, &mut ex, frame, sim, observer)?;
+        (log, Ended::Flight(outcome))
+    };
+    Ok(Flight {
+        log,
+        ended,
+        plan,
+        watcher: None,
+        replanned: Vec::new(),
+    })
+}
+
+/// The simulator's new notes, told as lines.
+fn sim_notes<O: Observer + ?Sized>(sim: Option<&InProcessSim>, observer: &mut O) {
+    for n in sim.map(InProcessSim::notes).unwrap_or_default() {
+        if let Some(line) = sim_note_line(&n) {
+            observer.say(&format!("sim        {line}"));
+        }
+    }
+}
+
+/// The front end's observer with the simulator's notes told and the replanned routes kept.
+struct Story<'a, O: ?Sized> {
+    inner: &'a mut O,
+    sim: Option<&'a InProcessSim>,
+    replanned: Vec<Vec<(f64, f64)>>,
+}
+
+impl<O: Observer + ?Sized> Observer for Story<'_, O> {
+    fn say(&mut self, line: &str) {
+        self.inner.say(line);
+    }
+
+    fn update(&mut self, u: &Update) {
+        sim_notes(self.sim, self.inner);
+        if let Update::Notes(_, notes) = u {
+            for note in notes {
+                if let Note::Replanned { targets, .. } = note {
+                    let route = targets.iter().map(|p| (p.north_m, p.east_m)).collect();
+                    self.replanned.push(route);
+                }
+            }
+        }
+        self.inner.update(u);
+    }
+}
+
+type Routes = Vec<Vec<(f64, f64)>>;
+
+/// Flies with either executor, telling as it goes.
+fn fly_with<E: FlightExecutor, O: RunObserver>(
+    gcs: &mut GroundStation,
+    ex: &mut E,
+    frame: &LocalFrame,
+    sim: Option<&InProcessSim>,
+    observer: &mut O,
+) -> Result<(Vec<LogRow>, Option<Outcome>, Routes), RunError> {
+    observer.flying(Some(ex.targets().len()));
+    let mut story = Story {
+        inner: &mut *observer,
+        sim,
+        replanned: Vec::new(),
+    };
+    let flown = flight::fly(gcs, ex, frame, &mut story);
+    let replanned = story.replanned;
+    observer.flying(None);
+    let flown = flown?;
+    observer.landed(flown.summary.time_s, ex.state(), ex.last_telemetry());
+    Ok((flown.log, flown.outcome, replanned))
+}
+
+/// Whether a request's planner can be replanned in flight (the 2D grid planners).
+pub fn replannable(request: &PlanRequest) -> bool {
+    matches!(
+        request.planner.unwrap_or_default().info().family,
+        Family::Grid(_)
+    )
+}
+
+/// The first plan and, for a 2D grid planner with a replanner, the replanner that watches it.
+/// The request's `max_alt_m` is the replanner's climbing limit then (the grid planners do not
+/// take it).
+pub fn plan_with_replanner(
+    mut session: Session,
+    mut request: PlanRequest,
+    replanner: Option<ReplannerKind>,
+) -> Result<(Plan, Option<SharedReplanner>), PlanFailure> {
+    let kind = match replanner {
+        Some(kind) if replannable(&request) => kind,
+        _ => return Ok((session.plan(&request)?, None)),
+    };
+    let options = ReplanOptions {
+        replanner: kind,
+        max_alt_m: request
+            .max_alt_m
+            .take()
+            .unwrap_or(ReplanOptions::default().max_alt_m),
+        ..ReplanOptions::default()
+    };
+    let r = Replanner::new(session, &request, options)?;
+    let plan = r.initial_plan().clone();
+    Ok((plan, Some(SharedReplanner(Arc::new(Mutex::new(r))))))
+}
+
+/// `count` hidden buildings on or near the route planned for `request` (seeded).
+pub fn hidden_random(
+    world: &World,
+    request: &PlanRequest,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<ObstacleBox>, RunError> {
+    let map = world
+        .colliders()
+        .ok_or_else(|| bad("--hidden-random needs a colliders map"))?;
+    let mut plain = request.clone();
+    plain.max_alt_m = None;
+    let plan = Session::new(world.clone()).plan(&plain)?;
+    let grid = plan
+        .grid
+        .ok_or_else(|| bad("--hidden-random needs a 2D grid planner's route"))?;
+    let spec = HiddenSpec {
+        count,
+        seed,
+        route_ne: plan.waypoints.iter().map(|w| [w[0], w[1]]).collect(),
+        start_ne: [plan.start.north_m, plan.start.east_m],
+        goal_ne: [plan.goal.north_m, plan.goal.east_m],
+        alt_m: grid.alt_m,
+        safety_m: grid.safety_m,
+        cell_m: grid.cell_m,
+        model: skyplan_search::MoveModel::Octile,
+    };
+    place_hidden(map, &spec).map_err(bad)
+}
+
+/// The replanner's account: replans, latencies, expansions, learned cells.
+pub fn summary_line(kind: &str, stats: &ReplanStats, learned: usize) -> String {
+    format!("replans    {}", stats.account(kind, learned))
+}
+
+/// Flies one `bench --replan` scenario on the in-process simulator: the first route planned
+/// with `replanner` watching, the hidden buildings in the simulated world.
+pub fn fly_scenario(
+    world: &World,
+    scenario: &Scenario,
+    replanner: Option<ReplannerKind>,
+    speedup: f64,
+) -> Result<FlightResult, RunError> {
+    let (Some(map), Some(frame)) = (world.colliders(), world.frame()) else {
+        return Err(bad("bench --replan needs a colliders map"));
+    };
+    let session = Session::new(world.clone());
+    let (plan, watcher) = plan_with_replanner(session, scenario.request.clone(), replanner)?;
+    let start = frame
+        .lla_from_ned(Ned {
+            north_m: plan.start.north_m,
+            east_m: plan.start.east_m,
+            down_m: 0.0,
+        })
+        .map_err(|e| bad(format!("start: {e}")))?;
+    let config = SimServerConfig {
+        speedup,
+        map_home: Some(frame.home()),
+        hidden: scenario.hidden.clone(),
+        ..SimServerConfig::at(start)
+    };
+    let sim = InProcessSim::start(config, BoxWorld::new(&map.boxes))?;
+    let ground = GroundConfig {
+        speedup,
+        timeout_s: Some(1200.0 / speedup),
+        ..GroundConfig::default()
+    };
+    let mut gcs = GroundStation::connect(&sim.address(), ground)?;
+    gcs.wait_for_vehicle(Duration::from_secs_f64(60.0 / speedup), |_, _| {})?;
+    if let Some(w) = &watcher {
+        gcs.set_watcher(Box::new(w.clone()));
+    }
+    let targets: Vec<_> = plan.waypoints.iter().copied().map(Target::from).collect();
+    let mut ex = MissionExecutor::new(&targets, ExecutorConfig::default()).map_err(bad)?;
+    let flown = flight::fly(&mut gcs, &mut ex, frame, &mut Quiet);
+    drop(gcs);
+    let (report, _) = sim.finish();
+    flown?;
+    let report =
+        report.ok_or_else(|| RunError::Runtime("the simulator stopped unexpectedly".into()))?;
+    let at_goal = ex
+        .last_telemetry()
+        .is_some_and(|t| (t.north_m - plan.goal.north_m).hypot(t.east_m - plan.goal.east_m) < 3.0);
+    let stats = watcher
+        .and_then(|w| w.0.lock().ok().map(|r| r.stats().clone()))
+        .unwrap_or_default();
+    Ok(FlightResult {
+        success: matches!(ex.outcome(), Some(Outcome::Completed)) && at_goal,
+        collisions: report.track.colliding_samples(),
+        stats,
+        flown_m: report.distance_m,
+        optimum_m: scenario.optimum_m,
+    })
+}
+
+/// `skyplan bench --replan N`: N seeded flights per replanner (D\* Lite, JPS from scratch), one
+/// row each, as a table; `progress` hears (replanner, flight, of) before each flight.
+pub fn replan_bench(
+    world: &World,
+    spec: &ScenarioSpec,
+    speedup: f64,
+    mut progress: impl FnMut(&str, usize, usize),
+) -> Result<String, RunError> {
+    let scenarios = skyplan_replan::bench::scenarios(world, spec).map_err(bad)?;
+    let mut rows = Vec::new();
+    for kind in [ReplannerKind::DStarLite, ReplannerKind::Scratch] {
+        let mut results = Vec::new();
+        for (k, s) in scenarios.iter().enumerate() {
+            progress(kind.name(), k + 1, scenarios.len());
+            results.push(fly_scenario(world, s, Some(kind), speedup)?);
+        }
+        rows.push(skyplan_replan::bench::summarise(kind, &results));
+    }
+    Ok(skyplan_replan::bench::format_rows(&rows))
+}

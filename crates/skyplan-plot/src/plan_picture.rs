@@ -1,0 +1,162 @@
+//! One picture for any plan of the planning API (`skyplan plan --plot`, `fly --plot`,
+//! `navigate --plot`): the 2D map with the route (and a roadmap), the 3D top view and side
+//! profile, or a heat map of a navigation function's field.
+
+use crate::{FlightLayers, PlotError, PlotFormat};
+use skyplan_cspace::Cell;
+use skyplan_plan::{Plan, Ride, World};
+use std::path::Path;
+
+/// What the picture of a plan is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PictureKind {
+    /// The map and the route, in this format.
+    Scene(PlotFormat),
+    /// A PNG heat map of the planner's field.
+    Heatmap,
+}
+
+fn short_name(name: &str) -> &str {
+    if name == skyplan_plan::FCND_CITY_NAME {
+        return "FCND city map";
+    }
+    Path::new(name)
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or(name)
+}
+
+/// The picture of `plan` on `world`: a heat map of its field (a grid planner's), the 2D map
+/// with the route (and what the planner built; `flight` adds what a flight saw), or the 3D
+/// top view and side profile.
+pub fn plan_picture(
+    world: &World,
+    plan: &Plan,
+    kind: &PictureKind,
+    flight: Option<&FlightLayers>,
+) -> Result<Vec<u8>, PlotError> {
+    let geometry = plan.geometry.clone().unwrap_or_default();
+    let info = plan.planner.info();
+    let grid = plan.grid_used.as_deref();
+    let map = short_name(world.name());
+    match (kind, grid) {
+        (PictureKind::Heatmap, Some(grid)) => {
+            let cell = |p: &[f64]| grid.cell_at_ne(p[0], p[1]);
+            let path: Vec<Cell> = geometry.raw_path.iter().filter_map(|p| cell(p)).collect();
+            let values = match geometry.field {
+                Some(v) if v.len() == grid.len() => v,
+                _ => vec![0.0; grid.len()],
+            };
+            let measure = match plan.planner {
+                skyplan_plan::PlannerId::Costmap => "cost-to-go (cells of length + weight × cost)",
+                _ if plan.details.get("field").and_then(|v| v.as_str()) == Some("steps") => {
+                    "steps to the goal"
+                }
+                _ => "distance to the goal (cells)",
+            };
+            let heat = crate::Heatmap {
+                title: format!(
+                    "{map}, {}{}: {:.1} m, field of {measure}",
+                    info.label,
+                    grid_at(plan),
+                    plan.cost_m
+                ),
+                grid,
+                values: &values,
+                measure,
+                path: &path,
+                start: plan.start.cell.map(|[r, c]| Cell::new(r, c)),
+                goal: plan.goal.cell.map(|[r, c]| Cell::new(r, c)),
+            };
+            crate::render_heatmap_png(&heat, 1000)
+        }
+        (PictureKind::Scene(format), Some(grid)) if info.dims == 2 => {
+            let ne = |p: &[f64]| (p[0], p[1]);
+            let raw: Vec<_> = geometry.raw_path.iter().map(|p| ne(p)).collect();
+            let waypoints: Vec<_> = plan.waypoints.iter().map(|w| ne(w)).collect();
+            let seg = |s: &[[f64; 3]; 2]| (ne(&s[0]), ne(&s[1]));
+            let graph: Vec<_> = geometry.edges.iter().map(seg).collect();
+            let connectors: Vec<_> = geometry.connectors.iter().map(seg).collect();
+            let how = match plan.details.get("fallback") {
+                Some(v) if !v.is_null() => "grid fallback".to_string(),
+                _ => info.label.to_string(),
+            };
+            let at = grid_at(plan);
+            let scene = crate::Scene {
+                title: format!(
+                    "{map}, {how}{at}: {:.1} m, {} waypoints",
+                    plan.cost_m,
+                    waypoints.len()
+                ),
+                grid,
+                obstacles: &geometry.active_boxes,
+                raw_path_ne: &raw,
+                pruned_path_ne: &waypoints,
+                start_ne: Some((plan.start.north_m, plan.start.east_m)),
+                goal_ne: Some((plan.goal.north_m, plan.goal.east_m)),
+                graph_ne: &graph,
+                connectors_ne: &connectors,
+                flight,
+            };
+            crate::render(&scene, *format, 1000, 1000)
+        }
+        (PictureKind::Scene(format), _) => {
+            let boxes = world
+                .colliders()
+                .map(|m| m.boxes.as_slice())
+                .unwrap_or_default();
+            let points = plan.points_nea();
+            let edges: Vec<_> = geometry.edges.iter().map(|s| (s[0], s[1])).collect();
+            let safety_m = plan
+                .details
+                .get("safety_m")
+                .and_then(|v| v.as_f64())
+                .unwrap_or(0.0);
+            let scene = crate::Scene3d {
+                title: format!(
+                    "{map}: {}, {:.0} m, margin {safety_m} m",
+                    info.name, plan.cost_m
+                ),
+                obstacles: boxes,
+                safety_m,
+                path: &points,
+                raw_path: &geometry.raw_path,
+                raw_label: if plan.planner == skyplan_plan::PlannerId::Voxel {
+                    "voxel path"
+                } else {
+                    "before shortcutting"
+                },
+                edges: &edges,
+                edges_label: &geometry.edges_label,
+            };
+            crate::render_plan3d(&scene, *format, 1500, 900)
+        }
+        (PictureKind::Heatmap, None) => Err(PlotError::BadScene {
+            what: "a heat map needs a grid planner",
+        }),
+    }
+}
+
+fn grid_at(plan: &Plan) -> String {
+    match (&plan.grid, plan.obstacles) {
+        (Some(g), Some(_)) => format!(" at {} m altitude, {} m margin", g.alt_m, g.safety_m),
+        _ => String::new(),
+    }
+}
+
+/// The normalised cost map of a ride with its trace, as a PNG heat map.
+pub fn ride_heatmap_png(ride: &Ride) -> Result<Vec<u8>, PlotError> {
+    let heat = crate::Heatmap {
+        title: format!(
+            "navigation over the inflated cost map: {} steps",
+            ride.trace.len().saturating_sub(1)
+        ),
+        grid: &ride.grid,
+        values: &ride.costs,
+        measure: "Nav2 cost (0 free to 254 lethal)",
+        path: &ride.trace,
+        start: Some(ride.ends.0),
+        goal: Some(ride.ends.1),
+    };
+    crate::render_heatmap_png(&heat, 1000)
+}
