@@ -3,7 +3,7 @@
 
 use crate::args::BenchArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
-use crate::files::{read_bytes, read_text, write_atomic};
+use crate::files::{read_text, write_atomic};
 use anyhow::Context;
 use serde_json::json;
 use skyplan_bench::{Contender, Record, Run, random_far_queries, run, run_prepared};
@@ -268,16 +268,33 @@ fn table_spec(args: &BenchArgs) -> [f64; 3] {
     }
 }
 
-/// Builds the JPS+ table of `grid` and writes it to `path`.
+/// Builds the JPS+ table of `grid` and streams it to `path` (through a temporary file renamed
+/// into place, so a failed save leaves no partial table).
 fn save_table(path: &Path, grid: &Grid2, model: MoveModel, args: &BenchArgs) -> Result<()> {
     let t = Instant::now();
     let table = JpsPlusTable::build(Arc::new(grid.clone()), model);
-    let bytes = table.to_bytes(table_spec(args));
-    write_atomic(path, &bytes)?;
+    let built_ms = t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
+    let written = (|| -> std::io::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        let mut out = std::io::BufWriter::new(file);
+        table.write_to(&mut out, table_spec(args))?;
+        out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(anyhow::anyhow!("writing {}: {e}", path.display())).or_exit(Kind::Runtime);
+    }
     if !args.json {
         eprintln!(
-            "saved    JPS+ table ({:.1} MB, built in {:.0} ms) to {}",
-            bytes.len() as f64 / 1e6,
+            "saved    JPS+ table ({:.1} MB, built in {built_ms:.0} ms, written in {:.0} ms) to {}",
+            table.file_bytes() as f64 / 1e6,
             t.elapsed().as_secs_f64() * 1e3,
             path.display()
         );
@@ -285,11 +302,14 @@ fn save_table(path: &Path, grid: &Grid2, model: MoveModel, args: &BenchArgs) -> 
     Ok(())
 }
 
-/// JPS+ prepared from the table in `path` (the load time is its preparation time).
+/// JPS+ prepared from the table in `path`, streamed into the table's memory (the load time is
+/// its preparation time).
 fn load_table<'g>(path: &Path, grid: &'g Grid2, model: MoveModel) -> Result<CellSearch<'g>> {
     let t = Instant::now();
-    let bytes = read_bytes(path)?;
-    let table = JpsPlusTable::from_bytes(&bytes, Arc::new(grid.clone())).map_err(|e| {
+    let file = std::fs::File::open(path)
+        .with_context(|| format!("--preprocess {}: cannot open", path.display()))
+        .or_exit(Kind::BadInput)?;
+    let table = JpsPlusTable::read_from(file, Arc::new(grid.clone())).map_err(|e| {
         bad_input(format!(
             "--preprocess {}: {e}; rebuild it with --save-preprocess",
             path.display()
