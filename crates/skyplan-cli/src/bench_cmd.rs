@@ -20,7 +20,8 @@ const PEERS_PY: &str = include_str!("../../../bench/peers.py");
 
 struct Source {
     name: String,
-    grid: Grid2,
+    /// Shared with a JPS+ table built or loaded for it (no second copy of the grid).
+    grid: Arc<Grid2>,
 }
 
 fn load(args: &BenchArgs) -> Result<Source> {
@@ -38,7 +39,7 @@ fn load(args: &BenchArgs) -> Result<Source> {
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
             Ok(Source {
                 name: path.display().to_string(),
-                grid,
+                grid: Arc::new(grid),
             })
         }
         other => {
@@ -55,7 +56,7 @@ fn load(args: &BenchArgs) -> Result<Source> {
                 Grid2::from_colliders(&map, spec).map_err(|e| bad_input(format!("{name}: {e}")))?;
             Ok(Source {
                 name: format!("{name} at {} m, {} m margin", spec.alt_m, spec.safety_m),
-                grid,
+                grid: Arc::new(grid),
             })
         }
     }
@@ -270,9 +271,9 @@ fn table_spec(args: &BenchArgs) -> [f64; 3] {
 
 /// Builds the JPS+ table of `grid` and streams it to `path` (through a temporary file renamed
 /// into place, so a failed save leaves no partial table).
-fn save_table(path: &Path, grid: &Grid2, model: MoveModel, args: &BenchArgs) -> Result<()> {
+fn save_table(path: &Path, grid: &Arc<Grid2>, model: MoveModel, args: &BenchArgs) -> Result<()> {
     let t = Instant::now();
-    let table = JpsPlusTable::build(Arc::new(grid.clone()), model);
+    let table = JpsPlusTable::build(Arc::clone(grid), model);
     let built_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
     let file_name = path
@@ -304,12 +305,12 @@ fn save_table(path: &Path, grid: &Grid2, model: MoveModel, args: &BenchArgs) -> 
 
 /// JPS+ prepared from the table in `path`, streamed into the table's memory (the load time is
 /// its preparation time).
-fn load_table<'g>(path: &Path, grid: &'g Grid2, model: MoveModel) -> Result<CellSearch<'g>> {
+fn load_table<'g>(path: &Path, grid: &'g Arc<Grid2>, model: MoveModel) -> Result<CellSearch<'g>> {
     let t = Instant::now();
     let file = std::fs::File::open(path)
         .with_context(|| format!("--preprocess {}: cannot open", path.display()))
         .or_exit(Kind::BadInput)?;
-    let table = JpsPlusTable::read_from(file, Arc::new(grid.clone())).map_err(|e| {
+    let table = JpsPlusTable::read_from(file, Arc::clone(grid)).map_err(|e| {
         bad_input(format!(
             "--preprocess {}: {e}; rebuild it with --save-preprocess",
             path.display()

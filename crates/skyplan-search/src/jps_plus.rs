@@ -358,14 +358,15 @@ impl JpsPlusTable {
                 c += esc * dc;
             }
         };
-        search.jump_point_search(
-            grid,
-            start,
-            goal,
-            &view,
-            |r, c, _| view.neighbour_mask(r, c),
-            jump,
-        )
+        // A cell's free neighbours, read from its own entry (same cache line as its jumps): a
+        // direction's code is 0 exactly when the neighbour that way is blocked or off the grid.
+        let mask = |_: i64, _: i64, i: usize| -> u8 {
+            table[i]
+                .iter()
+                .enumerate()
+                .fold(0u8, |m, (k, &code)| m | (u8::from(code != 0) << k))
+        };
+        search.jump_point_search(grid, start, goal, &view, mask, jump)
     }
 }
 
@@ -408,6 +409,24 @@ mod tests {
             .search(&mut GridSearch::new(), Cell::new(0, 0), Cell::new(0, 299))
             .expect("path");
         assert_eq!(path.cost_cells(), 299.0);
+    }
+
+    /// A direction's code is 0 exactly when the neighbour that way is blocked or off the grid
+    /// (the search reads free-neighbour masks from the table).
+    #[test]
+    fn zero_codes_are_the_blocked_neighbours() {
+        let g = Grid2::from_ascii("..#..\n.#...\n....#\n#....").expect("grid");
+        for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
+            let t = JpsPlusTable::build_with_escape(Arc::new(g.clone()), model, 2);
+            let view = View::new(&g, Cell::new(0, 0), model);
+            for (i, entry) in t.table.iter().enumerate() {
+                let (r, c) = (i as i64 / view.cols, i as i64 % view.cols);
+                for (k, &code) in entry.iter().enumerate() {
+                    let free = view.neighbour_mask(r, c) & (1 << k) != 0;
+                    assert_eq!(code != 0, free, "cell {i} direction {k}");
+                }
+            }
+        }
     }
 
     fn grid_strategy() -> impl Strategy<Value = Grid2> {

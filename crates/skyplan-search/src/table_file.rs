@@ -26,7 +26,6 @@
 //! Loading checks all of it against the grid it is given, and every code against the grid's
 //! borders, so a damaged or foreign file is an error, never a wrong path or a panic.
 
-use crate::jps::DIRS;
 use crate::jps_plus::{ESCAPE_CELLS, Entry, decode};
 use crate::{JpsPlusTable, MoveModel};
 use skyplan_cspace::Grid2;
@@ -388,6 +387,7 @@ impl JpsPlusTable {
         let expected = header.file_bytes();
         let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
         let escape = header.escape_cells;
+        let reach = reach_table(escape);
         let mut table = vec![[0u8; 8]; grid.len()];
         let mut table_sum = TableSum::new(header.model, escape);
         // The first bad entry, reported only if the checksum holds (damage is a checksum error).
@@ -404,7 +404,7 @@ impl JpsPlusTable {
             }
             table_sum.cells(chunk);
             if first_bad.is_none() {
-                first_bad = check_codes(chunk, done, rows, cols, escape);
+                first_bad = check_codes(chunk, done, rows, cols, &reach);
             }
             done += chunk.len();
         }
@@ -425,6 +425,23 @@ impl JpsPlusTable {
     }
 }
 
+/// Reach of an impossible code: more than any grid has room for.
+const IMPOSSIBLE: i64 = i64::MAX;
+
+/// How many cells each code lets a scan examine, for a table of escape length `escape`
+/// ([`IMPOSSIBLE`] for a code no table holds).
+fn reach_table(escape: u8) -> [i64; 256] {
+    let mut reach = [IMPOSSIBLE; 256];
+    for (code, slot) in reach.iter_mut().enumerate() {
+        *slot = match decode(code as u8, escape) {
+            Some(Entry::Wall(w) | Entry::Jump(w)) => i64::from(w),
+            Some(Entry::Escape) => i64::from(escape),
+            None => IMPOSSIBLE,
+        };
+    }
+    reach
+}
+
 /// The first entry of `cells` (cell `first` on) whose code is impossible or whose scan
 /// reaches past the grid's border.
 fn check_codes(
@@ -432,35 +449,48 @@ fn check_codes(
     first: usize,
     rows: i64,
     cols: i64,
-    escape: u8,
+    reach: &[i64; 256],
 ) -> Option<TableFileError> {
-    for (n, entry) in cells.iter().enumerate() {
-        let i = (first + n) as i64;
-        let (r, c) = (i / cols, i % cols);
+    let (mut r, mut c) = (first as i64 / cols, first as i64 % cols);
+    for entry in cells {
+        // Room to the border in each direction of DIRS (straight, then diagonal).
+        let (down, up, right, left) = (rows - 1 - r, r, cols - 1 - c, c);
+        let room = [
+            down,
+            up,
+            right,
+            left,
+            down.min(right),
+            down.min(left),
+            up.min(right),
+            up.min(left),
+        ];
+        let mut bad = false;
         for (k, &code) in entry.iter().enumerate() {
-            let reach = match decode(code, escape) {
-                Some(Entry::Wall(w) | Entry::Jump(w)) => i64::from(w),
-                Some(Entry::Escape) => i64::from(escape),
-                None => {
-                    return Some(TableFileError::Code {
-                        row: r as u32,
-                        col: c as u32,
-                    });
-                }
-            };
-            // A scan reaches `reach` cells along DIRS[k]: all of them must be on the grid.
-            let (dr, dc) = DIRS[k];
-            let (er, ec) = (r + reach * dr, c + reach * dc);
-            if er < 0 || er >= rows || ec < 0 || ec >= cols {
-                return Some(TableFileError::OffGrid {
-                    row: r as u32,
-                    col: c as u32,
-                });
-            }
+            bad |= reach[usize::from(code)] > room[k];
+        }
+        if bad {
+            let (row, col) = (r as u32, c as u32);
+            return Some(
+                if entry
+                    .iter()
+                    .any(|&code| reach[usize::from(code)] == IMPOSSIBLE)
+                {
+                    TableFileError::Code { row, col }
+                } else {
+                    TableFileError::OffGrid { row, col }
+                },
+            );
+        }
+        c += 1;
+        if c == cols {
+            c = 0;
+            r += 1;
         }
     }
     None
 }
+
 #[cfg(test)]
 mod tests {
     use super::*;
