@@ -1,7 +1,7 @@
 //! Wall-clock and CPU time per query of JPS+ and JPS on a (tiled) colliders map, for a machine
 //! shared with other work: the CPU time (from /proc/thread-self/schedstat, nanoseconds on the
 //! CPU) does not count the time the thread waited for a core. Run with
-//! `cargo run --release -p skyplan-search --example city_cpu -- MAP.csv [QUERIES] [TABLE_FILE]`
+//! `cargo run --release -p skyplan-search --example city_cpu -- MAP.csv [QUERIES] [TABLE_FILE] [jps-plus|jps]`
 //! (with a table file saved by `skyplan bench --save-preprocess`, JPS+ loads it instead of
 //! building it).
 
@@ -80,7 +80,11 @@ fn main() {
         (cpu_ns() - cpu) as f64 / 1e6
     );
     let mut search = GridSearch::new();
+    let only = args.get(4);
     for name in ["jps-plus", "jps"] {
+        if only.is_some_and(|o| o != name) {
+            continue;
+        }
         let (mut walls, mut cpus) = (Vec::new(), Vec::new());
         for (k, &(a, b)) in queries.iter().enumerate() {
             let (wall, cpu) = (Instant::now(), cpu_ns());

@@ -289,6 +289,12 @@ impl JpsPlusTable {
                 }
             }
         };
+        // A jump point found: its entry is read now, so that the memory access overlaps the
+        // offer's own (the entry is needed again if the point is expanded).
+        let found = |r: i64, c: i64| -> Option<(i64, i64)> {
+            std::hint::black_box(table[(r * cols + c) as usize]);
+            Some((r, c))
+        };
         let jump = |mut r: i64, mut c: i64, dr: i64, dc: i64| -> Option<(i64, i64)> {
             let k = dir_index(dr, dc);
             if dr == 0 || dc == 0 {
@@ -303,12 +309,12 @@ impl JpsPlusTable {
                         && t >= 1
                         && t <= reach(e)
                     {
-                        return Some((gr, gc));
+                        return found(gr, gc);
                     }
                     match e {
                         Entry::Jump(s) => {
                             let s = i64::from(s);
-                            return Some((r + s * dr, c + s * dc));
+                            return found(r + s * dr, c + s * dc);
                         }
                         Entry::Wall(_) => return None,
                         Entry::Escape => {
@@ -349,7 +355,7 @@ impl JpsPlusTable {
                     }
                 }
                 if let Some(i) = best {
-                    return Some((r + i * dr, c + i * dc));
+                    return found(r + i * dr, c + i * dc);
                 }
                 if e != Entry::Escape {
                     return None;
