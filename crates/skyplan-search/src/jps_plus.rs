@@ -2,7 +2,7 @@
 //! cell and direction.
 //!
 //! For each cell and each of the 8 directions the table holds where the goal-free scan of
-//! [`crate::Planner::Jps`] from that cell would stop, as one byte ([`Entry`] codes):
+//! [`crate::Planner::Jps`] from that cell would stop, as one byte:
 //!
 //! * *wall* `w` (`0 ≤ w ≤ E`): no jump point; the scan examines `w` cells and then stops;
 //! * *jump* `k` (`1 ≤ k ≤ E`): a jump point `k` cells away;
