@@ -85,3 +85,30 @@ fn foreign_and_damaged_tables_are_refused_with_the_reason() {
         e.message
     );
 }
+
+/// A reader that hands out at most 1,000 bytes per call (as a pipe or a slow disk may).
+struct Trickle<'a>(&'a [u8]);
+
+impl std::io::Read for Trickle<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = buf.len().min(self.0.len()).min(1000);
+        buf[..n].copy_from_slice(&self.0[..n]);
+        self.0 = &self.0[n..];
+        Ok(n)
+    }
+}
+
+#[test]
+fn a_table_streamed_in_small_pieces_loads_and_answers_like_jps() {
+    let mut session = Session::new(World::fcnd_city());
+    let jps = session.plan(&request(PlannerId::Jps)).expect("jps plans");
+    let mut bytes = Vec::new();
+    session
+        .save_jps_plus(&PlanRequest::default(), &mut bytes)
+        .expect("saves");
+    let mut later = Session::new(World::fcnd_city());
+    later.load_jps_plus(Trickle(&bytes)).expect("loads");
+    let loaded = later.plan(&request(PlannerId::JpsPlus)).expect("plans");
+    assert_eq!(table_use(&loaded), Some("reused"));
+    assert_eq!(loaded.cost_m, jps.cost_m);
+}

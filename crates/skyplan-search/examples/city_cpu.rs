@@ -50,7 +50,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let path = args
         .get(1)
-        .expect("usage: city_cpu MAP.csv [QUERIES] [TABLE_FILE]");
+        .expect("usage: city_cpu MAP.csv [QUERIES] [TABLE_FILE] [jps-plus|jps]");
     let count: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(20);
     let text = std::fs::read_to_string(path).expect("map file");
     let map = skyplan_map::colliders::parse_colliders(&text).expect("colliders map");
