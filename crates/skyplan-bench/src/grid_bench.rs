@@ -14,8 +14,8 @@ use std::time::Instant;
 pub struct Source {
     /// The map's name (its file, or the bundled map), with the slice for colliders maps.
     pub name: String,
-    /// The grid searched.
-    pub grid: Grid2,
+    /// The grid searched (shared with a JPS+ table built or loaded for it: no second copy).
+    pub grid: Arc<Grid2>,
 }
 
 /// The grid of a map's text: a MovingAI `.map` as it is (`movingai`), else an FCND colliders
@@ -27,14 +27,14 @@ pub fn load_grid(name: &str, text: &str, movingai: bool, spec: GridSpec) -> Resu
         let grid = crate::replay::file_order_grid(&map).map_err(|e| fail(&e))?;
         return Ok(Source {
             name: name.to_string(),
-            grid,
+            grid: Arc::new(grid),
         });
     }
     let map = skyplan_map::colliders::parse_colliders(text).map_err(|e| fail(&e))?;
     let grid = Grid2::from_colliders(&map, spec).map_err(|e| fail(&e))?;
     Ok(Source {
         name: format!("{name} at {} m, {} m margin", spec.alt_m, spec.safety_m),
-        grid,
+        grid: Arc::new(grid),
     })
 }
 
@@ -187,21 +187,30 @@ pub fn records_bytes(
     w.into_inner().map_err(|e| e.to_string())
 }
 
-/// The JPS+ table of `grid` as a file's bytes (`spec`: alt, margin, cell size the grid was
+/// The JPS+ table of `grid` (sharing it) and its build time, microseconds. The caller streams
+/// it to a file with [`JpsPlusTable::write_to`] (`spec`: alt, margin, cell size the grid was
 /// built with, `NaN` for a MovingAI map).
-pub fn jps_plus_table_bytes(grid: &Grid2, model: MoveModel, spec: [f64; 3]) -> Vec<u8> {
-    JpsPlusTable::build(Arc::new(grid.clone()), model).to_bytes(spec)
+pub fn build_jps_plus_table(grid: &Arc<Grid2>, model: MoveModel) -> (JpsPlusTable, u64) {
+    let t = Instant::now();
+    let table = JpsPlusTable::build(Arc::clone(grid), model);
+    (table, micros_since(t))
 }
 
-/// JPS+ prepared from a table file's bytes, read since `started` (the load time is its
-/// preparation time); refused if built for another move model.
+/// Microseconds since `t`.
+fn micros_since(t: Instant) -> u64 {
+    u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX)
+}
+
+/// JPS+ prepared from a table file streamed from `input` straight into the table's memory
+/// (read since `started`: the load time is its preparation time); refused if built for another
+/// grid or move model.
 pub fn jps_plus_from_table<'g>(
-    bytes: &[u8],
-    grid: &'g Grid2,
+    input: impl std::io::Read,
+    grid: &'g Arc<Grid2>,
     model: MoveModel,
     started: Instant,
 ) -> Result<CellSearch<'g>, String> {
-    let table = JpsPlusTable::from_bytes(bytes, Arc::new(grid.clone()))
+    let table = JpsPlusTable::read_from(input, Arc::clone(grid))
         .map_err(|e| format!("{e}; rebuild it with --save-preprocess"))?;
     let rule = |m: MoveModel| {
         if m == MoveModel::OctileCornerCutting {
@@ -217,6 +226,14 @@ pub fn jps_plus_from_table<'g>(
             rule(model)
         ));
     }
-    let us = u64::try_from(started.elapsed().as_micros()).unwrap_or(u64::MAX);
+    jps_plus_engine(grid, table, micros_since(started))
+}
+
+/// JPS+ over a table already built or loaded (`us`: what preparing it took).
+pub fn jps_plus_engine(
+    grid: &Grid2,
+    table: JpsPlusTable,
+    us: u64,
+) -> Result<CellSearch<'_>, String> {
     CellSearch::with_jps_plus_table(grid, Arc::new(table), us).map_err(|e| e.to_string())
 }

@@ -3,8 +3,9 @@
 //! are `skyplan_bench::grid_bench`'s; this reads the files, prints and writes.
 
 use crate::args::BenchArgs;
-use crate::exit::{Result, bad_input, runtime};
-use crate::files::{read_bytes, read_text, write_atomic};
+use crate::exit::{Classify, Kind, Result, bad_input, runtime};
+use crate::files::{read_text, write_atomic};
+use anyhow::Context;
 use serde_json::json;
 use skyplan_bench::grid_bench::{self, QuerySource};
 use skyplan_bench::{Contender, Run};
@@ -92,27 +93,30 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
+    // The saved table also serves this run's JPS+ queries (no second build) when JPS+ runs
+    // first; otherwise it is dropped, so that it does not count in another planner's peak.
+    let mut saved = None;
     if let Some(path) = &args.save_preprocess {
-        let t = Instant::now();
-        let bytes = grid_bench::jps_plus_table_bytes(grid, model, table_spec(&args));
-        write_atomic(path, &bytes)?;
-        if !args.json {
-            eprintln!(
-                "saved    JPS+ table ({:.1} MB, built in {:.0} ms) to {}",
-                bytes.len() as f64 / 1e6,
-                t.elapsed().as_secs_f64() * 1e3,
-                path.display()
-            );
+        let table = save_table(path, grid, model, &args)?;
+        if planners.first() == Some(&Contender::Skyplan(PlannerId::JpsPlus)) {
+            saved = Some(table);
         }
     }
     let mut runs: Vec<Run> = Vec::new();
     for &planner in &planners {
         progress.set_message(planner.name());
-        let prepare = || match (&args.preprocess, planner) {
-            (Some(path), Contender::Skyplan(PlannerId::JpsPlus)) => {
+        let jps_plus = planner == Contender::Skyplan(PlannerId::JpsPlus);
+        let reuse = if jps_plus { saved.take() } else { None };
+        let prepare = || match (&args.preprocess, reuse) {
+            (_, Some((table, us))) => grid_bench::jps_plus_engine(grid, table, us)
+                .map(Some)
+                .map_err(runtime),
+            (Some(path), None) if jps_plus => {
                 let t = Instant::now();
-                let bytes = read_bytes(path)?;
-                grid_bench::jps_plus_from_table(&bytes, grid, model, t)
+                let file = std::fs::File::open(path)
+                    .with_context(|| format!("--preprocess {}: cannot open", path.display()))
+                    .or_exit(Kind::BadInput)?;
+                grid_bench::jps_plus_from_table(std::io::BufReader::new(file), grid, model, t)
                     .map(Some)
                     .map_err(|e| bad_input(format!("--preprocess {}: {e}", path.display())))
             }
@@ -174,6 +178,44 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         println!("wrote    {}", out.display());
     }
     Ok(())
+}
+
+/// Builds the JPS+ table of `grid` and streams it to `path` (through a temporary file renamed
+/// into place, so a failed save leaves no partial table); the table and its build time (µs).
+fn save_table(
+    path: &Path,
+    grid: &std::sync::Arc<skyplan_cspace::Grid2>,
+    model: MoveModel,
+    args: &BenchArgs,
+) -> Result<(skyplan_search::JpsPlusTable, u64)> {
+    let (table, built_us) = grid_bench::build_jps_plus_table(grid, model);
+    let t = Instant::now();
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
+    let written = (|| -> std::io::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        let mut out = std::io::BufWriter::new(file);
+        table.write_to(&mut out, table_spec(args))?;
+        out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(anyhow::anyhow!("writing {}: {e}", path.display())).or_exit(Kind::Runtime);
+    }
+    if !args.json {
+        eprintln!(
+            "saved    JPS+ table ({:.1} MB, built in {:.0} ms, written in {:.0} ms) to {}",
+            table.file_bytes() as f64 / 1e6,
+            built_us as f64 / 1e3,
+            t.elapsed().as_secs_f64() * 1e3,
+            path.display()
+        );
+    }
+    Ok((table, built_us))
 }
 
 /// `bench --replan N`: seeded flights into hidden buildings, one row per replanner.

@@ -69,7 +69,8 @@ impl<'g> CellSearch<'g> {
         table: Arc<JpsPlusTable>,
         precompute_us: u64,
     ) -> Result<Self, PlanFailure> {
-        if **table.grid() != *grid {
+        // The same grid (shared, as a session or the bench shares it) or an equal one.
+        if !std::ptr::eq(&**table.grid(), grid) && **table.grid() != *grid {
             return Err(PlanFailure::bad_request(
                 "the JPS+ table was built for another grid",
             ));

@@ -10,10 +10,11 @@ use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
 use skyplan_mission::Mission;
-use skyplan_search::table_file::read_header;
+use skyplan_search::table_file::{TableFileError, read_header_from};
 use skyplan_search::{GridSearch, JpsPlusTable, MoveModel};
 use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
 use std::collections::HashMap;
+use std::io::{Read, Write};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -249,9 +250,14 @@ impl Session {
         self.jps_plus.push(table);
     }
 
-    /// The JPS+ table for `request`'s grid and corner rule as file bytes (built unless the
-    /// session has it), for [`Session::load_jps_plus`] in a later run.
-    pub fn save_jps_plus(&mut self, request: &PlanRequest) -> Result<Vec<u8>, PlanFailure> {
+    /// Writes the JPS+ table for `request`'s grid and corner rule (built unless the session
+    /// has it) to `out` as a table file, for [`Session::load_jps_plus`] in a later run; the
+    /// bytes written. The table is streamed from its own memory (no copy is made).
+    pub fn save_jps_plus(
+        &mut self,
+        request: &PlanRequest,
+        out: impl Write,
+    ) -> Result<u64, PlanFailure> {
         let r = Resolved::new(&PlanRequest {
             planner: Some(PlannerId::JpsPlus),
             ..request.clone()
@@ -263,14 +269,26 @@ impl Session {
             Source::Grid(_) => [f64::NAN; 3],
             Source::Colliders(_) => [r.alt_m, r.safety_m, r.cell_m],
         };
-        Ok(table.to_bytes(spec))
+        table
+            .write_to(out, spec)
+            .map_err(|e| PlanFailure::internal(format!("writing the JPS+ table: {e}")))?;
+        Ok(table.file_bytes())
     }
 
-    /// Loads a JPS+ table saved by [`Session::save_jps_plus`]: later `jps-plus` requests on its
-    /// grid use it instead of building one. Refused (bad request, saying why) unless it was
-    /// built for this world's grid at the altitude, margin and cell size it records.
-    pub fn load_jps_plus(&mut self, bytes: &[u8]) -> Result<(), PlanFailure> {
-        let header = read_header(bytes).map_err(|e| PlanFailure::bad_request(e.to_string()))?;
+    /// Loads a JPS+ table file saved by [`Session::save_jps_plus`] from `input` (read in
+    /// chunks straight into the table: the load needs the table's memory once): later
+    /// `jps-plus` requests on its grid use it instead of building one. Refused (bad request,
+    /// saying why) unless it was built for this world's grid at the altitude, margin and cell
+    /// size it records.
+    pub fn load_jps_plus(&mut self, mut input: impl Read) -> Result<(), PlanFailure> {
+        let refuse = |e: TableFileError, name: &str| match e {
+            TableFileError::Io(_) => PlanFailure::internal(e.to_string()),
+            _ => PlanFailure::bad_request(format!("{e}; this session's map is {name}")),
+        };
+        let header = read_header_from(&mut input).map_err(|e| match e {
+            TableFileError::Io(_) => PlanFailure::internal(e.to_string()),
+            _ => PlanFailure::bad_request(e.to_string()),
+        })?;
         let [alt_m, safety_m, cell_m] = header.spec;
         let fixed = matches!(self.world.source, Source::Grid(_));
         let spec_ok = alt_m.is_finite() && safety_m.is_finite() && cell_m > 0.0;
@@ -281,11 +299,11 @@ impl Session {
             )));
         }
         let grid = self.grid(alt_m, safety_m, cell_m)?;
-        let table = JpsPlusTable::from_bytes(bytes, grid).map_err(|e| {
-            PlanFailure::bad_request(format!("{e}; this session's map is {}", self.world.name()))
-        })?;
+        // Drop a table this one replaces before reading: the two are never held at once.
         self.jps_plus
-            .retain(|t| !(t.model() == header.model && Arc::ptr_eq(t.grid(), table.grid())));
+            .retain(|t| !(t.model() == header.model && Arc::ptr_eq(t.grid(), &grid)));
+        let table = JpsPlusTable::read_after_header(&header, input, grid)
+            .map_err(|e| refuse(e, self.world.name()))?;
         self.keep_jps_plus(Arc::new(table));
         Ok(())
     }

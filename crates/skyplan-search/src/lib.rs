@@ -34,7 +34,7 @@ mod theta;
 
 pub use astar::GridSearch;
 pub use components::Components;
-pub use jps_plus::{JpsPlus, JpsPlusTable};
+pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 
 use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;

@@ -1,34 +1,47 @@
 //! The JPS+ table on disk: a versioned header, the checksum of the grid it was built for, the
 //! table, and a checksum of the table.
 //!
-//! Layout (little-endian), version 1:
+//! Layout (little-endian), version 2:
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 16 | magic `SKYPLAN-JPSPLUS\n` |
-//! | 4 | version (1) |
+//! | 4 | version (2) |
 //! | 4 | corner rule: 1 = octile, no corner cutting; 2 = octile with corner cutting |
 //! | 4, 4 | grid rows, columns |
 //! | 8 | [`grid_checksum`] of the grid |
 //! | 3 × 8 | the grid's altitude, margin and cell size in metres as the caller gave them
 //! (`NaN` for a fixed grid): how to rebuild the grid |
-//! | 8 | checksum of the table bytes |
-//! | rows × cols × 8 × 4 | per cell, per direction ([`crate::jps`]'s order), the jump value (i32) |
+//! | 4 | escape length in cells (1 ..= [`crate::ESCAPE_CELLS`]) |
+//! | 4 | bytes per cell (8) |
+//! | 8 | checksum of the corner rule, the escape length and the table bytes |
+//! | rows × cols × 8 | per cell, per direction ([`crate::jps`]'s order), the one-byte code of [`crate::JpsPlusTable`] |
 //!
-//! Loading checks all of it against the grid it is given, and every jump value against the
-//! grid's borders, so a damaged or foreign file is an error, never a wrong path or a panic.
-//! The free-neighbour masks are not stored: they are recomputed from the grid.
+//! Tables are written and read as streams ([`JpsPlusTable::write_to`],
+//! [`JpsPlusTable::read_from`]): the writer sends the table's own memory, the reader reads
+//! straight into the new table's buffer in 1 MiB chunks and checks each chunk as it arrives, so
+//! loading needs the table's memory once, not the file's bytes as well. The library opens no
+//! files: callers hand it any [`std::io::Read`] / [`std::io::Write`].
+//!
+//! Loading checks all of it against the grid it is given, and every code against the grid's
+//! borders, so a damaged or foreign file is an error, never a wrong path or a panic.
 
-use crate::jps::DIRS;
+use crate::jps_plus::{ESCAPE_CELLS, Entry, decode};
 use crate::{JpsPlusTable, MoveModel};
 use skyplan_cspace::Grid2;
+use std::io::{self, Read, Write};
 use std::sync::Arc;
 
 /// The first 16 bytes of a table file.
 pub const MAGIC: &[u8; 16] = b"SKYPLAN-JPSPLUS\n";
 /// The version this build writes and reads.
-pub const VERSION: u32 = 1;
-const HEADER_BYTES: usize = 16 + 4 + 4 + 8 + 8 + 24 + 8;
+pub const VERSION: u32 = 2;
+/// Bytes before the table.
+pub const HEADER_BYTES: usize = 16 + 4 + 4 + 4 + 4 + 8 + 24 + 4 + 4 + 8;
+/// Bytes per cell in the table.
+const CELL_BYTES: u32 = 8;
+/// Cells per streamed chunk (1 MiB).
+const CHUNK_CELLS: usize = 1 << 17;
 
 /// Why a table file cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,7 +50,9 @@ pub enum TableFileError {
     #[error("not a skyplan JPS+ table (expected the header `SKYPLAN-JPSPLUS`)")]
     NotATable,
     /// Written by another version of the format.
-    #[error("JPS+ table format version {found}; this skyplan reads version {expected}")]
+    #[error(
+        "JPS+ table format version {found}; this skyplan reads version {expected} (rebuild the table)"
+    )]
     Version {
         /// The file's version.
         found: u32,
@@ -85,6 +100,23 @@ pub enum TableFileError {
         /// Column of the entry.
         col: u32,
     },
+    /// A code no table holds.
+    #[error("JPS+ table entry at row {row}, column {col} holds an impossible code (damaged table)")]
+    Code {
+        /// Row of the entry.
+        row: u32,
+        /// Column of the entry.
+        col: u32,
+    },
+    /// The reader or writer failed.
+    #[error("JPS+ table input/output: {0}")]
+    Io(String),
+}
+
+impl From<io::Error> for TableFileError {
+    fn from(e: io::Error) -> Self {
+        TableFileError::Io(e.to_string())
+    }
 }
 
 /// What a table file's header says (read without the grid).
@@ -100,6 +132,17 @@ pub struct TableHeader {
     pub grid_checksum: u64,
     /// Altitude, margin and cell size (metres) the caller gave when saving (`NaN` if none).
     pub spec: [f64; 3],
+    /// Escape length of the table, cells.
+    pub escape_cells: u8,
+    /// Checksum of the corner rule, the escape length and the table bytes.
+    pub table_checksum: u64,
+}
+
+impl TableHeader {
+    /// Bytes of the whole file this header describes.
+    pub fn file_bytes(&self) -> u64 {
+        HEADER_BYTES as u64 + u64::from(self.rows) * u64::from(self.cols) * u64::from(CELL_BYTES)
+    }
 }
 
 /// A 64-bit checksum of a grid's size and occupancy (not cryptographic: it tells grids apart).
@@ -137,17 +180,29 @@ impl Hasher {
     }
 }
 
-fn payload_checksum(payload: &[u8]) -> u64 {
-    let mut h = Hasher::new();
-    let mut words = payload.chunks_exact(8);
-    for w in &mut words {
-        h.word(u64::from_le_bytes(w.try_into().unwrap_or_default()));
+/// The table checksum, fed cell by cell while streaming.
+struct TableSum {
+    h: Hasher,
+    cells: u64,
+}
+
+impl TableSum {
+    fn new(model: MoveModel, escape: u8) -> Self {
+        let mut h = Hasher::new();
+        h.word(u64::from(model_code(model)) << 32 | u64::from(escape));
+        Self { h, cells: 0 }
     }
-    let mut tail = [0u8; 8];
-    tail[..words.remainder().len()].copy_from_slice(words.remainder());
-    h.word(u64::from_le_bytes(tail));
-    h.word(payload.len() as u64);
-    h.finish()
+    #[inline]
+    fn cells(&mut self, cells: &[[u8; 8]]) {
+        for &c in cells {
+            self.h.word(u64::from_le_bytes(c));
+        }
+        self.cells += cells.len() as u64;
+    }
+    fn finish(mut self) -> u64 {
+        self.h.word(self.cells);
+        self.h.finish()
+    }
 }
 
 fn model_code(model: MoveModel) -> u32 {
@@ -157,7 +212,7 @@ fn model_code(model: MoveModel) -> u32 {
     }
 }
 
-/// Reads the header of a table file.
+/// Reads the header at the start of a table file's bytes.
 pub fn read_header(bytes: &[u8]) -> Result<TableHeader, TableFileError> {
     if bytes.len() < 16 || &bytes[..16] != MAGIC {
         return Err(TableFileError::NotATable);
@@ -197,45 +252,127 @@ pub fn read_header(bytes: &[u8]) -> Result<TableHeader, TableFileError> {
         f64::from_bits(u64_at(48)),
         f64::from_bits(u64_at(56)),
     ];
+    let escape_cells = match u8::try_from(u32_at(64)) {
+        Ok(e) if (1..=ESCAPE_CELLS).contains(&e) => e,
+        _ => {
+            return Err(TableFileError::Header(format!(
+                "escape length {} cells (expected 1 to {ESCAPE_CELLS})",
+                u32_at(64)
+            )));
+        }
+    };
+    let cell_bytes = u32_at(68);
+    if cell_bytes != CELL_BYTES {
+        return Err(TableFileError::Header(format!(
+            "{cell_bytes} bytes per cell (expected {CELL_BYTES})"
+        )));
+    }
     Ok(TableHeader {
         model,
         rows,
         cols,
         grid_checksum: u64_at(32),
         spec,
+        escape_cells,
+        table_checksum: u64_at(72),
     })
 }
 
+/// Reads exactly the header from the start of a table stream (the table follows).
+pub fn read_header_from(input: &mut impl Read) -> Result<TableHeader, TableFileError> {
+    let mut bytes = [0u8; HEADER_BYTES];
+    let got = read_full(input, &mut bytes)?;
+    read_header(&bytes[..got])
+}
+
+/// Reads until `buf` is full or the input ends; the bytes read.
+fn read_full(input: &mut impl Read, buf: &mut [u8]) -> Result<usize, TableFileError> {
+    let mut got = 0;
+    while got < buf.len() {
+        match input.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok(got)
+}
+
 impl JpsPlusTable {
-    /// The table as a file (module [`crate::table_file`]); `spec` is stored for the reader:
-    /// the grid's altitude, margin and cell size in metres (`NaN` for a fixed grid).
-    pub fn to_bytes(&self, spec: [f64; 3]) -> Vec<u8> {
+    fn header_bytes(&self, spec: [f64; 3], table_checksum: u64) -> [u8; HEADER_BYTES] {
         let grid = self.grid();
-        let mut out = Vec::with_capacity(HEADER_BYTES + self.table.len() * 32);
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&VERSION.to_le_bytes());
-        out.extend_from_slice(&model_code(self.model()).to_le_bytes());
-        out.extend_from_slice(&grid.rows().to_le_bytes());
-        out.extend_from_slice(&grid.cols().to_le_bytes());
-        out.extend_from_slice(&grid_checksum(grid).to_le_bytes());
+        let mut out = [0u8; HEADER_BYTES];
+        let mut at = 0;
+        let mut put = |b: &[u8]| {
+            out[at..at + b.len()].copy_from_slice(b);
+            at += b.len();
+        };
+        put(MAGIC);
+        put(&VERSION.to_le_bytes());
+        put(&model_code(self.model()).to_le_bytes());
+        put(&grid.rows().to_le_bytes());
+        put(&grid.cols().to_le_bytes());
+        put(&grid_checksum(grid).to_le_bytes());
         for v in spec {
-            out.extend_from_slice(&v.to_bits().to_le_bytes());
+            put(&v.to_bits().to_le_bytes());
         }
-        out.extend_from_slice(&[0; 8]); // the table checksum, written below
-        for entry in &self.table {
-            for v in entry {
-                out.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-        let sum = payload_checksum(&out[HEADER_BYTES..]);
-        out[HEADER_BYTES - 8..HEADER_BYTES].copy_from_slice(&sum.to_le_bytes());
+        put(&u32::from(self.escape).to_le_bytes());
+        put(&CELL_BYTES.to_le_bytes());
+        put(&table_checksum.to_le_bytes());
         out
     }
 
-    /// Loads a table file for `grid`: refused unless the file is whole, undamaged, of this
-    /// version, and built for exactly this grid.
+    fn checksum(&self) -> u64 {
+        let mut sum = TableSum::new(self.model(), self.escape);
+        sum.cells(&self.table);
+        sum.finish()
+    }
+
+    /// Bytes of the table as a file ([`HEADER_BYTES`] + 8 per cell).
+    pub fn file_bytes(&self) -> u64 {
+        HEADER_BYTES as u64 + self.table.len() as u64 * u64::from(CELL_BYTES)
+    }
+
+    /// Writes the table as a file (module [`crate::table_file`]) to `out`, straight from the
+    /// table's memory (no copy); `spec` is stored for the reader: the grid's altitude, margin
+    /// and cell size in metres (`NaN` for a fixed grid).
+    pub fn write_to(&self, mut out: impl Write, spec: [f64; 3]) -> io::Result<()> {
+        out.write_all(&self.header_bytes(spec, self.checksum()))?;
+        for chunk in self.table.chunks(CHUNK_CELLS) {
+            out.write_all(chunk.as_flattened())?;
+        }
+        out.flush()
+    }
+
+    /// The table as file bytes in memory ([`JpsPlusTable::write_to`] into a `Vec`).
+    pub fn to_bytes(&self, spec: [f64; 3]) -> Vec<u8> {
+        let mut out = Vec::with_capacity(usize::try_from(self.file_bytes()).unwrap_or(0));
+        out.extend_from_slice(&self.header_bytes(spec, self.checksum()));
+        out.extend_from_slice(self.table.as_flattened());
+        out
+    }
+
+    /// Loads a table file's bytes for `grid` ([`JpsPlusTable::read_from`]).
     pub fn from_bytes(bytes: &[u8], grid: Arc<Grid2>) -> Result<Self, TableFileError> {
-        let header = read_header(bytes)?;
+        Self::read_from(bytes, grid)
+    }
+
+    /// Reads a table file from `input` for `grid`: refused unless the file is whole,
+    /// undamaged, of this version, and built for exactly this grid. The table is read straight
+    /// into its own buffer, checked chunk by chunk (peak memory: the table).
+    pub fn read_from(mut input: impl Read, grid: Arc<Grid2>) -> Result<Self, TableFileError> {
+        let header = read_header_from(&mut input)?;
+        Self::read_after_header(&header, input, grid)
+    }
+
+    /// [`JpsPlusTable::read_from`] for a caller that already read the header with
+    /// [`read_header_from`] (to choose the grid from it): `input` is positioned at the table.
+    pub fn read_after_header(
+        header: &TableHeader,
+        mut input: impl Read,
+        grid: Arc<Grid2>,
+    ) -> Result<Self, TableFileError> {
         let sum = grid_checksum(&grid);
         if (header.rows, header.cols, header.grid_checksum) != (grid.rows(), grid.cols(), sum) {
             return Err(TableFileError::OtherGrid {
@@ -247,43 +384,111 @@ impl JpsPlusTable {
                 sum,
             });
         }
-        let cells = grid.len();
-        let expected = HEADER_BYTES as u64 + cells as u64 * 32;
-        if bytes.len() as u64 != expected {
+        let expected = header.file_bytes();
+        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
+        let escape = header.escape_cells;
+        let reach = reach_table(escape);
+        let mut table = vec![[0u8; 8]; grid.len()];
+        let mut table_sum = TableSum::new(header.model, escape);
+        // The first bad entry, reported only if the checksum holds (damage is a checksum error).
+        let mut first_bad: Option<TableFileError> = None;
+        let mut done = 0usize;
+        for chunk in table.chunks_mut(CHUNK_CELLS) {
+            let bytes = chunk.as_flattened_mut();
+            let got = read_full(&mut input, bytes)?;
+            if got < bytes.len() {
+                return Err(TableFileError::Length {
+                    expected,
+                    found: (HEADER_BYTES + done * CELL_BYTES as usize + got) as u64,
+                });
+            }
+            table_sum.cells(chunk);
+            if first_bad.is_none() {
+                first_bad = check_codes(chunk, done, rows, cols, &reach);
+            }
+            done += chunk.len();
+        }
+        let extra = io::copy(&mut input, &mut io::sink())?;
+        if extra > 0 {
             return Err(TableFileError::Length {
                 expected,
-                found: bytes.len() as u64,
+                found: expected + extra,
             });
         }
-        let payload = &bytes[HEADER_BYTES..];
-        let mut stored = [0u8; 8];
-        stored.copy_from_slice(&bytes[HEADER_BYTES - 8..HEADER_BYTES]);
-        if payload_checksum(payload) != u64::from_le_bytes(stored) {
+        if table_sum.finish() != header.table_checksum {
             return Err(TableFileError::Checksum);
         }
-        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
-        let mut table = Vec::with_capacity(cells);
-        for (i, chunk) in payload.chunks_exact(32).enumerate() {
-            let (r, c) = (i as i64 / cols, i as i64 % cols);
-            let mut entry = [0i32; 8];
-            for (k, v) in entry.iter_mut().enumerate() {
-                let at = 4 * k;
-                *v = i32::from_le_bytes([chunk[at], chunk[at + 1], chunk[at + 2], chunk[at + 3]]);
-                // A scan reaches |v| cells along DIRS[k]: all of them must be on the grid.
-                let (dr, dc) = DIRS[k];
-                let reach = i64::from(v.unsigned_abs());
-                let (er, ec) = (r + reach * dr, c + reach * dc);
-                if er < 0 || er >= rows || ec < 0 || ec >= cols {
-                    return Err(TableFileError::OffGrid {
-                        row: r as u32,
-                        col: c as u32,
-                    });
-                }
-            }
-            table.push(entry);
+        if let Some(e) = first_bad {
+            return Err(e);
         }
-        Ok(Self::from_parts(grid, header.model, table))
+        Ok(Self::from_parts(grid, header.model, escape, table))
     }
+}
+
+/// Reach of an impossible code: more than any grid has room for.
+const IMPOSSIBLE: i64 = i64::MAX;
+
+/// How many cells each code lets a scan examine, for a table of escape length `escape`
+/// ([`IMPOSSIBLE`] for a code no table holds).
+fn reach_table(escape: u8) -> [i64; 256] {
+    let mut reach = [IMPOSSIBLE; 256];
+    for (code, slot) in reach.iter_mut().enumerate() {
+        *slot = match decode(code as u8, escape) {
+            Some(Entry::Wall(w) | Entry::Jump(w)) => i64::from(w),
+            Some(Entry::Escape) => i64::from(escape),
+            None => IMPOSSIBLE,
+        };
+    }
+    reach
+}
+
+/// The first entry of `cells` (cell `first` on) whose code is impossible or whose scan
+/// reaches past the grid's border.
+fn check_codes(
+    cells: &[[u8; 8]],
+    first: usize,
+    rows: i64,
+    cols: i64,
+    reach: &[i64; 256],
+) -> Option<TableFileError> {
+    let (mut r, mut c) = (first as i64 / cols, first as i64 % cols);
+    for entry in cells {
+        // Room to the border in each direction of DIRS (straight, then diagonal).
+        let (down, up, right, left) = (rows - 1 - r, r, cols - 1 - c, c);
+        let room = [
+            down,
+            up,
+            right,
+            left,
+            down.min(right),
+            down.min(left),
+            up.min(right),
+            up.min(left),
+        ];
+        let mut bad = false;
+        for (k, &code) in entry.iter().enumerate() {
+            bad |= reach[usize::from(code)] > room[k];
+        }
+        if bad {
+            let (row, col) = (r as u32, c as u32);
+            return Some(
+                if entry
+                    .iter()
+                    .any(|&code| reach[usize::from(code)] == IMPOSSIBLE)
+                {
+                    TableFileError::Code { row, col }
+                } else {
+                    TableFileError::OffGrid { row, col }
+                },
+            );
+        }
+        c += 1;
+        if c == cols {
+            c = 0;
+            r += 1;
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -296,6 +501,52 @@ mod tests {
 
     fn grid(rows: u32, cols: u32, blocked: Vec<bool>) -> Arc<Grid2> {
         Arc::new(Grid2::new(rows, cols, blocked, GridFrame::default()).expect("size"))
+    }
+
+    /// A reader that hands out at most `piece` bytes per call.
+    struct Trickle<'a> {
+        bytes: &'a [u8],
+        piece: usize,
+    }
+
+    impl std::io::Read for Trickle<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = self.piece.min(buf.len()).min(self.bytes.len());
+            buf[..n].copy_from_slice(&self.bytes[..n]);
+            self.bytes = &self.bytes[n..];
+            Ok(n)
+        }
+    }
+
+    /// A reader that fails after `ok` bytes.
+    struct Failing {
+        bytes: Vec<u8>,
+        ok: usize,
+    }
+
+    impl std::io::Read for Failing {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.ok == 0 {
+                return Err(std::io::Error::other("disk on fire"));
+            }
+            let n = self.ok.min(buf.len()).min(self.bytes.len());
+            buf[..n].copy_from_slice(&self.bytes[..n]);
+            self.bytes.drain(..n);
+            self.ok -= n;
+            Ok(n)
+        }
+    }
+
+    /// Re-seals a crafted file: the table checksum recomputed over its (changed) bytes.
+    fn reseal(file: &mut [u8]) {
+        let header = read_header(file).expect("header");
+        let mut sum = TableSum::new(header.model, header.escape_cells);
+        let cells: Vec<[u8; 8]> = file[HEADER_BYTES..]
+            .chunks_exact(8)
+            .map(|c| c.try_into().expect("8 bytes"))
+            .collect();
+        sum.cells(&cells);
+        file[HEADER_BYTES - 8..HEADER_BYTES].copy_from_slice(&sum.finish().to_le_bytes());
     }
 
     fn city_block() -> Arc<Grid2> {
@@ -312,16 +563,25 @@ mod tests {
             rows in 1u32..20, cols in 1u32..20,
             cells in proptest::collection::vec(proptest::bool::weighted(0.3), 400),
             ends in proptest::collection::vec((0u32..20, 0u32..20, 0u32..20, 0u32..20), 1..5),
+            escape in 1u8..5, piece in 1usize..100,
         ) {
             let g = grid(rows, cols, cells[..(rows * cols) as usize].to_vec());
             for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
-                let built = JpsPlusTable::build(Arc::clone(&g), model);
+                let built = JpsPlusTable::build_with_escape(Arc::clone(&g), model, escape);
                 let spec = [5.0, 5.0, 1.0];
                 let bytes = built.to_bytes(spec);
+                let mut streamed = Vec::new();
+                built.write_to(&mut streamed, spec).expect("writes to memory");
+                prop_assert_eq!(&streamed, &bytes);
+                prop_assert_eq!(bytes.len() as u64, built.file_bytes());
                 let header = read_header(&bytes).expect("header");
                 prop_assert_eq!(header.spec, spec);
                 prop_assert_eq!(header.model, model);
-                let loaded = JpsPlusTable::from_bytes(&bytes, Arc::clone(&g)).expect("loads");
+                prop_assert_eq!(header.escape_cells, escape);
+                // Read in pieces of any size: the same table.
+                let loaded = JpsPlusTable::read_from(Trickle { bytes: &bytes, piece }, Arc::clone(&g))
+                    .expect("loads");
+                prop_assert_eq!(&loaded.table, &built.table);
                 let mut plus = JpsPlus::new(&g, model);
                 let mut search = GridSearch::new();
                 for &(a, b, c, d) in &ends {
@@ -348,8 +608,18 @@ mod tests {
             let i = at % bad.len();
             bad[i] ^= value | 1;
             let result = JpsPlusTable::from_bytes(&bad, Arc::clone(&g));
+            if i >= HEADER_BYTES || (64..68).contains(&i) {
+                // The table, or the escape length its codes are read with.
+                prop_assert!(matches!(
+                    result.err(),
+                    Some(TableFileError::Checksum | TableFileError::Header(_))
+                ));
+            }
             if i >= HEADER_BYTES {
-                prop_assert_eq!(result.err(), Some(TableFileError::Checksum));
+                prop_assert_eq!(
+                    JpsPlusTable::from_bytes(&bad, Arc::clone(&g)).err(),
+                    Some(TableFileError::Checksum)
+                );
             }
             let short = &good[..cut % good.len()];
             prop_assert!(JpsPlusTable::from_bytes(short, Arc::clone(&g)).is_err());
@@ -365,15 +635,46 @@ mod tests {
             JpsPlusTable::from_bytes(b"P5 not a table", Arc::clone(&g)).err(),
             Some(TableFileError::NotATable)
         );
-        let mut v2 = good.clone();
-        v2[16] = 2;
+        // A version 1 file (32 bytes per cell) is refused by its version.
+        let mut v1 = good.clone();
+        v1[16] = 1;
         assert_eq!(
-            JpsPlusTable::from_bytes(&v2, Arc::clone(&g)).err(),
+            JpsPlusTable::from_bytes(&v1, Arc::clone(&g)).err(),
             Some(TableFileError::Version {
-                found: 2,
-                expected: 1
+                found: 1,
+                expected: 2
             })
         );
+        let mut escape = good.clone();
+        escape[64] = 200;
+        assert!(matches!(
+            JpsPlusTable::from_bytes(&escape, Arc::clone(&g)).err(),
+            Some(TableFileError::Header(m)) if m.contains("escape length 200")
+        ));
+        let mut longer = good.clone();
+        longer.extend_from_slice(b"tail");
+        assert_eq!(
+            JpsPlusTable::from_bytes(&longer, Arc::clone(&g)).err(),
+            Some(TableFileError::Length {
+                expected: good.len() as u64,
+                found: good.len() as u64 + 4
+            })
+        );
+        assert_eq!(
+            JpsPlusTable::from_bytes(&good[..good.len() - 3], Arc::clone(&g)).err(),
+            Some(TableFileError::Length {
+                expected: good.len() as u64,
+                found: good.len() as u64 - 3
+            })
+        );
+        let failing = Failing {
+            bytes: good.clone(),
+            ok: HEADER_BYTES + 5,
+        };
+        assert!(matches!(
+            JpsPlusTable::read_from(failing, Arc::clone(&g)).err(),
+            Some(TableFileError::Io(m)) if m.contains("disk on fire")
+        ));
         // One more blocked cell: another grid.
         let mut cells = g.blocked_cells().to_vec();
         cells[0] = true;
@@ -389,13 +690,21 @@ mod tests {
         ));
         assert!(err.is_some_and(|e| e.to_string().contains("another map")));
         // A jump past the border with a valid checksum (a crafted file) is still refused.
+        // (Cell (0, 0), direction south: an escape of 126 cells on a 5-row grid.)
         let mut crafted = good.clone();
-        crafted[HEADER_BYTES..HEADER_BYTES + 4].copy_from_slice(&1000i32.to_le_bytes());
-        let sum = payload_checksum(&crafted[HEADER_BYTES..]);
-        crafted[HEADER_BYTES - 8..HEADER_BYTES].copy_from_slice(&sum.to_le_bytes());
+        crafted[HEADER_BYTES] = crate::jps_plus::ESCAPE_TO_WALL;
+        reseal(&mut crafted);
+        assert_eq!(
+            JpsPlusTable::from_bytes(&crafted, Arc::clone(&g)).err(),
+            Some(TableFileError::OffGrid { row: 0, col: 0 })
+        );
+        // An impossible code (a jump longer than the escape length) at cell (0, 1).
+        let mut crafted = good.clone();
+        crafted[HEADER_BYTES + 8 + 2] = 254;
+        reseal(&mut crafted);
         assert_eq!(
             JpsPlusTable::from_bytes(&crafted, g).err(),
-            Some(TableFileError::OffGrid { row: 0, col: 0 })
+            Some(TableFileError::Code { row: 0, col: 1 })
         );
     }
 }
