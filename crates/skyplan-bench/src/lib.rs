@@ -26,7 +26,7 @@ pub mod three_d;
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_plan::{CellSearch, Family, PlannerId};
+use skyplan_plan::{CellSearch, PlannerId};
 use skyplan_search::{Components, MoveModel};
 use std::time::Instant;
 
@@ -54,7 +54,10 @@ impl Contender {
             return Some(Contender::PathfindingCrateAStar);
         }
         let p: PlannerId = name.parse().ok()?;
-        matches!(p.info().family, Family::Grid(_)).then_some(Contender::Skyplan(p))
+        p.info()
+            .family
+            .is_cell_search()
+            .then_some(Contender::Skyplan(p))
     }
 
     /// True for skyplan's own planners (false for peers).

@@ -195,7 +195,7 @@ fn tempfile_dir() -> anyhow::Result<PathBuf> {
     Ok(dir)
 }
 
-/// The planners of `--planners` (or jps-plus, jps, astar, and the Rust peer with `--peers`).
+/// The planners of `--planners` (or ch, jps-plus, jps, astar, and the Rust peer with `--peers`).
 fn contenders(args: &BenchArgs) -> Result<Vec<Contender>> {
     Ok(match &args.planners {
         Some(list) => list
@@ -203,13 +203,14 @@ fn contenders(args: &BenchArgs) -> Result<Vec<Contender>> {
             .map(|n| {
                 Contender::from_name(n.trim()).ok_or_else(|| {
                     bad_input(format!(
-                        "--planners: unknown planner {n:?}; expected some of jps-plus, jps, astar, dijkstra, theta, rust-pathfinding-astar"
+                        "--planners: unknown planner {n:?}; expected some of ch, jps-plus, jps, astar, dijkstra, theta, rust-pathfinding-astar"
                     ))
                 })
             })
             .collect::<Result<_>>()?,
         None => {
             let mut v = vec![
+                Contender::Skyplan(PlannerId::Ch),
                 Contender::Skyplan(PlannerId::JpsPlus),
                 Contender::Skyplan(PlannerId::Jps),
                 Contender::Skyplan(PlannerId::Astar),
