@@ -5,8 +5,11 @@
 //!   contracted neighbours, level, updated lazily). Contracting `v` removes it and adds a shortcut
 //!   `u – w` for each pair of its neighbours whose shortest path runs through `v` (a bounded
 //!   witness search decides; when it gives up the shortcut is kept, which is always correct).
-//! * A query runs Dijkstra upwards from both ends (with stall-on-demand) and stops when neither
-//!   queue can beat the best meeting cost; the shortcuts are then unpacked into cells.
+//!   Contraction stops when the cheapest node has more than 40 neighbours: the nodes left form a
+//!   core (open ground makes dense cores) that queries search in every direction.
+//! * A query runs Dijkstra upwards (and inside the core) from both ends, with stall-on-demand,
+//!   and stops when neither queue can beat the best meeting cost; the shortcuts are then
+//!   unpacked into cells.
 //!
 //! Costs are exact integers: a straight move costs [`STRAIGHT`] = q and a diagonal [`DIAGONAL`] =
 //! p, where p/q is a convergent of √2 (p² − 2q² = ±1), so `cost = s·q + d·p`. For two move counts
@@ -32,6 +35,9 @@ pub const MAX_CELLS: usize = 1 << 28;
 const NONE: u32 = u32::MAX;
 /// Nodes a witness search may settle before it gives up (and keeps the shortcut).
 const WITNESS_SETTLE_LIMIT: u32 = 120;
+/// Contraction stops when the cheapest node left has more neighbours than this: the rest stay
+/// an uncontracted core (open ground makes dense cores whose contraction costs cubic time).
+const CORE_DEGREE: usize = 40;
 
 /// Why a hierarchy cannot be built.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -109,9 +115,14 @@ impl ContractionHierarchy {
                 max: MAX_CELLS,
             });
         }
+        Ok(Self::build_with_core(grid, model, CORE_DEGREE))
+    }
+
+    /// [`ContractionHierarchy::build`] with another core threshold (tests force large cores).
+    fn build_with_core(grid: Arc<Grid2>, model: MoveModel, core_degree: usize) -> Self {
         let mut b = Builder::new(&grid, model);
-        b.contract_all();
-        Ok(b.finish(grid, model))
+        b.contract_all(core_degree);
+        b.finish(grid, model)
     }
 
     /// The grid this hierarchy was built for.
@@ -332,6 +343,8 @@ struct Builder {
 struct Witness {
     dist: Vec<u64>,
     stamp: Vec<u32>,
+    /// `target[x] == now`: x is a neighbour the search must reach.
+    target: Vec<u32>,
     now: u32,
     heap: BinaryHeap<Reverse<(u64, u32)>>,
 }
@@ -361,6 +374,7 @@ impl Builder {
             witness: Witness {
                 dist: vec![0; n],
                 stamp: vec![0; n],
+                target: vec![0; n],
                 now: 0,
                 heap: BinaryHeap::new(),
             },
@@ -441,9 +455,13 @@ impl Builder {
         w.now = w.now.wrapping_add(1);
         if w.now == 0 {
             w.stamp.iter_mut().for_each(|x| *x = 0);
+            w.target.iter_mut().for_each(|x| *x = 0);
             w.now = 1;
         }
         let now = w.now;
+        for &(t, _) in targets {
+            w.target[t as usize] = now;
+        }
         w.heap.clear();
         w.dist[source as usize] = 0;
         w.stamp[source as usize] = now;
@@ -458,7 +476,7 @@ impl Builder {
                 break;
             }
             settled += 1;
-            if targets.iter().any(|&(t, _)| t == x) {
+            if w.target[x as usize] == now {
                 left -= 1;
                 if left == 0 {
                     break;
@@ -537,7 +555,7 @@ impl Builder {
         self.up[v as usize] = nbrs;
     }
 
-    fn contract_all(&mut self) {
+    fn contract_all(&mut self, core_degree: usize) {
         let n = self.adj.len() as u32;
         let mut heap: BinaryHeap<Reverse<(i64, u32)>> =
             (0..n).map(|v| Reverse((self.priority(v), v))).collect();
@@ -555,8 +573,20 @@ impl Builder {
                 heap.push(Reverse((now, v)));
                 continue;
             }
+            if self.adj[v as usize].len() > core_degree {
+                break;
+            }
             self.contract(v, rank);
             rank += 1;
+        }
+        // The core: ranked above every contracted node, searched in both directions (each core
+        // node keeps all its core neighbours as "upward" edges).
+        for v in 0..n {
+            if self.rank[v as usize] == NONE {
+                self.rank[v as usize] = rank;
+                rank += 1;
+                self.up[v as usize] = self.adj[v as usize].clone();
+            }
         }
     }
 
@@ -619,6 +649,47 @@ impl Builder {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::oracle::dijkstra_exact;
+    use proptest::prelude::*;
+    use skyplan_cspace::GridFrame;
+
+    fn grid_strategy() -> impl Strategy<Value = Grid2> {
+        (1u32..20, 1u32..20, 0.0f64..0.4).prop_flat_map(|(rows, cols, density)| {
+            proptest::collection::vec(proptest::bool::weighted(density), (rows * cols) as usize)
+                .prop_map(move |b| Grid2::new(rows, cols, b, GridFrame::default()).unwrap())
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        /// Large cores (searched in every direction) are as exact as full contraction: core
+        /// thresholds 0 (no contraction: bidirectional Dijkstra), 2, 5 and the default.
+        #[test]
+        fn any_core_threshold_gives_the_oracle_costs(
+            grid in grid_strategy(),
+            ends in proptest::collection::vec((0u32..20, 0u32..20, 0u32..20, 0u32..20), 1..5),
+        ) {
+            let grid = Arc::new(grid);
+            for model in [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting] {
+                for core in [0, 2, 5, CORE_DEGREE] {
+                    let ch = ContractionHierarchy::build_with_core(Arc::clone(&grid), model, core);
+                    let mut q = ChQuery::default();
+                    for &(a, b, c, d) in &ends {
+                        let s = Cell::new(a % grid.rows(), b % grid.cols());
+                        let t = Cell::new(c % grid.rows(), d % grid.cols());
+                        let got = ch.search(&mut q, s, t).ok().map(|p| {
+                            prop_assert_eq!(crate::check_path(&grid, &p.cells, model), Ok(()));
+                            prop_assert_eq!((p.cells.first(), p.cells.last()), (Some(&s), Some(&t)));
+                            Ok((p.straight_moves, p.diagonal_moves))
+                        }).transpose()?;
+                        let want = dijkstra_exact(&grid, s, t, model).map(|c| (c.straight, c.diagonal));
+                        prop_assert_eq!(got, want, "{:?} core {}", model, core);
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn integer_costs_are_a_convergent_of_root_two() {
