@@ -5,7 +5,7 @@
 //!   contracted neighbours, level, updated lazily). Contracting `v` removes it and adds a shortcut
 //!   `u – w` for each pair of its neighbours whose shortest path runs through `v` (a bounded
 //!   witness search decides; when it gives up the shortcut is kept, which is always correct).
-//!   Contraction stops when the cheapest node has more than 40 neighbours: the nodes left form a
+//!   Contraction stops when the cheapest node has more than 200 neighbours: the nodes left form a
 //!   core (open ground makes dense cores) that queries search in every direction.
 //! * A query runs Dijkstra upwards (and inside the core) from both ends, with stall-on-demand,
 //!   and stops when neither queue can beat the best meeting cost; the shortcuts are then
@@ -37,7 +37,7 @@ const NONE: u32 = u32::MAX;
 const WITNESS_SETTLE_LIMIT: u32 = 120;
 /// Contraction stops when the cheapest node left has more neighbours than this: the rest stay
 /// an uncontracted core (open ground makes dense cores whose contraction costs cubic time).
-const CORE_DEGREE: usize = 40;
+const CORE_DEGREE: usize = 200;
 
 /// Why a hierarchy cannot be built.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -354,9 +354,9 @@ impl Builder {
         let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
         let mut node_of_cell = vec![NONE; grid.len()];
         let mut cell_of_node = Vec::new();
-        for i in 0..grid.len() {
+        for (i, node) in node_of_cell.iter_mut().enumerate() {
             if !grid.is_blocked(grid.cell(i)) {
-                node_of_cell[i] = cell_of_node.len() as u32;
+                *node = cell_of_node.len() as u32;
                 cell_of_node.push(i as u32);
             }
         }
