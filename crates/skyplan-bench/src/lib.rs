@@ -66,6 +66,34 @@ impl Contender {
     }
 }
 
+/// The planners `skyplan bench` runs when none are named: JPS+, JPS and A\*, the contraction
+/// hierarchy (`ch`) first on MovingAI maps (where per-map preprocessing is the norm; on large
+/// open maps such as the city at 1 m its preprocessing takes minutes, so it is opt-in there),
+/// and the Rust `pathfinding` crate's A\* with `peers`.
+///
+/// ```
+/// use skyplan_bench::{default_contenders, Contender};
+/// use skyplan_plan::PlannerId;
+/// assert_eq!(default_contenders(true, false)[0], Contender::Skyplan(PlannerId::Ch));
+/// assert!(!default_contenders(false, false).contains(&Contender::Skyplan(PlannerId::Ch)));
+/// assert!(default_contenders(false, true).contains(&Contender::PathfindingCrateAStar));
+/// ```
+pub fn default_contenders(movingai_map: bool, peers: bool) -> Vec<Contender> {
+    let mut v = Vec::new();
+    if movingai_map {
+        v.push(Contender::Skyplan(PlannerId::Ch));
+    }
+    v.extend([
+        Contender::Skyplan(PlannerId::JpsPlus),
+        Contender::Skyplan(PlannerId::Jps),
+        Contender::Skyplan(PlannerId::Astar),
+    ]);
+    if peers {
+        v.push(Contender::PathfindingCrateAStar);
+    }
+    v
+}
+
 /// One timed query.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Record {

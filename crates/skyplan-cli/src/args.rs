@@ -321,7 +321,7 @@ pub struct BenchArgs {
     /// Take the queries from a MovingAI .scen file instead.
     #[arg(long, value_name = "FILE")]
     pub scen: Option<PathBuf>,
-    /// Comma-separated planners: ch, jps-plus, jps, astar, dijkstra, rust-pathfinding-astar [default: ch,jps-plus,jps,astar].
+    /// Comma-separated planners: ch, jps-plus, jps, astar, dijkstra, rust-pathfinding-astar [default: jps-plus,jps,astar; ch first on MovingAI .map files].
     #[arg(long, value_name = "LIST")]
     pub planners: Option<String>,
     /// Use the corner-cutting move model (FCND) instead of no corner cutting.

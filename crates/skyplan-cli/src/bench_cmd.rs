@@ -195,7 +195,7 @@ fn tempfile_dir() -> anyhow::Result<PathBuf> {
     Ok(dir)
 }
 
-/// The planners of `--planners` (or ch, jps-plus, jps, astar, and the Rust peer with `--peers`).
+/// The planners of `--planners` (or [`skyplan_bench::default_contenders`]: (ch on MovingAI maps,) jps-plus, jps, astar, and the Rust peer with `--peers`).
 fn contenders(args: &BenchArgs) -> Result<Vec<Contender>> {
     Ok(match &args.planners {
         Some(list) => list
@@ -209,16 +209,11 @@ fn contenders(args: &BenchArgs) -> Result<Vec<Contender>> {
             })
             .collect::<Result<_>>()?,
         None => {
-            let mut v = vec![
-                Contender::Skyplan(PlannerId::Ch),
-                Contender::Skyplan(PlannerId::JpsPlus),
-                Contender::Skyplan(PlannerId::Jps),
-                Contender::Skyplan(PlannerId::Astar),
-            ];
-            if args.peers {
-                v.push(Contender::PathfindingCrateAStar);
-            }
-            v
+            let movingai = args
+                .map
+                .as_ref()
+                .is_some_and(|p| p.extension().is_some_and(|e| e == "map"));
+            skyplan_bench::default_contenders(movingai, args.peers)
         }
     })
 }
