@@ -5,7 +5,7 @@
 use crate::{Contender, Record, Run, random_far_queries, run_prepared};
 use serde_json::json;
 use skyplan_cspace::{Cell, Grid2, GridSpec};
-use skyplan_plan::{CellSearch, PlannerId};
+use skyplan_plan::CellSearch;
 use skyplan_search::{JpsPlusTable, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
@@ -99,25 +99,21 @@ pub fn queries(
     ))
 }
 
-/// The planners of a comma-separated list, or jps-plus, jps, astar (and the Rust peer with
-/// `peers`).
-pub fn contenders(list: Option<&str>, peers: bool) -> Result<Vec<Contender>, String> {
+/// The planners of `--planners` (a comma-separated list), or [`crate::default_contenders`]: ch
+/// first on MovingAI maps (`movingai`), jps-plus, jps, astar, and the Rust peer with `peers`.
+pub fn contenders(
+    list: Option<&str>,
+    movingai: bool,
+    peers: bool,
+) -> Result<Vec<Contender>, String> {
     let Some(list) = list else {
-        let mut v = vec![
-            Contender::Skyplan(PlannerId::JpsPlus),
-            Contender::Skyplan(PlannerId::Jps),
-            Contender::Skyplan(PlannerId::Astar),
-        ];
-        if peers {
-            v.push(Contender::PathfindingCrateAStar);
-        }
-        return Ok(v);
+        return Ok(crate::default_contenders(movingai, peers));
     };
     list.split(',')
         .map(|n| {
             Contender::from_name(n.trim()).ok_or_else(|| {
                 format!(
-                    "--planners: unknown planner {n:?}; expected some of jps-plus, jps, astar, dijkstra, theta, rust-pathfinding-astar"
+                    "--planners: unknown planner {n:?}; expected some of ch, jps-plus, jps, astar, dijkstra, theta, rust-pathfinding-astar"
                 )
             })
         })

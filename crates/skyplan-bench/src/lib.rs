@@ -28,7 +28,7 @@ pub mod three_d;
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_plan::{CellSearch, Family, PlannerId};
+use skyplan_plan::{CellSearch, PlannerId};
 use skyplan_search::{Components, MoveModel};
 use std::time::Instant;
 
@@ -56,13 +56,44 @@ impl Contender {
             return Some(Contender::PathfindingCrateAStar);
         }
         let p: PlannerId = name.parse().ok()?;
-        matches!(p.info().family, Family::Grid(_)).then_some(Contender::Skyplan(p))
+        p.info()
+            .family
+            .is_cell_search()
+            .then_some(Contender::Skyplan(p))
     }
 
     /// True for skyplan's own planners (false for peers).
     pub fn is_skyplan(self) -> bool {
         matches!(self, Contender::Skyplan(_))
     }
+}
+
+/// The planners `skyplan bench` runs when none are named: JPS+, JPS and A\*, the contraction
+/// hierarchy (`ch`) first on MovingAI maps (where per-map preprocessing is the norm; on large
+/// open maps such as the city at 1 m its preprocessing takes minutes, so it is opt-in there),
+/// and the Rust `pathfinding` crate's A\* with `peers`.
+///
+/// ```
+/// use skyplan_bench::{default_contenders, Contender};
+/// use skyplan_plan::PlannerId;
+/// assert_eq!(default_contenders(true, false)[0], Contender::Skyplan(PlannerId::Ch));
+/// assert!(!default_contenders(false, false).contains(&Contender::Skyplan(PlannerId::Ch)));
+/// assert!(default_contenders(false, true).contains(&Contender::PathfindingCrateAStar));
+/// ```
+pub fn default_contenders(movingai_map: bool, peers: bool) -> Vec<Contender> {
+    let mut v = Vec::new();
+    if movingai_map {
+        v.push(Contender::Skyplan(PlannerId::Ch));
+    }
+    v.extend([
+        Contender::Skyplan(PlannerId::JpsPlus),
+        Contender::Skyplan(PlannerId::Jps),
+        Contender::Skyplan(PlannerId::Astar),
+    ]);
+    if peers {
+        v.push(Contender::PathfindingCrateAStar);
+    }
+    v
 }
 
 /// One timed query.

@@ -94,9 +94,7 @@ fn any_planner() -> impl clap::builder::TypedValueParser<Value = PlannerId> {
 
 /// `--planner` for `scen`: the grid-search planners only.
 fn grid_search_planner() -> impl clap::builder::TypedValueParser<Value = PlannerId> {
-    planner_parser(|p| {
-        matches!(p.info().family, skyplan_plan::Family::Grid(_)) && p != PlannerId::Theta
-    })
+    planner_parser(|p| p.info().family.is_cell_search() && p != PlannerId::Theta)
 }
 
 fn planner_parser(
@@ -328,7 +326,7 @@ pub struct BenchArgs {
     pub map: Option<PathBuf>,
     #[command(flatten)]
     pub slice: SliceArgs,
-    /// Number of random far-apart queries (with --scen: at most this many scenarios) [default: 26].
+    /// Number of random far-apart queries [default: 26]; with --scen: at most this many scenarios (first in file order) [default with --scen: every scenario of the file].
     #[arg(long, value_name = "N")]
     pub random: Option<usize>,
     /// Seed of the random queries.
@@ -340,7 +338,7 @@ pub struct BenchArgs {
     /// Take the queries from a MovingAI .scen file instead.
     #[arg(long, value_name = "FILE")]
     pub scen: Option<PathBuf>,
-    /// Comma-separated planners: jps-plus, jps, astar, dijkstra, rust-pathfinding-astar [default: jps-plus,jps,astar].
+    /// Comma-separated planners: ch, jps-plus, jps, astar, dijkstra, rust-pathfinding-astar [default: jps-plus,jps,astar; ch first on MovingAI .map files].
     #[arg(long, value_name = "LIST")]
     pub planners: Option<String>,
     /// Use the corner-cutting move model (FCND) instead of no corner cutting.

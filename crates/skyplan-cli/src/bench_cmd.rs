@@ -63,8 +63,8 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     } else {
         MoveModel::Octile
     };
-    let planners =
-        grid_bench::contenders(args.planners.as_deref(), args.peers).map_err(bad_input)?;
+    let planners = grid_bench::contenders(args.planners.as_deref(), is_movingai(&args), args.peers)
+        .map_err(bad_input)?;
     let (name, text) = map_text(args.map.as_deref())?;
     let spec = args.slice.spec();
     let source =

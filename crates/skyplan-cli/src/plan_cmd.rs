@@ -210,10 +210,8 @@ fn show_plan(plan: &Plan, request: &PlanRequest) {
         .iter()
         .filter_map(|p| grid.cell_at_ne(p[0], p[1]))
         .collect();
-    let path = if matches!(
-        plan.planner.info().family,
-        Family::Grid(_) | Family::Wavefront | Family::Costmap
-    ) {
+    let family = plan.planner.info().family;
+    let path = if family.is_cell_search() || matches!(family, Family::Wavefront | Family::Costmap) {
         path
     } else {
         Vec::new()

@@ -106,3 +106,25 @@ fn saved_preprocessing_is_reloaded_and_refused_for_another_grid() {
     std::fs::write(&table, b"garbage").unwrap();
     refused(&[], "not a skyplan JPS+ table");
 }
+
+#[test]
+fn contraction_hierarchy_matches_astar_on_every_den312d_scenario() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/movingai/den312d.map"
+    );
+    let v = bench(
+        dir.path(),
+        &format!("--map {map} --scen {map}.scen --planners ch,astar"),
+        &[],
+    );
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for r in rows {
+        assert_eq!(r["queries"], 290, "{r}"); // --scen without --random: every scenario
+        assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
+    }
+    let ch = rows.iter().find(|r| r["planner"] == "ch").unwrap();
+    assert!(ch["precompute_ms"].as_f64().unwrap() > 0.0, "{ch}");
+}

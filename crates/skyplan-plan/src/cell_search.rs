@@ -4,12 +4,16 @@
 use crate::failure::PlanFailure;
 use crate::planner_id::{Family, PlannerId};
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{GridPath, GridSearch, JpsPlusTable, MoveModel, Planner, SearchError};
+use skyplan_search::{
+    ChQuery, ContractionHierarchy, GridPath, GridSearch, JpsPlusTable, MoveModel, Planner,
+    SearchError,
+};
 use std::sync::Arc;
 
 enum Engine {
     Plus(Arc<JpsPlusTable>, Box<GridSearch>),
     Online(Box<GridSearch>, Planner),
+    Contraction(Arc<ContractionHierarchy>, Box<ChQuery>),
 }
 
 /// A grid planner prepared for many queries on one grid.
@@ -31,27 +35,47 @@ pub struct CellSearch<'g> {
 }
 
 impl<'g> CellSearch<'g> {
-    /// Prepares `planner` (a grid-search planner: jps, jps-plus, astar, dijkstra, theta) on
-    /// `grid`; other planners are refused with a message naming the ones that work.
+    /// Prepares `planner` (a grid-search planner: jps, jps-plus, astar, dijkstra, theta, or the
+    /// contraction hierarchy ch) on `grid`; other planners are refused with a message naming
+    /// the ones that work.
     pub fn new(grid: &'g Grid2, planner: PlannerId, model: MoveModel) -> Result<Self, PlanFailure> {
-        let Family::Grid(p) = planner.info().family else {
+        let family = planner.info().family;
+        if !family.is_cell_search() {
             let grid_planners: Vec<&str> = PlannerId::ALL
                 .iter()
-                .filter(|p| matches!(p.info().family, Family::Grid(_)))
+                .filter(|p| p.info().family.is_cell_search())
                 .map(|p| p.name())
                 .collect();
             return Err(PlanFailure::bad_request(format!(
                 "--planner {planner}: cell-to-cell queries take a grid-search planner: {}",
                 grid_planners.join(", ")
             )));
-        };
+        }
         let t = std::time::Instant::now();
-        let engine = match p {
-            Planner::JpsPlus => Engine::Plus(
+        let engine = match family {
+            Family::Grid(Planner::JpsPlus) => Engine::Plus(
                 Arc::new(JpsPlusTable::build(Arc::new(grid.clone()), model)),
                 Box::default(),
             ),
-            other => Engine::Online(Box::new(GridSearch::new()), other),
+            Family::Contraction => Engine::Contraction(
+                Arc::new(
+                    ContractionHierarchy::build(Arc::new(grid.clone()), model).map_err(|e| {
+                        PlanFailure::bad_request(format!("--planner {planner}: {e}"))
+                    })?,
+                ),
+                Box::default(),
+            ),
+            Family::Grid(other) => Engine::Online(Box::new(GridSearch::new()), other),
+            Family::AnyAngle
+            | Family::Wavefront
+            | Family::Costmap
+            | Family::Voronoi
+            | Family::Sampling(_)
+            | Family::Voxel => {
+                return Err(PlanFailure::internal(format!(
+                    "--planner {planner}: not a cell-to-cell planner"
+                )));
+            }
         };
         Ok(Self {
             grid,
@@ -90,10 +114,11 @@ impl<'g> CellSearch<'g> {
             Engine::Online(search, planner) => {
                 search.search(self.grid, start, goal, self.model, *planner)
             }
+            Engine::Contraction(ch, query) => ch.search(query, start, goal),
         }
     }
 
-    /// One-off preparation time (the JPS+ table), microseconds.
+    /// One-off preparation time (the JPS+ table, the contraction hierarchy), microseconds.
     pub fn precompute_us(&self) -> u64 {
         self.precompute_us
     }

@@ -193,12 +193,17 @@ pub(crate) fn centres_at(grid: &Grid2, cells: &[Cell], alt_m: f64) -> Vec<[f64; 
         .collect()
 }
 
-/// A*, Dijkstra, JPS, JPS+ or Theta\* on the grid, then the passes.
-pub(crate) fn plan(
-    session: &mut Session,
-    q: &Query,
-    planner: Planner,
-) -> Result<Route, PlanFailure> {
+/// What answers a cell-to-cell grid request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Engine {
+    /// A grid search (A\*, Dijkstra, JPS, JPS+, Theta\*).
+    Search(Planner),
+    /// The contraction hierarchy the session keeps per grid and model.
+    Contraction,
+}
+
+/// A*, Dijkstra, JPS, JPS+, Theta\* or the contraction hierarchy on the grid, then the passes.
+pub(crate) fn plan(session: &mut Session, q: &Query, engine: Engine) -> Result<Route, PlanFailure> {
     let r = q.r;
     let (grid, build_us) = grid_for(session, q)?;
     let start = end_cell(&grid, q, "start", q.start_ne)?;
@@ -206,16 +211,35 @@ pub(crate) fn plan(
     // JPS+: the session keeps the table (built once per grid, or loaded from a file).
     let mut build_us = build_us;
     let mut table_built = None;
-    let table = (planner == Planner::JpsPlus && r.model.has_diagonals()).then(|| {
-        let (table, table_us) = session.jps_plus_table(&grid, r.model);
-        build_us += table_us.unwrap_or(0);
-        table_built = Some(table_us.is_some());
-        table
-    });
+    let table =
+        (engine == Engine::Search(Planner::JpsPlus) && r.model.has_diagonals()).then(|| {
+            let (table, table_us) = session.jps_plus_table(&grid, r.model);
+            build_us += table_us.unwrap_or(0);
+            table_built = Some(table_us.is_some());
+            table
+        });
+    let mut ch_built = None;
+    let ch = match engine {
+        Engine::Contraction => {
+            let (ch, us) = session.contraction_hierarchy(&grid, r.model)?;
+            build_us += us.unwrap_or(0);
+            ch_built = Some(us.is_some());
+            Some(ch)
+        }
+        Engine::Search(_) => None,
+    };
     let t = Instant::now();
-    let searched = match &table {
-        Some(table) => table.search(&mut session.search, start, goal),
-        None => session.search.search(&grid, start, goal, r.model, planner),
+    let searched = match (engine, &table, &ch) {
+        (_, _, Some(ch)) => ch.search(&mut session.ch_query, start, goal),
+        (_, Some(table), None) => table.search(&mut session.search, start, goal),
+        (Engine::Search(planner), None, None) => {
+            session.search.search(&grid, start, goal, r.model, planner)
+        }
+        (Engine::Contraction, None, None) => {
+            return Err(PlanFailure::internal(
+                "no contraction hierarchy was prepared",
+            ));
+        }
     };
     let search_us = micros(t.elapsed());
     let path = match searched {
@@ -252,8 +276,8 @@ pub(crate) fn plan(
             touch,
         },
     );
-    route.octile_optimum_m = match planner {
-        Planner::ThetaStar => GridSearch::new()
+    route.octile_optimum_m = match engine {
+        Engine::Search(Planner::ThetaStar) => GridSearch::new()
             .search(&grid, start, goal, r.model, Planner::Jps)
             .ok()
             .map(|p| p.cost_cells() * cell_m),
@@ -263,6 +287,12 @@ pub(crate) fn plan(
         // Whether this request built the JPS+ table or used the session's (kept or loaded).
         let how = if built { "built" } else { "reused" };
         route.details.insert("jps_plus_table".into(), how.into());
+    }
+    if let Some(built) = ch_built {
+        let how = if built { "built" } else { "reused" };
+        route
+            .details
+            .insert("contraction_hierarchy".into(), how.into());
     }
     let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
     let waypoints = (pruned.len(), kept.len());

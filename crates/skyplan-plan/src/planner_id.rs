@@ -13,6 +13,9 @@ use std::str::FromStr;
 pub enum Family {
     /// Best-first grid search (`skyplan-search`), then pruning and line-of-sight shortcutting.
     Grid(skyplan_search::Planner),
+    /// Contraction hierarchy over the grid graph (`skyplan-search`), kept per grid by the
+    /// session; then the same pruning and shortcutting as [`Family::Grid`].
+    Contraction,
     /// Exact any-angle shortest paths (`skyplan-anyangle`): visibility graph of convex corners.
     AnyAngle,
     /// The wavefront navigation function (`skyplan-navfn`): distance field, gradient descent.
@@ -124,6 +127,9 @@ planners! {
     /// JPS with precomputed jumps.
     JpsPlus => "jps-plus", "JPS+", 2, Family::Grid(G::JpsPlus), Exact, AnyGrid,
         "JPS+: JPS with every scan precomputed per grid; pays off over many queries";
+    /// Contraction hierarchy over the grid graph.
+    Ch => "ch", "CH", 2, Family::Contraction, Exact, AnyGrid,
+        "contraction hierarchy: exact, shortcuts precomputed per grid; fastest on random obstacles and mazes";
     /// A\* with the octile (or Manhattan) heuristic.
     Astar => "astar", "A*", 2, Family::Grid(G::AStar), Exact, AnyGrid,
         "A* with the octile (8-connected) or Manhattan (4-connected) heuristic";
@@ -160,6 +166,22 @@ planners! {
     /// Voxel A\* in 3D.
     Voxel => "voxel", "voxel A*", 3, Family::Voxel, ExactForObjective, CollidersOnly,
         "3D voxel A* (26-connected, altitude layers, climb cost): may climb over low buildings";
+}
+
+impl Family {
+    /// True for the cell-to-cell grid planners (grid search and the contraction hierarchy),
+    /// which take the move model, pruning and shortcut options.
+    pub fn is_cell_search(self) -> bool {
+        match self {
+            Family::Grid(_) | Family::Contraction => true,
+            Family::AnyAngle
+            | Family::Wavefront
+            | Family::Costmap
+            | Family::Voronoi
+            | Family::Sampling(_)
+            | Family::Voxel => false,
+        }
+    }
 }
 
 impl PlannerId {

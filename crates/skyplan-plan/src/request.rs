@@ -289,11 +289,9 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("connectivity", r.connectivity.is_some()),
                 ("corner_cutting", r.corner_cutting.is_some()),
             ]),
-            matches!(
-                info.family,
-                Family::Grid(_) | Family::Wavefront | Family::Costmap
-            ),
-            "a grid planner (jps, jps-plus, astar, dijkstra, theta, wavefront, costmap)",
+            info.family.is_cell_search()
+                || matches!(info.family, Family::Wavefront | Family::Costmap),
+            "a grid planner (jps, jps-plus, ch, astar, dijkstra, theta, wavefront, costmap)",
         ),
     ];
     for (names, applies, needs) in groups {

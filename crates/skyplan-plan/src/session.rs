@@ -2,6 +2,7 @@
 //! (grids per altitude/margin/cell size, 3D box worlds, Voronoi and PRM roadmaps).
 
 use crate::failure::{FailureKind, PlanFailure};
+use crate::grid::Engine;
 use crate::plan::{Geometry, GridInfo, Home, Place, Plan, Timings, WaypointCounts};
 use crate::planner_id::{Family, MapKinds, PlannerId};
 use crate::request::{PlanRequest, Position, Resolved};
@@ -11,7 +12,7 @@ use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
 use skyplan_mission::Mission;
 use skyplan_search::table_file::{TableFileError, read_header_from};
-use skyplan_search::{GridSearch, JpsPlusTable, MoveModel};
+use skyplan_search::{ChQuery, ContractionHierarchy, GridSearch, JpsPlusTable, MoveModel};
 use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -150,6 +151,10 @@ pub struct Session {
     pub(crate) search: GridSearch,
     /// JPS+ preprocessing kept across requests (built on first use or loaded from a file).
     jps_plus: Vec<Arc<JpsPlusTable>>,
+    /// Contraction hierarchies kept across requests (built on first use per grid and model).
+    ch: Vec<Arc<ContractionHierarchy>>,
+    /// The hierarchies' query workspace.
+    pub(crate) ch_query: ChQuery,
 }
 
 impl Session {
@@ -165,6 +170,8 @@ impl Session {
             any_angle: HashMap::new(),
             search: GridSearch::new(),
             jps_plus: Vec::new(),
+            ch: Vec::new(),
+            ch_query: ChQuery::default(),
         }
     }
 
@@ -310,6 +317,32 @@ impl Session {
 
     // ---- end of JPS+ preprocessing ----
 
+    /// The contraction hierarchy of `grid` under `model`: kept from an earlier request, or built
+    /// now (then also the build time in microseconds).
+    pub(crate) fn contraction_hierarchy(
+        &mut self,
+        grid: &Arc<Grid2>,
+        model: MoveModel,
+    ) -> Result<(Arc<ContractionHierarchy>, Option<u64>), PlanFailure> {
+        if let Some(ch) = self
+            .ch
+            .iter()
+            .find(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid))
+        {
+            return Ok((Arc::clone(ch), None));
+        }
+        let t0 = Instant::now();
+        let ch = ContractionHierarchy::build(Arc::clone(grid), model)
+            .map_err(|e| PlanFailure::bad_request(format!("--planner ch: {e}")))?;
+        let ch = Arc::new(ch);
+        let us = micros(t0.elapsed());
+        if self.ch.len() >= CACHE_ENTRIES {
+            self.ch.remove(0);
+        }
+        self.ch.push(Arc::clone(&ch));
+        Ok((ch, Some(us)))
+    }
+
     /// The 3D box world for a request: boxes grown by the margin, the ground, the altitude band,
     /// and horizontal bounds that cover the grid's (so every planner takes the same points).
     pub(crate) fn boxes(&mut self, r: &Resolved) -> Result<Arc<BoxWorld3>, PlanFailure> {
@@ -362,6 +395,8 @@ impl Session {
             Family::Grid(skyplan_search::Planner::JpsPlus) => {
                 (self.cells_at(r.cell_m), 68, "cells", "use a larger cell_m")
             }
+            // Up to ~10 upward edges per cell on open ground (16 bytes each) plus the edge arena.
+            Family::Contraction => (self.cells_at(r.cell_m), 400, "cells", "use a larger cell_m"),
             Family::Grid(_) | Family::Voronoi | Family::AnyAngle => {
                 (self.cells_at(r.cell_m), 24, "cells", "use a larger cell_m")
             }
@@ -421,7 +456,8 @@ impl Session {
             world: &world,
         };
         let route = match info.family {
-            Family::Grid(planner) => crate::grid::plan(self, &q, planner)?,
+            Family::Grid(planner) => crate::grid::plan(self, &q, Engine::Search(planner))?,
+            Family::Contraction => crate::grid::plan(self, &q, Engine::Contraction)?,
             Family::Wavefront => crate::navfn::wavefront(self, &q)?,
             Family::Costmap => crate::navfn::costmap(self, &q)?,
             Family::Voronoi => crate::voronoi::plan(self, &q)?,
@@ -549,10 +585,8 @@ fn assemble(
         .as_ref()
         .filter(|_| info.dims == 2)
         .map(|g| GridInfo::of(g, r.alt_m, r.safety_m));
-    let grid_planner = matches!(
-        info.family,
-        Family::Grid(_) | Family::Wavefront | Family::Costmap
-    );
+    let grid_planner =
+        info.family.is_cell_search() || matches!(info.family, Family::Wavefront | Family::Costmap);
     let mut counts = route.grid_stats.map(|s| s.3);
     if let Some(c) = counts.as_mut() {
         c.mission = waypoints.len();

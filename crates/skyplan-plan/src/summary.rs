@@ -81,7 +81,7 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     }
     details(plan, f)?;
     match (&plan.waypoint_counts, info.family) {
-        (Some(c), Family::Grid(_)) => writeln!(
+        (Some(c), Family::Grid(_) | Family::Contraction) => writeln!(
             f,
             "waypoints  {} → {} after pruning → {} after line-of-sight shortcut; mission of {} waypoints, {:.2} m flown",
             c.grid_path, c.after_pruning, c.after_shortcut, c.mission, plan.mission_length_m

@@ -84,7 +84,7 @@ def test_plan_object(city, tmp_path):
 def test_every_planner_is_reachable(city):
     names = [p["name"] for p in skyplan.planners()]
     assert sorted(names) == sorted([
-        "jps", "jps-plus", "astar", "dijkstra", "theta", "any-angle", "wavefront", "costmap",
+        "jps", "jps-plus", "ch", "astar", "dijkstra", "theta", "any-angle", "wavefront", "costmap",
         "voronoi", "prm", "lazy-prm", "rrt-connect", "rrt-star", "voxel",
     ])
     for name in names:

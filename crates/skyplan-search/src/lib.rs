@@ -4,6 +4,8 @@
 //!   arrays, `u32` cell indices and buffers reused between queries.
 //! * [`oracle`]: an independent Dijkstra in exact arithmetic, the truth the tests compare against.
 //! * [`Components`]: connected free regions under a move model, to tell "unreachable" up front.
+//! * [`ContractionHierarchy`]: exact shortest paths with a per-grid preprocessing (shortcuts
+//!   over the grid graph, bidirectional upward queries), for many queries on one grid.
 //! * [`check_path`]: re-checks a path against the grid and the move model.
 //!
 //! Costs are in cells (multiply by the cell size for metres). A path's cost is computed from its
@@ -24,6 +26,7 @@
 
 mod astar;
 mod components;
+mod contraction;
 mod jps;
 mod jps_plus;
 mod nodes;
@@ -34,6 +37,10 @@ mod theta;
 
 pub use astar::GridSearch;
 pub use components::Components;
+pub use contraction::{
+    ChQuery, ContractionError, ContractionHierarchy, DIAGONAL as CH_DIAGONAL_COST,
+    MAX_CELLS as CH_MAX_CELLS, STRAIGHT as CH_STRAIGHT_COST,
+};
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 
 use skyplan_cspace::{Cell, Grid2};

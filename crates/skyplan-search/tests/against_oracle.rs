@@ -4,7 +4,8 @@ use proptest::prelude::*;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
 use skyplan_search::oracle::dijkstra_exact;
 use skyplan_search::{
-    Components, GridSearch, JpsPlus, MoveModel, Planner, SearchError, check_path,
+    ChQuery, Components, ContractionHierarchy, GridSearch, JpsPlus, MoveModel, Planner,
+    SearchError, check_path,
 };
 
 const MODELS: [MoveModel; 3] = [
@@ -135,6 +136,45 @@ proptest! {
                 }
                 (Err(_), None) => {}
                 (got, want) => prop_assert!(false, "{model:?}: got {got:?}, oracle {want:?}"),
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(600))]
+
+    /// The contraction hierarchy: one preprocessing per grid and model, then queries both ways
+    /// (buffers reused), each against the oracle's exact cost, a valid path and its ends.
+    #[test]
+    fn contraction_hierarchy_is_optimal_and_valid(
+        (grid, start, goal) in query_strategy(),
+        extra in proptest::collection::vec((0u32..26, 0u32..26, 0u32..26, 0u32..26), 0..4),
+    ) {
+        let grid = std::sync::Arc::new(grid);
+        let mut queries = vec![(start, goal), (goal, start)];
+        queries.extend(extra.iter().map(|&(a, b, c, d)| {
+            (Cell::new(a % grid.rows(), b % grid.cols()), Cell::new(c % grid.rows(), d % grid.cols()))
+        }));
+        for model in MODELS {
+            let ch = ContractionHierarchy::build(std::sync::Arc::clone(&grid), model).unwrap();
+            let mut query = ChQuery::default();
+            for &(start, goal) in &queries {
+                let truth = dijkstra_exact(&grid, start, goal, model);
+                match (ch.search(&mut query, start, goal), truth) {
+                    (Ok(path), Some(cost)) => {
+                        prop_assert_eq!((path.straight_moves, path.diagonal_moves), (cost.straight, cost.diagonal));
+                        prop_assert_eq!(path.cells.first(), Some(&start));
+                        prop_assert_eq!(path.cells.last(), Some(&goal));
+                        prop_assert_eq!(check_path(&grid, &path.cells, model), Ok(()));
+                    }
+                    (Err(e), None) => {
+                        let expected = grid.is_blocked(start) || grid.is_blocked(goal)
+                            || matches!(e, SearchError::Unreachable { .. });
+                        prop_assert!(expected, "unexpected error {e:?}");
+                    }
+                    (got, want) => prop_assert!(false, "{model:?}: got {got:?}, oracle {want:?}"),
+                }
             }
         }
     }
