@@ -7,7 +7,7 @@ use crate::picture::PictureKind;
 use crate::report::Written;
 use skyplan_cspace::Cell;
 use skyplan_export::Format;
-use skyplan_plan::{Family, Plan, PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{Plan, PlanRequest, PlannerId, Session, World};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -178,22 +178,6 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
     Ok(written)
 }
 
-fn model_of(request: &PlanRequest) -> skyplan_search::MoveModel {
-    use skyplan_search::MoveModel;
-    match (
-        request.connectivity.unwrap_or(8),
-        request.corner_cutting.unwrap_or(false),
-    ) {
-        (4, _) => MoveModel::FourConnected,
-        (_, true) => MoveModel::OctileCornerCutting,
-        _ => MoveModel::Octile,
-    }
-}
-
-fn steps(request: &PlanRequest) -> bool {
-    request.field == Some(skyplan_plan::FieldMode::Steps)
-}
-
 fn show_plan(plan: &Plan, request: &PlanRequest) {
     let (Some(grid), [Some(s), Some(g)]) =
         (plan.grid_used.as_deref(), [plan.start.cell, plan.goal.cell])
@@ -201,31 +185,9 @@ fn show_plan(plan: &Plan, request: &PlanRequest) {
         eprintln!("--show: text pictures are for grid planners");
         return;
     };
-    let raw = plan
-        .geometry
-        .as_ref()
-        .map(|g| g.raw_path.clone())
-        .unwrap_or_default();
-    let path: Vec<Cell> = raw
-        .iter()
-        .filter_map(|p| grid.cell_at_ne(p[0], p[1]))
-        .collect();
-    let path = if matches!(
-        plan.planner.info().family,
-        Family::Grid(_) | Family::Wavefront | Family::Costmap
-    ) {
-        path
-    } else {
-        Vec::new()
-    };
-    crate::show::print(
-        grid,
-        Cell::new(s[0], s[1]),
-        Cell::new(g[0], g[1]),
-        &path,
-        model_of(request),
-        steps(request),
-    );
+    let (s, g) = (Cell::new(s[0], s[1]), Cell::new(g[0], g[1]));
+    let (model, steps) = (request.move_model(), request.counts_steps());
+    crate::show::print(grid, s, g, &plan.path_cells(), model, steps);
 }
 
 fn show_failure(session: &mut Session, request: &PlanRequest) {
@@ -235,6 +197,7 @@ fn show_failure(session: &mut Session, request: &PlanRequest) {
     let cell = |ne: Option<[f64; 2]>| ne.and_then(|p| grid.cell_at_ne(p[0], p[1]));
     let (ds, dg) = session.world().default_endpoints_ne();
     if let (Some(s), Some(g)) = (cell(request.start_ne.or(ds)), cell(request.goal_ne.or(dg))) {
-        crate::show::print(&grid, s, g, &[], model_of(request), steps(request));
+        let (model, steps) = (request.move_model(), request.counts_steps());
+        crate::show::print(&grid, s, g, &[], model, steps);
     }
 }
