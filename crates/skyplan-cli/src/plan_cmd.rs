@@ -1,7 +1,7 @@
 //! `skyplan plan`: options → the planning API → files, picture and summary.
 
 use crate::args::PlanArgs;
-use crate::exit::{Classify, Kind, Result, bad_input};
+use crate::exit::{Classify, Failure, Kind, Result, bad_input};
 use crate::files::{Target, output_target, read_bytes, write_target};
 use crate::picture::PictureKind;
 use crate::report::Written;
@@ -29,9 +29,22 @@ pub(crate) fn output_file(out: &Path, format: Option<&str>) -> Result<(Target, F
     Ok((output_target("--out", out)?, format))
 }
 
+/// A waypoint file: the path as given, where it goes, its format.
+pub(crate) type WaypointFile = (PathBuf, Target, Format);
+
+/// Writes `mission` (with a summary of its plan) to a waypoint file.
+pub(crate) fn write_waypoints(
+    (_, target, format): &WaypointFile,
+    mission: &skyplan_mission::Mission,
+    summary: &serde_json::Value,
+) -> Result<()> {
+    let bytes = skyplan_export::encode(*format, mission, summary).or_exit(Kind::Runtime)?;
+    write_target(target, &bytes)
+}
+
 /// Every output of a run, checked before planning so that a failing run writes nothing.
 struct Outputs {
-    waypoints: Option<(PathBuf, Target, Format)>,
+    waypoints: Option<WaypointFile>,
     plot: Option<(PathBuf, Target, PictureKind)>,
     roadmap: Option<(PathBuf, Target)>,
 }
@@ -59,23 +72,21 @@ fn check_outputs(
         }
         (None, None) => None,
     };
-    let plot = match args.plot.clone().or(cfg.path(&cfg.text.plot)) {
-        Some(p) => {
+    let plot = (args.plot.clone().or(cfg.path(&cfg.text.plot)))
+        .map(|p| {
             let kind = crate::picture::kind_for(&p, planner.info().family)?;
-            Some((p.clone(), output_target("--plot", &p)?, kind))
-        }
-        None => None,
-    };
+            Ok::<_, Failure>((p.clone(), output_target("--plot", &p)?, kind))
+        })
+        .transpose()?;
     let prm = matches!(planner, PlannerId::Prm | PlannerId::LazyPrm);
     if !prm && (args.save_roadmap.is_some() || args.load_roadmap.is_some()) {
         return Err(bad_input(
             "--save-roadmap and --load-roadmap need --planner prm or lazy-prm",
         ));
     }
-    let roadmap = match &args.save_roadmap {
-        Some(p) => Some((p.clone(), output_target("--save-roadmap", p)?)),
-        None => None,
-    };
+    let roadmap = (args.save_roadmap.as_ref())
+        .map(|p| Ok::<_, Failure>((p.clone(), output_target("--save-roadmap", p)?)))
+        .transpose()?;
     Ok(Outputs {
         waypoints,
         plot,
@@ -101,12 +112,7 @@ fn prompt_missing(world: &World, request: &mut PlanRequest) -> Result<()> {
 }
 
 pub fn run(args: PlanArgs) -> Result<()> {
-    let json_mode = args.json;
-    let result = run_inner(args);
-    if json_mode {
-        crate::exit::print_json_failure(&result);
-    }
-    result
+    crate::exit::print_json_failure(args.json, run_inner(args))
 }
 
 fn run_inner(args: PlanArgs) -> Result<()> {
@@ -156,15 +162,14 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
         plot: None,
         roadmap: None,
     };
-    if let Some((path, target, format)) = &outputs.waypoints {
+    if let Some(file @ (path, _, format)) = &outputs.waypoints {
         let mission = plan
             .mission
             .as_ref()
             .ok_or_else(|| bad_input("waypoint files need a map with a geodetic home"))?;
         let summary =
             serde_json::json!({ "map": plan.map, "planner": plan.planner, "cost_m": plan.cost_m });
-        let bytes = skyplan_export::encode(*format, mission, &summary).or_exit(Kind::Runtime)?;
-        write_target(target, &bytes)?;
+        write_waypoints(file, mission, &summary)?;
         written.waypoints = Some((path.display().to_string(), format.name()));
     }
     if let Some((path, target, kind)) = &outputs.plot {

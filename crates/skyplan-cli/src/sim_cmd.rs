@@ -9,8 +9,6 @@ use skyplan_link::vehicle::{SimServer, SimServerConfig};
 use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
 use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, FCND_CITY_NAME as BUNDLED_NAME};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// Reads `--hidden FILE`: boxes in the colliders format whose `lat0/lon0` line must be the
@@ -77,10 +75,10 @@ pub fn run(args: SimArgs) -> Result<()> {
             args.ekf_delay_s
         )));
     }
-    let hidden = match &args.hidden {
-        Some(path) => load_hidden(path, &map.home)?,
-        None => Vec::new(),
-    };
+    let hidden = (args.hidden.as_ref())
+        .map(|path| load_hidden(path, &map.home))
+        .transpose()?
+        .unwrap_or_default();
     let hidden_count = hidden.len();
     let config = SimServerConfig {
         hidden,
@@ -120,15 +118,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         }
         None => crate::live::Live::default(),
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    if let Some(d) = args.duration_s {
-        let stop = Arc::clone(&stop);
-        let d = Duration::from_secs_f64(d.max(0.0));
-        std::thread::spawn(move || {
-            std::thread::sleep(d);
-            stop.store(true, Ordering::Relaxed);
-        });
-    }
+    let stop = SimServer::stop_after(args.duration_s);
     let world = BoxWorld::new(&map.boxes);
     let map_boxes = map.boxes.len();
     let report = server.run_with_state(
