@@ -79,26 +79,6 @@ def dijkstra_cost(grid, start, goal, diagonal=True, corner_cutting=True):
             yield nr, nc, cost
 
     return dijkstra(start, goal, neighbours)
-    dist = {start: 0.0}
-    heap = [(0.0, start)]
-    steps = moves(diagonal, corner_cutting)
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if (r, c) == goal:
-            return d
-        if d > dist[(r, c)]:
-            continue
-        for dr, dc, cost, sides in steps:
-            nr, nc = r + dr, c + dc
-            if not free(nr, nc):
-                continue
-            if sides and not (free(r + dr, c) and free(r, c + dc)):
-                continue
-            nd = d + cost
-            if nd < dist.get((nr, nc), math.inf):
-                dist[(nr, nc)] = nd
-                heapq.heappush(heap, (nd, (nr, nc)))
-    return None
 
 
 def path_cost_checked(grid, path, diagonal=True, corner_cutting=True):
