@@ -38,6 +38,13 @@ async fn post_plan(app: Router, body: Value) -> (StatusCode, Value) {
 }
 
 /// The plan without the keys that differ from run to run (times in µs, request numbers).
+/// A response's content type ("" when it is not text).
+fn content_type(response: &axum::http::Response<Body>) -> &str {
+    response.headers()["content-type"]
+        .to_str()
+        .unwrap_or_default()
+}
+
 /// An error answer's message ("" without one).
 fn message(v: &Value) -> &str {
     v["message"].as_str().unwrap_or_default()
@@ -333,12 +340,7 @@ async fn the_page_is_one_self_contained_file() {
         .await
         .expect("answer");
     assert_eq!(response.status(), StatusCode::OK);
-    assert!(
-        response.headers()["content-type"]
-            .to_str()
-            .unwrap_or_default()
-            .starts_with("text/html")
-    );
+    assert!(content_type(&response).starts_with("text/html"));
     let page = String::from_utf8(
         axum::body::to_bytes(response.into_body(), usize::MAX)
             .await
@@ -545,12 +547,7 @@ async fn app_events_reach_a_oneshot_stream() {
         .await
         .expect("answer");
     assert_eq!(response.status(), StatusCode::OK);
-    assert_eq!(
-        response.headers()["content-type"]
-            .to_str()
-            .unwrap_or_default(),
-        "text/event-stream"
-    );
+    assert_eq!(content_type(&response), "text/event-stream");
     assert_eq!(a.events.clients(), 1);
     drop(response);
     assert_eq!(
