@@ -198,8 +198,15 @@ pub(crate) fn parse_size_bytes(s: &str) -> Result<u64, String> {
     }
 }
 
+/// `--max-memory` as the planning API's limits [default: [`default_max_memory`]].
+pub(crate) fn limits(max_memory: Option<u64>) -> skyplan_plan::Limits {
+    skyplan_plan::Limits {
+        max_memory_bytes: max_memory.unwrap_or_else(default_max_memory),
+    }
+}
+
 /// Half the machine's memory (`/proc/meminfo`), or 8 GiB where it cannot be read.
-pub(crate) fn default_max_memory() -> u64 {
+fn default_max_memory() -> u64 {
     std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|t| {

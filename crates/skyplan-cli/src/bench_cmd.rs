@@ -3,7 +3,7 @@
 //! are `skyplan_bench::grid_bench`'s; this reads the files, prints and writes.
 
 use crate::args::BenchArgs;
-use crate::exit::{Classify, Kind, Result, bad_input, runtime};
+use crate::exit::{Classify, Failure, Kind, Result, bad_input, runtime};
 use crate::files::{read_text, write_atomic};
 use anyhow::Context;
 use serde_json::json;
@@ -70,10 +70,9 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     let source =
         grid_bench::load_grid(&name, &text, is_movingai(&args), spec).map_err(bad_input)?;
     let grid = &source.grid;
-    let scen = match &args.scen {
-        Some(path) => Some((path.display().to_string(), read_text(path)?)),
-        None => None,
-    };
+    let scen = (args.scen.as_ref())
+        .map(|path| Ok::<_, Failure>((path.display().to_string(), read_text(path)?)))
+        .transpose()?;
     let from = match &scen {
         Some((name, text)) => QuerySource::Scen(name, text, args.random),
         None => QuerySource::Random {
@@ -163,11 +162,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         grid.cols(),
         cell_m
     );
-    let model_name = if args.corner_cutting {
-        "8-connected, corner cutting"
-    } else {
-        "8-connected, no corner cutting"
-    };
+    let model_name = skyplan_plan::model_name(model);
     println!("queries  {described}; move model {model_name}");
     println!();
     print!("{}", skyplan_bench::format_table(&rows));

@@ -70,8 +70,9 @@ impl From<PlanFailure> for Failure {
 
 /// With `--json`, scripts get one JSON object on stdout for failures too:
 /// `{"status": "bad_input" | "no_path" | "error", "kind": "invalid_goal" | …, "error": "…"}`.
-pub fn print_json_failure<T>(result: &Result<T>) {
-    if let Err(f) = result {
+/// Returns the result as it was.
+pub fn print_json_failure<T>(json: bool, result: Result<T>) -> Result<T> {
+    if let (true, Err(f)) = (json, &result) {
         let status = match f.kind {
             Kind::NoPath => "no_path",
             Kind::BadInput => "bad_input",
@@ -82,24 +83,28 @@ pub fn print_json_failure<T>(result: &Result<T>) {
             serde_json::json!({ "status": status, "kind": f.plan_kind, "error": format!("{:#}", f.error) })
         );
     }
+    result
+}
+
+impl Failure {
+    /// A failure of `kind` from a message.
+    pub fn new(kind: Kind, message: impl std::fmt::Display) -> Self {
+        Failure {
+            kind,
+            error: anyhow::anyhow!("{message}"),
+            plan_kind: None,
+        }
+    }
 }
 
 /// A bad-input failure from a message.
 pub fn bad_input(message: impl std::fmt::Display) -> Failure {
-    Failure {
-        kind: Kind::BadInput,
-        error: anyhow::anyhow!("{message}"),
-        plan_kind: None,
-    }
+    Failure::new(Kind::BadInput, message)
 }
 
 /// A runtime failure from a message.
 pub fn runtime(message: impl std::fmt::Display) -> Failure {
-    Failure {
-        kind: Kind::Runtime,
-        error: anyhow::anyhow!("{message}"),
-        plan_kind: None,
-    }
+    Failure::new(Kind::Runtime, message)
 }
 
 impl From<skyplan_link::runner::RunError> for Failure {

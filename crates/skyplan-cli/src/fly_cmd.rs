@@ -4,7 +4,7 @@
 
 use crate::args::FlyArgs;
 use crate::exit::runtime;
-use crate::exit::{Classify, Failure, Kind, Result, bad_input};
+use crate::exit::{Failure, Kind, Result, bad_input};
 use crate::files::{write_atomic, write_target};
 use skyplan_flight::executor::{
     ExecutorConfig, FailsafeAction, FlightState, Note, Outcome, Telemetry,
@@ -116,33 +116,26 @@ pub fn run(args: FlyArgs) -> Result<()> {
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
-    let out = match args.out.clone().or(config.path(&config.text.out)) {
-        Some(path) => {
-            let (target, format) = crate::plan_cmd::output_file(
-                &path,
-                args.format.as_deref().or(config.text.format.as_deref()),
-            )?;
-            Some((path, target, format))
-        }
-        None => None,
-    };
+    let format = args.format.as_deref().or(config.text.format.as_deref());
+    let out = (args.out.clone().or(config.path(&config.text.out)))
+        .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))
+        .transpose()?;
     let (Some(map), Some(frame)) = (world.colliders().cloned(), world.frame().cloned()) else {
         return Err(bad_input(format!(
             "fly: {} is not an FCND colliders map; flying needs the map's boxes and geodetic home (--map FILE.csv, or the bundled map)",
             world.name()
         )));
     };
-    let plot = match &args.plot {
-        Some(path) => {
+    let plot = (args.plot.as_ref())
+        .map(|path| {
             let kind = crate::picture::kind_for(path, skyplan_plan::Family::AnyAngle)?;
-            Some((crate::files::output_target("--plot", path)?, kind))
-        }
-        None => None,
-    };
-    let mut hidden = match &args.hidden {
-        Some(path) => crate::sim_cmd::load_hidden(path, &map.home)?,
-        None => Vec::new(),
-    };
+            Ok::<_, Failure>((crate::files::output_target("--plot", path)?, kind))
+        })
+        .transpose()?;
+    let mut hidden = (args.hidden.as_ref())
+        .map(|path| crate::sim_cmd::load_hidden(path, &map.home))
+        .transpose()?
+        .unwrap_or_default();
     if args.hidden_random > 0 {
         let seed = args.route.grid.seed;
         let placed = runner::hidden_random(&world, &request, args.hidden_random, seed)?;
@@ -254,19 +247,13 @@ fn check_flight_args(args: &FlyArgs) -> Result<()> {
         ("--link-timeout-s", args.link_timeout_s),
         ("--wait-s", args.wait_s),
         ("--deadband-m", args.deadband_m),
+        ("--timeout-s", args.timeout_s.unwrap_or(1.0)),
     ] {
         if v <= 0.0 {
             return Err(bad_input(format!(
                 "{name}: expected a positive number, found {v}"
             )));
         }
-    }
-    if let Some(t) = args.timeout_s
-        && t <= 0.0
-    {
-        return Err(bad_input(format!(
-            "--timeout-s: expected a positive number, found {t}"
-        )));
     }
     if args.sim_ekf_delay_s < 0.0 {
         return Err(bad_input(format!(
@@ -329,11 +316,7 @@ fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Insta
         }
         // No route in the true world: the "no path" exit, as for planning.
         Some(Outcome::Failed(f @ skyplan_flight::executor::Failure::NoRoute { .. })) => {
-            Err(Failure {
-                kind: Kind::NoPath,
-                error: anyhow::anyhow!("flight failed: {f}"),
-                plan_kind: None,
-            })
+            Err(Failure::new(Kind::NoPath, format!("flight failed: {f}")))
         }
         Some(Outcome::Failed(f)) => Err(runtime(format!("flight failed: {f}"))),
         None => Err(runtime(
@@ -383,11 +366,7 @@ struct Terminal {
     live: crate::live::Live,
     bar: indicatif::ProgressBar,
     wait_s: f64,
-    out: Option<(
-        std::path::PathBuf,
-        crate::files::Target,
-        skyplan_export::Format,
-    )>,
+    out: Option<crate::plan_cmd::WaypointFile>,
     in_flight: Arc<AtomicBool>,
 }
 
@@ -435,11 +414,9 @@ impl RunObserver for Terminal {
     fn planned(&mut self, plan: &Plan) -> Result<()> {
         self.bar.set_message("");
         self.live.route(plan, "plan");
-        if let (Some((path, target, format)), Some(mission)) = (&self.out, &plan.mission) {
+        if let (Some(file @ (path, _, format)), Some(mission)) = (&self.out, &plan.mission) {
             let summary = serde_json::json!({ "map_home": plan.home, "planner": plan.planner });
-            let bytes =
-                skyplan_export::encode(*format, mission, &summary).or_exit(Kind::Runtime)?;
-            write_target(target, &bytes)?;
+            crate::plan_cmd::write_waypoints(file, mission, &summary)?;
             println!("wrote      {} ({})", path.display(), format.name());
         }
         Ok(())

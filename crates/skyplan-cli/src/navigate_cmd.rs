@@ -33,12 +33,7 @@ fn read_targets_file(path: &Path) -> Result<Vec<Pair>> {
 }
 
 pub fn run_navigate(args: NavigateArgs) -> Result<()> {
-    let json_mode = args.json;
-    let result = navigate_inner(args);
-    if json_mode {
-        crate::exit::print_json_failure(&result);
-    }
-    match result? {
+    match crate::exit::print_json_failure(args.json, navigate_inner(args))? {
         Some(stopped_short) => Err(stopped_short),
         None => Ok(()),
     }
@@ -138,11 +133,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         }
         None => None,
     };
-    let limits = skyplan_plan::Limits {
-        max_memory_bytes: args
-            .max_memory
-            .unwrap_or_else(crate::args::default_max_memory),
-    };
+    let limits = crate::args::limits(args.max_memory);
     let world = crate::world_load::load_world(args.map.as_deref(), &args.grid, &limits)?;
     let mut session = Session::new(world).with_limits(limits);
     let request = ride_request(&mut session, &args)?;

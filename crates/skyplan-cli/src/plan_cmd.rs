@@ -1,13 +1,13 @@
 //! `skyplan plan`: options → the planning API → files, picture and summary.
 
 use crate::args::PlanArgs;
-use crate::exit::{Classify, Kind, Result, bad_input};
+use crate::exit::{Classify, Failure, Kind, Result, bad_input};
 use crate::files::{Target, output_target, read_bytes, write_target};
 use crate::picture::PictureKind;
 use crate::report::Written;
 use skyplan_cspace::Cell;
 use skyplan_export::Format;
-use skyplan_plan::{Family, Plan, PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{Plan, PlanRequest, PlannerId, Session, World};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -29,9 +29,22 @@ pub(crate) fn output_file(out: &Path, format: Option<&str>) -> Result<(Target, F
     Ok((output_target("--out", out)?, format))
 }
 
+/// A waypoint file: the path as given, where it goes, its format.
+pub(crate) type WaypointFile = (PathBuf, Target, Format);
+
+/// Writes `mission` (with a summary of its plan) to a waypoint file.
+pub(crate) fn write_waypoints(
+    (_, target, format): &WaypointFile,
+    mission: &skyplan_mission::Mission,
+    summary: &serde_json::Value,
+) -> Result<()> {
+    let bytes = skyplan_export::encode(*format, mission, summary).or_exit(Kind::Runtime)?;
+    write_target(target, &bytes)
+}
+
 /// Every output of a run, checked before planning so that a failing run writes nothing.
 struct Outputs {
-    waypoints: Option<(PathBuf, Target, Format)>,
+    waypoints: Option<WaypointFile>,
     plot: Option<(PathBuf, Target, PictureKind)>,
     roadmap: Option<(PathBuf, Target)>,
 }
@@ -59,23 +72,21 @@ fn check_outputs(
         }
         (None, None) => None,
     };
-    let plot = match args.plot.clone().or(cfg.path(&cfg.text.plot)) {
-        Some(p) => {
+    let plot = (args.plot.clone().or(cfg.path(&cfg.text.plot)))
+        .map(|p| {
             let kind = crate::picture::kind_for(&p, planner.info().family)?;
-            Some((p.clone(), output_target("--plot", &p)?, kind))
-        }
-        None => None,
-    };
+            Ok::<_, Failure>((p.clone(), output_target("--plot", &p)?, kind))
+        })
+        .transpose()?;
     let prm = matches!(planner, PlannerId::Prm | PlannerId::LazyPrm);
     if !prm && (args.save_roadmap.is_some() || args.load_roadmap.is_some()) {
         return Err(bad_input(
             "--save-roadmap and --load-roadmap need --planner prm or lazy-prm",
         ));
     }
-    let roadmap = match &args.save_roadmap {
-        Some(p) => Some((p.clone(), output_target("--save-roadmap", p)?)),
-        None => None,
-    };
+    let roadmap = (args.save_roadmap.as_ref())
+        .map(|p| Ok::<_, Failure>((p.clone(), output_target("--save-roadmap", p)?)))
+        .transpose()?;
     Ok(Outputs {
         waypoints,
         plot,
@@ -101,12 +112,7 @@ fn prompt_missing(world: &World, request: &mut PlanRequest) -> Result<()> {
 }
 
 pub fn run(args: PlanArgs) -> Result<()> {
-    let json_mode = args.json;
-    let result = run_inner(args);
-    if json_mode {
-        crate::exit::print_json_failure(&result);
-    }
-    result
+    crate::exit::print_json_failure(args.json, run_inner(args))
 }
 
 fn run_inner(args: PlanArgs) -> Result<()> {
@@ -156,15 +162,14 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
         plot: None,
         roadmap: None,
     };
-    if let Some((path, target, format)) = &outputs.waypoints {
+    if let Some(file @ (path, _, format)) = &outputs.waypoints {
         let mission = plan
             .mission
             .as_ref()
             .ok_or_else(|| bad_input("waypoint files need a map with a geodetic home"))?;
         let summary =
             serde_json::json!({ "map": plan.map, "planner": plan.planner, "cost_m": plan.cost_m });
-        let bytes = skyplan_export::encode(*format, mission, &summary).or_exit(Kind::Runtime)?;
-        write_target(target, &bytes)?;
+        write_waypoints(file, mission, &summary)?;
         written.waypoints = Some((path.display().to_string(), format.name()));
     }
     if let Some((path, target, kind)) = &outputs.plot {
@@ -178,22 +183,6 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
     Ok(written)
 }
 
-fn model_of(request: &PlanRequest) -> skyplan_search::MoveModel {
-    use skyplan_search::MoveModel;
-    match (
-        request.connectivity.unwrap_or(8),
-        request.corner_cutting.unwrap_or(false),
-    ) {
-        (4, _) => MoveModel::FourConnected,
-        (_, true) => MoveModel::OctileCornerCutting,
-        _ => MoveModel::Octile,
-    }
-}
-
-fn steps(request: &PlanRequest) -> bool {
-    request.field == Some(skyplan_plan::FieldMode::Steps)
-}
-
 fn show_plan(plan: &Plan, request: &PlanRequest) {
     let (Some(grid), [Some(s), Some(g)]) =
         (plan.grid_used.as_deref(), [plan.start.cell, plan.goal.cell])
@@ -201,29 +190,9 @@ fn show_plan(plan: &Plan, request: &PlanRequest) {
         eprintln!("--show: text pictures are for grid planners");
         return;
     };
-    let raw = plan
-        .geometry
-        .as_ref()
-        .map(|g| g.raw_path.clone())
-        .unwrap_or_default();
-    let path: Vec<Cell> = raw
-        .iter()
-        .filter_map(|p| grid.cell_at_ne(p[0], p[1]))
-        .collect();
-    let family = plan.planner.info().family;
-    let path = if family.is_cell_search() || matches!(family, Family::Wavefront | Family::Costmap) {
-        path
-    } else {
-        Vec::new()
-    };
-    crate::show::print(
-        grid,
-        Cell::new(s[0], s[1]),
-        Cell::new(g[0], g[1]),
-        &path,
-        model_of(request),
-        steps(request),
-    );
+    let (s, g) = (Cell::new(s[0], s[1]), Cell::new(g[0], g[1]));
+    let (model, steps) = (request.move_model(), request.counts_steps());
+    crate::show::print(grid, s, g, &plan.path_cells(), model, steps);
 }
 
 fn show_failure(session: &mut Session, request: &PlanRequest) {
@@ -233,6 +202,7 @@ fn show_failure(session: &mut Session, request: &PlanRequest) {
     let cell = |ne: Option<[f64; 2]>| ne.and_then(|p| grid.cell_at_ne(p[0], p[1]));
     let (ds, dg) = session.world().default_endpoints_ne();
     if let (Some(s), Some(g)) = (cell(request.start_ne.or(ds)), cell(request.goal_ne.or(dg))) {
-        crate::show::print(&grid, s, g, &[], model_of(request), steps(request));
+        let (model, steps) = (request.move_model(), request.counts_steps());
+        crate::show::print(&grid, s, g, &[], model, steps);
     }
 }

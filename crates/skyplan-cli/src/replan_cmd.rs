@@ -55,15 +55,7 @@ pub fn flight_picture(
     flight: &Flight,
     hidden: &[ObstacleBox],
 ) -> Result<Vec<u8>> {
-    let learned: Vec<(f64, f64)> = flight
-        .watcher
-        .as_ref()
-        .and_then(|w| w.0.lock().ok().map(|r| r.learned_points_ne()))
-        .unwrap_or_default()
-        .into_iter()
-        .flat_map(|(_, points)| points.into_iter().map(|[n, e]| (n, e)))
-        .collect();
-    let track: Vec<(f64, f64)> = flight.log.iter().map(|r| (r.north_m, r.east_m)).collect();
+    let (learned, track) = (flight.learned_ne(), flight.track_ne());
     let layers = skyplan_plot::FlightLayers {
         hidden,
         learned_ne: &learned,

@@ -7,9 +7,7 @@ use skyplan_server::ServerConfig;
 use std::time::Duration;
 
 pub fn run(args: ServeArgs) -> Result<()> {
-    let limits = skyplan_plan::Limits {
-        max_memory_bytes: crate::args::default_max_memory(),
-    };
+    let limits = crate::args::limits(None);
     let world =
         crate::world_load::load_world(args.map.as_deref(), &GridMapArgs::default(), &limits)?;
     let mut config = ServerConfig {

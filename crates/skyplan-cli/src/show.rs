@@ -4,46 +4,21 @@
 use crate::args::Pair;
 use crate::exit::{Classify, Kind, Result, bad_input};
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_navfn::{DistanceField, FieldMetric, distance_field, show};
+use skyplan_navfn::{FieldMetric, show};
 use skyplan_search::MoveModel;
 use std::io::{BufRead, Write};
-
-/// Largest grid `--show` prints as text.
-const SHOW_MAX_ROWS: u32 = 60;
-const SHOW_MAX_COLS: u32 = 80;
 
 /// Prints the workspace (with the wavefront field's unreachable cells), the distance matrix and
 /// the path.
 pub fn print(grid: &Grid2, start: Cell, goal: Cell, path: &[Cell], model: MoveModel, steps: bool) {
-    if grid.rows() > SHOW_MAX_ROWS || grid.cols() > SHOW_MAX_COLS {
-        eprintln!(
-            "--show: the grid is {} × {} cells; text output is for grids up to {SHOW_MAX_COLS} × {SHOW_MAX_ROWS} (use --plot)",
-            grid.rows(),
-            grid.cols()
-        );
-        return;
-    }
     let metric = if steps {
         FieldMetric::Steps
     } else {
         FieldMetric::Length
     };
-    let field: Option<DistanceField> = distance_field(grid, goal, model, metric).ok();
-    println!("workspace (north up; {})", show::WORKSPACE_LEGEND);
-    print!(
-        "{}",
-        show::workspace(grid, Some(start), Some(goal), path, field.as_ref())
-    );
-    if let Some(field) = &field {
-        println!("\ndistance matrix (cells; {})", show::MATRIX_LEGEND);
-        print!("{}", show::distance_matrix(field, Some(start)));
-    }
-    if !path.is_empty() {
-        let cells: Vec<String> = path
-            .iter()
-            .map(|c| format!("({},{})", c.row, c.col))
-            .collect();
-        println!("\npath (row,col): {}", cells.join(" → "));
+    match show::picture(grid, start, goal, path, model, metric) {
+        Ok(text) => print!("{text}"),
+        Err(why) => eprintln!("--show: {why} (use --plot)"),
     }
 }
 

@@ -9,8 +9,6 @@ use skyplan_link::vehicle::{SimServer, SimServerConfig};
 use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
 use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, FCND_CITY_NAME as BUNDLED_NAME};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// Reads `--hidden FILE`: boxes in the colliders format whose `lat0/lon0` line must be the
@@ -19,19 +17,8 @@ pub(crate) fn load_hidden(
     path: &std::path::Path,
     map_home: &skyplan_map::colliders::GeodeticHome,
 ) -> Result<Vec<skyplan_map::colliders::ObstacleBox>> {
-    let text = read_text(path)?;
-    let name = path.display();
-    let hidden = skyplan_map::colliders::parse_colliders(&text)
-        .map_err(|e| bad_input(format!("--hidden {name}: {e}")))?;
-    let same = (hidden.home.lat_deg - map_home.lat_deg).abs() < 1e-9
-        && (hidden.home.lon_deg - map_home.lon_deg).abs() < 1e-9;
-    if !same {
-        return Err(bad_input(format!(
-            "--hidden {name}: line 1: its home lat0 {}, lon0 {} is not the map's home lat0 {}, lon0 {} (hidden obstacles are placed in the map's frame: use the map's first line)",
-            hidden.home.lat_deg, hidden.home.lon_deg, map_home.lat_deg, map_home.lon_deg
-        )));
-    }
-    Ok(hidden.boxes)
+    skyplan_map::colliders::parse_hidden(&read_text(path)?, map_home)
+        .map_err(|e| bad_input(format!("--hidden {}: {e}", path.display())))
 }
 
 /// Checks `--speedup`: 0.1 to 1000 simulated seconds per wall second.
@@ -63,25 +50,24 @@ pub fn run(args: SimArgs) -> Result<()> {
     };
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
+    let map_home = Lla {
+        lat_deg: map.home.lat_deg,
+        lon_deg: map.home.lon_deg,
+        alt_m: 0.0,
+    };
     let home = match args.home {
-        Some(p) => {
-            if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) {
-                return Err(bad_input(format!(
-                    "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
-                    p.0, p.1
-                )));
-            }
-            Lla {
-                lat_deg: p.0,
-                lon_deg: p.1,
-                alt_m: 0.0,
-            }
+        Some(p) if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) => {
+            return Err(bad_input(format!(
+                "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
+                p.0, p.1
+            )));
         }
-        None => Lla {
-            lat_deg: map.home.lat_deg,
-            lon_deg: map.home.lon_deg,
+        Some(p) => Lla {
+            lat_deg: p.0,
+            lon_deg: p.1,
             alt_m: 0.0,
         },
+        None => map_home,
     };
     if args.ekf_delay_s < 0.0 {
         return Err(bad_input(format!(
@@ -89,10 +75,10 @@ pub fn run(args: SimArgs) -> Result<()> {
             args.ekf_delay_s
         )));
     }
-    let hidden = match &args.hidden {
-        Some(path) => load_hidden(path, &map.home)?,
-        None => Vec::new(),
-    };
+    let hidden = (args.hidden.as_ref())
+        .map(|path| load_hidden(path, &map.home))
+        .transpose()?
+        .unwrap_or_default();
     let hidden_count = hidden.len();
     let config = SimServerConfig {
         hidden,
@@ -100,11 +86,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
         ekf_delay_s: args.ekf_delay_s,
-        map_home: Some(Lla {
-            lat_deg: map.home.lat_deg,
-            lon_deg: map.home.lon_deg,
-            alt_m: 0.0,
-        }),
+        map_home: Some(map_home),
         ..SimServerConfig::at(home)
     };
     let server = SimServer::bind(&address, config).or_exit(Kind::Runtime)?;
@@ -136,15 +118,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         }
         None => crate::live::Live::default(),
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    if let Some(d) = args.duration_s {
-        let stop = Arc::clone(&stop);
-        let d = Duration::from_secs_f64(d.max(0.0));
-        std::thread::spawn(move || {
-            std::thread::sleep(d);
-            stop.store(true, Ordering::Relaxed);
-        });
-    }
+    let stop = SimServer::stop_after(args.duration_s);
     let world = BoxWorld::new(&map.boxes);
     let map_boxes = map.boxes.len();
     let report = server.run_with_state(

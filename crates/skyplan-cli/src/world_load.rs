@@ -6,19 +6,17 @@ use crate::config::Config;
 use crate::exit::{Result, bad_input};
 use crate::files::{read_bytes, read_text};
 use crate::grid_args::{FieldArg, GridMapArgs};
-use skyplan_plan::{FieldMode, Limits, MapYaml, PlanRequest, PruneMode, World};
+use skyplan_plan::{FieldMode, Limits, MapFormat, MapYaml, PlanRequest, PruneMode, World};
 use std::path::{Path, PathBuf};
 
-fn is_ext(path: &Path, exts: &[&str]) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
+fn format_is(path: Option<&Path>, format: MapFormat) -> bool {
+    path.and_then(MapFormat::of_path) == Some(format)
 }
 
 /// The world a command runs on: `--random`, the map file by extension, or the bundled city.
 pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Result<World> {
-    let colliders = map.is_none_or(|p| is_ext(p, &["csv"])) && g.random.is_none();
-    if g.resolution.is_some() && !map.is_some_and(|p| is_ext(p, &["png", "pgm"])) {
+    let colliders = (map.is_none() || format_is(map, MapFormat::Colliders)) && g.random.is_none();
+    if g.resolution.is_some() && !format_is(map, MapFormat::Image) {
         return Err(bad_input(
             "--resolution: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)",
         ));
@@ -44,41 +42,38 @@ pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Resul
 
 fn load_file(path: &Path, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     let name = path.display().to_string();
-    if is_ext(path, &["csv"]) {
-        Ok(World::from_colliders_csv(&name, &read_text(path)?)?)
-    } else if is_ext(path, &["yaml", "yml"]) {
-        let meta =
-            MapYaml::parse(&read_text(path)?).map_err(|e| bad_input(format!("{name}: {e}")))?;
-        let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
-        let bytes = read_bytes(&image)
-            .map_err(|f| bad_input(format!("{name}: field image: {:#}", f.error)))?;
-        Ok(World::from_image_within(
-            &image.display().to_string(),
-            &bytes,
-            &meta,
-            g.unknown_free,
-            limits,
-        )?)
-    } else if is_ext(path, &["png", "pgm"]) {
-        let resolution = g.resolution.ok_or_else(|| {
-            bad_input(format!(
-                "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"
-            ))
-        })?;
-        Ok(World::from_image_within(
-            &name,
-            &read_bytes(path)?,
-            &MapYaml::bare(resolution),
-            g.unknown_free,
-            limits,
-        )?)
-    } else if is_ext(path, &["map"]) {
-        Ok(World::from_movingai(&name, &read_text(path)?)?)
-    } else {
-        Err(bad_input(format!(
+    let Some(format) = MapFormat::of_path(path) else {
+        return Err(bad_input(format!(
             "{name}: unknown map type; expected .csv (colliders), .yaml (map_server), .png/.pgm (with --resolution) or .map (MovingAI)"
-        )))
-    }
+        )));
+    };
+    let (image, bytes, meta) = match format {
+        MapFormat::Colliders => return Ok(World::from_colliders_csv(&name, &read_text(path)?)?),
+        MapFormat::MovingAi => return Ok(World::from_movingai(&name, &read_text(path)?)?),
+        MapFormat::MapServer => {
+            let meta =
+                MapYaml::parse(&read_text(path)?).map_err(|e| bad_input(format!("{name}: {e}")))?;
+            let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
+            let bytes = read_bytes(&image)
+                .map_err(|f| bad_input(format!("{name}: field image: {:#}", f.error)))?;
+            (image.display().to_string(), bytes, meta)
+        }
+        MapFormat::Image => {
+            let resolution = g.resolution.ok_or_else(|| {
+                bad_input(format!(
+                    "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"
+                ))
+            })?;
+            (name, read_bytes(path)?, MapYaml::bare(resolution))
+        }
+    };
+    Ok(World::from_image_within(
+        &image,
+        &bytes,
+        &meta,
+        g.unknown_free,
+        limits,
+    )?)
 }
 
 /// The request typed on the command line (only what was given).
@@ -142,9 +137,7 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
         None => Config::default(),
     };
     let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
-    let limits = Limits {
-        max_memory_bytes: a.max_memory.unwrap_or_else(crate::args::default_max_memory),
-    };
+    let limits = crate::args::limits(a.max_memory);
     let world = load_world(map.as_deref(), &a.grid, &limits)?;
     let request = typed_request(a).or(config.text.request.clone());
     Ok(Resolved {

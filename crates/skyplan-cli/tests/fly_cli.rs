@@ -477,18 +477,6 @@ fn bundled_frame() -> skyplan_frames::LocalFrame {
     .unwrap()
 }
 
-/// Distance from a point to the segment a–b, metres (horizontal).
-fn to_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-}
-
 /// The vehicle's true track (its own GLOBAL_POSITION_INT latitude/longitude, logged as received)
 /// in the map frame, and the planned waypoints (north, east) from `--out`.
 /// Logged rows as (state, map north/east, altitude).
@@ -540,14 +528,14 @@ fn on_a_long_route_the_true_track_stays_on_the_planned_segments() {
     assert!(plan.len() >= 5, "{plan:?}");
     let route_m: f64 = plan
         .windows(2)
-        .map(|w| to_segment_m(w[0], w[1], w[1]))
+        .map(|w| skyplan_testkit::distance_to_segment(w[0], w[1], w[1]))
         .sum();
     assert!(route_m > 800.0, "{route_m}");
     let mut worst = (0.0f64, [0.0; 2]);
     for (state, p, _) in track.iter().filter(|(s, _, _)| s == "WAYPOINT") {
         let d = plan
             .windows(2)
-            .map(|w| to_segment_m(*p, w[0], w[1]))
+            .map(|w| skyplan_testkit::distance_to_segment(*p, w[0], w[1]))
             .fold(f64::INFINITY, f64::min);
         if d > worst.0 {
             worst = (d, *p);

@@ -21,6 +21,20 @@ mod line_of_sight;
 pub use colliders_grid::GridSpec;
 pub use line_of_sight::Touch;
 
+/// The eight neighbour offsets `(d_row, d_col)`: the four straight moves (north, east, south,
+/// west) first, then the diagonals (north-east, south-east, south-west, north-west). Planners
+/// that break ties by neighbour order use this one.
+pub const NEIGHBOURS_8: [(i64, i64); 8] = [
+    (1, 0),
+    (0, 1),
+    (-1, 0),
+    (0, -1),
+    (1, 1),
+    (-1, 1),
+    (-1, -1),
+    (1, -1),
+];
+
 /// Largest grid skyplan builds, in cells (a 20 000 × 20 000 grid).
 pub const MAX_CELLS: usize = 400_000_000;
 

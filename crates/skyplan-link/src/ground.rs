@@ -895,16 +895,7 @@ impl GroundStation {
                 let t = now(start);
                 let is_telemetry = matches!(e, Event::Telemetry(_));
                 let out = ex.handle(t, e);
-                for c in &out.commands {
-                    if matches!(c, Command::GoTo { .. }) {
-                        sent_targets += 1;
-                    }
-                    // A failed send shows up as a lost link; nothing else to do here.
-                    let _ = self.send(*c, frame, convergence_rad);
-                }
-                if !out.notes.is_empty() {
-                    on_update(Update::Notes(t, out.notes));
-                }
+                sent_targets += self.dispatch(out, t, frame, convergence_rad, &mut on_update);
                 if is_telemetry && let Some(tel) = ex.last_telemetry() {
                     let (lat_deg, lon_deg) =
                         self.global.as_ref().map_or((f64::NAN, f64::NAN), |g| {

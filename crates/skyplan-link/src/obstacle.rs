@@ -256,6 +256,11 @@ mod tests {
         assert!(matches!(bad, Err(ObstacleError::Frame(_))));
     }
 
+    /// How many of the reading's sectors are `range`.
+    fn sectors(r: &ObstacleReading, range: SectorRange) -> usize {
+        r.ranges.iter().filter(|x| **x == range).count()
+    }
+
     #[test]
     fn increment_f_wins_offset_and_convergence_turn_the_sectors() {
         let mut m = message(MavFrame::MAV_FRAME_LOCAL_NED);
@@ -268,22 +273,10 @@ mod tests {
         let [n, e] = hit(&r);
         assert!((n - 12.34 * b.cos()).abs() < 1e-9 && (e - 12.34 * b.sin()).abs() < 1e-9);
         // 2.5° sectors: all 72 are used (180°); 10° sectors: only 36.
-        assert_eq!(
-            r.ranges
-                .iter()
-                .filter(|x| **x == SectorRange::Clear)
-                .count(),
-            71
-        );
+        assert_eq!(sectors(&r, SectorRange::Clear), 71);
         m.increment_f = 0.0;
         let r = reading_from_obstacle_distance(&m, 0.0, [0.0; 3], 0.0, 0.0).unwrap();
-        assert_eq!(
-            r.ranges
-                .iter()
-                .filter(|x| **x == SectorRange::Unknown)
-                .count(),
-            36
-        );
+        assert_eq!(sectors(&r, SectorRange::Unknown), 36);
         m.increment = 0;
         assert_eq!(
             reading_from_obstacle_distance(&m, 0.0, [0.0; 3], 0.0, 0.0),

@@ -164,6 +164,22 @@ impl Flight {
             .and_then(|w| w.0.lock().ok().map(|r| r.events().to_vec()))
             .unwrap_or_default()
     }
+
+    /// The cells the watcher learned, as (north, east) points (none without a watcher).
+    pub fn learned_ne(&self) -> Vec<(f64, f64)> {
+        self.watcher
+            .as_ref()
+            .and_then(|w| w.0.lock().ok().map(|r| r.learned_points_ne()))
+            .unwrap_or_default()
+            .into_iter()
+            .flat_map(|(_, points)| points.into_iter().map(|[n, e]| (n, e)))
+            .collect()
+    }
+
+    /// The flown track, as (north, east) points of the log.
+    pub fn track_ne(&self) -> Vec<(f64, f64)> {
+        self.log.iter().map(|r| (r.north_m, r.east_m)).collect()
+    }
 }
 
 /// Connects to the vehicle at `address`, waits for it, plans `request` on `world` from where it

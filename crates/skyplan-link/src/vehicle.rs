@@ -376,6 +376,21 @@ impl SimServer {
         self.run_with_state(world, stop, note, Duration::from_secs(3600), |_| {})
     }
 
+    /// A stop flag for [`SimServer::run_with_state`]: set after `wall_s` wall seconds (by a
+    /// thread of its own), or never.
+    pub fn stop_after(wall_s: Option<f64>) -> std::sync::Arc<AtomicBool> {
+        let stop = std::sync::Arc::new(AtomicBool::new(false));
+        if let Some(s) = wall_s {
+            let flag = std::sync::Arc::clone(&stop);
+            let wait = Duration::from_secs_f64(s.max(0.0));
+            std::thread::spawn(move || {
+                std::thread::sleep(wait);
+                flag.store(true, Ordering::Relaxed);
+            });
+        }
+        stop
+    }
+
     /// As [`SimServer::run`], and reports the vehicle's state to `state` every `period` of wall
     /// time (a live view: `skyplan sim --view`).
     pub fn run_with_state(

@@ -123,6 +123,22 @@ pub fn parse_colliders(text: &str) -> Result<CollidersMap, ParseError> {
     Ok(CollidersMap { home, boxes })
 }
 
+/// Parses hidden obstacles: boxes in the colliders format whose `lat0/lon0` line must be
+/// `map_home` (the boxes are placed in the map's frame). The error is the parse error, or why
+/// the homes differ.
+pub fn parse_hidden(text: &str, map_home: &GeodeticHome) -> Result<Vec<ObstacleBox>, String> {
+    let hidden = parse_colliders(text).map_err(|e| e.to_string())?;
+    let same = (hidden.home.lat_deg - map_home.lat_deg).abs() < 1e-9
+        && (hidden.home.lon_deg - map_home.lon_deg).abs() < 1e-9;
+    if !same {
+        return Err(format!(
+            "line 1: its home lat0 {}, lon0 {} is not the map's home lat0 {}, lon0 {} (hidden obstacles are placed in the map's frame: use the map's first line)",
+            hidden.home.lat_deg, hidden.home.lon_deg, map_home.lat_deg, map_home.lon_deg
+        ));
+    }
+    Ok(hidden.boxes)
+}
+
 fn parse_home(line: &str) -> Result<GeodeticHome, ParseError> {
     const WANT: &str = "expected `lat0 <deg>, lon0 <deg>`";
     let parts: Vec<&str> = line.split(',').collect();

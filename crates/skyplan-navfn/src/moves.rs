@@ -3,18 +3,9 @@
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::MoveModel;
 
-/// Offsets `(d_row, d_col)`: the four straight moves (north, east, south, west) first, then the
-/// diagonals (north-east, south-east, south-west, north-west). Ties are broken by this order.
-pub(crate) const OFFSETS: [(i64, i64); 8] = [
-    (1, 0),
-    (0, 1),
-    (-1, 0),
-    (0, -1),
-    (1, 1),
-    (-1, 1),
-    (-1, -1),
-    (1, -1),
-];
+/// Offsets `(d_row, d_col)`: [`skyplan_cspace::NEIGHBOURS_8`], straight moves first. Ties are
+/// broken by this order.
+pub(crate) const OFFSETS: [(i64, i64); 8] = skyplan_cspace::NEIGHBOURS_8;
 
 /// Calls `visit(next, diagonal)` for every legal move from `from` on `grid` under `model`, in
 /// [`OFFSETS`] order. A move is legal if its target is on the grid and free and, for a diagonal

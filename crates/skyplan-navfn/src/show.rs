@@ -28,6 +28,46 @@ pub const WORKSPACE_LEGEND: &str =
 pub const MATRIX_LEGEND: &str =
     "distance to the destination; # obstacle, ∞ unreachable, S source, D destination";
 
+/// Largest grid [`picture`] draws, rows.
+pub const MAX_ROWS: u32 = 60;
+/// Largest grid [`picture`] draws, columns.
+pub const MAX_COLS: u32 = 80;
+
+/// The whole text picture: the workspace (with the field's unreachable cells), the distance
+/// matrix of the field grown from `destination` under `model` and `metric` (when it grows), and
+/// the path as a list of cells. A grid over [`MAX_COLS`] × [`MAX_ROWS`] is refused with why.
+pub fn picture(
+    grid: &Grid2,
+    source: Cell,
+    destination: Cell,
+    path: &[Cell],
+    model: crate::MoveModel,
+    metric: FieldMetric,
+) -> Result<String, String> {
+    if grid.rows() > MAX_ROWS || grid.cols() > MAX_COLS {
+        return Err(format!(
+            "the grid is {} × {} cells; text output is for grids up to {MAX_COLS} × {MAX_ROWS}",
+            grid.rows(),
+            grid.cols()
+        ));
+    }
+    let field = crate::distance_field(grid, destination, model, metric).ok();
+    let mut text = format!("workspace (north up; {WORKSPACE_LEGEND})\n");
+    text += &workspace(grid, Some(source), Some(destination), path, field.as_ref());
+    if let Some(field) = &field {
+        text += &format!("\ndistance matrix (cells; {MATRIX_LEGEND})\n");
+        text += &distance_matrix(field, Some(source));
+    }
+    if !path.is_empty() {
+        let cells: Vec<String> = path
+            .iter()
+            .map(|c| format!("({},{})", c.row, c.col))
+            .collect();
+        text += &format!("\npath (row,col): {}\n", cells.join(" → "));
+    }
+    Ok(text)
+}
+
 fn row_label_width(grid: &Grid2) -> usize {
     grid.rows().saturating_sub(1).to_string().len() + 1
 }

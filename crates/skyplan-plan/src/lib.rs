@@ -92,9 +92,9 @@ pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, Waypoin
 pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};
 pub use ride::{Ride, RideChange, RideLeg, RidePlace, RideRequest};
-pub use session::{Session, recheck_grid_route};
+pub use session::{Session, model_name, recheck_grid_route};
 pub use skyplan_imagemap::MapYaml;
 pub use world::{
-    BoundsNe, FCND_CITY_CSV, FCND_CITY_NAME, FCND_DEFAULT_GOAL_NE, Limits, MapKind, World,
-    human_bytes,
+    BoundsNe, FCND_CITY_CSV, FCND_CITY_NAME, FCND_DEFAULT_GOAL_NE, Limits, MapFormat, MapKind,
+    World, human_bytes,
 };

@@ -219,6 +219,22 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// The raw path's cells on the grid used, for a text picture: empty unless a cell planner
+    /// (grid search, wavefront, costmap) planned on a grid and kept its geometry.
+    pub fn path_cells(&self) -> Vec<skyplan_cspace::Cell> {
+        let family = self.planner.info().family;
+        let cell_planner = family.is_cell_search()
+            || matches!(family, crate::Family::Wavefront | crate::Family::Costmap);
+        match (&self.grid_used, &self.geometry) {
+            (Some(grid), Some(g)) if cell_planner => g
+                .raw_path
+                .iter()
+                .filter_map(|p| grid.cell_at_ne(p[0], p[1]))
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
     /// The waypoints as `[north_m, east_m, alt_m]` points.
     pub fn points_nea(&self) -> Vec<[f64; 3]> {
         self.waypoints.iter().map(|w| [w[0], w[1], w[2]]).collect()

@@ -121,6 +121,24 @@ macro_rules! merge_fields {
 }
 
 impl PlanRequest {
+    /// The move model the request names, leniently (for pictures, before or after a failed
+    /// plan): 4-connected, else 8-connected with or without corner cutting.
+    pub fn move_model(&self) -> MoveModel {
+        match (
+            self.connectivity.unwrap_or(8),
+            self.corner_cutting.unwrap_or(false),
+        ) {
+            (4, _) => MoveModel::FourConnected,
+            (_, true) => MoveModel::OctileCornerCutting,
+            _ => MoveModel::Octile,
+        }
+    }
+
+    /// Whether the request's field counts steps (not lengths).
+    pub fn counts_steps(&self) -> bool {
+        self.field == Some(FieldMode::Steps)
+    }
+
     /// Field by field, `self` where set, else `fallback` (command line over config file).
     pub fn or(self, fallback: PlanRequest) -> PlanRequest {
         let (a, b) = (self, fallback);

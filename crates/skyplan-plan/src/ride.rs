@@ -274,11 +274,7 @@ impl Session {
         Ok(Ride {
             status: if run.reached { "ok" } else { "no_path" },
             map: self.world().name().to_string(),
-            move_model: match model {
-                MoveModel::FourConnected => "4-connected",
-                MoveModel::Octile => "8-connected, no corner cutting",
-                MoveModel::OctileCornerCutting => "8-connected, corner cutting",
-            },
+            move_model: crate::session::model_name(model),
             start: RidePlace {
                 cell: [start.row, start.col],
                 north_m: r.start_ne[0],

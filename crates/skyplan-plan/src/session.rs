@@ -662,7 +662,7 @@ fn rows_without_frame(points: &[[f64; 3]], start_heading_rad: f64) -> Vec<[f64; 
 }
 
 /// The move model as users read it.
-pub(crate) fn model_name(model: MoveModel) -> &'static str {
+pub fn model_name(model: MoveModel) -> &'static str {
     match model {
         MoveModel::FourConnected => "4-connected",
         MoveModel::Octile => "8-connected, no corner cutting",

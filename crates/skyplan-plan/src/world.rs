@@ -75,6 +75,33 @@ pub enum MapKind {
     Grid,
 }
 
+/// A map file's format, told by its extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapFormat {
+    /// `.csv`: FCND colliders ([`World::from_colliders_csv`]).
+    Colliders,
+    /// `.yaml`, `.yml`: a ROS map_server description of an image ([`MapYaml`]).
+    MapServer,
+    /// `.png`, `.pgm`: a bare occupancy image ([`MapYaml::bare`]).
+    Image,
+    /// `.map`: a MovingAI grid ([`World::from_movingai`]).
+    MovingAi,
+}
+
+impl MapFormat {
+    /// The format of `path` by its extension (any case), or `None` for another extension.
+    pub fn of_path(path: &std::path::Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "csv" => Self::Colliders,
+            "yaml" | "yml" => Self::MapServer,
+            "png" | "pgm" => Self::Image,
+            "map" => Self::MovingAi,
+            _ => return None,
+        })
+    }
+}
+
 #[derive(Debug, Clone)]
 pub(crate) enum Source {
     Colliders(Arc<CollidersMap>),

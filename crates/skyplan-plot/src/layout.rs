@@ -263,13 +263,20 @@ fn world_bounds(scene: &Scene) -> Result<(f64, f64, f64, f64), PlotError> {
 
 fn legend_entries(scene: &Scene) -> Vec<LegendEntry> {
     let mut v = Vec::new();
-    let mut push = |kind, text: String| v.push(LegendEntry { kind, text });
-    if scene.grid.blocked_cells().iter().any(|&b| b) {
-        push(LegendKind::CSpace, "obstacle + safety margin".into());
-    }
-    if !scene.obstacles.is_empty() {
-        push(LegendKind::Obstacle, "obstacle".into());
-    }
+    // An entry for each layer the picture shows.
+    let mut push = |shown: bool, kind, text: String| {
+        if shown {
+            v.push(LegendEntry { kind, text });
+        }
+    };
+    let blocked = scene.grid.blocked_cells().iter().any(|&b| b);
+    push(
+        blocked,
+        LegendKind::CSpace,
+        "obstacle + safety margin".into(),
+    );
+    let obstacles = !scene.obstacles.is_empty();
+    push(obstacles, LegendKind::Obstacle, "obstacle".into());
     let points = |n: usize| {
         if n == 1 {
             "1 point".to_string()
@@ -277,64 +284,41 @@ fn legend_entries(scene: &Scene) -> Vec<LegendEntry> {
             format!("{n} points")
         }
     };
-    if !scene.graph_ne.is_empty() {
-        push(
-            LegendKind::Graph,
-            format!("roadmap ({} edges)", scene.graph_ne.len()),
-        );
-    }
-    if !scene.connectors_ne.is_empty() {
-        push(
-            LegendKind::Connector,
-            format!("connectors ({})", scene.connectors_ne.len()),
-        );
-    }
-    if !scene.raw_path_ne.is_empty() {
-        let what = if scene.graph_ne.is_empty() {
-            "grid path"
-        } else {
-            "graph route"
-        };
-        push(
-            LegendKind::Raw,
-            format!("{what} ({})", points(scene.raw_path_ne.len())),
-        );
-    }
-    if !scene.pruned_path_ne.is_empty() {
-        push(
-            LegendKind::Pruned,
-            format!("waypoints ({})", points(scene.pruned_path_ne.len())),
-        );
-    }
+    let (graph, connectors) = (scene.graph_ne.len(), scene.connectors_ne.len());
+    push(
+        graph > 0,
+        LegendKind::Graph,
+        format!("roadmap ({graph} edges)"),
+    );
+    let text = format!("connectors ({connectors})");
+    push(connectors > 0, LegendKind::Connector, text);
+    let (raw, pruned) = (scene.raw_path_ne.len(), scene.pruned_path_ne.len());
+    let what = if graph == 0 {
+        "grid path"
+    } else {
+        "graph route"
+    };
+    push(
+        raw > 0,
+        LegendKind::Raw,
+        format!("{what} ({})", points(raw)),
+    );
+    let text = format!("waypoints ({})", points(pruned));
+    push(pruned > 0, LegendKind::Pruned, text);
     if let Some(f) = scene.flight {
-        if !f.hidden.is_empty() {
-            push(
-                LegendKind::Hidden,
-                format!("hidden obstacles ({})", f.hidden.len()),
-            );
-        }
-        if !f.learned_ne.is_empty() {
-            push(
-                LegendKind::Learned,
-                format!("learned cells ({})", f.learned_ne.len()),
-            );
-        }
-        if !f.replanned_ne.is_empty() {
-            push(
-                LegendKind::Replanned,
-                format!("replanned routes ({})", f.replanned_ne.len()),
-            );
-        }
-        if !f.track_ne.is_empty() {
-            push(LegendKind::Track, "flown track".into());
-        }
+        let (hidden, learned) = (f.hidden.len(), f.learned_ne.len());
+        let text = format!("hidden obstacles ({hidden})");
+        push(hidden > 0, LegendKind::Hidden, text);
+        let text = format!("learned cells ({learned})");
+        push(learned > 0, LegendKind::Learned, text);
+        let replanned = f.replanned_ne.len();
+        let text = format!("replanned routes ({replanned})");
+        push(replanned > 0, LegendKind::Replanned, text);
+        let track = !f.track_ne.is_empty();
+        push(track, LegendKind::Track, "flown track".into());
     }
-    if scene.start_ne.is_some() {
-        push(LegendKind::Start, "start".into());
-    }
-    if scene.goal_ne.is_some() {
-        push(LegendKind::Goal, "goal".into());
-    }
+    push(scene.start_ne.is_some(), LegendKind::Start, "start".into());
+    push(scene.goal_ne.is_some(), LegendKind::Goal, "goal".into());
     v
 }
 

@@ -38,6 +38,25 @@ def moves(diagonal, corner_cutting):
     return out
 
 
+def dijkstra(start, goal, neighbours):
+    """Textbook Dijkstra (heapq): `neighbours(r, c)` yields `(nr, nc, cost)`; the cost of the
+    cheapest path, None when the goal is unreachable."""
+    dist = {start: 0.0}
+    heap = [(0.0, start)]
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if (r, c) == goal:
+            return d
+        if d > dist[(r, c)]:
+            continue
+        for nr, nc, cost in neighbours(r, c):
+            nd = d + cost
+            if nd < dist.get((nr, nc), math.inf):
+                dist[(nr, nc)] = nd
+                heapq.heappush(heap, (nd, (nr, nc)))
+    return None
+
+
 def dijkstra_cost(grid, start, goal, diagonal=True, corner_cutting=True):
     """Textbook Dijkstra (heapq) over free cells (grid == 0); None when unreachable."""
     rows, cols = grid.shape
@@ -48,26 +67,18 @@ def dijkstra_cost(grid, start, goal, diagonal=True, corner_cutting=True):
 
     if not free(*start) or not free(*goal):
         return None
-    dist = {start: 0.0}
-    heap = [(0.0, start)]
     steps = moves(diagonal, corner_cutting)
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if (r, c) == goal:
-            return d
-        if d > dist[(r, c)]:
-            continue
+
+    def neighbours(r, c):
         for dr, dc, cost, sides in steps:
             nr, nc = r + dr, c + dc
             if not free(nr, nc):
                 continue
             if sides and not (free(r + dr, c) and free(r, c + dc)):
                 continue
-            nd = d + cost
-            if nd < dist.get((nr, nc), math.inf):
-                dist[(nr, nc)] = nd
-                heapq.heappush(heap, (nd, (nr, nc)))
-    return None
+            yield nr, nc, cost
+
+    return dijkstra(start, goal, neighbours)
 
 
 def path_cost_checked(grid, path, diagonal=True, corner_cutting=True):

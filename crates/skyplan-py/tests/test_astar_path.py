@@ -1,12 +1,12 @@
 """astar_path with pyastar2d's contract, against pyastar2d and an independent Dijkstra."""
 
-import heapq
 import math
 
 import numpy as np
 import pytest
 
 import skyplan
+from conftest import dijkstra
 
 
 def weighted_dijkstra(weights, start, goal, diagonal):
@@ -15,22 +15,14 @@ def weighted_dijkstra(weights, start, goal, diagonal):
     steps = [(-1, 0), (1, 0), (0, -1), (0, 1)]
     if diagonal:
         steps += [(-1, -1), (-1, 1), (1, -1), (1, 1)]
-    dist = {start: 0.0}
-    heap = [(0.0, start)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if (r, c) == goal:
-            return d
-        if d > dist[(r, c)]:
-            continue
+
+    def neighbours(r, c):
         for dr, dc in steps:
             nr, nc = r + dr, c + dc
             if 0 <= nr < rows and 0 <= nc < cols and math.isfinite(weights[nr, nc]):
-                nd = d + float(weights[nr, nc])
-                if nd < dist.get((nr, nc), math.inf):
-                    dist[(nr, nc)] = nd
-                    heapq.heappush(heap, (nd, (nr, nc)))
-    return None
+                yield nr, nc, float(weights[nr, nc])
+
+    return dijkstra(start, goal, neighbours)
 
 
 def walked_cost(weights, path, diagonal):

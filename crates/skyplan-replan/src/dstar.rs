@@ -501,14 +501,5 @@ impl DStarLite {
     }
 }
 
-/// Neighbour order: N, E, S, W, then the diagonals.
-const NEIGHBOURS: [(i64, i64); 8] = [
-    (1, 0),
-    (0, 1),
-    (-1, 0),
-    (0, -1),
-    (1, 1),
-    (-1, 1),
-    (-1, -1),
-    (1, -1),
-];
+// Neighbour order: N, E, S, W, then the diagonals.
+use skyplan_cspace::NEIGHBOURS_8 as NEIGHBOURS;

@@ -10,17 +10,6 @@ use skyplan_replan::hidden::{HiddenError, HiddenSpec, place_hidden, true_world};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
 
-fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-}
-
 #[test]
 fn hidden_buildings_lie_on_the_route_leave_both_ends_clear_and_the_goal_reachable() {
     let map = parse_colliders(FCND_CITY_CSV).expect("the bundled map parses");
@@ -36,7 +25,7 @@ fn hidden_buildings_lie_on_the_route_leave_both_ends_clear_and_the_goal_reachabl
         for b in &hidden {
             let near = route_ne
                 .windows(2)
-                .map(|w| distance_to_segment([b.north_m, b.east_m], w[0], w[1]))
+                .map(|w| skyplan_testkit::distance_to_segment([b.north_m, b.east_m], w[0], w[1]))
                 .fold(f64::INFINITY, f64::min);
             assert!(
                 near <= 6.0 * std::f64::consts::SQRT_2 + 1e-9,

@@ -38,6 +38,18 @@ async fn post_plan(app: Router, body: Value) -> (StatusCode, Value) {
 }
 
 /// The plan without the keys that differ from run to run (times in µs, request numbers).
+/// A response's content type ("" when it is not text).
+fn content_type(response: &axum::http::Response<Body>) -> &str {
+    response.headers()["content-type"]
+        .to_str()
+        .unwrap_or_default()
+}
+
+/// An error answer's message ("" without one).
+fn message(v: &Value) -> &str {
+    v["message"].as_str().unwrap_or_default()
+}
+
 fn timeless(mut v: Value) -> Value {
     if let Some(o) = v.as_object_mut() {
         o.retain(|k, _| !k.ends_with("_us") && k != "request_id");
@@ -79,7 +91,7 @@ async fn malformed_requests_get_400_naming_the_field() {
         assert_eq!(status, StatusCode::BAD_REQUEST, "{body}: {v}");
         assert_eq!(v["status"], "error");
         assert_eq!(v["kind"], "bad_request");
-        let message = v["message"].as_str().unwrap_or_default();
+        let message = message(&v);
         for p in phrases {
             assert!(message.contains(p), "{body}: {message:?} lacks {p:?}");
         }
@@ -123,7 +135,7 @@ async fn plan_requests_must_say_they_are_json() {
 async fn an_unknown_planner_gets_400_listing_the_planners() {
     let (status, v) = post_plan(city(), json!({ "planner": "rrt" })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
-    let message = v["message"].as_str().unwrap_or_default();
+    let message = message(&v);
     assert!(message.starts_with("planner: unknown planner"), "{message}");
     for p in PlannerId::ALL {
         assert!(message.contains(p.name()), "{message} lacks {p}");
@@ -190,20 +202,10 @@ async fn past_the_time_budget_requests_get_504_and_long_limits_400() {
     assert_eq!(v["kind"], "over_budget");
     let (status, v) = post_plan(city(), json!({ "planner": "prm", "time_limit_ms": 600000 })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
-    assert!(
-        v["message"]
-            .as_str()
-            .unwrap_or_default()
-            .contains("time_limit_ms 600000")
-    );
+    assert!(message(&v).contains("time_limit_ms 600000"), "{v}");
     let (status, v) = post_plan(city(), json!({ "cell_m": 0.01 })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
-    assert!(
-        v["message"]
-            .as_str()
-            .unwrap_or_default()
-            .contains("cell_m 0.01")
-    );
+    assert!(message(&v).contains("cell_m 0.01"), "{v}");
 }
 
 #[tokio::test]
@@ -338,12 +340,7 @@ async fn the_page_is_one_self_contained_file() {
         .await
         .expect("answer");
     assert_eq!(response.status(), StatusCode::OK);
-    assert!(
-        response.headers()["content-type"]
-            .to_str()
-            .unwrap_or_default()
-            .starts_with("text/html")
-    );
+    assert!(content_type(&response).starts_with("text/html"));
     let page = String::from_utf8(
         axum::body::to_bytes(response.into_body(), usize::MAX)
             .await
@@ -373,6 +370,15 @@ async fn the_page_is_one_self_contained_file() {
 // ---- a real loopback server: the event stream -------------------------------------------------
 
 /// Opens `GET /api/events` and reads the response head; the stream is then live.
+/// The status code of an HTTP response's first line (0 if there is none).
+fn status_code(response: &str) -> u16 {
+    response
+        .split_whitespace()
+        .nth(1)
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(0)
+}
+
 fn open_events(addr: std::net::SocketAddr) -> (u16, BufReader<TcpStream>) {
     let mut s = TcpStream::connect(addr).expect("connect");
     s.set_read_timeout(Some(Duration::from_secs(10)))
@@ -385,11 +391,7 @@ fn open_events(addr: std::net::SocketAddr) -> (u16, BufReader<TcpStream>) {
     let mut r = BufReader::new(s);
     let mut status = String::new();
     r.read_line(&mut status).expect("status line");
-    let code = status
-        .split_whitespace()
-        .nth(1)
-        .and_then(|c| c.parse().ok())
-        .unwrap_or(0);
+    let code = status_code(&status);
     loop {
         let mut line = String::new();
         r.read_line(&mut line).expect("header");
@@ -436,11 +438,7 @@ fn http_as(
     .expect("write");
     let mut text = String::new();
     s.read_to_string(&mut text).expect("read");
-    let code = text
-        .split_whitespace()
-        .nth(1)
-        .and_then(|c| c.parse().ok())
-        .unwrap_or(0);
+    let code = status_code(&text);
     (code, text)
 }
 
@@ -549,12 +547,7 @@ async fn app_events_reach_a_oneshot_stream() {
         .await
         .expect("answer");
     assert_eq!(response.status(), StatusCode::OK);
-    assert_eq!(
-        response.headers()["content-type"]
-            .to_str()
-            .unwrap_or_default(),
-        "text/event-stream"
-    );
+    assert_eq!(content_type(&response), "text/event-stream");
     assert_eq!(a.events.clients(), 1);
     drop(response);
     assert_eq!(

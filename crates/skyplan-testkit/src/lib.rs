@@ -1,5 +1,6 @@
 //! Test helpers shared by the tests of skyplan's 3D crates (a dev-dependency only): proptest
-//! strategies for random box worlds, box worlds from a few numbers, and the bundled city.
+//! strategies for random box worlds, box worlds from a few numbers, the bundled city, and the
+//! distance from a point to a route segment.
 
 use proptest::prelude::*;
 use skyplan_map::colliders::ObstacleBox;
@@ -74,4 +75,16 @@ pub fn caged(boxes: Vec<ObstacleBox>, c: Neu) -> Vec<ObstacleBox> {
         slab([0.0, 0.0, 8.0], [9.0, 9.0, 1.0]),
     ]);
     all
+}
+
+/// Horizontal distance from the point `p` to the segment `a`–`b` (north, east metres).
+pub fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
 }
