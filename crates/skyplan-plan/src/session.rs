@@ -155,6 +155,8 @@ pub struct Session {
     ch: Vec<Arc<ContractionHierarchy>>,
     /// The hierarchies' query workspace.
     pub(crate) ch_query: ChQuery,
+    /// When long preprocessing (a contraction hierarchy) must give up, if ever.
+    deadline: Option<Instant>,
 }
 
 impl Session {
@@ -172,6 +174,7 @@ impl Session {
             jps_plus: Vec::new(),
             ch: Vec::new(),
             ch_query: ChQuery::default(),
+            deadline: None,
         }
     }
 
@@ -179,6 +182,13 @@ impl Session {
     pub fn with_limits(mut self, limits: Limits) -> Self {
         self.limits = limits;
         self
+    }
+
+    /// Until when preprocessing that can take minutes (the `ch` planner's contraction hierarchy
+    /// on an open map) may run; past it the request fails with kind `timeout`. `None` (the
+    /// default): no limit. A server sets it from its time budget before each request.
+    pub fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
     }
 
     /// The world.
@@ -332,8 +342,14 @@ impl Session {
             return Ok((Arc::clone(ch), None));
         }
         let t0 = Instant::now();
-        let ch = ContractionHierarchy::build(Arc::clone(grid), model)
-            .map_err(|e| PlanFailure::bad_request(format!("--planner ch: {e}")))?;
+        let ch = ContractionHierarchy::build_until(Arc::clone(grid), model, self.deadline)
+            .map_err(|e| match e {
+                skyplan_search::ContractionError::Deadline { .. } => PlanFailure::new(
+                    crate::FailureKind::Timeout,
+                    format!("--planner ch: {e}: its preprocessing takes long on open maps; jps-plus or jps answer at once"),
+                ),
+                other => PlanFailure::bad_request(format!("--planner ch: {other}")),
+            })?;
         let ch = Arc::new(ch);
         let us = micros(t0.elapsed());
         if self.ch.len() >= CACHE_ENTRIES {

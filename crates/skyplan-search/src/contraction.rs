@@ -50,6 +50,16 @@ pub enum ContractionError {
         /// [`MAX_CELLS`].
         max: usize,
     },
+    /// The contraction did not finish before the caller's deadline.
+    #[error(
+        "preprocessing did not finish within the time allowed ({contracted} of {nodes} cells contracted)"
+    )]
+    Deadline {
+        /// Cells contracted by then.
+        contracted: usize,
+        /// Free cells of the grid.
+        nodes: usize,
+    },
 }
 
 /// One edge ever created: an original move (`mid == NONE`) or a shortcut `a – mid – b` made of
@@ -109,19 +119,46 @@ pub struct ChQuery {
 impl ContractionHierarchy {
     /// Contracts every free cell of `grid` under `model` (all three move models).
     pub fn build(grid: Arc<Grid2>, model: MoveModel) -> Result<Self, ContractionError> {
+        Self::build_until(grid, model, None)
+    }
+
+    /// [`ContractionHierarchy::build`] that gives up with [`ContractionError::Deadline`] once
+    /// `deadline` has passed (checked before every contraction), so a caller with a time budget
+    /// (a server) does not keep preprocessing an open map for minutes.
+    ///
+    /// ```
+    /// use skyplan_cspace::{Grid2, GridFrame};
+    /// use skyplan_search::{ContractionError, ContractionHierarchy, MoveModel};
+    /// use std::sync::Arc;
+    /// let grid = Arc::new(Grid2::new(64, 64, vec![false; 64 * 64], GridFrame::default())?);
+    /// let past = std::time::Instant::now();
+    /// let late = ContractionHierarchy::build_until(Arc::clone(&grid), MoveModel::Octile, Some(past));
+    /// assert!(matches!(late, Err(ContractionError::Deadline { .. })));
+    /// assert!(ContractionHierarchy::build_until(grid, MoveModel::Octile, None).is_ok());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn build_until(
+        grid: Arc<Grid2>,
+        model: MoveModel,
+        deadline: Option<std::time::Instant>,
+    ) -> Result<Self, ContractionError> {
         if grid.len() > MAX_CELLS {
             return Err(ContractionError::TooLarge {
                 cells: grid.len(),
                 max: MAX_CELLS,
             });
         }
-        Ok(Self::build_with_core(grid, model, CORE_DEGREE))
+        let mut b = Builder::new(&grid, model);
+        b.contract_all(CORE_DEGREE, deadline)?;
+        Ok(b.finish(grid, model))
     }
 
     /// [`ContractionHierarchy::build`] with another core threshold (tests force large cores).
+    #[cfg(test)]
     fn build_with_core(grid: Arc<Grid2>, model: MoveModel, core_degree: usize) -> Self {
         let mut b = Builder::new(&grid, model);
-        b.contract_all(core_degree);
+        // No deadline: cannot fail.
+        let _ = b.contract_all(core_degree, None);
         b.finish(grid, model)
     }
 
@@ -555,10 +592,26 @@ impl Builder {
         self.up[v as usize] = nbrs;
     }
 
-    fn contract_all(&mut self, core_degree: usize) {
+    fn contract_all(
+        &mut self,
+        core_degree: usize,
+        deadline: Option<std::time::Instant>,
+    ) -> Result<(), ContractionError> {
         let n = self.adj.len() as u32;
-        let mut heap: BinaryHeap<Reverse<(i64, u32)>> =
-            (0..n).map(|v| Reverse((self.priority(v), v))).collect();
+        let late = |contracted: u32| match deadline {
+            Some(d) if std::time::Instant::now() >= d => Err(ContractionError::Deadline {
+                contracted: contracted as usize,
+                nodes: n as usize,
+            }),
+            _ => Ok(()),
+        };
+        let mut heap = BinaryHeap::with_capacity(n as usize);
+        for v in 0..n {
+            if v.is_multiple_of(1024) {
+                late(0)?;
+            }
+            heap.push(Reverse((self.priority(v), v)));
+        }
         let mut rank = 0u32;
         while let Some(Reverse((p, v))) = heap.pop() {
             if self.rank[v as usize] != NONE {
@@ -576,6 +629,7 @@ impl Builder {
             if self.adj[v as usize].len() > core_degree {
                 break;
             }
+            late(rank)?;
             self.contract(v, rank);
             rank += 1;
         }
@@ -588,6 +642,7 @@ impl Builder {
                 self.up[v as usize] = self.adj[v as usize].clone();
             }
         }
+        Ok(())
     }
 
     fn finish(self, grid: Arc<Grid2>, model: MoveModel) -> ContractionHierarchy {

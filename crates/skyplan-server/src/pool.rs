@@ -70,9 +70,14 @@ impl Pool {
             ));
         };
         let pool = Arc::clone(self);
+        // Long preprocessing gives up a little before the budget, so the client hears why (a
+        // `timeout` failure) instead of a bare 504 while the work goes on in the background.
+        let deadline = std::time::Instant::now() + self.budget.mul_f64(0.8);
         let handle = tokio::task::spawn_blocking(move || {
             let mut worker = pool.take();
+            worker.session.set_deadline(Some(deadline));
             let out = job(&mut worker.session);
+            worker.session.set_deadline(None);
             worker.shapes.insert(shape.map(f64::to_bits));
             if worker.shapes.len() > MAX_CACHED_SHAPES {
                 worker = Worker::new(&pool.world);

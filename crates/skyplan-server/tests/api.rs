@@ -208,6 +208,27 @@ async fn past_the_time_budget_requests_get_504_and_long_limits_400() {
     assert!(message(&v).contains("cell_m 0.01"), "{v}");
 }
 
+/// The `ch` planner's preprocessing takes minutes on the open city at 1 m: it gives up before
+/// the budget with a `timeout` failure (422) instead of a 504 with the work left running.
+#[tokio::test]
+async fn preprocessing_past_the_budget_is_a_timeout_failure_not_a_504() {
+    let config = ServerConfig {
+        timeout: Duration::from_millis(3000),
+        ..ServerConfig::default()
+    };
+    let app = router(World::fcnd_city(), config);
+    let (status, v) = post_plan(app.clone(), json!({ "planner": "ch" })).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert_eq!(v["kind"], "timeout");
+    assert!(
+        message(&v).contains("did not finish within the time allowed"),
+        "{v}"
+    );
+    // The worker is free again at once.
+    let (status, _) = post_plan(app, json!({})).await;
+    assert_eq!(status, StatusCode::OK);
+}
+
 #[tokio::test]
 async fn the_map_has_its_boxes_and_on_request_the_grid_as_runs() {
     let (status, m) = send(city(), "GET", "/api/map", Body::empty()).await;
