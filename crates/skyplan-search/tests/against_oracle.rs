@@ -2,9 +2,9 @@
 
 use proptest::prelude::*;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
-use skyplan_search::oracle::dijkstra_exact;
+use skyplan_search::oracle::{OctileCost, dijkstra_exact};
 use skyplan_search::{
-    ChQuery, Components, ContractionHierarchy, GridSearch, JpsPlus, MoveModel, Planner,
+    ChQuery, Components, ContractionHierarchy, GridPath, GridSearch, JpsPlus, MoveModel, Planner,
     SearchError, check_path,
 };
 
@@ -29,6 +29,37 @@ fn query_strategy() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
     })
 }
 
+/// A planner's answer against the oracle's: the oracle's move counts, a valid path between the
+/// ends; or, where the oracle finds none, an error that says why (a blocked end, unreachable).
+fn agrees_with_oracle(
+    grid: &Grid2,
+    (start, goal): (Cell, Cell),
+    model: MoveModel,
+    planner: &str,
+    found: Result<GridPath, SearchError>,
+    truth: Option<OctileCost>,
+) -> Result<(), TestCaseError> {
+    match (found, truth) {
+        (Ok(path), Some(cost)) => {
+            prop_assert_eq!(
+                (path.straight_moves, path.diagonal_moves),
+                (cost.straight, cost.diagonal)
+            );
+            prop_assert_eq!(path.cells.first(), Some(&start));
+            prop_assert_eq!(path.cells.last(), Some(&goal));
+            prop_assert_eq!(check_path(grid, &path.cells, model), Ok(()));
+        }
+        (Err(e), None) => {
+            let expected = grid.is_blocked(start)
+                || grid.is_blocked(goal)
+                || matches!(e, SearchError::Unreachable { .. });
+            prop_assert!(expected, "unexpected error {e:?}");
+        }
+        (got, want) => prop_assert!(false, "{model:?} {planner}: got {got:?}, oracle {want:?}"),
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(1500))]
 
@@ -40,21 +71,11 @@ proptest! {
             let components = Components::new(&grid, model);
             prop_assert_eq!(components.connected(start, goal), truth.is_some());
             for planner in [Planner::AStar, Planner::Dijkstra, Planner::Jps, Planner::JpsPlus] {
-                match (search.search(&grid, start, goal, model, planner), truth) {
-                    (Ok(path), Some(cost)) => {
-                        prop_assert_eq!((path.straight_moves, path.diagonal_moves), (cost.straight, cost.diagonal));
-                        prop_assert_eq!(path.cost_cells(), cost.to_f64());
-                        prop_assert_eq!(path.cells.first(), Some(&start));
-                        prop_assert_eq!(path.cells.last(), Some(&goal));
-                        prop_assert_eq!(check_path(&grid, &path.cells, model), Ok(()));
-                    }
-                    (Err(e), None) => {
-                        let expected = grid.is_blocked(start) || grid.is_blocked(goal)
-                            || matches!(e, SearchError::Unreachable { .. });
-                        prop_assert!(expected, "unexpected error {e:?}");
-                    }
-                    (got, want) => prop_assert!(false, "{model:?} {planner:?}: got {got:?}, oracle {want:?}"),
+                let found = search.search(&grid, start, goal, model, planner);
+                if let (Ok(path), Some(cost)) = (&found, &truth) {
+                    prop_assert_eq!(path.cost_cells(), cost.to_f64());
                 }
+                agrees_with_oracle(&grid, (start, goal), model, &format!("{planner:?}"), found, truth)?;
             }
         }
     }
@@ -161,20 +182,8 @@ proptest! {
             let mut query = ChQuery::default();
             for &(start, goal) in &queries {
                 let truth = dijkstra_exact(&grid, start, goal, model);
-                match (ch.search(&mut query, start, goal), truth) {
-                    (Ok(path), Some(cost)) => {
-                        prop_assert_eq!((path.straight_moves, path.diagonal_moves), (cost.straight, cost.diagonal));
-                        prop_assert_eq!(path.cells.first(), Some(&start));
-                        prop_assert_eq!(path.cells.last(), Some(&goal));
-                        prop_assert_eq!(check_path(&grid, &path.cells, model), Ok(()));
-                    }
-                    (Err(e), None) => {
-                        let expected = grid.is_blocked(start) || grid.is_blocked(goal)
-                            || matches!(e, SearchError::Unreachable { .. });
-                        prop_assert!(expected, "unexpected error {e:?}");
-                    }
-                    (got, want) => prop_assert!(false, "{model:?}: got {got:?}, oracle {want:?}"),
-                }
+                let found = ch.search(&mut query, start, goal);
+                agrees_with_oracle(&grid, (start, goal), model, "ch", found, truth)?;
             }
         }
     }
