@@ -7,7 +7,7 @@ use crate::exit::{Failure, Result, bad_input};
 use crate::files::read_text;
 use crate::grid_args::NavigateArgs;
 use skyplan_cspace::Grid2;
-use skyplan_plan::{RideChange, RideRequest, Session};
+use skyplan_plan::{CostmapOptions, RideChange, RideRequest, Session};
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -108,10 +108,12 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
         cell_m: args.slice.cell_m,
         connectivity: args.connectivity,
         corner_cutting: args.corner_cutting,
-        inscribed_radius_m: g.inscribed_radius_m,
-        inflation_radius_m: g.inflation_radius_m,
-        cost_scaling: g.cost_scaling,
-        cost_weight: g.cost_weight,
+        costmap: CostmapOptions {
+            inscribed_radius_m: g.inscribed_radius_m,
+            inflation_radius_m: g.inflation_radius_m,
+            cost_scaling: g.cost_scaling,
+            cost_weight: g.cost_weight,
+        },
     })
 }
 

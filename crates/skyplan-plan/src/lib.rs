@@ -88,6 +88,7 @@ pub use cell_search::CellSearch;
 pub use config::{ConfigError, ConfigText, parse_config_toml};
 pub use failure::{FailureKind, PlanFailure};
 pub use grid::waypoint_points;
+pub use navfn::CostmapOptions;
 pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, WaypointCounts};
 pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};

@@ -3,8 +3,9 @@
 
 use crate::failure::{FailureKind, PlanFailure};
 use crate::grid::{end_cell, grid_for, waypoint_points};
-use crate::request::FieldMode;
+use crate::request::{FieldMode, in_range};
 use crate::session::{Check, Query, Route, Session, micros};
+use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_navfn::{
@@ -41,23 +42,77 @@ pub(crate) fn finite_or_null(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
 }
 
-/// Nav2-style inflation parameters, with the defaults: ten cells of inflation, cost decaying to
-/// e⁻³ at its edge.
-pub(crate) fn inflation(
-    cell_m: f64,
-    inscribed_radius_m: f64,
-    inflation_radius_m: Option<f64>,
-    cost_scaling: Option<f64>,
-) -> Inflation {
-    let inflation_radius_m = inflation_radius_m.unwrap_or(10.0 * cell_m);
-    Inflation {
-        inscribed_radius_m,
-        inflation_radius_m,
-        cost_scaling_factor: cost_scaling.unwrap_or(if inflation_radius_m > 0.0 {
-            3.0 / inflation_radius_m
-        } else {
-            0.0
-        }),
+/// The inflated cost map's options (Nav2's inflation layer), for the `costmap` planner and
+/// [`Session::ride`]; `None` takes the default in brackets.
+///
+/// ```
+/// let options = skyplan_plan::CostmapOptions { cost_weight: Some(4.0), ..Default::default() };
+/// let mut request = skyplan_plan::RideRequest::new([0.0, 0.0], vec![[40.0, 30.0]]);
+/// request.costmap = options;
+/// assert_eq!(request.costmap.inscribed_radius_m, None);
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CostmapOptions {
+    /// Radius inscribed in the vehicle's footprint, metres: cells within it are lethal [0].
+    pub inscribed_radius_m: Option<f64>,
+    /// Distance up to which costs are raised, metres [ten cells].
+    pub inflation_radius_m: Option<f64>,
+    /// Decay k of 252·exp(−k·(d − r_inscribed)), per metre [3 / inflation radius].
+    pub cost_scaling: Option<f64>,
+    /// Weight of the cost in length + weight · cost [2].
+    pub cost_weight: Option<f64>,
+}
+
+/// Cost-map options with the defaults filled in for the grid's cell size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct CostmapParams {
+    pub inflation: Inflation,
+    pub weight: f64,
+}
+
+impl CostmapOptions {
+    /// The same options if every one is a number from 0 to 10⁶, else a bad request naming it.
+    pub(crate) fn checked(self) -> Result<Self, PlanFailure> {
+        let check = |name: &str, v: Option<f64>| -> Result<Option<f64>, PlanFailure> {
+            v.map(|v| in_range(name, v, 0.0, 1e6, "")).transpose()
+        };
+        Ok(CostmapOptions {
+            inscribed_radius_m: check("inscribed_radius_m", self.inscribed_radius_m)?,
+            inflation_radius_m: check("inflation_radius_m", self.inflation_radius_m)?,
+            cost_scaling: check("cost_scaling", self.cost_scaling)?,
+            cost_weight: check("cost_weight", self.cost_weight)?,
+        })
+    }
+
+    /// Nav2-style inflation parameters with the defaults: ten cells of inflation, cost decaying
+    /// to e⁻³ at its edge, weight 2.
+    pub(crate) fn params(&self, cell_m: f64) -> CostmapParams {
+        let inflation_radius_m = self.inflation_radius_m.unwrap_or(10.0 * cell_m);
+        CostmapParams {
+            inflation: Inflation {
+                inscribed_radius_m: self.inscribed_radius_m.unwrap_or(0.0),
+                inflation_radius_m,
+                cost_scaling_factor: self.cost_scaling.unwrap_or(if inflation_radius_m > 0.0 {
+                    3.0 / inflation_radius_m
+                } else {
+                    0.0
+                }),
+            },
+            weight: self.cost_weight.unwrap_or(2.0),
+        }
+    }
+}
+
+impl CostmapParams {
+    /// The parameters as reported (`costmap` in a ride, the planner's details in a plan).
+    pub(crate) fn json(&self) -> Value {
+        json!({
+            "inscribed_radius_m": self.inflation.inscribed_radius_m,
+            "inflation_radius_m": self.inflation.inflation_radius_m,
+            "cost_scaling_factor": self.inflation.cost_scaling_factor,
+            "cost_weight": self.weight,
+        })
     }
 }
 
@@ -152,15 +207,10 @@ pub(crate) fn costmap(session: &mut Session, q: &Query) -> Result<Route, PlanFai
     let start = end_cell(&grid, q, "start", q.start_ne)?;
     let goal = end_cell(&grid, q, "goal", q.goal_ne)?;
     let cell_m = grid.frame().cell_m;
-    let params = inflation(
-        cell_m,
-        r.inscribed_radius_m,
-        r.inflation_radius_m,
-        r.cost_scaling,
-    );
+    let params = r.costmap.params(cell_m);
     let t = Instant::now();
-    let costmap = Costmap::inflate(&grid, params).map_err(|e| failure(e, &grid))?;
-    let found = cost_search(&costmap, start, goal, r.model, r.cost_weight, true)
+    let costmap = Costmap::inflate(&grid, params.inflation).map_err(|e| failure(e, &grid))?;
+    let found = cost_search(&costmap, start, goal, r.model, params.weight, true)
         .map_err(|e| failure(e, &grid))?;
     let search_us = micros(t.elapsed());
     let min_clearance_m = found
@@ -168,17 +218,12 @@ pub(crate) fn costmap(session: &mut Session, q: &Query) -> Result<Route, PlanFai
         .iter()
         .filter_map(|&c| costmap.clearance_m(c))
         .fold(f64::INFINITY, f64::min);
-    let details = json!({
-        "inscribed_radius_m": params.inscribed_radius_m,
-        "inflation_radius_m": params.inflation_radius_m,
-        "cost_scaling_factor": params.cost_scaling_factor,
-        "cost_weight": r.cost_weight,
-        "objective_m": found.objective_cells * cell_m,
-        "min_clearance_m": finite_or_null(min_clearance_m),
-    });
+    let mut details = params.json();
+    details["objective_m"] = json!(found.objective_cells * cell_m);
+    details["min_clearance_m"] = finite_or_null(min_clearance_m);
     let field = if r.geometry {
         Some(
-            cost_to_go(&costmap, goal, r.model, r.cost_weight)
+            cost_to_go(&costmap, goal, r.model, params.weight)
                 .map_err(|e| failure(e, &grid))?
                 .values()
                 .to_vec(),

@@ -3,6 +3,7 @@
 //! names); every field is optional and has a documented default.
 
 use crate::failure::{FailureKind, PlanFailure};
+use crate::navfn::CostmapOptions;
 use crate::planner_id::PlannerId;
 use serde::{Deserialize, Serialize};
 use std::time::Duration;
@@ -198,10 +199,7 @@ pub(crate) struct Resolved {
     pub voxel_m: f64,
     pub layer_m: f64,
     pub field: FieldMode,
-    pub inscribed_radius_m: f64,
-    pub inflation_radius_m: Option<f64>,
-    pub cost_scaling: Option<f64>,
-    pub cost_weight: f64,
+    pub costmap: CostmapOptions,
     pub geometry: bool,
 }
 
@@ -218,7 +216,13 @@ fn bad(message: String) -> PlanFailure {
 }
 
 /// A value in `[lo, hi]`, else an error naming the field and the range.
-fn in_range(name: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, PlanFailure> {
+pub(crate) fn in_range(
+    name: &str,
+    v: f64,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+) -> Result<f64, PlanFailure> {
     if v.is_finite() && (lo..=hi).contains(&v) {
         Ok(v)
     } else {
@@ -405,9 +409,6 @@ impl Resolved {
         let climb_weight = in_range("climb_weight", r.climb_weight.unwrap_or(1.0), 0.0, 1e6, "")?;
         let voxel_m = positive("voxel_m", r.voxel_m.unwrap_or(5.0), 1000.0)?;
         let layer_m = positive("layer_m", r.layer_m.unwrap_or(5.0), 1000.0)?;
-        let nonneg = |name: &str, v: Option<f64>| -> Result<Option<f64>, PlanFailure> {
-            v.map(|v| in_range(name, v, 0.0, 1e6, "")).transpose()
-        };
         let start_heading_deg = r.start_heading_deg.unwrap_or(0.0);
         if !start_heading_deg.is_finite() {
             return Err(bad("start_heading_deg: expected a finite number".into()));
@@ -434,10 +435,13 @@ impl Resolved {
             voxel_m,
             layer_m,
             field: r.field.unwrap_or(FieldMode::Length),
-            inscribed_radius_m: nonneg("inscribed_radius_m", r.inscribed_radius_m)?.unwrap_or(0.0),
-            inflation_radius_m: nonneg("inflation_radius_m", r.inflation_radius_m)?,
-            cost_scaling: nonneg("cost_scaling", r.cost_scaling)?,
-            cost_weight: nonneg("cost_weight", r.cost_weight)?.unwrap_or(2.0),
+            costmap: CostmapOptions {
+                inscribed_radius_m: r.inscribed_radius_m,
+                inflation_radius_m: r.inflation_radius_m,
+                cost_scaling: r.cost_scaling,
+                cost_weight: r.cost_weight,
+            }
+            .checked()?,
             geometry: r.geometry.unwrap_or(false),
         })
     }

@@ -2,7 +2,7 @@
 //! from a start through targets, which may change mid-ride (the workshop's navigation functions).
 
 use crate::failure::PlanFailure;
-use crate::navfn::{failure, finite_or_null, inflation};
+use crate::navfn::{CostmapOptions, failure, finite_or_null};
 use crate::session::{Session, micros};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -40,14 +40,8 @@ pub struct RideRequest {
     pub connectivity: u8,
     /// Diagonal moves may cut a blocked cell's corner (8-connected only).
     pub corner_cutting: bool,
-    /// Cost-map inscribed radius, metres (default 0).
-    pub inscribed_radius_m: Option<f64>,
-    /// Cost-map inflation radius, metres (default ten cells).
-    pub inflation_radius_m: Option<f64>,
-    /// Cost-map exponential decay per metre (default 3 / inflation radius).
-    pub cost_scaling: Option<f64>,
-    /// Weight of the cost against length (default 2).
-    pub cost_weight: Option<f64>,
+    /// The cost map's options.
+    pub costmap: CostmapOptions,
 }
 
 impl RideRequest {
@@ -67,10 +61,7 @@ impl RideRequest {
             cell_m: 1.0,
             connectivity: 8,
             corner_cutting: false,
-            inscribed_radius_m: None,
-            inflation_radius_m: None,
-            cost_scaling: None,
-            cost_weight: None,
+            costmap: CostmapOptions::default(),
         }
     }
 
@@ -244,22 +235,16 @@ impl Session {
             })
             .collect::<Result<Vec<_>, PlanFailure>>()?;
         let cell_m = grid.frame().cell_m;
-        let params = inflation(
-            cell_m,
-            r.inscribed_radius_m.unwrap_or(0.0),
-            r.inflation_radius_m,
-            r.cost_scaling,
-        );
-        let weight = r.cost_weight.unwrap_or(2.0);
+        let params = r.costmap.checked()?.params(cell_m);
         let t0 = Instant::now();
-        let costmap = Costmap::inflate(&grid, params).map_err(|e| failure(e, &grid))?;
+        let costmap = Costmap::inflate(&grid, params.inflation).map_err(|e| failure(e, &grid))?;
         let inflation_time_us = micros(t0.elapsed());
         let request = NavRequest {
             source: start,
             targets,
             changes,
             model,
-            weight,
+            weight: params.weight,
         };
         let run = navigate(&costmap, &request).map_err(|e| failure(e, &grid))?;
         let ride_time_us = micros(t0.elapsed()).saturating_sub(inflation_time_us);
@@ -298,12 +283,7 @@ impl Session {
             ignored_changes: run.ignored_changes,
             failure: run.failure.as_ref().map(|e| e.to_string()),
             waypoints,
-            costmap: serde_json::json!({
-                "inscribed_radius_m": params.inscribed_radius_m,
-                "inflation_radius_m": params.inflation_radius_m,
-                "cost_scaling_factor": params.cost_scaling_factor,
-                "cost_weight": weight,
-            }),
+            costmap: params.json(),
             inflation_time_us,
             ride_time_us,
             costs: costmap.normalised().iter().map(|&c| f64::from(c)).collect(),

@@ -3,7 +3,7 @@
 //! row per replanner. The flights themselves need a vehicle and a link, so the caller flies them.
 
 use crate::hidden::{HiddenSpec, place_hidden, true_world};
-use crate::replanner::{ReplanStats, Replanner, ReplannerKind, percentile};
+use crate::replanner::{ReplanStats, Replanner, ReplannerKind, Spread, percentile};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use skyplan_flight::executor::Target;
@@ -167,19 +167,11 @@ pub struct ReplanRow {
     pub collisions: usize,
     /// Replans per flight, mean.
     pub replans_per_flight: f64,
-    /// Replan latency percentiles over every replan, milliseconds.
-    pub latency_p50_ms: Option<f64>,
-    /// 99th percentile.
-    pub latency_p99_ms: Option<f64>,
-    /// Largest replan latency, milliseconds.
-    pub latency_max_ms: Option<f64>,
-    /// Replan CPU time percentiles over every replan (the replanning thread's own work,
-    /// whatever else the machine runs), milliseconds.
-    pub cpu_p50_ms: Option<f64>,
-    /// 99th percentile.
-    pub cpu_p99_ms: Option<f64>,
-    /// Largest replan CPU time, milliseconds.
-    pub cpu_max_ms: Option<f64>,
+    /// Replan latency over every replan (`None`: no replan).
+    pub latency: Option<Spread>,
+    /// Replan CPU time over every replan: the replanning thread's own work, whatever else the
+    /// machine runs (`None`: no replan, or no thread clock).
+    pub cpu: Option<Spread>,
     /// Expansions per replan, mean.
     pub expansions_per_replan: Option<f64>,
     /// Median over successful flights of flown length ÷ full-knowledge optimum.
@@ -189,55 +181,37 @@ pub struct ReplanRow {
 /// Sums up `results` of one replanner.
 ///
 /// ```
-/// use skyplan_replan::{ReplanStats, ReplannerKind};
+/// use skyplan_replan::{ReplanSample, ReplanStats, ReplannerKind};
 /// use skyplan_replan::bench::{FlightResult, summarise};
+/// let sample = ReplanSample { latency_ms: 1.0, cpu_ms: Some(0.5), expansions: 10 };
 /// let r = |replans: u64, flown_m: f64| FlightResult {
 ///     success: true, collisions: 0,
-///     stats: ReplanStats { replans, latencies_ms: vec![1.0; replans as usize],
-///         cpu_ms: vec![0.5; replans as usize], expansions: vec![10; replans as usize],
-///         ..Default::default() },
+///     stats: ReplanStats { replans, samples: vec![sample; replans as usize], ..Default::default() },
 ///     flown_m, optimum_m: 100.0,
 /// };
 /// let row = summarise(ReplannerKind::DStarLite, &[r(1, 110.0), r(3, 120.0), r(0, 100.0)]);
 /// assert_eq!((row.flights, row.success_pct, row.replans_per_flight), (3, 100.0, 4.0 / 3.0));
 /// assert_eq!(row.flown_over_optimum_median, Some(1.1));
 /// assert_eq!(row.expansions_per_replan, Some(10.0));
-/// assert_eq!((row.latency_p99_ms, row.cpu_p99_ms), (Some(1.0), Some(0.5)));
+/// assert_eq!((row.latency.unwrap().p99_ms, row.cpu.unwrap().p99_ms), (1.0, 0.5));
 /// ```
 pub fn summarise(replanner: ReplannerKind, results: &[FlightResult]) -> ReplanRow {
     let n = results.len();
-    let all = |f: fn(&ReplanStats) -> &Vec<f64>| -> Vec<f64> {
-        results
-            .iter()
-            .flat_map(|r| f(&r.stats).iter().copied())
-            .collect()
-    };
-    let latencies = all(|s| &s.latencies_ms);
-    let cpu = all(|s| &s.cpu_ms);
-    let expansions: Vec<u64> = results
-        .iter()
-        .flat_map(|r| r.stats.expansions.iter().copied())
-        .collect();
+    let all = ReplanStats::merged(results.iter().map(|r| &r.stats));
     let ratios: Vec<f64> = results
         .iter()
         .filter(|r| r.success && r.optimum_m > 0.0)
         .map(|r| r.flown_m / r.optimum_m)
         .collect();
-    let replans: u64 = results.iter().map(|r| r.stats.replans).sum();
     ReplanRow {
         replanner,
         flights: n,
         success_pct: 100.0 * results.iter().filter(|r| r.success).count() as f64 / n.max(1) as f64,
         collisions: results.iter().filter(|r| r.collisions > 0).count(),
-        replans_per_flight: replans as f64 / n.max(1) as f64,
-        latency_p50_ms: percentile(&latencies, 50.0),
-        latency_p99_ms: percentile(&latencies, 99.0),
-        latency_max_ms: latencies.iter().copied().reduce(f64::max),
-        cpu_p50_ms: percentile(&cpu, 50.0),
-        cpu_p99_ms: percentile(&cpu, 99.0),
-        cpu_max_ms: cpu.iter().copied().reduce(f64::max),
-        expansions_per_replan: (!expansions.is_empty())
-            .then(|| expansions.iter().sum::<u64>() as f64 / expansions.len() as f64),
+        replans_per_flight: all.replans as f64 / n.max(1) as f64,
+        latency: all.latency(),
+        cpu: all.cpu(),
+        expansions_per_replan: all.expansions_per_replan(),
         flown_over_optimum_median: percentile(&ratios, 50.0),
     }
 }
@@ -270,12 +244,12 @@ pub fn format_rows(rows: &[ReplanRow]) -> String {
             r.success_pct,
             r.collisions,
             r.replans_per_flight,
-            opt(r.latency_p50_ms, 2),
-            opt(r.latency_p99_ms, 2),
-            opt(r.latency_max_ms, 2),
-            opt(r.cpu_p50_ms, 2),
-            opt(r.cpu_p99_ms, 2),
-            opt(r.cpu_max_ms, 2),
+            opt(r.latency.map(|s| s.p50_ms), 2),
+            opt(r.latency.map(|s| s.p99_ms), 2),
+            opt(r.latency.map(|s| s.max_ms), 2),
+            opt(r.cpu.map(|s| s.p50_ms), 2),
+            opt(r.cpu.map(|s| s.p99_ms), 2),
+            opt(r.cpu.map(|s| s.max_ms), 2),
             opt(r.expansions_per_replan, 0),
             opt(r.flown_over_optimum_median, 3),
         ));

@@ -23,5 +23,7 @@ mod world_model;
 
 pub use clock::thread_cpu_s;
 pub use dstar::{BudgetSpent, DStarError, DStarLite, DStarPath};
-pub use replanner::{ReplanOptions, ReplanStats, Replanner, ReplannerKind, UnknownReplanner};
+pub use replanner::{
+    ReplanOptions, ReplanSample, ReplanStats, Replanner, ReplannerKind, Spread, UnknownReplanner,
+};
 pub use world_model::WorldModel;

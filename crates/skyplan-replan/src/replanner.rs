@@ -86,6 +86,46 @@ impl Default for ReplanOptions {
     }
 }
 
+/// What one replan cost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReplanSample {
+    /// Wall-clock time from the reading to the new route, milliseconds.
+    pub latency_ms: f64,
+    /// CPU time on the replanning thread, milliseconds (`None` where the platform has no
+    /// thread clock).
+    pub cpu_ms: Option<f64>,
+    /// Search expansions.
+    pub expansions: u64,
+}
+
+/// Nearest-rank percentiles of some durations, milliseconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spread {
+    /// Median.
+    pub p50_ms: f64,
+    /// 99th percentile.
+    pub p99_ms: f64,
+    /// Largest.
+    pub max_ms: f64,
+}
+
+impl Spread {
+    /// The spread of `samples_ms` (`None` when there is none).
+    ///
+    /// ```
+    /// let s = skyplan_replan::Spread::of(&[3.0, 1.0, 2.0]).unwrap();
+    /// assert_eq!((s.p50_ms, s.p99_ms, s.max_ms), (2.0, 3.0, 3.0));
+    /// assert_eq!(skyplan_replan::Spread::of(&[]), None);
+    /// ```
+    pub fn of(samples_ms: &[f64]) -> Option<Spread> {
+        Some(Spread {
+            p50_ms: percentile(samples_ms, 50.0)?,
+            p99_ms: percentile(samples_ms, 99.0)?,
+            max_ms: percentile(samples_ms, 100.0)?,
+        })
+    }
+}
+
 /// What the replanner did so far (for the flight summary and `bench --replan`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReplanStats {
@@ -95,62 +135,80 @@ pub struct ReplanStats {
     pub replans: u64,
     /// Holds decided.
     pub holds: u64,
-    /// Wall-clock time of each replan (from the reading to the new route), milliseconds.
-    pub latencies_ms: Vec<f64>,
-    /// CPU time of each replan on the replanning thread, milliseconds (empty where the
-    /// platform has no thread clock).
-    pub cpu_ms: Vec<f64>,
-    /// Search expansions of each replan.
-    pub expansions: Vec<u64>,
+    /// What each replan cost, in order.
+    pub samples: Vec<ReplanSample>,
 }
 
 impl ReplanStats {
-    /// The `p`-th percentile (0–100, nearest rank) of the replan latencies, milliseconds.
+    /// Every flight's replans together (for a row over many flights).
+    pub fn merged<'a>(all: impl IntoIterator<Item = &'a ReplanStats>) -> ReplanStats {
+        all.into_iter().fold(ReplanStats::default(), |mut sum, s| {
+            sum.readings += s.readings;
+            sum.replans += s.replans;
+            sum.holds += s.holds;
+            sum.samples.extend_from_slice(&s.samples);
+            sum
+        })
+    }
+
+    /// The spread of the replans' wall-clock latencies (`None` before the first replan).
     ///
     /// ```
-    /// let stats = skyplan_replan::ReplanStats { latencies_ms: vec![3.0, 1.0, 2.0], ..Default::default() };
-    /// assert_eq!(stats.latency_percentile_ms(50.0), Some(2.0));
-    /// assert_eq!(stats.latency_percentile_ms(100.0), Some(3.0));
+    /// use skyplan_replan::{ReplanSample, ReplanStats};
+    /// let sample = |latency_ms| ReplanSample { latency_ms, cpu_ms: None, expansions: 0 };
+    /// let stats = ReplanStats { samples: vec![sample(3.0), sample(1.0), sample(2.0)], ..Default::default() };
+    /// let spread = stats.latency().unwrap();
+    /// assert_eq!((spread.p50_ms, spread.max_ms), (2.0, 3.0));
+    /// assert_eq!(stats.cpu(), None);
     /// ```
-    pub fn latency_percentile_ms(&self, p: f64) -> Option<f64> {
-        percentile(&self.latencies_ms, p)
+    pub fn latency(&self) -> Option<Spread> {
+        let ms: Vec<f64> = self.samples.iter().map(|s| s.latency_ms).collect();
+        Spread::of(&ms)
+    }
+
+    /// The spread of the replans' CPU times (`None` without a thread clock or a replan).
+    pub fn cpu(&self) -> Option<Spread> {
+        let ms: Vec<f64> = self.samples.iter().filter_map(|s| s.cpu_ms).collect();
+        Spread::of(&ms)
+    }
+
+    /// Mean search expansions per replan (`None` before the first replan).
+    pub fn expansions_per_replan(&self) -> Option<f64> {
+        let n = self.samples.len();
+        (n > 0).then(|| self.samples.iter().map(|s| s.expansions).sum::<u64>() as f64 / n as f64)
     }
 
     /// The account in one sentence: replans, readings, latency and CPU percentiles,
     /// expansions per replan, learned cells (`kind` names the replanner).
     ///
     /// ```
-    /// let stats = skyplan_replan::ReplanStats { readings: 40, replans: 2,
-    ///     latencies_ms: vec![1.0, 3.0], cpu_ms: vec![0.5, 2.0], expansions: vec![10, 30], ..Default::default() };
+    /// use skyplan_replan::{ReplanSample, ReplanStats};
+    /// let stats = ReplanStats { readings: 40, replans: 2, samples: vec![
+    ///     ReplanSample { latency_ms: 1.0, cpu_ms: Some(0.5), expansions: 10 },
+    ///     ReplanSample { latency_ms: 3.0, cpu_ms: Some(2.0), expansions: 30 },
+    /// ], ..Default::default() };
     /// assert_eq!(stats.account("dstar-lite", 12),
     ///     "2 (dstar-lite) from 40 sensor readings: latency p50 1.00 ms, p99 3.00 ms, max 3.00 ms \
     ///      (CPU p50 0.50 ms, p99 2.00 ms); 20 expansions per replan; 12 cells learned");
     /// ```
     pub fn account(&self, kind: &str, learned_cells: usize) -> String {
-        let ms = |v: &[f64], p: f64| percentile(v, p).map_or("-".into(), |v| format!("{v:.2}"));
-        let expansions = match self.expansions.len() {
-            0 => "-".to_string(),
-            n => format!(
-                "{:.0}",
-                self.expansions.iter().sum::<u64>() as f64 / n as f64
-            ),
-        };
-        let cpu = if self.cpu_ms.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " (CPU p50 {} ms, p99 {} ms)",
-                ms(&self.cpu_ms, 50.0),
-                ms(&self.cpu_ms, 99.0)
-            )
-        };
+        let latency = self
+            .latency()
+            .map_or("p50 - ms, p99 - ms, max - ms".into(), |s| {
+                format!(
+                    "p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms",
+                    s.p50_ms, s.p99_ms, s.max_ms
+                )
+            });
+        let cpu = self.cpu().map_or(String::new(), |s| {
+            format!(" (CPU p50 {:.2} ms, p99 {:.2} ms)", s.p50_ms, s.p99_ms)
+        });
+        let expansions = self
+            .expansions_per_replan()
+            .map_or("-".into(), |x| format!("{x:.0}"));
         format!(
-            "{} ({kind}) from {} sensor readings: latency p50 {} ms, p99 {} ms, max {} ms{cpu}; {expansions} expansions per replan; {learned_cells} cells learned",
-            self.replans,
-            self.readings,
-            ms(&self.latencies_ms, 50.0),
-            ms(&self.latencies_ms, 99.0),
-            ms(&self.latencies_ms, 100.0),
+            "{} ({kind}) from {} sensor readings: latency {latency}{cpu}; {expansions} expansions per replan; {learned_cells} cells learned",
+            self.replans, self.readings,
         )
     }
 }
@@ -569,9 +627,11 @@ impl Replanner {
             let route_length_m = length_m([n, e, alt_m], &points);
             let (latency_ms, cpu_ms) = t0.elapsed_ms();
             self.stats.replans += 1;
-            self.stats.latencies_ms.push(latency_ms);
-            self.stats.cpu_ms.extend(cpu_ms);
-            self.stats.expansions.push(found.expansions);
+            self.stats.samples.push(ReplanSample {
+                latency_ms,
+                cpu_ms,
+                expansions: found.expansions,
+            });
             let reason = if k == here {
                 reason
             } else {
