@@ -52,8 +52,8 @@ pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailur
     route.start_cell = Some(start);
     route.goal_cell = Some(goal);
     route.expansions = path.expansions;
-    route.build_us = build_us;
-    route.search_us = search_us;
+    route.timings.grid_build_us = build_us;
+    route.timings.search_us = search_us;
     route.octile_optimum_m = GridSearch::new()
         .search(&grid, start, goal, r.model, Planner::Jps)
         .ok()

@@ -297,9 +297,9 @@ pub(crate) fn plan(session: &mut Session, q: &Query, engine: Engine) -> Result<R
     let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
     let waypoints = (pruned.len(), kept.len());
     route.record_grid_search((start, goal), path.expansions, moves, waypoints);
-    route.build_us = build_us;
-    route.search_us = search_us;
-    route.postprocess_us = postprocess_us;
+    route.timings.grid_build_us = build_us;
+    route.timings.search_us = search_us;
+    route.timings.postprocess_us = postprocess_us;
     if r.geometry {
         route.geometry.raw_path = centres_at(&grid, &path.cells, r.alt_m);
     }

@@ -148,8 +148,8 @@ fn finish(
     // No shortcut: the pruned cells are the waypoints.
     let waypoints = (pruned.len(), pruned.len());
     route.record_grid_search((start, goal), found.expansions, moves, waypoints);
-    route.build_us = build_us;
-    route.search_us = search_us;
+    route.timings.grid_build_us = build_us;
+    route.timings.search_us = search_us;
     if q.r.geometry {
         route.geometry.raw_path = crate::grid::centres_at(&grid, &found.cells, q.r.alt_m);
     }

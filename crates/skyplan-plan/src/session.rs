@@ -63,9 +63,8 @@ pub(crate) struct Route {
     pub start_cell: Option<Cell>,
     pub goal_cell: Option<Cell>,
     pub expansions: u64,
-    pub build_us: u64,
-    pub search_us: u64,
-    pub postprocess_us: u64,
+    /// Build, search and post-processing times (the session fills in the total).
+    pub timings: Timings,
     /// Grid planners: path cells, straight moves, diagonal moves, waypoint counts.
     pub grid_stats: Option<(usize, u64, u64, WaypointCounts)>,
     pub octile_optimum_m: Option<f64>,
@@ -84,9 +83,7 @@ impl Route {
             start_cell: None,
             goal_cell: None,
             expansions: 0,
-            build_us: 0,
-            search_us: 0,
-            postprocess_us: 0,
+            timings: Timings::default(),
             grid_stats: None,
             octile_optimum_m: None,
             details: Map::new(),
@@ -642,12 +639,10 @@ fn assemble(
         straight_moves: route.grid_stats.map(|s| s.1),
         diagonal_moves: route.grid_stats.map(|s| s.2),
         waypoint_counts: counts,
-        search_time_us: route.search_us,
+        search_time_us: route.timings.search_us,
         timings_us: Timings {
-            grid_build_us: route.build_us,
-            search_us: route.search_us,
-            postprocess_us: route.postprocess_us,
             total_us: micros(t0.elapsed()),
+            ..route.timings
         },
         waypoints,
         waypoints_lla,

@@ -258,8 +258,8 @@ fn finish(
     }
     let mut route = Route::new(s.path, s.cost_m, Check::Boxes(Arc::clone(world)));
     route.expansions = s.iterations as u64;
-    route.build_us = world_us;
-    route.search_us = s.elapsed_us;
+    route.timings.grid_build_us = world_us;
+    route.timings.search_us = s.elapsed_us;
     for (k, v) in [
         ("planner_status", json!(s.status.name())),
         ("seed", json!(q.r.seed)),

@@ -80,8 +80,8 @@ pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailur
     );
     let stats = roadmap.stats();
     out.expansions = route.expansions as u64;
-    out.build_us = build_us;
-    out.search_us = search_us;
+    out.timings.grid_build_us = build_us;
+    out.timings.search_us = search_us;
     for (k, v) in [
         ("graph_cost_m", json!(route.graph_cost_m)),
         ("components", json!(roadmap.component_count())),
