@@ -89,7 +89,9 @@ pub use config::{ConfigError, ConfigText, parse_config_toml};
 pub use failure::{FailureKind, PlanFailure};
 pub use grid::waypoint_points;
 pub use navfn::CostmapOptions;
-pub use plan::{Geometry, GridInfo, Home, Place, Plan, Segment3, Timings, WaypointCounts};
+pub use plan::{
+    Geometry, GridInfo, GridPathStats, Home, Place, Plan, Segment3, Timings, WaypointCounts,
+};
 pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};
 pub use ride::{Ride, RideChange, RideLeg, RidePlace, RideRequest};

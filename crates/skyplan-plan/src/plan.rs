@@ -94,6 +94,19 @@ pub struct Home {
     pub lon_deg: f64,
 }
 
+/// A grid path's moves and what post-processing made of it (grid planners).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct GridPathStats {
+    /// Cells of the grid path.
+    pub path_cells: usize,
+    /// Orthogonal moves of the grid path.
+    pub straight_moves: u64,
+    /// Diagonal moves of the grid path.
+    pub diagonal_moves: u64,
+    /// Waypoint counts through the passes.
+    pub waypoint_counts: WaypointCounts,
+}
+
 /// Waypoint counts through the post-processing passes (grid planners).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct WaypointCounts {
@@ -180,18 +193,10 @@ pub struct Plan {
     pub octile_optimum_m: Option<f64>,
     /// Nodes the search expanded (samples for the sampling planners).
     pub expansions: u64,
-    /// Cells of the grid path (grid planners).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub path_cells: Option<usize>,
-    /// Orthogonal moves of the grid path.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub straight_moves: Option<u64>,
-    /// Diagonal moves of the grid path.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub diagonal_moves: Option<u64>,
-    /// Waypoint counts through the passes (grid planners).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub waypoint_counts: Option<WaypointCounts>,
+    /// The grid path's moves and waypoint counts (grid planners), flattened into the JSON
+    /// object.
+    #[serde(flatten)]
+    pub grid_path: Option<GridPathStats>,
     /// The search's wall time, microseconds.
     pub search_time_us: u64,
     /// Stage timings.

@@ -3,7 +3,7 @@
 
 use crate::failure::{FailureKind, PlanFailure};
 use crate::grid::Engine;
-use crate::plan::{Geometry, GridInfo, Home, Place, Plan, Timings, WaypointCounts};
+use crate::plan::{Geometry, GridInfo, GridPathStats, Home, Place, Plan, Timings, WaypointCounts};
 use crate::planner_id::{Family, MapKinds, PlannerId};
 use crate::request::{PlanRequest, Position, Resolved};
 use crate::world::{Limits, Source, World, check_memory};
@@ -66,7 +66,7 @@ pub(crate) struct Route {
     /// Build, search and post-processing times (the session fills in the total).
     pub timings: Timings,
     /// Grid planners: path cells, straight moves, diagonal moves, waypoint counts.
-    pub grid_stats: Option<(usize, u64, u64, WaypointCounts)>,
+    pub grid_path: Option<GridPathStats>,
     pub octile_optimum_m: Option<f64>,
     pub details: Map<String, Value>,
     pub geometry: Geometry,
@@ -84,7 +84,7 @@ impl Route {
             goal_cell: None,
             expansions: 0,
             timings: Timings::default(),
-            grid_stats: None,
+            grid_path: None,
             octile_optimum_m: None,
             details: Map::new(),
             geometry: Geometry::default(),
@@ -105,13 +105,17 @@ impl Route {
         self.start_cell = Some(start);
         self.goal_cell = Some(goal);
         self.expansions = expansions;
-        let counts = WaypointCounts {
-            grid_path: moves.0,
-            after_pruning,
-            after_shortcut,
-            mission: 0,
-        };
-        self.grid_stats = Some((moves.0, moves.1, moves.2, counts));
+        self.grid_path = Some(GridPathStats {
+            path_cells: moves.0,
+            straight_moves: moves.1,
+            diagonal_moves: moves.2,
+            waypoint_counts: WaypointCounts {
+                grid_path: moves.0,
+                after_pruning,
+                after_shortcut,
+                mission: 0,
+            },
+        });
     }
 }
 
@@ -600,9 +604,9 @@ fn assemble(
         .map(|g| GridInfo::of(g, r.alt_m, r.safety_m));
     let grid_planner =
         info.family.is_cell_search() || matches!(info.family, Family::Wavefront | Family::Costmap);
-    let mut counts = route.grid_stats.map(|s| s.3);
-    if let Some(c) = counts.as_mut() {
-        c.mission = waypoints.len();
+    let mut grid_path = route.grid_path;
+    if let Some(g) = grid_path.as_mut() {
+        g.waypoint_counts.mission = waypoints.len();
     }
     if r.geometry
         && info.dims == 2
@@ -635,10 +639,7 @@ fn assemble(
         straight_line_m,
         octile_optimum_m: route.octile_optimum_m,
         expansions: route.expansions,
-        path_cells: route.grid_stats.map(|s| s.0),
-        straight_moves: route.grid_stats.map(|s| s.1),
-        diagonal_moves: route.grid_stats.map(|s| s.2),
-        waypoint_counts: counts,
+        grid_path,
         search_time_us: route.timings.search_us,
         timings_us: Timings {
             total_us: micros(t0.elapsed()),

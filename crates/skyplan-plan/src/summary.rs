@@ -80,7 +80,7 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         )?;
     }
     details(plan, f)?;
-    match (&plan.waypoint_counts, info.family) {
+    match (plan.grid_path.map(|g| g.waypoint_counts), info.family) {
         (Some(c), Family::Grid(_) | Family::Contraction) => writeln!(
             f,
             "waypoints  {} → {} after pruning → {} after line-of-sight shortcut; mission of {} waypoints, {:.2} m flown",
@@ -112,10 +112,13 @@ fn altitude(plan: &Plan, alt_m: f64) -> String {
 fn path_line(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let info = plan.planner.info();
     let model = plan.move_model.map(|m| format!(" {m}")).unwrap_or_default();
-    let shape = match (plan.path_cells, plan.straight_moves, plan.diagonal_moves) {
-        (Some(n), _, _) if plan.octile_optimum_m.is_some() => format!("{n} turning points"),
-        (Some(n), Some(s), Some(d)) => format!("{n} cells ({s} straight, {d} diagonal)"),
-        _ => format!("{} waypoints", plan.waypoints.len()),
+    let shape = match plan.grid_path {
+        Some(g) if plan.octile_optimum_m.is_some() => format!("{} turning points", g.path_cells),
+        Some(g) => format!(
+            "{} cells ({} straight, {} diagonal)",
+            g.path_cells, g.straight_moves, g.diagonal_moves
+        ),
+        None => format!("{} waypoints", plan.waypoints.len()),
     };
     let unit = if info.dims == 3 && !matches!(info.family, Family::Voxel) {
         "samples"
