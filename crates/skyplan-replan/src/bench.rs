@@ -3,7 +3,7 @@
 //! row per replanner. The flights themselves need a vehicle and a link, so the caller flies them.
 
 use crate::hidden::{HiddenSpec, place_hidden, true_world};
-use crate::replanner::{ReplanStats, Replanner, ReplannerKind, Spread, percentile};
+use crate::replanner::{ReplanStats, Replanner, ReplannerKind, percentile};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use skyplan_flight::executor::Target;
@@ -165,15 +165,8 @@ pub struct ReplanRow {
     pub success_pct: f64,
     /// Flights with any collision.
     pub collisions: usize,
-    /// Replans per flight, mean.
-    pub replans_per_flight: f64,
-    /// Replan latency over every replan (`None`: no replan).
-    pub latency: Option<Spread>,
-    /// Replan CPU time over every replan: the replanning thread's own work, whatever else the
-    /// machine runs (`None`: no replan, or no thread clock).
-    pub cpu: Option<Spread>,
-    /// Expansions per replan, mean.
-    pub expansions_per_replan: Option<f64>,
+    /// Every flight's replans together: counts, latency, CPU time, expansions.
+    pub replans: ReplanStats,
     /// Median over successful flights of flown length ÷ full-knowledge optimum.
     pub flown_over_optimum_median: Option<f64>,
 }
@@ -190,14 +183,13 @@ pub struct ReplanRow {
 ///     flown_m, optimum_m: 100.0,
 /// };
 /// let row = summarise(ReplannerKind::DStarLite, &[r(1, 110.0), r(3, 120.0), r(0, 100.0)]);
-/// assert_eq!((row.flights, row.success_pct, row.replans_per_flight), (3, 100.0, 4.0 / 3.0));
+/// assert_eq!((row.flights, row.success_pct, row.replans_per_flight()), (3, 100.0, 4.0 / 3.0));
 /// assert_eq!(row.flown_over_optimum_median, Some(1.1));
-/// assert_eq!(row.expansions_per_replan, Some(10.0));
-/// assert_eq!((row.latency.unwrap().p99_ms, row.cpu.unwrap().p99_ms), (1.0, 0.5));
+/// assert_eq!(row.replans.expansions_per_replan(), Some(10.0));
+/// assert_eq!((row.replans.latency().unwrap().p99_ms, row.replans.cpu().unwrap().p99_ms), (1.0, 0.5));
 /// ```
 pub fn summarise(replanner: ReplannerKind, results: &[FlightResult]) -> ReplanRow {
     let n = results.len();
-    let all = ReplanStats::merged(results.iter().map(|r| &r.stats));
     let ratios: Vec<f64> = results
         .iter()
         .filter(|r| r.success && r.optimum_m > 0.0)
@@ -208,11 +200,15 @@ pub fn summarise(replanner: ReplannerKind, results: &[FlightResult]) -> ReplanRo
         flights: n,
         success_pct: 100.0 * results.iter().filter(|r| r.success).count() as f64 / n.max(1) as f64,
         collisions: results.iter().filter(|r| r.collisions > 0).count(),
-        replans_per_flight: all.replans as f64 / n.max(1) as f64,
-        latency: all.latency(),
-        cpu: all.cpu(),
-        expansions_per_replan: all.expansions_per_replan(),
+        replans: ReplanStats::merged(results.iter().map(|r| &r.stats)),
         flown_over_optimum_median: percentile(&ratios, 50.0),
+    }
+}
+
+impl ReplanRow {
+    /// Replans per flight, mean.
+    pub fn replans_per_flight(&self) -> f64 {
+        self.replans.replans as f64 / self.flights.max(1) as f64
     }
 }
 
@@ -237,20 +233,21 @@ pub fn format_rows(rows: &[ReplanRow]) -> String {
         "flown/optimum"
     );
     for r in rows {
+        let (latency, cpu) = (r.replans.latency(), r.replans.cpu());
         s.push_str(&format!(
             "{:<11} {:>7} {:>8.0}% {:>10} {:>8.2} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>11} {:>14}\n",
             r.replanner.name(),
             r.flights,
             r.success_pct,
             r.collisions,
-            r.replans_per_flight,
-            opt(r.latency.map(|s| s.p50_ms), 2),
-            opt(r.latency.map(|s| s.p99_ms), 2),
-            opt(r.latency.map(|s| s.max_ms), 2),
-            opt(r.cpu.map(|s| s.p50_ms), 2),
-            opt(r.cpu.map(|s| s.p99_ms), 2),
-            opt(r.cpu.map(|s| s.max_ms), 2),
-            opt(r.expansions_per_replan, 0),
+            r.replans_per_flight(),
+            opt(latency.map(|s| s.p50_ms), 2),
+            opt(latency.map(|s| s.p99_ms), 2),
+            opt(latency.map(|s| s.max_ms), 2),
+            opt(cpu.map(|s| s.p50_ms), 2),
+            opt(cpu.map(|s| s.p99_ms), 2),
+            opt(cpu.map(|s| s.max_ms), 2),
+            opt(r.replans.expansions_per_replan(), 0),
             opt(r.flown_over_optimum_median, 3),
         ));
     }
