@@ -3,7 +3,7 @@
 //! the way its users write it.
 
 use pathfinding::num_traits::Zero;
-use skyplan_cspace::{Cell, Grid2};
+use skyplan_cspace::{Cell, Grid2, NEIGHBOURS_8};
 use skyplan_search::MoveModel;
 use skyplan_search::oracle::OctileCost;
 use std::ops::Add;
@@ -35,16 +35,8 @@ pub(crate) fn astar_cost(grid: &Grid2, model: MoveModel, start: Cell, goal: Cell
     let free = |r: i64, c: i64| grid.is_free_at(r, c);
     let successors = |&(r, c): &(i64, i64)| {
         let mut out = Vec::with_capacity(8);
-        for (dr, dc) in [
-            (1, 0),
-            (-1, 0),
-            (0, 1),
-            (0, -1),
-            (1, 1),
-            (1, -1),
-            (-1, 1),
-            (-1, -1),
-        ] {
+        // Neighbour order only breaks ties among equal-cost paths; the cost is the same.
+        for (dr, dc) in NEIGHBOURS_8 {
             let diagonal = dr != 0 && dc != 0;
             if !free(r + dr, c + dc) || (diagonal && !model.has_diagonals()) {
                 continue;

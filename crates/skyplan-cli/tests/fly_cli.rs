@@ -7,7 +7,7 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 mod common;
-use common::{Run, SimProcess, cmd, ok, python, run_args, words};
+use common::{Run, SimProcess, cmd, free_udp_port, ok, python, run_args, words};
 
 impl Run {
     /// Asserts that stdout holds each of `lines`.
@@ -285,11 +285,7 @@ fn pymavlink_drives_skyplan_sim() {
 #[ignore = "needs Python with mavsdk (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
     // A free UDP port for MAVSDK to listen on.
-    let port = std::net::UdpSocket::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = free_udp_port();
     let dir = tempfile::tempdir().unwrap();
     let plan = dir.path().join("plan.json");
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fly/mavsdk_autopilot.py");

@@ -5,6 +5,8 @@
 use assert_cmd::Command;
 use std::path::Path;
 
+mod common;
+
 fn skyplan(dir: &Path, args: &[&str]) -> (Option<i32>, String, String) {
     let out = Command::cargo_bin("skyplan")
         .unwrap()
@@ -242,12 +244,8 @@ fn outputs_that_are_not_regular_files_survive() {
 
 #[test]
 fn a_refused_connection_is_said_once() {
-    // A port nobody listens on: bind one, note it, close it.
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    // A port nobody listens on.
+    let port = common::free_tcp_port();
     let dir = tempfile::tempdir().unwrap();
     let address = format!("tcp:127.0.0.1:{port}");
     let (code, _, err) = skyplan(dir.path(), &["fly", "--connect", &address]);

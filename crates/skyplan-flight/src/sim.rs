@@ -154,16 +154,9 @@ pub enum SimMissionItem {
 }
 
 /// Why the simulated vehicle refused a command.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
 pub struct SimRefusal(pub String);
-
-impl fmt::Display for SimRefusal {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for SimRefusal {}
 
 /// What happened during a step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -35,25 +35,22 @@ impl CostPath {
     }
 }
 
-fn check_weight(weight: f64) -> Result<(), NavError> {
-    if weight.is_finite() && weight >= 0.0 {
-        Ok(())
-    } else {
-        Err(NavError::BadParameter {
+/// What both searches start from: the costmap's passable grid and each cell's factor
+/// `1 + weight · cost / 252` of a move's length. A weight that is not finite and ≥ 0 is refused.
+fn weighted_grid(costmap: &Costmap, weight: f64) -> Result<(Grid2, Vec<f64>), NavError> {
+    if !(weight.is_finite() && weight >= 0.0) {
+        return Err(NavError::BadParameter {
             name: "cost weight",
             value: weight,
             expected: "a finite weight ≥ 0",
-        })
+        });
     }
-}
-
-/// Per-cell factor `1 + weight · cost / 252` of a move's length.
-fn multipliers(costmap: &Costmap, weight: f64) -> Vec<f64> {
-    costmap
+    let multipliers = costmap
         .costs()
         .iter()
         .map(|&c| 1.0 + weight * f64::from(c) / f64::from(MAX_NON_OBSTACLE))
-        .collect()
+        .collect();
+    Ok((costmap.passable_grid(), multipliers))
 }
 
 #[inline]
@@ -89,10 +86,8 @@ pub fn cost_search(
     weight: f64,
     heuristic: bool,
 ) -> Result<CostPath, NavError> {
-    check_weight(weight)?;
-    let grid = costmap.passable_grid();
+    let (grid, mult) = weighted_grid(costmap, weight)?;
     check_endpoints(&grid, source, goal)?;
-    let mult = multipliers(costmap, weight);
     let n = grid.len();
     let mut g = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
@@ -199,10 +194,8 @@ pub fn cost_to_go(
     model: MoveModel,
     weight: f64,
 ) -> Result<CostToGo, NavError> {
-    check_weight(weight)?;
-    let grid = costmap.passable_grid();
+    let (grid, multipliers) = weighted_grid(costmap, weight)?;
     check_endpoint(&grid, goal, Endpoint::Destination)?;
-    let multipliers = multipliers(costmap, weight);
     let mut values = vec![f64::INFINITY; grid.len()];
     let t = grid.index(goal);
     values[t] = 0.0;

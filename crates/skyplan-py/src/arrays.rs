@@ -69,6 +69,22 @@ pub(crate) fn map2<R>(
     read2(&arr, what, f)
 }
 
+/// A 2-D numeric occupancy array as its shape and its cells in row-major order, `true` for
+/// blocked (nonzero); NaN cells are refused.
+pub(crate) fn blocked2(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(usize, usize, Vec<bool>)> {
+    let mut nan = false;
+    let (rows, cols, blocked) = map2(obj, what, |v| {
+        nan |= v.is_nan();
+        v != 0.0
+    })?;
+    if nan {
+        return Err(bad_input(format!(
+            "{what}: NaN cells (expected 0 for free, nonzero for blocked)"
+        )));
+    }
+    Ok((rows, cols, blocked))
+}
+
 fn read2<R>(
     arr: &Bound<'_, PyUntypedArray>,
     what: &str,
@@ -150,23 +166,28 @@ pub(crate) fn int_pair(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[i64; 2]>
 /// Two finite numbers.
 pub(crate) fn float_pair(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 2]> {
     let v = items(obj, 2, what)?;
-    let get = |x: &Bound<'_, PyAny>| -> PyResult<f64> {
-        let value = x.extract::<f64>().map_err(|_| {
-            bad_input(format!(
-                "{what}: expected two numbers, got {}",
-                describe(obj)
-            ))
-        })?;
-        if value.is_finite() {
-            Ok(value)
-        } else {
-            Err(bad_input(format!(
-                "{what}: expected finite numbers, got {}",
-                describe(obj)
-            )))
-        }
+    let get = |x: &Bound<'_, PyAny>| {
+        finite(
+            x.extract::<f64>().ok(),
+            || format!("{what}: expected two numbers, got {}", describe(obj)),
+            || format!("{what}: expected finite numbers, got {}", describe(obj)),
+        )
     };
     Ok([get(&v[0])?, get(&v[1])?])
+}
+
+/// `value` if it is a finite number; else a `BadInput` with `not_number()` (for `None`: the
+/// value was not a number) or `not_finite()` (NaN or infinite).
+pub(crate) fn finite(
+    value: Option<f64>,
+    not_number: impl FnOnce() -> String,
+    not_finite: impl FnOnce() -> String,
+) -> PyResult<f64> {
+    match value {
+        None => Err(bad_input(not_number())),
+        Some(v) if v.is_finite() => Ok(v),
+        Some(_) => Err(bad_input(not_finite())),
+    }
 }
 
 /// A Python value (numbers, strings, booleans, None, sequences, dicts, numpy scalars and

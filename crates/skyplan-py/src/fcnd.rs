@@ -1,6 +1,6 @@
 //! Drop-ins for FCND's `planning_utils.py`: a student replaces the import and nothing else.
 
-use crate::arrays::{describe, int_pair, map2};
+use crate::arrays::{blocked2, describe, finite, int_pair, map2};
 use crate::errors::{bad_input, fail, to_py};
 use numpy::PyArray2;
 use numpy::ndarray::Array2;
@@ -142,16 +142,7 @@ pub fn create_grid<'py>(
 
 /// A 2-D numeric array as a skyplan grid: nonzero = blocked; NaN refused.
 fn occupancy(grid: &Bound<'_, PyAny>) -> PyResult<Grid2> {
-    let mut nan = false;
-    let (rows, cols, blocked) = map2(grid, "grid", |v| {
-        nan |= v.is_nan();
-        v != 0.0
-    })?;
-    if nan {
-        return Err(bad_input(
-            "grid: NaN cells (expected 0 for free, nonzero for blocked)",
-        ));
-    }
+    let (rows, cols, blocked) = blocked2(grid, "grid")?;
     let too_large = || bad_input(format!("grid: {rows} × {cols} is too large"));
     let rows = u32::try_from(rows).map_err(|_| too_large())?;
     let cols = u32::try_from(cols).map_err(|_| too_large())?;
@@ -252,24 +243,17 @@ fn points(path: &[Bound<'_, PyAny>]) -> PyResult<Vec<[f64; 2]>> {
     path.iter()
         .enumerate()
         .map(|(k, p)| {
-            let coord = |i: usize| -> PyResult<f64> {
-                let v = p
-                    .get_item(i)
-                    .and_then(|x| x.extract::<f64>())
-                    .map_err(|_| {
-                        bad_input(format!(
+            let coord = |i: usize| {
+                finite(
+                    p.get_item(i).and_then(|x| x.extract::<f64>()).ok(),
+                    || {
+                        format!(
                             "path[{k}]: expected a point (row, col), got {}",
                             describe(p)
-                        ))
-                    })?;
-                if v.is_finite() {
-                    Ok(v)
-                } else {
-                    Err(bad_input(format!(
-                        "path[{k}]: {} is not finite",
-                        describe(p)
-                    )))
-                }
+                        )
+                    },
+                    || format!("path[{k}]: {} is not finite", describe(p)),
+                )
             };
             Ok([coord(0)?, coord(1)?])
         })

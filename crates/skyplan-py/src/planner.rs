@@ -1,7 +1,7 @@
 //! `Planner`: one world loaded once, planned on by the planning API's sessions; `Plan`: its
 //! answer as numpy arrays and a dict.
 
-use crate::arrays::{describe, float_pair, map2, to_json};
+use crate::arrays::{blocked2, describe, float_pair, to_json};
 use crate::errors::{bad_input, to_py};
 use numpy::PyArray2;
 use numpy::ndarray::Array2;
@@ -79,16 +79,7 @@ fn load_file(path: &Path, resolution_m: Option<f64>, unknown_free: bool) -> PyRe
 
 /// A numpy occupancy grid (row 0 the southern edge, nonzero = blocked) as a world.
 fn grid_world(grid: &Bound<'_, PyAny>, origin_ne: [f64; 2], cell_m: f64) -> PyResult<World> {
-    let mut nan = false;
-    let (rows, cols, blocked) = map2(grid, "map", |v| {
-        nan |= v.is_nan();
-        v != 0.0
-    })?;
-    if nan {
-        return Err(bad_input(
-            "map: NaN cells (expected 0 for free, nonzero for blocked)",
-        ));
-    }
+    let (rows, cols, blocked) = blocked2(grid, "map")?;
     if !(cell_m.is_finite() && cell_m > 0.0) {
         return Err(bad_input(format!(
             "cell_m {cell_m}: expected a size above 0"

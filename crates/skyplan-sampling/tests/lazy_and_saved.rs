@@ -1,18 +1,18 @@
-//! Lazy PRM and saved roadmaps. Lazy PRM on random box worlds: every returned path is exactly
-//! free by the brute-force checker, starts and ends as asked, an enclosed goal is never reached,
-//! and it tests no more roadmap edges than eager PRM on the same roadmap (far fewer on the city).
+//! Lazy PRM and saved roadmaps. Lazy PRM on random box worlds (its paths and enclosed goals are
+//! checked with the other planners' in `properties.rs`): it tests no more roadmap edges than eager
+//! PRM on the same roadmap (far fewer on the city).
 //! Saved roadmaps: a loaded roadmap answers the same query with the same route, grows on with
 //! the same samples, and a roadmap for another margin, map or flight volume is refused.
 
 use proptest::prelude::*;
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_sampling::prm::{PrmConfig, Roadmap, RoadmapFileError, solve};
-use skyplan_sampling::{Budget, PlannerKind, Request, Status, plan};
+use skyplan_sampling::{Budget, Status};
 use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, distance_m, first_blocked_segment};
 use std::time::Instant;
 
 mod common;
-use common::{arb_box, arb_case, arb_point, caged_goal, check_solution, world};
+use common::{arb_case, world};
 
 fn city(safety_m: f64) -> BoxWorld3 {
     skyplan_testkit::city_world(safety_m, 100.0)
@@ -29,22 +29,6 @@ fn config(seed: u64, samples: usize, lazy: bool) -> PrmConfig {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
-
-    #[test]
-    fn lazy_prm_paths_are_exactly_free_and_end_where_asked(
-        (boxes, start, goal, seed) in arb_case(1..14),
-        safety_m in 0.0..3.0f64,
-    ) {
-        let w = world(&boxes, safety_m);
-        let request = Request { start, goal, seed, budget: Budget::iterations(1500), ..Request::default() };
-        let s = plan(&w, PlannerKind::LazyPrm, &request);
-        prop_assert_ne!(s.status, Status::Approximate, "lazy PRM is exact or nothing");
-        check_solution(&w, &request, &s)?;
-        if w.brute_force().segment_is_free(start, goal) {
-            prop_assert_eq!(s.status, Status::Exact);
-        }
-        prop_assert_eq!(&plan(&w, PlannerKind::LazyPrm, &request).path, &s.path);
-    }
 
     #[test]
     fn lazy_prm_tests_no_more_edges_than_prm_on_the_same_roadmap(
@@ -66,21 +50,6 @@ proptest! {
         // (unless its unchecked connectors all fail; then eager's 3k candidates did better).
         let e = eager.query(&w, start, goal);
         if e.status == Status::Exact && s.status != Status::Exact {
-            prop_assert_eq!(s.status, Status::Timeout);
-        }
-    }
-
-    #[test]
-    fn lazy_prm_never_reaches_an_enclosed_goal(
-        boxes in prop::collection::vec(arb_box(), 0..6),
-        start in arb_point(),
-        seed in 0u64..1000,
-    ) {
-        let (w, c) = caged_goal(boxes, start)?;
-        let request = Request { start, goal: c, seed, budget: Budget::iterations(800), ..Request::default() };
-        let s = plan(&w, PlannerKind::LazyPrm, &request);
-        prop_assert_ne!(s.status, Status::Exact, "lazy PRM reached an enclosed goal");
-        if w.is_free(start) {
             prop_assert_eq!(s.status, Status::Timeout);
         }
     }

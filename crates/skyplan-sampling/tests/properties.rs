@@ -6,17 +6,31 @@ use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use skyplan_map::colliders::ObstacleBox;
-use skyplan_sampling::{Budget, PlannerKind, Request, Status, plan, shortcut};
+use skyplan_sampling::{Budget, PlannerKind, Request, Solution, Status, plan, shortcut};
 use skyplan_world3::{CollisionChecker, first_blocked_segment, path_length_m};
 
-const KINDS: [PlannerKind; 3] = [
+const KINDS: [PlannerKind; 4] = [
     PlannerKind::Prm,
+    PlannerKind::LazyPrm,
     PlannerKind::RrtConnect,
     PlannerKind::RrtStar,
 ];
 
 mod common;
 use common::{arb_box, arb_case, arb_point, caged_goal, check_solution, world};
+
+/// Lazy PRM checks edges only on found paths, so it returns an exact path or none (never an
+/// approximate one).
+fn lazy_prm_is_exact_or_nothing(kind: PlannerKind, s: &Solution) -> Result<(), TestCaseError> {
+    if kind == PlannerKind::LazyPrm {
+        prop_assert_ne!(
+            s.status,
+            Status::Approximate,
+            "lazy PRM is exact or nothing"
+        );
+    }
+    Ok(())
+}
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
@@ -31,6 +45,7 @@ proptest! {
             let request = Request { start, goal, seed, budget: Budget::iterations(1500), ..Request::default() };
             let s = plan(&w, kind, &request);
             check_solution(&w, &request, &s)?;
+            lazy_prm_is_exact_or_nothing(kind, &s)?;
             // The straight line free ⇒ every planner finds an exact path.
             if w.brute_force().segment_is_free(start, goal) {
                 prop_assert_eq!(s.status, Status::Exact, "{:?}", kind);
@@ -51,6 +66,7 @@ proptest! {
             let request = Request { start, goal: c, seed, budget: Budget::iterations(800), ..Request::default() };
             let s = plan(&w, kind, &request);
             check_solution(&w, &request, &s)?;
+            lazy_prm_is_exact_or_nothing(kind, &s)?;
             prop_assert_ne!(s.status, Status::Exact, "{:?} reached an enclosed goal", kind);
             if w.is_free(start) {
                 prop_assert!(matches!(s.status, Status::Timeout | Status::Approximate));

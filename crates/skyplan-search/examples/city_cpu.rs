@@ -21,24 +21,9 @@ fn cpu_ns() -> u64 {
 /// Far-apart connected free cell pairs from a fixed 64-bit LCG.
 fn far_queries(grid: &Grid2, count: usize) -> Vec<(Cell, Cell)> {
     let components = Components::new(grid, MoveModel::Octile);
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut next = |n: usize| {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((state >> 33) as usize) % n
-    };
-    let min_d = 0.5 * f64::from(grid.rows()).hypot(f64::from(grid.cols()));
-    let mut out = Vec::new();
-    while out.len() < count {
-        let a = grid.cell(next(grid.len()));
-        let b = grid.cell(next(grid.len()));
-        let d = (f64::from(a.row) - f64::from(b.row)).hypot(f64::from(a.col) - f64::from(b.col));
-        if d >= min_d && !grid.is_blocked(a) && !grid.is_blocked(b) && components.connected(a, b) {
-            out.push((a, b));
-        }
-    }
-    out
+    skyplan_testkit::lcg_far_pairs(grid, count, |a, b| {
+        !grid.is_blocked(a) && !grid.is_blocked(b) && components.connected(a, b)
+    })
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

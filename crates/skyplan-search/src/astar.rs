@@ -126,6 +126,28 @@ impl DivBy {
     }
 }
 
+/// The heuristic from `(r, c)` to `(goal_r, goal_c)` as move counts (straight, diagonal):
+/// octile with `DIAGONALS`, Manhattan without, `(0, 0)` without `HEURISTIC` (Dijkstra).
+#[inline(always)]
+fn heuristic_counts<const DIAGONALS: bool, const HEURISTIC: bool>(
+    r: usize,
+    c: usize,
+    goal_r: usize,
+    goal_c: usize,
+) -> (u32, u32) {
+    if !HEURISTIC {
+        return (0, 0);
+    }
+    let dr = r.abs_diff(goal_r) as u32;
+    let dc = c.abs_diff(goal_c) as u32;
+    if DIAGONALS {
+        let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
+        (hi - lo, lo)
+    } else {
+        (dr + dc, 0)
+    }
+}
+
 /// The endpoint checks every planner makes first.
 pub(crate) fn check_endpoints(grid: &Grid2, start: Cell, goal: Cell) -> Result<(), SearchError> {
     let (rows, cols) = (grid.rows(), grid.cols());
@@ -341,19 +363,7 @@ impl GridSearch {
         let closed = open + 1;
         // Bordered coordinates: the goal's differences are the grid's.
         let (goal_r, goal_c) = (goal.row as usize + 1, goal.col as usize + 1);
-        let h = |r: usize, c: usize| -> (u32, u32) {
-            if !HEURISTIC {
-                return (0, 0);
-            }
-            let dr = r.abs_diff(goal_r) as u32;
-            let dc = c.abs_diff(goal_c) as u32;
-            if DIAGONALS {
-                let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
-                (hi - lo, lo)
-            } else {
-                (dr + dc, 0)
-            }
-        };
+        let h = |r: usize, c: usize| heuristic_counts::<DIAGONALS, HEURISTIC>(r, c, goal_r, goal_c);
         let bits = |s: u32, d: u32| f64::from_bits((u64::from(d) << 32) | u64::from(s));
         let start_p = (start.row as usize + 1) * w + start.col as usize + 1;
         let goal_p = goal_r * w + goal_c;
@@ -439,19 +449,7 @@ impl GridSearch {
         let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
         let (goal_r, goal_c) = (goal.row as usize, goal.col as usize);
         // The heuristic as move counts (straight, diagonal).
-        let h = |r: usize, c: usize| -> (u32, u32) {
-            if !HEURISTIC {
-                return (0, 0);
-            }
-            let dr = r.abs_diff(goal_r) as u32;
-            let dc = c.abs_diff(goal_c) as u32;
-            if DIAGONALS {
-                let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
-                (hi - lo, lo)
-            } else {
-                (dr + dc, 0)
-            }
-        };
+        let h = |r: usize, c: usize| heuristic_counts::<DIAGONALS, HEURISTIC>(r, c, goal_r, goal_c);
         let start_i = grid.index(start);
         let goal_i = grid.index(goal) as u32;
         let (sr, sc) = (start.row as usize, start.col as usize);

@@ -7,6 +7,7 @@
 //! the Euclidean distance and the octile optimum, and the pipeline reports both.
 
 use crate::astar::NO_PARENT;
+use crate::jps::DIRS;
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 
@@ -42,19 +43,11 @@ impl GridSearch {
         let cols = i64::from(grid.cols());
         let start_i = grid.index(start);
         self.offer(start_i, 0.0, euclid(start, goal), NO_PARENT);
+        // The straight moves are the first four of `DIRS`.
         let moves: &[(i64, i64)] = if model.has_diagonals() {
-            &[
-                (1, 0),
-                (-1, 0),
-                (0, 1),
-                (0, -1),
-                (1, 1),
-                (1, -1),
-                (-1, 1),
-                (-1, -1),
-            ]
+            &DIRS
         } else {
-            &[(1, 0), (-1, 0), (0, 1), (0, -1)]
+            &DIRS[..4]
         };
         let mut expansions = 0u64;
         while let Some((g, index)) = self.expand_next() {

@@ -2,26 +2,21 @@
 // and publishes a route and the vehicle's state at 10 Hz; the page shows the route, moves the
 // marker, draws the trail and shows the state until MANUAL after landing.
 // Usage: node flight.test.mjs VIEW_FLIGHT_BIN|fly_sim.sh SCREENSHOT.png
-import { chromium } from "playwright-core";
 import fs from "node:fs";
 import { freePort, startProcess } from "./common.mjs";
+import { checker, launchBrowser, newPage, openView, waitForVehicleState } from "./view.mjs";
 
 const [bin, screenshot] = process.argv.slice(2);
 if (!bin || !screenshot) throw new Error("usage: node flight.test.mjs VIEW_FLIGHT_BIN SCREENSHOT.png");
-let passed = 0, failed = 0;
-function check(name, ok, detail = "") {
-  if (ok) { passed++; console.log(`ok   ${name}`); }
-  else { failed++; console.log(`FAIL ${name} ${detail}`); }
-}
+const { check, finish } = checker();
 
 const port = await freePort();
 const flight = await startProcess(bin, [`127.0.0.1:${port}`, "10"]);
-const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || "/usr/bin/chromium", args: ["--no-sandbox"] });
+const browser = await launchBrowser();
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1 });
-  await page.goto(flight.url);
-  await page.waitForFunction(() => window.skyplanView && window.skyplanView.state.ready, null, { timeout: 20000 });
-  await page.waitForFunction(() => document.getElementById("v-state").textContent.startsWith("WAYPOINT"), null, { timeout: 20000 });
+  const page = await newPage(browser);
+  await openView(page, flight.url);
+  await waitForVehicleState(page, "WAYPOINT");
   const route = await page.evaluate(() => window.skyplanView.state.route);
   check("the route being flown is shown", Array.isArray(route) && route.length >= 2, JSON.stringify(route));
   const states = [];
@@ -49,5 +44,4 @@ try {
   await browser.close();
   flight.stop();
 }
-console.log(`flight: ${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+finish("flight");

@@ -2,32 +2,26 @@
 // click sets the start, another the goal, the route comes back and its shown length is
 // `skyplan plan --json`'s cost_m for the same request; the roadmap toggle draws the roadmap.
 // Usage: node page.test.mjs SKYPLAN_BIN SCREENSHOT.png
-import { chromium } from "playwright-core";
 import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { startServer, loadGrid, connectedClearCells, nearest } from "./common.mjs";
+import { checker, launchBrowser, newPage, openView } from "./view.mjs";
 
 const [bin, screenshot] = process.argv.slice(2);
 if (!bin || !screenshot) throw new Error("usage: node page.test.mjs SKYPLAN_BIN SCREENSHOT.png");
-const browserPath = process.env.CHROMIUM || "/usr/bin/chromium";
-let passed = 0, failed = 0;
-function check(name, ok, detail = "") {
-  if (ok) { passed++; console.log(`ok   ${name}`); }
-  else { failed++; console.log(`FAIL ${name} ${detail}`); }
-}
+const { check, finish } = checker();
 
 const server = await startServer(bin);
-const browser = await chromium.launch({ executablePath: browserPath, args: ["--no-sandbox"] });
+const browser = await launchBrowser();
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1 });
+  const page = await newPage(browser);
   const consoleErrors = [];
   // The browser logs the 422s the invalid start below asks for, and the 503s the page retries.
   page.on("console", (m) => { if (m.type() === "error" && !/status of (422|503)/.test(m.text())) consoleErrors.push(m.text()); });
   page.on("pageerror", (e) => consoleErrors.push(String(e)));
-  await page.goto(server.url);
-  await page.waitForFunction(() => window.skyplanView && window.skyplanView.state.ready, null, { timeout: 20000 });
+  await openView(page, server.url);
 
   // The map canvas is drawn: many non-background pixels, several colours.
   const pixels = await page.evaluate(() => {
@@ -122,5 +116,4 @@ try {
   await browser.close();
   server.stop();
 }
-console.log(`page: ${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+finish("page");

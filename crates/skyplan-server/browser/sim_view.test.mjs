@@ -2,19 +2,15 @@
 // heading, mode, armed) and what its obstacle sensor sees at 10 Hz; the page shows the vehicle in
 // its mode and draws the sensed points, which lie on the hidden box's face 25 m east of home.
 // Usage: node sim_view.test.mjs SKYPLAN_BIN
-import { chromium } from "playwright-core";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { freePort, startProcess } from "./common.mjs";
+import { checker, launchBrowser, newPage, openView, waitForVehicleState } from "./view.mjs";
 
 const [bin] = process.argv.slice(2);
 if (!bin) throw new Error("usage: node sim_view.test.mjs SKYPLAN_BIN");
-let passed = 0, failed = 0;
-function check(name, ok, detail = "") {
-  if (ok) { passed++; console.log(`ok   ${name}`); }
-  else { failed++; console.log(`FAIL ${name} ${detail}`); }
-}
+const { check, finish } = checker();
 
 const dir = fs.mkdtempSync(path.join(os.tmpdir(), "skyplan-sim-view-"));
 const hidden = path.join(dir, "hidden.csv");
@@ -22,12 +18,11 @@ fs.writeFileSync(hidden, "lat0 37.792480, lon0 -122.397450\nposX,posY,posZ,halfS
 const port = await freePort();
 const sim = await startProcess(bin, ["sim", "--listen", "tcp:127.0.0.1:0", "--view", `127.0.0.1:${port}`,
   "--hidden", hidden, "--ekf-delay-s", "0", "--duration-s", "60"]);
-const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || "/usr/bin/chromium", args: ["--no-sandbox"] });
+const browser = await launchBrowser();
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1 });
-  await page.goto(sim.url);
-  await page.waitForFunction(() => window.skyplanView && window.skyplanView.state.ready, null, { timeout: 20000 });
-  await page.waitForFunction(() => document.getElementById("v-state").textContent.startsWith("STABILIZE"), null, { timeout: 20000 });
+  const page = await newPage(browser);
+  await openView(page, sim.url);
+  await waitForVehicleState(page, "STABILIZE");
   check("the page shows the simulator's mode", true);
   const v = await page.evaluate(() => window.skyplanView.state.vehicle);
   check("the vehicle is at home", v && Math.abs(v.north_m) < 0.01 && Math.abs(v.east_m) < 0.01 && v.armed === false, JSON.stringify(v));
@@ -41,5 +36,4 @@ try {
   sim.stop();
   fs.rmSync(dir, { recursive: true, force: true });
 }
-console.log(`sim view: ${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+finish("sim view");

@@ -16,6 +16,15 @@ fn city() -> Router {
     router(World::fcnd_city(), ServerConfig::default())
 }
 
+/// The city's API with a time budget per request of `timeout`.
+fn city_with_budget(timeout: Duration) -> Router {
+    let config = ServerConfig {
+        timeout,
+        ..ServerConfig::default()
+    };
+    router(World::fcnd_city(), config)
+}
+
 async fn send(app: Router, method: &str, uri: &str, body: impl Into<Body>) -> (StatusCode, Value) {
     let request = Request::builder()
         .method(method)
@@ -192,11 +201,7 @@ async fn past_the_concurrency_limit_requests_get_503() {
 
 #[tokio::test]
 async fn past_the_time_budget_requests_get_504_and_long_limits_400() {
-    let config = ServerConfig {
-        timeout: Duration::from_millis(1),
-        ..ServerConfig::default()
-    };
-    let app = router(World::fcnd_city(), config);
+    let app = city_with_budget(Duration::from_millis(1));
     let (status, v) = post_plan(app, json!({ "cell_m": 0.5 })).await;
     assert_eq!(status, StatusCode::GATEWAY_TIMEOUT, "{v}");
     assert_eq!(v["kind"], "over_budget");
@@ -212,11 +217,7 @@ async fn past_the_time_budget_requests_get_504_and_long_limits_400() {
 /// the budget with a `timeout` failure (422) instead of a 504 with the work left running.
 #[tokio::test]
 async fn preprocessing_past_the_budget_is_a_timeout_failure_not_a_504() {
-    let config = ServerConfig {
-        timeout: Duration::from_millis(3000),
-        ..ServerConfig::default()
-    };
-    let app = router(World::fcnd_city(), config);
+    let app = city_with_budget(Duration::from_millis(3000));
     let (status, v) = post_plan(app.clone(), json!({ "planner": "ch" })).await;
     assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert_eq!(v["kind"], "timeout");

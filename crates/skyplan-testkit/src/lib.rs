@@ -1,14 +1,54 @@
-//! Test helpers shared by the tests of skyplan's 3D crates (a dev-dependency only): proptest
-//! strategies for random box worlds, box worlds from a few numbers, the bundled city, and the
-//! distance from a point to a route segment.
+//! Test helpers shared by the tests and examples of skyplan's crates (a dev-dependency only):
+//! proptest strategies for random box worlds, box worlds from a few numbers, the bundled city,
+//! the distance from a point to a route segment, and fixed far-apart grid queries.
 
 use proptest::prelude::*;
+use skyplan_cspace::{Cell, Grid2};
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_world3::{BoxWorld3, Neu, WorldSpec};
 use std::ops::Range;
 
 /// The bundled FCND city map's text (`data/colliders.csv`).
 pub const CITY_CSV: &str = include_str!("../../../data/colliders.csv");
+
+/// Far-apart cell pairs from a fixed 64-bit LCG (the same pairs on every machine): pairs drawn
+/// over the whole grid, kept when they are at least half the grid's diagonal apart and `accept`
+/// takes them (say, both free and connected), until there are `count`.
+///
+/// ```
+/// use skyplan_cspace::{Grid2, GridSpec};
+///
+/// let map = skyplan_map::colliders::parse_colliders(skyplan_testkit::CITY_CSV).unwrap();
+/// let grid = Grid2::from_colliders(&map, GridSpec::default()).unwrap();
+/// let free = |a, b| !grid.is_blocked(a) && !grid.is_blocked(b);
+/// let pairs = skyplan_testkit::lcg_far_pairs(&grid, 3, free);
+/// assert_eq!(pairs, skyplan_testkit::lcg_far_pairs(&grid, 3, free));
+/// assert_eq!(pairs.len(), 3);
+/// ```
+pub fn lcg_far_pairs(
+    grid: &Grid2,
+    count: usize,
+    mut accept: impl FnMut(Cell, Cell) -> bool,
+) -> Vec<(Cell, Cell)> {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = |n: usize| {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 33) as usize) % n
+    };
+    let min_d = 0.5 * f64::from(grid.rows()).hypot(f64::from(grid.cols()));
+    let mut out = Vec::new();
+    while out.len() < count {
+        let a = grid.cell(next(grid.len()));
+        let b = grid.cell(next(grid.len()));
+        let d = (f64::from(a.row) - f64::from(b.row)).hypot(f64::from(a.col) - f64::from(b.col));
+        if d >= min_d && accept(a, b) {
+            out.push((a, b));
+        }
+    }
+    out
+}
 
 /// Random boxes with their centre north and east in 0..100 m, centre up in `up`, half sizes north
 /// and east in `half`, half height in `half_up`.

@@ -37,6 +37,20 @@ pub fn plan_json(dir: &Path, line: &str) -> (i32, Value) {
     (code, v)
 }
 
+/// A loopback UDP port that was free a moment ago (bound, noted and released), for a peer to
+/// bind.
+pub fn free_udp_port() -> u16 {
+    let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    socket.local_addr().unwrap().port()
+}
+
+/// A loopback TCP port that was free a moment ago (bound, noted and released): nobody listens
+/// on it until someone binds it.
+pub fn free_tcp_port() -> u16 {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    listener.local_addr().unwrap().port()
+}
+
 /// A JSON number.
 pub fn num(v: &Value) -> f64 {
     v.as_f64().unwrap()

@@ -92,12 +92,7 @@ impl Core {
         let Some(first) = targets.first() else {
             return Err(ConfigError("the mission has no waypoint".into()));
         };
-        if targets.iter().any(|t| {
-            !(t.north_m.is_finite()
-                && t.east_m.is_finite()
-                && t.alt_m.is_finite()
-                && t.heading_rad.is_finite())
-        }) {
+        if !targets.iter().all(Target::is_finite) {
             return Err(ConfigError("a waypoint is not a finite number".into()));
         }
         if first.alt_m <= config.landed_alt_m {
@@ -542,13 +537,10 @@ impl<S: Strategy> Executor<S> {
         if targets.is_empty() {
             return Err(ConfigError("the new route has no waypoint".into()));
         }
-        if targets.iter().any(|t| {
-            !(t.north_m.is_finite()
-                && t.east_m.is_finite()
-                && t.alt_m.is_finite()
-                && t.heading_rad.is_finite())
-                || t.alt_m <= self.core.config.landed_alt_m
-        }) {
+        if targets
+            .iter()
+            .any(|t| !t.is_finite() || t.alt_m <= self.core.config.landed_alt_m)
+        {
             return Err(ConfigError(
                 "the new route has a waypoint that is not finite or not above the ground".into(),
             ));

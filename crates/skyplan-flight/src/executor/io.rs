@@ -54,6 +54,22 @@ pub struct Target {
 }
 
 impl Target {
+    /// Whether all four numbers are finite (the executor flies no other waypoint).
+    ///
+    /// ```
+    /// use skyplan_flight::executor::Target;
+    ///
+    /// let t = Target { north_m: 1.0, east_m: 2.0, alt_m: 5.0, heading_rad: 0.0 };
+    /// assert!(t.is_finite());
+    /// assert!(!Target { alt_m: f64::NAN, ..t }.is_finite());
+    /// ```
+    pub fn is_finite(&self) -> bool {
+        self.north_m.is_finite()
+            && self.east_m.is_finite()
+            && self.alt_m.is_finite()
+            && self.heading_rad.is_finite()
+    }
+
     /// Horizontal distance from the vehicle, metres.
     pub fn horizontal_error_m(&self, t: &Telemetry) -> f64 {
         (self.north_m - t.north_m).hypot(self.east_m - t.east_m)
