@@ -175,6 +175,30 @@ pub(crate) enum Position {
 /// How the vehicle moves between cells.
 pub(crate) use skyplan_search::MoveModel;
 
+/// A start or goal, resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct End {
+    /// Where (`None`: the map's default).
+    pub at: Option<Position>,
+    /// Altitude of 3D planners, metres (the flight altitude unless given).
+    pub alt_m: f64,
+}
+
+impl End {
+    /// `which` (`start` or `goal`) from the request's fields, each checked.
+    fn of(
+        which: &str,
+        (ne, lla, alt_m): (Option<[f64; 2]>, Option<[f64; 2]>, Option<f64>),
+        flight_alt_m: f64,
+    ) -> Result<End, PlanFailure> {
+        let alt_m = alt_m.unwrap_or(flight_alt_m);
+        Ok(End {
+            at: position(ne, lla, which)?,
+            alt_m: in_range(&format!("{which}_alt_m"), alt_m, 0.0, MAX_ALT_M, " m")?,
+        })
+    }
+}
+
 /// The request with defaults applied and every value checked.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Resolved {
@@ -182,10 +206,8 @@ pub(crate) struct Resolved {
     pub alt_m: f64,
     pub safety_m: f64,
     pub cell_m: f64,
-    pub start: Option<Position>,
-    pub goal: Option<Position>,
-    pub start_alt_m: f64,
-    pub goal_alt_m: f64,
+    pub start: End,
+    pub goal: End,
     pub start_heading_rad: f64,
     pub model: MoveModel,
     pub prune: Prune,
@@ -363,20 +385,8 @@ impl Resolved {
             (None, Some(PruneMode::None)) => Prune::None,
             (None, _) => Prune::Collinear,
         };
-        let start_alt_m = in_range(
-            "start_alt_m",
-            r.start_alt_m.unwrap_or(alt_m),
-            0.0,
-            MAX_ALT_M,
-            " m",
-        )?;
-        let goal_alt_m = in_range(
-            "goal_alt_m",
-            r.goal_alt_m.unwrap_or(alt_m),
-            0.0,
-            MAX_ALT_M,
-            " m",
-        )?;
+        let start = End::of("start", (r.start_ne, r.start_lla, r.start_alt_m), alt_m)?;
+        let goal = End::of("goal", (r.goal_ne, r.goal_lla, r.goal_alt_m), alt_m)?;
         let min_alt_m = in_range(
             "min_alt_m",
             r.min_alt_m.unwrap_or(0.0),
@@ -387,8 +397,8 @@ impl Resolved {
         let max_alt_m = match r.max_alt_m {
             Some(v) => in_range("max_alt_m", v, 0.0, MAX_ALT_M, " m")?,
             None => 120f64
-                .max(start_alt_m + 10.0)
-                .max(goal_alt_m + 10.0)
+                .max(start.alt_m + 10.0)
+                .max(goal.alt_m + 10.0)
                 .min(MAX_ALT_M),
         };
         if min_alt_m >= max_alt_m {
@@ -418,10 +428,8 @@ impl Resolved {
             alt_m,
             safety_m,
             cell_m,
-            start: position(r.start_ne, r.start_lla, "start")?,
-            goal: position(r.goal_ne, r.goal_lla, "goal")?,
-            start_alt_m,
-            goal_alt_m,
+            start,
+            goal,
             start_heading_rad: start_heading_deg.to_radians(),
             model,
             prune,

@@ -463,8 +463,9 @@ impl Session {
                     .join(", ")
             )));
         }
-        let (start_ne, start_lla) = self.endpoint(r.start, self.world.default_start_ne, "start")?;
-        let (goal_ne, goal_lla) = self.endpoint(r.goal, self.world.default_goal_ne, "goal")?;
+        let (start_ne, start_lla) =
+            self.endpoint(r.start.at, self.world.default_start_ne, "start")?;
+        let (goal_ne, goal_lla) = self.endpoint(r.goal.at, self.world.default_goal_ne, "goal")?;
         let world = self.world.clone();
         let q = Query {
             r: &r,

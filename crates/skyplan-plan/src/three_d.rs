@@ -38,8 +38,8 @@ fn why_invalid(world: &BoxWorld3, p: Neu, safety_m: f64) -> String {
 
 fn ends(q: &Query) -> (Neu, Neu) {
     (
-        [q.start_ne[0], q.start_ne[1], q.r.start_alt_m],
-        [q.goal_ne[0], q.goal_ne[1], q.r.goal_alt_m],
+        [q.start_ne[0], q.start_ne[1], q.r.start.alt_m],
+        [q.goal_ne[0], q.goal_ne[1], q.r.goal.alt_m],
     )
 }
 
