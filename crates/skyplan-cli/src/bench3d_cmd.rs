@@ -26,11 +26,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
             p.display()
         )));
     }
+    let safety_m = args.slice.spec().safety_m;
     let (name, text) = crate::bench_cmd::map_text(args.map.as_deref())?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{name}: {e}")))?;
     let spec = WorldSpec {
-        safety_m: args.slice.safety_m,
+        safety_m,
         min_alt_m: 0.0,
         max_alt_m: 120.0,
         margin_bounds_m: 0.0,
@@ -38,7 +39,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let world = BoxWorld3::new(&map.boxes, &spec).map_err(|e| bad_input(format!("{e}")))?;
     let qs = random_queries(&world, args.random.unwrap_or(10), args.seed);
     let mut session = Session::new(World::from_colliders(&name, map.clone())?);
-    let mut runs = skyplan_runs(&mut session, &qs, args.slice.safety_m, args.seed, BUDGET_S);
+    let mut runs = skyplan_runs(&mut session, &qs, safety_m, args.seed, BUDGET_S);
     let mut notes = Vec::new();
     if args.peers {
         match ompl_peers(&world, &qs, BUDGET_S) {
@@ -53,14 +54,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.json {
         println!(
             "{}",
-            json!({ "map": name, "safety_m": args.slice.safety_m, "queries": qs.len(), "budget_s": BUDGET_S, "rows": rows, "notes": notes })
+            json!({ "map": name, "safety_m": safety_m, "queries": qs.len(), "budget_s": BUDGET_S, "rows": rows, "notes": notes })
         );
         return Ok(());
     }
     println!(
         "map      {name}: {} boxes grown by {} m in all three axes",
         map.boxes.len(),
-        args.slice.safety_m
+        safety_m
     );
     println!(
         "queries  {} (FCND route + {} random free pairs, seed {}), budget {BUDGET_S} s each (RRT* uses all of it)",

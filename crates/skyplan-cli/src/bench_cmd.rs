@@ -6,9 +6,8 @@ use crate::args::BenchArgs;
 use crate::exit::{Classify, Failure, Kind, Result, bad_input, runtime};
 use crate::files::{read_text, write_atomic};
 use anyhow::Context;
-use serde_json::json;
-use skyplan_bench::grid_bench::{self, QuerySource};
-use skyplan_bench::{Contender, Run};
+use skyplan_bench::Contender;
+use skyplan_bench::grid_bench::{self, JpsPlusPrep, QuerySource, RunAllError};
 use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
 use skyplan_search::MoveModel;
 use std::path::Path;
@@ -36,7 +35,8 @@ fn table_spec(args: &BenchArgs) -> [f64; 3] {
     if is_movingai(args) {
         [f64::NAN; 3]
     } else {
-        [args.slice.alt_m, args.slice.safety_m, args.slice.cell_m]
+        let s = args.slice.spec();
+        [s.alt_m, s.safety_m, s.cell_m]
     }
 }
 
@@ -82,8 +82,6 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         },
     };
     let (queries, described) = grid_bench::queries(grid, model, from).map_err(bad_input)?;
-    let cell_m = grid.frame().cell_m;
-
     let progress = indicatif::ProgressBar::new((planners.len() * queries.len()) as u64);
     progress.set_style(
         indicatif::ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} queries")
@@ -92,39 +90,22 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    // The saved table also serves this run's JPS+ queries (no second build) when JPS+ runs
-    // first; otherwise it is dropped, so that it does not count in another planner's peak.
-    let mut saved = None;
-    if let Some(path) = &args.save_preprocess {
-        let table = save_table(path, grid, model, &args)?;
-        if planners.first() == Some(&Contender::Skyplan(PlannerId::JpsPlus)) {
-            saved = Some(table);
+    let jps_plus = jps_plus_prep(&args, grid, model, &planners)?;
+    let mut runs = grid_bench::run_all(
+        grid,
+        model,
+        &planners,
+        &queries,
+        jps_plus,
+        |planner| progress.set_message(planner.name()),
+        || progress.inc(1),
+    )
+    .map_err(|e| match (e, &args.preprocess) {
+        (RunAllError::Table(e), Some(path)) => {
+            bad_input(format!("--preprocess {}: {e}", path.display()))
         }
-    }
-    let mut runs: Vec<Run> = Vec::new();
-    for &planner in &planners {
-        progress.set_message(planner.name());
-        let jps_plus = planner == Contender::Skyplan(PlannerId::JpsPlus);
-        let reuse = if jps_plus { saved.take() } else { None };
-        let prepare = || match (&args.preprocess, reuse) {
-            (_, Some((table, us))) => grid_bench::jps_plus_engine(grid, table, us)
-                .map(Some)
-                .map_err(runtime),
-            (Some(path), None) if jps_plus => {
-                let t = Instant::now();
-                let file = std::fs::File::open(path)
-                    .with_context(|| format!("--preprocess {}: cannot open", path.display()))
-                    .or_exit(Kind::BadInput)?;
-                grid_bench::jps_plus_from_table(std::io::BufReader::new(file), grid, model, t)
-                    .map(Some)
-                    .map_err(|e| bad_input(format!("--preprocess {}: {e}", path.display())))
-            }
-            _ => Ok(None),
-        };
-        let run =
-            grid_bench::run_measured(grid, model, planner, prepare, &queries, |_| progress.inc(1))?;
-        runs.push(run);
-    }
+        (e, _) => runtime(e),
+    })?;
     progress.finish_and_clear();
     let mut notes = Vec::new();
     if args.peers {
@@ -139,9 +120,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         runs.extend(py_runs);
         notes.extend(py_notes);
     }
-
-    let rows = skyplan_bench::table(&runs, queries.len(), cell_m);
-
+    let report = grid_bench::Report::new(&source, &described, model, &runs, queries.len(), notes);
     if let Some(out) = &args.out {
         let json = out.extension().is_some_and(|e| e == "json");
         let bytes =
@@ -149,30 +128,37 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         write_atomic(out, &bytes)?;
     }
     if args.json {
-        println!(
-            "{}",
-            json!({ "map": source.name, "grid": [grid.rows(), grid.cols()], "queries": described, "rows": rows, "notes": notes })
-        );
+        println!("{}", report.json());
         return Ok(());
     }
-    println!(
-        "map      {}: {} × {} cells of {} m",
-        source.name,
-        grid.rows(),
-        grid.cols(),
-        cell_m
-    );
-    let model_name = skyplan_plan::model_name(model);
-    println!("queries  {described}; move model {model_name}");
-    println!();
-    print!("{}", skyplan_bench::format_table(&rows));
-    for n in &notes {
-        println!("note     {n}");
-    }
+    print!("{report}");
     if let Some(out) = &args.out {
         println!("wrote    {}", out.display());
     }
     Ok(())
+}
+
+/// How JPS+ gets its table: built here and saved (`--save-preprocess`), streamed from a file
+/// (`--preprocess`, opened only when JPS+ runs), or built by itself.
+fn jps_plus_prep(
+    args: &BenchArgs,
+    grid: &std::sync::Arc<skyplan_cspace::Grid2>,
+    model: MoveModel,
+    planners: &[Contender],
+) -> Result<JpsPlusPrep<std::fs::File>> {
+    if let Some(path) = &args.save_preprocess {
+        let (table, us) = save_table(path, grid, model, args)?;
+        return Ok(JpsPlusPrep::Built(table, us));
+    }
+    match &args.preprocess {
+        Some(path) if planners.contains(&Contender::Skyplan(PlannerId::JpsPlus)) => {
+            let file = std::fs::File::open(path)
+                .with_context(|| format!("--preprocess {}: cannot open", path.display()))
+                .or_exit(Kind::BadInput)?;
+            Ok(JpsPlusPrep::File(file))
+        }
+        _ => Ok(JpsPlusPrep::Build),
+    }
 }
 
 /// Builds the JPS+ table of `grid` and streams it to `path` (through a temporary file renamed
@@ -220,12 +206,13 @@ fn replan_bench(args: &BenchArgs, flights: usize) -> Result<()> {
     }
     let limits = skyplan_plan::Limits::default();
     let world = crate::world_load::load_world(args.map.as_deref(), &Default::default(), &limits)?;
+    let slice = args.slice.spec();
     let spec = skyplan_replan::bench::ScenarioSpec {
         flights,
         seed: args.seed,
         hidden: args.hidden_random,
-        alt_m: args.slice.alt_m,
-        safety_m: args.slice.safety_m,
+        alt_m: slice.alt_m,
+        safety_m: slice.safety_m,
         min_distance_m: args.min_distance_m.unwrap_or(300.0),
     };
     print!("{}", crate::replan_cmd::bench(&world, &spec, 50.0)?);
