@@ -41,6 +41,36 @@ pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
     Ok(m)
 }
 
+/// The map's home, and where the vehicle starts: `--home`, else the map's home.
+fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> Result<(Lla, Lla)> {
+    let at = |lat_deg, lon_deg| Lla {
+        lat_deg,
+        lon_deg,
+        alt_m: 0.0,
+    };
+    let map_home = at(map_home.lat_deg, map_home.lon_deg);
+    match args.home {
+        Some(p) if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) => {
+            Err(bad_input(format!(
+                "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
+                p.0, p.1
+            )))
+        }
+        Some(p) => Ok((map_home, at(p.0, p.1))),
+        None => Ok((map_home, map_home)),
+    }
+}
+
+/// `--view ADDR`: the live view of the simulator's state.
+fn live_view(args: &SimArgs, map_name: &str, text: &str) -> Result<crate::live::Live> {
+    let Some(addr) = &args.view else {
+        return Ok(crate::live::Live::default());
+    };
+    let world = skyplan_plan::World::from_colliders_csv(map_name, text)
+        .map_err(|e| bad_input(format!("{map_name}: {}", e.message)))?;
+    crate::live::Live::start(&world, Some(addr), None)
+}
+
 pub fn run(args: SimArgs) -> Result<()> {
     check_speedup(args.speedup)?;
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
@@ -50,25 +80,7 @@ pub fn run(args: SimArgs) -> Result<()> {
     };
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
-    let map_home = Lla {
-        lat_deg: map.home.lat_deg,
-        lon_deg: map.home.lon_deg,
-        alt_m: 0.0,
-    };
-    let home = match args.home {
-        Some(p) if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) => {
-            return Err(bad_input(format!(
-                "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
-                p.0, p.1
-            )));
-        }
-        Some(p) => Lla {
-            lat_deg: p.0,
-            lon_deg: p.1,
-            alt_m: 0.0,
-        },
-        None => map_home,
-    };
+    let (map_home, home) = homes(&args, &map.home)?;
     if args.ekf_delay_s < 0.0 {
         return Err(bad_input(format!(
             "--ekf-delay-s: expected 0 or more, found {}",
@@ -110,14 +122,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         },
         args.sensor_range_m
     );
-    let mut live = match &args.view {
-        Some(addr) => {
-            let world = skyplan_plan::World::from_colliders_csv(&map_name, &text)
-                .map_err(|e| bad_input(format!("{map_name}: {}", e.message)))?;
-            crate::live::Live::start(&world, Some(addr), None)?
-        }
-        None => crate::live::Live::default(),
-    };
+    let mut live = live_view(&args, &map_name, &text)?;
     let stop = SimServer::stop_after(args.duration_s);
     let world = BoxWorld::new(&map.boxes);
     let map_boxes = map.boxes.len();
