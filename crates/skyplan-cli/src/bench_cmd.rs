@@ -161,8 +161,8 @@ fn jps_plus_prep(
     }
 }
 
-/// Builds the JPS+ table of `grid` and streams it to `path` (through a temporary file renamed
-/// into place, so a failed save leaves no partial table); the table and its build time (µs).
+/// Builds the JPS+ table of `grid` and streams it to `path` atomically (a failed save leaves no
+/// partial table); the table and its build time (µs).
 fn save_table(
     path: &Path,
     grid: &std::sync::Arc<skyplan_cspace::Grid2>,
@@ -171,22 +171,7 @@ fn save_table(
 ) -> Result<(skyplan_search::JpsPlusTable, u64)> {
     let (table, built_us) = grid_bench::build_jps_plus_table(grid, model);
     let t = Instant::now();
-    let file_name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
-    let written = (|| -> std::io::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
-        let mut out = std::io::BufWriter::new(file);
-        table.write_to(&mut out, table_spec(args))?;
-        out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(anyhow::anyhow!("writing {}: {e}", path.display())).or_exit(Kind::Runtime);
-    }
+    crate::files::write_atomic_with(path, |out| table.write_to(out, table_spec(args)))?;
     if !args.json {
         eprintln!(
             "saved    JPS+ table ({:.1} MB, built in {:.0} ms, written in {:.0} ms) to {}",
