@@ -153,10 +153,8 @@ pub struct RouteArgs {
     /// Skip line-of-sight shortcutting.
     #[arg(long)]
     pub no_shortcut: bool,
-    /// Most memory a map or plan may need, estimated before anything is allocated: bytes, or
-    /// with a suffix K, M, G [default: half the machine's memory].
-    #[arg(long, value_name = "SIZE", value_parser = parse_size_bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub memory: MemoryArgs,
     #[command(flatten)]
     pub grid: crate::grid_args::GridMapArgs,
     #[command(flatten)]
@@ -164,7 +162,7 @@ pub struct RouteArgs {
 }
 
 /// `1G`, `512M`, `300K` or a number of bytes.
-pub(crate) fn parse_size_bytes(s: &str) -> Result<u64, String> {
+fn parse_size_bytes(s: &str) -> Result<u64, String> {
     let t = s.trim();
     let (num, mult) = match t.char_indices().last() {
         Some((i, c)) if c.is_ascii_alphabetic() => {
@@ -184,6 +182,22 @@ pub(crate) fn parse_size_bytes(s: &str) -> Result<u64, String> {
             Ok((v * mult as f64) as u64)
         }
         _ => Err(format!("expected a size like 512M or 2G, found {s:?}")),
+    }
+}
+
+/// `--max-memory` (`plan`, `fly`, `navigate`).
+#[derive(Debug, Args)]
+pub struct MemoryArgs {
+    /// Most memory a map or plan may need, estimated before anything is allocated: bytes, or
+    /// with a suffix K, M, G [default: half the machine's memory].
+    #[arg(long, value_name = "SIZE", value_parser = parse_size_bytes)]
+    pub max_memory: Option<u64>,
+}
+
+impl MemoryArgs {
+    /// The planning API's limits of the option.
+    pub fn limits(&self) -> skyplan_plan::Limits {
+        limits(self.max_memory)
     }
 }
 

@@ -157,9 +157,8 @@ pub struct NavigateArgs {
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Most memory the map may need: bytes, or with a suffix K, M, G [default: half the machine's memory].
-    #[arg(long, value_name = "SIZE", value_parser = crate::args::parse_size_bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub memory: crate::args::MemoryArgs,
     /// Print the workspace and the ride as text (grids up to 80 × 60).
     #[arg(long)]
     pub show: bool,

@@ -133,7 +133,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         }
         None => None,
     };
-    let limits = crate::args::limits(args.max_memory);
+    let limits = args.memory.limits();
     let world = crate::world_load::load_world(args.map.as_deref(), &args.grid, &limits)?;
     let mut session = Session::new(world).with_limits(limits);
     let request = ride_request(&mut session, &args)?;

@@ -137,7 +137,7 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
         None => Config::default(),
     };
     let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
-    let limits = crate::args::limits(a.max_memory);
+    let limits = a.memory.limits();
     let world = load_world(map.as_deref(), &a.grid, &limits)?;
     let request = typed_request(a).or(config.text.request.clone());
     Ok(Resolved {
