@@ -303,12 +303,7 @@ fn check_flight_args(args: &FlyArgs) -> Result<()> {
             )));
         }
     }
-    if args.sim_ekf_delay_s < 0.0 {
-        return Err(bad_input(format!(
-            "--sim-ekf-delay-s: expected 0 or more, found {}",
-            args.sim_ekf_delay_s
-        )));
-    }
+    crate::sim_cmd::ekf_delay_s("--sim-ekf-delay-s", args.sim_ekf_delay_s)?;
     Ok(())
 }
 

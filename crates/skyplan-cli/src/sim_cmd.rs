@@ -41,6 +41,16 @@ pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
     Ok(m)
 }
 
+/// Checks an EKF delay (`option`): 0 or more simulated seconds.
+pub(crate) fn ekf_delay_s(option: &str, s: f64) -> Result<f64> {
+    if s < 0.0 {
+        return Err(bad_input(format!(
+            "{option}: expected 0 or more, found {s}"
+        )));
+    }
+    Ok(s)
+}
+
 /// The map's home, and where the vehicle starts: `--home`, else the map's home.
 fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> Result<(Lla, Lla)> {
     let at = |lat_deg, lon_deg| Lla {
@@ -81,12 +91,7 @@ pub fn run(args: SimArgs) -> Result<()> {
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
     let (map_home, home) = homes(&args, &map.home)?;
-    if args.ekf_delay_s < 0.0 {
-        return Err(bad_input(format!(
-            "--ekf-delay-s: expected 0 or more, found {}",
-            args.ekf_delay_s
-        )));
-    }
+    let ekf_delay_s = ekf_delay_s("--ekf-delay-s", args.ekf_delay_s)?;
     let hidden = (args.hidden.as_ref())
         .map(|path| load_hidden(path, &map.home))
         .transpose()?
@@ -97,7 +102,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         sensor_range_m: sensor_range_m(args.sensor_range_m)?,
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
-        ekf_delay_s: args.ekf_delay_s,
+        ekf_delay_s,
         map_home: Some(map_home),
         ..SimServerConfig::at(home)
     };
