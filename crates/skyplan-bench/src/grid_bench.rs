@@ -462,27 +462,13 @@ mod tests {
         let mut bytes = Vec::new();
         table.write_to(&mut bytes, [f64::NAN; 3]).unwrap();
         let list = names("jps-plus");
-        let file = JpsPlusPrep::File(&bytes[..]);
-        let runs = run_all(
-            &grid,
-            MoveModel::Octile,
-            &list,
-            &QUERIES,
-            file,
-            |_| {},
-            || {},
-        );
-        assert!(runs.unwrap()[0].records.iter().all(|r| r.cost.is_some()));
-        let file = JpsPlusPrep::File(&bytes[..]);
-        let refused = run_all(
-            &grid,
-            MoveModel::OctileCornerCutting,
-            &list,
-            &QUERIES,
-            file,
-            |_| {},
-            || {},
-        );
+        let run = |model| {
+            let file = JpsPlusPrep::File(&bytes[..]);
+            run_all(&grid, model, &list, &QUERIES, file, |_| {}, || {})
+        };
+        let runs = run(MoveModel::Octile).unwrap();
+        assert!(runs[0].records.iter().all(|r| r.cost.is_some()));
+        let refused = run(MoveModel::OctileCornerCutting);
         assert!(matches!(refused, Err(RunAllError::Table(m)) if m.contains("corner cutting")));
     }
 
