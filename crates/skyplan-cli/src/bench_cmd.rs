@@ -70,18 +70,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     let source =
         grid_bench::load_grid(&name, &text, is_movingai(&args), spec).map_err(bad_input)?;
     let grid = &source.grid;
-    let scen = (args.scen.as_ref())
-        .map(|path| Ok::<_, Failure>((path.display().to_string(), read_text(path)?)))
-        .transpose()?;
-    let from = match &scen {
-        Some((name, text)) => QuerySource::Scen(name, text, args.random),
-        None => QuerySource::Random {
-            count: args.random.unwrap_or(26),
-            seed: args.seed,
-            min_distance_m: args.min_distance_m,
-        },
-    };
-    let (queries, described) = grid_bench::queries(grid, model, from).map_err(bad_input)?;
+    let (queries, described) = queries(&args, grid, model)?;
     let progress = indicatif::ProgressBar::new((planners.len() * queries.len()) as u64);
     progress.set_style(
         indicatif::ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} queries")
@@ -136,6 +125,26 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         println!("wrote    {}", out.display());
     }
     Ok(())
+}
+
+/// The queries of `--scen FILE` (read here), or `--random` ones, and how they were drawn.
+fn queries(
+    args: &BenchArgs,
+    grid: &skyplan_cspace::Grid2,
+    model: MoveModel,
+) -> Result<(Vec<(skyplan_cspace::Cell, skyplan_cspace::Cell)>, String)> {
+    let scen = (args.scen.as_ref())
+        .map(|path| Ok::<_, Failure>((path.display().to_string(), read_text(path)?)))
+        .transpose()?;
+    let from = match &scen {
+        Some((name, text)) => QuerySource::Scen(name, text, args.random),
+        None => QuerySource::Random {
+            count: args.random.unwrap_or(26),
+            seed: args.seed,
+            min_distance_m: args.min_distance_m,
+        },
+    };
+    grid_bench::queries(grid, model, from).map_err(bad_input)
 }
 
 /// How JPS+ gets its table: built here and saved (`--save-preprocess`), streamed from a file
