@@ -23,7 +23,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             p.display()
         )));
     }
-    let (name, text) = crate::bench_cmd::map_text(args.map.as_deref())?;
+    let (name, text) = crate::files::map_text(args.map.as_deref(), crate::bench_cmd::BUNDLED_NAME)?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{name}: {e}")))?;
     let bench = Bench3d {

@@ -4,25 +4,17 @@
 
 use crate::args::BenchArgs;
 use crate::exit::{Classify, Failure, Kind, Result, bad_input, runtime};
-use crate::files::{read_text, write_atomic};
+use crate::files::{map_text, read_text, write_atomic};
 use anyhow::Context;
 use skyplan_bench::Contender;
 use skyplan_bench::grid_bench::{self, JpsPlusPrep, QuerySource, RunAllError};
-use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
+use skyplan_plan::PlannerId;
 use skyplan_search::MoveModel;
 use std::path::Path;
 use std::time::Instant;
 
-/// The map's name and text: the file, or the bundled FCND city map.
-pub(crate) fn map_text(map: Option<&Path>) -> Result<(String, String)> {
-    Ok(match map {
-        Some(path) => (path.display().to_string(), read_text(path)?),
-        None => (
-            "FCND city map (bundled)".to_string(),
-            BUNDLED_COLLIDERS.to_string(),
-        ),
-    })
-}
+/// How `bench` names the bundled map.
+pub(crate) const BUNDLED_NAME: &str = "FCND city map (bundled)";
 
 fn is_movingai(args: &BenchArgs) -> bool {
     args.map
@@ -65,7 +57,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     };
     let planners = grid_bench::contenders(args.planners.as_deref(), is_movingai(&args), args.peers)
         .map_err(bad_input)?;
-    let (name, text) = map_text(args.map.as_deref())?;
+    let (name, text) = map_text(args.map.as_deref(), BUNDLED_NAME)?;
     let spec = args.slice.spec();
     let source =
         grid_bench::load_grid(&name, &text, is_movingai(&args), spec).map_err(bad_input)?;

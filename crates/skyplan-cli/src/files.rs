@@ -20,6 +20,17 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
         .or_exit(Kind::BadInput)
 }
 
+/// A map's name and text: the file, or the bundled FCND city map, named `bundled_name`.
+pub fn map_text(map: Option<&Path>, bundled_name: &str) -> Result<(String, String)> {
+    Ok(match map {
+        Some(path) => (path.display().to_string(), read_text(path)?),
+        None => (
+            bundled_name.to_string(),
+            skyplan_plan::FCND_CITY_CSV.to_string(),
+        ),
+    })
+}
+
 /// Where an output goes: standard output for `-`, else the file the path names (a symlink is
 /// followed to its target, so the link survives).
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -2,13 +2,13 @@
 
 use crate::args::SimArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
-use crate::files::read_text;
+use crate::files::{map_text, read_text};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_frames::Lla;
 use skyplan_link::vehicle::{SimServer, SimServerConfig};
 use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
-use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, FCND_CITY_NAME as BUNDLED_NAME};
+use skyplan_plan::FCND_CITY_NAME;
 use std::time::Duration;
 
 /// Reads `--hidden FILE`: boxes in the colliders format whose `lat0/lon0` line must be the
@@ -84,10 +84,7 @@ fn live_view(args: &SimArgs, map_name: &str, text: &str) -> Result<crate::live::
 pub fn run(args: SimArgs) -> Result<()> {
     check_speedup(args.speedup)?;
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
-    let (map_name, text) = match &args.map {
-        Some(path) => (path.display().to_string(), read_text(path)?),
-        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
-    };
+    let (map_name, text) = map_text(args.map.as_deref(), FCND_CITY_NAME)?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
     let (map_home, home) = homes(&args, &map.home)?;
