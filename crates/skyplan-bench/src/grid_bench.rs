@@ -233,3 +233,273 @@ pub fn jps_plus_engine(
 ) -> Result<CellSearch<'_>, String> {
     CellSearch::with_jps_plus_table(grid, Arc::new(table), us).map_err(|e| e.to_string())
 }
+
+/// Where [`run_all`]'s JPS+ gets its table.
+pub enum JpsPlusPrep<R> {
+    /// JPS+ builds its own table (timed as its preparation).
+    Build,
+    /// A table the caller built (and saved) with [`build_jps_plus_table`], and its build time,
+    /// µs: reused when JPS+ runs first, otherwise dropped before the runs so that it does not
+    /// count in another planner's peak memory.
+    Built(JpsPlusTable, u64),
+    /// A table file (written by [`JpsPlusTable::write_to`]) to stream in, timed as the
+    /// preparation.
+    File(R),
+}
+
+/// Why [`run_all`] stopped before running every contender.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RunAllError {
+    /// The table file of [`JpsPlusPrep::File`] was refused (unreadable, another grid or move
+    /// model): the input is wrong.
+    Table(String),
+    /// JPS+ could not use a table that was fine.
+    Engine(String),
+}
+
+impl std::fmt::Display for RunAllError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunAllError::Table(m) | RunAllError::Engine(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for RunAllError {}
+
+/// Every contender on the same queries, one after the other, each measured by
+/// [`run_measured`] from its preparation; JPS+ prepared as `jps_plus` says. `started` is told
+/// each contender before its queries, `answered` after each query.
+///
+/// ```
+/// use skyplan_bench::{Contender, grid_bench::{self, JpsPlusPrep}};
+/// use skyplan_cspace::{Cell, Grid2};
+/// use skyplan_search::MoveModel;
+///
+/// let grid = std::sync::Arc::new(Grid2::from_ascii("....\n....\n....").unwrap());
+/// let contenders = [Contender::from_name("jps-plus").unwrap(), Contender::from_name("astar").unwrap()];
+/// let queries = [(Cell::new(0, 0), Cell::new(2, 3))];
+/// let none: JpsPlusPrep<&[u8]> = JpsPlusPrep::Build;
+/// let runs = grid_bench::run_all(&grid, MoveModel::Octile, &contenders, &queries, none, |_| {}, || {})
+///     .unwrap();
+/// assert_eq!(runs.len(), 2);
+/// assert_eq!(runs[0].records[0].cost, runs[1].records[0].cost);
+/// ```
+pub fn run_all<R: std::io::Read>(
+    grid: &Arc<Grid2>,
+    model: MoveModel,
+    contenders: &[Contender],
+    queries: &[(Cell, Cell)],
+    jps_plus: JpsPlusPrep<R>,
+    mut started: impl FnMut(Contender),
+    mut answered: impl FnMut(),
+) -> Result<Vec<Run>, RunAllError> {
+    let jps_plus_id = Contender::Skyplan(skyplan_plan::PlannerId::JpsPlus);
+    let mut prep = match jps_plus {
+        JpsPlusPrep::Built(..) if contenders.first() != Some(&jps_plus_id) => JpsPlusPrep::Build,
+        prep => prep,
+    };
+    let mut runs = Vec::with_capacity(contenders.len());
+    for &contender in contenders {
+        started(contender);
+        let own = if contender == jps_plus_id {
+            std::mem::replace(&mut prep, JpsPlusPrep::Build)
+        } else {
+            JpsPlusPrep::Build
+        };
+        let prepare = || match own {
+            JpsPlusPrep::Build => Ok(None),
+            JpsPlusPrep::Built(table, us) => jps_plus_engine(grid, table, us)
+                .map(Some)
+                .map_err(RunAllError::Engine),
+            JpsPlusPrep::File(input) => {
+                jps_plus_from_table(std::io::BufReader::new(input), grid, model, Instant::now())
+                    .map(Some)
+                    .map_err(RunAllError::Table)
+            }
+        };
+        runs.push(run_measured(
+            grid,
+            model,
+            contender,
+            prepare,
+            queries,
+            |_| answered(),
+        )?);
+    }
+    Ok(runs)
+}
+
+/// The grid benchmark's result as `skyplan bench` shows it: the map, the queries, the table
+/// and notes (e.g. peers that did not run); [`Report::json`] or the text of its `Display`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// The map's name ([`Source::name`]).
+    pub map: String,
+    /// Grid rows.
+    pub rows: u32,
+    /// Grid columns.
+    pub cols: u32,
+    /// Cell size, metres.
+    pub cell_m: f64,
+    /// How the queries were drawn, in words (from [`queries`]).
+    pub queries: String,
+    /// The move model.
+    pub model: MoveModel,
+    /// The table's rows ([`crate::table`]).
+    pub table: Vec<crate::Row>,
+    /// Notes printed under the table.
+    pub notes: Vec<String>,
+}
+
+impl Report {
+    /// The report of `runs` over `query_count` queries on `source`'s grid.
+    pub fn new(
+        source: &Source,
+        described: &str,
+        model: MoveModel,
+        runs: &[Run],
+        query_count: usize,
+        notes: Vec<String>,
+    ) -> Self {
+        let grid = &source.grid;
+        let cell_m = grid.frame().cell_m;
+        Report {
+            map: source.name.clone(),
+            rows: grid.rows(),
+            cols: grid.cols(),
+            cell_m,
+            queries: described.to_string(),
+            model,
+            table: crate::table(runs, query_count, cell_m),
+            notes,
+        }
+    }
+
+    /// One JSON object: `map`, `grid` (rows, columns), `queries`, `rows`, `notes`.
+    pub fn json(&self) -> serde_json::Value {
+        json!({ "map": self.map, "grid": [self.rows, self.cols], "queries": self.queries, "rows": self.table, "notes": self.notes })
+    }
+}
+
+impl std::fmt::Display for Report {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "map      {}: {} × {} cells of {} m",
+            self.map, self.rows, self.cols, self.cell_m
+        )?;
+        let model_name = skyplan_plan::model_name(self.model);
+        writeln!(f, "queries  {}; move model {model_name}", self.queries)?;
+        writeln!(f)?;
+        write!(f, "{}", crate::format_table(&self.table))?;
+        for n in &self.notes {
+            writeln!(f, "note     {n}")?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn open_grid() -> Arc<Grid2> {
+        Arc::new(Grid2::from_ascii("......\n..##..\n......").unwrap())
+    }
+
+    const QUERIES: [(Cell, Cell); 2] = [
+        (Cell { row: 0, col: 0 }, Cell { row: 2, col: 5 }),
+        (Cell { row: 2, col: 0 }, Cell { row: 0, col: 5 }),
+    ];
+
+    fn names(list: &str) -> Vec<Contender> {
+        contenders(Some(list), false, false).unwrap()
+    }
+
+    #[test]
+    fn run_all_reuses_a_built_table_only_when_jps_plus_runs_first() {
+        let grid = open_grid();
+        let model = MoveModel::Octile;
+        let (table, _) = build_jps_plus_table(&grid, model);
+        let prep: JpsPlusPrep<&[u8]> = JpsPlusPrep::Built(table, 4242);
+        let (mut started, mut answered) = (Vec::new(), 0);
+        let runs = run_all(
+            &grid,
+            model,
+            &names("jps-plus,astar"),
+            &QUERIES,
+            prep,
+            |c| started.push(c.name()),
+            || answered += 1,
+        )
+        .unwrap();
+        assert_eq!(started, ["jps-plus", "astar"]);
+        assert_eq!(answered, 4);
+        assert_eq!(runs[0].precompute_us, 4242.0);
+        let costs = |r: &Run| r.records.iter().map(|x| x.cost).collect::<Vec<_>>();
+        assert_eq!(costs(&runs[0]), costs(&runs[1]));
+
+        let (table, _) = build_jps_plus_table(&grid, model);
+        let prep: JpsPlusPrep<&[u8]> = JpsPlusPrep::Built(table, 4242);
+        let runs = run_all(
+            &grid,
+            model,
+            &names("astar,jps-plus"),
+            &QUERIES,
+            prep,
+            |_| {},
+            || {},
+        )
+        .unwrap();
+        assert_ne!(runs[1].precompute_us, 4242.0);
+    }
+
+    #[test]
+    fn run_all_loads_a_table_file_and_refuses_another_move_model() {
+        let grid = open_grid();
+        let (table, _) = build_jps_plus_table(&grid, MoveModel::Octile);
+        let mut bytes = Vec::new();
+        table.write_to(&mut bytes, [f64::NAN; 3]).unwrap();
+        let list = names("jps-plus");
+        let run = |model| {
+            let file = JpsPlusPrep::File(&bytes[..]);
+            run_all(&grid, model, &list, &QUERIES, file, |_| {}, || {})
+        };
+        let runs = run(MoveModel::Octile).unwrap();
+        assert!(runs[0].records.iter().all(|r| r.cost.is_some()));
+        let refused = run(MoveModel::OctileCornerCutting);
+        assert!(matches!(refused, Err(RunAllError::Table(m)) if m.contains("corner cutting")));
+    }
+
+    #[test]
+    fn report_text_and_json_name_the_map_queries_and_notes() {
+        let source = Source {
+            name: "test grid".into(),
+            grid: open_grid(),
+        };
+        let list = names("astar");
+        let none: JpsPlusPrep<&[u8]> = JpsPlusPrep::Build;
+        let runs = run_all(
+            &source.grid,
+            MoveModel::Octile,
+            &list,
+            &QUERIES,
+            none,
+            |_| {},
+            || {},
+        )
+        .unwrap();
+        let notes = vec!["a peer did not run".to_string()];
+        let report = Report::new(&source, "2 queries", MoveModel::Octile, &runs, 2, notes);
+        let text = report.to_string();
+        assert!(text.starts_with(
+            "map      test grid: 3 × 6 cells of 1 m\nqueries  2 queries; move model "
+        ));
+        assert!(text.ends_with("note     a peer did not run\n"));
+        let json = report.json();
+        assert_eq!(json["grid"], json!([3, 6]));
+        assert_eq!(json["rows"][0]["planner"], "astar");
+        assert_eq!(json["notes"][0], "a peer did not run");
+    }
+}

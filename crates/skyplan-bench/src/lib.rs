@@ -19,10 +19,12 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod bench3d;
 pub mod grid_bench;
 mod peer_pathfinding;
 pub mod python_peers;
 pub mod replay;
+pub mod replay_report;
 pub mod three_d;
 
 use rand::{RngExt, SeedableRng};

@@ -122,15 +122,8 @@ pub struct RouteArgs {
     /// TOML file with default values for these options (command-line options win).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
-    /// Flight altitude above home, metres, 0 to 10000 [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub alt_m: Option<f64>,
-    /// Safety margin around obstacles, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub safety_m: Option<f64>,
-    /// Grid cell size of colliders maps, metres [default: 1].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub cell_m: Option<f64>,
+    #[command(flatten)]
+    pub slice: SliceArgs,
     /// Start as local metres north,east of the map's origin [default: the home].
     #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "start_lla", allow_hyphen_values = true)]
     pub start_ne: Option<Pair>,
@@ -146,12 +139,8 @@ pub struct RouteArgs {
     /// Heading of the first waypoint, degrees clockwise from north [default: 0].
     #[arg(long, value_name = "DEG", value_parser = parse_finite, allow_hyphen_values = true)]
     pub start_heading_deg: Option<f64>,
-    /// Grid connectivity: 8 (diagonals cost √2) or 4 [default: 8].
-    #[arg(long, value_name = "4|8", value_parser = clap::value_parser!(u8).range(4..=8))]
-    pub connectivity: Option<u8>,
-    /// Let diagonal moves pass between two blocked cells (the FCND move model).
-    #[arg(long)]
-    pub corner_cutting: bool,
+    #[command(flatten)]
+    pub moves: MovesArgs,
     /// The planner [default: jps].
     #[arg(long, value_name = "PLANNER", value_parser = any_planner())]
     pub planner: Option<PlannerId>,
@@ -164,10 +153,8 @@ pub struct RouteArgs {
     /// Skip line-of-sight shortcutting.
     #[arg(long)]
     pub no_shortcut: bool,
-    /// Most memory a map or plan may need, estimated before anything is allocated: bytes, or
-    /// with a suffix K, M, G [default: half the machine's memory].
-    #[arg(long, value_name = "SIZE", value_parser = parse_size_bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub memory: MemoryArgs,
     #[command(flatten)]
     pub grid: crate::grid_args::GridMapArgs,
     #[command(flatten)]
@@ -175,7 +162,7 @@ pub struct RouteArgs {
 }
 
 /// `1G`, `512M`, `300K` or a number of bytes.
-pub(crate) fn parse_size_bytes(s: &str) -> Result<u64, String> {
+fn parse_size_bytes(s: &str) -> Result<u64, String> {
     let t = s.trim();
     let (num, mult) = match t.char_indices().last() {
         Some((i, c)) if c.is_ascii_alphabetic() => {
@@ -195,6 +182,22 @@ pub(crate) fn parse_size_bytes(s: &str) -> Result<u64, String> {
             Ok((v * mult as f64) as u64)
         }
         _ => Err(format!("expected a size like 512M or 2G, found {s:?}")),
+    }
+}
+
+/// `--max-memory` (`plan`, `fly`, `navigate`).
+#[derive(Debug, Args)]
+pub struct MemoryArgs {
+    /// Most memory a map or plan may need, estimated before anything is allocated: bytes, or
+    /// with a suffix K, M, G [default: half the machine's memory].
+    #[arg(long, value_name = "SIZE", value_parser = parse_size_bytes)]
+    pub max_memory: Option<u64>,
+}
+
+impl MemoryArgs {
+    /// The planning API's limits of the option.
+    pub fn limits(&self) -> skyplan_plan::Limits {
+        limits(self.max_memory)
     }
 }
 
@@ -298,28 +301,41 @@ pub struct ScenArgs {
     pub planner: PlannerId,
 }
 
-/// Where a colliders map is sliced into a grid (`bench`, `navigate`).
+/// Where a colliders map is sliced into a grid (`plan`, `fly`, `bench`, `navigate`); `plan`
+/// and `fly` take the defaults from `--config` first.
 #[derive(Debug, Args)]
 pub struct SliceArgs {
-    /// Flight altitude for colliders maps, metres.
-    #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
-    pub alt_m: f64,
-    /// Safety margin for colliders maps, metres.
-    #[arg(long, value_name = "M", default_value_t = 5.0, value_parser = parse_finite)]
-    pub safety_m: f64,
-    /// Cell size for colliders maps, metres.
-    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
-    pub cell_m: f64,
+    /// Flight altitude above home, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub alt_m: Option<f64>,
+    /// Safety margin around obstacles, metres [default: 5].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub safety_m: Option<f64>,
+    /// Grid cell size of colliders maps, metres [default: 1].
+    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub cell_m: Option<f64>,
 }
 
 impl SliceArgs {
+    /// The slice, the defaults where an option was not given.
     pub fn spec(&self) -> skyplan_cspace::GridSpec {
         skyplan_cspace::GridSpec {
-            alt_m: self.alt_m,
-            safety_m: self.safety_m,
-            cell_m: self.cell_m,
+            alt_m: self.alt_m.unwrap_or(5.0),
+            safety_m: self.safety_m.unwrap_or(5.0),
+            cell_m: self.cell_m.unwrap_or(1.0),
         }
     }
+}
+
+/// How a grid path may move (`plan`, `fly`, `navigate`).
+#[derive(Debug, Args)]
+pub struct MovesArgs {
+    /// Grid connectivity: 8 (diagonals cost √2) or 4 [default: 8].
+    #[arg(long, value_name = "4|8", value_parser = clap::value_parser!(u8).range(4..=8))]
+    pub connectivity: Option<u8>,
+    /// Let diagonal moves pass between two blocked cells (the FCND move model).
+    #[arg(long)]
+    pub corner_cutting: bool,
 }
 
 #[derive(Debug, Args)]

@@ -4,26 +4,17 @@
 
 use crate::args::BenchArgs;
 use crate::exit::{Classify, Failure, Kind, Result, bad_input, runtime};
-use crate::files::{read_text, write_atomic};
+use crate::files::{map_text, read_text, write_atomic};
 use anyhow::Context;
-use serde_json::json;
-use skyplan_bench::grid_bench::{self, QuerySource};
-use skyplan_bench::{Contender, Run};
-use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, PlannerId};
+use skyplan_bench::Contender;
+use skyplan_bench::grid_bench::{self, JpsPlusPrep, QuerySource, RunAllError};
+use skyplan_plan::PlannerId;
 use skyplan_search::MoveModel;
 use std::path::Path;
 use std::time::Instant;
 
-/// The map's name and text: the file, or the bundled FCND city map.
-pub(crate) fn map_text(map: Option<&Path>) -> Result<(String, String)> {
-    Ok(match map {
-        Some(path) => (path.display().to_string(), read_text(path)?),
-        None => (
-            "FCND city map (bundled)".to_string(),
-            BUNDLED_COLLIDERS.to_string(),
-        ),
-    })
-}
+/// How `bench` names the bundled map.
+pub(crate) const BUNDLED_NAME: &str = "FCND city map (bundled)";
 
 fn is_movingai(args: &BenchArgs) -> bool {
     args.map
@@ -36,7 +27,8 @@ fn table_spec(args: &BenchArgs) -> [f64; 3] {
     if is_movingai(args) {
         [f64::NAN; 3]
     } else {
-        [args.slice.alt_m, args.slice.safety_m, args.slice.cell_m]
+        let s = args.slice.spec();
+        [s.alt_m, s.safety_m, s.cell_m]
     }
 }
 
@@ -65,25 +57,12 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     };
     let planners = grid_bench::contenders(args.planners.as_deref(), is_movingai(&args), args.peers)
         .map_err(bad_input)?;
-    let (name, text) = map_text(args.map.as_deref())?;
+    let (name, text) = map_text(args.map.as_deref(), BUNDLED_NAME)?;
     let spec = args.slice.spec();
     let source =
         grid_bench::load_grid(&name, &text, is_movingai(&args), spec).map_err(bad_input)?;
     let grid = &source.grid;
-    let scen = (args.scen.as_ref())
-        .map(|path| Ok::<_, Failure>((path.display().to_string(), read_text(path)?)))
-        .transpose()?;
-    let from = match &scen {
-        Some((name, text)) => QuerySource::Scen(name, text, args.random),
-        None => QuerySource::Random {
-            count: args.random.unwrap_or(26),
-            seed: args.seed,
-            min_distance_m: args.min_distance_m,
-        },
-    };
-    let (queries, described) = grid_bench::queries(grid, model, from).map_err(bad_input)?;
-    let cell_m = grid.frame().cell_m;
-
+    let (queries, described) = queries(&args, grid, model)?;
     let progress = indicatif::ProgressBar::new((planners.len() * queries.len()) as u64);
     progress.set_style(
         indicatif::ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} queries")
@@ -92,39 +71,22 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    // The saved table also serves this run's JPS+ queries (no second build) when JPS+ runs
-    // first; otherwise it is dropped, so that it does not count in another planner's peak.
-    let mut saved = None;
-    if let Some(path) = &args.save_preprocess {
-        let table = save_table(path, grid, model, &args)?;
-        if planners.first() == Some(&Contender::Skyplan(PlannerId::JpsPlus)) {
-            saved = Some(table);
+    let jps_plus = jps_plus_prep(&args, grid, model, &planners)?;
+    let mut runs = grid_bench::run_all(
+        grid,
+        model,
+        &planners,
+        &queries,
+        jps_plus,
+        |planner| progress.set_message(planner.name()),
+        || progress.inc(1),
+    )
+    .map_err(|e| match (e, &args.preprocess) {
+        (RunAllError::Table(e), Some(path)) => {
+            bad_input(format!("--preprocess {}: {e}", path.display()))
         }
-    }
-    let mut runs: Vec<Run> = Vec::new();
-    for &planner in &planners {
-        progress.set_message(planner.name());
-        let jps_plus = planner == Contender::Skyplan(PlannerId::JpsPlus);
-        let reuse = if jps_plus { saved.take() } else { None };
-        let prepare = || match (&args.preprocess, reuse) {
-            (_, Some((table, us))) => grid_bench::jps_plus_engine(grid, table, us)
-                .map(Some)
-                .map_err(runtime),
-            (Some(path), None) if jps_plus => {
-                let t = Instant::now();
-                let file = std::fs::File::open(path)
-                    .with_context(|| format!("--preprocess {}: cannot open", path.display()))
-                    .or_exit(Kind::BadInput)?;
-                grid_bench::jps_plus_from_table(std::io::BufReader::new(file), grid, model, t)
-                    .map(Some)
-                    .map_err(|e| bad_input(format!("--preprocess {}: {e}", path.display())))
-            }
-            _ => Ok(None),
-        };
-        let run =
-            grid_bench::run_measured(grid, model, planner, prepare, &queries, |_| progress.inc(1))?;
-        runs.push(run);
-    }
+        (e, _) => runtime(e),
+    })?;
     progress.finish_and_clear();
     let mut notes = Vec::new();
     if args.peers {
@@ -139,9 +101,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         runs.extend(py_runs);
         notes.extend(py_notes);
     }
-
-    let rows = skyplan_bench::table(&runs, queries.len(), cell_m);
-
+    let report = grid_bench::Report::new(&source, &described, model, &runs, queries.len(), notes);
     if let Some(out) = &args.out {
         let json = out.extension().is_some_and(|e| e == "json");
         let bytes =
@@ -149,34 +109,61 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         write_atomic(out, &bytes)?;
     }
     if args.json {
-        println!(
-            "{}",
-            json!({ "map": source.name, "grid": [grid.rows(), grid.cols()], "queries": described, "rows": rows, "notes": notes })
-        );
+        println!("{}", report.json());
         return Ok(());
     }
-    println!(
-        "map      {}: {} × {} cells of {} m",
-        source.name,
-        grid.rows(),
-        grid.cols(),
-        cell_m
-    );
-    let model_name = skyplan_plan::model_name(model);
-    println!("queries  {described}; move model {model_name}");
-    println!();
-    print!("{}", skyplan_bench::format_table(&rows));
-    for n in &notes {
-        println!("note     {n}");
-    }
+    print!("{report}");
     if let Some(out) = &args.out {
         println!("wrote    {}", out.display());
     }
     Ok(())
 }
 
-/// Builds the JPS+ table of `grid` and streams it to `path` (through a temporary file renamed
-/// into place, so a failed save leaves no partial table); the table and its build time (µs).
+/// The queries of `--scen FILE` (read here), or `--random` ones, and how they were drawn.
+fn queries(
+    args: &BenchArgs,
+    grid: &skyplan_cspace::Grid2,
+    model: MoveModel,
+) -> Result<(Vec<(skyplan_cspace::Cell, skyplan_cspace::Cell)>, String)> {
+    let scen = (args.scen.as_ref())
+        .map(|path| Ok::<_, Failure>((path.display().to_string(), read_text(path)?)))
+        .transpose()?;
+    let from = match &scen {
+        Some((name, text)) => QuerySource::Scen(name, text, args.random),
+        None => QuerySource::Random {
+            count: args.random.unwrap_or(26),
+            seed: args.seed,
+            min_distance_m: args.min_distance_m,
+        },
+    };
+    grid_bench::queries(grid, model, from).map_err(bad_input)
+}
+
+/// How JPS+ gets its table: built here and saved (`--save-preprocess`), streamed from a file
+/// (`--preprocess`, opened only when JPS+ runs), or built by itself.
+fn jps_plus_prep(
+    args: &BenchArgs,
+    grid: &std::sync::Arc<skyplan_cspace::Grid2>,
+    model: MoveModel,
+    planners: &[Contender],
+) -> Result<JpsPlusPrep<std::fs::File>> {
+    if let Some(path) = &args.save_preprocess {
+        let (table, us) = save_table(path, grid, model, args)?;
+        return Ok(JpsPlusPrep::Built(table, us));
+    }
+    match &args.preprocess {
+        Some(path) if planners.contains(&Contender::Skyplan(PlannerId::JpsPlus)) => {
+            let file = std::fs::File::open(path)
+                .with_context(|| format!("--preprocess {}: cannot open", path.display()))
+                .or_exit(Kind::BadInput)?;
+            Ok(JpsPlusPrep::File(file))
+        }
+        _ => Ok(JpsPlusPrep::Build),
+    }
+}
+
+/// Builds the JPS+ table of `grid` and streams it to `path` atomically (a failed save leaves no
+/// partial table); the table and its build time (µs).
 fn save_table(
     path: &Path,
     grid: &std::sync::Arc<skyplan_cspace::Grid2>,
@@ -185,22 +172,7 @@ fn save_table(
 ) -> Result<(skyplan_search::JpsPlusTable, u64)> {
     let (table, built_us) = grid_bench::build_jps_plus_table(grid, model);
     let t = Instant::now();
-    let file_name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
-    let written = (|| -> std::io::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
-        let mut out = std::io::BufWriter::new(file);
-        table.write_to(&mut out, table_spec(args))?;
-        out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(anyhow::anyhow!("writing {}: {e}", path.display())).or_exit(Kind::Runtime);
-    }
+    crate::files::write_atomic_with(path, |out| table.write_to(out, table_spec(args)))?;
     if !args.json {
         eprintln!(
             "saved    JPS+ table ({:.1} MB, built in {:.0} ms, written in {:.0} ms) to {}",
@@ -220,12 +192,13 @@ fn replan_bench(args: &BenchArgs, flights: usize) -> Result<()> {
     }
     let limits = skyplan_plan::Limits::default();
     let world = crate::world_load::load_world(args.map.as_deref(), &Default::default(), &limits)?;
+    let slice = args.slice.spec();
     let spec = skyplan_replan::bench::ScenarioSpec {
         flights,
         seed: args.seed,
         hidden: args.hidden_random,
-        alt_m: args.slice.alt_m,
-        safety_m: args.slice.safety_m,
+        alt_m: slice.alt_m,
+        safety_m: slice.safety_m,
         min_distance_m: args.min_distance_m.unwrap_or(300.0),
     };
     print!("{}", crate::replan_cmd::bench(&world, &spec, 50.0)?);

@@ -20,6 +20,17 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
         .or_exit(Kind::BadInput)
 }
 
+/// A map's name and text: the file, or the bundled FCND city map, named `bundled_name`.
+pub fn map_text(map: Option<&Path>, bundled_name: &str) -> Result<(String, String)> {
+    Ok(match map {
+        Some(path) => (path.display().to_string(), read_text(path)?),
+        None => (
+            bundled_name.to_string(),
+            skyplan_plan::FCND_CITY_CSV.to_string(),
+        ),
+    })
+}
+
 /// Where an output goes: standard output for `-`, else the file the path names (a symlink is
 /// followed to its target, so the link survives).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -87,6 +98,14 @@ pub fn write_target(target: &Target, bytes: &[u8]) -> Result<()> {
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename, so a reader
 /// never sees a half-written file and a failure leaves any previous file intact.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Streams `write`'s output to `path` atomically (buffered), as [`write_atomic`] writes bytes.
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -97,11 +116,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         .unwrap_or_default();
     let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
     let result = (|| -> anyhow::Result<()> {
-        let mut f = std::fs::File::create(&tmp)
+        let f = std::fs::File::create(&tmp)
             .with_context(|| format!("cannot create {}", tmp.display()))?;
-        f.write_all(bytes)
-            .with_context(|| format!("cannot write {}", tmp.display()))?;
-        f.sync_all()
+        let mut out = std::io::BufWriter::new(f);
+        write(&mut out).with_context(|| format!("cannot write {}", tmp.display()))?;
+        out.into_inner()
+            .map_err(|e| e.into_error())
+            .and_then(|f| f.sync_all())
             .with_context(|| format!("cannot flush {}", tmp.display()))?;
         std::fs::rename(&tmp, path)
             .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))?;

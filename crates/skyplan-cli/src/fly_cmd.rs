@@ -5,17 +5,20 @@
 use crate::args::FlyArgs;
 use crate::exit::runtime;
 use crate::exit::{Failure, Kind, Result, bad_input};
-use crate::files::{write_atomic, write_target};
+use crate::files::{Target, write_atomic, write_target};
+use crate::picture::PictureKind;
 use skyplan_flight::executor::{
     ExecutorConfig, FailsafeAction, FlightState, Note, Outcome, Telemetry,
 };
+use skyplan_frames::LocalFrame;
 use skyplan_link::flight::{self, Observer, reached_index};
 use skyplan_link::ground::{GroundConfig, Update, Waiting};
 use skyplan_link::in_process::InProcessSim;
-use skyplan_link::runner::{self, Ended, FlyOptions, Mode, RunObserver};
+use skyplan_link::runner::{self, Ended, FlyOptions, Mode, RunObserver, Unfinished};
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
 use skyplan_link::words::{log_csv, progress_message, sim_note_line};
 use skyplan_link::{Address, Role};
+use skyplan_map::colliders::{CollidersMap, ObstacleBox};
 use skyplan_plan::Plan;
 use std::io::IsTerminal;
 use std::sync::Arc;
@@ -132,19 +135,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
             Ok::<_, Failure>((crate::files::output_target("--plot", path)?, kind))
         })
         .transpose()?;
-    let mut hidden = (args.hidden.as_ref())
-        .map(|path| crate::sim_cmd::load_hidden(path, &map.home))
-        .transpose()?
-        .unwrap_or_default();
-    if args.hidden_random > 0 {
-        let seed = args.route.grid.seed;
-        let placed = runner::hidden_random(&world, &request, args.hidden_random, seed)?;
-        println!(
-            "hidden     {} buildings on or near the route (seed {seed}), in the simulated world only",
-            placed.len()
-        );
-        hidden.extend(placed);
-    }
+    let hidden = hidden_obstacles(&args, &world, &request, &map)?;
     println!(
         "map        {}: {} obstacles, home lat {:.6}, lon {:.6}",
         world.name(),
@@ -153,31 +144,8 @@ pub fn run(args: FlyArgs) -> Result<()> {
         map.home.lon_deg
     );
 
-    // The vehicle: the built-in simulator on a free loopback port, or the given address.
-    let (address, sim) = if args.sim {
-        let config = SimServerConfig {
-            speedup: args.speedup,
-            drop_link_after_s: args.sim_drop_link_after_s,
-            link_gap_s: args.sim_link_gap_s,
-            ekf_delay_s: args.sim_ekf_delay_s,
-            sensor_range_m: crate::sim_cmd::sensor_range_m(args.sensor_range_m)?,
-            hidden: hidden.clone(),
-            ..SimServerConfig::at(frame.home())
-        };
-        let (sim, home) = runner::start_sim(&map, &frame, &request, config)?;
-        println!(
-            "sim        simulated multicopter on tcp:127.0.0.1:{}, {}× real time, at lat {:.7}, lon {:.7}",
-            sim.port(),
-            args.speedup,
-            home.lat_deg,
-            home.lon_deg
-        );
-        (sim.address(), Some(sim))
-    } else {
-        let address = Address::parse(&args.connect, Role::Client).map_err(bad_input)?;
-        (address, None)
-    };
-    let picture_world = plot.as_ref().map(|_| world.clone());
+    let (address, sim) = vehicle(&args, &map, &frame, &request, &hidden)?;
+    let drawing = plot.map(|plot| (world.clone(), plot));
     let bar = progress_bar(0);
     bar.set_prefix("WAITING");
     let mut terminal = Terminal {
@@ -203,6 +171,18 @@ pub fn run(args: FlyArgs) -> Result<()> {
     }
     let report = sim.and_then(finish_sim);
     let flight = result?;
+    conclude(&args, &flight, drawing, &hidden, report.as_ref(), t0)
+}
+
+/// After the flight: the replanner's account, the picture, the flight log and the exit.
+fn conclude(
+    args: &FlyArgs,
+    flight: &runner::Flight,
+    drawing: Option<(skyplan_plan::World, (Target, PictureKind))>,
+    hidden: &[ObstacleBox],
+    report: Option<&SimReport>,
+    t0: Instant,
+) -> Result<()> {
     if let Some(w) = &flight.watcher
         && let Ok(r) = w.0.lock()
     {
@@ -212,12 +192,8 @@ pub fn run(args: FlyArgs) -> Result<()> {
             runner::summary_line(name, r.stats(), r.learned_count())
         );
     }
-    if let (Some((target, kind)), Some(world)) = (&plot, &picture_world) {
-        let bytes = crate::replan_cmd::flight_picture(world, kind, &flight, &hidden)?;
-        write_target(target, &bytes)?;
-        if let Some(path) = &args.plot {
-            println!("wrote      {}", path.display());
-        }
+    if let Some((world, plot)) = &drawing {
+        draw_flight(args, world, plot, flight, hidden)?;
     }
     let outcome = match &flight.ended {
         Ended::Uploaded => {
@@ -237,7 +213,79 @@ pub fn run(args: FlyArgs) -> Result<()> {
             flight.log.len()
         );
     }
-    finish_flight(report.as_ref(), outcome, t0)
+    finish_flight(report, outcome, t0)
+}
+
+/// The obstacles of the simulated world that the map does not have: `--hidden FILE` and
+/// `--hidden-random N` buildings on or near the route.
+fn hidden_obstacles(
+    args: &FlyArgs,
+    world: &skyplan_plan::World,
+    request: &skyplan_plan::PlanRequest,
+    map: &CollidersMap,
+) -> Result<Vec<ObstacleBox>> {
+    let mut hidden = (args.hidden.as_ref())
+        .map(|path| crate::sim_cmd::load_hidden(path, &map.home))
+        .transpose()?
+        .unwrap_or_default();
+    if args.hidden_random > 0 {
+        let seed = args.route.grid.seed;
+        let placed = runner::hidden_random(world, request, args.hidden_random, seed)?;
+        println!(
+            "hidden     {} buildings on or near the route (seed {seed}), in the simulated world only",
+            placed.len()
+        );
+        hidden.extend(placed);
+    }
+    Ok(hidden)
+}
+
+/// The vehicle: the built-in simulator on a free loopback port (`--sim`), or `--connect`.
+fn vehicle(
+    args: &FlyArgs,
+    map: &CollidersMap,
+    frame: &LocalFrame,
+    request: &skyplan_plan::PlanRequest,
+    hidden: &[ObstacleBox],
+) -> Result<(Address, Option<InProcessSim>)> {
+    if !args.sim {
+        let address = Address::parse(&args.connect, Role::Client).map_err(bad_input)?;
+        return Ok((address, None));
+    }
+    let config = SimServerConfig {
+        speedup: args.speedup,
+        drop_link_after_s: args.sim_drop_link_after_s,
+        link_gap_s: args.sim_link_gap_s,
+        ekf_delay_s: args.sim_ekf_delay_s,
+        sensor_range_m: crate::sim_cmd::sensor_range_m(args.sensor_range_m)?,
+        hidden: hidden.to_vec(),
+        ..SimServerConfig::at(frame.home())
+    };
+    let (sim, home) = runner::start_sim(map, frame, request, config)?;
+    println!(
+        "sim        simulated multicopter on tcp:127.0.0.1:{}, {}× real time, at lat {:.7}, lon {:.7}",
+        sim.port(),
+        args.speedup,
+        home.lat_deg,
+        home.lon_deg
+    );
+    Ok((sim.address(), Some(sim)))
+}
+
+/// `--plot`: the flight's picture.
+fn draw_flight(
+    args: &FlyArgs,
+    world: &skyplan_plan::World,
+    (target, kind): &(Target, PictureKind),
+    flight: &runner::Flight,
+    hidden: &[ObstacleBox],
+) -> Result<()> {
+    let bytes = crate::replan_cmd::flight_picture(world, kind, flight, hidden)?;
+    write_target(target, &bytes)?;
+    if let Some(path) = &args.plot {
+        println!("wrote      {}", path.display());
+    }
+    Ok(())
 }
 
 /// Flight options out of range are bad input.
@@ -255,12 +303,7 @@ fn check_flight_args(args: &FlyArgs) -> Result<()> {
             )));
         }
     }
-    if args.sim_ekf_delay_s < 0.0 {
-        return Err(bad_input(format!(
-            "--sim-ekf-delay-s: expected 0 or more, found {}",
-            args.sim_ekf_delay_s
-        )));
-    }
+    crate::sim_cmd::ekf_delay_s("--sim-ekf-delay-s", args.sim_ekf_delay_s)?;
     Ok(())
 }
 
@@ -302,27 +345,10 @@ fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Insta
         println!("{}", flight::track_line(r));
     }
     println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
-    match outcome {
-        Some(Outcome::Completed) => {
-            if let Some(r) = &report
-                && let Some(c) = r.track.collision()
-            {
-                return Err(runtime(format!(
-                    "the flight completed but the simulated vehicle hit obstacle #{} at {:.1} s",
-                    c.box_index, c.time_s
-                )));
-            }
-            Ok(())
-        }
-        // No route in the true world: the "no path" exit, as for planning.
-        Some(Outcome::Failed(f @ skyplan_flight::executor::Failure::NoRoute { .. })) => {
-            Err(Failure::new(Kind::NoPath, format!("flight failed: {f}")))
-        }
-        Some(Outcome::Failed(f)) => Err(runtime(format!("flight failed: {f}"))),
-        None => Err(runtime(
-            "flight aborted and the vehicle did not land in time: check it",
-        )),
-    }
+    runner::verdict(outcome, report).map_err(|e| match e {
+        Unfinished::NoRoute(_) => Failure::new(Kind::NoPath, e),
+        e => runtime(e),
+    })
 }
 
 /// Prints a line, above the progress bar when there is one.

@@ -149,21 +149,16 @@ pub struct NavigateArgs {
     /// At step STEP, replace the current target by N,E and replan (repeatable).
     #[arg(long, value_name = "STEP:N,E", value_parser = parse_change, allow_hyphen_values = true)]
     pub change_target_at: Vec<ChangeArg>,
-    /// Grid connectivity: 8 or 4.
-    #[arg(long, value_name = "4|8", default_value_t = 8, value_parser = clap::value_parser!(u8).range(4..=8))]
-    pub connectivity: u8,
-    /// Let diagonal moves pass between two blocked cells.
-    #[arg(long)]
-    pub corner_cutting: bool,
+    #[command(flatten)]
+    pub moves: crate::args::MovesArgs,
     /// Heat map of the cost map with the route (.png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Most memory the map may need: bytes, or with a suffix K, M, G [default: half the machine's memory].
-    #[arg(long, value_name = "SIZE", value_parser = crate::args::parse_size_bytes)]
-    pub max_memory: Option<u64>,
+    #[command(flatten)]
+    pub memory: crate::args::MemoryArgs,
     /// Print the workspace and the ride as text (grids up to 80 × 60).
     #[arg(long)]
     pub show: bool,

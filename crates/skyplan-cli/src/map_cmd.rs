@@ -2,17 +2,11 @@
 
 use crate::args::TileArgs;
 use crate::exit::{Result, bad_input};
-use crate::files::{output_target, read_text, write_target};
+use crate::files::{map_text, output_target, write_target};
 
 pub fn tile(args: TileArgs) -> Result<()> {
     let target = output_target("--out", &args.out)?;
-    let (name, text) = match &args.map {
-        Some(p) => (p.display().to_string(), read_text(p)?),
-        None => (
-            skyplan_plan::FCND_CITY_NAME.to_string(),
-            skyplan_plan::FCND_CITY_CSV.to_string(),
-        ),
-    };
+    let (name, text) = map_text(args.map.as_deref(), skyplan_plan::FCND_CITY_NAME)?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{name}: {e}")))?;
     let world = skyplan_plan::World::from_colliders(&name, map.clone())?;

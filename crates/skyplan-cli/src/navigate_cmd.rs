@@ -52,8 +52,8 @@ fn endpoint(
         (Some(p), _) => p,
         (None, Some([n, e])) => Pair(n, e),
         (None, None) if std::io::stdin().is_terminal() => {
-            let grid: std::sync::Arc<Grid2> =
-                session.grid(args.slice.alt_m, args.slice.safety_m, args.slice.cell_m)?;
+            let s = args.slice.spec();
+            let grid: std::sync::Arc<Grid2> = session.grid(s.alt_m, s.safety_m, s.cell_m)?;
             crate::show::ask_position(&grid, which)?
         }
         (None, None) => {
@@ -91,7 +91,7 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
             goal_default,
         )?],
     };
-    let g = &args.grid;
+    let (g, slice) = (&args.grid, args.slice.spec());
     Ok(RideRequest {
         start_ne,
         targets_ne,
@@ -103,11 +103,11 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
                 target_ne: [c.target.0, c.target.1],
             })
             .collect(),
-        alt_m: args.slice.alt_m,
-        safety_m: args.slice.safety_m,
-        cell_m: args.slice.cell_m,
-        connectivity: args.connectivity,
-        corner_cutting: args.corner_cutting,
+        alt_m: slice.alt_m,
+        safety_m: slice.safety_m,
+        cell_m: slice.cell_m,
+        connectivity: args.moves.connectivity.unwrap_or(8),
+        corner_cutting: args.moves.corner_cutting,
         costmap: CostmapOptions {
             inscribed_radius_m: g.inscribed_radius_m,
             inflation_radius_m: g.inflation_radius_m,
@@ -135,7 +135,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         }
         None => None,
     };
-    let limits = crate::args::limits(args.max_memory);
+    let limits = args.memory.limits();
     let world = crate::world_load::load_world(args.map.as_deref(), &args.grid, &limits)?;
     let mut session = Session::new(world).with_limits(limits);
     let request = ride_request(&mut session, &args)?;

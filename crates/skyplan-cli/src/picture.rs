@@ -3,27 +3,14 @@
 
 use crate::exit::{Classify, Kind, Result, bad_input};
 use skyplan_plan::{Family, Plan, World};
-use skyplan_plot::PlotFormat;
 use std::path::Path;
 
 pub use skyplan_plot::plan_picture::PictureKind;
 
 /// The picture kind for a path and a planner's family.
 pub fn kind_for(path: &Path, family: Family) -> Result<PictureKind> {
-    let heat = matches!(family, Family::Wavefront | Family::Costmap);
-    let format = PlotFormat::from_path(path);
-    match (heat, format) {
-        (true, Some(PlotFormat::Png)) => Ok(PictureKind::Heatmap),
-        (true, _) => Err(bad_input(format!(
-            "--plot {}: wavefront and costmap draw PNG heat maps; use a .png file name",
-            path.display()
-        ))),
-        (false, Some(f)) => Ok(PictureKind::Scene(f)),
-        (false, None) => Err(bad_input(format!(
-            "--plot {}: expected a .png or .svg file name",
-            path.display()
-        ))),
-    }
+    PictureKind::for_path(path, family)
+        .map_err(|why| bad_input(format!("--plot {}: {why}", path.display())))
 }
 
 /// Renders the picture of `plan`.

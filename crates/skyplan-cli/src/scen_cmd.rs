@@ -5,7 +5,8 @@ use crate::args::ScenArgs;
 use crate::exit::{Result, bad_input};
 use crate::files::read_text;
 use serde_json::json;
-use skyplan_bench::replay::{REL_TOL, file_order_grid, first_off_map, replay};
+use skyplan_bench::replay::{file_order_grid, first_off_map, replay};
+use skyplan_bench::replay_report::ReplayOf;
 
 pub fn run(args: ScenArgs) -> Result<()> {
     let (map_name, scen_name) = (
@@ -25,57 +26,26 @@ pub fn run(args: ScenArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let skyplan_bench::replay::Replay {
-        buckets,
-        failures,
-        table_ms,
-    } = replay(&grid, &scenarios, args.planner, |o| {
+    let replayed = replay(&grid, &scenarios, args.planner, |o| {
         if args.json {
             println!("{}", json!(o));
         }
         progress.inc(1);
     })?;
     progress.finish_and_clear();
-    let total: u64 = buckets.values().map(|b| b.count).sum();
-    let matched: u64 = buckets.values().map(|b| b.matched).sum();
-    let mean_us = buckets.values().map(|b| b.total_us).sum::<f64>() / total.max(1) as f64;
+    let of = ReplayOf {
+        map: &map_name,
+        width: map.width,
+        height: map.height,
+        planner: args.planner,
+    };
     if args.json {
-        println!(
-            "{}",
-            json!({ "summary": true, "map": map_name, "scenarios": total, "matched": matched,
-                    "mean_time_us": mean_us, "planner": args.planner, "precompute_ms": table_ms })
-        );
+        println!("{}", replayed.json_summary(&of));
     } else {
-        let table = if args.planner == skyplan_plan::PlannerId::JpsPlus {
-            format!(" (JPS+ table built in {table_ms:.1} ms)")
-        } else {
-            String::new()
-        };
-        println!(
-            "{map_name}: {} × {} grid, {total} scenarios, planner {}{table}",
-            map.width, map.height, args.planner
-        );
-        println!(
-            "{:>6} {:>9} {:>9} {:>14}",
-            "bucket", "scenarios", "matched", "mean time µs"
-        );
-        for (bucket, b) in &buckets {
-            let mean = b.total_us / b.count as f64;
-            println!("{bucket:>6} {:>9} {:>9} {mean:>14.1}", b.count, b.matched);
-        }
-        println!("{:>6} {total:>9} {matched:>9} {mean_us:>14.1}", "all");
+        print!("{}", replayed.table(&of));
     }
-    if failures.is_empty() {
-        return Ok(());
+    match replayed.mismatches() {
+        Some(why) => Err(crate::exit::runtime(why)),
+        None => Ok(()),
     }
-    let shown: Vec<&str> = failures
-        .iter()
-        .take(5)
-        .filter_map(|o| o.why.as_deref())
-        .collect();
-    Err(crate::exit::runtime(format!(
-        "{} of {total} scenarios do not match optimal_length (relative {REL_TOL}): {}",
-        failures.len(),
-        shown.join("; ")
-    )))
 }

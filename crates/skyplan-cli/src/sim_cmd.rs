@@ -2,13 +2,13 @@
 
 use crate::args::SimArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
-use crate::files::read_text;
+use crate::files::{map_text, read_text};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_frames::Lla;
 use skyplan_link::vehicle::{SimServer, SimServerConfig};
 use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
-use skyplan_plan::{FCND_CITY_CSV as BUNDLED_COLLIDERS, FCND_CITY_NAME as BUNDLED_NAME};
+use skyplan_plan::FCND_CITY_NAME;
 use std::time::Duration;
 
 /// Reads `--hidden FILE`: boxes in the colliders format whose `lat0/lon0` line must be the
@@ -41,40 +41,54 @@ pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
     Ok(m)
 }
 
+/// Checks an EKF delay (`option`): 0 or more simulated seconds.
+pub(crate) fn ekf_delay_s(option: &str, s: f64) -> Result<f64> {
+    if s < 0.0 {
+        return Err(bad_input(format!(
+            "{option}: expected 0 or more, found {s}"
+        )));
+    }
+    Ok(s)
+}
+
+/// The map's home, and where the vehicle starts: `--home`, else the map's home.
+fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> Result<(Lla, Lla)> {
+    let at = |lat_deg, lon_deg| Lla {
+        lat_deg,
+        lon_deg,
+        alt_m: 0.0,
+    };
+    let map_home = at(map_home.lat_deg, map_home.lon_deg);
+    match args.home {
+        Some(p) if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) => {
+            Err(bad_input(format!(
+                "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
+                p.0, p.1
+            )))
+        }
+        Some(p) => Ok((map_home, at(p.0, p.1))),
+        None => Ok((map_home, map_home)),
+    }
+}
+
+/// `--view ADDR`: the live view of the simulator's state.
+fn live_view(args: &SimArgs, map_name: &str, text: &str) -> Result<crate::live::Live> {
+    let Some(addr) = &args.view else {
+        return Ok(crate::live::Live::default());
+    };
+    let world = skyplan_plan::World::from_colliders_csv(map_name, text)
+        .map_err(|e| bad_input(format!("{map_name}: {}", e.message)))?;
+    crate::live::Live::start(&world, Some(addr), None)
+}
+
 pub fn run(args: SimArgs) -> Result<()> {
     check_speedup(args.speedup)?;
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
-    let (map_name, text) = match &args.map {
-        Some(path) => (path.display().to_string(), read_text(path)?),
-        None => (BUNDLED_NAME.to_string(), BUNDLED_COLLIDERS.to_string()),
-    };
+    let (map_name, text) = map_text(args.map.as_deref(), FCND_CITY_NAME)?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
-    let map_home = Lla {
-        lat_deg: map.home.lat_deg,
-        lon_deg: map.home.lon_deg,
-        alt_m: 0.0,
-    };
-    let home = match args.home {
-        Some(p) if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) => {
-            return Err(bad_input(format!(
-                "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
-                p.0, p.1
-            )));
-        }
-        Some(p) => Lla {
-            lat_deg: p.0,
-            lon_deg: p.1,
-            alt_m: 0.0,
-        },
-        None => map_home,
-    };
-    if args.ekf_delay_s < 0.0 {
-        return Err(bad_input(format!(
-            "--ekf-delay-s: expected 0 or more, found {}",
-            args.ekf_delay_s
-        )));
-    }
+    let (map_home, home) = homes(&args, &map.home)?;
+    let ekf_delay_s = ekf_delay_s("--ekf-delay-s", args.ekf_delay_s)?;
     let hidden = (args.hidden.as_ref())
         .map(|path| load_hidden(path, &map.home))
         .transpose()?
@@ -85,7 +99,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         sensor_range_m: sensor_range_m(args.sensor_range_m)?,
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
-        ekf_delay_s: args.ekf_delay_s,
+        ekf_delay_s,
         map_home: Some(map_home),
         ..SimServerConfig::at(home)
     };
@@ -110,14 +124,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         },
         args.sensor_range_m
     );
-    let mut live = match &args.view {
-        Some(addr) => {
-            let world = skyplan_plan::World::from_colliders_csv(&map_name, &text)
-                .map_err(|e| bad_input(format!("{map_name}: {}", e.message)))?;
-            crate::live::Live::start(&world, Some(addr), None)?
-        }
-        None => crate::live::Live::default(),
-    };
+    let mut live = live_view(&args, &map_name, &text)?;
     let stop = SimServer::stop_after(args.duration_s);
     let world = BoxWorld::new(&map.boxes);
     let map_boxes = map.boxes.len();

@@ -83,9 +83,9 @@ fn typed_request(a: &RouteArgs) -> PlanRequest {
     let p3 = &a.plan3d;
     PlanRequest {
         planner: a.planner,
-        alt_m: a.alt_m,
-        safety_m: a.safety_m,
-        cell_m: a.cell_m,
+        alt_m: a.slice.alt_m,
+        safety_m: a.slice.safety_m,
+        cell_m: a.slice.cell_m,
         start_ne: pair(a.start_ne),
         start_lla: pair(a.start_lla),
         goal_ne: pair(a.goal_ne),
@@ -93,8 +93,8 @@ fn typed_request(a: &RouteArgs) -> PlanRequest {
         start_alt_m: p3.start_alt_m,
         goal_alt_m: p3.goal_alt_m,
         start_heading_deg: a.start_heading_deg,
-        connectivity: a.connectivity,
-        corner_cutting: a.corner_cutting.then_some(true),
+        connectivity: a.moves.connectivity,
+        corner_cutting: a.moves.corner_cutting.then_some(true),
         prune: a.prune.map(|p| match p {
             PruneArg::Collinear => PruneMode::Collinear,
             PruneArg::None => PruneMode::None,
@@ -137,7 +137,7 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
         None => Config::default(),
     };
     let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
-    let limits = crate::args::limits(a.max_memory);
+    let limits = a.memory.limits();
     let world = load_world(map.as_deref(), &a.grid, &limits)?;
     let request = typed_request(a).or(config.text.request.clone());
     Ok(Resolved {

@@ -429,6 +429,59 @@ pub fn hidden_random(
     place_hidden(map, &spec).map_err(bad)
 }
 
+/// Why a flown mission does not count as done ([`verdict`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Unfinished {
+    /// Every waypoint was reached, but the simulated vehicle hit an obstacle on the way.
+    #[error(
+        "the flight completed but the simulated vehicle hit obstacle #{box_index} at {time_s:.1} s"
+    )]
+    Collided {
+        /// The obstacle's index in the simulated world.
+        box_index: usize,
+        /// When, simulated seconds.
+        time_s: f64,
+    },
+    /// No route in the true world: the "no path" of planning.
+    #[error("flight failed: {0}")]
+    NoRoute(skyplan_flight::executor::Failure),
+    /// The flight failed otherwise (link, timeout, vehicle, interrupt).
+    #[error("flight failed: {0}")]
+    Failed(skyplan_flight::executor::Failure),
+    /// The flight was aborted and the vehicle did not land in time.
+    #[error("flight aborted and the vehicle did not land in time: check it")]
+    NotLanded,
+}
+
+/// A flight's verdict from its outcome ([`Ended::Flight`]) and, on the simulator, its track
+/// report: done only when it landed and disarmed with every waypoint reached and no collision.
+///
+/// ```
+/// use skyplan_flight::executor::Outcome;
+/// use skyplan_link::runner::{Unfinished, verdict};
+///
+/// assert_eq!(verdict(Some(Outcome::Completed), None), Ok(()));
+/// assert_eq!(verdict(None, None), Err(Unfinished::NotLanded));
+/// ```
+pub fn verdict(
+    outcome: Option<Outcome>,
+    report: Option<&crate::vehicle::SimReport>,
+) -> Result<(), Unfinished> {
+    use skyplan_flight::executor::Failure;
+    match outcome {
+        Some(Outcome::Completed) => match report.and_then(|r| r.track.collision()) {
+            Some(c) => Err(Unfinished::Collided {
+                box_index: c.box_index,
+                time_s: c.time_s,
+            }),
+            None => Ok(()),
+        },
+        Some(Outcome::Failed(f @ Failure::NoRoute { .. })) => Err(Unfinished::NoRoute(f)),
+        Some(Outcome::Failed(f)) => Err(Unfinished::Failed(f)),
+        None => Err(Unfinished::NotLanded),
+    }
+}
+
 /// The replanner's account: replans, latencies, expansions, learned cells.
 pub fn summary_line(kind: &str, stats: &ReplanStats, learned: usize) -> String {
     format!("replans    {}", stats.account(kind, learned))
@@ -513,4 +566,32 @@ pub fn replan_bench(
         rows.push(skyplan_replan::bench::summarise(kind, &results));
     }
     Ok(skyplan_replan::bench::format_rows(&rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use skyplan_flight::executor::Failure;
+
+    #[test]
+    fn verdict_tells_no_route_from_other_failures_and_names_them() {
+        let no_route = Failure::NoRoute {
+            reason: "the goal is walled in".into(),
+        };
+        let got = verdict(Some(Outcome::Failed(no_route.clone())), None);
+        assert_eq!(got, Err(Unfinished::NoRoute(no_route)));
+        let lost = Failure::LinkLost {
+            state: FlightState::Waypoint,
+            silent_s: 6.0,
+        };
+        let got = verdict(Some(Outcome::Failed(lost.clone())), None).unwrap_err();
+        assert_eq!(got.to_string(), format!("flight failed: {lost}"));
+        assert_eq!(verdict(Some(Outcome::Completed), None), Ok(()));
+        assert!(
+            verdict(None, None)
+                .unwrap_err()
+                .to_string()
+                .contains("did not land in time")
+        );
+    }
 }

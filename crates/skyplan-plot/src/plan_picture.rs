@@ -16,6 +16,33 @@ pub enum PictureKind {
     Heatmap,
 }
 
+impl PictureKind {
+    /// The picture a file name asks for, for a planner of `family`: a PNG heat map of the field
+    /// for the navigation functions (wavefront, costmap), else the map and the route in the
+    /// file's format (.png or .svg). `Err` says which file names would do.
+    ///
+    /// ```
+    /// use skyplan_plan::Family;
+    /// use skyplan_plot::{PlotFormat, plan_picture::PictureKind};
+    /// use std::path::Path;
+    ///
+    /// let svg = PictureKind::for_path(Path::new("route.svg"), Family::AnyAngle);
+    /// assert_eq!(svg, Ok(PictureKind::Scene(PlotFormat::Svg)));
+    /// assert_eq!(PictureKind::for_path(Path::new("f.png"), Family::Wavefront), Ok(PictureKind::Heatmap));
+    /// assert!(PictureKind::for_path(Path::new("f.svg"), Family::Costmap).is_err());
+    /// ```
+    pub fn for_path(path: &Path, family: skyplan_plan::Family) -> Result<Self, &'static str> {
+        use skyplan_plan::Family;
+        let heat = matches!(family, Family::Wavefront | Family::Costmap);
+        match (heat, PlotFormat::from_path(path)) {
+            (true, Some(PlotFormat::Png)) => Ok(PictureKind::Heatmap),
+            (true, _) => Err("wavefront and costmap draw PNG heat maps; use a .png file name"),
+            (false, Some(f)) => Ok(PictureKind::Scene(f)),
+            (false, None) => Err("expected a .png or .svg file name"),
+        }
+    }
+}
+
 fn short_name(name: &str) -> &str {
     if name == skyplan_plan::FCND_CITY_NAME {
         return "FCND city map";
