@@ -132,7 +132,10 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     }
     prompt_missing(&world, &mut request)?;
     let mut session = Session::new(world).with_limits(limits);
-    let plan = match session.plan(&request) {
+    let working = spinner(planner);
+    let planned = session.plan(&request);
+    working.finish_and_clear();
+    let plan = match planned {
         Ok(plan) => plan,
         Err(f) => {
             if args.show && f.kind == skyplan_plan::FailureKind::NoPath {
@@ -154,6 +157,22 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         crate::report::print(&plan, &written, t0.elapsed().as_secs_f64() * 1000.0);
     }
     Ok(())
+}
+
+/// A spinner with the elapsed time on a terminal's stderr while the planner works: a contraction
+/// hierarchy or a JPS+ table on a large open map, or RRT* spending its time limit, takes a while.
+fn spinner(planner: PlannerId) -> indicatif::ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner()
+        .with_message(format!("planning with {planner}"))
+        .with_style(
+            indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+        );
+    bar.enable_steady_tick(std::time::Duration::from_millis(150));
+    bar
 }
 
 fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Written> {
