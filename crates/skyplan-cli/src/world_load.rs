@@ -4,10 +4,14 @@
 use crate::args::{Pair, PruneArg, RouteArgs};
 use crate::config::Config;
 use crate::exit::{Result, bad_input};
-use crate::files::{read_bytes, read_text};
+use crate::files::read_bytes;
 use crate::grid_args::{FieldArg, GridMapArgs};
-use skyplan_plan::{FieldMode, Limits, MapFormat, MapYaml, PlanRequest, PruneMode, World};
+use skyplan_plan::{
+    FieldMode, Limits, MapFileError, MapFileOptions, MapFormat, PlanRequest, PruneMode, World,
+};
 use std::path::{Path, PathBuf};
+
+const RESOLUTION_NOT_TAKEN: &str = "--resolution: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)";
 
 fn format_is(path: Option<&Path>, format: MapFormat) -> bool {
     path.and_then(MapFormat::of_path) == Some(format)
@@ -17,9 +21,7 @@ fn format_is(path: Option<&Path>, format: MapFormat) -> bool {
 pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     let colliders = (map.is_none() || format_is(map, MapFormat::Colliders)) && g.random.is_none();
     if g.resolution.is_some() && !format_is(map, MapFormat::Image) {
-        return Err(bad_input(
-            "--resolution: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)",
-        ));
+        return Err(bad_input(RESOLUTION_NOT_TAKEN));
     }
     if colliders && g.home.is_some() {
         return Err(bad_input(
@@ -42,38 +44,27 @@ pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Resul
 
 fn load_file(path: &Path, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     let name = path.display().to_string();
-    let Some(format) = MapFormat::of_path(path) else {
-        return Err(bad_input(format!(
+    let options = MapFileOptions {
+        resolution_m: g.resolution,
+        unknown_free: g.unknown_free,
+        limits: *limits,
+    };
+    World::load_file(path, &options, read_bytes).map_err(|e| match e {
+        MapFileError::UnknownType => bad_input(format!(
             "{name}: unknown map type; expected .csv (colliders), .yaml (map_server), .png/.pgm (with --resolution) or .map (MovingAI)"
-        )));
-    };
-    let (image, bytes, meta) = match format {
-        MapFormat::Colliders => return Ok(World::from_colliders_csv(&name, &read_text(path)?)?),
-        MapFormat::MovingAi => return Ok(World::from_movingai(&name, &read_text(path)?)?),
-        MapFormat::MapServer => {
-            let meta =
-                MapYaml::parse(&read_text(path)?).map_err(|e| bad_input(format!("{name}: {e}")))?;
-            let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
-            let bytes = read_bytes(&image)
-                .map_err(|f| bad_input(format!("{name}: field image: {:#}", f.error)))?;
-            (image.display().to_string(), bytes, meta)
-        }
-        MapFormat::Image => {
-            let resolution = g.resolution.ok_or_else(|| {
-                bad_input(format!(
-                    "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"
-                ))
-            })?;
-            (name, read_bytes(path)?, MapYaml::bare(resolution))
-        }
-    };
-    Ok(World::from_image_within(
-        &image,
-        &bytes,
-        &meta,
-        g.unknown_free,
-        limits,
-    )?)
+        )),
+        MapFileError::NeedsResolution => bad_input(format!(
+            "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"
+        )),
+        MapFileError::ResolutionNotTaken => bad_input(RESOLUTION_NOT_TAKEN),
+        MapFileError::Read {
+            via_yaml: true,
+            error,
+            ..
+        } => bad_input(format!("{name}: field image: {:#}", error.error)),
+        MapFileError::Read { error, .. } => error,
+        MapFileError::Map(failure) => failure.into(),
+    })
 }
 
 /// The request typed on the command line (only what was given).

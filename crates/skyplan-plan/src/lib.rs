@@ -73,6 +73,7 @@ mod cell_search;
 mod config;
 mod failure;
 mod grid;
+mod map_file;
 mod navfn;
 mod plan;
 mod planner_id;
@@ -88,6 +89,7 @@ pub use cell_search::CellSearch;
 pub use config::{ConfigError, ConfigText, parse_config_toml};
 pub use failure::{FailureKind, PlanFailure};
 pub use grid::waypoint_points;
+pub use map_file::{MapFileError, MapFileOptions};
 pub use navfn::CostmapOptions;
 pub use plan::{
     Geometry, GridInfo, GridPathStats, Home, Place, Plan, Segment3, Timings, WaypointCounts,

@@ -11,7 +11,9 @@ use pyo3::types::{PyDict, PyString};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Grid2, GridFrame};
 use skyplan_export::Format;
-use skyplan_plan::{MapYaml, PlanFailure, PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{
+    MapFileError, MapFileOptions, PlanFailure, PlanRequest, PlannerId, Session, World,
+};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -25,56 +27,29 @@ fn io_error(path: &Path, e: std::io::Error) -> PyErr {
     }
 }
 
-fn read_text(path: &Path) -> PyResult<String> {
-    std::fs::read_to_string(path).map_err(|e| io_error(path, e))
-}
-
-fn read_bytes(path: &Path) -> PyResult<Vec<u8>> {
-    std::fs::read(path).map_err(|e| io_error(path, e))
-}
-
-fn has_ext(path: &Path, exts: &[&str]) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
-}
-
 /// A map file by its extension, as the CLI's `--map` reads it.
 fn load_file(path: &Path, resolution_m: Option<f64>, unknown_free: bool) -> PyResult<World> {
     let name = path.display().to_string();
-    if resolution_m.is_some() && !has_ext(path, &["png", "pgm"]) {
-        return Err(bad_input(
-            "resolution_m: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)",
-        ));
-    }
-    let world = if has_ext(path, &["csv"]) {
-        World::from_colliders_csv(&name, &read_text(path)?)
-    } else if has_ext(path, &["yaml", "yml"]) {
-        let meta =
-            MapYaml::parse(&read_text(path)?).map_err(|e| bad_input(format!("{name}: {e}")))?;
-        let image = path.parent().unwrap_or(Path::new("")).join(&meta.image);
-        let bytes = read_bytes(&image)?;
-        World::from_image(&image.display().to_string(), &bytes, &meta, unknown_free)
-    } else if has_ext(path, &["png", "pgm"]) {
-        let resolution = resolution_m.ok_or_else(|| {
-            bad_input(format!(
-                "{name}: a bare image needs resolution_m= (metres per pixel), or use a map_server .yaml"
-            ))
-        })?;
-        World::from_image(
-            &name,
-            &read_bytes(path)?,
-            &MapYaml::bare(resolution),
-            unknown_free,
-        )
-    } else if has_ext(path, &["map"]) {
-        World::from_movingai(&name, &read_text(path)?)
-    } else {
-        return Err(bad_input(format!(
-            "{name}: unknown map type; expected .csv (FCND colliders), .yaml (map_server), .png/.pgm (with resolution_m=) or .map (MovingAI)"
-        )));
+    let options = MapFileOptions {
+        resolution_m,
+        unknown_free,
+        ..Default::default()
     };
-    world.map_err(to_py)
+    World::load_file(path, &options, |p| std::fs::read(p).map_err(|e| io_error(p, e))).map_err(
+        |e| match e {
+            MapFileError::UnknownType => bad_input(format!(
+                "{name}: unknown map type; expected .csv (FCND colliders), .yaml (map_server), .png/.pgm (with resolution_m=) or .map (MovingAI)"
+            )),
+            MapFileError::NeedsResolution => bad_input(format!(
+                "{name}: a bare image needs resolution_m= (metres per pixel), or use a map_server .yaml"
+            )),
+            MapFileError::ResolutionNotTaken => bad_input(
+                "resolution_m: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)",
+            ),
+            MapFileError::Read { error, .. } => error,
+            MapFileError::Map(failure) => to_py(failure),
+        },
+    )
 }
 
 /// A numpy occupancy grid (row 0 the southern edge, nonzero = blocked) as a world.
