@@ -198,7 +198,8 @@ impl Session {
     }
 
     /// The grid at an altitude, margin and cell size (built once per session; the fixed grid
-    /// of image, MovingAI and random maps whatever the arguments).
+    /// of image, MovingAI and random maps whatever the arguments). An altitude outside
+    /// 0..=[`MAX_ALT_M`](crate::MAX_ALT_M) is a bad request, as in a [`PlanRequest`](crate::PlanRequest).
     pub fn grid(
         &mut self,
         alt_m: f64,
@@ -209,6 +210,7 @@ impl Session {
             Source::Grid(g) => return Ok(Arc::clone(g)),
             Source::Colliders(m) => Arc::clone(m),
         };
+        crate::request::in_range("alt_m", alt_m, 0.0, crate::MAX_ALT_M, " m")?;
         let k = key([alt_m, safety_m, cell_m, 0.0]);
         if let Some(g) = self.grids.get(&k) {
             return Ok(Arc::clone(g));

@@ -304,3 +304,20 @@ fn the_summary_tells_the_plans_numbers() {
         assert!(!text.contains("Some(") && !text.contains("None"), "{text}");
     }
 }
+
+#[test]
+fn grids_below_the_ground_or_above_the_ceiling_are_bad_requests() {
+    let mut session = city();
+    for alt_m in [-5.0, 10_001.0] {
+        let failure = session.grid(alt_m, 5.0, 1.0).unwrap_err();
+        assert_eq!(failure.kind, skyplan_plan::FailureKind::BadRequest);
+        assert!(
+            failure
+                .message
+                .contains(&format!("alt_m {alt_m}: expected a number from 0 to 10000")),
+            "{}",
+            failure.message
+        );
+    }
+    assert!(session.grid(0.0, 5.0, 1.0).is_ok());
+}
