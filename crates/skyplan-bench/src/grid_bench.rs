@@ -19,7 +19,7 @@ pub struct Source {
 }
 
 /// The grid of a map's text: a MovingAI `.map` as it is (`movingai`), else an FCND colliders
-/// map sliced at `spec`. Errors name the map.
+/// map sliced at `spec` (an altitude from 0 to [`skyplan_plan::MAX_ALT_M`]). Errors name the map.
 pub fn load_grid(name: &str, text: &str, movingai: bool, spec: GridSpec) -> Result<Source, String> {
     let fail = |e: &dyn std::fmt::Display| format!("{name}: {e}");
     if movingai {
@@ -31,6 +31,13 @@ pub fn load_grid(name: &str, text: &str, movingai: bool, spec: GridSpec) -> Resu
         });
     }
     let map = skyplan_map::colliders::parse_colliders(text).map_err(|e| fail(&e))?;
+    if !(0.0..=skyplan_plan::MAX_ALT_M).contains(&spec.alt_m) {
+        return Err(fail(&format!(
+            "alt_m {}: expected a number from 0 to {} m",
+            spec.alt_m,
+            skyplan_plan::MAX_ALT_M
+        )));
+    }
     let grid = Grid2::from_colliders(&map, spec).map_err(|e| fail(&e))?;
     Ok(Source {
         name: format!("{name} at {} m, {} m margin", spec.alt_m, spec.safety_m),
@@ -415,6 +422,22 @@ mod tests {
 
     fn names(list: &str) -> Vec<Contender> {
         contenders(Some(list), false, false).unwrap()
+    }
+
+    #[test]
+    fn colliders_slices_below_the_ground_or_above_the_ceiling_are_refused() {
+        let spec = |alt_m| GridSpec {
+            alt_m,
+            safety_m: 5.0,
+            cell_m: 10.0,
+        };
+        let city = skyplan_plan::FCND_CITY_CSV;
+        for alt_m in [-5.0, 10_001.0] {
+            let e = load_grid("city", city, false, spec(alt_m)).err();
+            let expected = format!("city: alt_m {alt_m}: expected a number from 0 to 10000 m");
+            assert_eq!(e.as_deref(), Some(expected.as_str()));
+        }
+        assert!(load_grid("city", city, false, spec(0.0)).is_ok());
     }
 
     #[test]
