@@ -5,7 +5,7 @@
 use crate::{Contender, Record, Run, random_far_queries, run_prepared};
 use serde_json::json;
 use skyplan_cspace::{Cell, Grid2, GridSpec};
-use skyplan_plan::CellSearch;
+use skyplan_plan::{CellSearch, Session, World};
 use skyplan_search::{JpsPlusTable, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
@@ -19,7 +19,7 @@ pub struct Source {
 }
 
 /// The grid of a map's text: a MovingAI `.map` as it is (`movingai`), else an FCND colliders
-/// map sliced at `spec` (an altitude from 0 to [`skyplan_plan::MAX_ALT_M`]). Errors name the map.
+/// map sliced at `spec` by the planning API ([`Session::grid`]). Errors name the map.
 pub fn load_grid(name: &str, text: &str, movingai: bool, spec: GridSpec) -> Result<Source, String> {
     let fail = |e: &dyn std::fmt::Display| format!("{name}: {e}");
     if movingai {
@@ -30,18 +30,14 @@ pub fn load_grid(name: &str, text: &str, movingai: bool, spec: GridSpec) -> Resu
             grid: Arc::new(grid),
         });
     }
-    let map = skyplan_map::colliders::parse_colliders(text).map_err(|e| fail(&e))?;
-    if !(0.0..=skyplan_plan::MAX_ALT_M).contains(&spec.alt_m) {
-        return Err(fail(&format!(
-            "alt_m {}: expected a number from 0 to {} m",
-            spec.alt_m,
-            skyplan_plan::MAX_ALT_M
-        )));
-    }
-    let grid = Grid2::from_colliders(&map, spec).map_err(|e| fail(&e))?;
+    // Sliced by the planning API, with its checks (altitude, margin, cell, memory).
+    let mut session = Session::new(World::from_colliders_csv(name, text).map_err(|f| f.message)?);
+    let grid = session
+        .grid(spec.alt_m, spec.safety_m, spec.cell_m)
+        .map_err(|f| f.message)?;
     Ok(Source {
         name: format!("{name} at {} m, {} m margin", spec.alt_m, spec.safety_m),
-        grid: Arc::new(grid),
+        grid,
     })
 }
 

@@ -210,7 +210,9 @@ impl Session {
             Source::Grid(g) => return Ok(Arc::clone(g)),
             Source::Colliders(m) => Arc::clone(m),
         };
-        crate::request::in_range("alt_m", alt_m, 0.0, crate::MAX_ALT_M, " m")?;
+        crate::request::in_range("alt_m", alt_m, 0.0, crate::MAX_ALT_M, " m").map_err(|f| {
+            PlanFailure::bad_request(format!("{}: {}", self.world.name(), f.message))
+        })?;
         let k = key([alt_m, safety_m, cell_m, 0.0]);
         if let Some(g) = self.grids.get(&k) {
             return Ok(Arc::clone(g));
