@@ -46,10 +46,15 @@ pub(crate) fn finite_or_null(v: f64) -> Value {
 /// [`Session::ride`]; `None` takes the default in brackets.
 ///
 /// ```
-/// let options = skyplan_plan::CostmapOptions { cost_weight: Some(4.0), ..Default::default() };
-/// let mut request = skyplan_plan::RideRequest::new([0.0, 0.0], vec![[40.0, 30.0]]);
-/// request.costmap = options;
-/// assert_eq!(request.costmap.inscribed_radius_m, None);
+/// use skyplan_plan::{CostmapOptions, RideRequest, Session, World};
+/// let mut session = Session::new(World::fcnd_city());
+/// let mut request = RideRequest::new([0.0, 0.0], vec![[40.0, 30.0]]);
+/// request.costmap = CostmapOptions { cost_weight: Some(4.0), ..Default::default() };
+/// let ride = session.ride(&request).unwrap();
+/// assert_eq!(ride.costmap["cost_weight"], 4.0);
+/// assert_eq!(ride.costmap["inflation_radius_m"], 10.0); // ten 1 m cells
+/// request.costmap.cost_weight = Some(-1.0); // checked as a plan's options are
+/// assert!(session.ride(&request).unwrap_err().message.contains("cost_weight -1"));
 /// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
