@@ -231,7 +231,7 @@ pub struct Plan3dArgs {
     /// Goal altitude above home, metres [default: --alt-m].
     #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
     pub goal_alt_m: Option<f64>,
-    /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000].
+    /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000]; with ch, how long building its hierarchy may take [default: no limit].
     #[arg(long, value_name = "MS")]
     pub time_limit_ms: Option<u64>,
     /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].

@@ -221,7 +221,7 @@ pub(crate) fn plan(session: &mut Session, q: &Query, engine: Engine) -> Result<R
     let mut ch_built = None;
     let ch = match engine {
         Engine::Contraction => {
-            let (ch, us) = session.contraction_hierarchy(&grid, r.model)?;
+            let (ch, us) = session.contraction_hierarchy(&grid, r.model, r.preprocess_limit)?;
             build_us += us.unwrap_or(0);
             ch_built = Some(us.is_some());
             Some(ch)

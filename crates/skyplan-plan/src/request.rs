@@ -84,7 +84,8 @@ pub struct PlanRequest {
     pub epsilon: Option<f64>,
     /// Line-of-sight shortcut of grid paths [true].
     pub shortcut: Option<bool>,
-    /// Time budget of the 3D planners, milliseconds [1000; at most 600000].
+    /// Time budget of the 3D planners, milliseconds [1000; at most 600000]; for `ch`, how long
+    /// building its hierarchy may take [no limit].
     pub time_limit_ms: Option<u64>,
     /// Seed of the sampling planners [1].
     pub seed: Option<u64>,
@@ -214,6 +215,8 @@ pub(crate) struct Resolved {
     pub shortcut: bool,
     pub time_limit: Duration,
     pub time_limit_ms: u64,
+    /// `ch`: how long its preprocessing may take (only when a time limit is given).
+    pub preprocess_limit: Option<Duration>,
     pub seed: u64,
     pub min_alt_m: f64,
     pub max_alt_m: f64,
@@ -289,17 +292,21 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
     let given = |fields: &[(&'static str, bool)]| -> Vec<&'static str> {
         fields.iter().filter(|f| f.1).map(|f| f.0).collect()
     };
-    let groups: [(Vec<&str>, bool, &str); 5] = [
+    let groups: [(Vec<&str>, bool, &str); 6] = [
         (
             given(&[
                 ("start_alt_m", r.start_alt_m.is_some()),
                 ("goal_alt_m", r.goal_alt_m.is_some()),
-                ("time_limit_ms", r.time_limit_ms.is_some()),
                 ("min_alt_m", r.min_alt_m.is_some()),
                 ("max_alt_m", r.max_alt_m.is_some()),
             ]),
             info.dims == 3,
             "a 3D planner (prm, lazy-prm, rrt-connect, rrt-star, voxel)",
+        ),
+        (
+            given(&[("time_limit_ms", r.time_limit_ms.is_some())]),
+            info.dims == 3 || planner == PlannerId::Ch,
+            "a 3D planner (prm, lazy-prm, rrt-connect, rrt-star, voxel) or ch (the limit of its preprocessing)",
         ),
         (
             given(&[
@@ -436,6 +443,7 @@ impl Resolved {
             shortcut: r.shortcut.unwrap_or(true),
             time_limit: Duration::from_millis(time_limit_ms),
             time_limit_ms,
+            preprocess_limit: r.time_limit_ms.map(Duration::from_millis),
             seed: r.seed.unwrap_or(1),
             min_alt_m,
             max_alt_m,

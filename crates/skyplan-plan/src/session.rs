@@ -333,11 +333,12 @@ impl Session {
     // ---- end of JPS+ preprocessing ----
 
     /// The contraction hierarchy of `grid` under `model`: kept from an earlier request, or built
-    /// now (then also the build time in microseconds).
+    /// now within `limit` and the session's deadline (then also the build time in microseconds).
     pub(crate) fn contraction_hierarchy(
         &mut self,
         grid: &Arc<Grid2>,
         model: MoveModel,
+        limit: Option<Duration>,
     ) -> Result<(Arc<ContractionHierarchy>, Option<u64>), PlanFailure> {
         if let Some(ch) = self
             .ch
@@ -347,7 +348,11 @@ impl Session {
             return Ok((Arc::clone(ch), None));
         }
         let t0 = Instant::now();
-        let ch = ContractionHierarchy::build_until(Arc::clone(grid), model, self.deadline)
+        let deadline = match (self.deadline, limit.map(|l| t0 + l)) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let ch = ContractionHierarchy::build_until(Arc::clone(grid), model, deadline)
             .map_err(|e| match e {
                 skyplan_search::ContractionError::Deadline { .. } => PlanFailure::new(
                     crate::FailureKind::Timeout,

@@ -321,3 +321,51 @@ fn grids_below_the_ground_or_above_the_ceiling_are_bad_requests() {
     }
     assert!(session.grid(0.0, 5.0, 1.0).is_ok());
 }
+
+#[test]
+fn ch_preprocessing_stops_at_its_time_limit_and_only_ch_and_3d_planners_take_one() {
+    let ch = |world: World, time_limit_ms| {
+        Session::new(world).plan(&PlanRequest {
+            planner: Some(PlannerId::Ch),
+            time_limit_ms: Some(time_limit_ms),
+            ..PlanRequest::default()
+        })
+    };
+    // The open city at 1 m takes minutes to contract: 1 ms is far too little.
+    let failure = ch(World::fcnd_city(), 1).unwrap_err();
+    assert_eq!(failure.kind, FailureKind::Timeout, "{}", failure.message);
+    assert!(
+        failure.message.starts_with("--planner ch: "),
+        "{}",
+        failure.message
+    );
+    // A small random map contracts well within a generous limit.
+    let small = World::random_within(40, 40, 0.2, 3, &Default::default()).unwrap();
+    let (start, goal) = small.default_endpoints_ne();
+    let plan = Session::new(small)
+        .plan(&PlanRequest {
+            planner: Some(PlannerId::Ch),
+            start_ne: start,
+            goal_ne: goal,
+            time_limit_ms: Some(600_000),
+            ..PlanRequest::default()
+        })
+        .unwrap();
+    assert_eq!(plan.planner, PlannerId::Ch);
+    let refused = city()
+        .plan(&PlanRequest {
+            planner: Some(PlannerId::Jps),
+            time_limit_ms: Some(1000),
+            ..PlanRequest::default()
+        })
+        .unwrap_err();
+    assert_eq!(refused.kind, FailureKind::BadRequest);
+    assert!(
+        refused
+            .message
+            .starts_with("time_limit_ms is not used by planner jps")
+            && refused.message.contains(" or ch "),
+        "{}",
+        refused.message
+    );
+}
