@@ -5,7 +5,7 @@
 use crate::{Contender, Record, Run, random_far_queries, run_prepared};
 use serde_json::json;
 use skyplan_cspace::{Cell, Grid2, GridSpec};
-use skyplan_plan::{CellSearch, Session, World};
+use skyplan_plan::{CellSearch, PlannerId, Session, World};
 use skyplan_search::{JpsPlusTable, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
@@ -116,11 +116,22 @@ pub fn contenders(
         .map(|n| {
             Contender::from_name(n.trim()).ok_or_else(|| {
                 format!(
-                    "--planners: unknown planner {n:?}; expected some of ch, jps-plus, jps, astar, dijkstra, theta, rust-pathfinding-astar"
+                    "--planners: unknown planner {n:?}; expected some of {}",
+                    contender_names()
                 )
             })
         })
         .collect()
+}
+
+/// Every name `--planners` takes: the registry's grid-search planners, then the peer (derived,
+/// so a new grid planner is named here without an edit).
+fn contender_names() -> String {
+    let planners = PlannerId::ALL
+        .iter()
+        .filter_map(|&p| Contender::from_name(p.name()).map(Contender::name));
+    let peer = std::iter::once(Contender::PathfindingCrateAStar.name());
+    planners.chain(peer).collect::<Vec<_>>().join(", ")
 }
 
 /// [`run_prepared`] with the process's peak resident set measured around it (Linux), from
@@ -418,6 +429,19 @@ mod tests {
 
     fn names(list: &str) -> Vec<Contender> {
         contenders(Some(list), false, false).unwrap()
+    }
+
+    #[test]
+    fn an_unknown_contender_is_named_with_every_name_that_is_taken() {
+        let e = contenders(Some("jps,warp"), false, false)
+            .err()
+            .unwrap_or_default();
+        let expected = "--planners: unknown planner \"warp\"; expected some of \
+                        jps, jps-plus, ch, astar, dijkstra, theta, rust-pathfinding-astar";
+        assert_eq!(e, expected);
+        for name in contender_names().split(", ") {
+            assert_eq!(Contender::from_name(name).map(Contender::name), Some(name));
+        }
     }
 
     #[test]
