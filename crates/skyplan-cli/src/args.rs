@@ -2,7 +2,8 @@
 
 use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use skyplan_plan::PlannerId;
+use skyplan_plan::cli::{finite, pair};
+use skyplan_plan::{PlanRequest, PlannerId};
 use std::path::PathBuf;
 
 #[derive(Debug, Parser)]
@@ -55,59 +56,34 @@ pub struct TileArgs {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=100))]
     pub times: u32,
     /// Distance between copies, metres [default: the map's extent, rounded up to 10 m].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    #[arg(long, value_name = "M", value_parser = finite)]
     pub pitch_m: Option<f64>,
     /// The new map (.csv).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
 }
 
-/// A pair of numbers typed as `A,B`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pair(pub f64, pub f64);
-
-pub(crate) fn parse_pair(s: &str) -> Result<Pair, String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let [a, b] = parts[..] else {
-        return Err(format!(
-            "expected two comma-separated numbers like `12.5,-40`, found {s:?}"
-        ));
-    };
-    let num = |t: &str| match t.parse::<f64>() {
-        Ok(x) if x.is_finite() => Ok(x),
-        _ => Err(format!("expected a finite number, found {t:?} in {s:?}")),
-    };
-    Ok(Pair(num(a)?, num(b)?))
-}
-
-pub(crate) fn parse_finite(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(x) if x.is_finite() => Ok(x),
-        _ => Err(format!("expected a finite number, found {s:?}")),
+/// A finite number from `lo` to `hi`.
+fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    move |s| match finite(s)? {
+        x if (lo..=hi).contains(&x) => Ok(x),
+        x => Err(format!("expected a number from {lo} to {hi}, found {x}")),
     }
 }
 
-/// `--planner` for `plan` and `fly`: every planner of the registry, with its summary.
-fn any_planner() -> impl clap::builder::TypedValueParser<Value = PlannerId> {
-    planner_parser(|_| true)
+/// A finite number above 0.
+fn positive(s: &str) -> Result<f64, String> {
+    match finite(s)? {
+        x if x > 0.0 => Ok(x),
+        x => Err(format!("expected a number above 0, found {x}")),
+    }
 }
 
 /// `--planner` for `scen`: the grid-search planners only.
-fn grid_search_planner() -> impl clap::builder::TypedValueParser<Value = PlannerId> {
-    planner_parser(|p| p.info().family.is_cell_search() && p != PlannerId::Theta)
-}
-
-fn planner_parser(
-    keep: fn(PlannerId) -> bool,
-) -> impl clap::builder::TypedValueParser<Value = PlannerId> {
-    let values = PlannerId::ALL
-        .iter()
-        .copied()
-        .filter(|&p| keep(p))
-        .map(|p| {
-            let info = p.info();
-            clap::builder::PossibleValue::new(info.name).help(info.summary)
-        });
+fn grid_search_planner() -> impl TypedValueParser<Value = PlannerId> {
+    let values = (PlannerId::ALL.iter())
+        .filter(|&&p| p.info().family.is_cell_search() && p != PlannerId::Theta)
+        .filter_map(|p| p.to_possible_value());
     clap::builder::PossibleValuesParser::new(values)
         .map(|s| s.parse::<PlannerId>().unwrap_or_default())
 }
@@ -123,42 +99,11 @@ pub struct RouteArgs {
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     #[command(flatten)]
-    pub slice: SliceArgs,
-    /// Start as local metres north,east of the map's origin [default: the home].
-    #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "start_lla", allow_hyphen_values = true)]
-    pub start_ne: Option<Pair>,
-    /// Start as latitude,longitude in degrees (the vehicle's current global position).
-    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub start_lla: Option<Pair>,
-    /// Goal as local metres north,east of the map's origin [default on the bundled map: 420,390].
-    #[arg(long, value_name = "N,E", value_parser = parse_pair, conflicts_with = "goal_lla", allow_hyphen_values = true)]
-    pub goal_ne: Option<Pair>,
-    /// Goal as latitude,longitude in degrees.
-    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub goal_lla: Option<Pair>,
-    /// Heading of the first waypoint, degrees clockwise from north [default: 0].
-    #[arg(long, value_name = "DEG", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub start_heading_deg: Option<f64>,
-    #[command(flatten)]
-    pub moves: MovesArgs,
-    /// The planner [default: jps].
-    #[arg(long, value_name = "PLANNER", value_parser = any_planner())]
-    pub planner: Option<PlannerId>,
-    /// Collinearity pruning [default: collinear].
-    #[arg(long, value_enum)]
-    pub prune: Option<PruneArg>,
-    /// Use the FCND determinant collinearity test with this tolerance (cells²) instead of exact pruning.
-    #[arg(long, value_name = "EPS", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub epsilon: Option<f64>,
-    /// Skip line-of-sight shortcutting.
-    #[arg(long)]
-    pub no_shortcut: bool,
+    pub request: PlanRequest,
     #[command(flatten)]
     pub memory: MemoryArgs,
     #[command(flatten)]
     pub grid: crate::grid_args::GridMapArgs,
-    #[command(flatten)]
-    pub plan3d: Plan3dArgs,
 }
 
 /// `1G`, `512M`, `300K` or a number of bytes.
@@ -221,44 +166,6 @@ fn default_max_memory() -> u64 {
         .map_or(8 << 30, |kb| kb * 1024 / 2)
 }
 
-/// Options of the 3D planners.
-#[derive(Debug, Args)]
-#[command(next_help_heading = "3D planners (prm, lazy-prm, rrt-connect, rrt-star, voxel)")]
-pub struct Plan3dArgs {
-    /// Start altitude above home, metres [default: --alt-m].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub start_alt_m: Option<f64>,
-    /// Goal altitude above home, metres [default: --alt-m].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub goal_alt_m: Option<f64>,
-    /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000]; with ch, how long building its hierarchy may take [default: no limit].
-    #[arg(long, value_name = "MS")]
-    pub time_limit_ms: Option<u64>,
-    /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub max_alt_m: Option<f64>,
-    /// Floor of the flight volume: nothing flies lower, metres [default: 0, the ground].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub min_alt_m: Option<f64>,
-    /// voxel: extra cost per metre climbed (0: shortest path) [default: 1].
-    #[arg(long, value_name = "W", value_parser = parse_finite, allow_hyphen_values = true)]
-    pub climb_weight: Option<f64>,
-    /// voxel: horizontal pitch of the voxel lattice, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
-    pub voxel_m: Option<f64>,
-    /// voxel: vertical pitch between altitude layers, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
-    pub layer_m: Option<f64>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PruneArg {
-    /// Exact collinearity on grid cells.
-    Collinear,
-    /// Keep every cell of the grid path.
-    None,
-}
-
 #[derive(Debug, Args)]
 pub struct PlanArgs {
     #[command(flatten)]
@@ -301,18 +208,18 @@ pub struct ScenArgs {
     pub planner: PlannerId,
 }
 
-/// Where a colliders map is sliced into a grid (`plan`, `fly`, `bench`, `navigate`); `plan`
-/// and `fly` take the defaults from `--config` first.
+/// Where a colliders map is sliced into a grid (`bench`, `navigate`; `plan` and `fly` take
+/// these options from `PlanRequest`).
 #[derive(Debug, Args)]
 pub struct SliceArgs {
     /// Flight altitude above home, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    #[arg(long, value_name = "M", value_parser = finite, allow_hyphen_values = true)]
     pub alt_m: Option<f64>,
     /// Safety margin around obstacles, metres [default: 5].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    #[arg(long, value_name = "M", value_parser = finite, allow_hyphen_values = true)]
     pub safety_m: Option<f64>,
     /// Grid cell size of colliders maps, metres [default: 1].
-    #[arg(long, value_name = "M", value_parser = parse_finite, allow_hyphen_values = true)]
+    #[arg(long, value_name = "M", value_parser = finite, allow_hyphen_values = true)]
     pub cell_m: Option<f64>,
 }
 
@@ -327,7 +234,7 @@ impl SliceArgs {
     }
 }
 
-/// How a grid path may move (`plan`, `fly`, `navigate`).
+/// How a grid path may move (`navigate`; `plan` and `fly` take these options from `PlanRequest`).
 #[derive(Debug, Args)]
 pub struct MovesArgs {
     /// Grid connectivity: 8 (diagonals cost √2) or 4 [default: 8].
@@ -356,7 +263,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
     /// Minimum start-goal distance of random queries, metres [default: half the grid diagonal].
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    #[arg(long, value_name = "M", value_parser = finite)]
     pub min_distance_m: Option<f64>,
     /// Take the queries from a MovingAI .scen file instead.
     #[arg(long, value_name = "FILE")]
@@ -371,7 +278,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub peers: bool,
     /// Time budget of each Python peer, seconds (a slow peer runs fewer queries).
-    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = parse_finite)]
+    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = finite)]
     pub peer_budget_s: f64,
     /// Write every record (planner, query, time, expansions, cost) to a .csv or .json file.
     #[arg(long, value_name = "FILE")]
@@ -403,22 +310,22 @@ pub struct FlyArgs {
     #[arg(long)]
     pub sim: bool,
     /// Vehicle seconds per wall second: the simulator's speed with --sim, or `skyplan sim --speedup`.
-    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = parse_finite)]
+    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = within(0.1, 1000.0))]
     pub speedup: f64,
     /// Write the flight log (time, state, position, target) as CSV.
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Wall-clock budget of the flight, seconds: past it the vehicle is told to land, and the exit is non-zero.
-    #[arg(long, value_name = "T", value_parser = parse_finite)]
+    #[arg(long, value_name = "T", value_parser = positive)]
     pub timeout_s: Option<f64>,
     /// A vehicle silent this long (no heartbeat, wall seconds) has lost the link.
-    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = parse_finite)]
+    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = positive)]
     pub link_timeout_s: f64,
     /// How long to wait for the vehicle's heartbeat, EKF origin and position, vehicle seconds (wall seconds × --speedup); ArduCopter's EKF needs ~40 s after boot.
-    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = parse_finite)]
+    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = positive)]
     pub wait_s: f64,
     /// Waypoint deadband, horizontal metres.
-    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = parse_finite)]
+    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = positive)]
     pub deadband_m: f64,
     /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the route and the
     /// vehicle (position, heading, trail, state, waypoint) at 5 updates per second.
@@ -440,19 +347,19 @@ pub struct FlyArgs {
     #[arg(long, value_enum, value_name = "ACTION")]
     pub failsafe: Option<crate::fly_cmd::FailsafeArg>,
     /// With --sim: simulated seconds after boot until the vehicle's EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
-    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = parse_finite, requires = "sim")]
+    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6), requires = "sim")]
     pub sim_ekf_delay_s: f64,
     /// Fault injection for tests: the simulated vehicle goes silent after this many simulated seconds.
-    #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim")]
+    #[arg(long, value_name = "S", value_parser = finite, hide = true, requires = "sim")]
     pub sim_drop_link_after_s: Option<f64>,
     /// Fault injection for tests: the silence lasts this many simulated seconds, then the link comes back.
-    #[arg(long, value_name = "S", value_parser = parse_finite, hide = true, requires = "sim_drop_link_after_s")]
+    #[arg(long, value_name = "S", value_parser = finite, hide = true, requires = "sim_drop_link_after_s")]
     pub sim_link_gap_s: Option<f64>,
     /// With --sim: obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
     #[arg(long, value_name = "FILE", requires = "sim")]
     pub hidden: Option<PathBuf>,
     /// With --sim: range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
-    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = parse_finite, requires = "sim")]
+    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), requires = "sim")]
     pub sensor_range_m: f64,
     /// With --sim: N random buildings on or near the planned route, unknown to the map (seeded by --seed; never on the ends, never sealing the goal).
     #[arg(long, value_name = "N", default_value_t = 0, requires = "sim")]
@@ -479,28 +386,28 @@ pub struct SimArgs {
     #[arg(long, value_name = "ADDRESS", default_value = "tcp:127.0.0.1:5760")]
     pub listen: String,
     /// Home (start position) as latitude,longitude; default: the map's home.
-    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub home: Option<Pair>,
+    #[arg(long, value_name = "LAT,LON", value_parser = pair, allow_hyphen_values = true)]
+    pub home: Option<[f64; 2]>,
     /// Map whose obstacles the flown track is checked against (default: the bundled city map).
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
     /// Simulated seconds per wall second.
-    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = parse_finite)]
+    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = within(0.1, 1000.0))]
     pub speedup: f64,
     /// Stop after this many wall seconds (default: run until killed).
-    #[arg(long, value_name = "S", value_parser = parse_finite)]
+    #[arg(long, value_name = "S", value_parser = finite)]
     pub duration_s: Option<f64>,
     /// Simulated seconds after boot until the EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
-    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = parse_finite)]
+    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6))]
     pub ekf_delay_s: f64,
     /// Fault injection for tests: go silent after this many simulated seconds.
-    #[arg(long, value_name = "S", value_parser = parse_finite, hide = true)]
+    #[arg(long, value_name = "S", value_parser = finite, hide = true)]
     pub drop_link_after_s: Option<f64>,
     /// Obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
     #[arg(long, value_name = "FILE")]
     pub hidden: Option<PathBuf>,
     /// Range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
-    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = parse_finite)]
+    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0))]
     pub sensor_range_m: f64,
     /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the vehicle (position, heading, mode, armed) and what its sensor sees, at 10 updates per second.
     #[arg(long, value_name = "ADDR")]

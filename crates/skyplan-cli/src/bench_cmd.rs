@@ -191,7 +191,8 @@ fn replan_bench(args: &BenchArgs, flights: usize) -> Result<()> {
         return Err(bad_input("--replan 0: expected at least 1 flight"));
     }
     let limits = skyplan_plan::Limits::default();
-    let world = crate::world_load::load_world(args.map.as_deref(), &Default::default(), &limits)?;
+    let world =
+        crate::world_load::load_world(args.map.as_deref(), &Default::default(), 1, &limits)?;
     let slice = args.slice.spec();
     let spec = skyplan_replan::bench::ScenarioSpec {
         flights,

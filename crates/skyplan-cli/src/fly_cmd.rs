@@ -110,7 +110,6 @@ fn finish_sim(sim: InProcessSim) -> Option<SimReport> {
 
 pub fn run(args: FlyArgs) -> Result<()> {
     let t0 = Instant::now();
-    check_flight_args(&args)?;
     let ctrl_c = CtrlC::install();
     let options = fly_options(&args);
     let crate::world_load::Resolved {
@@ -229,7 +228,7 @@ fn hidden_obstacles(
         .transpose()?
         .unwrap_or_default();
     if args.hidden_random > 0 {
-        let seed = args.route.grid.seed;
+        let seed = request.seed.unwrap_or(1);
         let placed = runner::hidden_random(world, request, args.hidden_random, seed)?;
         println!(
             "hidden     {} buildings on or near the route (seed {seed}), in the simulated world only",
@@ -257,7 +256,7 @@ fn vehicle(
         drop_link_after_s: args.sim_drop_link_after_s,
         link_gap_s: args.sim_link_gap_s,
         ekf_delay_s: args.sim_ekf_delay_s,
-        sensor_range_m: crate::sim_cmd::sensor_range_m(args.sensor_range_m)?,
+        sensor_range_m: args.sensor_range_m,
         hidden: hidden.to_vec(),
         ..SimServerConfig::at(frame.home())
     };
@@ -288,25 +287,6 @@ fn draw_flight(
     Ok(())
 }
 
-/// Flight options out of range are bad input.
-fn check_flight_args(args: &FlyArgs) -> Result<()> {
-    crate::sim_cmd::check_speedup(args.speedup)?;
-    for (name, v) in [
-        ("--link-timeout-s", args.link_timeout_s),
-        ("--wait-s", args.wait_s),
-        ("--deadband-m", args.deadband_m),
-        ("--timeout-s", args.timeout_s.unwrap_or(1.0)),
-    ] {
-        if v <= 0.0 {
-            return Err(bad_input(format!(
-                "{name}: expected a positive number, found {v}"
-            )));
-        }
-    }
-    crate::sim_cmd::ekf_delay_s("--sim-ekf-delay-s", args.sim_ekf_delay_s)?;
-    Ok(())
-}
-
 /// The flight options of the arguments (an uploaded mission is flown by the autopilot: no
 /// route swaps).
 fn fly_options(a: &FlyArgs) -> FlyOptions {
@@ -328,7 +308,7 @@ fn fly_options(a: &FlyArgs) -> FlyOptions {
         (true, false) => Mode::Upload { fly: true },
         (false, false) => Mode::Guided(a.replanner.kind()),
     };
-    let user_start = a.route.start_ne.is_some() || a.route.start_lla.is_some();
+    let user_start = a.route.request.start_ne.is_some() || a.route.request.start_lla.is_some();
     FlyOptions {
         ground,
         executor,

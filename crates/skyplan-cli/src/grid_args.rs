@@ -1,8 +1,8 @@
 //! Options of the grid-map planners (`plan --planner wavefront|costmap`, image, MovingAI and
 //! random maps) and of `skyplan navigate`.
 
-use crate::args::{Pair, parse_finite, parse_pair};
-use clap::{Args, ValueEnum};
+use clap::Args;
+use skyplan_plan::cli::{finite, pair};
 use std::path::PathBuf;
 
 /// A grid size typed as `WxH` (columns × rows).
@@ -33,23 +33,16 @@ fn parse_probability(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_nonneg(s: &str) -> Result<f64, String> {
-    match parse_finite(s)? {
-        x if x >= 0.0 => Ok(x),
-        x => Err(format!("expected a number ≥ 0, found {x}")),
-    }
-}
-
 /// A list of targets typed as `N,E;N,E;…`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Targets(pub Vec<Pair>);
+pub struct Targets(pub Vec<[f64; 2]>);
 
 /// `N,E;N,E;…`
 pub fn parse_targets(s: &str) -> Result<Targets, String> {
     s.split(';')
         .map(str::trim)
         .filter(|t| !t.is_empty())
-        .map(parse_pair)
+        .map(pair)
         .collect::<Result<Vec<_>, _>>()
         .and_then(|v| {
             if v.is_empty() {
@@ -64,7 +57,7 @@ pub fn parse_targets(s: &str) -> Result<Targets, String> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChangeArg {
     pub at_step: u64,
-    pub target: Pair,
+    pub target: [f64; 2],
 }
 
 fn parse_change(s: &str) -> Result<ChangeArg, String> {
@@ -77,24 +70,15 @@ fn parse_change(s: &str) -> Result<ChangeArg, String> {
         .map_err(|_| format!("expected a step count before `:`, found {step:?}"))?;
     Ok(ChangeArg {
         at_step,
-        target: parse_pair(target)?,
+        target: pair(target)?,
     })
 }
 
-/// What the wavefront's distance field counts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum FieldArg {
-    /// Path length (straight 1, diagonal √2 cells): Dijkstra; descends along A*-optimal paths.
-    Length,
-    /// Number of moves: the breadth-first wavefront.
-    Steps,
-}
-
-/// Options shared by grid maps and their planners (flattened into `plan` and `navigate`).
+/// How grid maps are read or drawn (flattened into `plan`, `fly` and `navigate`).
 #[derive(Debug, Args, Default)]
 pub struct GridMapArgs {
     /// Metres per pixel of a bare .png/.pgm map (a .yaml map gives its own).
-    #[arg(long, value_name = "M", value_parser = parse_finite)]
+    #[arg(long, value_name = "M", value_parser = finite)]
     pub resolution: Option<f64>,
     /// Count unknown pixels of an image map as free (default: blocked).
     #[arg(long)]
@@ -105,28 +89,10 @@ pub struct GridMapArgs {
     /// Probability that a cell of the random workspace is blocked.
     #[arg(long, value_name = "P", value_parser = parse_probability, default_value_t = 0.25)]
     pub density: f64,
-    /// Seed of the random workspace, of the drawn start/goal and of the 3D sampling planners.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    pub seed: u64,
     /// Geodetic home LAT,LON of the map's origin, for lat/lon of waypoints on maps without one
     /// (images, MovingAI, random).
-    #[arg(long, value_name = "LAT,LON", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub home: Option<Pair>,
-    /// Wavefront field: length (Dijkstra, octile) or steps (BFS) [default: length].
-    #[arg(long, value_enum)]
-    pub field: Option<FieldArg>,
-    /// Cost map: radius inscribed in the vehicle's footprint, metres (cells within it are lethal) [default: 0].
-    #[arg(long, value_name = "M", value_parser = parse_nonneg)]
-    pub inscribed_radius_m: Option<f64>,
-    /// Cost map: distance up to which costs are raised, metres [default: 10 cells].
-    #[arg(long, value_name = "M", value_parser = parse_nonneg)]
-    pub inflation_radius_m: Option<f64>,
-    /// Cost map: decay k of 252·exp(−k·(d − r_inscribed)), per metre [default: 3 / inflation radius].
-    #[arg(long, value_name = "K", value_parser = parse_nonneg)]
-    pub cost_scaling: Option<f64>,
-    /// Cost map: weight of the cost in length + weight · cost [default: 2].
-    #[arg(long, value_name = "W", value_parser = parse_nonneg)]
-    pub cost_weight: Option<f64>,
+    #[arg(long, value_name = "LAT,LON", value_parser = pair, allow_hyphen_values = true)]
+    pub home: Option<[f64; 2]>,
 }
 
 #[derive(Debug, Args)]
@@ -138,8 +104,8 @@ pub struct NavigateArgs {
     #[command(flatten)]
     pub slice: crate::args::SliceArgs,
     /// Where the vehicle starts, metres north,east of the map's origin.
-    #[arg(long, value_name = "N,E", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub start_ne: Option<Pair>,
+    #[arg(long, value_name = "N,E", value_parser = pair, allow_hyphen_values = true)]
+    pub start_ne: Option<[f64; 2]>,
     /// Targets to visit in order: `N,E;N,E;…` (metres north,east).
     #[arg(long, value_name = "N,E;…", value_parser = parse_targets, allow_hyphen_values = true)]
     pub targets: Option<Targets>,
@@ -164,4 +130,9 @@ pub struct NavigateArgs {
     pub show: bool,
     #[command(flatten)]
     pub grid: GridMapArgs,
+    /// Seed of the random workspace (--random) and of its drawn start and target.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub costmap: skyplan_plan::CostmapOptions,
 }

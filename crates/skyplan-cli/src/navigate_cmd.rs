@@ -2,16 +2,15 @@
 //! which may change mid-ride (the workshop's navigation functions). The map is loaded through the
 //! planning API's `World`; the ride itself is `skyplan_navfn::navigate`.
 
-use crate::args::Pair;
 use crate::exit::{Failure, Result, bad_input};
 use crate::files::read_text;
 use crate::grid_args::NavigateArgs;
 use skyplan_cspace::Grid2;
-use skyplan_plan::{CostmapOptions, RideChange, RideRequest, Session};
+use skyplan_plan::{RideChange, RideRequest, Session};
 use std::io::IsTerminal;
 use std::path::Path;
 
-fn read_targets_file(path: &Path) -> Result<Vec<Pair>> {
+fn read_targets_file(path: &Path) -> Result<Vec<[f64; 2]>> {
     let text = read_text(path)?;
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
@@ -19,7 +18,7 @@ fn read_targets_file(path: &Path) -> Result<Vec<Pair>> {
         if line.is_empty() {
             continue;
         }
-        let p = crate::args::parse_pair(line)
+        let p = skyplan_plan::cli::pair(line)
             .map_err(|e| bad_input(format!("{}: line {}: {e}", path.display(), k + 1)))?;
         out.push(p);
     }
@@ -45,24 +44,22 @@ fn endpoint(
     args: &NavigateArgs,
     which: &str,
     option: &str,
-    given: Option<Pair>,
+    given: Option<[f64; 2]>,
     default: Option<[f64; 2]>,
 ) -> Result<[f64; 2]> {
-    let p = match (given, default) {
-        (Some(p), _) => p,
-        (None, Some([n, e])) => Pair(n, e),
-        (None, None) if std::io::stdin().is_terminal() => {
+    Ok(match given.or(default) {
+        Some(p) => p,
+        None if std::io::stdin().is_terminal() => {
             let s = args.slice.spec();
             let grid: std::sync::Arc<Grid2> = session.grid(s.alt_m, s.safety_m, s.cell_m)?;
             crate::show::ask_position(&grid, which)?
         }
-        (None, None) => {
+        None => {
             return Err(bad_input(format!(
                 "missing {option} N,E (the {which}, metres north,east of the map's origin)"
             )));
         }
-    };
-    Ok([p.0, p.1])
+    })
 }
 
 /// The request: the ends from the options (or the map's defaults, or a prompt), the cost map.
@@ -77,11 +74,8 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
         start_default,
     )?;
     let targets_ne = match (&args.targets, &args.targets_file) {
-        (Some(t), _) => t.0.iter().map(|p| [p.0, p.1]).collect(),
-        (None, Some(path)) => read_targets_file(path)?
-            .iter()
-            .map(|p| [p.0, p.1])
-            .collect(),
+        (Some(t), _) => t.0.clone(),
+        (None, Some(path)) => read_targets_file(path)?,
         (None, None) => vec![endpoint(
             session,
             args,
@@ -91,7 +85,7 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
             goal_default,
         )?],
     };
-    let (g, slice) = (&args.grid, args.slice.spec());
+    let slice = args.slice.spec();
     Ok(RideRequest {
         start_ne,
         targets_ne,
@@ -100,7 +94,7 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
             .iter()
             .map(|c| RideChange {
                 at_step: c.at_step,
-                target_ne: [c.target.0, c.target.1],
+                target_ne: c.target,
             })
             .collect(),
         alt_m: slice.alt_m,
@@ -108,12 +102,7 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
         cell_m: slice.cell_m,
         connectivity: args.moves.connectivity.unwrap_or(8),
         corner_cutting: args.moves.corner_cutting,
-        costmap: CostmapOptions {
-            inscribed_radius_m: g.inscribed_radius_m,
-            inflation_radius_m: g.inflation_radius_m,
-            cost_scaling: g.cost_scaling,
-            cost_weight: g.cost_weight,
-        },
+        costmap: args.costmap,
     })
 }
 
@@ -136,7 +125,7 @@ fn navigate_inner(args: NavigateArgs) -> Result<Option<Failure>> {
         None => None,
     };
     let limits = args.memory.limits();
-    let world = crate::world_load::load_world(args.map.as_deref(), &args.grid, &limits)?;
+    let world = crate::world_load::load_world(args.map.as_deref(), &args.grid, args.seed, &limits)?;
     let mut session = Session::new(world).with_limits(limits);
     let request = ride_request(&mut session, &args)?;
     let ride = session.ride(&request)?;

@@ -101,12 +101,10 @@ fn prompt_missing(world: &World, request: &mut PlanRequest) -> Result<()> {
     };
     let (default_start, default_goal) = world.default_endpoints_ne();
     if request.start_ne.is_none() && request.start_lla.is_none() && default_start.is_none() {
-        let p = crate::show::ask_position(grid, "start")?;
-        request.start_ne = Some([p.0, p.1]);
+        request.start_ne = Some(crate::show::ask_position(grid, "start")?);
     }
     if request.goal_ne.is_none() && request.goal_lla.is_none() && default_goal.is_none() {
-        let p = crate::show::ask_position(grid, "goal")?;
-        request.goal_ne = Some([p.0, p.1]);
+        request.goal_ne = Some(crate::show::ask_position(grid, "goal")?);
     }
     Ok(())
 }

@@ -9,7 +9,7 @@ use std::time::Duration;
 pub fn run(args: ServeArgs) -> Result<()> {
     let limits = crate::args::limits(None);
     let world =
-        crate::world_load::load_world(args.map.as_deref(), &GridMapArgs::default(), &limits)?;
+        crate::world_load::load_world(args.map.as_deref(), &GridMapArgs::default(), 1, &limits)?;
     let mut config = ServerConfig {
         timeout: Duration::from_millis(args.timeout_ms),
         ..ServerConfig::default()

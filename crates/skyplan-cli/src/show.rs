@@ -1,7 +1,6 @@
 //! `--show`: the workspace, the distance matrix and the path as text, and the terminal prompt
 //! for a start or goal on grid maps without defaults.
 
-use crate::args::Pair;
 use crate::exit::{Classify, Kind, Result, bad_input};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_navfn::{FieldMetric, show};
@@ -23,7 +22,7 @@ pub fn print(grid: &Grid2, start: Cell, goal: Cell, path: &[Cell], model: MoveMo
 }
 
 /// Asks on the terminal until the answer is a free cell on the map.
-pub fn ask_position(grid: &Grid2, which: &str) -> Result<Pair> {
+pub fn ask_position(grid: &Grid2, which: &str) -> Result<[f64; 2]> {
     let extent = {
         let f = grid.frame();
         format!(
@@ -43,12 +42,12 @@ pub fn ask_position(grid: &Grid2, which: &str) -> Result<Pair> {
         if read == 0 {
             return Err(bad_input(format!("no {which} given (end of input)")));
         }
-        match crate::args::parse_pair(line.trim()) {
+        match skyplan_plan::cli::pair(line.trim()) {
             Err(e) => eprintln!("  {e}; try again"),
-            Ok(p) => match grid.cell_at_ne(p.0, p.1) {
-                Some(c) if !grid.is_blocked(c) => return Ok(p),
-                Some(_) => eprintln!("  N {} m, E {} m is at an obstacle; try again", p.0, p.1),
-                None => eprintln!("  N {} m, E {} m is off the map; try again", p.0, p.1),
+            Ok([n, e]) => match grid.cell_at_ne(n, e) {
+                Some(c) if !grid.is_blocked(c) => return Ok([n, e]),
+                Some(_) => eprintln!("  N {n} m, E {e} m is at an obstacle; try again"),
+                None => eprintln!("  N {n} m, E {e} m is off the map; try again"),
             },
         }
     }

@@ -21,36 +21,6 @@ pub(crate) fn load_hidden(
         .map_err(|e| bad_input(format!("--hidden {}: {e}", path.display())))
 }
 
-/// Checks `--speedup`: 0.1 to 1000 simulated seconds per wall second.
-pub(crate) fn check_speedup(k: f64) -> Result<()> {
-    if !(0.1..=1000.0).contains(&k) {
-        return Err(bad_input(format!(
-            "--speedup: expected 0.1 to 1000, found {k}"
-        )));
-    }
-    Ok(())
-}
-
-/// Checks `--sensor-range-m`: 0.5 to 650 m (OBSTACLE_DISTANCE carries centimetres in 16 bits).
-pub(crate) fn sensor_range_m(m: f64) -> Result<f64> {
-    if !(0.5..=650.0).contains(&m) {
-        return Err(bad_input(format!(
-            "--sensor-range-m: expected 0.5 to 650 (metres), found {m}"
-        )));
-    }
-    Ok(m)
-}
-
-/// Checks an EKF delay (`option`): 0 or more simulated seconds.
-pub(crate) fn ekf_delay_s(option: &str, s: f64) -> Result<f64> {
-    if s < 0.0 {
-        return Err(bad_input(format!(
-            "{option}: expected 0 or more, found {s}"
-        )));
-    }
-    Ok(s)
-}
-
 /// The map's home, and where the vehicle starts: `--home`, else the map's home.
 fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> Result<(Lla, Lla)> {
     let at = |lat_deg, lon_deg| Lla {
@@ -60,13 +30,13 @@ fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> Res
     };
     let map_home = at(map_home.lat_deg, map_home.lon_deg);
     match args.home {
-        Some(p) if !(-90.0..=90.0).contains(&p.0) || !(-180.0..=180.0).contains(&p.1) => {
+        Some([lat, lon]) if !(-90.0..=90.0).contains(&lat) || !(-180.0..=180.0).contains(&lon) => {
             Err(bad_input(format!(
                 "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
-                p.0, p.1
+                lat, lon
             )))
         }
-        Some(p) => Ok((map_home, at(p.0, p.1))),
+        Some([lat, lon]) => Ok((map_home, at(lat, lon))),
         None => Ok((map_home, map_home)),
     }
 }
@@ -82,13 +52,11 @@ fn live_view(args: &SimArgs, map_name: &str, text: &str) -> Result<crate::live::
 }
 
 pub fn run(args: SimArgs) -> Result<()> {
-    check_speedup(args.speedup)?;
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
     let (map_name, text) = map_text(args.map.as_deref(), FCND_CITY_NAME)?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
     let (map_home, home) = homes(&args, &map.home)?;
-    let ekf_delay_s = ekf_delay_s("--ekf-delay-s", args.ekf_delay_s)?;
     let hidden = (args.hidden.as_ref())
         .map(|path| load_hidden(path, &map.home))
         .transpose()?
@@ -96,10 +64,10 @@ pub fn run(args: SimArgs) -> Result<()> {
     let hidden_count = hidden.len();
     let config = SimServerConfig {
         hidden,
-        sensor_range_m: sensor_range_m(args.sensor_range_m)?,
+        sensor_range_m: args.sensor_range_m,
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
-        ekf_delay_s,
+        ekf_delay_s: args.ekf_delay_s,
         map_home: Some(map_home),
         ..SimServerConfig::at(home)
     };

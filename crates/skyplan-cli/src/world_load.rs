@@ -1,14 +1,12 @@
-//! Map files (by extension) and `--random` into a `skyplan_plan::World`, and the CLI's options
-//! (over a config file) into a `PlanRequest`.
+//! Map files (by extension) and `--random` into a `skyplan_plan::World`, and the request typed
+//! on the command line over the config file's.
 
-use crate::args::{Pair, PruneArg, RouteArgs};
+use crate::args::RouteArgs;
 use crate::config::Config;
 use crate::exit::{Result, bad_input};
 use crate::files::read_bytes;
-use crate::grid_args::{FieldArg, GridMapArgs};
-use skyplan_plan::{
-    FieldMode, Limits, MapFileError, MapFileOptions, MapFormat, PlanRequest, PruneMode, World,
-};
+use crate::grid_args::GridMapArgs;
+use skyplan_plan::{Limits, MapFileError, MapFileOptions, MapFormat, PlanRequest, World};
 use std::path::{Path, PathBuf};
 
 const RESOLUTION_NOT_TAKEN: &str = "--resolution: only bare .png/.pgm maps take it (a .yaml map gives its own; other maps are in metres)";
@@ -17,8 +15,14 @@ fn format_is(path: Option<&Path>, format: MapFormat) -> bool {
     path.and_then(MapFormat::of_path) == Some(format)
 }
 
-/// The world a command runs on: `--random`, the map file by extension, or the bundled city.
-pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Result<World> {
+/// The world a command runs on: `--random` (drawn with `seed`), the map file by extension, or
+/// the bundled city.
+pub fn load_world(
+    map: Option<&Path>,
+    g: &GridMapArgs,
+    seed: u64,
+    limits: &Limits,
+) -> Result<World> {
     let colliders = (map.is_none() || format_is(map, MapFormat::Colliders)) && g.random.is_none();
     if g.resolution.is_some() && !format_is(map, MapFormat::Image) {
         return Err(bad_input(RESOLUTION_NOT_TAKEN));
@@ -29,7 +33,7 @@ pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Resul
         ));
     }
     let world = if let Some(size) = g.random {
-        World::random_within(size.width, size.height, g.density, g.seed, limits)?
+        World::random_within(size.width, size.height, g.density, seed, limits)?
     } else {
         match map {
             None => World::fcnd_city(),
@@ -37,7 +41,7 @@ pub fn load_world(map: Option<&Path>, g: &GridMapArgs, limits: &Limits) -> Resul
         }
     };
     match g.home {
-        Some(Pair(lat, lon)) => Ok(world.with_home(lat, lon)?),
+        Some([lat, lon]) => Ok(world.with_home(lat, lon)?),
         None => Ok(world),
     }
 }
@@ -67,51 +71,6 @@ fn load_file(path: &Path, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     })
 }
 
-/// The request typed on the command line (only what was given).
-fn typed_request(a: &RouteArgs) -> PlanRequest {
-    let pair = |p: Option<Pair>| p.map(|Pair(x, y)| [x, y]);
-    let g = &a.grid;
-    let p3 = &a.plan3d;
-    PlanRequest {
-        planner: a.planner,
-        alt_m: a.slice.alt_m,
-        safety_m: a.slice.safety_m,
-        cell_m: a.slice.cell_m,
-        start_ne: pair(a.start_ne),
-        start_lla: pair(a.start_lla),
-        goal_ne: pair(a.goal_ne),
-        goal_lla: pair(a.goal_lla),
-        start_alt_m: p3.start_alt_m,
-        goal_alt_m: p3.goal_alt_m,
-        start_heading_deg: a.start_heading_deg,
-        connectivity: a.moves.connectivity,
-        corner_cutting: a.moves.corner_cutting.then_some(true),
-        prune: a.prune.map(|p| match p {
-            PruneArg::Collinear => PruneMode::Collinear,
-            PruneArg::None => PruneMode::None,
-        }),
-        epsilon: a.epsilon,
-        shortcut: a.no_shortcut.then_some(false),
-        time_limit_ms: p3.time_limit_ms,
-        seed: Some(g.seed),
-        min_alt_m: p3.min_alt_m,
-        max_alt_m: p3.max_alt_m,
-        climb_weight: p3.climb_weight,
-        voxel_m: p3.voxel_m,
-        layer_m: p3.layer_m,
-        field: g.field.map(|f| match f {
-            FieldArg::Length => FieldMode::Length,
-            FieldArg::Steps => FieldMode::Steps,
-        }),
-        inscribed_radius_m: g.inscribed_radius_m,
-        inflation_radius_m: g.inflation_radius_m,
-        cost_scaling: g.cost_scaling,
-        cost_weight: g.cost_weight,
-        geometry: None,
-        roadmap: Default::default(),
-    }
-}
-
 /// The route options resolved: the world, the request (command line over config file), and the
 /// config's file options.
 pub struct Resolved {
@@ -129,8 +88,8 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
     };
     let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
     let limits = a.memory.limits();
-    let world = load_world(map.as_deref(), &a.grid, &limits)?;
-    let request = typed_request(a).or(config.text.request.clone());
+    let request = a.request.clone().or(config.text.request.clone());
+    let world = load_world(map.as_deref(), &a.grid, request.seed.unwrap_or(1), &limits)?;
     Ok(Resolved {
         world,
         limits,

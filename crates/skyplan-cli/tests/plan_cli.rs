@@ -200,6 +200,39 @@ fn config_file_supplies_defaults_and_flags_win() {
     );
 }
 
+/// The route options are `PlanRequest`'s own (one definition for the CLI, the config, the HTTP
+/// API and Python): every key is an option of `plan` and `fly`, and a config key counts as its
+/// option does (the config's `seed` draws the same random workspace as `--seed`).
+#[test]
+fn every_request_key_is_an_option_and_config_keys_count_as_options() {
+    let keys = serde_json::to_value(skyplan_plan::PlanRequest::default()).unwrap();
+    for command in ["plan", "fly"] {
+        let help = common::succeed(Path::new("."), &format!("{command} --help"));
+        let help = String::from_utf8(help.stdout).unwrap();
+        for key in keys.as_object().unwrap().keys() {
+            let option = match key.as_str() {
+                "geometry" => continue, // an API option: the CLI asks for it with --plot/--show
+                "shortcut" => "--no-shortcut".to_string(),
+                k => format!("--{}", k.replace('_', "-")),
+            };
+            let listed = (help.lines()).any(|l| l.split_whitespace().next() == Some(&option));
+            assert!(listed, "{command} --help lacks {option}");
+        }
+    }
+    let dir = dir_with(&[("seed.toml", "seed = 2\n")]);
+    let blocked = |line: &str| run_json(dir.path(), line)["grid"]["blocked_cells"].clone();
+    let from_config = blocked("--random 30x20 --density 0.1 --config seed.toml");
+    assert_eq!(
+        from_config,
+        blocked("--random 30x20 --density 0.1 --seed 2")
+    );
+    assert_ne!(
+        from_config,
+        blocked("--random 30x20 --density 0.1"),
+        "seed 1 draws another workspace"
+    );
+}
+
 #[test]
 fn bad_map_input_names_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();

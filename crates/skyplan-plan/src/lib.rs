@@ -70,6 +70,8 @@
 
 mod any_angle;
 mod cell_search;
+#[cfg(feature = "clap")]
+pub mod cli;
 mod config;
 mod failure;
 mod grid;

@@ -57,15 +57,20 @@ pub(crate) fn finite_or_null(v: f64) -> Value {
 /// assert!(session.ride(&request).unwrap_err().message.contains("cost_weight -1"));
 /// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields, default)]
 pub struct CostmapOptions {
-    /// Radius inscribed in the vehicle's footprint, metres: cells within it are lethal [0].
+    /// Radius inscribed in the vehicle's footprint, metres: cells within it are lethal [default: 0].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = crate::cli::finite, allow_hyphen_values = true, help_heading = "Cost map"))]
     pub inscribed_radius_m: Option<f64>,
-    /// Distance up to which costs are raised, metres [ten cells].
+    /// Distance up to which costs are raised, metres [default: 10 cells].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = crate::cli::finite, allow_hyphen_values = true, help_heading = "Cost map"))]
     pub inflation_radius_m: Option<f64>,
-    /// Decay k of 252·exp(−k·(d − r_inscribed)), per metre [3 / inflation radius].
+    /// Decay k of 252·exp(−k·(d − r_inscribed)), per metre [default: 3 / inflation radius].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "K", value_parser = crate::cli::finite, allow_hyphen_values = true, help_heading = "Cost map"))]
     pub cost_scaling: Option<f64>,
-    /// Weight of the cost in length + weight · cost [2].
+    /// Weight of the cost in length + weight · cost [default: 2].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = crate::cli::finite, allow_hyphen_values = true, help_heading = "Cost map"))]
     pub cost_weight: Option<f64>,
 }
 

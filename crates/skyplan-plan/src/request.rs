@@ -2,6 +2,8 @@
 //! options with underscores (the TOML config, the HTTP API and the Python keywords use the same
 //! names); every field is optional and has a documented default.
 
+#[cfg(feature = "clap")]
+use crate::cli;
 use crate::failure::{FailureKind, PlanFailure};
 use crate::navfn::CostmapOptions;
 use crate::planner_id::PlannerId;
@@ -10,6 +12,7 @@ use std::time::Duration;
 
 /// Collinearity pruning of grid paths.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum PruneMode {
     /// Exact integer collinearity on grid cells (the default).
@@ -20,9 +23,10 @@ pub enum PruneMode {
 
 /// What the wavefront's distance field counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum FieldMode {
-    /// Path length (octile Dijkstra; descends along A\*-optimal paths). The default.
+    /// Path length (octile Dijkstra; descends along shortest grid paths). The default.
     Length,
     /// Number of moves (breadth-first wavefront).
     Steps,
@@ -37,7 +41,11 @@ pub struct RoadmapIo {
     pub save: bool,
 }
 
-/// One planning request. Every field is optional; `None` takes the default in its doc.
+/// One planning request. Every field is optional; `None` takes the default in brackets.
+///
+/// With the `clap` feature the request is also the command line's route options (each key as
+/// `--key-with-dashes`, its doc as the help), so the CLI, the TOML config, the HTTP API and the
+/// Python keywords share one definition.
 ///
 /// ```
 /// use skyplan_plan::{PlanRequest, PlannerId};
@@ -47,72 +55,102 @@ pub struct RoadmapIo {
 /// assert!(serde_json::from_str::<PlanRequest>(r#"{"safty_m": 3}"#).is_err()); // typos are refused
 /// ```
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanRequest {
-    /// Which planner [jps].
+    /// The planner [default: jps].
     #[serde(alias = "method")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PLANNER"))]
     pub planner: Option<PlannerId>,
-    /// Flight altitude above home, metres [5].
+    /// Flight altitude above home, metres [default: 5].
     #[serde(alias = "target_altitude")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
     pub alt_m: Option<f64>,
-    /// Safety margin around obstacles, metres [5].
+    /// Safety margin around obstacles, metres [default: 5].
     #[serde(alias = "safety_distance")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
     pub safety_m: Option<f64>,
-    /// Grid cell size of colliders maps, metres [1].
+    /// Grid cell size of colliders maps, metres [default: 1].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
     pub cell_m: Option<f64>,
-    /// Start, metres north,east of the map's origin [the map's default: the home].
+    /// Start as local metres north,east of the map's origin [default: the map's, the home].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N,E", value_parser = cli::pair, conflicts_with = "start_lla", allow_hyphen_values = true))]
     pub start_ne: Option<[f64; 2]>,
-    /// Start as latitude,longitude, degrees.
+    /// Start as latitude,longitude in degrees (the vehicle's current global position).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LAT,LON", value_parser = cli::pair, allow_hyphen_values = true))]
     pub start_lla: Option<[f64; 2]>,
-    /// Goal, metres north,east of the map's origin [the map's default].
+    /// Goal as local metres north,east of the map's origin [default: the map's; 420,390 on the bundled map].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N,E", value_parser = cli::pair, conflicts_with = "goal_lla", allow_hyphen_values = true))]
     pub goal_ne: Option<[f64; 2]>,
-    /// Goal as latitude,longitude, degrees.
+    /// Goal as latitude,longitude in degrees.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LAT,LON", value_parser = cli::pair, allow_hyphen_values = true))]
     pub goal_lla: Option<[f64; 2]>,
-    /// Start altitude of 3D planners, metres [alt_m].
-    pub start_alt_m: Option<f64>,
-    /// Goal altitude of 3D planners, metres [alt_m].
-    pub goal_alt_m: Option<f64>,
-    /// Heading of the first waypoint, degrees clockwise from north [0].
+    /// Heading of the first waypoint, degrees clockwise from north [default: 0].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "DEG", value_parser = cli::finite, allow_hyphen_values = true))]
     pub start_heading_deg: Option<f64>,
-    /// Grid connectivity, 4 or 8 [8].
-    pub connectivity: Option<u8>,
-    /// Let diagonal moves pass between two blocked cells (the FCND move model) [false].
-    pub corner_cutting: Option<bool>,
-    /// Collinearity pruning [collinear].
-    pub prune: Option<PruneMode>,
-    /// The FCND determinant collinearity test with this tolerance (cells²) instead.
-    pub epsilon: Option<f64>,
-    /// Line-of-sight shortcut of grid paths [true].
-    pub shortcut: Option<bool>,
-    /// Time budget of the 3D planners, milliseconds [1000; at most 600000]; for `ch`, how long
-    /// building its hierarchy may take [no limit].
-    pub time_limit_ms: Option<u64>,
-    /// Seed of the sampling planners [1].
+    /// Seed of the sampling planners; on the command line also of `--random` workspaces and `--hidden-random` buildings [default: 1].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub seed: Option<u64>,
-    /// Floor of the 3D flight volume, metres [0].
-    pub min_alt_m: Option<f64>,
-    /// Ceiling of the 3D flight volume, metres [120, at least 10 m above both ends].
-    pub max_alt_m: Option<f64>,
-    /// voxel: extra cost per metre climbed [1].
-    pub climb_weight: Option<f64>,
-    /// voxel: horizontal pitch of the lattice, metres [5].
-    pub voxel_m: Option<f64>,
-    /// voxel: vertical pitch of the layers, metres [5].
-    pub layer_m: Option<f64>,
-    /// wavefront: what the field counts [length].
+    /// Grid connectivity: 8 (diagonals cost √2) or 4 [default: 8].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "4|8", value_parser = clap::value_parser!(u8).range(4..=8), help_heading = cli::GRID))]
+    pub connectivity: Option<u8>,
+    /// Let diagonal moves pass between two blocked cells (the FCND move model) [default: false].
+    #[cfg_attr(feature = "clap", arg(long, num_args = 0..=1, value_name = "BOOL", default_missing_value = "true", hide_possible_values = true, help_heading = cli::GRID))]
+    pub corner_cutting: Option<bool>,
+    /// Collinearity pruning of the grid path [default: collinear].
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = cli::GRID))]
+    pub prune: Option<PruneMode>,
+    /// The FCND determinant collinearity test with this tolerance (cells²) instead of exact pruning.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "EPS", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::GRID))]
+    pub epsilon: Option<f64>,
+    /// Line-of-sight shortcut of grid paths [default: true].
+    #[cfg_attr(feature = "clap", arg(long = "no-shortcut", num_args = 0, default_missing_value = "false", help = "Skip the line-of-sight shortcut of grid paths", help_heading = cli::GRID))]
+    pub shortcut: Option<bool>,
+    /// wavefront: what the field counts [default: length].
+    #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = cli::NAVFN))]
     pub field: Option<FieldMode>,
-    /// costmap: radius inscribed in the footprint, metres [0].
+    /// costmap: radius inscribed in the vehicle's footprint, metres; cells within it are lethal [default: 0].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub inscribed_radius_m: Option<f64>,
-    /// costmap: distance up to which costs are raised, metres [10 cells].
+    /// costmap: distance up to which costs are raised, metres [default: 10 cells].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub inflation_radius_m: Option<f64>,
-    /// costmap: decay of 252·exp(−k·(d − r)), per metre [3 / inflation radius].
+    /// costmap: decay k of 252·exp(−k·(d − r_inscribed)), per metre [default: 3 / inflation radius].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "K", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub cost_scaling: Option<f64>,
-    /// costmap: weight of the cost in length + weight · cost [2].
+    /// costmap: weight of the cost in length + weight · cost [default: 2].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub cost_weight: Option<f64>,
-    /// Return the geometry pictures need (grid path, roadmap, trees, field) [false].
+    /// Start altitude above home, metres [default: alt_m, the flight altitude].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    pub start_alt_m: Option<f64>,
+    /// Goal altitude above home, metres [default: alt_m, the flight altitude].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    pub goal_alt_m: Option<f64>,
+    /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000]; with ch, how long building its hierarchy may take [default: no limit].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "MS", help_heading = cli::THREE_D))]
+    pub time_limit_ms: Option<u64>,
+    /// Floor of the flight volume: nothing flies lower, metres [default: 0, the ground].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    pub min_alt_m: Option<f64>,
+    /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    pub max_alt_m: Option<f64>,
+    /// voxel: extra cost per metre climbed (0: shortest path) [default: 1].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    pub climb_weight: Option<f64>,
+    /// voxel: horizontal pitch of the voxel lattice, metres [default: 5].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, help_heading = cli::THREE_D))]
+    pub voxel_m: Option<f64>,
+    /// voxel: vertical pitch between altitude layers, metres [default: 5].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, help_heading = cli::THREE_D))]
+    pub layer_m: Option<f64>,
+    /// Return the geometry pictures need (grid path, roadmap, trees, field) [default: false].
+    #[cfg_attr(feature = "clap", arg(skip))]
     pub geometry: Option<bool>,
     /// A saved PRM roadmap to start from / return the roadmap (Rust callers only).
     #[serde(skip)]
+    #[cfg_attr(feature = "clap", arg(skip))]
     pub roadmap: RoadmapIo,
 }
 
