@@ -340,12 +340,12 @@ pub struct FlyArgs {
     /// Upload the mission and exit without flying (interop tests).
     #[arg(long, hide = true)]
     pub upload_only: bool,
-    /// What Ctrl-C commands in flight: land, or hold the position (LOITER) and leave the vehicle to the pilot.
+    /// What Ctrl-C commands in flight.
     #[arg(long, value_enum, value_name = "ACTION", default_value = "land")]
-    pub on_interrupt: crate::fly_cmd::InterruptArg,
-    /// What to command when a lost link comes back within 6 × --link-timeout-s: land, rtl or hold [default: none, a lost link ends the flight at once].
+    pub on_interrupt: skyplan_flight::executor::FailsafeAction,
+    /// What to command when a lost link comes back within 6 × --link-timeout-s [default: none, a lost link ends the flight at once].
     #[arg(long, value_enum, value_name = "ACTION")]
-    pub failsafe: Option<crate::fly_cmd::FailsafeArg>,
+    pub failsafe: Option<skyplan_flight::executor::FailsafeAction>,
     /// With --sim: simulated seconds after boot until the vehicle's EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
     #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6), requires = "sim")]
     pub sim_ekf_delay_s: f64,

@@ -7,9 +7,7 @@ use crate::exit::runtime;
 use crate::exit::{Failure, Kind, Result, bad_input};
 use crate::files::{Target, write_atomic, write_target};
 use crate::picture::PictureKind;
-use skyplan_flight::executor::{
-    ExecutorConfig, FailsafeAction, FlightState, Note, Outcome, Telemetry,
-};
+use skyplan_flight::executor::{ExecutorConfig, FlightState, Note, Outcome, Telemetry};
 use skyplan_frames::LocalFrame;
 use skyplan_link::flight::{self, Observer, reached_index};
 use skyplan_link::ground::{GroundConfig, Update, Waiting};
@@ -24,45 +22,6 @@ use std::io::IsTerminal;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-
-/// `--on-interrupt`: what Ctrl-C commands in flight.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum InterruptArg {
-    /// Land where the vehicle is, wait for the touchdown and the disarm.
-    Land,
-    /// Hold the position (LOITER) and exit once the vehicle confirms: a pilot takes over.
-    Hold,
-}
-
-/// `--failsafe`: what to command when a lost link comes back.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum FailsafeArg {
-    /// Land where the vehicle is.
-    Land,
-    /// Return to launch (RTL) and land there.
-    Rtl,
-    /// Hold the position (LOITER) and leave the vehicle to the pilot.
-    Hold,
-}
-
-impl From<InterruptArg> for FailsafeAction {
-    fn from(a: InterruptArg) -> Self {
-        match a {
-            InterruptArg::Land => FailsafeAction::Land,
-            InterruptArg::Hold => FailsafeAction::Hold,
-        }
-    }
-}
-
-impl From<FailsafeArg> for FailsafeAction {
-    fn from(a: FailsafeArg) -> Self {
-        match a {
-            FailsafeArg::Land => FailsafeAction::Land,
-            FailsafeArg::Rtl => FailsafeAction::ReturnToLaunch,
-            FailsafeArg::Hold => FailsafeAction::Hold,
-        }
-    }
-}
 
 /// The Ctrl-C handler's view: `in_flight` while the executor flies (a Ctrl-C then sets
 /// `interrupt`, which the ground station turns into a landing or a hold; a second one exits at
@@ -294,12 +253,12 @@ fn fly_options(a: &FlyArgs) -> FlyOptions {
         speedup: a.speedup,
         link_timeout_s: a.link_timeout_s,
         timeout_s: a.timeout_s,
-        on_interrupt: a.on_interrupt.into(),
+        on_interrupt: a.on_interrupt,
         ..GroundConfig::default()
     };
     let executor = ExecutorConfig {
         deadband_m: a.deadband_m,
-        failsafe: a.failsafe.map(FailsafeAction::from),
+        failsafe: a.failsafe,
         link_regain_wait_s: runner::LINK_REGAIN_FACTOR * a.link_timeout_s,
         ..ExecutorConfig::default()
     };

@@ -30,11 +30,7 @@ impl ReplannerArg {
 
     /// The `--replanner` spelling.
     pub fn name(self) -> &'static str {
-        match self {
-            ReplannerArg::DstarLite => "dstar-lite",
-            ReplannerArg::Scratch => "scratch",
-            ReplannerArg::Off => "off",
-        }
+        self.kind().map_or("off", ReplannerKind::name)
     }
 }
 

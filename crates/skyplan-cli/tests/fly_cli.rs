@@ -413,6 +413,42 @@ fn ctrl_c_in_flight_lands_reports_and_fails() {
 }
 
 #[test]
+fn ctrl_c_with_on_interrupt_rtl_returns_to_launch_and_lands_there() {
+    let run = fly_and_interrupt(
+        "fly --sim --speedup 20 --on-interrupt rtl",
+        "3 of 14 reached",
+    );
+    run.expect_code(1).stdout_has(&[
+        "interrupt  Ctrl-C: returning to launch",
+        "sim        mode RTL",
+        "result     FAILED: aborted (interrupted by Ctrl-C); the vehicle landed",
+        "sim        disarmed",
+    ]);
+    // Interrupted ~250 m from home, the vehicle ends back at the launch point, on the ground.
+    let at = run
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("vehicle    at N "));
+    let at = at.unwrap_or_else(|| panic!("no final position:\n{}", run.stdout));
+    let number = |s: &str| s.trim().trim_end_matches(" m").parse::<f64>().unwrap();
+    let fields: Vec<&str> = at.split(',').collect();
+    let (north_m, east_m) = (
+        number(fields[0]),
+        number(fields[1].trim().trim_start_matches("E ")),
+    );
+    assert!(
+        north_m.hypot(east_m) < 1.0,
+        "landed at N {north_m} E {east_m}, not home"
+    );
+    let flown = run
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("track      flown "));
+    let flown_m = number(flown.unwrap().split(',').next().unwrap());
+    assert!(flown_m > 400.0, "flew out and back: {flown_m} m");
+}
+
+#[test]
 fn ctrl_c_with_on_interrupt_hold_leaves_the_vehicle_loitering() {
     fly_and_interrupt(
         "fly --sim --speedup 20 --upload --on-interrupt hold",

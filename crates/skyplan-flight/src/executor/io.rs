@@ -269,10 +269,12 @@ impl fmt::Display for VehicleMode {
 /// What the executor tells the vehicle to do when it stops a flight early: on a Ctrl-C
 /// ([`Event::Stop`]) or when a lost link comes back ([`ExecutorConfig::failsafe`](super::ExecutorConfig::failsafe)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum FailsafeAction {
     /// Land where it is (NAV_LAND), then disarm.
     Land,
     /// Return to the launch point and land there (RTL), then disarm.
+    #[cfg_attr(feature = "clap", value(name = "rtl"))]
     ReturnToLaunch,
     /// Hold the position in the air (LOITER / PX4 HOLD); the flight ends once the vehicle
     /// confirms, leaving it to the pilot.
