@@ -2,7 +2,7 @@
 
 use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use skyplan_plan::cli::{finite, pair};
+use skyplan_plan::cli::{finite, lat_lon};
 use skyplan_plan::{PlanRequest, PlannerId};
 use std::path::PathBuf;
 
@@ -56,7 +56,7 @@ pub struct TileArgs {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=100))]
     pub times: u32,
     /// Distance between copies, metres [default: the map's extent, rounded up to 10 m].
-    #[arg(long, value_name = "M", value_parser = finite)]
+    #[arg(long, value_name = "M", value_parser = positive_up_to(1e6))]
     pub pitch_m: Option<f64>,
     /// The new map (.csv).
     #[arg(long, value_name = "FILE")]
@@ -71,11 +71,13 @@ fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Se
     }
 }
 
-/// A finite number above 0.
-fn positive(s: &str) -> Result<f64, String> {
-    match finite(s)? {
-        x if x > 0.0 => Ok(x),
-        x => Err(format!("expected a number above 0, found {x}")),
+/// A finite number above 0 and at most `hi`.
+fn positive_up_to(hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    move |s| match finite(s)? {
+        x if x > 0.0 && x <= hi => Ok(x),
+        x => Err(format!(
+            "expected a number above 0 and at most {hi}, found {x}"
+        )),
     }
 }
 
@@ -316,16 +318,16 @@ pub struct FlyArgs {
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Wall-clock budget of the flight, seconds: past it the vehicle is told to land, and the exit is non-zero.
-    #[arg(long, value_name = "T", value_parser = positive)]
+    #[arg(long, value_name = "T", value_parser = positive_up_to(1e6))]
     pub timeout_s: Option<f64>,
     /// A vehicle silent this long (no heartbeat, wall seconds) has lost the link.
-    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = positive)]
+    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = positive_up_to(1e6))]
     pub link_timeout_s: f64,
     /// How long to wait for the vehicle's heartbeat, EKF origin and position, vehicle seconds (wall seconds × --speedup); ArduCopter's EKF needs ~40 s after boot.
-    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = positive)]
+    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = positive_up_to(1e6))]
     pub wait_s: f64,
     /// Waypoint deadband, horizontal metres.
-    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = positive)]
+    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = positive_up_to(1e6))]
     pub deadband_m: f64,
     /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the route and the
     /// vehicle (position, heading, trail, state, waypoint) at 5 updates per second.
@@ -386,7 +388,7 @@ pub struct SimArgs {
     #[arg(long, value_name = "ADDRESS", default_value = "tcp:127.0.0.1:5760")]
     pub listen: String,
     /// Home (start position) as latitude,longitude; default: the map's home.
-    #[arg(long, value_name = "LAT,LON", value_parser = pair, allow_hyphen_values = true)]
+    #[arg(long, value_name = "LAT,LON", value_parser = lat_lon, allow_hyphen_values = true)]
     pub home: Option<[f64; 2]>,
     /// Map whose obstacles the flown track is checked against (default: the bundled city map).
     #[arg(long, value_name = "FILE")]

@@ -63,14 +63,12 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         grid_bench::load_grid(&name, &text, is_movingai(&args), spec).map_err(bad_input)?;
     let grid = &source.grid;
     let (queries, described) = queries(&args, grid, model)?;
-    let progress = indicatif::ProgressBar::new((planners.len() * queries.len()) as u64);
-    progress.set_style(
-        indicatif::ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} queries")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    if args.json {
-        progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    let target = match args.json {
+        true => indicatif::ProgressDrawTarget::hidden(),
+        false => indicatif::ProgressDrawTarget::stderr(),
+    };
+    let steps = Some((planners.len() * queries.len()) as u64);
+    let progress = crate::show::progress("{msg:>24} [{bar:40}] {pos}/{len} queries", steps, target);
     let jps_plus = jps_plus_prep(&args, grid, model, &planners)?;
     let mut runs = grid_bench::run_all(
         grid,

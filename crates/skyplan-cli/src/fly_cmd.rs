@@ -7,6 +7,7 @@ use crate::exit::runtime;
 use crate::exit::{Failure, Kind, Result, bad_input};
 use crate::files::{Target, write_atomic, write_target};
 use crate::picture::PictureKind;
+use crate::replan_cmd::flight_picture;
 use skyplan_flight::executor::{ExecutorConfig, FlightState, Note, Outcome, Telemetry};
 use skyplan_frames::LocalFrame;
 use skyplan_link::flight::{self, Observer, reached_index};
@@ -150,8 +151,9 @@ fn conclude(
             runner::summary_line(name, r.stats(), r.learned_count())
         );
     }
-    if let Some((world, plot)) = &drawing {
-        draw_flight(args, world, plot, flight, hidden)?;
+    if let (Some((world, (target, kind))), Some(path)) = (&drawing, &args.plot) {
+        write_target(target, &flight_picture(world, kind, flight, hidden)?)?;
+        println!("wrote      {}", path.display());
     }
     let outcome = match &flight.ended {
         Ended::Uploaded => {
@@ -230,22 +232,6 @@ fn vehicle(
     Ok((sim.address(), Some(sim)))
 }
 
-/// `--plot`: the flight's picture.
-fn draw_flight(
-    args: &FlyArgs,
-    world: &skyplan_plan::World,
-    (target, kind): &(Target, PictureKind),
-    flight: &runner::Flight,
-    hidden: &[ObstacleBox],
-) -> Result<()> {
-    let bytes = crate::replan_cmd::flight_picture(world, kind, flight, hidden)?;
-    write_target(target, &bytes)?;
-    if let Some(path) = &args.plot {
-        println!("wrote      {}", path.display());
-    }
-    Ok(())
-}
-
 /// The flight options of the arguments (an uploaded mission is flown by the autopilot: no
 /// route swaps).
 fn fly_options(a: &FlyArgs) -> FlyOptions {
@@ -304,22 +290,12 @@ static PROGRESS: std::sync::OnceLock<indicatif::ProgressBar> = std::sync::OnceLo
 fn progress_bar(waypoints: usize) -> indicatif::ProgressBar {
     let bar = PROGRESS
         .get_or_init(|| {
-            let bar = indicatif::ProgressBar::with_draw_target(
-                Some(waypoints as u64),
-                if std::io::stdout().is_terminal() {
-                    indicatif::ProgressDrawTarget::stdout()
-                } else {
-                    indicatif::ProgressDrawTarget::hidden()
-                },
-            );
-            bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{prefix:>9} [{bar:30}] waypoint {pos}/{len}  {msg}",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                .progress_chars("=> "),
-            );
-            bar
+            let target = match std::io::stdout().is_terminal() {
+                true => indicatif::ProgressDrawTarget::stdout(),
+                false => indicatif::ProgressDrawTarget::hidden(),
+            };
+            let template = "{prefix:>9} [{bar:30}] waypoint {pos}/{len}  {msg}";
+            crate::show::progress(template, Some(waypoints as u64), target)
         })
         .clone();
     bar.set_length(waypoints as u64);
@@ -346,16 +322,16 @@ impl Observer for Terminal {
                 for note in notes {
                     if let Note::Replanned { event, targets } = note {
                         self.bar.set_length(targets.len() as u64);
-                        self.live.replanned(*t, targets, event);
+                        self.live.events.replanned(*t, targets, event);
                     }
                 }
                 if let Some(i) = notes.iter().rev().find_map(reached_index) {
                     self.bar.set_position((i + 1) as u64);
                 }
             }
-            Update::Reading(r) => self.live.reading(r.clone()),
+            Update::Reading(r) => self.live.events.reading(r.clone()),
             Update::Progress(p) => {
-                self.live.progress(p);
+                self.live.events.progress(p);
                 self.bar.set_prefix(p.state.name());
                 self.bar.set_position(p.reached as u64);
                 self.bar.set_message(progress_message(p));
@@ -378,7 +354,7 @@ impl RunObserver for Terminal {
 
     fn planned(&mut self, plan: &Plan) -> Result<()> {
         self.bar.set_message("");
-        self.live.route(plan, "plan");
+        self.live.events.route(plan, "plan");
         if let (Some(file @ (path, _, format)), Some(mission)) = (&self.out, &plan.mission) {
             let summary = serde_json::json!({ "map_home": plan.home, "planner": plan.planner });
             crate::plan_cmd::write_waypoints(file, mission, &summary)?;
@@ -401,6 +377,6 @@ impl RunObserver for Terminal {
     }
 
     fn landed(&mut self, time_s: f64, state: FlightState, telemetry: Option<&Telemetry>) {
-        self.live.last(time_s, state, telemetry);
+        self.live.events.last(time_s, state, telemetry);
     }
 }

@@ -91,7 +91,7 @@ pub struct GridMapArgs {
     pub density: f64,
     /// Geodetic home LAT,LON of the map's origin, for lat/lon of waypoints on maps without one
     /// (images, MovingAI, random).
-    #[arg(long, value_name = "LAT,LON", value_parser = pair, allow_hyphen_values = true)]
+    #[arg(long, value_name = "LAT,LON", value_parser = skyplan_plan::cli::pair, allow_hyphen_values = true)]
     pub home: Option<[f64; 2]>,
 }
 

@@ -8,27 +8,13 @@ use crate::files::{Target, output_target};
 use skyplan_plan::World;
 use skyplan_server::{Recorder, ViewServer};
 use std::fs::File;
-use std::ops::{Deref, DerefMut};
 use std::path::{Path, PathBuf};
 
 /// Where a flight's events go, and the recording's target and temporary file.
 #[derive(Default)]
 pub struct Live {
-    events: skyplan_server::live::Live<File>,
+    pub events: skyplan_server::live::Live<File>,
     record: Option<(PathBuf, PathBuf)>,
-}
-
-impl Deref for Live {
-    type Target = skyplan_server::live::Live<File>;
-    fn deref(&self) -> &Self::Target {
-        &self.events
-    }
-}
-
-impl DerefMut for Live {
-    fn deref_mut(&mut self) -> &mut Self::Target {
-        &mut self.events
-    }
 }
 
 impl Live {

@@ -12,15 +12,7 @@ pub fn tile(args: TileArgs) -> Result<()> {
     let world = skyplan_plan::World::from_colliders(&name, map.clone())?;
     let b = world.bounds_ne(1.0);
     let extent_m = (b.north_max_m - b.north_min_m).max(b.east_max_m - b.east_min_m);
-    let pitch_m = match args.pitch_m {
-        Some(p) if p.is_finite() && p > 0.0 && p <= 1e6 => p,
-        Some(p) => {
-            return Err(bad_input(format!(
-                "--pitch-m {p}: expected a distance above 0 and at most 1000000 m"
-            )));
-        }
-        None => (extent_m / 10.0).ceil() * 10.0,
-    };
+    let pitch_m = args.pitch_m.unwrap_or((extent_m / 10.0).ceil() * 10.0);
     let big = skyplan_map::tile(&map, args.times, pitch_m);
     write_target(&target, skyplan_map::to_colliders_csv(&big).as_bytes())?;
     let side_km = (f64::from(args.times - 1) * pitch_m + extent_m) / 1000.0;

@@ -11,24 +11,8 @@ use std::io::IsTerminal;
 use std::path::Path;
 
 fn read_targets_file(path: &Path) -> Result<Vec<[f64; 2]>> {
-    let text = read_text(path)?;
-    let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
-        let line = line.split('#').next().unwrap_or("").trim();
-        if line.is_empty() {
-            continue;
-        }
-        let p = skyplan_plan::cli::pair(line)
-            .map_err(|e| bad_input(format!("{}: line {}: {e}", path.display(), k + 1)))?;
-        out.push(p);
-    }
-    if out.is_empty() {
-        return Err(bad_input(format!(
-            "{}: no targets (expected one N,E per line)",
-            path.display()
-        )));
-    }
-    Ok(out)
+    skyplan_plan::cli::targets_text(&read_text(path)?)
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
 
 pub fn run_navigate(args: NavigateArgs) -> Result<()> {

@@ -163,12 +163,9 @@ fn spinner(planner: PlannerId) -> indicatif::ProgressBar {
     if !std::io::stderr().is_terminal() {
         return indicatif::ProgressBar::hidden();
     }
-    let bar = indicatif::ProgressBar::new_spinner()
-        .with_message(format!("planning with {planner}"))
-        .with_style(
-            indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-        );
+    let target = indicatif::ProgressDrawTarget::stderr();
+    let bar = crate::show::progress("{spinner} {msg} ({elapsed})", None, target)
+        .with_message(format!("planning with {planner}"));
     bar.enable_steady_tick(std::time::Duration::from_millis(150));
     bar
 }

@@ -1,7 +1,8 @@
-//! `--show`: the workspace, the distance matrix and the path as text, and the terminal prompt
-//! for a start or goal on grid maps without defaults.
+//! `--show`: the workspace, the distance matrix and the path as text; the terminal prompt for a
+//! start or goal on grid maps without defaults; progress bars.
 
 use crate::exit::{Classify, Kind, Result, bad_input};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_navfn::{FieldMetric, show};
 use skyplan_search::MoveModel;
@@ -19,6 +20,13 @@ pub fn print(grid: &Grid2, start: Cell, goal: Cell, path: &[Cell], model: MoveMo
         Ok(text) => print!("{text}"),
         Err(why) => eprintln!("--show: {why} (use --plot)"),
     }
+}
+
+/// A progress bar of `len` steps (`None`: a spinner) in `template`'s style, drawn on `target`.
+pub fn progress(template: &str, len: Option<u64>, target: ProgressDrawTarget) -> ProgressBar {
+    let style =
+        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
+    ProgressBar::with_draw_target(len, target).with_style(style.progress_chars("=> "))
 }
 
 /// Asks on the terminal until the answer is a free cell on the map.

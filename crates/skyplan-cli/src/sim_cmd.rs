@@ -5,6 +5,7 @@ use crate::exit::{Classify, Kind, Result, bad_input};
 use crate::files::{map_text, read_text};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_frames::Lla;
+use skyplan_link::flight::sim_listening_line;
 use skyplan_link::vehicle::{SimServer, SimServerConfig};
 use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
@@ -22,23 +23,14 @@ pub(crate) fn load_hidden(
 }
 
 /// The map's home, and where the vehicle starts: `--home`, else the map's home.
-fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> Result<(Lla, Lla)> {
-    let at = |lat_deg, lon_deg| Lla {
+fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> (Lla, Lla) {
+    let at = |[lat_deg, lon_deg]: [f64; 2]| Lla {
         lat_deg,
         lon_deg,
         alt_m: 0.0,
     };
-    let map_home = at(map_home.lat_deg, map_home.lon_deg);
-    match args.home {
-        Some([lat, lon]) if !(-90.0..=90.0).contains(&lat) || !(-180.0..=180.0).contains(&lon) => {
-            Err(bad_input(format!(
-                "--home: expected latitude in [-90, 90] and longitude in [-180, 180], found {},{}",
-                lat, lon
-            )))
-        }
-        Some([lat, lon]) => Ok((map_home, at(lat, lon))),
-        None => Ok((map_home, map_home)),
-    }
+    let map_home = at([map_home.lat_deg, map_home.lon_deg]);
+    (map_home, args.home.map_or(map_home, at))
 }
 
 /// `--view ADDR`: the live view of the simulator's state.
@@ -56,12 +48,11 @@ pub fn run(args: SimArgs) -> Result<()> {
     let (map_name, text) = map_text(args.map.as_deref(), FCND_CITY_NAME)?;
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
-    let (map_home, home) = homes(&args, &map.home)?;
+    let (map_home, home) = homes(&args, &map.home);
     let hidden = (args.hidden.as_ref())
         .map(|path| load_hidden(path, &map.home))
         .transpose()?
         .unwrap_or_default();
-    let hidden_count = hidden.len();
     let config = SimServerConfig {
         hidden,
         sensor_range_m: args.sensor_range_m,
@@ -71,27 +62,14 @@ pub fn run(args: SimArgs) -> Result<()> {
         map_home: Some(map_home),
         ..SimServerConfig::at(home)
     };
-    let server = SimServer::bind(&address, config).or_exit(Kind::Runtime)?;
+    let server = SimServer::bind(&address, config.clone()).or_exit(Kind::Runtime)?;
     let shown = match (server.local_addr(), &address) {
         (Some(a), Address::TcpIn(_)) => format!("tcp:{a}"),
         _ => address.to_string(),
     };
-    println!(
-        "sim        simulated multicopter (MAVLink system 1, ArduCopter modes) listening on {shown}, \
-         {}× real time, home lat {:.7}, lon {:.7}; obstacles from {map_name}{}; OBSTACLE_DISTANCE at 10 Hz, range {} m",
-        args.speedup,
-        home.lat_deg,
-        home.lon_deg,
-        match &args.hidden {
-            Some(p) => format!(
-                " and {hidden_count} hidden obstacle{} from {}",
-                if hidden_count == 1 { "" } else { "s" },
-                p.display()
-            ),
-            None => String::new(),
-        },
-        args.sensor_range_m
-    );
+    let hidden_from = args.hidden.as_ref().map(|p| p.display().to_string());
+    let line = sim_listening_line(&shown, &config, &map_name, hidden_from.as_deref());
+    println!("{line}");
     let mut live = live_view(&args, &map_name, &text)?;
     let stop = SimServer::stop_after(args.duration_s);
     let world = BoxWorld::new(&map.boxes);
@@ -105,7 +83,7 @@ pub fn run(args: SimArgs) -> Result<()> {
             }
         },
         Duration::from_millis(100),
-        |s| live.sim_status(s),
+        |s| live.events.sim_status(s),
     );
     println!(
         "{}",

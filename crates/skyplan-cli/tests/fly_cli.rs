@@ -206,7 +206,7 @@ fn the_overall_timeout_lands_the_vehicle_and_fails() {
 #[test]
 fn bad_addresses_and_missing_vehicles_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, i32, &[&str]); 5] = [
+    let cases: [(&str, i32, &[&str]); 10] = [
         (
             "fly --connect serial:/dev/ttyUSB0:57600",
             2,
@@ -219,7 +219,24 @@ fn bad_addresses_and_missing_vehicles_are_clear_errors() {
             1,
             &["cannot open tcpout:127.0.0.1:1"],
         ),
-        ("fly --sim --speedup 0", 2, &[]),
+        (
+            "fly --sim --speedup 0",
+            2,
+            &["--speedup", "from 0.1 to 1000"],
+        ),
+        ("sim --speedup 2000", 2, &["--speedup", "from 0.1 to 1000"]),
+        ("fly --sim --wait-s 0", 2, &["--wait-s", "above 0"]),
+        (
+            "fly --sim --sim-ekf-delay-s=-1",
+            2,
+            &["--sim-ekf-delay-s", "from 0 to"],
+        ),
+        ("sim --home 95,0", 2, &["--home", "latitude in [-90, 90]"]),
+        (
+            "map tile --times 2 --pitch-m 0 --out t.csv",
+            2,
+            &["--pitch-m", "above 0"],
+        ),
         (
             "sim --listen tcpout:127.0.0.1:5760",
             1,

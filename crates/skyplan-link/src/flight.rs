@@ -5,7 +5,7 @@
 //! this module only makes them.
 
 use crate::ground::{FlightSummary, GroundError, GroundStation, LogRow, Update};
-use crate::vehicle::SimReport;
+use crate::vehicle::{SimReport, SimServerConfig};
 use crate::words::{note_line, tidy, update_line};
 use skyplan_flight::executor::{FlightExecutor, Note, Outcome};
 use skyplan_frames::LocalFrame;
@@ -155,6 +155,37 @@ pub fn track_line(report: &SimReport) -> String {
             )
         }
     }
+}
+
+/// The simulator's account when it starts (`skyplan sim`): where it listens, how fast, where
+/// the vehicle is, what the track is checked against (the map and the hidden obstacles, read from
+/// `hidden_from`) and what its sensor sees.
+///
+/// ```
+/// use skyplan_frames::Lla;
+/// use skyplan_link::vehicle::SimServerConfig;
+/// let home = Lla { lat_deg: 37.5, lon_deg: -122.25, alt_m: 0.0 };
+/// let config = SimServerConfig { speedup: 2.0, ..SimServerConfig::at(home) };
+/// let line = skyplan_link::flight::sim_listening_line("tcp:127.0.0.1:5760", &config, "city.csv", None);
+/// assert!(line.contains("listening on tcp:127.0.0.1:5760, 2× real time, home lat 37.5000000, lon -122.2500000;"));
+/// assert!(line.ends_with("obstacles from city.csv; OBSTACLE_DISTANCE at 10 Hz, range 30 m"));
+/// ```
+pub fn sim_listening_line(
+    listening: &str,
+    config: &SimServerConfig,
+    map_name: &str,
+    hidden_from: Option<&str>,
+) -> String {
+    let hidden = match (hidden_from, config.hidden.len()) {
+        (Some(from), 1) => format!(" and 1 hidden obstacle from {from}"),
+        (Some(from), n) => format!(" and {n} hidden obstacles from {from}"),
+        (None, _) => String::new(),
+    };
+    format!(
+        "sim        simulated multicopter (MAVLink system 1, ArduCopter modes) listening on {listening}, \
+         {}× real time, home lat {:.7}, lon {:.7}; obstacles from {map_name}{hidden}; OBSTACLE_DISTANCE at 10 Hz, range {} m",
+        config.speedup, config.home.lat_deg, config.home.lon_deg, config.sensor_range_m
+    )
 }
 
 /// The simulator's account when it stops (`skyplan sim`): times, distance, and any collision

@@ -1,6 +1,7 @@
-//! With the `clap` feature: the value parsers and help headings of the command-line options
-//! derived from [`PlanRequest`](crate::PlanRequest) and [`CostmapOptions`](crate::CostmapOptions),
-//! for front ends built on `clap`.
+//! How front ends read typed values: the value parsers and help headings of the command-line
+//! options (with the `clap` feature, [`PlanRequest`](crate::PlanRequest) and
+//! [`CostmapOptions`](crate::CostmapOptions) are `clap` arguments and [`PlannerId`](crate::PlannerId)
+//! a `clap` value), and the text of a targets file.
 
 /// Help heading of the grid-path options.
 pub const GRID: &str = "Grid paths";
@@ -39,6 +40,47 @@ pub fn pair(s: &str) -> Result<[f64; 2], String> {
     Ok([num(a)?, num(b)?])
 }
 
+/// A latitude,longitude in degrees: latitude in [-90, 90], longitude in [-180, 180].
+///
+/// ```
+/// assert_eq!(skyplan_plan::cli::lat_lon("37.79,-122.39"), Ok([37.79, -122.39]));
+/// assert!(skyplan_plan::cli::lat_lon("97.8,-122.4").unwrap_err().contains("latitude in [-90, 90]"));
+/// ```
+pub fn lat_lon(s: &str) -> Result<[f64; 2], String> {
+    match pair(s)? {
+        [lat, lon] if (-90.0..=90.0).contains(&lat) && (-180.0..=180.0).contains(&lon) => {
+            Ok([lat, lon])
+        }
+        [lat, lon] => Err(format!(
+            "expected latitude in [-90, 90] and longitude in [-180, 180], found {lat},{lon}"
+        )),
+    }
+}
+
+/// A targets file's text: one `N,E` per line (metres north,east), `#` starts a comment; an
+/// error names the line.
+///
+/// ```
+/// let text = "# patrol\n10,20\n\n-5.5, 3  # the gate\n";
+/// assert_eq!(skyplan_plan::cli::targets_text(text), Ok(vec![[10.0, 20.0], [-5.5, 3.0]]));
+/// assert!(skyplan_plan::cli::targets_text("1,2\n3\n").unwrap_err().starts_with("line 2: "));
+/// assert!(skyplan_plan::cli::targets_text("# none\n").is_err());
+/// ```
+pub fn targets_text(text: &str) -> Result<Vec<[f64; 2]>, String> {
+    let mut targets = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if !line.is_empty() {
+            targets.push(pair(line).map_err(|e| format!("line {}: {e}", k + 1))?);
+        }
+    }
+    if targets.is_empty() {
+        return Err("no targets (expected one N,E per line)".into());
+    }
+    Ok(targets)
+}
+
+#[cfg(feature = "clap")]
 impl clap::ValueEnum for crate::PlannerId {
     fn value_variants<'a>() -> &'a [Self] {
         crate::PlannerId::ALL

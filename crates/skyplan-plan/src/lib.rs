@@ -70,7 +70,6 @@
 
 mod any_angle;
 mod cell_search;
-#[cfg(feature = "clap")]
 pub mod cli;
 mod config;
 mod failure;
