@@ -32,6 +32,7 @@
 
 use crate::obstacle::obstacle_distance;
 use crate::{Address, Link, LinkError};
+use mavlink::MessageData;
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
 use skyplan_flight::flat_earth::FlatEarth;
@@ -198,23 +199,17 @@ pub struct SimServer {
     map_frame: LocalFrame,
 }
 
-/// The streamed messages, ArduCopter's way: off until requested. Message id and default period.
+/// The streamed messages, ArduCopter's way: off until requested. Message id (the dialect's) and
+/// default period.
 const STREAMS: [(u32, f64); 7] = [
-    (ATTITUDE_ID, 0.1),
-    (MISSION_ITEM_REACHED_ID, 1.0),
-    (LOCAL_POSITION_NED_ID, 0.1),
-    (GLOBAL_POSITION_INT_ID, 0.1),
-    (MISSION_CURRENT_ID, 0.5),
-    (GPS_GLOBAL_ORIGIN_ID, 1.0),
-    (EXTENDED_SYS_STATE_ID, 0.5),
+    (ATTITUDE_DATA::ID, 0.1),
+    (MISSION_ITEM_REACHED_DATA::ID, 1.0),
+    (LOCAL_POSITION_NED_DATA::ID, 0.1),
+    (GLOBAL_POSITION_INT_DATA::ID, 0.1),
+    (MISSION_CURRENT_DATA::ID, 0.5),
+    (GPS_GLOBAL_ORIGIN_DATA::ID, 1.0),
+    (EXTENDED_SYS_STATE_DATA::ID, 0.5),
 ];
-const ATTITUDE_ID: u32 = 30;
-const LOCAL_POSITION_NED_ID: u32 = 32;
-const GLOBAL_POSITION_INT_ID: u32 = 33;
-const MISSION_CURRENT_ID: u32 = 42;
-const MISSION_ITEM_REACHED_ID: u32 = 46;
-const GPS_GLOBAL_ORIGIN_ID: u32 = 49;
-const EXTENDED_SYS_STATE_ID: u32 = 245;
 
 /// Requested stream periods (simulated seconds) and when each was last sent.
 #[derive(Debug, Clone, Default)]
@@ -737,7 +732,7 @@ impl Side {
         let [vn, ve, vd] = s.velocity_ned_m_s;
         let cm_s = |v: f64| (v * 100.0).round().clamp(-32768.0, 32767.0) as i16;
         Some(match id {
-            ATTITUDE_ID => MavMessage::ATTITUDE(ATTITUDE_DATA {
+            ATTITUDE_DATA::ID => MavMessage::ATTITUDE(ATTITUDE_DATA {
                 time_boot_ms,
                 roll: 0.0,
                 pitch: 0.0,
@@ -746,7 +741,7 @@ impl Side {
                 pitchspeed: 0.0,
                 yawspeed: s.yaw_rate_rad_s as f32,
             }),
-            LOCAL_POSITION_NED_ID if self.position_ready(s) => {
+            LOCAL_POSITION_NED_DATA::ID if self.position_ready(s) => {
                 MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
                     time_boot_ms,
                     x: n as f32,
@@ -757,7 +752,7 @@ impl Side {
                     vz: vd as f32,
                 })
             }
-            GLOBAL_POSITION_INT_ID if self.position_ready(s) => {
+            GLOBAL_POSITION_INT_DATA::ID if self.position_ready(s) => {
                 let (lat, lon) = self.lat_lon_e7(n, e);
                 let hdg = (s.yaw_rad.to_degrees().rem_euclid(360.0) * 100.0).round() as u16 % 36000;
                 MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
@@ -772,7 +767,7 @@ impl Side {
                     hdg,
                 })
             }
-            GPS_GLOBAL_ORIGIN_ID if self.origin_set(s) => {
+            GPS_GLOBAL_ORIGIN_DATA::ID if self.origin_set(s) => {
                 let (latitude, longitude) = self.lat_lon_e7(0.0, 0.0);
                 MavMessage::GPS_GLOBAL_ORIGIN(GPS_GLOBAL_ORIGIN_DATA {
                     latitude,
@@ -781,21 +776,23 @@ impl Side {
                     ..Default::default()
                 })
             }
-            EXTENDED_SYS_STATE_ID => MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
-                vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
-                landed_state: if s.on_ground {
-                    MavLandedState::MAV_LANDED_STATE_ON_GROUND
-                } else {
-                    MavLandedState::MAV_LANDED_STATE_IN_AIR
-                },
-            }),
-            MISSION_ITEM_REACHED_ID => {
+            EXTENDED_SYS_STATE_DATA::ID => {
+                MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
+                    vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+                    landed_state: if s.on_ground {
+                        MavLandedState::MAV_LANDED_STATE_ON_GROUND
+                    } else {
+                        MavLandedState::MAV_LANDED_STATE_IN_AIR
+                    },
+                })
+            }
+            MISSION_ITEM_REACHED_DATA::ID => {
                 MavMessage::MISSION_ITEM_REACHED(MISSION_ITEM_REACHED_DATA {
                     seq: self.last_reached,
                 })
             }
             // As ArduPilot: in every mode, once there is a mission.
-            MISSION_CURRENT_ID if mission_len > 1 => {
+            MISSION_CURRENT_DATA::ID if mission_len > 1 => {
                 MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
                     seq: s.mission_current,
                     ..Default::default()
