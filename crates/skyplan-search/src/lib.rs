@@ -43,7 +43,7 @@ pub use contraction::{
 };
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 
-use skyplan_cspace::{Cell, Grid2};
+use skyplan_cspace::{Cell, Grid2, OutsideGrid};
 use std::f64::consts::SQRT_2;
 
 /// How a vehicle may move between grid cells.
@@ -156,25 +156,11 @@ pub fn octile_cost(straight: u64, diagonal: u64) -> f64 {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SearchError {
     /// The start cell is outside the grid.
-    #[error("start cell (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
-    StartOutside {
-        /// The cell.
-        cell: Cell,
-        /// Grid rows.
-        rows: u32,
-        /// Grid columns.
-        cols: u32,
-    },
+    #[error("start {0}")]
+    StartOutside(OutsideGrid),
     /// The goal cell is outside the grid.
-    #[error("goal cell (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
-    GoalOutside {
-        /// The cell.
-        cell: Cell,
-        /// Grid rows.
-        rows: u32,
-        /// Grid columns.
-        cols: u32,
-    },
+    #[error("goal {0}")]
+    GoalOutside(OutsideGrid),
     /// The start cell is blocked.
     #[error("start cell (row {}, col {}) is blocked", .0.row, .0.col)]
     StartBlocked(Cell),
