@@ -8,7 +8,7 @@ use crate::field::{check_endpoint, descend_by, finite_value};
 use crate::moves::{for_each_move, key};
 use crate::{Costmap, Endpoint, MAX_NON_OBSTACLE, NavError};
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{MoveModel, octile_cost};
+use skyplan_search::{MoveModel, OpenEntry, octile_cost};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::f64::consts::SQRT_2;
@@ -101,10 +101,13 @@ pub fn cost_search(
     };
     let (s, t) = (grid.index(source), grid.index(goal));
     g[s] = 0.0;
-    // Smallest f first; on equal f, the larger g (deeper) first; then the smaller index.
-    let mut heap = BinaryHeap::from([Reverse((key(h(source)), Reverse(key(0.0)), s as u32))]);
+    let mut heap = BinaryHeap::from([OpenEntry {
+        f: h(source),
+        g: 0.0,
+        node: s as u32,
+    }]);
     let mut expansions = 0u64;
-    while let Some(Reverse((_, _, index))) = heap.pop() {
+    while let Some(OpenEntry { node: index, .. }) = heap.pop() {
         let i = index as usize;
         if closed[i] {
             continue;
@@ -124,11 +127,11 @@ pub fn cost_search(
             if candidate < g[j] {
                 g[j] = candidate;
                 parent[j] = index;
-                heap.push(Reverse((
-                    key(candidate + h(next)),
-                    Reverse(key(candidate)),
-                    j as u32,
-                )));
+                heap.push(OpenEntry {
+                    f: candidate + h(next),
+                    g: candidate,
+                    node: j as u32,
+                });
             }
         });
     }

@@ -35,9 +35,8 @@
 
 use skyplan_cspace::{Cell, Grid2, Touch};
 use skyplan_map::colliders::CollidersMap;
-use skyplan_search::{GridSearch, MoveModel, Planner};
+use skyplan_search::{GridSearch, MoveModel, OpenEntry, Planner};
 use spade::{DelaunayTriangulation, Point2, Triangulation};
-use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 use std::time::Instant;
 
@@ -274,32 +273,6 @@ pub fn grid_boundary_sites(grid: &Grid2) -> Vec<Ne> {
     }
     sites.extend(frame_sites(grid, grid.frame().cell_m));
     sites
-}
-
-#[derive(Clone, Copy, PartialEq)]
-struct Open {
-    f: f64,
-    g: f64,
-    node: u32,
-}
-
-impl Eq for Open {}
-
-impl Ord for Open {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Min-heap on f, then larger g first (deeper), then node index.
-        other
-            .f
-            .total_cmp(&self.f)
-            .then(self.g.total_cmp(&other.g))
-            .then(other.node.cmp(&self.node))
-    }
-}
-
-impl PartialOrd for Open {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
 }
 
 impl Roadmap {
@@ -632,24 +605,24 @@ impl Roadmap {
         let mut closed = vec![false; n + 2];
         let mut heap = BinaryHeap::new();
         best[s as usize] = 0.0;
-        heap.push(Open {
+        heap.push(OpenEntry {
             f: dist(start, goal),
             g: 0.0,
             node: s,
         });
         let mut expansions = 0;
-        let mut relax = |heap: &mut BinaryHeap<Open>, from: u32, to: u32, g: f64| {
+        let mut relax = |heap: &mut BinaryHeap<OpenEntry>, from: u32, to: u32, g: f64| {
             if g < best[to as usize] {
                 best[to as usize] = g;
                 parent[to as usize] = from;
-                heap.push(Open {
+                heap.push(OpenEntry {
                     f: g + dist(pos(to), goal),
                     g,
                     node: to,
                 });
             }
         };
-        while let Some(Open { g: gv, node, .. }) = heap.pop() {
+        while let Some(OpenEntry { g: gv, node, .. }) = heap.pop() {
             if closed[node as usize] {
                 continue;
             }

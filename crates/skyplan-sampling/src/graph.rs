@@ -10,34 +10,8 @@
 //! assert_eq!(cost, 2.0);
 //! ```
 
-use std::cmp::Ordering;
+use skyplan_search::OpenEntry;
 use std::collections::BinaryHeap;
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Entry {
-    f: f64,
-    g: f64,
-    node: u32,
-}
-
-impl Eq for Entry {}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Min-heap on f, then prefer larger g (deeper) on ties.
-        other
-            .f
-            .total_cmp(&self.f)
-            .then_with(|| self.g.total_cmp(&other.g))
-            .then_with(|| other.node.cmp(&self.node))
-    }
-}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
 
 /// Shortest path from `start` to `goal` (node lists and cost), or `None` if unreachable.
 ///
@@ -58,12 +32,12 @@ pub fn astar(
     let mut closed = vec![false; n];
     let mut heap = BinaryHeap::new();
     g[start as usize] = 0.0;
-    heap.push(Entry {
+    heap.push(OpenEntry {
         f: heuristic(start),
         g: 0.0,
         node: start,
     });
-    while let Some(Entry { g: gv, node, .. }) = heap.pop() {
+    while let Some(OpenEntry { g: gv, node, .. }) = heap.pop() {
         let v = node as usize;
         if closed[v] || gv > g[v] {
             continue;
@@ -85,7 +59,7 @@ pub fn astar(
             if !closed[nw] && ng < g[nw] {
                 g[nw] = ng;
                 parent[nw] = node;
-                heap.push(Entry {
+                heap.push(OpenEntry {
                     f: ng + heuristic(w),
                     g: ng,
                     node: w,
