@@ -35,9 +35,9 @@
 
 use skyplan_cspace::{Cell, Grid2, Touch};
 use skyplan_map::colliders::CollidersMap;
-use skyplan_search::{GridSearch, MoveModel, OpenEntry, Planner};
+use skyplan_search::{GridSearch, MoveModel, OpenEntry, OpenList, Planner};
 use spade::{DelaunayTriangulation, Point2, Triangulation};
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// A local `[north_m, east_m]` point.
@@ -602,32 +602,25 @@ impl Roadmap {
         };
         let mut best = vec![f64::INFINITY; n + 2];
         let mut parent = vec![u32::MAX; n + 2];
-        let mut closed = vec![false; n + 2];
-        let mut heap = BinaryHeap::new();
+        let mut open = OpenList::new(n + 2);
         best[s as usize] = 0.0;
-        heap.push(OpenEntry {
+        open.push(OpenEntry {
             f: dist(start, goal),
             g: 0.0,
             node: s,
         });
-        let mut expansions = 0;
-        let mut relax = |heap: &mut BinaryHeap<OpenEntry>, from: u32, to: u32, g: f64| {
+        let mut relax = |open: &mut OpenList, from: u32, to: u32, g: f64| {
             if g < best[to as usize] {
                 best[to as usize] = g;
                 parent[to as usize] = from;
-                heap.push(OpenEntry {
+                open.push(OpenEntry {
                     f: g + dist(pos(to), goal),
                     g,
                     node: to,
                 });
             }
         };
-        while let Some(OpenEntry { g: gv, node, .. }) = heap.pop() {
-            if closed[node as usize] {
-                continue;
-            }
-            closed[node as usize] = true;
-            expansions += 1;
+        while let Some(OpenEntry { g: gv, node, .. }) = open.pop() {
             if node == g {
                 let mut path = vec![goal];
                 let mut v = parent[g as usize];
@@ -637,25 +630,25 @@ impl Roadmap {
                 }
                 path.push(start);
                 path.reverse();
-                return (Some(path), expansions);
+                return (Some(path), open.expansions() as usize);
             }
             if node == s {
                 for &(v, d) in from_start {
-                    relax(&mut heap, s, v, d);
+                    relax(&mut open, s, v, d);
                 }
                 if direct {
-                    relax(&mut heap, s, g, dist(start, goal));
+                    relax(&mut open, s, g, dist(start, goal));
                 }
                 continue;
             }
             for &(v, w) in self.neighbours(node) {
-                relax(&mut heap, node, v, gv + w);
+                relax(&mut open, node, v, gv + w);
             }
             if let Some(&d) = goal_link.get(&node) {
-                relax(&mut heap, node, g, gv + d);
+                relax(&mut open, node, g, gv + d);
             }
         }
-        (None, expansions)
+        (None, open.expansions() as usize)
     }
 }
 

@@ -10,8 +10,7 @@
 //! assert_eq!(cost, 2.0);
 //! ```
 
-use skyplan_search::OpenEntry;
-use std::collections::BinaryHeap;
+use skyplan_search::{OpenEntry, OpenList};
 
 /// Shortest path from `start` to `goal` (node lists and cost), or `None` if unreachable.
 ///
@@ -29,19 +28,14 @@ pub fn astar(
     }
     let mut g = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
-    let mut closed = vec![false; n];
-    let mut heap = BinaryHeap::new();
+    let mut open = OpenList::new(n);
     g[start as usize] = 0.0;
-    heap.push(OpenEntry {
+    open.push(OpenEntry {
         f: heuristic(start),
         g: 0.0,
         node: start,
     });
-    while let Some(OpenEntry { g: gv, node, .. }) = heap.pop() {
-        let v = node as usize;
-        if closed[v] || gv > g[v] {
-            continue;
-        }
+    while let Some(OpenEntry { g: gv, node, .. }) = open.pop() {
         if node == goal {
             let mut path = vec![goal];
             let mut k = goal;
@@ -52,14 +46,13 @@ pub fn astar(
             path.reverse();
             return Some((path, gv));
         }
-        closed[v] = true;
-        for &(w, c) in &adjacency[v] {
+        for &(w, c) in &adjacency[node as usize] {
             let nw = w as usize;
             let ng = gv + c;
-            if !closed[nw] && ng < g[nw] {
+            if !open.is_closed(w) && ng < g[nw] {
                 g[nw] = ng;
                 parent[nw] = node;
-                heap.push(OpenEntry {
+                open.push(OpenEntry {
                     f: ng + heuristic(w),
                     g: ng,
                     node: w,

@@ -7,8 +7,8 @@
 //! * [`ContractionHierarchy`]: exact shortest paths with a per-grid preprocessing (shortcuts
 //!   over the grid graph, bidirectional upward queries), for many queries on one grid.
 //! * [`check_path`]: re-checks a path against the grid and the move model.
-//! * [`OpenEntry`]: the binary-heap open-list entry of the float-cost searches (graph A\*,
-//!   roadmaps, cost maps).
+//! * [`OpenList`], [`OpenEntry`]: the binary-heap open list of the float-cost searches (graph
+//!   A\*, roadmaps, voxel lattices, cost maps).
 //!
 //! Costs are in cells (multiply by the cell size for metres). A path's cost is computed from its
 //! counts of straight and diagonal moves, so two optimal paths report bit-identical costs.
@@ -45,7 +45,7 @@ pub use contraction::{
     MAX_CELLS as CH_MAX_CELLS, STRAIGHT as CH_STRAIGHT_COST,
 };
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
-pub use open::OpenEntry;
+pub use open::{OpenEntry, OpenList};
 
 use skyplan_cspace::{Cell, Grid2, OutsideGrid};
 use std::f64::consts::SQRT_2;
