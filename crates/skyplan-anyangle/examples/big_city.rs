@@ -9,16 +9,9 @@ use std::time::Instant;
 
 const CITY: &str = include_str!("../../../data/colliders.csv");
 
-/// Peak resident set of this process in MB (Linux), for the report.
+/// Peak resident set of this process in MB (Linux; NaN elsewhere), for the report.
 fn peak_rss_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
+    skyplan_bench::grid_bench::peak_rss_bytes().map_or(f64::NAN, |b| b as f64 / (1024.0 * 1024.0))
 }
 
 fn main() {

@@ -10,6 +10,7 @@ use proptest::sample::Index;
 use skyplan_anyangle::{AnyAngle, AnyAngleError, GridPoint, segment_is_free_any_angle};
 use skyplan_cspace::{Cell, Grid2, GridFrame, Touch};
 use skyplan_search::{GridSearch, MoveModel, Planner, SearchError};
+use std::ops::RangeInclusive;
 
 /// Brute-force rule in integer coordinates with `s` units per cell; cells off the grid blocked.
 struct Brute<'a> {
@@ -45,6 +46,22 @@ impl Brute<'_> {
         !(sides.iter().all(|&v| v >= 0) || sides.iter().all(|&v| v <= 0))
     }
 
+    /// For a segment along a grid line from `a` to `b` (coordinates along the line): does it
+    /// cover, with positive length, a unit edge `i` in `edges` that is `walled` (blocked on both
+    /// sides)?
+    fn walled_edge_covered(
+        &self,
+        (a, b): (i64, i64),
+        edges: RangeInclusive<i64>,
+        walled: impl Fn(i64) -> bool,
+    ) -> bool {
+        let s = self.s;
+        let (lo, hi) = (a.min(b), a.max(b));
+        edges
+            .into_iter()
+            .any(|i| lo.max(i * s) < hi.min((i + 1) * s) && walled(i))
+    }
+
     fn segment_free(&self, p: (i64, i64), q: (i64, i64)) -> bool {
         let s = self.s;
         let (rows, cols) = (i64::from(self.grid.rows()), i64::from(self.grid.cols()));
@@ -77,26 +94,16 @@ impl Brute<'_> {
         // Along a grid line: every unit edge covered with positive length needs a free side.
         if p.0 == q.0 && p.0 % s == 0 {
             let k = p.0 / s;
-            let (lo, hi) = (p.1.min(q.1), p.1.max(q.1));
-            for c in c_lo..=c_hi {
-                if lo.max(c * s) < hi.min((c + 1) * s)
-                    && self.blocked(k - 1, c)
-                    && self.blocked(k, c)
-                {
-                    return false;
-                }
+            let walled = |c| self.blocked(k - 1, c) && self.blocked(k, c);
+            if self.walled_edge_covered((p.1, q.1), c_lo..=c_hi, walled) {
+                return false;
             }
         }
         if p.1 == q.1 && p.1 % s == 0 {
             let k = p.1 / s;
-            let (lo, hi) = (p.0.min(q.0), p.0.max(q.0));
-            for r in r_lo..=r_hi {
-                if lo.max(r * s) < hi.min((r + 1) * s)
-                    && self.blocked(r, k - 1)
-                    && self.blocked(r, k)
-                {
-                    return false;
-                }
+            let walled = |r| self.blocked(r, k - 1) && self.blocked(r, k);
+            if self.walled_edge_covered((p.0, q.0), r_lo..=r_hi, walled) {
+                return false;
             }
         }
         // Vertices strictly inside the segment.

@@ -162,8 +162,9 @@ fn reset_peak_rss() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 
-/// VmHWM of /proc/self/status (the peak resident set since the last reset), bytes.
-fn peak_rss_bytes() -> Option<u64> {
+/// VmHWM of /proc/self/status (the process's peak resident set since it started or since the
+/// bench last reset it), bytes; `None` where it cannot be read (not Linux).
+pub fn peak_rss_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line

@@ -766,16 +766,14 @@ fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
 #[test]
 fn fly_without_replanning_hits_the_hidden_buildings() {
     let dir = tempfile::tempdir().unwrap();
-    let out = cmd(
+    let r = run(
         dir.path(),
         "fly --sim --speedup 50 --hidden-random 3 --seed 1 --replanner off",
-    )
-    .output()
-    .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert_ne!(out.status.code(), Some(0), "{text}");
-    assert!(text.contains("COLLISION"), "{text}");
-    assert!(!text.lines().any(|l| l.starts_with("replan ")), "{text}");
+    );
+    assert_ne!(r.code, Some(0), "{}", r.stdout);
+    r.stdout_has(&["COLLISION"]);
+    let replanned = r.stdout.lines().any(|l| l.starts_with("replan "));
+    assert!(!replanned, "{}", r.stdout);
 }
 
 /// A hidden ring of 100 m walls around the goal: no route at the flight altitude nor by climbing
@@ -796,18 +794,14 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold_then_land_exit_3() {
         csv.push_str(&format!("{n},{e},50,{hn},{he},50\n"));
     }
     std::fs::write(dir.path().join("ring.csv"), csv).unwrap();
-    let out = cmd(dir.path(), "fly --sim --speedup 50 --hidden ring.csv")
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(3), "{text}\n{err}");
-    assert!(
-        text.lines()
-            .any(|l| l.starts_with("hold ") && l.contains("no route")),
-        "{text}"
-    );
-    assert!(text.contains("touched down"), "{text}");
-    assert!(!text.contains("COLLISION"), "{text}");
-    assert!(err.contains("no route"), "{err}");
+    let r = run(dir.path(), "fly --sim --speedup 50 --hidden ring.csv");
+    r.expect_code(3)
+        .stdout_has(&["touched down"])
+        .stdout_lacks("COLLISION")
+        .stderr_has(&["no route"]);
+    let held = r
+        .stdout
+        .lines()
+        .any(|l| l.starts_with("hold ") && l.contains("no route"));
+    assert!(held, "{}", r.stdout);
 }

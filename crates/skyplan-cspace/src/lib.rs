@@ -114,6 +114,30 @@ pub enum GridError {
     },
 }
 
+/// A cell that is not on a grid, with the grid's size: the one refusal every planner gives for
+/// a start, goal or other endpoint off the grid ([`Grid2::check_contains`]). Planner errors
+/// name which endpoint and show this one's message after it.
+///
+/// ```
+/// use skyplan_cspace::{Cell, Grid2, OutsideGrid};
+/// let grid = Grid2::from_ascii("...\n...")?;
+/// assert_eq!(grid.check_contains(Cell::new(1, 2)), Ok(()));
+/// let err = grid.check_contains(Cell::new(5, 0)).unwrap_err();
+/// assert_eq!(err, OutsideGrid { cell: Cell::new(5, 0), rows: 2, cols: 3 });
+/// assert_eq!(err.to_string(), "cell (row 5, col 0) is outside the 2 × 3 grid");
+/// # Ok::<(), skyplan_cspace::GridError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("cell (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
+pub struct OutsideGrid {
+    /// The cell.
+    pub cell: Cell,
+    /// Grid rows.
+    pub rows: u32,
+    /// Grid columns.
+    pub cols: u32,
+}
+
 /// A 2D occupancy grid (row-major, `true` = blocked).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid2 {
@@ -222,6 +246,19 @@ impl Grid2 {
     #[inline]
     pub fn contains(&self, cell: Cell) -> bool {
         cell.row < self.rows && cell.col < self.cols
+    }
+    /// `Ok` if the cell is inside the grid, else the [`OutsideGrid`] refusal naming it and the
+    /// grid's size.
+    pub fn check_contains(&self, cell: Cell) -> Result<(), OutsideGrid> {
+        if self.contains(cell) {
+            Ok(())
+        } else {
+            Err(OutsideGrid {
+                cell,
+                rows: self.rows,
+                cols: self.cols,
+            })
+        }
     }
     /// True if the cell is blocked; cells outside the grid count as blocked.
     #[inline]

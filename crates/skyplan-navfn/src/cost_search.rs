@@ -8,7 +8,7 @@ use crate::field::{check_endpoint, descend_by, finite_value};
 use crate::moves::{for_each_move, key};
 use crate::{Costmap, Endpoint, MAX_NON_OBSTACLE, NavError};
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{MoveModel, octile_cost};
+use skyplan_search::{MoveModel, OpenEntry, OpenList, octile_cost};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::f64::consts::SQRT_2;
@@ -91,7 +91,6 @@ pub fn cost_search(
     let n = grid.len();
     let mut g = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
-    let mut closed = vec![false; n];
     let h = |c: Cell| {
         if heuristic {
             model.heuristic(c, goal)
@@ -101,38 +100,36 @@ pub fn cost_search(
     };
     let (s, t) = (grid.index(source), grid.index(goal));
     g[s] = 0.0;
-    // Smallest f first; on equal f, the larger g (deeper) first; then the smaller index.
-    let mut heap = BinaryHeap::from([Reverse((key(h(source)), Reverse(key(0.0)), s as u32))]);
-    let mut expansions = 0u64;
-    while let Some(Reverse((_, _, index))) = heap.pop() {
+    let mut open = OpenList::new(n);
+    open.push(OpenEntry {
+        f: h(source),
+        g: 0.0,
+        node: s as u32,
+    });
+    while let Some(OpenEntry { node: index, .. }) = open.pop() {
         let i = index as usize;
-        if closed[i] {
-            continue;
-        }
-        closed[i] = true;
-        expansions += 1;
         if i == t {
             break;
         }
         let cell = grid.cell(i);
         for_each_move(&grid, cell, model, |next, diagonal| {
             let j = grid.index(next);
-            if closed[j] {
+            if open.is_closed(j as u32) {
                 return;
             }
             let candidate = g[i] + step_length(diagonal) * mult[j];
             if candidate < g[j] {
                 g[j] = candidate;
                 parent[j] = index;
-                heap.push(Reverse((
-                    key(candidate + h(next)),
-                    Reverse(key(candidate)),
-                    j as u32,
-                )));
+                open.push(OpenEntry {
+                    f: candidate + h(next),
+                    g: candidate,
+                    node: j as u32,
+                });
             }
         });
     }
-    if !closed[t] {
+    if !open.is_closed(t as u32) {
         return Err(NavError::Unreachable {
             source_cell: source,
             destination_cell: goal,
@@ -151,7 +148,7 @@ pub fn cost_search(
         straight_moves,
         diagonal_moves,
         objective_cells: g[t],
-        expansions,
+        expansions: open.expansions(),
     })
 }
 

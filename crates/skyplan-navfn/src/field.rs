@@ -102,14 +102,8 @@ pub(crate) fn descend_by(
 }
 
 pub(crate) fn check_endpoint(grid: &Grid2, cell: Cell, which: Endpoint) -> Result<(), NavError> {
-    if !grid.contains(cell) {
-        return Err(NavError::Outside {
-            which,
-            cell,
-            rows: grid.rows(),
-            cols: grid.cols(),
-        });
-    }
+    grid.check_contains(cell)
+        .map_err(|outside| NavError::Outside { which, outside })?;
     if grid.is_blocked(cell) {
         return Err(NavError::AtObstacle { which, cell });
     }

@@ -47,7 +47,7 @@ pub use navigate::{NavLeg, NavRequest, NavRun, TargetChange, navigate};
 
 pub use skyplan_search::MoveModel;
 
-use skyplan_cspace::Cell;
+use skyplan_cspace::{Cell, OutsideGrid};
 
 /// Which end of a query an error is about.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,16 +71,12 @@ impl std::fmt::Display for Endpoint {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum NavError {
     /// An endpoint lies outside the grid.
-    #[error("the {which} (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
+    #[error("the {which} {outside}")]
     Outside {
         /// Which endpoint.
         which: Endpoint,
-        /// The cell.
-        cell: Cell,
-        /// Grid rows.
-        rows: u32,
-        /// Grid columns.
-        cols: u32,
+        /// The cell and the grid's size.
+        outside: OutsideGrid,
     },
     /// An endpoint is on an obstacle (or, on a cost map, within the inscribed radius of one).
     #[error("the {which} (row {}, col {}) is at an obstacle", .cell.row, .cell.col)]

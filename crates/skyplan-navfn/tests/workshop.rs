@@ -143,7 +143,7 @@ fn endpoint_at_an_obstacle_or_off_the_grid_is_named() {
     let field = distance_field(&grid, Cell::new(0, 0), Octile, Length).unwrap();
     assert_eq!(
         field.descend(Cell::new(5, 0)).unwrap_err().to_string(),
-        "the source (row 5, col 0) is outside the 2 × 3 grid"
+        "the source cell (row 5, col 0) is outside the 2 × 3 grid"
     );
 }
 

@@ -5,7 +5,7 @@
 //! Moves and costs are exactly the grid planners' ([`MoveModel`]: octile costs, the same corner
 //! rule as `skyplan-search`), so D\* Lite's cost equals A\*'s from scratch after every edit.
 
-use skyplan_cspace::{Cell, Grid2};
+use skyplan_cspace::{Cell, Grid2, OutsideGrid};
 use skyplan_search::{MoveModel, octile_cost};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -24,16 +24,12 @@ const DIAGONAL: Cost = 1_554_944_255_988;
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum DStarError {
     /// The start or the goal cell is outside the grid.
-    #[error("{which} cell (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
+    #[error("{which} {outside}")]
     Outside {
         /// `start` or `goal`.
         which: &'static str,
-        /// The cell.
-        cell: Cell,
-        /// Grid rows.
-        rows: u32,
-        /// Grid columns.
-        cols: u32,
+        /// The cell and the grid's size.
+        outside: OutsideGrid,
     },
 }
 
@@ -152,14 +148,8 @@ impl DStarLite {
         model: MoveModel,
     ) -> Result<Self, DStarError> {
         for (which, cell) in [("start", start), ("goal", goal)] {
-            if !grid.contains(cell) {
-                return Err(DStarError::Outside {
-                    which,
-                    cell,
-                    rows: grid.rows(),
-                    cols: grid.cols(),
-                });
-            }
+            grid.check_contains(cell)
+                .map_err(|outside| DStarError::Outside { which, outside })?;
         }
         let n = grid.len();
         let mut d = Self {

@@ -35,10 +35,9 @@
 
 use skyplan_cspace::{Cell, Grid2, Touch};
 use skyplan_map::colliders::CollidersMap;
-use skyplan_search::{GridSearch, MoveModel, Planner};
+use skyplan_search::{GridSearch, MoveModel, OpenEntry, OpenList, Planner};
 use spade::{DelaunayTriangulation, Point2, Triangulation};
-use std::cmp::Ordering;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// A local `[north_m, east_m]` point.
@@ -274,32 +273,6 @@ pub fn grid_boundary_sites(grid: &Grid2) -> Vec<Ne> {
     }
     sites.extend(frame_sites(grid, grid.frame().cell_m));
     sites
-}
-
-#[derive(Clone, Copy, PartialEq)]
-struct Open {
-    f: f64,
-    g: f64,
-    node: u32,
-}
-
-impl Eq for Open {}
-
-impl Ord for Open {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Min-heap on f, then larger g first (deeper), then node index.
-        other
-            .f
-            .total_cmp(&self.f)
-            .then(self.g.total_cmp(&other.g))
-            .then(other.node.cmp(&self.node))
-    }
-}
-
-impl PartialOrd for Open {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
 }
 
 impl Roadmap {
@@ -629,32 +602,25 @@ impl Roadmap {
         };
         let mut best = vec![f64::INFINITY; n + 2];
         let mut parent = vec![u32::MAX; n + 2];
-        let mut closed = vec![false; n + 2];
-        let mut heap = BinaryHeap::new();
+        let mut open = OpenList::new(n + 2);
         best[s as usize] = 0.0;
-        heap.push(Open {
+        open.push(OpenEntry {
             f: dist(start, goal),
             g: 0.0,
             node: s,
         });
-        let mut expansions = 0;
-        let mut relax = |heap: &mut BinaryHeap<Open>, from: u32, to: u32, g: f64| {
+        let mut relax = |open: &mut OpenList, from: u32, to: u32, g: f64| {
             if g < best[to as usize] {
                 best[to as usize] = g;
                 parent[to as usize] = from;
-                heap.push(Open {
+                open.push(OpenEntry {
                     f: g + dist(pos(to), goal),
                     g,
                     node: to,
                 });
             }
         };
-        while let Some(Open { g: gv, node, .. }) = heap.pop() {
-            if closed[node as usize] {
-                continue;
-            }
-            closed[node as usize] = true;
-            expansions += 1;
+        while let Some(OpenEntry { g: gv, node, .. }) = open.pop() {
             if node == g {
                 let mut path = vec![goal];
                 let mut v = parent[g as usize];
@@ -664,25 +630,25 @@ impl Roadmap {
                 }
                 path.push(start);
                 path.reverse();
-                return (Some(path), expansions);
+                return (Some(path), open.expansions() as usize);
             }
             if node == s {
                 for &(v, d) in from_start {
-                    relax(&mut heap, s, v, d);
+                    relax(&mut open, s, v, d);
                 }
                 if direct {
-                    relax(&mut heap, s, g, dist(start, goal));
+                    relax(&mut open, s, g, dist(start, goal));
                 }
                 continue;
             }
             for &(v, w) in self.neighbours(node) {
-                relax(&mut heap, node, v, gv + w);
+                relax(&mut open, node, v, gv + w);
             }
             if let Some(&d) = goal_link.get(&node) {
-                relax(&mut heap, node, g, gv + d);
+                relax(&mut open, node, g, gv + d);
             }
         }
-        (None, expansions)
+        (None, open.expansions() as usize)
     }
 }
 

@@ -10,34 +10,7 @@
 //! assert_eq!(cost, 2.0);
 //! ```
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Entry {
-    f: f64,
-    g: f64,
-    node: u32,
-}
-
-impl Eq for Entry {}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Min-heap on f, then prefer larger g (deeper) on ties.
-        other
-            .f
-            .total_cmp(&self.f)
-            .then_with(|| self.g.total_cmp(&other.g))
-            .then_with(|| other.node.cmp(&self.node))
-    }
-}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
+use skyplan_search::{OpenEntry, OpenList};
 
 /// Shortest path from `start` to `goal` (node lists and cost), or `None` if unreachable.
 ///
@@ -55,19 +28,14 @@ pub fn astar(
     }
     let mut g = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
-    let mut closed = vec![false; n];
-    let mut heap = BinaryHeap::new();
+    let mut open = OpenList::new(n);
     g[start as usize] = 0.0;
-    heap.push(Entry {
+    open.push(OpenEntry {
         f: heuristic(start),
         g: 0.0,
         node: start,
     });
-    while let Some(Entry { g: gv, node, .. }) = heap.pop() {
-        let v = node as usize;
-        if closed[v] || gv > g[v] {
-            continue;
-        }
+    while let Some(OpenEntry { g: gv, node, .. }) = open.pop() {
         if node == goal {
             let mut path = vec![goal];
             let mut k = goal;
@@ -78,14 +46,13 @@ pub fn astar(
             path.reverse();
             return Some((path, gv));
         }
-        closed[v] = true;
-        for &(w, c) in &adjacency[v] {
+        for &(w, c) in &adjacency[node as usize] {
             let nw = w as usize;
             let ng = gv + c;
-            if !closed[nw] && ng < g[nw] {
+            if !open.is_closed(w) && ng < g[nw] {
                 g[nw] = ng;
                 parent[nw] = node;
-                heap.push(Entry {
+                open.push(OpenEntry {
                     f: ng + heuristic(w),
                     g: ng,
                     node: w,

@@ -150,21 +150,10 @@ fn heuristic_counts<const DIAGONALS: bool, const HEURISTIC: bool>(
 
 /// The endpoint checks every planner makes first.
 pub(crate) fn check_endpoints(grid: &Grid2, start: Cell, goal: Cell) -> Result<(), SearchError> {
-    let (rows, cols) = (grid.rows(), grid.cols());
-    if !grid.contains(start) {
-        return Err(SearchError::StartOutside {
-            cell: start,
-            rows,
-            cols,
-        });
-    }
-    if !grid.contains(goal) {
-        return Err(SearchError::GoalOutside {
-            cell: goal,
-            rows,
-            cols,
-        });
-    }
+    grid.check_contains(start)
+        .map_err(SearchError::StartOutside)?;
+    grid.check_contains(goal)
+        .map_err(SearchError::GoalOutside)?;
     if grid.is_blocked(start) {
         return Err(SearchError::StartBlocked(start));
     }

@@ -7,6 +7,8 @@
 //! * [`ContractionHierarchy`]: exact shortest paths with a per-grid preprocessing (shortcuts
 //!   over the grid graph, bidirectional upward queries), for many queries on one grid.
 //! * [`check_path`]: re-checks a path against the grid and the move model.
+//! * [`OpenList`], [`OpenEntry`]: the binary-heap open list of the float-cost searches (graph
+//!   A\*, roadmaps, voxel lattices, cost maps).
 //!
 //! Costs are in cells (multiply by the cell size for metres). A path's cost is computed from its
 //! counts of straight and diagonal moves, so two optimal paths report bit-identical costs.
@@ -30,6 +32,7 @@ mod contraction;
 mod jps;
 mod jps_plus;
 mod nodes;
+mod open;
 pub mod oracle;
 mod queue;
 pub mod table_file;
@@ -42,8 +45,9 @@ pub use contraction::{
     MAX_CELLS as CH_MAX_CELLS, STRAIGHT as CH_STRAIGHT_COST,
 };
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
+pub use open::{OpenEntry, OpenList};
 
-use skyplan_cspace::{Cell, Grid2};
+use skyplan_cspace::{Cell, Grid2, OutsideGrid};
 use std::f64::consts::SQRT_2;
 
 /// How a vehicle may move between grid cells.
@@ -156,25 +160,11 @@ pub fn octile_cost(straight: u64, diagonal: u64) -> f64 {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SearchError {
     /// The start cell is outside the grid.
-    #[error("start cell (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
-    StartOutside {
-        /// The cell.
-        cell: Cell,
-        /// Grid rows.
-        rows: u32,
-        /// Grid columns.
-        cols: u32,
-    },
+    #[error("start {0}")]
+    StartOutside(OutsideGrid),
     /// The goal cell is outside the grid.
-    #[error("goal cell (row {}, col {}) is outside the {rows} × {cols} grid", .cell.row, .cell.col)]
-    GoalOutside {
-        /// The cell.
-        cell: Cell,
-        /// Grid rows.
-        rows: u32,
-        /// Grid columns.
-        cols: u32,
-    },
+    #[error("goal {0}")]
+    GoalOutside(OutsideGrid),
     /// The start cell is blocked.
     #[error("start cell (row {}, col {}) is blocked", .0.row, .0.col)]
     StartBlocked(Cell),

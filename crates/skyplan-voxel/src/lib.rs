@@ -43,9 +43,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+use skyplan_search::{OpenEntry, OpenList};
 use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, distance_m};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 use std::time::Instant;
 
 /// Slack added around a voxel's neighbourhood box before calling it clear of every inflated box,
@@ -513,7 +512,6 @@ impl<'w> VoxelGrid<'w> {
         let (start_id, goal_id) = (n, n + 1);
         let mut g = vec![f64::INFINITY; n + 2];
         let mut parent = vec![u32::MAX; n + 2];
-        let mut closed = vec![false; n + 2];
         let point_of = |id: usize| -> Neu {
             if id == start_id {
                 start
@@ -524,11 +522,14 @@ impl<'w> VoxelGrid<'w> {
             }
         };
         let h = |p: Neu| distance_m(p, goal) + w * (goal[2] - p[2]).max(0.0);
-        let mut heap: BinaryHeap<Reverse<(u64, u32)>> = BinaryHeap::new();
+        let mut open = OpenList::new(n + 2);
         g[start_id] = 0.0;
-        heap.push(Reverse((h(start).to_bits(), start_id as u32)));
-        let mut expansions = 0usize;
-        let relax = |heap: &mut BinaryHeap<Reverse<(u64, u32)>>,
+        open.push(OpenEntry {
+            f: h(start),
+            g: 0.0,
+            node: start_id as u32,
+        });
+        let relax = |open: &mut OpenList,
                      g: &mut [f64],
                      parent: &mut [u32],
                      from: usize,
@@ -538,23 +539,22 @@ impl<'w> VoxelGrid<'w> {
             if ng < g[to] {
                 g[to] = ng;
                 parent[to] = from as u32;
-                heap.push(Reverse(((ng + h(point_of(to))).to_bits(), to as u32)));
+                open.push(OpenEntry {
+                    f: ng + h(point_of(to)),
+                    g: ng,
+                    node: to as u32,
+                });
             }
         };
-        while let Some(Reverse((_, u))) = heap.pop() {
+        while let Some(OpenEntry { node: u, .. }) = open.pop() {
             let u = u as usize;
-            if closed[u] {
-                continue;
-            }
-            closed[u] = true;
-            expansions += 1;
             if u == goal_id {
                 break;
             }
             if u == start_id {
                 if direct {
                     relax(
-                        &mut heap,
+                        &mut open,
                         &mut g,
                         &mut parent,
                         u,
@@ -563,13 +563,13 @@ impl<'w> VoxelGrid<'w> {
                     );
                 }
                 for &(v, c) in &from_start {
-                    relax(&mut heap, &mut g, &mut parent, u, v, c);
+                    relax(&mut open, &mut g, &mut parent, u, v, c);
                 }
                 continue;
             }
             let p = self.point(u);
             if let Ok(k) = to_goal.binary_search_by_key(&u, |&(v, _)| v) {
-                relax(&mut heap, &mut g, &mut parent, u, goal_id, to_goal[k].1);
+                relax(&mut open, &mut g, &mut parent, u, goal_id, to_goal[k].1);
             }
             let ijk = self.ijk(u);
             let near = self.state[u] == NEAR;
@@ -588,7 +588,7 @@ impl<'w> VoxelGrid<'w> {
                     continue;
                 }
                 let v = self.index(nb);
-                if closed[v] || self.state[v] == BLOCKED {
+                if open.is_closed(v as u32) || self.state[v] == BLOCKED {
                     continue;
                 }
                 let q = self.point(v);
@@ -602,10 +602,11 @@ impl<'w> VoxelGrid<'w> {
                         continue;
                     }
                 }
-                relax(&mut heap, &mut g, &mut parent, u, v, cost);
+                relax(&mut open, &mut g, &mut parent, u, v, cost);
             }
         }
-        if !closed[goal_id] {
+        let expansions = open.expansions() as usize;
+        if !open.is_closed(goal_id as u32) {
             return Err(VoxelError::NoPath { expansions });
         }
         let mut ids = vec![goal_id];
