@@ -56,7 +56,7 @@ pub struct TileArgs {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=100))]
     pub times: u32,
     /// Distance between copies, metres [default: the map's extent, rounded up to 10 m].
-    #[arg(long, value_name = "M", value_parser = positive_up_to(1e6))]
+    #[arg(long, value_name = "M", value_parser = positive_up_to(1e6), allow_negative_numbers = true)]
     pub pitch_m: Option<f64>,
     /// The new map (.csv).
     #[arg(long, value_name = "FILE")]
@@ -67,7 +67,7 @@ pub struct TileArgs {
 fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
     move |s| match finite(s)? {
         x if (lo..=hi).contains(&x) => Ok(x),
-        x => Err(format!("expected a number from {lo} to {hi}, found {x}")),
+        _ => Err(format!("expected a number from {lo} to {hi}, found {s}")),
     }
 }
 
@@ -75,8 +75,8 @@ fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Se
 fn positive_up_to(hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
     move |s| match finite(s)? {
         x if x > 0.0 && x <= hi => Ok(x),
-        x => Err(format!(
-            "expected a number above 0 and at most {hi}, found {x}"
+        _ => Err(format!(
+            "expected a number above 0 and at most {hi}, found {s}"
         )),
     }
 }
@@ -265,7 +265,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
     /// Minimum start-goal distance of random queries, metres [default: half the grid diagonal].
-    #[arg(long, value_name = "M", value_parser = finite)]
+    #[arg(long, value_name = "M", value_parser = finite, allow_negative_numbers = true)]
     pub min_distance_m: Option<f64>,
     /// Take the queries from a MovingAI .scen file instead.
     #[arg(long, value_name = "FILE")]
@@ -280,7 +280,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub peers: bool,
     /// Time budget of each Python peer, seconds (a slow peer runs fewer queries).
-    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = finite)]
+    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = finite, allow_negative_numbers = true)]
     pub peer_budget_s: f64,
     /// Write every record (planner, query, time, expansions, cost) to a .csv or .json file.
     #[arg(long, value_name = "FILE")]
@@ -312,22 +312,22 @@ pub struct FlyArgs {
     #[arg(long)]
     pub sim: bool,
     /// Vehicle seconds per wall second: the simulator's speed with --sim, or `skyplan sim --speedup`.
-    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = within(0.1, 1000.0))]
+    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = within(0.1, 1000.0), allow_negative_numbers = true)]
     pub speedup: f64,
     /// Write the flight log (time, state, position, target) as CSV.
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Wall-clock budget of the flight, seconds: past it the vehicle is told to land, and the exit is non-zero.
-    #[arg(long, value_name = "T", value_parser = positive_up_to(1e6))]
+    #[arg(long, value_name = "T", value_parser = positive_up_to(1e6), allow_negative_numbers = true)]
     pub timeout_s: Option<f64>,
     /// A vehicle silent this long (no heartbeat, wall seconds) has lost the link.
-    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = positive_up_to(1e6))]
+    #[arg(long, value_name = "S", default_value_t = 5.0, value_parser = positive_up_to(1e6), allow_negative_numbers = true)]
     pub link_timeout_s: f64,
     /// How long to wait for the vehicle's heartbeat, EKF origin and position, vehicle seconds (wall seconds × --speedup); ArduCopter's EKF needs ~40 s after boot.
-    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = positive_up_to(1e6))]
+    #[arg(long, value_name = "S", default_value_t = 90.0, value_parser = positive_up_to(1e6), allow_negative_numbers = true)]
     pub wait_s: f64,
     /// Waypoint deadband, horizontal metres.
-    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = positive_up_to(1e6))]
+    #[arg(long, value_name = "M", default_value_t = 1.0, value_parser = positive_up_to(1e6), allow_negative_numbers = true)]
     pub deadband_m: f64,
     /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the route and the
     /// vehicle (position, heading, trail, state, waypoint) at 5 updates per second.
@@ -349,19 +349,19 @@ pub struct FlyArgs {
     #[arg(long, value_enum, value_name = "ACTION")]
     pub failsafe: Option<skyplan_flight::executor::FailsafeAction>,
     /// With --sim: simulated seconds after boot until the vehicle's EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
-    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6), requires = "sim")]
+    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6), allow_negative_numbers = true, requires = "sim")]
     pub sim_ekf_delay_s: f64,
     /// Fault injection for tests: the simulated vehicle goes silent after this many simulated seconds.
-    #[arg(long, value_name = "S", value_parser = finite, hide = true, requires = "sim")]
+    #[arg(long, value_name = "S", value_parser = within(0.0, 1e6), allow_negative_numbers = true, hide = true, requires = "sim")]
     pub sim_drop_link_after_s: Option<f64>,
     /// Fault injection for tests: the silence lasts this many simulated seconds, then the link comes back.
-    #[arg(long, value_name = "S", value_parser = finite, hide = true, requires = "sim_drop_link_after_s")]
+    #[arg(long, value_name = "S", value_parser = within(0.0, 1e6), allow_negative_numbers = true, hide = true, requires = "sim_drop_link_after_s")]
     pub sim_link_gap_s: Option<f64>,
     /// With --sim: obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
     #[arg(long, value_name = "FILE", requires = "sim")]
     pub hidden: Option<PathBuf>,
     /// With --sim: range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
-    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), requires = "sim")]
+    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), allow_negative_numbers = true, requires = "sim")]
     pub sensor_range_m: f64,
     /// With --sim: N random buildings on or near the planned route, unknown to the map (seeded by --seed; never on the ends, never sealing the goal).
     #[arg(long, value_name = "N", default_value_t = 0, requires = "sim")]
@@ -394,22 +394,22 @@ pub struct SimArgs {
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
     /// Simulated seconds per wall second.
-    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = within(0.1, 1000.0))]
+    #[arg(long, value_name = "K", default_value_t = 1.0, value_parser = within(0.1, 1000.0), allow_negative_numbers = true)]
     pub speedup: f64,
     /// Stop after this many wall seconds (default: run until killed).
-    #[arg(long, value_name = "S", value_parser = finite)]
+    #[arg(long, value_name = "S", value_parser = positive_up_to(1e6), allow_negative_numbers = true)]
     pub duration_s: Option<f64>,
     /// Simulated seconds after boot until the EKF has a position (its origin at half of it); ArduCopter SITL needs ~40 s.
-    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6))]
+    #[arg(long, value_name = "S", default_value_t = skyplan_link::vehicle::DEFAULT_EKF_DELAY_S, value_parser = within(0.0, 1e6), allow_negative_numbers = true)]
     pub ekf_delay_s: f64,
     /// Fault injection for tests: go silent after this many simulated seconds.
-    #[arg(long, value_name = "S", value_parser = finite, hide = true)]
+    #[arg(long, value_name = "S", value_parser = within(0.0, 1e6), allow_negative_numbers = true, hide = true)]
     pub drop_link_after_s: Option<f64>,
     /// Obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
     #[arg(long, value_name = "FILE")]
     pub hidden: Option<PathBuf>,
     /// Range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
-    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0))]
+    #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), allow_negative_numbers = true)]
     pub sensor_range_m: f64,
     /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the vehicle (position, heading, mode, armed) and what its sensor sees, at 10 updates per second.
     #[arg(long, value_name = "ADDR")]

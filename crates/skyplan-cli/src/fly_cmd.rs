@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// The Ctrl-C handler's view: `in_flight` while the executor flies (a Ctrl-C then sets
-/// `interrupt`, which the ground station turns into a landing or a hold; a second one exits at
+/// `interrupt`, which the ground station turns into `--on-interrupt`: land, rtl or hold; a second one exits at
 /// once); outside the flight a Ctrl-C exits at once, nothing having been commanded to fly.
 #[derive(Clone)]
 struct CtrlC {

@@ -78,7 +78,7 @@ fn parse_change(s: &str) -> Result<ChangeArg, String> {
 #[derive(Debug, Args, Default)]
 pub struct GridMapArgs {
     /// Metres per pixel of a bare .png/.pgm map (a .yaml map gives its own).
-    #[arg(long, value_name = "M", value_parser = finite)]
+    #[arg(long, value_name = "M", value_parser = finite, allow_negative_numbers = true)]
     pub resolution: Option<f64>,
     /// Count unknown pixels of an image map as free (default: blocked).
     #[arg(long)]

@@ -227,7 +227,7 @@ fn bad_addresses_and_missing_vehicles_are_clear_errors() {
         ("sim --speedup 2000", 2, &["--speedup", "from 0.1 to 1000"]),
         ("fly --sim --wait-s 0", 2, &["--wait-s", "above 0"]),
         (
-            "fly --sim --sim-ekf-delay-s=-1",
+            "fly --sim --sim-ekf-delay-s -1",
             2,
             &["--sim-ekf-delay-s", "from 0 to"],
         ),

@@ -85,7 +85,8 @@ pub struct GroundConfig {
     pub link_timeout_s: f64,
     /// Overall wall-clock budget of the flight: past it, the executor is told to land.
     pub timeout_s: Option<f64>,
-    /// After an abort, wall seconds to wait for the landing before giving up.
+    /// After an abort, wall seconds to wait for the landing beyond the executor's own landing
+    /// budget (a return to launch from far away takes that much longer) before giving up.
     pub abort_grace_s: f64,
     /// What the interrupt flag ([`GroundStation::set_interrupt`]) commands: land (default) or
     /// hold ([`FailsafeAction::Hold`]; a return to launch works too).
@@ -887,7 +888,8 @@ impl GroundStation {
                 }));
             }
             if let Some(t) = aborted_at
-                && t.elapsed().as_secs_f64() > self.config.abort_grace_s
+                && t.elapsed().as_secs_f64()
+                    > self.config.abort_grace_s + ex.landing_budget_s() / self.config.speedup
             {
                 break;
             }

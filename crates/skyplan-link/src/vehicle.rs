@@ -375,9 +375,9 @@ impl SimServer {
     /// thread of its own), or never.
     pub fn stop_after(wall_s: Option<f64>) -> std::sync::Arc<AtomicBool> {
         let stop = std::sync::Arc::new(AtomicBool::new(false));
-        if let Some(s) = wall_s {
+        // A time too long for a `Duration` (or NaN) is never.
+        if let Some(wait) = wall_s.and_then(|s| Duration::try_from_secs_f64(s.max(0.0)).ok()) {
             let flag = std::sync::Arc::clone(&stop);
-            let wait = Duration::from_secs_f64(s.max(0.0));
             std::thread::spawn(move || {
                 std::thread::sleep(wait);
                 flag.store(true, Ordering::Relaxed);

@@ -1,7 +1,7 @@
 //! The ground station flies the simulator over a real loopback TCP socket.
 
 use skyplan_flight::executor::{
-    ExecutorConfig, FlightState, MissionExecutor, Note, Outcome, Target,
+    ExecutorConfig, FailsafeAction, FlightState, MissionExecutor, Note, Outcome, Target, Telemetry,
 };
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_link::ground::{GroundConfig, GroundStation, Update};
@@ -30,23 +30,41 @@ struct Run {
     states: Vec<FlightState>,
     sim_notes: Vec<SimNote>,
     reached: usize,
+    last: Option<Telemetry>,
 }
 
 fn fly(config: SimServerConfig, ground: GroundConfig) -> Run {
+    fly_route(config, ground, &route(), None)
+}
+
+/// Flies `targets`; with `interrupt_at`, Ctrl-C (the interrupt flag) once that waypoint is
+/// reached.
+fn fly_route(
+    config: SimServerConfig,
+    ground: GroundConfig,
+    targets: &[Target],
+    interrupt_at: Option<usize>,
+) -> Run {
     let sim = InProcessSim::start(config, None).unwrap();
     let mut gcs = GroundStation::connect(&sim.address(), ground).unwrap();
+    let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    gcs.set_interrupt(interrupt.clone());
     let info = gcs
         .wait_for_vehicle(Duration::from_secs(10), |_, _| {})
         .unwrap();
     assert!((info.position.lat_deg - HOME.lat_deg).abs() < 1e-6);
-    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut ex = MissionExecutor::new(targets, ExecutorConfig::default()).unwrap();
     let frame = LocalFrame::new(HOME).unwrap();
     let mut states = vec![FlightState::Manual];
     gcs.fly(&mut ex, &frame, |u| {
         if let Update::Notes(_, notes) = u {
             for n in notes {
-                if let Note::State { to, .. } = n {
-                    states.push(to);
+                match n {
+                    Note::State { to, .. } => states.push(to),
+                    Note::Reached(r) if Some(r.index) == interrupt_at => {
+                        interrupt.store(true, std::sync::atomic::Ordering::SeqCst);
+                    }
+                    _ => {}
                 }
             }
         }
@@ -59,6 +77,7 @@ fn fly(config: SimServerConfig, ground: GroundConfig) -> Run {
         states,
         sim_notes,
         reached: ex.reached().len(),
+        last: ex.last_telemetry().cloned(),
     }
 }
 
@@ -85,6 +104,48 @@ fn flies_a_short_mission_over_tcp() {
     assert_eq!(run.reached, 3);
     assert!(run.sim_notes.contains(&SimNote::Landed));
     assert!(run.sim_notes.contains(&SimNote::Armed(false)));
+}
+
+/// Ctrl-C with `on_interrupt` RTL 200 m out: the ground station waits for the return and the
+/// touchdown at home (the executor's landing budget grows with the way back), not only its fixed
+/// grace after the abort (here 0.2 wall seconds, far shorter than the flight back).
+#[test]
+fn an_interrupted_return_to_launch_is_awaited_until_the_touchdown_at_home() {
+    let config = SimServerConfig {
+        speedup: 20.0,
+        ..SimServerConfig::at(HOME)
+    };
+    let ground = GroundConfig {
+        speedup: 20.0,
+        timeout_s: Some(60.0),
+        abort_grace_s: 0.2,
+        on_interrupt: FailsafeAction::ReturnToLaunch,
+        ..GroundConfig::default()
+    };
+    let wp = |n: f64| Target {
+        north_m: n,
+        east_m: 0.0,
+        alt_m: 5.0,
+        heading_rad: 0.0,
+    };
+    let targets = [wp(0.0), wp(100.0), wp(200.0), wp(300.0)];
+    let run = fly_route(config, ground, &targets, Some(2));
+    let Some(Outcome::Failed(f)) = &run.outcome else {
+        panic!("{:?}", run.outcome)
+    };
+    assert!(f.to_string().contains("interrupted"), "{f}");
+    assert!(
+        run.sim_notes.contains(&SimNote::Landed),
+        "{:?}",
+        run.sim_notes
+    );
+    assert!(run.sim_notes.contains(&SimNote::Armed(false)));
+    let last = run.last.unwrap();
+    assert!(
+        last.north_m.hypot(last.east_m) < 2.0,
+        "landed at {last:?}, not home"
+    );
+    assert_eq!(run.states.last(), Some(&FlightState::Manual));
 }
 
 #[test]

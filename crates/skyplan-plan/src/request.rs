@@ -15,7 +15,7 @@ use std::time::Duration;
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum PruneMode {
-    /// Exact integer collinearity on grid cells (the default).
+    /// Exact integer collinearity on grid cells.
     Collinear,
     /// Keep every cell of the grid path.
     None,
@@ -26,7 +26,7 @@ pub enum PruneMode {
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum FieldMode {
-    /// Path length (octile Dijkstra; descends along shortest grid paths). The default.
+    /// Path length (octile Dijkstra; descends along shortest grid paths).
     Length,
     /// Number of moves (breadth-first wavefront).
     Steps,
@@ -44,8 +44,9 @@ pub struct RoadmapIo {
 /// One planning request. Every field is optional; `None` takes the default in brackets.
 ///
 /// With the `clap` feature the request is also the command line's route options (each key as
-/// `--key-with-dashes`, its doc as the help), so the CLI, the TOML config, the HTTP API and the
-/// Python keywords share one definition.
+/// `--key-with-dashes`, its doc as the help; `shortcut` as `--no-shortcut`; `geometry` and
+/// `roadmap` are not options), so the CLI, the TOML config, the HTTP API and the Python keywords
+/// share one definition.
 ///
 /// ```
 /// use skyplan_plan::{PlanRequest, PlannerId};
@@ -73,7 +74,7 @@ pub struct PlanRequest {
     /// Grid cell size of colliders maps, metres [default: 1].
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
     pub cell_m: Option<f64>,
-    /// Start as local metres north,east of the map's origin [default: the map's, the home].
+    /// Start as local metres north,east of the map's origin [default: the map's default start; the home on colliders maps].
     #[cfg_attr(feature = "clap", arg(long, value_name = "N,E", value_parser = cli::pair, conflicts_with = "start_lla", allow_hyphen_values = true))]
     pub start_ne: Option<[f64; 2]>,
     /// Start as latitude,longitude in degrees (the vehicle's current global position).
@@ -88,7 +89,7 @@ pub struct PlanRequest {
     /// Heading of the first waypoint, degrees clockwise from north [default: 0].
     #[cfg_attr(feature = "clap", arg(long, value_name = "DEG", value_parser = cli::finite, allow_hyphen_values = true))]
     pub start_heading_deg: Option<f64>,
-    /// Seed of the sampling planners; on the command line also of `--random` workspaces and `--hidden-random` buildings [default: 1].
+    /// Seed of the sampling planners, of a random workspace and of `fly`'s random hidden buildings [default: 1].
     #[cfg_attr(feature = "clap", arg(long, value_name = "S"))]
     pub seed: Option<u64>,
     /// Grid connectivity: 8 (diagonals cost √2) or 4 [default: 8].
@@ -109,7 +110,7 @@ pub struct PlanRequest {
     /// wavefront: what the field counts [default: length].
     #[cfg_attr(feature = "clap", arg(long, value_enum, help_heading = cli::NAVFN))]
     pub field: Option<FieldMode>,
-    /// costmap: radius inscribed in the vehicle's footprint, metres; cells within it are lethal [default: 0].
+    /// costmap: radius inscribed in the vehicle's footprint, metres: cells within it are lethal [default: 0].
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub inscribed_radius_m: Option<f64>,
     /// costmap: distance up to which costs are raised, metres [default: 10 cells].
@@ -121,10 +122,10 @@ pub struct PlanRequest {
     /// costmap: weight of the cost in length + weight · cost [default: 2].
     #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub cost_weight: Option<f64>,
-    /// Start altitude above home, metres [default: alt_m, the flight altitude].
+    /// Start altitude above home, metres [default: the flight altitude].
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
     pub start_alt_m: Option<f64>,
-    /// Goal altitude above home, metres [default: alt_m, the flight altitude].
+    /// Goal altitude above home, metres [default: the flight altitude].
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
     pub goal_alt_m: Option<f64>,
     /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000]; with ch, how long building its hierarchy may take [default: no limit].
@@ -140,10 +141,10 @@ pub struct PlanRequest {
     #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
     pub climb_weight: Option<f64>,
     /// voxel: horizontal pitch of the voxel lattice, metres [default: 5].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::THREE_D))]
     pub voxel_m: Option<f64>,
     /// voxel: vertical pitch between altitude layers, metres [default: 5].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::THREE_D))]
     pub layer_m: Option<f64>,
     /// Return the geometry pictures need (grid path, roadmap, trees, field) [default: false].
     #[cfg_attr(feature = "clap", arg(skip))]
@@ -179,8 +180,16 @@ impl PlanRequest {
         self.field == Some(FieldMode::Steps)
     }
 
-    /// Field by field, `self` where set, else `fallback` (command line over config file).
-    pub fn or(self, fallback: PlanRequest) -> PlanRequest {
+    /// Field by field, `self` where set, else `fallback` (command line over config file); a
+    /// start or goal counts as one field whichever form it is given in (a goal as `goal_ne`
+    /// here replaces the fallback's `goal_lla`).
+    pub fn or(self, mut fallback: PlanRequest) -> PlanRequest {
+        if self.start_ne.is_some() || self.start_lla.is_some() {
+            (fallback.start_ne, fallback.start_lla) = (None, None);
+        }
+        if self.goal_ne.is_some() || self.goal_lla.is_some() {
+            (fallback.goal_ne, fallback.goal_lla) = (None, None);
+        }
         let (a, b) = (self, fallback);
         merge_fields!(a, b; planner, alt_m, safety_m, cell_m, start_ne, start_lla, goal_ne,
             goal_lla, start_alt_m, goal_alt_m, start_heading_deg, connectivity, corner_cutting,
@@ -612,5 +621,21 @@ mod tests {
         };
         let merged = cli.or(cfg);
         assert_eq!((merged.alt_m, merged.safety_m), (Some(10.0), Some(2.0)));
+        // An end given in one form replaces the fallback's end in the other form.
+        let cli = PlanRequest {
+            goal_ne: Some([100.0, 100.0]),
+            ..Default::default()
+        };
+        let cfg = PlanRequest {
+            goal_lla: Some([37.79, -122.39]),
+            start_lla: Some([37.7925, -122.3975]),
+            ..Default::default()
+        };
+        let merged = cli.or(cfg);
+        assert_eq!(
+            (merged.goal_ne, merged.goal_lla),
+            (Some([100.0, 100.0]), None)
+        );
+        assert_eq!(merged.start_lla, Some([37.7925, -122.3975]));
     }
 }

@@ -392,10 +392,17 @@ impl Core {
         self.landing_command = commanded.then_some(Command::Land);
     }
 
+    /// How long LANDING may last before the executor gives up on the touchdown, executor
+    /// seconds: the landing timeout and the time to descend, and for a return to launch the
+    /// time to fly back too.
+    pub(crate) fn landing_budget_s(&self) -> f64 {
+        self.faults.landing_budget_s(&self.config)
+            + self.landing_alt_m / self.config.landing_descent_m_s.max(0.1)
+    }
+
     /// One step in LANDING; `true` when DISARMING was entered.
     fn landing(&mut self, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
-        let budget_s = self.faults.landing_budget_s(&self.config)
-            + self.landing_alt_m / self.config.landing_descent_m_s.max(0.1);
+        let budget_s = self.landing_budget_s();
         if self.on_ground(t) || !t.armed {
             self.enter(FlightState::Disarming, now_s, out);
             return true;
@@ -742,6 +749,9 @@ pub trait FlightExecutor {
     fn targets(&self) -> &[Target];
     /// Horizontal distance still to fly along the route, metres.
     fn distance_left_m(&self) -> f64;
+    /// How long LANDING may last before the executor gives up on the touchdown, executor
+    /// seconds (longer for a return to launch: the way back is in it).
+    fn landing_budget_s(&self) -> f64;
     /// The targets still to fly, the current one first (empty outside WAYPOINT).
     fn remaining_targets(&self) -> &[Target];
     /// Whether the route can be changed now ([`Executor::accepts_route_change`]).
@@ -783,6 +793,9 @@ impl<S: Strategy> FlightExecutor for Executor<S> {
     }
     fn distance_left_m(&self) -> f64 {
         Executor::distance_left_m(self)
+    }
+    fn landing_budget_s(&self) -> f64 {
+        self.core.landing_budget_s()
     }
     fn remaining_targets(&self) -> &[Target] {
         Executor::remaining_targets(self)

@@ -273,7 +273,8 @@ impl fmt::Display for VehicleMode {
 pub enum FailsafeAction {
     /// Land where it is (NAV_LAND), then disarm.
     Land,
-    /// Return to the launch point and land there (RTL), then disarm.
+    /// Return to the launch point and land there (RTL), then disarm: the autopilot's own way
+    /// home (a straight line at its return altitude), not planned around the map's obstacles.
     #[cfg_attr(feature = "clap", value(name = "rtl"))]
     ReturnToLaunch,
     /// Hold the position in the air (LOITER / PX4 HOLD); the flight ends once the vehicle
