@@ -81,18 +81,26 @@ fn fly_route(
     }
 }
 
-#[test]
-fn flies_a_short_mission_over_tcp() {
-    let config = SimServerConfig {
+/// The simulator at 20× real time, at home.
+fn sim_at_20x() -> SimServerConfig {
+    SimServerConfig {
         speedup: 20.0,
         ..SimServerConfig::at(HOME)
-    };
-    let ground = GroundConfig {
+    }
+}
+
+/// A ground station for the simulator at 20×, with a minute to fly.
+fn ground_at_20x() -> GroundConfig {
+    GroundConfig {
         speedup: 20.0,
         timeout_s: Some(60.0),
         ..GroundConfig::default()
-    };
-    let run = fly(config, ground);
+    }
+}
+
+#[test]
+fn flies_a_short_mission_over_tcp() {
+    let run = fly(sim_at_20x(), ground_at_20x());
     assert_eq!(run.outcome, Some(Outcome::Completed), "{:?}", run.sim_notes);
     use FlightState::*;
     assert_eq!(
@@ -111,16 +119,10 @@ fn flies_a_short_mission_over_tcp() {
 /// grace after the abort (here 0.2 wall seconds, far shorter than the flight back).
 #[test]
 fn an_interrupted_return_to_launch_is_awaited_until_the_touchdown_at_home() {
-    let config = SimServerConfig {
-        speedup: 20.0,
-        ..SimServerConfig::at(HOME)
-    };
     let ground = GroundConfig {
-        speedup: 20.0,
-        timeout_s: Some(60.0),
         abort_grace_s: 0.2,
         on_interrupt: FailsafeAction::ReturnToLaunch,
-        ..GroundConfig::default()
+        ..ground_at_20x()
     };
     let wp = |n: f64| Target {
         north_m: n,
@@ -129,7 +131,7 @@ fn an_interrupted_return_to_launch_is_awaited_until_the_touchdown_at_home() {
         heading_rad: 0.0,
     };
     let targets = [wp(0.0), wp(100.0), wp(200.0), wp(300.0)];
-    let run = fly_route(config, ground, &targets, Some(2));
+    let run = fly_route(sim_at_20x(), ground, &targets, Some(2));
     let Some(Outcome::Failed(f)) = &run.outcome else {
         panic!("{:?}", run.outcome)
     };
@@ -151,15 +153,12 @@ fn an_interrupted_return_to_launch_is_awaited_until_the_touchdown_at_home() {
 #[test]
 fn a_silent_vehicle_is_a_lost_link() {
     let config = SimServerConfig {
-        speedup: 20.0,
         drop_link_after_s: Some(8.0),
-        ..SimServerConfig::at(HOME)
+        ..sim_at_20x()
     };
     let ground = GroundConfig {
-        speedup: 20.0,
         link_timeout_s: 1.0,
-        timeout_s: Some(60.0),
-        ..GroundConfig::default()
+        ..ground_at_20x()
     };
     let run = fly(config, ground);
     let Some(Outcome::Failed(f)) = &run.outcome else {
@@ -175,9 +174,8 @@ fn the_simulator_streams_nothing_until_asked_like_arducopter() {
     use skyplan_link::mavlink::dialects::common::MavCmd;
     use skyplan_link::messages::command_long;
     let config = SimServerConfig {
-        speedup: 20.0,
         ekf_delay_s: 2.0,
-        ..SimServerConfig::at(HOME)
+        ..sim_at_20x()
     };
     let sim = InProcessSim::start(config, None).unwrap();
     let address = sim.address();
