@@ -189,7 +189,7 @@ fn hidden_obstacles(
         .transpose()?
         .unwrap_or_default();
     if args.hidden_random > 0 {
-        let seed = request.seed.unwrap_or(1);
+        let seed = request.seed_or_default();
         let placed = runner::hidden_random(world, request, args.hidden_random, seed)?;
         println!(
             "hidden     {} buildings on or near the route (seed {seed}), in the simulated world only",

@@ -89,7 +89,7 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
     let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
     let limits = a.memory.limits();
     let request = a.request.clone().or(config.text.request.clone());
-    let world = load_world(map.as_deref(), &a.grid, request.seed.unwrap_or(1), &limits)?;
+    let world = load_world(map.as_deref(), &a.grid, request.seed_or_default(), &limits)?;
     Ok(Resolved {
         world,
         limits,

@@ -175,6 +175,12 @@ impl PlanRequest {
         }
     }
 
+    /// The seed, or its default (1): the sampling planners', and the one front ends draw a
+    /// random workspace or random hidden buildings with.
+    pub fn seed_or_default(&self) -> u64 {
+        self.seed.unwrap_or(1)
+    }
+
     /// Whether the request's field counts steps (not lengths).
     pub fn counts_steps(&self) -> bool {
         self.field == Some(FieldMode::Steps)
@@ -491,7 +497,7 @@ impl Resolved {
             time_limit: Duration::from_millis(time_limit_ms),
             time_limit_ms,
             preprocess_limit: r.time_limit_ms.map(Duration::from_millis),
-            seed: r.seed.unwrap_or(1),
+            seed: r.seed_or_default(),
             min_alt_m,
             max_alt_m,
             climb_weight,
