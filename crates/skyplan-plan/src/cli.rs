@@ -7,8 +7,14 @@
 pub const GRID: &str = "Grid paths";
 /// Help heading of the navigation functions' options.
 pub const NAVFN: &str = "Navigation functions (wavefront, costmap)";
-/// Help heading of the 3D planners' options.
-pub const THREE_D: &str = "3D planners (prm, lazy-prm, rrt-connect, rrt-star, voxel)";
+/// Help heading of the 3D planners' options, naming them from the registry.
+pub fn three_d() -> &'static str {
+    static HEADING: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+        let names = crate::PlannerId::names_where(|p| p.info().dims == 3);
+        format!("3D planners ({names})")
+    });
+    &HEADING
+}
 
 /// A finite number.
 ///

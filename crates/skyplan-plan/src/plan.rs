@@ -227,9 +227,7 @@ impl Plan {
     /// The raw path's cells on the grid used, for a text picture: empty unless a cell planner
     /// (grid search, wavefront, costmap) planned on a grid and kept its geometry.
     pub fn path_cells(&self) -> Vec<skyplan_cspace::Cell> {
-        let family = self.planner.info().family;
-        let cell_planner = family.is_cell_search()
-            || matches!(family, crate::Family::Wavefront | crate::Family::Costmap);
+        let cell_planner = self.planner.is_cell_planner();
         match (&self.grid_used, &self.geometry) {
             (Some(grid), Some(g)) if cell_planner => g
                 .raw_path

@@ -190,6 +190,29 @@ impl PlannerId {
         self.info().name
     }
 
+    /// The names of the planners `keep` holds for, in registry order, for messages and help
+    /// (`prm, lazy-prm, …`): derived, so a new planner is listed where it belongs.
+    ///
+    /// ```
+    /// use skyplan_plan::PlannerId;
+    /// assert_eq!(PlannerId::names_where(|p| p.info().dims == 3), "prm, lazy-prm, rrt-connect, rrt-star, voxel");
+    /// ```
+    pub fn names_where(keep: impl Fn(PlannerId) -> bool) -> String {
+        let names: Vec<&str> = (Self::ALL.iter().copied())
+            .filter(|&p| keep(p))
+            .map(Self::name)
+            .collect();
+        names.join(", ")
+    }
+
+    /// Whether the planner's route is a path through grid cells (the cell searches, the
+    /// wavefront and the cost map): it takes the grid-path options (connectivity, corner
+    /// cutting, pruning, shortcut) and has a grid path to report and draw.
+    pub fn is_cell_planner(self) -> bool {
+        let family = self.info().family;
+        family.is_cell_search() || matches!(family, Family::Wavefront | Family::Costmap)
+    }
+
     /// The planners that take this map kind.
     pub fn for_maps(colliders: bool) -> impl Iterator<Item = PlannerId> {
         Self::ALL

@@ -123,28 +123,28 @@ pub struct PlanRequest {
     #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::NAVFN))]
     pub cost_weight: Option<f64>,
     /// Start altitude above home, metres [default: the flight altitude].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::three_d()))]
     pub start_alt_m: Option<f64>,
     /// Goal altitude above home, metres [default: the flight altitude].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::three_d()))]
     pub goal_alt_m: Option<f64>,
     /// Time budget, milliseconds, 1 to 600000 (rrt-star uses all of it; the others stop at the first path) [default: 1000]; with ch, how long building its hierarchy may take [default: no limit].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "MS", help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "MS", help_heading = cli::three_d()))]
     pub time_limit_ms: Option<u64>,
     /// Floor of the flight volume: nothing flies lower, metres [default: 0, the ground].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::three_d()))]
     pub min_alt_m: Option<f64>,
     /// Ceiling of the flight volume, metres [default: 120, at least 10 m above both ends].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::three_d()))]
     pub max_alt_m: Option<f64>,
     /// voxel: extra cost per metre climbed (0: shortest path) [default: 1].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "W", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::three_d()))]
     pub climb_weight: Option<f64>,
     /// voxel: horizontal pitch of the voxel lattice, metres [default: 5].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::three_d()))]
     pub voxel_m: Option<f64>,
     /// voxel: vertical pitch between altitude layers, metres [default: 5].
-    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::THREE_D))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::three_d()))]
     pub layer_m: Option<f64>,
     /// Return the geometry pictures need (grid path, roadmap, trees, field) [default: false].
     #[cfg_attr(feature = "clap", arg(skip))]
@@ -340,12 +340,19 @@ fn position(
 
 /// Options given that the planner does not use: refused, so that nothing is silently ignored.
 fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailure> {
-    use crate::planner_id::Family;
     let info = planner.info();
+    let three_d = format!(
+        "a 3D planner ({})",
+        PlannerId::names_where(|p| p.info().dims == 3)
+    );
+    let grid = format!(
+        "a grid planner ({})",
+        PlannerId::names_where(PlannerId::is_cell_planner)
+    );
     let given = |fields: &[(&'static str, bool)]| -> Vec<&'static str> {
         fields.iter().filter(|f| f.1).map(|f| f.0).collect()
     };
-    let groups: [(Vec<&str>, bool, &str); 6] = [
+    let groups: [(Vec<&str>, bool, String); 6] = [
         (
             given(&[
                 ("start_alt_m", r.start_alt_m.is_some()),
@@ -354,12 +361,12 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("max_alt_m", r.max_alt_m.is_some()),
             ]),
             info.dims == 3,
-            "a 3D planner (prm, lazy-prm, rrt-connect, rrt-star, voxel)",
+            three_d.clone(),
         ),
         (
             given(&[("time_limit_ms", r.time_limit_ms.is_some())]),
             info.dims == 3 || planner == PlannerId::Ch,
-            "a 3D planner (prm, lazy-prm, rrt-connect, rrt-star, voxel) or ch (the limit of its preprocessing)",
+            format!("{three_d} or ch (the limit of its preprocessing)"),
         ),
         (
             given(&[
@@ -368,7 +375,7 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("layer_m", r.layer_m.is_some()),
             ]),
             planner == PlannerId::Voxel,
-            "planner voxel",
+            "planner voxel".into(),
         ),
         (
             given(&[
@@ -378,12 +385,12 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("cost_weight", r.cost_weight.is_some()),
             ]),
             planner == PlannerId::Costmap,
-            "planner costmap",
+            "planner costmap".into(),
         ),
         (
             given(&[("field", r.field.is_some())]),
             planner == PlannerId::Wavefront,
-            "planner wavefront",
+            "planner wavefront".into(),
         ),
         (
             given(&[
@@ -393,9 +400,8 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("connectivity", r.connectivity.is_some()),
                 ("corner_cutting", r.corner_cutting.is_some()),
             ]),
-            info.family.is_cell_search()
-                || matches!(info.family, Family::Wavefront | Family::Costmap),
-            "a grid planner (jps, jps-plus, ch, astar, dijkstra, theta, wavefront, costmap)",
+            planner.is_cell_planner(),
+            grid,
         ),
     ];
     for (names, applies, needs) in groups {

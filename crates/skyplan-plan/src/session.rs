@@ -612,8 +612,7 @@ fn assemble(
         .as_ref()
         .filter(|_| info.dims == 2)
         .map(|g| GridInfo::of(g, r.alt_m, r.safety_m));
-    let grid_planner =
-        info.family.is_cell_search() || matches!(info.family, Family::Wavefront | Family::Costmap);
+    let grid_planner = r.planner.is_cell_planner();
     let mut grid_path = route.grid_path;
     if let Some(g) = grid_path.as_mut() {
         g.waypoint_counts.mission = waypoints.len();
