@@ -338,21 +338,22 @@ fn position(
     }
 }
 
+/// Options of one kind that were given, whether the planner uses them, and what they need
+/// (worded only for a refusal).
+type OptionGroup = (Vec<&'static str>, bool, fn() -> String);
+
 /// Options given that the planner does not use: refused, so that nothing is silently ignored.
 fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailure> {
     let info = planner.info();
-    let three_d = format!(
-        "a 3D planner ({})",
-        PlannerId::names_where(|p| p.info().dims == 3)
-    );
-    let grid = format!(
-        "a grid planner ({})",
-        PlannerId::names_where(PlannerId::is_cell_planner)
-    );
+    // What a refused group needs, worded only when a request is refused.
+    fn three_d() -> String {
+        let names = PlannerId::names_where(|p| p.info().dims == 3);
+        format!("a 3D planner ({names})")
+    }
     let given = |fields: &[(&'static str, bool)]| -> Vec<&'static str> {
         fields.iter().filter(|f| f.1).map(|f| f.0).collect()
     };
-    let groups: [(Vec<&str>, bool, String); 6] = [
+    let groups: [OptionGroup; 6] = [
         (
             given(&[
                 ("start_alt_m", r.start_alt_m.is_some()),
@@ -361,12 +362,12 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("max_alt_m", r.max_alt_m.is_some()),
             ]),
             info.dims == 3,
-            three_d.clone(),
+            three_d,
         ),
         (
             given(&[("time_limit_ms", r.time_limit_ms.is_some())]),
             info.dims == 3 || planner == PlannerId::Ch,
-            format!("{three_d} or ch (the limit of its preprocessing)"),
+            || format!("{} or ch (the limit of its preprocessing)", three_d()),
         ),
         (
             given(&[
@@ -375,7 +376,7 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("layer_m", r.layer_m.is_some()),
             ]),
             planner == PlannerId::Voxel,
-            "planner voxel".into(),
+            || "planner voxel".into(),
         ),
         (
             given(&[
@@ -385,12 +386,12 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("cost_weight", r.cost_weight.is_some()),
             ]),
             planner == PlannerId::Costmap,
-            "planner costmap".into(),
+            || "planner costmap".into(),
         ),
         (
             given(&[("field", r.field.is_some())]),
             planner == PlannerId::Wavefront,
-            "planner wavefront".into(),
+            || "planner wavefront".into(),
         ),
         (
             given(&[
@@ -401,17 +402,21 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
                 ("corner_cutting", r.corner_cutting.is_some()),
             ]),
             planner.is_cell_planner(),
-            grid,
+            || {
+                let names = PlannerId::names_where(PlannerId::is_cell_planner);
+                format!("a grid planner ({names})")
+            },
         ),
     ];
     for (names, applies, needs) in groups {
         if !names.is_empty() && !applies {
             return Err(bad(format!(
-                "{} {} not used by planner {planner}: {} need{} {needs}",
+                "{} {} not used by planner {planner}: {} need{} {}",
                 names.join(", "),
                 if names.len() == 1 { "is" } else { "are" },
                 if names.len() == 1 { "it" } else { "they" },
                 if names.len() == 1 { "s" } else { "" },
+                needs(),
             )));
         }
     }
