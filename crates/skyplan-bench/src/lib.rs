@@ -58,10 +58,7 @@ impl Contender {
             return Some(Contender::PathfindingCrateAStar);
         }
         let p: PlannerId = name.parse().ok()?;
-        p.info()
-            .family
-            .is_cell_search()
-            .then_some(Contender::Skyplan(p))
+        p.is_cell_search().then_some(Contender::Skyplan(p))
     }
 
     /// True for skyplan's own planners (false for peers).

@@ -81,10 +81,10 @@ fn positive_up_to(hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Sen
     }
 }
 
-/// `--planner` for `scen`: the grid-search planners only.
+/// `--planner` for `scen`: the exact cell searches (from the registry).
 fn grid_search_planner() -> impl TypedValueParser<Value = PlannerId> {
     let values = (PlannerId::ALL.iter())
-        .filter(|&&p| p.info().family.is_cell_search() && p != PlannerId::Theta)
+        .filter(|&&p| p.is_cell_search() && p.is_exact_on_grids())
         .filter_map(|p| p.to_possible_value());
     clap::builder::PossibleValuesParser::new(values)
         .map(|s| s.parse::<PlannerId>().unwrap_or_default())

@@ -63,7 +63,7 @@ impl From<PlanFailure> for Failure {
         Failure {
             kind,
             plan_kind: Some(f.kind),
-            error: anyhow::anyhow!(f.message),
+            error: anyhow::anyhow!(skyplan_plan::cli::in_cli_words(&f.message)),
         }
     }
 }

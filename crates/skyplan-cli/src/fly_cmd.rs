@@ -90,7 +90,8 @@ pub fn run(args: FlyArgs) -> Result<()> {
     };
     let plot = (args.plot.as_ref())
         .map(|path| {
-            let kind = crate::picture::kind_for(path, skyplan_plan::Family::AnyAngle)?;
+            // A flight is drawn on the map whatever its planner (no heat map): a scene's kind.
+            let kind = crate::picture::kind_for(path, skyplan_plan::PlannerId::Jps)?;
             Ok::<_, Failure>((crate::files::output_target("--plot", path)?, kind))
         })
         .transpose()?;

@@ -2,14 +2,14 @@
 //! view and side profile, or a heat map of a navigation function's field.
 
 use crate::exit::{Classify, Kind, Result, bad_input};
-use skyplan_plan::{Family, Plan, World};
+use skyplan_plan::{Plan, PlannerId, World};
 use std::path::Path;
 
 pub use skyplan_plot::plan_picture::PictureKind;
 
-/// The picture kind for a path and a planner's family.
-pub fn kind_for(path: &Path, family: Family) -> Result<PictureKind> {
-    PictureKind::for_path(path, family)
+/// The picture kind for a path and a planner.
+pub fn kind_for(path: &Path, planner: PlannerId) -> Result<PictureKind> {
+    PictureKind::for_path(path, planner)
         .map_err(|why| bad_input(format!("--plot {}: {why}", path.display())))
 }
 

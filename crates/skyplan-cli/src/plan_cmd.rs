@@ -74,7 +74,7 @@ fn check_outputs(
     };
     let plot = (args.plot.clone().or(cfg.path(&cfg.text.plot)))
         .map(|p| {
-            let kind = crate::picture::kind_for(&p, planner.info().family)?;
+            let kind = crate::picture::kind_for(&p, planner)?;
             Ok::<_, Failure>((p.clone(), output_target("--plot", &p)?, kind))
         })
         .transpose()?;

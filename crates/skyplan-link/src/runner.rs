@@ -17,7 +17,7 @@ use skyplan_flight::executor::{
 use skyplan_flight::upload::UploadConfig;
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
-use skyplan_plan::{Family, Limits, Plan, PlanFailure, PlanRequest, Session, World};
+use skyplan_plan::{Limits, Plan, PlanFailure, PlanRequest, Session, World};
 use skyplan_replan::bench::{FlightResult, Scenario, ScenarioSpec, SharedReplanner};
 use skyplan_replan::hidden::{HiddenSpec, place_hidden};
 use skyplan_replan::{ReplanOptions, ReplanStats, Replanner, ReplannerKind};
@@ -366,12 +366,9 @@ fn fly_with<E: FlightExecutor, O: RunObserver>(
     Ok((flown.log, flown.outcome, replanned))
 }
 
-/// Whether a request's planner can be replanned in flight (the 2D grid planners).
+/// Whether a request's planner can be replanned in flight (the 2D cell searches).
 pub fn replannable(request: &PlanRequest) -> bool {
-    matches!(
-        request.planner.unwrap_or_default().info().family,
-        Family::Grid(_)
-    )
+    request.planner.unwrap_or_default().is_cell_search()
 }
 
 /// The first plan and, for a 2D grid planner with a replanner, the replanner that watches it.

@@ -1,20 +1,12 @@
 //! [`CellSearch`]: many cell-to-cell queries on one grid with one grid planner — what MovingAI
 //! replays and benchmarks need (JPS+ builds its table once, the others reuse their node arrays).
 
+use crate::algorithm::{Engine, Workspace};
 use crate::failure::PlanFailure;
-use crate::planner_id::{Family, PlannerId};
+use crate::planner_id::PlannerId;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{
-    ChQuery, ContractionHierarchy, GridPath, GridSearch, JpsPlusTable, MoveModel, Planner,
-    SearchError,
-};
+use skyplan_search::{GridPath, JpsPlusTable, MoveModel, SearchError};
 use std::sync::Arc;
-
-enum Engine {
-    Plus(Arc<JpsPlusTable>, Box<GridSearch>),
-    Online(Box<GridSearch>, Planner),
-    Contraction(Arc<ContractionHierarchy>, Box<ChQuery>),
-}
 
 /// A grid planner prepared for many queries on one grid.
 ///
@@ -31,6 +23,7 @@ pub struct CellSearch<'g> {
     grid: &'g Grid2,
     model: MoveModel,
     engine: Engine,
+    workspace: Box<Workspace>,
     precompute_us: u64,
 }
 
@@ -39,48 +32,19 @@ impl<'g> CellSearch<'g> {
     /// contraction hierarchy ch) on `grid`; other planners are refused with a message naming
     /// the ones that work.
     pub fn new(grid: &'g Grid2, planner: PlannerId, model: MoveModel) -> Result<Self, PlanFailure> {
-        let family = planner.info().family;
-        if !family.is_cell_search() {
-            let grid_planners: Vec<&str> = PlannerId::ALL
-                .iter()
-                .filter(|p| p.info().family.is_cell_search())
-                .map(|p| p.name())
-                .collect();
+        let Some(cells) = planner.algorithm().cells() else {
             return Err(PlanFailure::bad_request(format!(
-                "--planner {planner}: cell-to-cell queries take a grid-search planner: {}",
-                grid_planners.join(", ")
+                "planner {planner}: cell-to-cell queries take a grid-search planner: {}",
+                PlannerId::names_where(PlannerId::is_cell_search)
             )));
-        }
-        let t = std::time::Instant::now();
-        let engine = match family {
-            Family::Grid(Planner::JpsPlus) => Engine::Plus(
-                Arc::new(JpsPlusTable::build(Arc::new(grid.clone()), model)),
-                Box::default(),
-            ),
-            Family::Contraction => Engine::Contraction(
-                Arc::new(
-                    ContractionHierarchy::build(Arc::new(grid.clone()), model).map_err(|e| {
-                        PlanFailure::bad_request(format!("--planner {planner}: {e}"))
-                    })?,
-                ),
-                Box::default(),
-            ),
-            Family::Grid(other) => Engine::Online(Box::new(GridSearch::new()), other),
-            Family::AnyAngle
-            | Family::Wavefront
-            | Family::Costmap
-            | Family::Voronoi
-            | Family::Sampling(_)
-            | Family::Voxel => {
-                return Err(PlanFailure::internal(format!(
-                    "--planner {planner}: not a cell-to-cell planner"
-                )));
-            }
         };
+        let t = std::time::Instant::now();
+        let engine = cells.prepare_alone(grid, model)?;
         Ok(Self {
             grid,
             model,
             engine,
+            workspace: Box::default(),
             precompute_us: crate::session::micros(t.elapsed()),
         })
     }
@@ -102,20 +66,16 @@ impl<'g> CellSearch<'g> {
         Ok(Self {
             grid,
             model: table.model(),
-            engine: Engine::Plus(table, Box::default()),
+            engine: Engine::Plus(table),
+            workspace: Box::default(),
             precompute_us,
         })
     }
 
     /// One query.
     pub fn search(&mut self, start: Cell, goal: Cell) -> Result<GridPath, SearchError> {
-        match &mut self.engine {
-            Engine::Plus(table, search) => table.search(search, start, goal),
-            Engine::Online(search, planner) => {
-                search.search(self.grid, start, goal, self.model, *planner)
-            }
-            Engine::Contraction(ch, query) => ch.search(query, start, goal),
-        }
+        self.engine
+            .search(&mut self.workspace, self.grid, (start, goal), self.model)
     }
 
     /// One-off preparation time (the JPS+ table, the contraction hierarchy), microseconds.

@@ -97,3 +97,54 @@ impl clap::ValueEnum for crate::PlannerId {
         Some(clap::builder::PossibleValue::new(info.name).help(info.summary))
     }
 }
+
+/// A planning message in the command line's words: each request key (`alt_m`, `goal_alt_m`, …)
+/// becomes the option a user types (`--alt-m`, `--goal-alt-m`), and a message about the
+/// planner (`planner ch: …`, `not used by planner jps`) names `--planner`. The table is the
+/// command line's own options, derived from [`PlanRequest`](crate::PlanRequest), so the CLI
+/// and the API can never disagree about a name.
+///
+/// ```
+/// use skyplan_plan::cli::in_cli_words;
+/// assert_eq!(in_cli_words("alt_m -5: expected a number from 0 to 10000 m"),
+///            "--alt-m -5: expected a number from 0 to 10000 m");
+/// assert_eq!(in_cli_words("goal_alt_m is not used by planner jps: it needs a planner that uses it (prm)"),
+///            "--goal-alt-m is not used by --planner jps: it needs a planner that uses it (prm)");
+/// assert_eq!(in_cli_words("planner ch: the deadline passed"), "--planner ch: the deadline passed");
+/// ```
+#[cfg(feature = "clap")]
+pub fn in_cli_words(message: &str) -> String {
+    use clap::Args;
+    use std::collections::HashMap;
+    use std::sync::LazyLock;
+    static FLAGS: LazyLock<HashMap<String, String>> = LazyLock::new(|| {
+        let command = crate::PlanRequest::augment_args(clap::Command::new("plan"));
+        command
+            .get_arguments()
+            .filter_map(|a| Some((a.get_id().to_string(), format!("--{}", a.get_long()?))))
+            .filter(|(key, _)| key.contains('_'))
+            .collect()
+    });
+    let mut out = String::with_capacity(message.len() + 8);
+    let mut word = String::new();
+    let flush = |word: &mut String, out: &mut String| {
+        match FLAGS.get(word.as_str()) {
+            Some(flag) if !out.ends_with('-') => out.push_str(flag),
+            _ => out.push_str(word),
+        }
+        word.clear();
+    };
+    for ch in message.chars() {
+        if ch.is_ascii_alphanumeric() || ch == '_' {
+            word.push(ch);
+        } else {
+            flush(&mut word, &mut out);
+            out.push(ch);
+        }
+    }
+    flush(&mut word, &mut out);
+    if out.starts_with("planner ") {
+        out.insert_str(0, "--");
+    }
+    out.replace("by planner ", "by --planner ")
+}

@@ -1,13 +1,14 @@
 //! Grid search planners (A\*, Dijkstra, JPS, JPS+, Theta\*) on the grid at the altitude, then
 //! collinearity pruning and the line-of-sight shortcut (the FCND pipeline, made exact).
 
+use crate::algorithm::CellPlanner;
 use crate::failure::{FailureKind, PlanFailure};
 use crate::request::Prune;
 use crate::session::{Check, Query, Route, Session, micros};
 use crate::world::grid_bounds;
 use skyplan_cspace::{Cell, Grid2, Touch};
 use skyplan_postprocess::{prune_collinear, prune_collinear_eps, shortcut, touch_for};
-use skyplan_search::{Components, GridSearch, MoveModel, Planner, SearchError};
+use skyplan_search::{Components, GridPath, GridSearch, MoveModel, Planner, SearchError};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -193,54 +194,21 @@ pub(crate) fn centres_at(grid: &Grid2, cells: &[Cell], alt_m: f64) -> Vec<[f64; 
         .collect()
 }
 
-/// What answers a cell-to-cell grid request.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Engine {
-    /// A grid search (A\*, Dijkstra, JPS, JPS+, Theta\*).
-    Search(Planner),
-    /// The contraction hierarchy the session keeps per grid and model.
-    Contraction,
-}
-
-/// A*, Dijkstra, JPS, JPS+, Theta\* or the contraction hierarchy on the grid, then the passes.
-pub(crate) fn plan(session: &mut Session, q: &Query, engine: Engine) -> Result<Route, PlanFailure> {
+/// A cell-to-cell search on the grid (prepared through the session's caches), then the passes.
+pub(crate) fn plan<P: CellPlanner + ?Sized>(
+    session: &mut Session,
+    q: &Query,
+    planner: &P,
+) -> Result<Route, PlanFailure> {
     let r = q.r;
-    let (grid, build_us) = grid_for(session, q)?;
+    let (grid, grid_us) = grid_for(session, q)?;
     let start = end_cell(&grid, q, "start", q.start_ne)?;
     let goal = end_cell(&grid, q, "goal", q.goal_ne)?;
-    // JPS+: the session keeps the table (built once per grid, or loaded from a file).
-    let mut build_us = build_us;
-    let mut table_built = None;
-    let table =
-        (engine == Engine::Search(Planner::JpsPlus) && r.model.has_diagonals()).then(|| {
-            let (table, table_us) = session.jps_plus_table(&grid, r.model);
-            build_us += table_us.unwrap_or(0);
-            table_built = Some(table_us.is_some());
-            table
-        });
-    let mut ch_built = None;
-    let ch = match engine {
-        Engine::Contraction => {
-            let (ch, us) = session.contraction_hierarchy(&grid, r.model, r.preprocess_limit)?;
-            build_us += us.unwrap_or(0);
-            ch_built = Some(us.is_some());
-            Some(ch)
-        }
-        Engine::Search(_) => None,
-    };
+    let prepared = planner.prepare(session, &grid, r)?;
     let t = Instant::now();
-    let searched = match (engine, &table, &ch) {
-        (_, _, Some(ch)) => ch.search(&mut session.ch_query, start, goal),
-        (_, Some(table), None) => table.search(&mut session.search, start, goal),
-        (Engine::Search(planner), None, None) => {
-            session.search.search(&grid, start, goal, r.model, planner)
-        }
-        (Engine::Contraction, None, None) => {
-            return Err(PlanFailure::internal(
-                "no contraction hierarchy was prepared",
-            ));
-        }
-    };
+    let searched = prepared
+        .engine
+        .search(&mut session.workspace, &grid, (start, goal), r.model);
     let search_us = micros(t.elapsed());
     let path = match searched {
         Ok(p) => p,
@@ -253,56 +221,61 @@ pub(crate) fn plan(session: &mut Session, q: &Query, engine: Engine) -> Result<R
             )));
         }
     };
-    let t_post = Instant::now();
-    let touch = touch_for(r.model);
-    let pruned = match r.prune {
-        Prune::None => path.cells.clone(),
-        Prune::Collinear => prune_collinear(&path.cells),
-        Prune::Epsilon(eps) => prune_collinear_eps(&grid, &path.cells, eps, touch),
-    };
-    let kept = if r.shortcut {
-        shortcut(&grid, &pruned, touch)
-    } else {
-        pruned.clone()
-    };
-    let points = waypoint_points(&grid, &kept, q.start_ne, q.goal_ne, touch, r.alt_m);
-    let postprocess_us = micros(t_post.elapsed());
-    let cell_m = grid.frame().cell_m;
-    let mut route = Route::new(
-        points,
-        path.cost_cells() * cell_m,
-        Check::Grid {
-            grid: Arc::clone(&grid),
-            touch,
-        },
-    );
-    route.octile_optimum_m = match engine {
-        Engine::Search(Planner::ThetaStar) => GridSearch::new()
-            .search(&grid, start, goal, r.model, Planner::Jps)
-            .ok()
-            .map(|p| p.cost_cells() * cell_m),
-        _ => None,
-    };
-    if let Some(built) = table_built {
-        // Whether this request built the JPS+ table or used the session's (kept or loaded).
-        let how = if built { "built" } else { "reused" };
-        route.details.insert("jps_plus_table".into(), how.into());
-    }
-    if let Some(built) = ch_built {
-        let how = if built { "built" } else { "reused" };
-        route
-            .details
-            .insert("contraction_hierarchy".into(), how.into());
+    let (mut route, waypoints) = passes(&grid, q, &path);
+    route.octile_optimum_m = planner
+        .any_angle()
+        .then(|| {
+            GridSearch::new()
+                .search(&grid, start, goal, r.model, Planner::Jps)
+                .ok()
+                .map(|p| p.cost_cells() * grid.frame().cell_m)
+        })
+        .flatten();
+    if let Some(what) = prepared.detail {
+        // Whether this request built the table or hierarchy, or used the session's (kept or loaded).
+        let how = if prepared.built_us.is_some() {
+            "built"
+        } else {
+            "reused"
+        };
+        route.details.insert(what.into(), how.into());
     }
     let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
-    let waypoints = (pruned.len(), kept.len());
     route.record_grid_search((start, goal), path.expansions, moves, waypoints);
-    route.timings.grid_build_us = build_us;
+    route.timings.grid_build_us = grid_us + prepared.built_us.unwrap_or(0);
     route.timings.search_us = search_us;
-    route.timings.postprocess_us = postprocess_us;
     if r.geometry {
         route.geometry.raw_path = centres_at(&grid, &path.cells, r.alt_m);
     }
     route.grid = Some(grid);
     Ok(route)
+}
+
+/// Pruning and the line-of-sight shortcut of a cell path, as a route re-checked on `grid`, and
+/// the waypoints left after pruning and after the shortcut.
+fn passes(grid: &Arc<Grid2>, q: &Query, path: &GridPath) -> (Route, (usize, usize)) {
+    let r = q.r;
+    let t_post = Instant::now();
+    let touch = touch_for(r.model);
+    let pruned = match r.prune {
+        Prune::None => path.cells.clone(),
+        Prune::Collinear => prune_collinear(&path.cells),
+        Prune::Epsilon(eps) => prune_collinear_eps(grid, &path.cells, eps, touch),
+    };
+    let kept = if r.shortcut {
+        shortcut(grid, &pruned, touch)
+    } else {
+        pruned.clone()
+    };
+    let points = waypoint_points(grid, &kept, q.start_ne, q.goal_ne, touch, r.alt_m);
+    let mut route = Route::new(
+        points,
+        path.cost_cells() * grid.frame().cell_m,
+        Check::Grid {
+            grid: Arc::clone(grid),
+            touch,
+        },
+    );
+    route.timings.postprocess_us = micros(t_post.elapsed());
+    (route, (pruned.len(), kept.len()))
 }

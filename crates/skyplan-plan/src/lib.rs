@@ -68,6 +68,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod algorithm;
 mod any_angle;
 mod cell_search;
 pub mod cli;
@@ -93,9 +94,10 @@ pub use grid::waypoint_points;
 pub use map_file::{MapFileError, MapFileOptions};
 pub use navfn::CostmapOptions;
 pub use plan::{
-    Geometry, GridInfo, GridPathStats, Home, Place, Plan, Segment3, Timings, WaypointCounts,
+    Geometry, GridInfo, GridPathStats, Home, Place, Plan, PlanSpec, Segment3, Timings,
+    WaypointCounts,
 };
-pub use planner_id::{Family, MapKinds, Optimality, PlannerId, PlannerInfo, UnknownPlanner};
+pub use planner_id::{MapKinds, Optimality, OptionGroup, PlannerId, PlannerInfo, UnknownPlanner};
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};
 pub use ride::{Ride, RideChange, RideLeg, RidePlace, RideRequest};
 pub use session::{Session, model_name, recheck_grid_route};

@@ -157,6 +157,51 @@ pub struct Geometry {
     pub active_boxes: Vec<skyplan_map::colliders::ObstacleBox>,
 }
 
+/// The request as it was planned: every default applied and every value checked, so that
+/// pictures, benchmarks, the replanner and the flight read one margin, altitude and move model.
+///
+/// ```
+/// use skyplan_plan::PlanRequest;
+/// let spec = PlanRequest { alt_m: Some(12.0), ..Default::default() }.spec()?;
+/// assert_eq!((spec.alt_m, spec.safety_m, spec.cell_m), (12.0, 5.0, 1.0));
+/// assert!(PlanRequest { safety_m: Some(-1.0), ..Default::default() }.spec().is_err());
+/// # Ok::<(), skyplan_plan::PlanFailure>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PlanSpec {
+    /// Flight altitude above home, metres (the 2D planners' slice).
+    pub alt_m: f64,
+    /// Safety margin grown around every obstacle, metres.
+    pub safety_m: f64,
+    /// Grid cell size of colliders maps, metres.
+    pub cell_m: f64,
+    /// How grid paths move.
+    #[serde(serialize_with = "serialize_model")]
+    pub move_model: skyplan_search::MoveModel,
+    /// Floor of the flight volume (3D planners), metres.
+    pub min_alt_m: f64,
+    /// Ceiling of the flight volume (3D planners), metres.
+    pub max_alt_m: f64,
+}
+
+fn serialize_model<S: serde::Serializer>(
+    model: &skyplan_search::MoveModel,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    s.serialize_str(crate::model_name(*model))
+}
+
+impl PlanSpec {
+    /// The slice of a colliders map this spec plans on.
+    pub fn grid_spec(&self) -> skyplan_cspace::GridSpec {
+        skyplan_cspace::GridSpec {
+            alt_m: self.alt_m,
+            safety_m: self.safety_m,
+            cell_m: self.cell_m,
+        }
+    }
+}
+
 /// A planned route: waypoints from the exact start to the exact goal, every segment re-checked.
 #[derive(Debug, Clone, Serialize)]
 pub struct Plan {
@@ -171,6 +216,8 @@ pub struct Plan {
     pub home: Option<Home>,
     /// The planner, by its CLI spelling.
     pub planner: PlannerId,
+    /// The request as planned (defaults applied).
+    pub spec: PlanSpec,
     /// The grid (2D planners).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub grid: Option<GridInfo>,

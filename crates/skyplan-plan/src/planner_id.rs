@@ -1,34 +1,16 @@
-//! The planner registry: one line per planner (name, family, capabilities, summary).
+//! The planner registry: one row per planner (name, label, capabilities, the options it uses,
+//! what it keeps, the [`Algorithm`](crate::algorithm::Algorithm) that runs it, a summary).
 //!
-//! Adding a planner to an existing family is one line in [`planners!`]; a new family adds its
-//! module and one arm in `Session::run_family` (an exhaustive match: the compiler lists what is
-//! missing).
+//! Adding a planner is its module plus one row in [`planners!`]: the CLI's `--planner` values
+//! and help, `--json`'s `planner`, serde, `FromStr`, the HTTP API's `/api/planners`, Python's
+//! `skyplan.planners()`, which options it takes (the others are refused naming the planners
+//! that use them), its memory estimate and its place in every test that iterates the registry
+//! all come from that row.
 
+use crate::algorithm::{Algorithm, CellFunction, JpsPlusCells, OnlineCells};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
 use std::str::FromStr;
-
-/// How a planner finds its route (which module runs it).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Family {
-    /// Best-first grid search (`skyplan-search`), then pruning and line-of-sight shortcutting.
-    Grid(skyplan_search::Planner),
-    /// Contraction hierarchy over the grid graph (`skyplan-search`), kept per grid by the
-    /// session; then the same pruning and shortcutting as [`Family::Grid`].
-    Contraction,
-    /// Exact any-angle shortest paths (`skyplan-anyangle`): visibility graph of convex corners.
-    AnyAngle,
-    /// The wavefront navigation function (`skyplan-navfn`): distance field, gradient descent.
-    Wavefront,
-    /// A\* over an inflated cost map (`skyplan-navfn`).
-    Costmap,
-    /// The Voronoi roadmap at the flight altitude (`skyplan-roadmap`).
-    Voronoi,
-    /// A sampling planner among the 3D boxes (`skyplan-sampling`).
-    Sampling(skyplan_sampling::PlannerKind),
-    /// Voxel A\* among the 3D boxes (`skyplan-voxel`).
-    Voxel,
-}
 
 /// How good the returned route is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -58,7 +40,38 @@ pub enum MapKinds {
     CollidersOnly,
 }
 
-/// What a planner can do, for help texts, `--json` and clients that choose one.
+/// A group of request options that only some planners use. A request that gives an option of
+/// a group its planner does not use is refused, naming the planners that use it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OptionGroup {
+    /// The grid path's options: `connectivity`, `corner_cutting`, `prune`, `epsilon`, `shortcut`.
+    GridPath,
+    /// The 3D ends and flight volume: `start_alt_m`, `goal_alt_m`, `min_alt_m`, `max_alt_m`.
+    ThreeD,
+    /// `time_limit_ms`: a planning or preprocessing time budget.
+    TimeLimit,
+    /// The voxel lattice: `climb_weight`, `voxel_m`, `layer_m`.
+    Voxel,
+    /// The inflated cost map: `inscribed_radius_m`, `inflation_radius_m`, `cost_scaling`, `cost_weight`.
+    Costmap,
+    /// The wavefront's `field`.
+    Field,
+}
+
+impl OptionGroup {
+    /// Every group.
+    pub const ALL: &'static [OptionGroup] = &[
+        OptionGroup::GridPath,
+        OptionGroup::ThreeD,
+        OptionGroup::TimeLimit,
+        OptionGroup::Voxel,
+        OptionGroup::Costmap,
+        OptionGroup::Field,
+    ];
+}
+
+/// What a planner can do, for help texts, `--json`, `/api/planners` and clients that choose one.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct PlannerInfo {
     /// The CLI spelling.
@@ -71,15 +84,16 @@ pub struct PlannerInfo {
     pub optimality: Optimality,
     /// Which maps it takes.
     pub maps: MapKinds,
+    /// The option groups it uses (beside the common ones: ends, altitude, margin, cell size).
+    pub uses: &'static [OptionGroup],
+    /// What a session keeps for it between requests (empty: nothing beyond the grid).
+    pub keeps: &'static str,
     /// One line for help texts.
     pub summary: &'static str,
-    /// Which module runs it.
-    #[serde(skip)]
-    pub family: Family,
 }
 
 macro_rules! planners {
-    ($( $(#[$doc:meta])* $variant:ident => $name:literal, $label:literal, $dims:literal, $family:expr, $opt:ident, $maps:ident, $summary:literal; )*) => {
+    ($( $(#[$doc:meta])* $variant:ident => $name:literal, $label:literal, $dims:literal, $opt:ident, $maps:ident, [$($uses:ident),*], $keeps:literal, $algorithm:expr, $summary:literal; )*) => {
         /// Every planner skyplan has, by its CLI spelling (`jps-plus`, `rrt-star`, …).
         ///
         /// ```
@@ -107,81 +121,77 @@ macro_rules! planners {
                         dims: $dims,
                         optimality: Optimality::$opt,
                         maps: MapKinds::$maps,
+                        uses: &[$(OptionGroup::$uses),*],
+                        keeps: $keeps,
                         summary: $summary,
-                        family: $family,
                     },)*
+                }
+            }
+
+            /// The algorithm that answers its requests.
+            pub(crate) fn algorithm(self) -> &'static dyn Algorithm {
+                match self {
+                    $(PlannerId::$variant => $algorithm,)*
                 }
             }
         }
     };
 }
 
+use crate::algorithm as a;
 use skyplan_sampling::PlannerKind as K;
 use skyplan_search::Planner as G;
 
 planners! {
     /// Jump Point Search (the default).
     #[default]
-    Jps => "jps", "JPS", 2, Family::Grid(G::Jps), Exact, AnyGrid,
+    Jps => "jps", "JPS", 2, Exact, AnyGrid, [GridPath], "", &OnlineCells(G::Jps),
         "Jump Point Search: A*'s optimal costs, far fewer expansions (the default)";
     /// JPS with precomputed jumps.
-    JpsPlus => "jps-plus", "JPS+", 2, Family::Grid(G::JpsPlus), Exact, AnyGrid,
+    JpsPlus => "jps-plus", "JPS+", 2, Exact, AnyGrid, [GridPath], "the JPS+ table per grid and corner rule", &JpsPlusCells,
         "JPS+: JPS with every scan precomputed per grid; pays off over many queries";
     /// Contraction hierarchy over the grid graph.
-    Ch => "ch", "CH", 2, Family::Contraction, Exact, AnyGrid,
+    Ch => "ch", "CH", 2, Exact, AnyGrid, [GridPath, TimeLimit], "the contraction hierarchy per grid and move model", &a::HierarchyCells,
         "contraction hierarchy: exact, shortcuts precomputed per grid; fastest on random obstacles and mazes";
     /// A\* with the octile (or Manhattan) heuristic.
-    Astar => "astar", "A*", 2, Family::Grid(G::AStar), Exact, AnyGrid,
+    Astar => "astar", "A*", 2, Exact, AnyGrid, [GridPath], "", &OnlineCells(G::AStar),
         "A* with the octile (8-connected) or Manhattan (4-connected) heuristic";
+    /// Bidirectional A\*.
+    BidirAstar => "bidir-astar", "bidirectional A*", 2, Exact, AnyGrid, [GridPath], "", &CellFunction(skyplan_search::bidirectional_astar),
+        "bidirectional A*: searches from both ends at once, stops when neither side can improve the best meeting";
     /// Dijkstra.
-    Dijkstra => "dijkstra", "Dijkstra", 2, Family::Grid(G::Dijkstra), Exact, AnyGrid,
+    Dijkstra => "dijkstra", "Dijkstra", 2, Exact, AnyGrid, [GridPath], "", &OnlineCells(G::Dijkstra),
         "Dijkstra (A* without a heuristic)";
     /// Theta\*.
-    Theta => "theta", "Theta*", 2, Family::Grid(G::ThetaStar), AnyAngle, AnyGrid,
+    Theta => "theta", "Theta*", 2, AnyAngle, AnyGrid, [GridPath], "", &OnlineCells(G::ThetaStar),
         "Theta*: any-angle routes through cell centres, shorter than any grid path";
     /// Exact any-angle shortest paths.
-    AnyAngle => "any-angle", "exact any-angle", 2, Family::AnyAngle, ExactAnyAngle, AnyGrid,
+    AnyAngle => "any-angle", "exact any-angle", 2, ExactAnyAngle, AnyGrid, [], "the visibility graph per grid", &a::AnyAngleGraph,
         "exact any-angle: the Euclidean-shortest route through the free cells, turning at obstacle corners";
     /// Wavefront navigation function.
-    Wavefront => "wavefront", "wavefront", 2, Family::Wavefront, Exact, AnyGrid,
+    Wavefront => "wavefront", "wavefront", 2, Exact, AnyGrid, [GridPath, Field], "", &a::Wavefront,
         "wavefront navigation function: distance field from the goal, then gradient descent";
     /// Inflated cost map A\*.
-    Costmap => "costmap", "costmap A*", 2, Family::Costmap, ExactForObjective, AnyGrid,
+    Costmap => "costmap", "costmap A*", 2, ExactForObjective, AnyGrid, [GridPath, Costmap], "", &a::Costmap,
         "inflated cost map (Nav2-style): A* minimising length + weight x cost";
     /// Voronoi roadmap.
-    Voronoi => "voronoi", "Voronoi roadmap", 2, Family::Voronoi, Feasible, CollidersOnly,
+    Voronoi => "voronoi", "Voronoi roadmap", 2, Feasible, CollidersOnly, [], "the roadmap per altitude, margin and cell size", &a::Voronoi,
         "Voronoi roadmap of the grown footprints at the altitude: exactly free edges, graph A*";
     /// Probabilistic roadmap in 3D.
-    Prm => "prm", "PRM", 3, Family::Sampling(K::Prm), Feasible, CollidersOnly,
+    Prm => "prm", "PRM", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::Prm),
         "3D probabilistic roadmap among the boxes (grown until start and goal connect)";
     /// Lazy PRM in 3D.
-    LazyPrm => "lazy-prm", "lazy PRM", 3, Family::Sampling(K::LazyPrm), Feasible, CollidersOnly,
+    LazyPrm => "lazy-prm", "lazy PRM", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::LazyPrm),
         "3D lazy PRM: edges checked only on found paths";
     /// RRT-Connect in 3D.
-    RrtConnect => "rrt-connect", "RRT-Connect", 3, Family::Sampling(K::RrtConnect), Feasible, CollidersOnly,
+    RrtConnect => "rrt-connect", "RRT-Connect", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the grown boxes per flight volume", &a::Sampling(K::RrtConnect),
         "3D RRT-Connect: bidirectional trees, stops at the first path";
     /// Informed RRT\* in 3D.
-    RrtStar => "rrt-star", "RRT*", 3, Family::Sampling(K::RrtStar), AsymptoticallyOptimal, CollidersOnly,
+    RrtStar => "rrt-star", "RRT*", 3, AsymptoticallyOptimal, CollidersOnly, [ThreeD, TimeLimit], "the grown boxes per flight volume", &a::Sampling(K::RrtStar),
         "3D Informed RRT*: improves the path until the time limit";
     /// Voxel A\* in 3D.
-    Voxel => "voxel", "voxel A*", 3, Family::Voxel, ExactForObjective, CollidersOnly,
+    Voxel => "voxel", "voxel A*", 3, ExactForObjective, CollidersOnly, [ThreeD, TimeLimit, Voxel], "the grown boxes per flight volume", &a::Voxel,
         "3D voxel A* (26-connected, altitude layers, climb cost): may climb over low buildings";
-}
-
-impl Family {
-    /// True for the cell-to-cell grid planners (grid search and the contraction hierarchy),
-    /// which take the move model, pruning and shortcut options.
-    pub fn is_cell_search(self) -> bool {
-        match self {
-            Family::Grid(_) | Family::Contraction => true,
-            Family::AnyAngle
-            | Family::Wavefront
-            | Family::Costmap
-            | Family::Voronoi
-            | Family::Sampling(_)
-            | Family::Voxel => false,
-        }
-    }
 }
 
 impl PlannerId {
@@ -205,12 +215,34 @@ impl PlannerId {
         names.join(", ")
     }
 
+    /// Whether the planner uses the options of `group` (the others are refused).
+    pub fn uses(self, group: OptionGroup) -> bool {
+        self.info().uses.contains(&group)
+    }
+
     /// Whether the planner's route is a path through grid cells (the cell searches, the
     /// wavefront and the cost map): it takes the grid-path options (connectivity, corner
     /// cutting, pruning, shortcut) and has a grid path to report and draw.
     pub fn is_cell_planner(self) -> bool {
-        let family = self.info().family;
-        family.is_cell_search() || matches!(family, Family::Wavefront | Family::Costmap)
+        self.uses(OptionGroup::GridPath)
+    }
+
+    /// Whether the planner answers cell-to-cell queries on a grid ([`CellSearch`](crate::CellSearch):
+    /// MovingAI replays, benchmarks), then prunes and shortcuts its path.
+    pub fn is_cell_search(self) -> bool {
+        self.algorithm().cells().is_some()
+    }
+
+    /// Whether the planner's route comes with a navigation field (a value per cell: the
+    /// wavefront's distances, the cost map's cost to go) that a heat map can show.
+    pub fn has_field(self) -> bool {
+        self.algorithm().has_field()
+    }
+
+    /// Whether the planner's route is exactly shortest among grid paths under the move model
+    /// (checked against the exact oracle).
+    pub fn is_exact_on_grids(self) -> bool {
+        self.info().optimality == Optimality::Exact
     }
 
     /// The planners that take this map kind.

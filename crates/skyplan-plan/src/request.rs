@@ -6,7 +6,8 @@
 use crate::cli;
 use crate::failure::{FailureKind, PlanFailure};
 use crate::navfn::CostmapOptions;
-use crate::planner_id::PlannerId;
+use crate::plan::PlanSpec;
+use crate::planner_id::{OptionGroup, PlannerId};
 use serde::{Deserialize, Serialize};
 use std::time::Duration;
 
@@ -204,6 +205,13 @@ impl PlanRequest {
             cost_weight, geometry)
     }
 
+    /// The request's altitude, margin, cell size, move model and flight volume with the
+    /// defaults applied and every value checked (as a plan would use them); a bad value is a
+    /// bad request naming the field and its range.
+    pub fn spec(&self) -> Result<PlanSpec, PlanFailure> {
+        Resolved::new(self).map(|r| r.spec())
+    }
+
     /// The request with another start (replanning from where the vehicle is now).
     pub fn from_start_ne(&self, north_m: f64, east_m: f64) -> PlanRequest {
         PlanRequest {
@@ -338,92 +346,74 @@ fn position(
     }
 }
 
-/// Options of one kind that were given, whether the planner uses them, and what they need
-/// (worded only for a refusal).
-type OptionGroup = (Vec<&'static str>, bool, fn() -> String);
-
-/// Options given that the planner does not use: refused, so that nothing is silently ignored.
-fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailure> {
-    let info = planner.info();
-    // What a refused group needs, worded only when a request is refused.
-    fn three_d() -> String {
-        let names = PlannerId::names_where(|p| p.info().dims == 3);
-        format!("a 3D planner ({names})")
-    }
-    let given = |fields: &[(&'static str, bool)]| -> Vec<&'static str> {
-        fields.iter().filter(|f| f.1).map(|f| f.0).collect()
+/// The options of `group` that `r` gives.
+fn given(r: &PlanRequest, group: OptionGroup) -> Vec<&'static str> {
+    let fields: &[(&'static str, bool)] = match group {
+        OptionGroup::GridPath => &[
+            ("prune", r.prune.is_some()),
+            ("epsilon", r.epsilon.is_some()),
+            ("shortcut", r.shortcut.is_some()),
+            ("connectivity", r.connectivity.is_some()),
+            ("corner_cutting", r.corner_cutting.is_some()),
+        ],
+        OptionGroup::ThreeD => &[
+            ("start_alt_m", r.start_alt_m.is_some()),
+            ("goal_alt_m", r.goal_alt_m.is_some()),
+            ("min_alt_m", r.min_alt_m.is_some()),
+            ("max_alt_m", r.max_alt_m.is_some()),
+        ],
+        OptionGroup::TimeLimit => &[("time_limit_ms", r.time_limit_ms.is_some())],
+        OptionGroup::Voxel => &[
+            ("climb_weight", r.climb_weight.is_some()),
+            ("voxel_m", r.voxel_m.is_some()),
+            ("layer_m", r.layer_m.is_some()),
+        ],
+        OptionGroup::Costmap => &[
+            ("inscribed_radius_m", r.inscribed_radius_m.is_some()),
+            ("inflation_radius_m", r.inflation_radius_m.is_some()),
+            ("cost_scaling", r.cost_scaling.is_some()),
+            ("cost_weight", r.cost_weight.is_some()),
+        ],
+        OptionGroup::Field => &[("field", r.field.is_some())],
     };
-    let groups: [OptionGroup; 6] = [
-        (
-            given(&[
-                ("start_alt_m", r.start_alt_m.is_some()),
-                ("goal_alt_m", r.goal_alt_m.is_some()),
-                ("min_alt_m", r.min_alt_m.is_some()),
-                ("max_alt_m", r.max_alt_m.is_some()),
-            ]),
-            info.dims == 3,
-            three_d,
-        ),
-        (
-            given(&[("time_limit_ms", r.time_limit_ms.is_some())]),
-            info.dims == 3 || planner == PlannerId::Ch,
-            || format!("{} or ch (the limit of its preprocessing)", three_d()),
-        ),
-        (
-            given(&[
-                ("climb_weight", r.climb_weight.is_some()),
-                ("voxel_m", r.voxel_m.is_some()),
-                ("layer_m", r.layer_m.is_some()),
-            ]),
-            planner == PlannerId::Voxel,
-            || "planner voxel".into(),
-        ),
-        (
-            given(&[
-                ("inscribed_radius_m", r.inscribed_radius_m.is_some()),
-                ("inflation_radius_m", r.inflation_radius_m.is_some()),
-                ("cost_scaling", r.cost_scaling.is_some()),
-                ("cost_weight", r.cost_weight.is_some()),
-            ]),
-            planner == PlannerId::Costmap,
-            || "planner costmap".into(),
-        ),
-        (
-            given(&[("field", r.field.is_some())]),
-            planner == PlannerId::Wavefront,
-            || "planner wavefront".into(),
-        ),
-        (
-            given(&[
-                ("prune", r.prune.is_some()),
-                ("epsilon", r.epsilon.is_some()),
-                ("shortcut", r.shortcut.is_some()),
-                ("connectivity", r.connectivity.is_some()),
-                ("corner_cutting", r.corner_cutting.is_some()),
-            ]),
-            planner.is_cell_planner(),
-            || {
-                let names = PlannerId::names_where(PlannerId::is_cell_planner);
-                format!("a grid planner ({names})")
-            },
-        ),
-    ];
-    for (names, applies, needs) in groups {
-        if !names.is_empty() && !applies {
-            return Err(bad(format!(
-                "{} {} not used by planner {planner}: {} need{} {}",
-                names.join(", "),
-                if names.len() == 1 { "is" } else { "are" },
-                if names.len() == 1 { "it" } else { "they" },
-                if names.len() == 1 { "s" } else { "" },
-                needs(),
-            )));
+    fields.iter().filter(|f| f.1).map(|f| f.0).collect()
+}
+
+/// Options given that the planner does not use: refused, naming the planners that use them
+/// (from the registry), so that nothing is silently ignored.
+fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailure> {
+    for &group in OptionGroup::ALL {
+        let names = given(r, group);
+        if names.is_empty() || planner.uses(group) {
+            continue;
         }
+        let users = PlannerId::names_where(|p| p.uses(group));
+        let one = names.len() == 1;
+        return Err(bad(format!(
+            "{} {} not used by planner {planner}: {} need{} a planner that uses {} ({users})",
+            names.join(", "),
+            if one { "is" } else { "are" },
+            if one { "it" } else { "they" },
+            if one { "s" } else { "" },
+            if one { "it" } else { "them" },
+        )));
     }
     Ok(())
 }
 
 impl Resolved {
+    /// The values every front end reads back from a plan.
+    pub(crate) fn spec(&self) -> PlanSpec {
+        PlanSpec {
+            alt_m: self.alt_m,
+            safety_m: self.safety_m,
+            cell_m: self.cell_m,
+            move_model: self.model,
+            min_alt_m: self.min_alt_m,
+            max_alt_m: self.max_alt_m,
+        }
+    }
+
     pub(crate) fn new(r: &PlanRequest) -> Result<Self, PlanFailure> {
         let planner = r.planner.unwrap_or_default();
         check_applicable(r, planner)?;
@@ -606,14 +596,23 @@ mod tests {
             "{}",
             e.message
         );
-        assert!(e.message.contains("3D planner"), "{}", e.message);
+        assert!(
+            e.message
+                .contains("(prm, lazy-prm, rrt-connect, rrt-star, voxel)"),
+            "{}",
+            e.message
+        );
         let e = Resolved::new(&PlanRequest {
             planner: Some(PlannerId::Astar),
             climb_weight: Some(2.0),
             ..Default::default()
         })
         .unwrap_err();
-        assert!(e.message.contains("planner voxel"), "{}", e.message);
+        assert!(
+            e.message.ends_with("a planner that uses it (voxel)"),
+            "{}",
+            e.message
+        );
         assert!(
             Resolved::new(&PlanRequest {
                 planner: Some(PlannerId::Voxel),

@@ -1,18 +1,18 @@
 //! [`Session`]: one world loaded once, many requests answered; caches what requests share
 //! (grids per altitude/margin/cell size, 3D box worlds, Voronoi and PRM roadmaps).
 
+use crate::algorithm::Workspace;
 use crate::failure::{FailureKind, PlanFailure};
-use crate::grid::Engine;
 use crate::plan::{Geometry, GridInfo, GridPathStats, Home, Place, Plan, Timings, WaypointCounts};
-use crate::planner_id::{Family, MapKinds, PlannerId};
-use crate::request::{PlanRequest, Position, Resolved};
+use crate::planner_id::{MapKinds, PlannerId};
+use crate::request::{PlanRequest, Position, Resolved, RoadmapIo};
 use crate::world::{Limits, Source, World, check_memory};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
 use skyplan_mission::Mission;
 use skyplan_search::table_file::{TableFileError, read_header_from};
-use skyplan_search::{ChQuery, ContractionHierarchy, GridSearch, JpsPlusTable, MoveModel};
+use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel};
 use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -125,6 +125,8 @@ pub(crate) struct Query<'a> {
     pub start_ne: [f64; 2],
     pub goal_ne: [f64; 2],
     pub world: &'a World,
+    /// A PRM roadmap to start from, and whether to return it.
+    pub roadmap: &'a RoadmapIo,
 }
 
 /// A world loaded once and the caches its requests share.
@@ -149,13 +151,12 @@ pub struct Session {
     pub(crate) voronoi: HashMap<Key, Arc<skyplan_roadmap::Roadmap>>,
     pub(crate) prm: HashMap<Key, skyplan_sampling::prm::Roadmap>,
     pub(crate) any_angle: HashMap<Key, Arc<skyplan_anyangle::AnyAngle>>,
-    pub(crate) search: GridSearch,
+    /// The cell searches' buffers, reused between queries.
+    pub(crate) workspace: Workspace,
     /// JPS+ preprocessing kept across requests (built on first use or loaded from a file).
     jps_plus: Vec<Arc<JpsPlusTable>>,
     /// Contraction hierarchies kept across requests (built on first use per grid and model).
     ch: Vec<Arc<ContractionHierarchy>>,
-    /// The hierarchies' query workspace.
-    pub(crate) ch_query: ChQuery,
     /// When long preprocessing (a contraction hierarchy) must give up, if ever.
     deadline: Option<Instant>,
 }
@@ -171,10 +172,9 @@ impl Session {
             voronoi: HashMap::new(),
             prm: HashMap::new(),
             any_angle: HashMap::new(),
-            search: GridSearch::new(),
+            workspace: Workspace::default(),
             jps_plus: Vec::new(),
             ch: Vec::new(),
-            ch_query: ChQuery::default(),
             deadline: None,
         }
     }
@@ -356,9 +356,9 @@ impl Session {
             .map_err(|e| match e {
                 skyplan_search::ContractionError::Deadline { .. } => PlanFailure::new(
                     crate::FailureKind::Timeout,
-                    format!("--planner ch: {e}: its preprocessing takes long on open maps; jps-plus or jps answer at once"),
+                    format!("planner ch: {e}: its preprocessing takes long on open maps; jps-plus or jps answer at once"),
                 ),
-                other => PlanFailure::bad_request(format!("--planner ch: {other}")),
+                other => PlanFailure::bad_request(format!("planner ch: {other}")),
             })?;
         let ch = Arc::new(ch);
         let us = micros(t0.elapsed());
@@ -374,7 +374,7 @@ impl Session {
     pub(crate) fn boxes(&mut self, r: &Resolved) -> Result<Arc<BoxWorld3>, PlanFailure> {
         let Some(map) = self.world.colliders() else {
             return Err(PlanFailure::bad_request(format!(
-                "--planner {}: needs an FCND colliders map (--map FILE.csv, or the bundled map)",
+                "planner {}: needs an FCND colliders map (a colliders CSV file, or the bundled map)",
                 r.planner
             )));
         };
@@ -399,7 +399,7 @@ impl Session {
     }
 
     /// Cells of the grid at this cell size (before building it), saturating.
-    fn cells_at(&self, cell_m: f64) -> u64 {
+    pub(crate) fn cells_at(&self, cell_m: f64) -> u64 {
         if let Some(g) = self.world.fixed_grid() {
             return g.len() as u64;
         }
@@ -414,44 +414,22 @@ impl Session {
         }
     }
 
-    /// The memory a request needs, estimated before anything is allocated.
+    /// The memory a request needs, estimated by its planner before anything is allocated.
     fn check_request_memory(&self, r: &Resolved) -> Result<(), PlanFailure> {
-        let info = r.planner.info();
-        let (units, per_unit, what, change) = match info.family {
-            Family::Grid(skyplan_search::Planner::JpsPlus) => {
-                (self.cells_at(r.cell_m), 68, "cells", "use a larger cell_m")
-            }
-            // Up to ~10 upward edges per cell on open ground (16 bytes each) plus the edge arena.
-            Family::Contraction => (self.cells_at(r.cell_m), 400, "cells", "use a larger cell_m"),
-            Family::Grid(_) | Family::Voronoi | Family::AnyAngle => {
-                (self.cells_at(r.cell_m), 24, "cells", "use a larger cell_m")
-            }
-            Family::Wavefront | Family::Costmap => {
-                (self.cells_at(r.cell_m), 48, "cells", "use a larger cell_m")
-            }
-            Family::Voxel => {
-                let b = self.world.bounds_ne(r.cell_m);
-                let n = ((b.north_max_m - b.north_min_m) / r.voxel_m).ceil()
-                    * ((b.east_max_m - b.east_min_m) / r.voxel_m).ceil()
-                    * ((r.max_alt_m - r.min_alt_m) / r.layer_m).ceil().max(1.0);
-                let n = if n.is_finite() && n < 1.8e19 {
-                    n as u64
-                } else {
-                    u64::MAX
-                };
-                (n, 40, "voxels", "use a larger voxel_m or layer_m")
-            }
-            Family::Sampling(_) => return Ok(()),
+        let Some(m) = r.planner.algorithm().memory(self, r) else {
+            return Ok(());
         };
         check_memory(
-            units.saturating_mul(per_unit),
+            m.units.saturating_mul(m.bytes_per_unit),
             &self.limits,
             &format!(
-                "planner {} on {} ({units} {what})",
+                "planner {} on {} ({} {})",
                 r.planner,
-                self.world.name()
+                self.world.name(),
+                m.units,
+                m.what
             ),
-            change,
+            m.change,
         )
     }
 
@@ -463,7 +441,7 @@ impl Session {
         let info = r.planner.info();
         if info.maps == MapKinds::CollidersOnly && self.world.colliders().is_none() {
             return Err(PlanFailure::bad_request(format!(
-                "--planner {}: needs an FCND colliders map (--map FILE.csv, or the bundled map); on {} use one of {}",
+                "planner {}: needs an FCND colliders map (a colliders CSV file, or the bundled map); on {} use one of {}",
                 r.planner,
                 self.world.name(),
                 PlannerId::for_maps(false)
@@ -481,17 +459,9 @@ impl Session {
             start_ne,
             goal_ne,
             world: &world,
+            roadmap: &request.roadmap,
         };
-        let route = match info.family {
-            Family::Grid(planner) => crate::grid::plan(self, &q, Engine::Search(planner))?,
-            Family::Contraction => crate::grid::plan(self, &q, Engine::Contraction)?,
-            Family::Wavefront => crate::navfn::wavefront(self, &q)?,
-            Family::Costmap => crate::navfn::costmap(self, &q)?,
-            Family::Voronoi => crate::voronoi::plan(self, &q)?,
-            Family::Sampling(kind) => crate::three_d::sampling(self, &q, kind, request)?,
-            Family::Voxel => crate::three_d::voxel(self, &q)?,
-            Family::AnyAngle => crate::any_angle::plan(self, &q)?,
-        };
+        let route = r.planner.algorithm().plan(self, &q)?;
         recheck(&route)?;
         assemble(&world, &r, route, [start_lla, goal_lla], t0)
     }
@@ -639,6 +609,7 @@ fn assemble(
             lon_deg: f.home().lon_deg,
         }),
         planner: r.planner,
+        spec: r.spec(),
         grid: grid_info,
         move_model: grid_planner.then(|| model_name(r.model)),
         start,

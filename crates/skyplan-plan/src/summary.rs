@@ -1,7 +1,6 @@
 //! The human-readable summary of a plan (`skyplan plan` without `--json`): `Display for Plan`.
 
 use crate::plan::Plan;
-use crate::planner_id::Family;
 use serde_json::Value;
 use std::fmt;
 
@@ -17,7 +16,6 @@ impl fmt::Display for Plan {
 }
 
 fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-    let info = plan.planner.info();
     match (plan.obstacles, &plan.home) {
         (Some(n), Some(h)) => writeln!(
             f,
@@ -54,7 +52,7 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             num(&hi[1]),
             num(&lo[2]),
             num(&hi[2]),
-            num(&plan.details["safety_m"])
+            plan.spec.safety_m
         )?;
     }
     writeln!(
@@ -80,8 +78,11 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         )?;
     }
     details(plan, f)?;
-    match (plan.grid_path.map(|g| g.waypoint_counts), info.family) {
-        (Some(c), Family::Grid(_) | Family::Contraction) => writeln!(
+    match (
+        plan.grid_path.map(|g| g.waypoint_counts),
+        plan.planner.is_cell_search(),
+    ) {
+        (Some(c), true) => writeln!(
             f,
             "waypoints  {} → {} after pruning → {} after line-of-sight shortcut; mission of {} waypoints, {:.2} m flown",
             c.grid_path, c.after_pruning, c.after_shortcut, c.mission, plan.mission_length_m
@@ -120,11 +121,7 @@ fn path_line(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         ),
         None => format!("{} waypoints", plan.waypoints.len()),
     };
-    let unit = if info.dims == 3 && !matches!(info.family, Family::Voxel) {
-        "samples"
-    } else {
-        "expansions"
-    };
+    let unit = plan.planner.algorithm().work_unit();
     writeln!(
         f,
         "path       {}{model}: {:.2} m, {shape}, {} {unit}, {:.2} ms",

@@ -2,7 +2,6 @@
 //! PRM, RRT-Connect, Informed RRT\* (`skyplan-sampling`) and voxel A\* (`skyplan-voxel`).
 
 use crate::failure::{FailureKind, PlanFailure};
-use crate::request::PlanRequest;
 use crate::session::{Check, Query, Route, Session, micros};
 use rand::SeedableRng;
 use serde_json::json;
@@ -72,7 +71,6 @@ pub(crate) fn sampling(
     session: &mut Session,
     q: &Query,
     kind: PlannerKind,
-    request: &PlanRequest,
 ) -> Result<Route, PlanFailure> {
     let r = q.r;
     let t_world = Instant::now();
@@ -86,7 +84,7 @@ pub(crate) fn sampling(
     let mut details = serde_json::Map::new();
     let solution = match kind {
         PlannerKind::Prm | PlannerKind::LazyPrm => {
-            let (roadmap, mut solution) = run_prm(session, &world, kind, q, request, budget)?;
+            let (roadmap, mut solution) = run_prm(session, &world, kind, q, budget)?;
             let st = roadmap.stats;
             let mut info = json!({
                 "vertices": roadmap.vertices().len(),
@@ -96,9 +94,9 @@ pub(crate) fn sampling(
                 "edges_removed": st.edges_removed,
                 "connector_tests": st.connector_tests,
                 "build_us": st.build_us,
-                "loaded_from": request.roadmap.load.as_ref().map(|(name, _)| name.clone()),
+                "loaded_from": q.roadmap.load.as_ref().map(|(name, _)| name.clone()),
             });
-            if request.roadmap.save {
+            if q.roadmap.save {
                 let bytes = roadmap.to_json(&world);
                 info["saved_bytes"] = json!(bytes.len());
                 saved = Some(bytes);
@@ -182,19 +180,18 @@ fn run_prm(
     world: &BoxWorld3,
     kind: PlannerKind,
     q: &Query,
-    request: &PlanRequest,
     budget: Budget,
 ) -> Result<(Roadmap, Solution), PlanFailure> {
     let r = q.r;
     let lazy = kind == PlannerKind::LazyPrm;
     let (start, goal) = ends(q);
-    if let Some((name, bytes)) = &request.roadmap.load {
+    if let Some((name, bytes)) = &q.roadmap.load {
         let roadmap = Roadmap::from_json(bytes, world)
-            .map_err(|e| PlanFailure::bad_request(format!("--load-roadmap {name}: {e}")))?;
+            .map_err(|e| PlanFailure::bad_request(format!("roadmap {name}: {e}")))?;
         if roadmap.is_lazy() != lazy {
             let built = if roadmap.is_lazy() { "lazy-prm" } else { "prm" };
             return Err(PlanFailure::bad_request(format!(
-                "--load-roadmap {name}: the roadmap was built by --planner {built}; use that planner"
+                "roadmap {name}: the roadmap was built by planner {built}; use that planner"
             )));
         }
         return Ok(solve_from(world, roadmap, start, goal, 0, budget));
@@ -264,7 +261,6 @@ fn finish(
         ("planner_status", json!(s.status.name())),
         ("seed", json!(q.r.seed)),
         ("time_limit_ms", json!(q.r.time_limit_ms)),
-        ("safety_m", json!(q.r.safety_m)),
         ("flight_volume", volume(world)),
         ("iterations", json!(s.iterations)),
         ("vertices", json!(s.vertices)),

@@ -15,7 +15,7 @@ pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailur
     let map = q
         .world
         .colliders()
-        .ok_or_else(|| PlanFailure::bad_request("--planner voronoi needs an FCND colliders map"))?;
+        .ok_or_else(|| PlanFailure::bad_request("planner voronoi needs an FCND colliders map"))?;
     let (grid, grid_us) = grid_for(session, q)?;
     let t_build = Instant::now();
     let k = [r.alt_m, r.safety_m, r.cell_m, 0.0].map(f64::to_bits);

@@ -1,7 +1,7 @@
 //! Every planner through the one door, on the city: routes exactly free by an independent check,
 //! ends where asked, kinds of failure as documented. (These were CLI tests before the facade.)
 
-use skyplan_plan::{FailureKind, Family, PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{FailureKind, MapKinds, OptionGroup, PlanRequest, PlannerId, Session, World};
 use skyplan_world3::{BoxWorld3, CollisionChecker, WorldSpec};
 
 fn city() -> Session {
@@ -264,12 +264,16 @@ fn lat_lon_ends_give_the_same_route_as_local_ones() {
 }
 
 #[test]
-fn registry_families_cover_every_planner_and_help_lists_them() {
+fn registry_rows_are_consistent() {
     for &p in PlannerId::ALL {
         let info = p.info();
         assert!(!info.summary.is_empty());
-        let three_d = matches!(info.family, Family::Sampling(_) | Family::Voxel);
-        assert_eq!(info.dims == 3, three_d, "{p}");
+        // The 3D planners, and only they, take the 3D options; cell searches take the grid
+        // path's options and run on every grid map.
+        assert_eq!(info.dims == 3, p.uses(OptionGroup::ThreeD), "{p}");
+        if p.is_cell_search() {
+            assert!(p.is_cell_planner() && info.maps == MapKinds::AnyGrid, "{p}");
+        }
     }
 }
 
@@ -335,7 +339,7 @@ fn ch_preprocessing_stops_at_its_time_limit_and_only_ch_and_3d_planners_take_one
     let failure = ch(World::fcnd_city(), 1).unwrap_err();
     assert_eq!(failure.kind, FailureKind::Timeout, "{}", failure.message);
     assert!(
-        failure.message.starts_with("--planner ch: "),
+        failure.message.starts_with("planner ch: "),
         "{}",
         failure.message
     );
@@ -364,7 +368,7 @@ fn ch_preprocessing_stops_at_its_time_limit_and_only_ch_and_3d_planners_take_one
         refused
             .message
             .starts_with("time_limit_ms is not used by planner jps")
-            && refused.message.contains(" or ch "),
+            && refused.message.contains("(ch, prm, "),
         "{}",
         refused.message
     );

@@ -17,24 +17,23 @@ pub enum PictureKind {
 }
 
 impl PictureKind {
-    /// The picture a file name asks for, for a planner of `family`: a PNG heat map of the field
-    /// for the navigation functions (wavefront, costmap), else the map and the route in the
-    /// file's format (.png or .svg). `Err` says which file names would do.
+    /// The picture a file name asks for, for `planner`: a PNG heat map of the field for the
+    /// planners whose route comes with one (the navigation functions: wavefront, costmap), else
+    /// the map and the route in the file's format (.png or .svg). `Err` says which file names
+    /// would do.
     ///
     /// ```
-    /// use skyplan_plan::Family;
+    /// use skyplan_plan::PlannerId;
     /// use skyplan_plot::{PlotFormat, plan_picture::PictureKind};
     /// use std::path::Path;
     ///
-    /// let svg = PictureKind::for_path(Path::new("route.svg"), Family::AnyAngle);
+    /// let svg = PictureKind::for_path(Path::new("route.svg"), PlannerId::AnyAngle);
     /// assert_eq!(svg, Ok(PictureKind::Scene(PlotFormat::Svg)));
-    /// assert_eq!(PictureKind::for_path(Path::new("f.png"), Family::Wavefront), Ok(PictureKind::Heatmap));
-    /// assert!(PictureKind::for_path(Path::new("f.svg"), Family::Costmap).is_err());
+    /// assert_eq!(PictureKind::for_path(Path::new("f.png"), PlannerId::Wavefront), Ok(PictureKind::Heatmap));
+    /// assert!(PictureKind::for_path(Path::new("f.svg"), PlannerId::Costmap).is_err());
     /// ```
-    pub fn for_path(path: &Path, family: skyplan_plan::Family) -> Result<Self, &'static str> {
-        use skyplan_plan::Family;
-        let heat = matches!(family, Family::Wavefront | Family::Costmap);
-        match (heat, PlotFormat::from_path(path)) {
+    pub fn for_path(path: &Path, planner: skyplan_plan::PlannerId) -> Result<Self, &'static str> {
+        match (planner.has_field(), PlotFormat::from_path(path)) {
             (true, Some(PlotFormat::Png)) => Ok(PictureKind::Heatmap),
             (true, _) => Err("wavefront and costmap draw PNG heat maps; use a .png file name"),
             (false, Some(f)) => Ok(PictureKind::Scene(f)),
@@ -134,11 +133,7 @@ pub fn plan_picture(
                 .unwrap_or_default();
             let points = plan.points_nea();
             let edges: Vec<_> = geometry.edges.iter().map(|s| (s[0], s[1])).collect();
-            let safety_m = plan
-                .details
-                .get("safety_m")
-                .and_then(|v| v.as_f64())
-                .unwrap_or(0.0);
+            let safety_m = plan.spec.safety_m;
             let scene = crate::Scene3d {
                 title: format!(
                     "{map}: {}, {:.0} m, margin {safety_m} m",

@@ -27,6 +27,7 @@
 #![warn(missing_docs)]
 
 mod astar;
+mod bidirectional;
 mod components;
 mod contraction;
 mod jps;
@@ -39,6 +40,7 @@ pub mod table_file;
 mod theta;
 
 pub use astar::GridSearch;
+pub use bidirectional::bidirectional_astar;
 pub use components::Components;
 pub use contraction::{
     ChQuery, ContractionError, ContractionHierarchy, DIAGONAL as CH_DIAGONAL_COST,

@@ -1,0 +1,369 @@
+//! [`Algorithm`]: what each registry row runs (OMPL's `Planner`, Nav2's planner plugin): its
+//! memory estimate, its plan through the session's caches, and — for the cell-to-cell grid
+//! searches — a [`CellPlanner`] the grid pipeline (search, prune, shortcut) and [`CellSearch`]
+//! (replays, benchmarks) drive.
+//!
+//! [`CellSearch`]: crate::CellSearch
+
+use crate::failure::PlanFailure;
+use crate::request::Resolved;
+use crate::session::{Query, Route, Session};
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_sampling::PlannerKind;
+use skyplan_search::{
+    ChQuery, ContractionHierarchy, GridPath, GridSearch, JpsPlusTable, MoveModel, Planner,
+    SearchError,
+};
+use std::sync::Arc;
+
+/// The memory a request needs, estimated before anything is allocated.
+pub(crate) struct Memory {
+    /// How many units (cells, voxels).
+    pub units: u64,
+    /// Bytes per unit.
+    pub bytes_per_unit: u64,
+    /// What a unit is, for the message.
+    pub what: &'static str,
+    /// What the user can change to need less.
+    pub change: &'static str,
+}
+
+impl Memory {
+    /// `bytes_per_cell` for every cell of the request's grid.
+    fn cells(session: &Session, r: &Resolved, bytes_per_cell: u64) -> Option<Memory> {
+        Some(Memory {
+            units: session.cells_at(r.cell_m),
+            bytes_per_unit: bytes_per_cell,
+            what: "cells",
+            change: "use a larger cell_m",
+        })
+    }
+}
+
+/// One planner behind the registry.
+pub(crate) trait Algorithm: Sync {
+    /// The memory a request needs (`None`: nothing that grows with the map).
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory>;
+
+    /// The route for a resolved query, through the session's caches.
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure>;
+
+    /// The cell-to-cell search, for the planners that are one.
+    fn cells(&self) -> Option<&dyn CellPlanner> {
+        None
+    }
+
+    /// Whether its route comes with a navigation field (a value per cell).
+    fn has_field(&self) -> bool {
+        false
+    }
+
+    /// What its expansion count counts (`expansions`; the sampling planners count samples).
+    fn work_unit(&self) -> &'static str {
+        "expansions"
+    }
+}
+
+/// A plain cell-to-cell search function (no preprocessing, no kept state).
+pub(crate) type SearchFn = fn(&Grid2, Cell, Cell, MoveModel) -> Result<GridPath, SearchError>;
+
+/// A cell-to-cell search prepared on one grid.
+pub(crate) enum Engine {
+    /// A [`GridSearch`] algorithm.
+    Online(Planner),
+    /// JPS+ over its table.
+    Plus(Arc<JpsPlusTable>),
+    /// Queries of a contraction hierarchy.
+    Hierarchy(Arc<ContractionHierarchy>),
+    /// A plain function.
+    Function(SearchFn),
+}
+
+/// The buffers the engines reuse between queries.
+#[derive(Default)]
+pub(crate) struct Workspace {
+    pub search: GridSearch,
+    pub ch: ChQuery,
+}
+
+impl Engine {
+    /// One query.
+    pub(crate) fn search(
+        &self,
+        ws: &mut Workspace,
+        grid: &Grid2,
+        (start, goal): (Cell, Cell),
+        model: MoveModel,
+    ) -> Result<GridPath, SearchError> {
+        match self {
+            Engine::Online(planner) => ws.search.search(grid, start, goal, model, *planner),
+            Engine::Plus(table) => table.search(&mut ws.search, start, goal),
+            Engine::Hierarchy(ch) => ch.search(&mut ws.ch, start, goal),
+            Engine::Function(f) => f(grid, start, goal, model),
+        }
+    }
+}
+
+/// An engine and its preparation: `Some(µs)` if it was built now, `None` if kept or not
+/// needed; `detail` names the kept thing for the plan's details (`jps_plus_table`).
+pub(crate) struct Prepared {
+    pub engine: Engine,
+    pub built_us: Option<u64>,
+    pub detail: Option<&'static str>,
+}
+
+impl Prepared {
+    fn plain(engine: Engine) -> Self {
+        Prepared {
+            engine,
+            built_us: None,
+            detail: None,
+        }
+    }
+}
+
+/// A cell-to-cell grid search; every one is also an [`Algorithm`] (the grid pipeline).
+pub(crate) trait CellPlanner: Sync {
+    /// Bytes per grid cell: its tables and search state.
+    fn bytes_per_cell(&self) -> u64 {
+        24
+    }
+
+    /// Prepared on a session's grid: kept preprocessing is reused, new preprocessing is kept.
+    fn prepare(
+        &self,
+        session: &mut Session,
+        grid: &Arc<Grid2>,
+        r: &Resolved,
+    ) -> Result<Prepared, PlanFailure>;
+
+    /// Prepared on its own (many queries on one grid, outside a session).
+    fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure>;
+
+    /// Whether its paths turn anywhere (Theta\*): then the plan also reports the octile optimum.
+    fn any_angle(&self) -> bool {
+        false
+    }
+}
+
+impl<T: CellPlanner> Algorithm for T {
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
+        Memory::cells(session, r, self.bytes_per_cell())
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::grid::plan(session, q, self)
+    }
+
+    fn cells(&self) -> Option<&dyn CellPlanner> {
+        Some(self)
+    }
+}
+
+/// A [`GridSearch`] algorithm (A\*, Dijkstra, JPS, Theta\*): its buffers are the session's.
+pub(crate) struct OnlineCells(pub Planner);
+
+impl CellPlanner for OnlineCells {
+    fn prepare(
+        &self,
+        _: &mut Session,
+        _: &Arc<Grid2>,
+        _: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        Ok(Prepared::plain(Engine::Online(self.0)))
+    }
+
+    fn prepare_alone(&self, _: &Grid2, _: MoveModel) -> Result<Engine, PlanFailure> {
+        Ok(Engine::Online(self.0))
+    }
+
+    fn any_angle(&self) -> bool {
+        self.0 == Planner::ThetaStar
+    }
+}
+
+/// A plain search function (bidirectional A\*).
+pub(crate) struct CellFunction(pub SearchFn);
+
+impl CellPlanner for CellFunction {
+    fn prepare(
+        &self,
+        _: &mut Session,
+        _: &Arc<Grid2>,
+        _: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        Ok(Prepared::plain(Engine::Function(self.0)))
+    }
+
+    fn prepare_alone(&self, _: &Grid2, _: MoveModel) -> Result<Engine, PlanFailure> {
+        Ok(Engine::Function(self.0))
+    }
+}
+
+/// JPS+: its table is kept per grid (built once, or loaded from a file).
+pub(crate) struct JpsPlusCells;
+
+impl CellPlanner for JpsPlusCells {
+    fn bytes_per_cell(&self) -> u64 {
+        68
+    }
+
+    fn prepare(
+        &self,
+        session: &mut Session,
+        grid: &Arc<Grid2>,
+        r: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        if !r.model.has_diagonals() {
+            // 4-connected grids have no jumps: GridSearch runs A* for them.
+            return Ok(Prepared::plain(Engine::Online(Planner::JpsPlus)));
+        }
+        let (table, built_us) = session.jps_plus_table(grid, r.model);
+        Ok(Prepared {
+            engine: Engine::Plus(table),
+            built_us,
+            detail: Some("jps_plus_table"),
+        })
+    }
+
+    fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
+        Ok(Engine::Plus(Arc::new(JpsPlusTable::build(
+            Arc::new(grid.clone()),
+            model,
+        ))))
+    }
+}
+
+/// The contraction hierarchy, kept per grid and move model.
+pub(crate) struct HierarchyCells;
+
+impl CellPlanner for HierarchyCells {
+    /// Up to ~10 upward edges per cell on open ground (16 bytes each) plus the edge arena.
+    fn bytes_per_cell(&self) -> u64 {
+        400
+    }
+
+    fn prepare(
+        &self,
+        session: &mut Session,
+        grid: &Arc<Grid2>,
+        r: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        let (ch, built_us) = session.contraction_hierarchy(grid, r.model, r.preprocess_limit)?;
+        Ok(Prepared {
+            engine: Engine::Hierarchy(ch),
+            built_us,
+            detail: Some("contraction_hierarchy"),
+        })
+    }
+
+    fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
+        let ch = ContractionHierarchy::build(Arc::new(grid.clone()), model)
+            .map_err(|e| PlanFailure::bad_request(format!("planner ch: {e}")))?;
+        Ok(Engine::Hierarchy(Arc::new(ch)))
+    }
+}
+
+/// Exact any-angle paths over the visibility graph kept per grid.
+pub(crate) struct AnyAngleGraph;
+
+impl Algorithm for AnyAngleGraph {
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
+        Memory::cells(session, r, 24)
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::any_angle::plan(session, q)
+    }
+}
+
+/// The wavefront navigation function.
+pub(crate) struct Wavefront;
+
+impl Algorithm for Wavefront {
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
+        Memory::cells(session, r, 48)
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::navfn::wavefront(session, q)
+    }
+
+    fn has_field(&self) -> bool {
+        true
+    }
+}
+
+/// A\* over the inflated cost map.
+pub(crate) struct Costmap;
+
+impl Algorithm for Costmap {
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
+        Memory::cells(session, r, 48)
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::navfn::costmap(session, q)
+    }
+
+    fn has_field(&self) -> bool {
+        true
+    }
+}
+
+/// The Voronoi roadmap, kept per altitude, margin and cell size.
+pub(crate) struct Voronoi;
+
+impl Algorithm for Voronoi {
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
+        Memory::cells(session, r, 24)
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::voronoi::plan(session, q)
+    }
+}
+
+/// PRM, lazy PRM, RRT-Connect, RRT\* among the grown boxes.
+pub(crate) struct Sampling(pub PlannerKind);
+
+impl Algorithm for Sampling {
+    fn memory(&self, _: &Session, _: &Resolved) -> Option<Memory> {
+        None
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::three_d::sampling(session, q, self.0)
+    }
+
+    fn work_unit(&self) -> &'static str {
+        "samples"
+    }
+}
+
+/// Voxel A\* over the lattice of the grown boxes.
+pub(crate) struct Voxel;
+
+impl Algorithm for Voxel {
+    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
+        let b = session.world().bounds_ne(r.cell_m);
+        let n = ((b.north_max_m - b.north_min_m) / r.voxel_m).ceil()
+            * ((b.east_max_m - b.east_min_m) / r.voxel_m).ceil()
+            * ((r.max_alt_m - r.min_alt_m) / r.layer_m).ceil().max(1.0);
+        let units = if n.is_finite() && n < 1.8e19 {
+            n as u64
+        } else {
+            u64::MAX
+        };
+        Some(Memory {
+            units,
+            bytes_per_unit: 40,
+            what: "voxels",
+            change: "use a larger voxel_m or layer_m",
+        })
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        crate::three_d::voxel(session, q)
+    }
+}
