@@ -226,13 +226,20 @@ pub struct SliceArgs {
 }
 
 impl SliceArgs {
-    /// The slice, the defaults where an option was not given.
-    pub fn spec(&self) -> skyplan_cspace::GridSpec {
-        skyplan_cspace::GridSpec {
-            alt_m: self.alt_m.unwrap_or(5.0),
-            safety_m: self.safety_m.unwrap_or(5.0),
-            cell_m: self.cell_m.unwrap_or(1.0),
+    /// These options as a plan request's fields: the planning API applies the defaults and
+    /// checks the ranges, as for `plan`.
+    pub fn request(&self) -> PlanRequest {
+        PlanRequest {
+            alt_m: self.alt_m,
+            safety_m: self.safety_m,
+            cell_m: self.cell_m,
+            ..PlanRequest::default()
         }
+    }
+
+    /// The slice as the planning API resolves it (defaults applied, ranges checked).
+    pub fn spec(&self) -> crate::exit::Result<skyplan_plan::PlanSpec> {
+        Ok(self.request().spec()?)
     }
 }
 
@@ -245,6 +252,17 @@ pub struct MovesArgs {
     /// Let diagonal moves pass between two blocked cells (the FCND move model).
     #[arg(long)]
     pub corner_cutting: bool,
+}
+
+impl MovesArgs {
+    /// `request` with these options (the planning API resolves them).
+    pub fn apply(&self, request: PlanRequest) -> PlanRequest {
+        PlanRequest {
+            connectivity: self.connectivity,
+            corner_cutting: self.corner_cutting.then_some(true),
+            ..request
+        }
+    }
 }
 
 #[derive(Debug, Args)]

@@ -27,7 +27,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let map = skyplan_map::colliders::parse_colliders(&text)
         .map_err(|e| bad_input(format!("{name}: {e}")))?;
     let bench = Bench3d {
-        safety_m: args.slice.spec().safety_m,
+        safety_m: args.slice.spec()?.safety_m,
         random: args.random.unwrap_or(10),
         seed: args.seed,
         budget_s: BUDGET_S,

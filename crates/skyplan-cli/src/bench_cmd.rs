@@ -8,7 +8,7 @@ use crate::files::{map_text, read_text, write_atomic};
 use anyhow::Context;
 use skyplan_bench::Contender;
 use skyplan_bench::grid_bench::{self, JpsPlusPrep, QuerySource, RunAllError};
-use skyplan_plan::PlannerId;
+use skyplan_plan::{PlanRequest, PlannerId};
 use skyplan_search::MoveModel;
 use std::path::Path;
 use std::time::Instant;
@@ -23,12 +23,12 @@ fn is_movingai(args: &BenchArgs) -> bool {
 }
 
 /// The grid's values as a table file's record of how it was built (`NaN` for a MovingAI map).
-fn table_spec(args: &BenchArgs) -> [f64; 3] {
+fn table_spec(args: &BenchArgs) -> Result<[f64; 3]> {
     if is_movingai(args) {
-        [f64::NAN; 3]
+        Ok([f64::NAN; 3])
     } else {
-        let s = args.slice.spec();
-        [s.alt_m, s.safety_m, s.cell_m]
+        let s = args.slice.spec()?;
+        Ok([s.alt_m, s.safety_m, s.cell_m])
     }
 }
 
@@ -50,17 +50,17 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
             out.display()
         )));
     }
-    let model = if args.corner_cutting {
-        MoveModel::OctileCornerCutting
-    } else {
-        MoveModel::Octile
-    };
+    let spec = PlanRequest {
+        corner_cutting: args.corner_cutting.then_some(true),
+        ..args.slice.request()
+    }
+    .spec()?;
+    let model = spec.move_model;
     let planners = grid_bench::contenders(args.planners.as_deref(), is_movingai(&args), args.peers)
         .map_err(bad_input)?;
     let (name, text) = map_text(args.map.as_deref(), BUNDLED_NAME)?;
-    let spec = args.slice.spec();
-    let source =
-        grid_bench::load_grid(&name, &text, is_movingai(&args), spec).map_err(bad_input)?;
+    let source = grid_bench::load_grid(&name, &text, is_movingai(&args), spec.grid_spec())
+        .map_err(bad_input)?;
     let grid = &source.grid;
     let (queries, described) = queries(&args, grid, model)?;
     let target = match args.json {
@@ -170,7 +170,8 @@ fn save_table(
 ) -> Result<(skyplan_search::JpsPlusTable, u64)> {
     let (table, built_us) = grid_bench::build_jps_plus_table(grid, model);
     let t = Instant::now();
-    crate::files::write_atomic_with(path, |out| table.write_to(out, table_spec(args)))?;
+    let spec = table_spec(args)?;
+    crate::files::write_atomic_with(path, |out| table.write_to(out, spec))?;
     if !args.json {
         eprintln!(
             "saved    JPS+ table ({:.1} MB, built in {:.0} ms, written in {:.0} ms) to {}",
@@ -191,7 +192,7 @@ fn replan_bench(args: &BenchArgs, flights: usize) -> Result<()> {
     let limits = skyplan_plan::Limits::default();
     let world =
         crate::world_load::load_world(args.map.as_deref(), &Default::default(), 1, &limits)?;
-    let slice = args.slice.spec();
+    let slice = args.slice.spec()?;
     let spec = skyplan_replan::bench::ScenarioSpec {
         flights,
         seed: args.seed,

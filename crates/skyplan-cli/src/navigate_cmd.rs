@@ -6,7 +6,7 @@ use crate::exit::{Failure, Result, bad_input};
 use crate::files::read_text;
 use crate::grid_args::NavigateArgs;
 use skyplan_cspace::Grid2;
-use skyplan_plan::{RideChange, RideRequest, Session};
+use skyplan_plan::{PlanRequest, RideChange, RideRequest, Session};
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -34,7 +34,7 @@ fn endpoint(
     Ok(match given.or(default) {
         Some(p) => p,
         None if std::io::stdin().is_terminal() => {
-            let s = args.slice.spec();
+            let s = args.slice.spec()?;
             let grid: std::sync::Arc<Grid2> = session.grid(s.alt_m, s.safety_m, s.cell_m)?;
             crate::show::ask_position(&grid, which)?
         }
@@ -69,7 +69,12 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
             goal_default,
         )?],
     };
-    let slice = args.slice.spec();
+    let route = PlanRequest {
+        alt_m: args.slice.alt_m,
+        safety_m: args.slice.safety_m,
+        cell_m: args.slice.cell_m,
+        ..args.moves.apply(args.costmap.into_request())
+    };
     Ok(RideRequest {
         start_ne,
         targets_ne,
@@ -81,12 +86,7 @@ fn ride_request(session: &mut Session, args: &NavigateArgs) -> Result<RideReques
                 target_ne: c.target,
             })
             .collect(),
-        alt_m: slice.alt_m,
-        safety_m: slice.safety_m,
-        cell_m: slice.cell_m,
-        connectivity: args.moves.connectivity.unwrap_or(8),
-        corner_cutting: args.moves.corner_cutting,
-        costmap: args.costmap,
+        route,
     })
 }
 

@@ -101,13 +101,14 @@ impl Grid2 {
             (first <= last).then_some((first as usize, last as usize))
         };
         for b in &map.boxes {
-            if !(b.top_m() + safety_m > alt_m && b.bottom_m() - safety_m < alt_m) {
+            if !b.meets_altitude(alt_m, safety_m) {
                 continue;
             }
-            let north_lo = (b.north_m - b.half_north_m - safety_m - north_min) / cell_m;
-            let north_hi = (b.north_m + b.half_north_m + safety_m - north_min) / cell_m;
-            let east_lo = (b.east_m - b.half_east_m - safety_m - east_min) / cell_m;
-            let east_hi = (b.east_m + b.half_east_m + safety_m - east_min) / cell_m;
+            let (lo, hi) = b.grown(safety_m);
+            let north_lo = (lo[0] - north_min) / cell_m;
+            let north_hi = (hi[0] - north_min) / cell_m;
+            let east_lo = (lo[1] - east_min) / cell_m;
+            let east_hi = (hi[1] - east_min) / cell_m;
             let (Some((r0, r1)), Some((c0, c1))) =
                 (span(north_lo, north_hi, rows), span(east_lo, east_hi, cols))
             else {

@@ -59,6 +59,43 @@ impl ObstacleBox {
     pub fn bottom_m(&self) -> f64 {
         self.up_m - self.half_up_m
     }
+
+    /// The box grown by `margin_m` on every side (the obstacle a vehicle keeping `margin_m`
+    /// away must avoid), as its lowest and highest corners `[north, east, up]`: the one
+    /// definition of "grown by the margin" the grid, the 3D world, the roadmap and the pictures
+    /// share, so they agree to the last bit.
+    ///
+    /// ```
+    /// use skyplan_map::colliders::ObstacleBox;
+    /// let b = ObstacleBox::from_row([10.0, 20.0, 5.0, 2.0, 3.0, 5.0]);
+    /// assert_eq!(b.grown(1.0), ([7.0, 16.0, -1.0], [13.0, 24.0, 11.0]));
+    /// ```
+    pub fn grown(&self, margin_m: f64) -> ([f64; 3], [f64; 3]) {
+        (
+            [
+                self.north_m - self.half_north_m - margin_m,
+                self.east_m - self.half_east_m - margin_m,
+                self.up_m - self.half_up_m - margin_m,
+            ],
+            [
+                self.north_m + self.half_north_m + margin_m,
+                self.east_m + self.half_east_m + margin_m,
+                self.up_m + self.half_up_m + margin_m,
+            ],
+        )
+    }
+
+    /// Whether the box grown by `margin_m` meets the horizontal plane at `alt_m` (open interval:
+    /// a plane that only touches its grown top or bottom face flies clear).
+    ///
+    /// ```
+    /// use skyplan_map::colliders::ObstacleBox;
+    /// let b = ObstacleBox::from_row([0.0, 0.0, 10.0, 1.0, 1.0, 10.0]); // 0 to 20 m
+    /// assert!(b.meets_altitude(24.0, 5.0) && !b.meets_altitude(25.0, 5.0));
+    /// ```
+    pub fn meets_altitude(&self, alt_m: f64, margin_m: f64) -> bool {
+        self.top_m() + margin_m > alt_m && self.bottom_m() - margin_m < alt_m
+    }
 }
 
 /// A parsed colliders map: a home and at least one box.

@@ -49,11 +49,11 @@ pub(crate) fn finite_or_null(v: f64) -> Value {
 /// use skyplan_plan::{CostmapOptions, RideRequest, Session, World};
 /// let mut session = Session::new(World::fcnd_city());
 /// let mut request = RideRequest::new([0.0, 0.0], vec![[40.0, 30.0]]);
-/// request.costmap = CostmapOptions { cost_weight: Some(4.0), ..Default::default() };
+/// request.route = CostmapOptions { cost_weight: Some(4.0), ..Default::default() }.into_request();
 /// let ride = session.ride(&request).unwrap();
 /// assert_eq!(ride.costmap["cost_weight"], 4.0);
 /// assert_eq!(ride.costmap["inflation_radius_m"], 10.0); // ten 1 m cells
-/// request.costmap.cost_weight = Some(-1.0); // checked as a plan's options are
+/// request.route.cost_weight = Some(-1.0); // checked as a plan's options are
 /// assert!(session.ride(&request).unwrap_err().message.contains("cost_weight -1"));
 /// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -82,6 +82,18 @@ pub(crate) struct CostmapParams {
 }
 
 impl CostmapOptions {
+    /// These options as a plan request's fields (the rest left to their defaults), to be
+    /// combined with other fields: `PlanRequest { alt_m: Some(10.0), ..options.into_request() }`.
+    pub fn into_request(self) -> crate::PlanRequest {
+        crate::PlanRequest {
+            inscribed_radius_m: self.inscribed_radius_m,
+            inflation_radius_m: self.inflation_radius_m,
+            cost_scaling: self.cost_scaling,
+            cost_weight: self.cost_weight,
+            ..Default::default()
+        }
+    }
+
     /// The same options if every one is a number from 0 to 10⁶, else a bad request naming it.
     pub(crate) fn checked(self) -> Result<Self, PlanFailure> {
         let check = |name: &str, v: Option<f64>| -> Result<Option<f64>, PlanFailure> {

@@ -2,7 +2,9 @@
 //! from a start through targets, which may change mid-ride (the workshop's navigation functions).
 
 use crate::failure::PlanFailure;
-use crate::navfn::{CostmapOptions, failure, finite_or_null};
+use crate::navfn::{failure, finite_or_null};
+use crate::planner_id::PlannerId;
+use crate::request::{PlanRequest, Resolved};
 use crate::session::{Session, micros};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -21,7 +23,9 @@ pub struct RideChange {
     pub target_ne: [f64; 2],
 }
 
-/// What to ride: the map's grid (altitude, margin, cell), the start, the targets and the cost map.
+/// What to ride: the start, the targets and their changes; the grid (altitude, margin, cell
+/// size), the move model and the cost map are a [`PlanRequest`] for the `costmap` planner,
+/// resolved and checked as a plan's are (one set of defaults and ranges for every door).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RideRequest {
     /// Where the ride starts, metres north and east.
@@ -30,53 +34,45 @@ pub struct RideRequest {
     pub targets_ne: Vec<[f64; 2]>,
     /// Targets that change mid-ride.
     pub changes: Vec<RideChange>,
-    /// Flight altitude of the grid (colliders maps), metres.
-    pub alt_m: f64,
-    /// Safety margin around obstacles, metres.
-    pub safety_m: f64,
-    /// Grid cell size (colliders maps), metres.
-    pub cell_m: f64,
-    /// 4 or 8.
-    pub connectivity: u8,
-    /// Diagonal moves may cut a blocked cell's corner (8-connected only).
-    pub corner_cutting: bool,
-    /// The cost map's options.
-    pub costmap: CostmapOptions,
+    /// The grid, the move model and the cost map: `alt_m`, `safety_m`, `cell_m`,
+    /// `connectivity`, `corner_cutting` and the cost map's options (`None`: the planner's
+    /// defaults). Its ends are the ride's own, so a start or goal given here is refused.
+    pub route: PlanRequest,
 }
 
 impl RideRequest {
-    /// A request with the CLI's defaults: 5 m altitude and margin, 1 m cells, 8-connected.
+    /// A request with the planning API's defaults (5 m altitude and margin, 1 m cells,
+    /// 8-connected).
     ///
     /// ```
     /// let r = skyplan_plan::RideRequest::new([0.0, 0.0], vec![[40.0, 30.0]]);
-    /// assert_eq!((r.alt_m, r.connectivity), (5.0, 8));
+    /// assert_eq!(r.route.alt_m, None); // the planning API's default applies
     /// ```
     pub fn new(start_ne: [f64; 2], targets_ne: Vec<[f64; 2]>) -> Self {
         RideRequest {
             start_ne,
             targets_ne,
             changes: Vec::new(),
-            alt_m: 5.0,
-            safety_m: 5.0,
-            cell_m: 1.0,
-            connectivity: 8,
-            corner_cutting: false,
-            costmap: CostmapOptions::default(),
+            route: PlanRequest::default(),
         }
     }
 
-    fn model(&self) -> Result<MoveModel, PlanFailure> {
-        match (self.connectivity, self.corner_cutting) {
-            (8, false) => Ok(MoveModel::Octile),
-            (8, true) => Ok(MoveModel::OctileCornerCutting),
-            (4, false) => Ok(MoveModel::FourConnected),
-            (4, true) => Err(PlanFailure::bad_request(
-                "--corner-cutting needs diagonal moves: use it with --connectivity 8",
-            )),
-            (other, _) => Err(PlanFailure::bad_request(format!(
-                "--connectivity: expected 4 or 8, found {other}"
-            ))),
+    /// The route options resolved as the `costmap` planner's.
+    fn resolved(&self) -> Result<Resolved, PlanFailure> {
+        let r = &self.route;
+        if r.start_ne.is_some()
+            || r.start_lla.is_some()
+            || r.goal_ne.is_some()
+            || r.goal_lla.is_some()
+        {
+            return Err(PlanFailure::bad_request(
+                "a ride's ends are its start_ne and targets_ne, not the route's start or goal",
+            ));
         }
+        Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::Costmap),
+            ..r.clone()
+        })
     }
 }
 
@@ -211,8 +207,9 @@ impl Session {
     /// assert!(ride.reached && ride.distance_m >= 50.0);
     /// ```
     pub fn ride(&mut self, r: &RideRequest) -> Result<Ride, PlanFailure> {
-        let model = r.model()?;
-        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        let spec = r.resolved()?;
+        let model = spec.model;
+        let grid = self.grid(spec.alt_m, spec.safety_m, spec.cell_m)?;
         if r.targets_ne.is_empty() {
             return Err(PlanFailure::bad_request("no targets to ride to"));
         }
@@ -227,7 +224,7 @@ impl Session {
             .changes
             .iter()
             .map(|c| {
-                let which = format!("target of --change-target-at {}", c.at_step);
+                let which = format!("target changed at step {}", c.at_step);
                 Ok(TargetChange {
                     at_step: c.at_step,
                     target: free_cell(&grid, &which, c.target_ne)?,
@@ -235,7 +232,7 @@ impl Session {
             })
             .collect::<Result<Vec<_>, PlanFailure>>()?;
         let cell_m = grid.frame().cell_m;
-        let params = r.costmap.checked()?.params(cell_m);
+        let params = spec.costmap.params(cell_m);
         let t0 = Instant::now();
         let costmap = Costmap::inflate(&grid, params.inflation).map_err(|e| failure(e, &grid))?;
         let inflation_time_us = micros(t0.elapsed());

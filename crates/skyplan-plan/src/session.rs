@@ -595,7 +595,7 @@ fn assemble(
             route.geometry.active_boxes = map
                 .boxes
                 .iter()
-                .filter(|b| b.top_m() + r.safety_m > r.alt_m && b.bottom_m() - r.safety_m < r.alt_m)
+                .filter(|b| b.meets_altitude(r.alt_m, r.safety_m))
                 .copied()
                 .collect();
         }

@@ -73,18 +73,8 @@ impl Aabb {
 
     /// The box of an obstacle grown by a margin in all three axes.
     pub fn from_obstacle(b: &ObstacleBox, safety_m: f64) -> Self {
-        Self {
-            min: [
-                b.north_m - b.half_north_m - safety_m,
-                b.east_m - b.half_east_m - safety_m,
-                b.up_m - b.half_up_m - safety_m,
-            ],
-            max: [
-                b.north_m + b.half_north_m + safety_m,
-                b.east_m + b.half_east_m + safety_m,
-                b.up_m + b.half_up_m + safety_m,
-            ],
-        }
+        let (min, max) = b.grown(safety_m);
+        Self { min, max }
     }
 }
 
