@@ -31,8 +31,8 @@ target=$(cargo metadata --format-version 1 --no-deps | py -c 'import json, sys; 
 # The wheel, built by maturin through pip (PEP 517), as a user installs it.
 pip install --quiet --force-reinstall --no-deps ./crates/skyplan-py
 py -c "import skyplan; print('skyplan', skyplan.__version__, 'from', skyplan.__file__)"
-# The type stubs match the module (mypy's cache under target/, git-ignored).
-MYPY_CACHE_DIR="$target/mypy_cache" py -m mypy.stubtest skyplan
+# The type stubs match the module (run from target/: mypy writes its cache there, git-ignored).
+(cd "$target" && MYPY_CACHE_DIR="$target/mypy_cache" py -m mypy.stubtest skyplan)
 
 # pyastar2d's own tests/test_astar.py, from its sdist on PyPI (under target/, git-ignored).
 suite="$target/pyastar2d-suite"
