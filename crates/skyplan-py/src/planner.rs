@@ -7,7 +7,7 @@ use numpy::PyArray2;
 use numpy::ndarray::Array2;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
+use pyo3::types::{PyDict, PyList, PyString};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Grid2, GridFrame};
 use skyplan_export::Format;
@@ -84,23 +84,30 @@ fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// One registry row as a dict: the planner's `info()` fields, and the predicates tests and
-/// clients choose planners by.
-fn planner_row(planner: PlannerId) -> PyResult<Value> {
+/// One registry row as a dict, in the registry's field order: the planner's `info()` fields,
+/// then the predicates tests and clients choose planners by.
+fn planner_row(py: Python<'_>, planner: PlannerId) -> PyResult<Bound<'_, PyDict>> {
     let info = planner.info();
-    let mut row = serde_json::to_value(info)
+    // The enums' names as `--json` spells them (`asymptotically_optimal`).
+    let json = serde_json::to_value(info)
         .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
-    if let Some(fields) = row.as_object_mut() {
-        fields.insert(
-            "exact".into(),
-            (info.optimality == Optimality::Exact).into(),
-        );
-        fields.insert("grid_path".into(), planner.is_cell_planner().into());
-        fields.insert(
-            "colliders_only".into(),
-            (info.maps == MapKinds::CollidersOnly).into(),
-        );
-    }
+    let name_of = |field: &str| {
+        json.get(field).and_then(Value::as_str).ok_or_else(|| {
+            to_py(PlanFailure::internal(format!(
+                "registry: {field} is not a name"
+            )))
+        })
+    };
+    let row = PyDict::new(py);
+    row.set_item("name", info.name)?;
+    row.set_item("label", info.label)?;
+    row.set_item("dims", info.dims)?;
+    row.set_item("optimality", name_of("optimality")?)?;
+    row.set_item("maps", name_of("maps")?)?;
+    row.set_item("summary", info.summary)?;
+    row.set_item("exact", info.optimality == Optimality::Exact)?;
+    row.set_item("grid_path", planner.is_cell_planner())?;
+    row.set_item("colliders_only", info.maps == MapKinds::CollidersOnly)?;
     Ok(row)
 }
 
@@ -111,16 +118,17 @@ fn planner_row(planner: PlannerId) -> PyResult<Value> {
 /// routes that climb), `optimality` (`exact`, `exact_for_objective`, `any_angle`,
 /// `exact_any_angle`, `feasible`, `asymptotically_optimal`), `maps` (`any_grid` or
 /// `colliders_only`), `summary` (one line), and three predicates: `exact` (the shortest grid
-/// path under the move model: its cost equals Dijkstra's), `grid_path` (its route is a path
-/// through grid cells, so it takes `connectivity`, `corner_cutting`, `prune`, `epsilon`,
-/// `shortcut`), `colliders_only` (it needs an FCND colliders map: its boxes).
+/// path under the move model: its cost equals Dijkstra's), `grid_path` (it searches grid cells
+/// and takes the grid-path options `connectivity`, `corner_cutting`, `prune`, `epsilon`,
+/// `shortcut`; its route is that cell path unless its optimality is `any_angle`),
+/// `colliders_only` (it needs an FCND colliders map: its boxes).
 #[pyfunction]
-pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let rows = PlannerId::ALL
         .iter()
-        .map(|&p| planner_row(p))
-        .collect::<PyResult<Vec<Value>>>()?;
-    json_to_py(py, &Value::Array(rows))
+        .map(|&p| planner_row(py, p))
+        .collect::<PyResult<Vec<_>>>()?;
+    PyList::new(py, rows)
 }
 
 /// A map loaded once, and every skyplan planner on it (`skyplan.planners()` lists them).

@@ -113,6 +113,10 @@ def test_planners_are_the_clis(cli, tmp_path):
     assert offered == [(p["name"], p["summary"]) for p in PLANNERS]
     assert len({p["name"] for p in PLANNERS}) == len(PLANNERS)
     for p in PLANNERS:
+        assert list(p) == [
+            "name", "label", "dims", "optimality", "maps", "summary",
+            "exact", "grid_path", "colliders_only",
+        ]
         assert p["dims"] in (2, 3) and p["label"]
         assert p["exact"] == (p["optimality"] == "exact")
         assert p["colliders_only"] == (p["maps"] == "colliders_only")
