@@ -1,6 +1,10 @@
 """Per-query times on the FCND city: skyplan from Python, the CLI, and FCND's own A*.
 
     python crates/skyplan-py/bench.py [--runs 20] [--fcnd-runs 3] [--cli target/release/skyplan]
+        [--planners jps,astar]
+
+Planner.plan is timed with every exact grid planner of the registry (skyplan.planners() rows
+with `exact` and `grid_path`), or the ones --planners names.
 
 The query is FCND's: the home cell to the city's default goal (420 m north, 390 m east) at 5 m
 altitude with a 5 m margin. FCND's create_grid and a_star are reproduced in
@@ -45,6 +49,10 @@ def main():
     ap.add_argument("--runs", type=int, default=20)
     ap.add_argument("--fcnd-runs", type=int, default=3)
     ap.add_argument("--cli", default=str(REPO / "target" / "release" / "skyplan"))
+    ap.add_argument(
+        "--planners",
+        help="comma-separated planner names [default: every exact grid planner of skyplan.planners()]",
+    )
     args = ap.parse_args()
 
     data = np.loadtxt(REPO / "data" / "colliders.csv", delimiter=",", dtype="float64", skiprows=2)
@@ -63,7 +71,11 @@ def main():
         f"cost {cost:.3f}",
     ))
     planner = skyplan.Planner()
-    for name in ("jps", "jps-plus", "astar"):
+    if args.planners:
+        names = args.planners.split(",")
+    else:
+        names = [p["name"] for p in skyplan.planners() if p["exact"] and p["grid_path"]]
+    for name in names:
         planner.plan(planner=name)  # the session's grid and tables, built once
         plan = planner.plan(planner=name)
         rows.append((

@@ -6,8 +6,10 @@
 //! * [`fcnd`]: drop-ins for FCND's `planning_utils.py` — `create_grid` (FCND's own rules, bit
 //!   for bit), `a_star` (exactly optimal through [`skyplan_plan::CellSearch`]), `prune_path`,
 //!   `bresenham_prune`.
-//! * [`weighted`]: `astar_path` with pyastar2d's contract (weights ≥ 1, `inf` walls).
-//! * [`planner`]: `Planner` (a world loaded once, sessions of the planning API) and `Plan`.
+//! * [`weighted`]: `astar_path` with pyastar2d's contract (weights ≥ 1, `inf` walls), its
+//!   heuristics (`heuristic_override`) and its paths, ties included.
+//! * [`planner`]: `planners()` (the registry's rows), `Planner` (a world loaded once, sessions
+//!   of the planning API) and `Plan`.
 //! * [`arrays`]: numpy arrays and Python values in, checked; every failure a Python exception.
 //!
 //! Everything planning-related goes through the planning API crate `skyplan-plan`; the GIL is

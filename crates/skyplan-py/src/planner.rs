@@ -7,12 +7,13 @@ use numpy::PyArray2;
 use numpy::ndarray::Array2;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
+use pyo3::types::{PyDict, PyList, PyString};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Grid2, GridFrame};
 use skyplan_export::Format;
 use skyplan_plan::{
-    MapFileError, MapFileOptions, PlanFailure, PlanRequest, PlannerId, Session, World,
+    MapFileError, MapFileOptions, MapKinds, Optimality, PlanFailure, PlanRequest, PlannerId,
+    Session, World,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -83,17 +84,54 @@ fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// The planners there are: a list of dicts (`name`, `label`, `dims`, `optimality`, `maps`,
-/// `summary`), in registry order. Every name is a valid `planner=` option.
-#[pyfunction]
-pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    let infos: Vec<_> = PlannerId::ALL.iter().map(|p| p.info()).collect();
-    let value = serde_json::to_value(infos)
+/// One registry row as a dict, in the registry's field order: the planner's `info()` fields,
+/// then the predicates tests and clients choose planners by.
+fn planner_row(py: Python<'_>, planner: PlannerId) -> PyResult<Bound<'_, PyDict>> {
+    let info = planner.info();
+    // The enums' names as `--json` spells them (`asymptotically_optimal`).
+    let json = serde_json::to_value(info)
         .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
-    json_to_py(py, &value)
+    let name_of = |field: &str| {
+        json.get(field).and_then(Value::as_str).ok_or_else(|| {
+            to_py(PlanFailure::internal(format!(
+                "registry: {field} is not a name"
+            )))
+        })
+    };
+    let row = PyDict::new(py);
+    row.set_item("name", info.name)?;
+    row.set_item("label", info.label)?;
+    row.set_item("dims", info.dims)?;
+    row.set_item("optimality", name_of("optimality")?)?;
+    row.set_item("maps", name_of("maps")?)?;
+    row.set_item("summary", info.summary)?;
+    row.set_item("exact", info.optimality == Optimality::Exact)?;
+    row.set_item("grid_path", planner.is_cell_planner())?;
+    row.set_item("colliders_only", info.maps == MapKinds::CollidersOnly)?;
+    Ok(row)
 }
 
-/// A map loaded once, and every skyplan planner on it.
+/// Every planner there is, in registry order: a list of dicts, one per planner, generated from
+/// the planning API's registry (a new planner appears here without any edit in Python).
+///
+/// Each dict: `name` (the `planner=` value), `label`, `dims` (2: routes at one altitude, 3:
+/// routes that climb), `optimality` (`exact`, `exact_for_objective`, `any_angle`,
+/// `exact_any_angle`, `feasible`, `asymptotically_optimal`), `maps` (`any_grid` or
+/// `colliders_only`), `summary` (one line), and three predicates: `exact` (the shortest grid
+/// path under the move model: its cost equals Dijkstra's), `grid_path` (it searches grid cells
+/// and takes the grid-path options `connectivity`, `corner_cutting`, `prune`, `epsilon`,
+/// `shortcut`; its route is that cell path unless its optimality is `any_angle`),
+/// `colliders_only` (it needs an FCND colliders map: its boxes).
+#[pyfunction]
+pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let rows = PlannerId::ALL
+        .iter()
+        .map(|&p| planner_row(py, p))
+        .collect::<PyResult<Vec<_>>>()?;
+    PyList::new(py, rows)
+}
+
+/// A map loaded once, and every skyplan planner on it (`skyplan.planners()` lists them).
 ///
 /// `map`: `None` for the bundled FCND city; a path (str or `os.PathLike`) to an FCND
 /// `colliders.csv`, a ROS map_server `.yaml`, a bare `.png`/`.pgm` image (with `resolution_m=`)
@@ -207,11 +245,11 @@ impl Planner {
     /// `start`, `goal`: `(north_m, east_m)` of the map's local frame (the map's defaults when
     /// left out: on the bundled city the home and a far street corner). Geodetic positions go
     /// as `start_lla=(lat, lon)` / `goal_lla=(lat, lon)`. Every other keyword is a planning
-    /// option, named as the CLI's long options with underscores: `planner` ("jps", "jps-plus",
-    /// "astar", "dijkstra", "theta", "wavefront", "costmap", "voronoi", "prm", "lazy-prm",
-    /// "rrt-connect", "rrt-star", "voxel"), `alt_m`, `safety_m`, `cell_m`, `start_alt_m`,
-    /// `goal_alt_m`, `time_limit_ms`, `seed`, `connectivity`, `corner_cutting`, … — unknown
-    /// names and options the planner does not use raise `skyplan.BadInput`.
+    /// option, named as the CLI's long options with underscores: `planner` (a `name` from
+    /// `skyplan.planners()`, which lists every planner and what it does),
+    /// `alt_m`, `safety_m`, `cell_m`, `start_alt_m`, `goal_alt_m`, `time_limit_ms`, `seed`,
+    /// `connectivity`, `corner_cutting`, … — unknown names and options the planner does not use
+    /// raise `skyplan.BadInput`.
     ///
     /// Raises `InvalidStart`, `InvalidGoal`, `NoPath`, `Timeout` or `BadInput` (all
     /// `skyplan.PlanError`s) with the planning API's message.

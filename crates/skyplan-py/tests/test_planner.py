@@ -1,12 +1,28 @@
-"""Planner.plan against the CLI (`skyplan plan --json`), every planner, files, maps."""
+"""Planner.plan against the CLI (`skyplan plan --json`), every planner, files, maps.
+
+Planners are taken from the registry (`skyplan.planners()`) and chosen by its predicates, never
+from a list typed here: a new planner is tested without editing this file.
+"""
 
 import json
+import re
 
 import numpy as np
 import pytest
-from conftest import COLLIDERS, MOVINGAI, run_cli
+from conftest import COLLIDERS, MOVINGAI, dijkstra_cost, run_cli
 
 import skyplan
+
+PLANNERS = skyplan.planners()
+
+
+def by_name(row):
+    return row["name"]
+
+
+def first(**where):
+    """The first registry row whose fields equal `where` (e.g. a deterministic 3D planner)."""
+    return next(p for p in PLANNERS if all(p[k] == v for k, v in where.items()))
 
 
 @pytest.fixture(scope="module")
@@ -20,18 +36,20 @@ def cli_plan(cli, tmp_path, *args):
     return json.loads(text), out
 
 
+# Option spellings (the planner is the default unless the options need a 3D one); every
+# planner is compared with the CLI in test_every_planner_equals_the_cli.
+THREE_D = first(dims=3, optimality="feasible")["name"]
 REQUESTS = [
     ({}, []),
-    ({"planner": "astar", "goal_ne": (-191.5, 319.5), "alt_m": 10, "safety_m": 3},
-     ["--planner", "astar", "--goal-ne=-191.5,319.5", "--alt-m", "10", "--safety-m", "3"]),
-    ({"planner": "theta", "start_ne": (12.5, -40.0), "goal_ne": (298.5, -160.5)},
-     ["--planner", "theta", "--start-ne=12.5,-40", "--goal-ne", "298.5,-160.5"]),
-    ({"planner": "jps-plus", "connectivity": 4}, ["--planner", "jps-plus", "--connectivity", "4"]),
-    ({"planner": "rrt-connect", "goal_alt_m": 30, "seed": 7},
-     ["--planner", "rrt-connect", "--goal-alt-m", "30", "--seed", "7"]),
-    ({"planner": "voronoi", "goal_lla": (37.79518, -122.39925)},
-     ["--planner", "voronoi", "--goal-lla", "37.79518,-122.39925"]),
-    ({"planner": "wavefront", "cell_m": 2}, ["--planner", "wavefront", "--cell-m", "2"]),
+    ({"goal_ne": (-191.5, 319.5), "alt_m": 10, "safety_m": 3},
+     ["--goal-ne=-191.5,319.5", "--alt-m", "10", "--safety-m", "3"]),
+    ({"start_ne": (12.5, -40.0), "goal_ne": (298.5, -160.5)},
+     ["--start-ne=12.5,-40", "--goal-ne", "298.5,-160.5"]),
+    ({"connectivity": 4}, ["--connectivity", "4"]),
+    ({"planner": THREE_D, "goal_alt_m": 30, "seed": 7},
+     ["--planner", THREE_D, "--goal-alt-m", "30", "--seed", "7"]),
+    ({"goal_lla": (37.79518, -122.39925)}, ["--goal-lla", "37.79518,-122.39925"]),
+    ({"cell_m": 2}, ["--cell-m", "2"]),
 ]
 
 
@@ -81,20 +99,126 @@ def test_plan_object(city, tmp_path):
     assert "cost_m=" in repr(plan)
 
 
-def test_every_planner_is_reachable(city):
-    names = [p["name"] for p in skyplan.planners()]
-    assert sorted(names) == sorted([
-        "jps", "jps-plus", "ch", "astar", "dijkstra", "theta", "any-angle", "wavefront", "costmap",
-        "voronoi", "prm", "lazy-prm", "rrt-connect", "rrt-star", "voxel",
-    ])
-    for name in names:
-        options = {"planner": name, "goal_ne": (60.0, 40.0)}
-        if name in ("prm", "lazy-prm", "rrt-connect", "rrt-star", "voxel"):
-            options["time_limit_ms"] = 2000
-        plan = city.plan(**options)
-        assert plan.planner == name
-        assert tuple(plan.waypoints[-1, :2]) == (60.0, 40.0)
-        assert plan.cost_m >= np.hypot(60.0, 40.0) - 1e-9
+def test_planners_are_the_clis(cli, tmp_path):
+    """skyplan.planners() is the registry the CLI offers: its `plan --planner` values, in order,
+    with the same summaries; names are unique and every row carries its predicates."""
+    text = run_cli(cli, "plan", "--help", cwd=tmp_path)
+    values = text.split("--planner <PLANNER>", 1)[1].split("Possible values:", 1)[1]
+    offered = []
+    for line in values.splitlines()[1:]:
+        found = re.match(r"\s+- ([a-z0-9-]+):\s+(.*)$", line)
+        if not found:
+            break
+        offered.append((found[1], found[2].strip()))
+    assert offered == [(p["name"], p["summary"]) for p in PLANNERS]
+    assert len({p["name"] for p in PLANNERS}) == len(PLANNERS)
+    for p in PLANNERS:
+        assert list(p) == [
+            "name", "label", "dims", "optimality", "maps", "summary",
+            "exact", "grid_path", "colliders_only",
+        ]
+        assert p["dims"] in (2, 3) and p["label"]
+        assert p["exact"] == (p["optimality"] == "exact")
+        assert p["colliders_only"] == (p["maps"] == "colliders_only")
+        assert isinstance(p["grid_path"], bool)
+
+
+@pytest.fixture(scope="module")
+def den312d():
+    return skyplan.Planner(MOVINGAI / "den312d.map")
+
+
+@pytest.mark.parametrize("row", PLANNERS, ids=by_name)
+def test_every_planner_equals_the_cli(city, den312d, cli, tmp_path, row):
+    """Each planner on a map it takes: the bundled city for the colliders-only ones, a MovingAI
+    map (small: planners that preprocess the grid stay quick) for the others."""
+    name = row["name"]
+    if row["colliders_only"]:
+        planner, start, goal, map_args = city, (0.0, 0.0), (60.0, 40.0), []
+    else:
+        path = MOVINGAI / "den312d.map"
+        planner, start, goal, map_args = den312d, (10.5, 20.5), (61.5, 58.5), ["--map", str(path)]
+    options = {"planner": name, "start_ne": start, "goal_ne": goal}
+    args = [*map_args, "--planner", name, "--start-ne=%r,%r" % start, "--goal-ne=%r,%r" % goal]
+    if row["dims"] == 3:
+        options["time_limit_ms"] = 2000
+        args += ["--time-limit-ms", "2000"]
+    text = run_cli(cli, "plan", "--json", *args, cwd=tmp_path)
+    want = json.loads(text)
+    plan = planner.plan(**options)
+    straight = np.hypot(goal[0] - start[0], goal[1] - start[1])
+    assert plan.planner == want["planner"] == name
+    assert tuple(plan.waypoints[0, :2]) == start and tuple(plan.waypoints[-1, :2]) == goal
+    assert plan.cost_m >= straight - 1e-9
+    if row["optimality"] == "asymptotically_optimal":
+        # It improves its route until the time limit: the clock decides where it stops.
+        assert want["cost_m"] >= straight - 1e-9
+    else:
+        assert np.array_equal(plan.waypoints, np.array(want["waypoints"]))
+        assert plan.cost_m == want["cost_m"]
+
+
+@pytest.fixture(scope="module")
+def maze():
+    """A random 40 x 50 occupancy grid, two far free cells, and Dijkstra's cost between them
+    (8-connected, no corner cutting: the planners' default move model on a numpy grid)."""
+    rng = np.random.default_rng(11)
+    grid = (rng.random((40, 50)) < 0.25).astype(np.float64)
+    start, goal = (1, 1), (38, 47)
+    grid[start] = grid[goal] = 0
+    want = dijkstra_cost(grid, start, goal, diagonal=True, corner_cutting=False)
+    assert want is not None and want > 40
+    return grid, start, goal, want
+
+
+def test_registry_predicates_hold_on_a_grid(maze):
+    """What each row's predicates promise, checked on a numpy grid against Dijkstra: `exact`
+    planners find its cost; `grid_path` ones take the grid-path options (and, unless any-angle,
+    never beat Dijkstra); exact any-angle ones are the shortest of all; `colliders_only` ones
+    refuse the grid."""
+    grid, start, goal, want = maze
+    planner = skyplan.Planner(grid)
+    ends = [(start[0] + 0.5, start[1] + 0.5), (goal[0] + 0.5, goal[1] + 0.5)]
+    straight = np.hypot(goal[0] - start[0], goal[1] - start[1])
+    costs = {}
+    for row in PLANNERS:
+        name = row["name"]
+        if row["colliders_only"]:
+            with pytest.raises(skyplan.BadInput, match="colliders map"):
+                planner.plan(*ends, planner=name)
+            continue
+        plan = planner.plan(*ends, planner=name)
+        costs[name] = plan.cost_m
+        for n, e in plan.waypoints[:, :2]:
+            assert grid[int(np.floor(n)), int(np.floor(e))] == 0, name
+        assert plan.cost_m >= straight - 1e-9, name
+        if row["exact"]:
+            assert plan.cost_m == pytest.approx(want, abs=1e-9), name
+        any_angle = row["optimality"] in ("any_angle", "exact_any_angle")
+        if row["grid_path"]:
+            four = planner.plan(*ends, planner=name, connectivity=4)
+            if not any_angle:  # a path of grid moves: never shorter than Dijkstra's
+                assert plan.cost_m >= want - 1e-9, name
+                assert four.cost_m >= plan.cost_m - 1e-9, name
+        else:
+            with pytest.raises(skyplan.BadInput, match=f"connectivity is not used by planner {name}"):
+                planner.plan(*ends, planner=name, connectivity=4)
+    assert costs, "no planner takes a numpy grid"
+    for row in PLANNERS:
+        if row["optimality"] == "exact_any_angle":
+            assert costs[row["name"]] <= min(costs.values()) + 1e-9
+            assert costs[row["name"]] <= want + 1e-9
+
+
+@pytest.mark.parametrize("row", PLANNERS, ids=by_name)
+def test_altitude_options_are_for_3d_planners(city, row):
+    """`dims`: only 3D planners take a goal altitude; 2D ones refuse it by name."""
+    if row["dims"] == 3:
+        plan = city.plan(planner=row["name"], goal_ne=(60.0, 40.0), goal_alt_m=20, time_limit_ms=2000)
+        assert plan.waypoints[-1, 2] == 20.0
+    else:
+        with pytest.raises(skyplan.BadInput, match=f"goal_alt_m is not used by planner {row['name']}"):
+            city.plan(planner=row["name"], goal_alt_m=20)
 
 
 def test_movingai_map_equals_the_cli(cli, tmp_path):
@@ -135,13 +259,15 @@ def test_colliders_file_and_numpy_grid(colliders):
         assert grid[int(np.floor(n - north_offset)), int(np.floor(e - east_offset))] == 0
 
 
-def test_small_grid_known_answer():
+@pytest.mark.parametrize("row", [p for p in PLANNERS if p["exact"]], ids=by_name)
+def test_small_grid_known_answer(row):
     grid = np.array([[0, 0, 0, 0, 0], [0, 1, 1, 1, 0], [0, 0, 0, 0, 0]], dtype=bool)
     planner = skyplan.Planner(grid)
+    name = row["name"]
     # Row 0 is the southern edge. Without corner cutting: along row 0, six straight moves.
-    assert planner.plan((1.5, 0.5), (1.5, 4.5), planner="dijkstra").cost_m == 6.0
+    assert planner.plan((1.5, 0.5), (1.5, 4.5), planner=name).cost_m == 6.0
     # With it: two diagonals past the wall's ends and two straight moves.
-    cut = planner.plan((1.5, 0.5), (1.5, 4.5), planner="dijkstra", corner_cutting=True)
+    cut = planner.plan((1.5, 0.5), (1.5, 4.5), planner=name, corner_cutting=True)
     assert cut.cost_m == pytest.approx(2 + 2 * np.sqrt(2))
 
 

@@ -24,12 +24,14 @@ def test_threads_planning_at_once_get_the_same_routes():
 
 
 def test_other_threads_run_while_a_plan_computes():
-    # RRT* spends its whole time limit (1 s). While it does, this thread keeps looping: the
+    # An anytime planner (the registry's asymptotically optimal one, RRT*) spends its whole
+    # time limit (1 s). While it does, this thread keeps looping: the
     # longest gap between two of its iterations stays far below the plan's time. Were the GIL
     # held by the plan, this thread would stall for the whole second. (No speed is measured:
     # the margin is the plan's own length, whatever the machine's load.)
     planner = skyplan.Planner()
-    request = {"planner": "rrt-star", "time_limit_ms": 1000}
+    anytime = next(p for p in skyplan.planners() if p["optimality"] == "asymptotically_optimal")
+    request = {"planner": anytime["name"], "time_limit_ms": 1000}
     planned_s = []
 
     def plan():

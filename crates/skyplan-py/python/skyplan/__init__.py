@@ -6,18 +6,22 @@ FCND drop-ins (replace ``from planning_utils import ...`` by ``from skyplan impo
 * :func:`a_star` -- exactly optimal, FCND's move model, FCND's call ``a_star(grid, h, start, goal)``;
 * :func:`prune_path` and :func:`bresenham_prune`.
 
-pyastar2d's contract: :func:`astar_path` (float32 weights >= 1, ``np.inf`` walls).
+pyastar2d drop-in (``import skyplan as pyastar2d``): :func:`astar_path` (float32 weights >= 1,
+``np.inf`` walls; pyastar2d's paths, ties included) and :class:`Heuristic`
+(``heuristic_override=``). skyplan also takes float64 weights, which pyastar2d refuses.
 
 The whole planner: :class:`Planner` loads a map once (the bundled FCND city, a colliders.csv,
-an occupancy image, a MovingAI map or a numpy grid) and plans with any skyplan planner
-(grid search, Theta*, wavefront, cost map, Voronoi, PRM/RRT/voxel in 3D); :class:`Plan` holds
-the waypoints as numpy arrays.
+an occupancy image, a MovingAI map or a numpy grid) and plans with any skyplan planner:
+:func:`planners` lists them all, from the planning API's registry (name, dims, optimality,
+maps, summary, and the predicates ``exact``, ``grid_path``, ``colliders_only``); :class:`Plan`
+holds the waypoints as numpy arrays.
 
 Failures raise :class:`PlanError` subclasses: :class:`InvalidStart`, :class:`InvalidGoal`,
 :class:`NoPath`, :class:`Timeout`, :class:`BadInput`. The GIL is released while planning.
 """
 
 from ._errors import BadInput, InvalidGoal, InvalidStart, NoPath, PlanError, Timeout
+from ._heuristic import Heuristic
 from ._skyplan import (
     Plan,
     Planner,
@@ -32,6 +36,7 @@ from ._skyplan import (
 
 __all__ = [
     "BadInput",
+    "Heuristic",
     "InvalidGoal",
     "InvalidStart",
     "NoPath",

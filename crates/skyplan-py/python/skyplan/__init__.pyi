@@ -1,7 +1,20 @@
 """Type stubs for skyplan (the extension module skyplan._skyplan and its Python half)."""
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar, Union, final, overload
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    List,
+    Optional,
+    Sequence,
+    Tuple,
+    TypedDict,
+    TypeVar,
+    Union,
+    final,
+    overload,
+)
 
 import numpy as np
 import numpy.typing as npt
@@ -12,10 +25,12 @@ from ._errors import InvalidStart as InvalidStart
 from ._errors import NoPath as NoPath
 from ._errors import PlanError as PlanError
 from ._errors import Timeout as Timeout
+from ._heuristic import Heuristic as Heuristic
 
 __version__: str
 __all__ = [
     "BadInput",
+    "Heuristic",
     "InvalidGoal",
     "InvalidStart",
     "NoPath",
@@ -78,15 +93,40 @@ def bresenham_prune(grid: npt.ArrayLike, path: Sequence[_Point]) -> List[_Point]
     """Line-of-sight pruning along Bresenham lines (nonzero = blocked)."""
 
 def astar_path(
-    weights: npt.NDArray[np.float32],
+    weights: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
     start: _CellLike,
     goal: _CellLike,
     allow_diagonal: bool = False,
+    heuristic_override: Optional[int] = None,
 ) -> Optional[npt.NDArray[np.int32]]:
-    """pyastar2d's ``astar_path``: (N, 2) int32 path over float32 weights >= 1, or None."""
+    """pyastar2d's ``astar_path``: (N, 2) int32 path over weights >= 1 (``inf`` walls), or None.
 
-def planners() -> List[Dict[str, Any]]:
-    """Every planner: ``name``, ``label``, ``dims``, ``optimality``, ``maps``, ``summary``."""
+    The same paths as pyastar2d's, ties included. ``heuristic_override``: a :class:`Heuristic`
+    (pyastar2d's ``Heuristic`` or its number work too); None is ``Heuristic.DEFAULT``.
+    Deliberately more than pyastar2d: float64 weights are accepted (costs summed in float64;
+    pyastar2d asserts float32); refused with BadInput (a ValueError) where pyastar2d crashes or
+    lets them through: NaN weights, an unknown heuristic number.
+    """
+
+class _PlannerRow(TypedDict):
+    name: str
+    label: str
+    dims: int
+    optimality: str
+    maps: str
+    summary: str
+    exact: bool
+    grid_path: bool
+    colliders_only: bool
+
+def planners() -> List[_PlannerRow]:
+    """Every planner, from the planning API's registry, in its order.
+
+    ``name`` (the ``planner=`` value), ``label``, ``dims`` (2 or 3), ``optimality``, ``maps``
+    (``any_grid`` or ``colliders_only``), ``summary``; predicates: ``exact`` (shortest grid
+    path: Dijkstra's cost), ``grid_path`` (a path through grid cells: takes ``connectivity``,
+    ``corner_cutting``, ``prune``, ``epsilon``, ``shortcut``), ``colliders_only``.
+    """
 
 @final
 class Plan:
@@ -115,7 +155,8 @@ class Plan:
 
 @final
 class Planner:
-    """A map loaded once, and every skyplan planner on it; safe to share between threads."""
+    """A map loaded once, and every skyplan planner on it (:func:`planners` lists them); safe to
+    share between threads."""
 
     def __new__(
         cls,
@@ -153,4 +194,7 @@ class Planner:
         seed: Optional[int] = None,
         **options: Any,
     ) -> Plan:
-        """Plans a route from ``start`` to ``goal`` ((north_m, east_m)); options as the CLI's."""
+        """Plans a route from ``start`` to ``goal`` ((north_m, east_m)); options as the CLI's.
+
+        ``planner``: a ``name`` from :func:`planners` (every planner of the registry).
+        """
