@@ -199,8 +199,8 @@ fn time_planners(world: &BoxWorld3, qs: &[(Neu, Neu)]) {
             }
         }
         println!(
-            "{:12} {ok}/{} exact (all re-checked free), first solution median {:.2} ms, run median {:.2} ms, smoothed length/straight median {:.3} max {:.3}",
-            kind.name(),
+            "{:12?} {ok}/{} exact (all re-checked free), first solution median {:.2} ms, run median {:.2} ms, smoothed length/straight median {:.3} max {:.3}",
+            kind,
             qs.len(),
             median(first),
             median(total),
