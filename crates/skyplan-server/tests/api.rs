@@ -46,7 +46,6 @@ async fn post_plan(app: Router, body: Value) -> (StatusCode, Value) {
     send(app, "POST", "/api/plan", body.to_string()).await
 }
 
-/// The plan without the keys that differ from run to run (times in µs, request numbers).
 /// A response's content type ("" when it is not text).
 fn content_type(response: &axum::http::Response<Body>) -> &str {
     response.headers()["content-type"]
@@ -59,9 +58,14 @@ fn message(v: &Value) -> &str {
     v["message"].as_str().unwrap_or_default()
 }
 
+/// The plan without the keys that differ from run to run (times in µs at any depth, request
+/// numbers).
 fn timeless(mut v: Value) -> Value {
     if let Some(o) = v.as_object_mut() {
         o.retain(|k, _| !k.ends_with("_us") && k != "request_id");
+        for x in o.values_mut() {
+            *x = timeless(x.take());
+        }
     }
     v
 }
