@@ -249,8 +249,8 @@ pub struct MovesArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// 3D mode: skyplan's PRM, RRT-Connect and RRT* (and OMPL's with --peers) on random free 3D
-    /// queries plus the FCND route, among the boxes grown by --safety-m.
+    /// 3D mode: every skyplan 3D planner (and OMPL's PRM, RRT-Connect and RRT* with --peers) on
+    /// random free 3D queries plus the FCND route, among the boxes grown by --safety-m.
     #[arg(long = "3d")]
     pub three_d: bool,
     /// Map: FCND colliders .csv (default: the bundled city map) or MovingAI .map.
