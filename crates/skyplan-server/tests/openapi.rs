@@ -1,7 +1,12 @@
-//! `openapi.json` against what it describes: its planner list is generated from the registry
-//! (`SKYPLAN_BLESS=1 cargo test -p skyplan-server --test openapi` rewrites it), and the rest,
-//! written by hand, is checked against the types and the served answers field by field: the
-//! request's properties against `PlanRequest` (names both ways, values of each documented type
+//! `openapi.json` against what it describes. Its planner list (`PlannerName`) is generated from
+//! the registry:
+//!
+//! ```text
+//! SKYPLAN_BLESS=1 cargo test -p skyplan-server --test openapi openapi_json_is_what_the_registry_gives
+//! ```
+//!
+//! rewrites it. The rest, written by hand, is checked against the types and the served answers
+//! field by field: the request's properties against `PlanRequest` (names both ways, values of each documented type
 //! taken, values outside it refused), every planner's served plan, the registry, the map and
 //! the errors against their schemas, and the `Plan` type's fields against the `Plan` schema.
 
@@ -18,8 +23,10 @@ use tower::ServiceExt;
 /// The file, in the source tree.
 const DOC_PATH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/openapi.json");
 
-/// The command that regenerates the file's generated parts.
-const REGENERATE: &str = "SKYPLAN_BLESS=1 cargo test -p skyplan-server --test openapi";
+/// The command that regenerates the file's generated parts: this file's generator test alone (the
+/// others check the document compiled into the server, which predates the rewrite until the next
+/// build).
+const REGENERATE: &str = "SKYPLAN_BLESS=1 cargo test -p skyplan-server --test openapi openapi_json_is_what_the_registry_gives";
 
 /// Where the generated planner list lives in the document.
 const PLANNER_NAME: &str = "#/components/schemas/PlannerName";
