@@ -363,12 +363,12 @@ fn given(r: &PlanRequest, group: OptionGroup) -> Vec<&'static str> {
             ("max_alt_m", r.max_alt_m.is_some()),
         ],
         OptionGroup::TimeLimit => &[("time_limit_ms", r.time_limit_ms.is_some())],
-        OptionGroup::Voxel => &[
+        OptionGroup::Lattice => &[
             ("climb_weight", r.climb_weight.is_some()),
             ("voxel_m", r.voxel_m.is_some()),
             ("layer_m", r.layer_m.is_some()),
         ],
-        OptionGroup::Costmap => &[
+        OptionGroup::Inflation => &[
             ("inscribed_radius_m", r.inscribed_radius_m.is_some()),
             ("inflation_radius_m", r.inflation_radius_m.is_some()),
             ("cost_scaling", r.cost_scaling.is_some()),
