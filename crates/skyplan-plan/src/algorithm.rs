@@ -8,6 +8,7 @@
 use crate::failure::PlanFailure;
 use crate::request::Resolved;
 use crate::session::{Query, Route, Session};
+use crate::world::World;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_sampling::PlannerKind;
 use skyplan_search::{
@@ -30,9 +31,9 @@ pub(crate) struct Memory {
 
 impl Memory {
     /// `bytes_per_cell` for every cell of the request's grid.
-    fn cells(session: &Session, r: &Resolved, bytes_per_cell: u64) -> Option<Memory> {
+    fn cells(world: &World, r: &Resolved, bytes_per_cell: u64) -> Option<Memory> {
         Some(Memory {
-            units: session.cells_at(r.cell_m),
+            units: world.cells_at(r.cell_m),
             bytes_per_unit: bytes_per_cell,
             what: "cells",
             change: "use a larger cell_m",
@@ -43,7 +44,7 @@ impl Memory {
 /// One planner behind the registry.
 pub(crate) trait Algorithm: Sync {
     /// The memory a request needs (`None`: nothing that grows with the map).
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory>;
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory>;
 
     /// The route for a resolved query, through the session's caches.
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure>;
@@ -147,8 +148,8 @@ pub(crate) trait CellPlanner: Sync {
 }
 
 impl<T: CellPlanner> Algorithm for T {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, self.bytes_per_cell())
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, self.bytes_per_cell())
     }
 
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
@@ -268,8 +269,8 @@ impl CellPlanner for HierarchyCells {
 pub(crate) struct AnyAngleGraph;
 
 impl Algorithm for AnyAngleGraph {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 24)
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, 24)
     }
 
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
@@ -281,8 +282,8 @@ impl Algorithm for AnyAngleGraph {
 pub(crate) struct Wavefront;
 
 impl Algorithm for Wavefront {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 48)
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, 48)
     }
 
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
@@ -298,8 +299,8 @@ impl Algorithm for Wavefront {
 pub(crate) struct Costmap;
 
 impl Algorithm for Costmap {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 48)
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, 48)
     }
 
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
@@ -315,8 +316,8 @@ impl Algorithm for Costmap {
 pub(crate) struct Voronoi;
 
 impl Algorithm for Voronoi {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 24)
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, 24)
     }
 
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
@@ -328,7 +329,7 @@ impl Algorithm for Voronoi {
 pub(crate) struct Sampling(pub PlannerKind);
 
 impl Algorithm for Sampling {
-    fn memory(&self, _: &Session, _: &Resolved) -> Option<Memory> {
+    fn memory(&self, _: &World, _: &Resolved) -> Option<Memory> {
         None
     }
 
@@ -345,8 +346,8 @@ impl Algorithm for Sampling {
 pub(crate) struct Voxel;
 
 impl Algorithm for Voxel {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        let b = session.world().bounds_ne(r.cell_m);
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        let b = world.bounds_ne(r.cell_m);
         let n = ((b.north_max_m - b.north_min_m) / r.voxel_m).ceil()
             * ((b.east_max_m - b.east_min_m) / r.voxel_m).ceil()
             * ((r.max_alt_m - r.min_alt_m) / r.layer_m).ceil().max(1.0);

@@ -222,6 +222,34 @@ impl PlanRequest {
     }
 }
 
+/// The flight altitude when none is given, metres above home.
+const DEFAULT_ALT_M: f64 = 5.0;
+/// The safety margin when none is given, metres.
+const DEFAULT_SAFETY_M: f64 = 5.0;
+/// The cell size of colliders grids when none is given, metres.
+const DEFAULT_CELL_M: f64 = 1.0;
+
+impl Default for PlanSpec {
+    /// The spec of a request that gives nothing: 5 m altitude and margin, 1 m cells, 8-connected
+    /// without corner cutting, the flight volume 0 to 120 m.
+    ///
+    /// ```
+    /// use skyplan_plan::{PlanRequest, PlanSpec};
+    /// assert_eq!(PlanSpec::default(), PlanRequest::default().spec()?);
+    /// # Ok::<(), skyplan_plan::PlanFailure>(())
+    /// ```
+    fn default() -> Self {
+        PlanSpec {
+            alt_m: DEFAULT_ALT_M,
+            safety_m: DEFAULT_SAFETY_M,
+            cell_m: DEFAULT_CELL_M,
+            move_model: MoveModel::Octile,
+            min_alt_m: 0.0,
+            max_alt_m: 120.0,
+        }
+    }
+}
+
 /// Highest altitude any option takes, metres.
 pub const MAX_ALT_M: f64 = 10_000.0;
 /// Longest time budget, milliseconds (10 minutes).
@@ -476,9 +504,21 @@ impl Resolved {
     pub(crate) fn new(r: &PlanRequest) -> Result<Self, PlanFailure> {
         let planner = r.planner.unwrap_or_default();
         check_applicable(r, planner)?;
-        let alt_m = in_range("alt_m", r.alt_m.unwrap_or(5.0), 0.0, MAX_ALT_M, " m")?;
-        let safety_m = in_range("safety_m", r.safety_m.unwrap_or(5.0), 0.0, 1000.0, " m")?;
-        let cell_m = positive("cell_m", r.cell_m.unwrap_or(1.0), 1000.0)?;
+        let alt_m = in_range(
+            "alt_m",
+            r.alt_m.unwrap_or(DEFAULT_ALT_M),
+            0.0,
+            MAX_ALT_M,
+            " m",
+        )?;
+        let safety_m = in_range(
+            "safety_m",
+            r.safety_m.unwrap_or(DEFAULT_SAFETY_M),
+            0.0,
+            1000.0,
+            " m",
+        )?;
+        let cell_m = positive("cell_m", r.cell_m.unwrap_or(DEFAULT_CELL_M), 1000.0)?;
         let model = move_model(r)?;
         let prune = prune(r)?;
         let start = End::of("start", (r.start_ne, r.start_lla, r.start_alt_m), alt_m)?;

@@ -217,7 +217,7 @@ impl Session {
         if let Some(g) = self.grids.get(&k) {
             return Ok(Arc::clone(g));
         }
-        let cells = self.cells_at(cell_m);
+        let cells = self.world.cells_at(cell_m);
         check_memory(
             cells.saturating_mul(GRID_BYTES_PER_CELL),
             &self.limits,
@@ -398,25 +398,9 @@ impl Session {
         Ok(put(&mut self.boxes, k, Arc::new(world)))
     }
 
-    /// Cells of the grid at this cell size (before building it), saturating.
-    pub(crate) fn cells_at(&self, cell_m: f64) -> u64 {
-        if let Some(g) = self.world.fixed_grid() {
-            return g.len() as u64;
-        }
-        let b = self.world.bounds_ne(cell_m);
-        let rows = ((b.north_max_m - b.north_min_m) / cell_m).ceil();
-        let cols = ((b.east_max_m - b.east_min_m) / cell_m).ceil();
-        let cells = rows * cols;
-        if cells.is_finite() && cells < 1.8e19 {
-            cells as u64
-        } else {
-            u64::MAX
-        }
-    }
-
     /// The memory a request needs, estimated by its planner before anything is allocated.
     fn check_request_memory(&self, r: &Resolved) -> Result<(), PlanFailure> {
-        let Some(m) = r.planner.algorithm().memory(self, r) else {
+        let Some(m) = r.planner.algorithm().memory(&self.world, r) else {
             return Ok(());
         };
         check_memory(

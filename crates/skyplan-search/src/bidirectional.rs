@@ -188,10 +188,9 @@ pub fn bidirectional_astar(
         backward: t,
     });
     let mut scratch = Vec::with_capacity(8);
-    loop {
-        let (Some(f0), Some(f1)) = (sides[0].top_f(), sides[1].top_f()) else {
-            break; // one side has closed its whole region: every meeting has been seen
-        };
+    // Until one side has closed its whole region (then every meeting has been seen) or
+    // neither side can improve the best meeting.
+    while let (Some(f0), Some(f1)) = (sides[0].top_f(), sides[1].top_f()) {
         if best.is_some_and(|m| f0 >= m.cost || f1 >= m.cost) {
             break;
         }
