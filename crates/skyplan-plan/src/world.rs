@@ -54,7 +54,7 @@ pub(crate) fn check_memory(
         return Ok(());
     }
     Err(PlanFailure::bad_request(format!(
-        "{what} needs about {} of memory, above the limit of {}; {change}, or raise the limit (--max-memory)",
+        "{what} needs about {} of memory, above the limit of {}; {change}, or raise the limit (max_memory)",
         human_bytes(estimate),
         human_bytes(limits.max_memory_bytes)
     )))
