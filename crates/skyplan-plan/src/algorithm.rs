@@ -265,65 +265,55 @@ impl CellPlanner for HierarchyCells {
     }
 }
 
+/// A planner on the request's grid that is not a cell search: its bytes per cell, its plan,
+/// and whether its route comes with a navigation field.
+pub(crate) struct OnGrid {
+    bytes_per_cell: u64,
+    plan: fn(&mut Session, &Query) -> Result<Route, PlanFailure>,
+    field: bool,
+}
+
+impl Algorithm for OnGrid {
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, self.bytes_per_cell)
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        (self.plan)(session, q)
+    }
+
+    fn has_field(&self) -> bool {
+        self.field
+    }
+}
+
 /// Exact any-angle paths over the visibility graph kept per grid.
-pub(crate) struct AnyAngleGraph;
+pub(crate) const ANY_ANGLE: OnGrid = OnGrid {
+    bytes_per_cell: 24,
+    plan: crate::any_angle::plan,
+    field: false,
+};
 
-impl Algorithm for AnyAngleGraph {
-    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
-        Memory::cells(world, r, 24)
-    }
+/// The wavefront navigation function (its distance field).
+pub(crate) const WAVEFRONT: OnGrid = OnGrid {
+    bytes_per_cell: 48,
+    plan: crate::navfn::wavefront,
+    field: true,
+};
 
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::any_angle::plan(session, q)
-    }
-}
-
-/// The wavefront navigation function.
-pub(crate) struct Wavefront;
-
-impl Algorithm for Wavefront {
-    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
-        Memory::cells(world, r, 48)
-    }
-
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::navfn::wavefront(session, q)
-    }
-
-    fn has_field(&self) -> bool {
-        true
-    }
-}
-
-/// A\* over the inflated cost map.
-pub(crate) struct Costmap;
-
-impl Algorithm for Costmap {
-    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
-        Memory::cells(world, r, 48)
-    }
-
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::navfn::costmap(session, q)
-    }
-
-    fn has_field(&self) -> bool {
-        true
-    }
-}
+/// A\* over the inflated cost map (its cost to go).
+pub(crate) const COSTMAP: OnGrid = OnGrid {
+    bytes_per_cell: 48,
+    plan: crate::navfn::costmap,
+    field: true,
+};
 
 /// The Voronoi roadmap, kept per altitude, margin and cell size.
-pub(crate) struct Voronoi;
-
-impl Algorithm for Voronoi {
-    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
-        Memory::cells(world, r, 24)
-    }
-
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::voronoi::plan(session, q)
-    }
-}
+pub(crate) const VORONOI: OnGrid = OnGrid {
+    bytes_per_cell: 24,
+    plan: crate::voronoi::plan,
+    field: false,
+};
 
 /// PRM, lazy PRM, RRT-Connect, RRT\* among the grown boxes.
 pub(crate) struct Sampling(pub PlannerKind);

@@ -9,6 +9,7 @@
 //! both directions), so the backward search uses the same moves as the forward one.
 
 use crate::astar::check_endpoints;
+use crate::jps::DIRS;
 use crate::{GridPath, MoveModel, OpenEntry, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::collections::BinaryHeap;
@@ -86,16 +87,7 @@ struct Meeting {
 fn moves(grid: &Grid2, cell: Cell, model: MoveModel, out: &mut Vec<(u32, f64)>) {
     out.clear();
     let (r, c) = (i64::from(cell.row), i64::from(cell.col));
-    for (dr, dc) in [
-        (1, 0),
-        (-1, 0),
-        (0, 1),
-        (0, -1),
-        (1, 1),
-        (1, -1),
-        (-1, 1),
-        (-1, -1),
-    ] {
+    for (dr, dc) in DIRS {
         let diagonal = dr != 0 && dc != 0;
         if diagonal && !model.has_diagonals() {
             continue;
