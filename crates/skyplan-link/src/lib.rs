@@ -8,27 +8,18 @@
 //! - [`obstacle`]: MAVLink `OBSTACLE_DISTANCE` to and from skyplan-flight's `ObstacleReading`.
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
-//! - [`flight`]: one flight, told line by line to an observer and summed up (`fly`, `bench --replan`).
 //! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
 //! - [`messages`]: MAVLink messages built in one place (commands, heartbeats, frames).
-//! - [`mission`]: a planned mission as a vehicle's autopilot gets it (items, true-north headings).
-//! - [`runner`]: a whole run for any front end: the simulator started, the vehicle waited for,
-//!   the plan (a replanner watching), the upload or the flight; `bench --replan`'s flights.
-//! - [`words`]: the flight told in lines (notes, updates) and the flight log as CSV.
 //!
 //! Only the `common` dialect is compiled (build time); ArduPilot's custom modes are numbers.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod flight;
 pub mod ground;
 pub mod in_process;
 pub mod messages;
-pub mod mission;
 pub mod obstacle;
-pub mod runner;
 pub mod vehicle;
-pub mod words;
 
 use mavlink::dialects::common::MavMessage;
 use mavlink::error::MessageReadError;
