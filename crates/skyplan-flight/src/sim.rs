@@ -44,25 +44,27 @@ pub enum SimMode {
 impl SimMode {
     /// ArduCopter's `custom_mode` number of this mode.
     pub fn arducopter_custom_mode(self) -> u32 {
+        use crate::modes::arducopter;
         match self {
-            SimMode::Stabilize => 0,
-            SimMode::Auto => 3,
-            SimMode::Guided => 4,
-            SimMode::Loiter => 5,
-            SimMode::Rtl => 6,
-            SimMode::Land => 9,
+            SimMode::Stabilize => arducopter::STABILIZE,
+            SimMode::Auto => arducopter::AUTO,
+            SimMode::Guided => arducopter::GUIDED,
+            SimMode::Loiter => arducopter::LOITER,
+            SimMode::Rtl => arducopter::RTL,
+            SimMode::Land => arducopter::LAND,
         }
     }
 
     /// The mode of an ArduCopter `custom_mode` number, if simulated.
     pub fn from_arducopter_custom_mode(mode: u32) -> Option<Self> {
+        use crate::modes::arducopter;
         Some(match mode {
-            0 => SimMode::Stabilize,
-            3 => SimMode::Auto,
-            4 => SimMode::Guided,
-            5 => SimMode::Loiter,
-            6 => SimMode::Rtl,
-            9 => SimMode::Land,
+            arducopter::STABILIZE => SimMode::Stabilize,
+            arducopter::AUTO => SimMode::Auto,
+            arducopter::GUIDED => SimMode::Guided,
+            arducopter::LOITER => SimMode::Loiter,
+            arducopter::RTL => SimMode::Rtl,
+            arducopter::LAND => SimMode::Land,
             _ => return None,
         })
     }

@@ -9,9 +9,11 @@
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
 //! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
+//! - [`streams`]: the one table of streamed messages (the dialect's ids, rates, groups).
 //! - [`messages`]: MAVLink messages built in one place (commands, heartbeats, frames).
 //!
-//! Only the `common` dialect is compiled (build time); ArduPilot's custom modes are numbers.
+//! Only the `common` dialect is compiled (build time); ArduPilot's and PX4's custom modes are
+//! numbers, tabled once in `skyplan_flight::modes`.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -19,6 +21,7 @@ pub mod ground;
 pub mod in_process;
 pub mod messages;
 pub mod obstacle;
+pub mod streams;
 pub mod vehicle;
 
 use mavlink::dialects::common::MavMessage;

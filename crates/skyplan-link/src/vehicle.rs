@@ -31,6 +31,7 @@
 //! true world ([`skyplan_flight::sensor`]; see [`crate::obstacle`] for the encoding).
 
 use crate::obstacle::obstacle_distance;
+use crate::streams::{STREAMS, in_group};
 use crate::{Address, Link, LinkError};
 use mavlink::MessageData;
 use mavlink::dialects::common::*;
@@ -199,18 +200,6 @@ pub struct SimServer {
     map_frame: LocalFrame,
 }
 
-/// The streamed messages, ArduCopter's way: off until requested. Message id (the dialect's) and
-/// default period.
-const STREAMS: [(u32, f64); 7] = [
-    (ATTITUDE_DATA::ID, 0.1),
-    (MISSION_ITEM_REACHED_DATA::ID, 1.0),
-    (LOCAL_POSITION_NED_DATA::ID, 0.1),
-    (GLOBAL_POSITION_INT_DATA::ID, 0.1),
-    (MISSION_CURRENT_DATA::ID, 0.5),
-    (GPS_GLOBAL_ORIGIN_DATA::ID, 1.0),
-    (EXTENDED_SYS_STATE_DATA::ID, 0.5),
-];
-
 /// Requested stream periods (simulated seconds) and when each was last sent.
 #[derive(Debug, Clone, Default)]
 struct Streams {
@@ -221,13 +210,13 @@ struct Streams {
 impl Streams {
     /// SET_MESSAGE_INTERVAL: −1 stops, 0 is the default rate; `false` for an unknown message.
     fn set_interval(&mut self, id: u32, interval_us: f32) -> bool {
-        let Some(k) = STREAMS.iter().position(|(m, _)| *m == id) else {
+        let Some(k) = STREAMS.iter().position(|m| m.id == id) else {
             return false;
         };
         self.period_s[k] = if interval_us < 0.0 {
             None
         } else if interval_us == 0.0 {
-            Some(STREAMS[k].1)
+            Some(STREAMS[k].default_period_s)
         } else {
             Some(f64::from(interval_us) * 1e-6)
         };
@@ -239,32 +228,25 @@ impl Streams {
     /// by MAVLink, still what older ground stations send and what ArduPilot honours.
     #[allow(deprecated)]
     fn request(&mut self, stream: MavDataStream, rate_hz: u16, start: bool) {
-        let ids: &[u32] = match stream {
-            MavDataStream::MAV_DATA_STREAM_ALL => &[30, 32, 33, 42, 46, 49, 245],
-            MavDataStream::MAV_DATA_STREAM_POSITION => &[32, 33],
-            MavDataStream::MAV_DATA_STREAM_EXTRA1 => &[30],
-            MavDataStream::MAV_DATA_STREAM_EXTENDED_STATUS => &[42, 46, 49, 245],
-            _ => &[],
-        };
         let interval_us = if start && rate_hz > 0 {
             1e6 / f32::from(rate_hz)
         } else {
             -1.0
         };
-        for id in ids {
-            self.set_interval(*id, interval_us);
+        for s in STREAMS.iter().filter(|s| in_group(s, stream)) {
+            self.set_interval(s.id, interval_us);
         }
     }
 
     /// The messages due at `now_s` (and marks them sent).
     fn due(&mut self, now_s: f64) -> Vec<u32> {
         let mut ids = Vec::new();
-        for (k, (id, _)) in STREAMS.iter().enumerate() {
+        for (k, stream) in STREAMS.iter().enumerate() {
             if let Some(p) = self.period_s[k]
                 && now_s - self.last_s[k] >= p
             {
                 self.last_s[k] = now_s;
-                ids.push(*id);
+                ids.push(stream.id);
             }
         }
         ids
