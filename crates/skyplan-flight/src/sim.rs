@@ -382,6 +382,42 @@ impl SimVehicle {
             self.advance_mission(&mut events);
         }
         let c = self.config;
+        let (v_cmd, yaw_target) = self.commanded_velocity();
+        // First-order velocity response, within the acceleration limit.
+        let k = (dt_s / c.velocity_tau_s).min(1.0);
+        let mut dv: [f64; 3] = std::array::from_fn(|i| (v_cmd[i] - self.velocity[i]) * k);
+        let dv_norm = (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]).sqrt();
+        let dv_max = c.max_accel_m_s2 * dt_s;
+        if dv_norm > dv_max {
+            for x in &mut dv {
+                *x *= dv_max / dv_norm;
+            }
+        }
+        for ((v, p), dv) in self.velocity.iter_mut().zip(&mut self.position).zip(dv) {
+            *v += dv;
+            *p += *v * dt_s;
+        }
+        self.ground_contact(v_cmd, &mut events);
+        // Heading, within the yaw-rate limit (only when flying).
+        if self.armed && !self.on_ground {
+            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
+            let max = c.max_yaw_rate_rad_s * dt_s;
+            let turn = err.clamp(-max, max);
+            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
+            self.yaw_rate_rad_s = turn / dt_s;
+        } else {
+            self.yaw_rate_rad_s = 0.0;
+        }
+        if !self.armed && self.on_ground {
+            self.velocity = [0.0; 3];
+        }
+        events
+    }
+
+    /// The velocity commanded now (north, east, down) and the heading to turn to: toward the
+    /// target in GUIDED, AUTO and RTL's return, straight down when landing.
+    fn commanded_velocity(&mut self) -> ([f64; 3], f64) {
+        let c = self.config;
         let mut v_cmd = [0.0; 3];
         let mut yaw_target = self.yaw_rad;
         if self.armed && self.mode == SimMode::Rtl && !self.rtl_descending {
@@ -419,21 +455,12 @@ impl SimVehicle {
                 }
             }
         }
-        // First-order velocity response, within the acceleration limit.
-        let k = (dt_s / c.velocity_tau_s).min(1.0);
-        let mut dv: [f64; 3] = std::array::from_fn(|i| (v_cmd[i] - self.velocity[i]) * k);
-        let dv_norm = (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]).sqrt();
-        let dv_max = c.max_accel_m_s2 * dt_s;
-        if dv_norm > dv_max {
-            for x in &mut dv {
-                *x *= dv_max / dv_norm;
-            }
-        }
-        for ((v, p), dv) in self.velocity.iter_mut().zip(&mut self.position).zip(dv) {
-            *v += dv;
-            *p += *v * dt_s;
-        }
-        // The ground.
+        (v_cmd, yaw_target)
+    }
+
+    /// The ground stops the descent; touching down is told, and disarms in LAND, RTL and a
+    /// mission's landing.
+    fn ground_contact(&mut self, v_cmd: [f64; 3], events: &mut Vec<SimEvent>) {
         let was_on_ground = self.on_ground;
         if self.position[2] >= 0.0 {
             self.position[2] = 0.0;
@@ -464,20 +491,6 @@ impl SimVehicle {
                 self.mission_landing = false;
             }
         }
-        // Heading, within the yaw-rate limit (only when flying).
-        if self.armed && !self.on_ground {
-            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
-            let max = c.max_yaw_rate_rad_s * dt_s;
-            let turn = err.clamp(-max, max);
-            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
-            self.yaw_rate_rad_s = turn / dt_s;
-        } else {
-            self.yaw_rate_rad_s = 0.0;
-        }
-        if !self.armed && self.on_ground {
-            self.velocity = [0.0; 3];
-        }
-        events
     }
 
     /// Horizontal velocity command toward a point: proportional, braking, speed-limited.

@@ -10,10 +10,10 @@ use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
     ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, Target, Telemetry,
 };
-use skyplan_flight::upload::UploadConfig;
+use skyplan_flight::upload::{MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{
-    Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, Waiting,
+    Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, VehicleInfo, Waiting,
 };
 use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::SimServerConfig;
@@ -197,30 +197,12 @@ pub fn fly_mission<O: RunObserver>(
     interrupt: Arc<AtomicBool>,
     observer: &mut O,
 ) -> Result<Flight, O::Error> {
-    let speedup = o.ground.speedup;
     let mut gcs = GroundStation::connect(address, o.ground).map_err(RunError::from)?;
     gcs.set_interrupt(interrupt);
     observer.say(&format!(
         "link       {address}: connected, sending heartbeats at 1 Hz"
     ));
-    let mut last = None;
-    let wall = Duration::from_secs_f64(o.wait_s / speedup);
-    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
-        if last != Some(waiting) {
-            last = Some(waiting);
-            observer.say(&format!(
-                "wait       {:7.1} s  for the vehicle's {waiting}",
-                wall_s * speedup
-            ));
-        }
-        observer.waiting(waiting, wall_s * speedup);
-    });
-    let info = info.map_err(RunError::from)?;
-    sim_notes(sim, observer);
-    observer.say(&format!(
-        "vehicle    {}",
-        crate::mission::vehicle_line(&info)
-    ));
+    let info = wait_for_vehicle(&mut gcs, o, sim, observer)?;
 
     // PLANNING: the heartbeat thread keeps the link alive meanwhile.
     observer.say("state      PLANNING");
@@ -271,26 +253,8 @@ pub fn fly_mission<O: RunObserver>(
     };
     // `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
     // then flown in AUTO.
-    let items = crate::mission::items_for(mission, frame, &info).map_err(bad)?;
-    observer.say(&format!(
-        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
-        items.items.len(),
-        if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
-        request.alt_m.unwrap_or(5.0),
-        targets.len(),
-        if items.waypoint_stride == 2 {
-            " (each after a CONDITION_YAW to its heading)"
-        } else {
-            ""
-        }
-    ));
-    let report = gcs
-        .upload_mission(&items, UploadConfig::default())
-        .map_err(RunError::from)?;
-    observer.say(&format!(
-        "upload     accepted: {} items in {:.3} s wall ({} requests answered, {} resends)",
-        report.items, report.wall_time_s, report.requests, report.resends
-    ));
+    let alt_m = request.alt_m.unwrap_or(5.0);
+    let items = upload(&mut gcs, (frame, &info), mission, alt_m, observer)?;
     let (log, ended) = if !fly {
         observer.say("result     mission uploaded (--upload-only: not flown)");
         (Vec::new(), Ended::Uploaded)
@@ -307,6 +271,65 @@ pub fn fly_mission<O: RunObserver>(
         watcher: None,
         replanned: Vec::new(),
     })
+}
+
+/// Uploads `mission` (flown at `alt_m`) to the vehicle, telling its items and the upload.
+fn upload<O: RunObserver>(
+    gcs: &mut GroundStation,
+    (frame, info): (&LocalFrame, &VehicleInfo),
+    mission: &skyplan_mission::Mission,
+    alt_m: f64,
+    observer: &mut O,
+) -> Result<MissionPlan, RunError> {
+    let items = crate::mission::items_for(mission, frame, info).map_err(bad)?;
+    observer.say(&format!(
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        items.items.len(),
+        if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
+        alt_m,
+        mission.waypoints.len(),
+        if items.waypoint_stride == 2 {
+            " (each after a CONDITION_YAW to its heading)"
+        } else {
+            ""
+        }
+    ));
+    let report = gcs
+        .upload_mission(&items, UploadConfig::default())
+        .map_err(RunError::from)?;
+    observer.say(&format!(
+        "upload     accepted: {} items in {:.3} s wall ({} requests answered, {} resends)",
+        report.items, report.wall_time_s, report.requests, report.resends
+    ));
+    Ok(items)
+}
+
+/// Waits for the vehicle (`o.wait_s` vehicle seconds), telling what is awaited, then who it is.
+fn wait_for_vehicle<O: RunObserver>(
+    gcs: &mut GroundStation,
+    o: &FlyOptions,
+    sim: Option<&InProcessSim>,
+    observer: &mut O,
+) -> Result<VehicleInfo, RunError> {
+    let speedup = o.ground.speedup;
+    let mut last = None;
+    let wall = Duration::from_secs_f64(o.wait_s / speedup);
+    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
+        if last != Some(waiting) {
+            last = Some(waiting);
+            observer.say(&format!(
+                "wait       {:7.1} s  for the vehicle's {waiting}",
+                wall_s * speedup
+            ));
+        }
+        observer.waiting(waiting, wall_s * speedup);
+    })?;
+    sim_notes(sim, observer);
+    observer.say(&format!(
+        "vehicle    {}",
+        crate::mission::vehicle_line(&info)
+    ));
+    Ok(info)
 }
 
 /// The simulator's new notes, told as lines.

@@ -604,10 +604,6 @@ fn handle_message(
     note: &mut impl FnMut(SimNote),
 ) -> Vec<MavMessage> {
     let mut out = Vec::new();
-    let mut refuse = |out: &mut Vec<MavMessage>, text: String| {
-        out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
-        note(SimNote::Refused(text));
-    };
     // Addressed to another system (vehicles may share a network): not ours to obey.
     if mavlink::Message::target_system_id(&message).is_some_and(|t| t != 0 && t != SYSTEM_ID) {
         return out;
@@ -619,77 +615,7 @@ fn handle_message(
         {
             *last_gcs_s = now_s;
         }
-        MavMessage::COMMAND_LONG(c) => {
-            if c.target_system != 0 && c.target_system != SYSTEM_ID {
-                return out;
-            }
-            let result = match c.command {
-                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
-                    if c.param1 >= 0.5 && !side.position_ready(&v.state()) =>
-                {
-                    refuse(&mut out, "PreArm: Need Position Estimate".into());
-                    MavResult::MAV_RESULT_FAILED
-                }
-                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
-                    let r = if c.param1 >= 0.5 { v.arm() } else { v.disarm() };
-                    match r {
-                        Ok(()) => MavResult::MAV_RESULT_ACCEPTED,
-                        Err(e) => {
-                            refuse(&mut out, e.0);
-                            MavResult::MAV_RESULT_DENIED
-                        }
-                    }
-                }
-                MavCmd::MAV_CMD_NAV_TAKEOFF => match v.takeoff(f64::from(c.param7)) {
-                    Ok(()) => {
-                        note(SimNote::Takeoff(f64::from(c.param7)));
-                        MavResult::MAV_RESULT_ACCEPTED
-                    }
-                    Err(e) => {
-                        refuse(&mut out, e.0);
-                        MavResult::MAV_RESULT_FAILED
-                    }
-                },
-                MavCmd::MAV_CMD_NAV_LAND => {
-                    v.land();
-                    MavResult::MAV_RESULT_ACCEPTED
-                }
-                MavCmd::MAV_CMD_DO_SET_MODE => {
-                    match SimMode::from_arducopter_custom_mode(c.param2 as u32) {
-                        Some(m) if (c.param1 as u32) & 1 == 1 => {
-                            v.set_mode(m);
-                            MavResult::MAV_RESULT_ACCEPTED
-                        }
-                        _ => {
-                            refuse(
-                                &mut out,
-                                format!("Mode change to {} not supported", c.param2),
-                            );
-                            MavResult::MAV_RESULT_UNSUPPORTED
-                        }
-                    }
-                }
-                MavCmd::MAV_CMD_MISSION_START => {
-                    if v.mission().len() <= 1 {
-                        refuse(&mut out, "Mission: no items".into());
-                        MavResult::MAV_RESULT_DENIED
-                    } else {
-                        v.set_mode(SimMode::Auto);
-                        MavResult::MAV_RESULT_ACCEPTED
-                    }
-                }
-                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => {
-                    if side.streams.set_interval(c.param1 as u32, c.param2) {
-                        MavResult::MAV_RESULT_ACCEPTED
-                    } else {
-                        MavResult::MAV_RESULT_UNSUPPORTED
-                    }
-                }
-                MavCmd::MAV_CMD_REQUEST_MESSAGE => MavResult::MAV_RESULT_ACCEPTED,
-                _ => MavResult::MAV_RESULT_UNSUPPORTED,
-            };
-            out.push(ack(c.command, result));
-        }
+        MavMessage::COMMAND_LONG(c) => command_long(v, side, &c, &mut out, note),
         MavMessage::SET_MODE(m) => {
             if let Some(mode) = SimMode::from_arducopter_custom_mode(m.custom_mode) {
                 v.set_mode(mode);
@@ -699,35 +625,7 @@ fn handle_message(
             side.streams
                 .request(r.req_stream_id, r.req_message_rate, r.start_stop == 1);
         }
-        MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => {
-            let mask = t.type_mask.bits();
-            let relative = matches!(
-                t.coordinate_frame,
-                MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
-                    | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
-            );
-            let absolute = matches!(
-                t.coordinate_frame,
-                MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL
-            );
-            if mask & 0x7 == 0 && (relative || absolute) {
-                let [north_m, east_m] = side
-                    .earth
-                    .ne_from_lat_lon(f64::from(t.lat_int) * 1e-7, f64::from(t.lon_int) * 1e-7);
-                let alt_m = if relative {
-                    f64::from(t.alt)
-                } else {
-                    f64::from(t.alt) - side.home_alt_m
-                };
-                let yaw = if mask & 0x400 != 0 {
-                    f64::NAN
-                } else {
-                    f64::from(t.yaw)
-                };
-                // Ignored outside GUIDED, as ArduPilot does.
-                let _ = v.set_position_target([north_m, east_m, -alt_m], yaw);
-            }
-        }
+        MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => position_target_global(v, side, &t),
         MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) => {
             let mask = t.type_mask.bits();
             let position_ignored = mask & 0x7 != 0;
@@ -784,6 +682,121 @@ fn handle_message(
         _ => {}
     }
     out
+}
+
+/// A COMMAND_LONG: obeyed or refused (the reason as STATUSTEXT), always acknowledged.
+fn command_long(
+    v: &mut SimVehicle,
+    side: &mut Side,
+    c: &COMMAND_LONG_DATA,
+    out: &mut Vec<MavMessage>,
+    note: &mut impl FnMut(SimNote),
+) {
+    let mut refuse = |out: &mut Vec<MavMessage>, text: String| {
+        out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
+        note(SimNote::Refused(text));
+    };
+    if c.target_system != 0 && c.target_system != SYSTEM_ID {
+        return;
+    }
+    let result = match c.command {
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
+            if c.param1 >= 0.5 && !side.position_ready(&v.state()) =>
+        {
+            refuse(out, "PreArm: Need Position Estimate".into());
+            MavResult::MAV_RESULT_FAILED
+        }
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+            let r = if c.param1 >= 0.5 { v.arm() } else { v.disarm() };
+            match r {
+                Ok(()) => MavResult::MAV_RESULT_ACCEPTED,
+                Err(e) => {
+                    refuse(out, e.0);
+                    MavResult::MAV_RESULT_DENIED
+                }
+            }
+        }
+        MavCmd::MAV_CMD_NAV_TAKEOFF => match v.takeoff(f64::from(c.param7)) {
+            Ok(()) => {
+                note(SimNote::Takeoff(f64::from(c.param7)));
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+            Err(e) => {
+                refuse(out, e.0);
+                MavResult::MAV_RESULT_FAILED
+            }
+        },
+        MavCmd::MAV_CMD_NAV_LAND => {
+            v.land();
+            MavResult::MAV_RESULT_ACCEPTED
+        }
+        MavCmd::MAV_CMD_DO_SET_MODE => {
+            match SimMode::from_arducopter_custom_mode(c.param2 as u32) {
+                Some(m) if (c.param1 as u32) & 1 == 1 => {
+                    v.set_mode(m);
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                _ => {
+                    refuse(out, format!("Mode change to {} not supported", c.param2));
+                    MavResult::MAV_RESULT_UNSUPPORTED
+                }
+            }
+        }
+        MavCmd::MAV_CMD_MISSION_START => {
+            if v.mission().len() <= 1 {
+                refuse(out, "Mission: no items".into());
+                MavResult::MAV_RESULT_DENIED
+            } else {
+                v.set_mode(SimMode::Auto);
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+        }
+        MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => {
+            if side.streams.set_interval(c.param1 as u32, c.param2) {
+                MavResult::MAV_RESULT_ACCEPTED
+            } else {
+                MavResult::MAV_RESULT_UNSUPPORTED
+            }
+        }
+        MavCmd::MAV_CMD_REQUEST_MESSAGE => MavResult::MAV_RESULT_ACCEPTED,
+        _ => MavResult::MAV_RESULT_UNSUPPORTED,
+    };
+    out.push(ack(c.command, result));
+}
+
+/// A SET_POSITION_TARGET_GLOBAL_INT (relative or absolute altitude; yaw unless masked).
+#[allow(deprecated)] // the non-INT global frames: still sent by ground stations.
+fn position_target_global(
+    v: &mut SimVehicle,
+    side: &Side,
+    t: &SET_POSITION_TARGET_GLOBAL_INT_DATA,
+) {
+    let mask = t.type_mask.bits();
+    let relative = matches!(
+        t.coordinate_frame,
+        MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
+    );
+    let absolute = matches!(
+        t.coordinate_frame,
+        MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL
+    );
+    if mask & 0x7 == 0 && (relative || absolute) {
+        let [north_m, east_m] = side
+            .earth
+            .ne_from_lat_lon(f64::from(t.lat_int) * 1e-7, f64::from(t.lon_int) * 1e-7);
+        let alt_m = if relative {
+            f64::from(t.alt)
+        } else {
+            f64::from(t.alt) - side.home_alt_m
+        };
+        let yaw = if mask & 0x400 != 0 {
+            f64::NAN
+        } else {
+            f64::from(t.yaw)
+        };
+        // Ignored outside GUIDED, as ArduPilot does.
+        let _ = v.set_position_target([north_m, east_m, -alt_m], yaw);
+    }
 }
 
 fn mission_ack(result: MavMissionResult) -> MavMessage {
