@@ -763,7 +763,7 @@ impl FlightLoop {
             mut events,
             reading,
         } = match received {
-            Some(r) => self.from_message(p, ex, now_s, r),
+            Some(r) => self.absorb_message(p, ex, now_s, r),
             None => FromMessage {
                 events: Vec::new(),
                 reading: None,
@@ -780,7 +780,7 @@ impl FlightLoop {
             self.closed_reported = true;
             self.updates.push(Update::LinkClosed(why.to_string()));
         }
-        events.extend(self.from_clock(p, ex, now_s, interrupted));
+        events.extend(self.clock_events(p, ex, now_s, interrupted));
         if let Some(t) = self.aborted_at_s
             && now_s - t > self.config.abort_grace_s + ex.landing_budget_s() / self.speedup
         {
@@ -804,7 +804,7 @@ impl FlightLoop {
 
     /// Absorbs one message: its executor events (mode, ack, text, telemetry, a regained link)
     /// and the sensor reading it carries.
-    fn from_message<E: FlightExecutor>(
+    fn absorb_message<E: FlightExecutor>(
         &mut self,
         p: &mut GroundProtocol,
         ex: &E,
@@ -885,7 +885,7 @@ impl FlightLoop {
 
     /// The clock's events at `now_s`: a tick every 50 ms, a lost link, the flight's budget run
     /// out, an interrupt; and the progress report.
-    fn from_clock<E: FlightExecutor>(
+    fn clock_events<E: FlightExecutor>(
         &mut self,
         p: &GroundProtocol,
         ex: &E,
