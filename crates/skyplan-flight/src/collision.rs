@@ -1,4 +1,6 @@
-//! Checking a flown track against the map's obstacle boxes (the real boxes, no margin).
+//! Checking a flown track against the obstacle boxes of the true world (the real boxes, no
+//! margin): collisions, and the closest approach ([`Closest`]) that a flight's verdict judges
+//! against the route's safety margin.
 //!
 //! ```
 //! use skyplan_flight::collision::{BoxWorld, TrackCheck};

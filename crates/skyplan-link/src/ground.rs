@@ -1,9 +1,12 @@
 //! The ground side: `skyplan fly` connects to a vehicle and drives the mission state machine.
 //!
-//! Vehicle messages become [`Event`]s of the executor (HEARTBEAT → armed and mode,
+//! The protocol is [`protocol`]'s state machines, fed messages and wall seconds, returning the
+//! messages to send; [`GroundStation`] holds the link and the clock and runs them in short loops.
+//!
+//! Vehicle messages become `Event`s of the executor (HEARTBEAT → armed and mode,
 //! GLOBAL_POSITION_INT + ATTITUDE + EXTENDED_SYS_STATE → telemetry, COMMAND_ACK → acks,
 //! STATUSTEXT → reasons, MISSION_ITEM_REACHED / MISSION_CURRENT → mission progress), its
-//! [`Command`]s become COMMAND_LONG (DO_SET_MODE GUIDED, COMPONENT_ARM_DISARM, NAV_TAKEOFF,
+//! `Command`s become COMMAND_LONG (DO_SET_MODE GUIDED, COMPONENT_ARM_DISARM, NAV_TAKEOFF,
 //! NAV_LAND) and SET_POSITION_TARGET_GLOBAL_INT (`MAV_FRAME_GLOBAL_RELATIVE_ALT_INT`, `type_mask`
 //! 0x9F8: position + yaw). Heartbeats go out at 1 Hz from their own thread; a vehicle silent for
 //! [`GroundConfig::link_timeout_s`] is a lost link. Autopilots stream nothing by default
@@ -21,8 +24,8 @@
 //! companion computer) is decoded into an [`ObstacleReading`] at the vehicle's position then
 //! ([`crate::obstacle`]) and reported as [`Update::Reading`]. With a [`RouteWatcher`]
 //! ([`GroundStation::set_watcher`]), each reading taken while the executor flies its waypoints
-//! goes to it with the targets still to fly: [`RouteDecision::Replace`] swaps the route without
-//! landing, [`RouteDecision::Hold`] holds the position, then lands, and the flight fails
+//! goes to it with the targets still to fly: `RouteDecision::Replace` swaps the route without
+//! landing, `RouteDecision::Hold` holds the position, then lands, and the flight fails
 //! ([`skyplan_flight::executor::Failure::NoRoute`]). An uploaded mission (AUTO) cannot be
 //! replanned: [`GroundStation::fly`] refuses a watcher with it.
 

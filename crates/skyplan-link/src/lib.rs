@@ -1,4 +1,7 @@
-//! The MAVLink link layer of skyplan: the only library crate that touches sockets and clocks.
+//! The MAVLink link layer of skyplan: the only library crate that touches sockets and clocks,
+//! and only in short loops: the ground station's protocol ([`ground::protocol`]) and the
+//! simulator's ([`vehicle::protocol`]) are state machines fed messages and time that return
+//! messages, driven as they are by the fuzz harnesses.
 //!
 //! - [`Link`]: one MAVLink connection (TCP client or accepted server socket, UDP in/out) with a
 //!   reader thread, so that nothing blocks on the network, and an optional heartbeat thread that
