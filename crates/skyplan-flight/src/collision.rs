@@ -121,6 +121,18 @@ impl BoxWorld {
     }
 }
 
+/// The true world of a flight: the map's boxes followed by the hidden ones the planner does not
+/// know (so a box's index tells which it is); `None` without either. The one box world that the
+/// flown track is checked against and the simulated sensor sees.
+pub fn true_world(map: Option<&BoxWorld>, hidden: &[ObstacleBox]) -> Option<BoxWorld> {
+    match (map, hidden.is_empty()) {
+        (Some(w), true) => Some(w.clone()),
+        (Some(w), false) => Some(BoxWorld::new(&[w.boxes(), hidden].concat())),
+        (None, false) => Some(BoxWorld::new(hidden)),
+        (None, true) => None,
+    }
+}
+
 /// A collision of the track with a box.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Collision {

@@ -3,7 +3,7 @@
 //! flight as over TCP (loopback.rs), deterministic.
 
 use skyplan_flight::collision::BoxWorld;
-use skyplan_flight::executor::{ExecutorConfig, FlightExecutor, MissionExecutor, Outcome, Target};
+use skyplan_flight::executor::{ExecutorConfig, MissionExecutor, Outcome, Target};
 use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::sim::SimMode;
 use skyplan_frames::{Lla, LocalFrame};

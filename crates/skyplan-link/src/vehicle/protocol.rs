@@ -9,7 +9,7 @@ use super::{
 };
 use crate::obstacle::obstacle_distance;
 use mavlink::dialects::common::*;
-use skyplan_flight::collision::{BoxWorld, TrackCheck};
+use skyplan_flight::collision::{BoxWorld, TrackCheck, true_world};
 use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::sensing::SectorRange;
 use skyplan_flight::sensor::{RangeSensor, SECTORS};
@@ -48,20 +48,6 @@ pub struct SimProtocol {
     last_mode: SimMode,
     last_armed: bool,
     notes: Vec<SimNote>,
-}
-
-/// The true world of a simulation: the map's boxes followed by the hidden ones (one box world
-/// for the flown-track check and the sensor).
-pub fn true_world(
-    map: Option<&BoxWorld>,
-    hidden: &[skyplan_map::colliders::ObstacleBox],
-) -> Option<BoxWorld> {
-    match (map, hidden.is_empty()) {
-        (Some(w), true) => Some(w.clone()),
-        (Some(w), false) => Some(BoxWorld::new(&[w.boxes(), hidden].concat())),
-        (None, false) => Some(BoxWorld::new(hidden)),
-        (None, true) => None,
-    }
 }
 
 impl SimProtocol {
