@@ -253,7 +253,7 @@ pub fn fly_mission<O: RunObserver>(
     };
     // `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
     // then flown in AUTO.
-    let alt_m = request.alt_m.unwrap_or(5.0);
+    let alt_m = plan.spec.alt_m;
     let items = upload(&mut gcs, (frame, &info), mission, alt_m, observer)?;
     let (log, ended) = if !fly {
         observer.say("result     mission uploaded (--upload-only: not flown)");
@@ -446,7 +446,7 @@ pub fn hidden_random(
         alt_m: grid.alt_m,
         safety_m: grid.safety_m,
         cell_m: grid.cell_m,
-        model: skyplan_search::MoveModel::Octile,
+        model: plan.spec.move_model,
     };
     place_hidden(map, &spec).map_err(bad)
 }
@@ -490,11 +490,9 @@ pub enum Unfinished {
     NotLanded,
 }
 
-/// The safety margin a plan was made with, metres: its grid's (2D planners) or its flight
-/// volume's (3D planners); `None` when the plan does not say.
+/// The safety margin a plan was made with, metres (its resolved spec; every planner has one).
 pub fn plan_margin_m(plan: &Plan) -> Option<f64> {
-    (plan.grid.as_ref().map(|g| g.safety_m))
-        .or_else(|| plan.details.get("safety_m").and_then(|v| v.as_f64()))
+    Some(plan.spec.safety_m)
 }
 
 /// A flight's verdict from its outcome ([`Ended::Flight`]) and, on the simulator, its track
