@@ -28,12 +28,12 @@
 mod core;
 mod faults;
 mod guided;
-mod io;
+mod interface;
 mod report;
 
 pub use self::core::{Core, Executor, FlightExecutor, Strategy};
 pub use guided::{GuidedTargets, MissionExecutor};
-pub use io::{
+pub use interface::{
     Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
     wrap_angle_rad,
 };

@@ -3,7 +3,7 @@
 //! in [`crate::auto`]). A strategy decides only TAKEOFF and WAYPOINT and reads mission progress.
 
 use super::faults::{Faults, PendingHold};
-use super::io::{
+use super::interface::{
     Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
 };
 use super::report::{ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached};

@@ -1,6 +1,6 @@
 //! Link-loss, hold and return-to-launch bookkeeping of the executor core.
 
-use super::io::{
+use super::interface::{
     Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
 };
 use super::report::{ExecutorConfig, Failure, Note, Output};

@@ -2,7 +2,7 @@
 //! yaw target until the vehicle is within the deadband, land after the last one.
 
 use super::core::{Core, Executor, Strategy};
-use super::io::{Command, Event, FlightState, Target, Telemetry};
+use super::interface::{Command, Event, FlightState, Target, Telemetry};
 use super::report::{ConfigError, ExecutorConfig, Failure, Output};
 
 /// GUIDED position targets: see the module documentation.

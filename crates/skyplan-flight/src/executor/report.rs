@@ -1,6 +1,6 @@
 //! What an executor reports: notes, reached waypoints, failures and outcomes; its configuration.
 
-use super::io::{Command, CommandKind, FailsafeAction, FlightState, Target, VehicleMode};
+use super::interface::{Command, CommandKind, FailsafeAction, FlightState, Target, VehicleMode};
 use crate::sensing::ReplanEvent;
 use std::fmt;
 
