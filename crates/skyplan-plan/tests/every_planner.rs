@@ -88,17 +88,28 @@ fn optimal_grid_planners_agree_on_the_default_route() {
         .cost_m
     };
     let jps = cost(&mut session, PlannerId::Jps);
-    for p in [
-        PlannerId::JpsPlus,
-        PlannerId::Astar,
-        PlannerId::Dijkstra,
-        PlannerId::Wavefront,
-    ] {
-        assert_eq!(cost(&mut session, p), jps, "{p}");
-    }
     // The published FCND figure (README): 1097.94 m on the 921 × 921 grid.
     assert!((jps - 1097.94).abs() < 0.005, "{jps}");
     assert!(cost(&mut session, PlannerId::Theta) < jps);
+    // Every exact planner of the registry finds the same length, on 4 m cells (where the
+    // contraction hierarchy's preprocessing takes a second, not minutes).
+    let coarse = |s: &mut Session, p| {
+        s.plan(&PlanRequest {
+            planner: Some(p),
+            cell_m: Some(4.0),
+            ..Default::default()
+        })
+        .unwrap()
+        .cost_m
+    };
+    let jps = coarse(&mut session, PlannerId::Jps);
+    let exact: Vec<PlannerId> = (PlannerId::ALL.iter().copied())
+        .filter(|p| p.is_exact_on_grids())
+        .collect();
+    assert!(exact.len() >= 6, "{exact:?}");
+    for p in exact {
+        assert_eq!(coarse(&mut session, p), jps, "{p}");
+    }
 }
 
 #[test]
@@ -138,11 +149,12 @@ fn the_3d_planners_accept_every_point_the_grid_planners_accept() {
                 "grid planner refused {goal:?}: {e}"
             );
         }
-        for planner in [PlannerId::RrtConnect, PlannerId::Voxel] {
+        let three_d = PlannerId::ALL.iter().filter(|p| p.info().dims == 3);
+        for &planner in three_d {
             let r = session.plan(&PlanRequest {
                 planner: Some(planner),
                 goal_ne: Some(goal),
-                time_limit_ms: Some(3000),
+                time_limit_ms: Some(1000),
                 ..Default::default()
             });
             if let Err(e) = r {
@@ -220,12 +232,8 @@ fn an_enclosed_goal_is_no_path_with_both_regions() {
     let grid =
         skyplan_cspace::Grid2::from_ascii(".......\n.#####.\n.#...#.\n.#####.\n.......").unwrap();
     let mut s = Session::new(World::from_grid("box", grid));
-    for planner in [
-        PlannerId::Jps,
-        PlannerId::Astar,
-        PlannerId::Wavefront,
-        PlannerId::Costmap,
-    ] {
+    // Every planner that takes a grid map.
+    for planner in PlannerId::for_maps(false) {
         let e = s
             .plan(&PlanRequest {
                 planner: Some(planner),
