@@ -177,9 +177,8 @@ fn draw_routes<DB: DrawingBackend>(
 ) -> Result<(), PlotError> {
     let en = |&(n, e): &(f64, f64)| (e, n);
     if let Some(f) = scene.flight {
-        chart
-            .draw_series(f.hidden.iter().map(|o| footprint(o, HIDDEN_COLOR)))
-            .map_err(err)?;
+        // The learned cells first, then the hidden buildings over them: a hidden building
+        // stays visible where the vehicle learned its cells.
         let r = styles.r_learned;
         chart
             .draw_series(
@@ -187,6 +186,9 @@ fn draw_routes<DB: DrawingBackend>(
                     .iter()
                     .map(|p| Circle::new(en(p), r, LEARNED_COLOR.filled())),
             )
+            .map_err(err)?;
+        chart
+            .draw_series(f.hidden.iter().map(|o| footprint(o, HIDDEN_COLOR)))
             .map_err(err)?;
     }
     if scene.raw_path_ne.len() > 1 {

@@ -148,13 +148,37 @@ impl MapPicture<'_> {
             _ => plan.planner.info().label.to_string(),
         };
         let at = grid_at(plan);
+        let title = match self.flight {
+            // A flight: what was flown, not what was planned.
+            Some(f) => {
+                let flown_m: f64 = (f.track_ne.windows(2))
+                    .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+                    .sum();
+                format!(
+                    "{}, flight{at}: {flown_m:.1} m flown over the ground, {} replans, {} hidden obstacles",
+                    self.map,
+                    f.replanned_ne.len(),
+                    f.hidden.len()
+                )
+            }
+            // A plan: the length of the route to fly, and the planner's own path when it differs
+            // (a grid path before shortcutting).
+            None => {
+                let own = if (plan.cost_m - plan.mission_length_m).abs() > 0.05 {
+                    format!(" ({how} path {:.1} m)", plan.cost_m)
+                } else {
+                    String::new()
+                };
+                format!(
+                    "{}, {how}{at}: {:.1} m to fly in {} waypoints{own}",
+                    self.map,
+                    plan.mission_length_m,
+                    waypoints.len()
+                )
+            }
+        };
         let scene = crate::Scene {
-            title: format!(
-                "{}, {how}{at}: {:.1} m, {} waypoints",
-                self.map,
-                plan.cost_m,
-                waypoints.len()
-            ),
+            title,
             grid: self.grid,
             obstacles: &geometry.active_boxes,
             raw_path_ne: &raw,
