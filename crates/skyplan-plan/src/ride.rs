@@ -141,7 +141,8 @@ pub struct Ride {
     /// The start cell and the last target's cell.
     #[serde(skip)]
     pub ends: (Cell, Cell),
-    /// The cost map, normalised to 0..1, row-major.
+    /// The cost map's Nav2 costs (0 free to 254 lethal), row-major: the heat map's values, so
+    /// its scale reads as the costs themselves.
     #[serde(skip)]
     pub costs: Vec<f64>,
     /// The move model.
@@ -283,7 +284,7 @@ impl Session {
             costmap: params.json(),
             inflation_time_us,
             ride_time_us,
-            costs: costmap.normalised().iter().map(|&c| f64::from(c)).collect(),
+            costs: costmap.costs().iter().map(|&c| f64::from(c)).collect(),
             ends: (start, goal),
             trace: run.trace,
             model,
