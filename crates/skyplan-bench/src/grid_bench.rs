@@ -124,9 +124,14 @@ pub fn contenders(
         .collect()
 }
 
-/// Every name `--planners` takes: the registry's grid-search planners, then the peer (derived,
-/// so a new grid planner is named here without an edit).
-fn contender_names() -> String {
+/// Every name `--planners` takes, comma-separated: the registry's grid-search planners, then the
+/// peer (derived, so a new grid planner is named here without an edit).
+///
+/// ```
+/// let names = skyplan_bench::grid_bench::contender_names();
+/// assert!(names.contains("jps-plus, ") && names.ends_with(", rust-pathfinding-astar"));
+/// ```
+pub fn contender_names() -> String {
     let planners = PlannerId::ALL
         .iter()
         .filter_map(|&p| Contender::from_name(p.name()).map(Contender::name));

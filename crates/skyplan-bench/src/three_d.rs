@@ -150,9 +150,9 @@ pub fn parse_peer_lines(text: &str) -> (Vec<(String, Vec<Rec3>)>, Vec<String>) {
     })
 }
 
-/// skyplan's RRT-Connect, PRM and RRT\* through the planning API on `qs` (seeds `seed + k`),
-/// each within `budget_s` (the API re-checks every path exactly: a route that failed it would
-/// be an internal failure, never a solved row).
+/// Every 3D planner of the registry (`dims == 3`, in registry order) through the planning API
+/// on `qs` (seeds `seed + k`), each within `budget_s` (the API re-checks every path exactly: a
+/// route that failed it would be an internal failure, never a solved row).
 pub fn skyplan_runs(
     session: &mut skyplan_plan::Session,
     qs: &[(Neu, Neu)],
@@ -162,7 +162,7 @@ pub fn skyplan_runs(
 ) -> Vec<(String, Vec<Rec3>)> {
     use skyplan_plan::{PlanRequest, PlannerId};
     let mut runs = Vec::new();
-    for planner in [PlannerId::RrtConnect, PlannerId::Prm, PlannerId::RrtStar] {
+    for &planner in PlannerId::ALL.iter().filter(|p| p.info().dims == 3) {
         let mut recs = Vec::new();
         for (k, &(start, goal)) in qs.iter().enumerate() {
             let request = PlanRequest {

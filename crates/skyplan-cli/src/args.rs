@@ -109,6 +109,25 @@ pub struct RouteArgs {
 }
 
 /// `1G`, `512M`, `300K` or a number of bytes.
+/// `bench --planners`' help: the names it takes and its defaults, from the registry (a new grid
+/// planner is named here without an edit).
+fn bench_planners_help() -> String {
+    let names = |movingai| {
+        let defaults = skyplan_bench::default_contenders(movingai, false);
+        defaults
+            .iter()
+            .map(|c| c.name())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    format!(
+        "Comma-separated planners: {} [default: {}; on MovingAI .map files: {}]",
+        skyplan_bench::grid_bench::contender_names(),
+        names(false),
+        names(true)
+    )
+}
+
 fn parse_size_bytes(s: &str) -> Result<u64, String> {
     let t = s.trim();
     let (num, mult) = match t.char_indices().last() {
@@ -267,8 +286,8 @@ impl MovesArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// 3D mode: skyplan's PRM, RRT-Connect and RRT* (and OMPL's with --peers) on random free 3D
-    /// queries plus the FCND route, among the boxes grown by --safety-m.
+    /// 3D mode: every skyplan 3D planner (and OMPL's PRM, RRT-Connect and RRT* with --peers) on
+    /// random free 3D queries plus the FCND route, among the boxes grown by --safety-m.
     #[arg(long = "3d")]
     pub three_d: bool,
     /// Map: FCND colliders .csv (default: the bundled city map) or MovingAI .map.
@@ -288,8 +307,8 @@ pub struct BenchArgs {
     /// Take the queries from a MovingAI .scen file instead.
     #[arg(long, value_name = "FILE")]
     pub scen: Option<PathBuf>,
-    /// Comma-separated planners: ch, jps-plus, jps, astar, dijkstra, rust-pathfinding-astar [default: jps-plus,jps,astar; ch first on MovingAI .map files].
-    #[arg(long, value_name = "LIST")]
+    // Comma-separated planners: the help names them from the registry (`bench_planners_help`).
+    #[arg(long, value_name = "LIST", help = bench_planners_help())]
     pub planners: Option<String>,
     /// Use the corner-cutting move model (FCND) instead of no corner cutting.
     #[arg(long)]

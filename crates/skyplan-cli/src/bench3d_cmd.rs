@@ -1,4 +1,4 @@
-//! `skyplan bench --3d`: skyplan's PRM, RRT-Connect and Informed RRT\* on the same 3D queries
+//! `skyplan bench --3d`: every 3D planner of skyplan's registry on the same 3D queries
 //! (random free points far apart, plus the FCND route), and with `--peers` OMPL's PRM,
 //! RRTConnect and RRT\* through its Python wheels (`bench/peers3d.py`). Every path of either side
 //! is re-checked exactly (continuous segment–box tests). The runs and the report are

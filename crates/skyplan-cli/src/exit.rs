@@ -107,9 +107,9 @@ pub fn runtime(message: impl std::fmt::Display) -> Failure {
     Failure::new(Kind::Runtime, message)
 }
 
-impl From<skyplan_link::runner::RunError> for Failure {
-    fn from(e: skyplan_link::runner::RunError) -> Self {
-        use skyplan_link::runner::RunError;
+impl From<skyplan_flyer::runner::RunError> for Failure {
+    fn from(e: skyplan_flyer::runner::RunError) -> Self {
+        use skyplan_flyer::runner::RunError;
         match e {
             RunError::BadInput(m) => bad_input(m),
             RunError::Plan(f) => f.into(),

@@ -9,13 +9,13 @@ use crate::files::{Target, write_atomic, write_target};
 use crate::picture::PictureKind;
 use crate::replan_cmd::flight_picture;
 use skyplan_flight::executor::{ExecutorConfig, FlightState, Note, Outcome, Telemetry};
+use skyplan_flyer::flight::{self, Observer, reached_index};
+use skyplan_flyer::runner::{self, Ended, FlyOptions, Mode, RunObserver, Unfinished};
+use skyplan_flyer::words::{log_csv, progress_message, sim_note_line};
 use skyplan_frames::LocalFrame;
-use skyplan_link::flight::{self, Observer, reached_index};
 use skyplan_link::ground::{GroundConfig, Update, Waiting};
 use skyplan_link::in_process::InProcessSim;
-use skyplan_link::runner::{self, Ended, FlyOptions, Mode, RunObserver, Unfinished};
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
-use skyplan_link::words::{log_csv, progress_message, sim_note_line};
 use skyplan_link::{Address, Role};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
 use skyplan_plan::Plan;
@@ -174,7 +174,7 @@ fn conclude(
             flight.log.len()
         );
     }
-    finish_flight(report, outcome, t0)
+    finish_flight(report, outcome, runner::plan_margin_m(&flight.plan), t0)
 }
 
 /// The obstacles of the simulated world that the map does not have: `--hidden FILE` and
@@ -265,13 +265,19 @@ fn fly_options(a: &FlyArgs) -> FlyOptions {
 }
 
 /// The simulator's track report and the flight's exit: 0 only when landed and disarmed with
-/// every waypoint reached and, on the simulator, no collision.
-fn finish_flight(report: Option<&SimReport>, outcome: Option<Outcome>, t0: Instant) -> Result<()> {
+/// every waypoint reached and, on the simulator, no collision and never within half the route's
+/// safety margin `margin_m` of an obstacle.
+fn finish_flight(
+    report: Option<&SimReport>,
+    outcome: Option<Outcome>,
+    margin_m: Option<f64>,
+    t0: Instant,
+) -> Result<()> {
     if let Some(r) = report {
-        println!("{}", flight::track_line(r));
+        println!("{}", flight::track_line(r, margin_m));
     }
     println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
-    runner::verdict(outcome, report).map_err(|e| match e {
+    runner::verdict(outcome, report, margin_m).map_err(|e| match e {
         Unfinished::NoRoute(_) => Failure::new(Kind::NoPath, e),
         e => runtime(e),
     })

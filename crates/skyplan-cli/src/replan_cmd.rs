@@ -1,8 +1,8 @@
 //! Replanning in flight, the CLI's side: `--replanner`, the flight picture, and `bench --replan`
-//! (the flights are `skyplan_link::runner`'s).
+//! (the flights are `skyplan_flyer::runner`'s).
 
 use crate::exit::Result;
-use skyplan_link::runner::Flight;
+use skyplan_flyer::runner::Flight;
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_plan::World;
 use skyplan_replan::ReplannerKind;
@@ -38,7 +38,7 @@ impl ReplannerArg {
 pub fn bench(world: &World, spec: &ScenarioSpec, speedup: f64) -> Result<String> {
     // The `\r` progress line only on a terminal: redirected stderr gets no control characters.
     let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let table = skyplan_link::runner::replan_bench(world, spec, speedup, |kind, k, n| {
+    let table = skyplan_flyer::runner::replan_bench(world, spec, speedup, |kind, k, n| {
         if terminal {
             eprint!("\rbench --replan: {kind} flight {k}/{n}   ")
         }

@@ -4,10 +4,10 @@ use crate::args::SimArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
 use crate::files::{map_text, read_text};
 use skyplan_flight::collision::BoxWorld;
+use skyplan_flyer::flight::sim_listening_line;
+use skyplan_flyer::words::sim_note_line;
 use skyplan_frames::Lla;
-use skyplan_link::flight::sim_listening_line;
 use skyplan_link::vehicle::{SimServer, SimServerConfig};
-use skyplan_link::words::sim_note_line;
 use skyplan_link::{Address, Role};
 use skyplan_plan::FCND_CITY_NAME;
 use std::time::Duration;
@@ -87,7 +87,7 @@ pub fn run(args: SimArgs) -> Result<()> {
     );
     println!(
         "{}",
-        skyplan_link::flight::sim_stopped_line(&report, map_boxes)
+        skyplan_flyer::flight::sim_stopped_line(&report, map_boxes)
     );
     Ok(())
 }

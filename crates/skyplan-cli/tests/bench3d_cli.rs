@@ -3,6 +3,7 @@
 
 mod common;
 use common::ok_json;
+use skyplan_plan::PlannerId;
 
 #[test]
 fn bench_3d_solves_and_rechecks_every_query() {
@@ -12,16 +13,17 @@ fn bench_3d_solves_and_rechecks_every_query() {
     let queries = v["queries"].as_u64().unwrap();
     assert_eq!(queries, 3, "{v}");
     let rows = v["rows"].as_array().unwrap();
-    let mut names: Vec<&str> = rows
+    let names: Vec<&str> = rows
         .iter()
         .map(|r| r["planner"].as_str().unwrap())
         .collect();
-    names.sort_unstable();
-    assert_eq!(
-        names,
-        ["skyplan prm", "skyplan rrt-connect", "skyplan rrt-star"],
-        "no peers without --peers: {v}"
-    );
+    // Every 3D planner of the registry, no peers without --peers.
+    let want: Vec<String> = PlannerId::ALL
+        .iter()
+        .filter(|p| p.info().dims == 3)
+        .map(|p| format!("skyplan {p}"))
+        .collect();
+    assert_eq!(names, want, "{v}");
     for r in rows {
         assert_eq!(r["queries"], queries, "{r}");
         assert_eq!(r["solved"], queries, "every query solved: {r}");

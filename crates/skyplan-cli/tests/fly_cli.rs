@@ -776,6 +776,63 @@ fn fly_without_replanning_hits_the_hidden_buildings() {
     assert!(!replanned, "{}", r.stdout);
 }
 
+/// A hidden pole 2.5 m beside the first leg of the planned route (5 m margin), the replanner
+/// off: the vehicle flies past it without touching it but closer than half the margin, so the
+/// flight is not done: exit 1, the closest approach and the margin said.
+#[test]
+fn a_flight_closer_than_half_the_margin_to_a_hidden_pole_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    // The route as planned (the default request), its first leg from the start.
+    let plan = common::ok_json(dir.path(), "plan --json");
+    let w = plan["waypoints"].as_array().unwrap();
+    let p = |k: usize| [w[k][0].as_f64().unwrap(), w[k][1].as_f64().unwrap()];
+    let (a, b) = (p(0), p(1));
+    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+    assert!(len > 20.0, "first leg {len} m");
+    let (un, ue) = ((b[0] - a[0]) / len, (b[1] - a[1]) / len);
+    // A 1 m × 1 m pole, 20 m tall, its centre 2.5 m to the side of the leg's middle: its nearest
+    // corner is 2.5 − 0.5 (|un| + |ue|) from the leg.
+    let (n, e) = (
+        (a[0] + b[0]) / 2.0 - 2.5 * ue,
+        (a[1] + b[1]) / 2.0 + 2.5 * un,
+    );
+    let gap_m = 2.5 - 0.5 * (un.abs() + ue.abs());
+    assert!(gap_m > 1.0 && gap_m < 2.0, "{gap_m}");
+    std::fs::write(
+        dir.path().join("pole.csv"),
+        format!("lat0 37.792480, lon0 -122.397450\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n{n},{e},10,0.5,0.5,10\n"),
+    )
+    .unwrap();
+    let r = run(
+        dir.path(),
+        "fly --sim --speedup 50 --hidden pole.csv --replanner off",
+    );
+    r.expect_code(1)
+        .stdout_has(&[
+            "result     landed and disarmed after reaching all",
+            "no collision with the map's obstacles or the hidden building",
+            "(hidden building #1 of 1)",
+            "safety margin 5 m",
+        ])
+        .stdout_lacks("COLLISION")
+        .stderr_has(&[
+            "of hidden building #1 of 1",
+            "closer than half (2.5 m) the route's 5 m safety margin: not done",
+        ]);
+    // The closest approach is the pole's, near the gap to the planned leg (tracking ≤ 1 m off).
+    let track = r.stdout.lines().find(|l| l.starts_with("track ")).unwrap();
+    let closest: f64 = track
+        .split("closest obstacle ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|m| m.parse().ok())
+        .unwrap_or_else(|| panic!("{track}"));
+    assert!(
+        closest < 2.5 && (closest - gap_m).abs() < 1.0,
+        "{track} vs {gap_m}"
+    );
+}
+
 /// A hidden ring of 100 m walls around the goal: no route at the flight altitude nor by climbing
 /// to --max-alt-m. The vehicle holds, lands, and `fly` exits 3 saying why.
 #[test]

@@ -1,8 +1,9 @@
-//! `skyplan fly --planner P` flies any planner's route on the built-in simulator: landed,
+//! `skyplan fly --planner P` flies every planner's route on the built-in simulator: landed,
 //! disarmed, every waypoint reached, no collision with the map's boxes.
 
 mod common;
 use common::{cmd, ok, python};
+use skyplan_plan::{MapKinds, PlannerId};
 
 /// `skyplan fly --sim --speedup 50 --timeout-s 120 LINE` in a new directory: exit code, stdout
 /// and stderr together.
@@ -22,24 +23,24 @@ fn fly(line: &str) -> (Option<i32>, String) {
     (out.status.code(), text)
 }
 
+/// Whether a planner takes a colliders map, the only kind `fly` flies (an exhaustive match: a new
+/// kind of map decides here).
+fn takes_colliders(planner: PlannerId) -> bool {
+    match planner.info().maps {
+        MapKinds::AnyGrid | MapKinds::CollidersOnly => true,
+    }
+}
+
+/// Every planner of the registry that takes a colliders map, 2D or 3D. On a 5 m grid, so that
+/// `ch`'s per-grid preprocessing takes a second, not minutes.
 #[test]
-fn every_route_producing_planner_flies_to_landing() {
-    for planner in [
-        "jps",
-        "jps-plus",
-        "astar",
-        "dijkstra",
-        "theta",
-        "wavefront",
-        "costmap",
-        "voronoi",
-        "prm",
-        "lazy-prm",
-        "rrt-connect",
-        "rrt-star",
-        "voxel",
-    ] {
-        let (code, text) = fly(&format!("--planner {planner} --goal-ne 60,40"));
+fn every_planner_of_the_registry_flies_to_landing() {
+    let planners = PlannerId::ALL
+        .iter()
+        .copied()
+        .filter(|&p| takes_colliders(p));
+    for planner in planners {
+        let (code, text) = fly(&format!("--planner {planner} --cell-m 5 --goal-ne 60,40"));
         assert_eq!(code, Some(0), "{planner}: {text}");
         assert!(
             text.contains("result     landed and disarmed after reaching all"),

@@ -49,12 +49,12 @@ fn bad_input_table() {
         (
             &["plan", "--alt-m", "-5"],
             2,
-            "alt_m -5: expected a number from 0 to 10000 m",
+            "--alt-m -5: expected a number from 0 to 10000 m",
         ),
-        (&["plan", "--alt-m", "1e9"], 2, "alt_m 1000000000"),
-        (&["plan", "--safety-m", "-1"], 2, "safety_m -1"),
-        (&["plan", "--cell-m", "0"], 2, "cell_m 0"),
-        (&["plan", "--cell-m", "1e6"], 2, "cell_m 1000000"),
+        (&["plan", "--alt-m", "1e9"], 2, "--alt-m 1000000000"),
+        (&["plan", "--safety-m", "-1"], 2, "--safety-m -1"),
+        (&["plan", "--cell-m", "0"], 2, "--cell-m 0"),
+        (&["plan", "--cell-m", "1e6"], 2, "--cell-m 1000000"),
         (
             &[
                 "plan",
@@ -64,12 +64,12 @@ fn bad_input_table() {
                 "18446744073709551615",
             ],
             2,
-            "time_limit_ms 18446744073709551615: expected 1 to 600000",
+            "--time-limit-ms 18446744073709551615: expected 1 to 600000",
         ),
         (
             &["plan", "--planner", "prm", "--max-alt-m=-10"],
             2,
-            "max_alt_m -10",
+            "--max-alt-m -10",
         ),
         (&["plan", "--goal-alt-m", "30"], 2, "need"),
         (
@@ -80,7 +80,7 @@ fn bad_input_table() {
         (
             &["plan", "--cell-m", "0.01", "--max-memory", "1G"],
             2,
-            "use a larger cell_m",
+            "use a larger --cell-m",
         ),
         (
             &["plan", "--resolution", "1"],

@@ -1,16 +1,24 @@
-//! `skyplan plan --planner prm|rrt-connect|rrt-star`: the real binary; every returned segment is
-//! re-checked here against every box with the brute-force checker.
+//! `skyplan plan --planner P` for every 3D planner of the registry: the real binary; every
+//! returned segment is re-checked here against every box with the brute-force checker.
 
 mod common;
 use common::{CITY_CSV, assert_no_waypoints, checked_path_3d, num, plan_json};
 
-const PLANNERS: [&str; 3] = ["prm", "rrt-connect", "rrt-star"];
+use skyplan_plan::PlannerId;
+
+/// The registry's 3D planners (a new one is tested here without an edit).
+fn three_d_planners() -> impl Iterator<Item = PlannerId> {
+    PlannerId::ALL
+        .iter()
+        .copied()
+        .filter(|p| p.info().dims == 3)
+}
 
 #[test]
 fn every_3d_planner_returns_an_exactly_free_path_on_the_city() {
     let dir = tempfile::tempdir().unwrap();
     let text = CITY_CSV;
-    for planner in PLANNERS {
+    for planner in three_d_planners() {
         // Climb from 5 m at the home to 40 m across the city.
         let (code, v) = plan_json(
             dir.path(),
@@ -77,7 +85,7 @@ fn goal_in_a_building_is_bad_input_and_an_enclosed_goal_is_no_path() {
         ));
     }
     std::fs::write(dir.path().join("cage.csv"), text).unwrap();
-    for planner in PLANNERS {
+    for planner in three_d_planners() {
         let (code, v) = plan_json(
             dir.path(),
             &format!(

@@ -1,4 +1,6 @@
-//! Checking a flown track against the map's obstacle boxes (the real boxes, no margin).
+//! Checking a flown track against the obstacle boxes of the true world (the real boxes, no
+//! margin): collisions, and the closest approach ([`Closest`]) that a flight's verdict judges
+//! against the route's safety margin.
 //!
 //! ```
 //! use skyplan_flight::collision::{BoxWorld, TrackCheck};
@@ -96,31 +98,38 @@ impl BoxWorld {
     /// Distance from a NED point to the nearest box, metres, if one is within `max_m`
     /// (`max_m` ≤ 20 m; farther boxes may be missed).
     pub fn clearance_m(&self, point_ned_m: [f64; 3], max_m: f64) -> Option<f64> {
+        self.nearest(point_ned_m, max_m).map(|(_, d)| d)
+    }
+
+    /// The nearest box to a NED point and its distance, metres, if one is within `max_m`
+    /// (`max_m` ≤ 20 m; farther boxes may be missed); the lower index on a tie.
+    pub fn nearest(&self, point_ned_m: [f64; 3], max_m: f64) -> Option<(usize, f64)> {
         let [n, e, d] = point_ned_m;
         let up = -d;
-        let mut best: Option<f64> = None;
-        let mut seen = std::collections::HashSet::new();
-        for bn in bucket(n - max_m)..=bucket(n + max_m) {
-            for be in bucket(e - max_m)..=bucket(e + max_m) {
-                let Some(list) = self.buckets.get(&(bn, be)) else {
-                    continue;
-                };
-                for &i in list {
-                    if !seen.insert(i) {
-                        continue;
-                    }
-                    let b = &self.boxes[i as usize];
-                    let dn = ((n - b.north_m).abs() - b.half_north_m).max(0.0);
-                    let de = ((e - b.east_m).abs() - b.half_east_m).max(0.0);
-                    let du = ((up - b.up_m).abs() - b.half_up_m).max(0.0);
-                    let dist = (dn * dn + de * de + du * du).sqrt();
-                    if dist <= max_m && best.is_none_or(|x| dist < x) {
-                        best = Some(dist);
-                    }
-                }
+        let mut best: Option<(usize, f64)> = None;
+        for i in self.boxes_within(n, e, max_m) {
+            let b = &self.boxes[i];
+            let dn = ((n - b.north_m).abs() - b.half_north_m).max(0.0);
+            let de = ((e - b.east_m).abs() - b.half_east_m).max(0.0);
+            let du = ((up - b.up_m).abs() - b.half_up_m).max(0.0);
+            let dist = (dn * dn + de * de + du * du).sqrt();
+            if dist <= max_m && best.is_none_or(|(_, x)| dist < x) {
+                best = Some((i, dist));
             }
         }
         best
+    }
+}
+
+/// The true world of a flight: the map's boxes followed by the hidden ones the planner does not
+/// know (so a box's index tells which it is); `None` without either. The one box world that the
+/// flown track is checked against and the simulated sensor sees.
+pub fn true_world(map: Option<&BoxWorld>, hidden: &[ObstacleBox]) -> Option<BoxWorld> {
+    match (map, hidden.is_empty()) {
+        (Some(w), true) => Some(w.clone()),
+        (Some(w), false) => Some(BoxWorld::new(&[w.boxes(), hidden].concat())),
+        (None, false) => Some(BoxWorld::new(hidden)),
+        (None, true) => None,
     }
 }
 
@@ -135,13 +144,24 @@ pub struct Collision {
     pub box_index: usize,
 }
 
+/// The track's closest approach to a box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Closest {
+    /// Distance to the box, metres (0: touching or inside).
+    pub clearance_m: f64,
+    /// When, seconds (the time given with the point).
+    pub time_s: f64,
+    /// Index of the box in the world.
+    pub box_index: usize,
+}
+
 /// Accumulates a track's collisions and its closest approach to the boxes.
 #[derive(Debug, Clone, Default)]
 pub struct TrackCheck {
     last: Option<[f64; 3]>,
     first_collision: Option<Collision>,
     collisions: usize,
-    min_clearance_m: Option<f64>,
+    closest: Option<Closest>,
     samples: usize,
 }
 
@@ -187,9 +207,14 @@ impl TrackCheck {
             }
         }
         if -point_ned_m[2] >= 0.05
-            && let Some(c) = world.clearance_m(point_ned_m, CLEARANCE_MAX_M)
+            && let Some((box_index, clearance_m)) = world.nearest(point_ned_m, CLEARANCE_MAX_M)
+            && self.closest.is_none_or(|c| clearance_m < c.clearance_m)
         {
-            self.min_clearance_m = Some(self.min_clearance_m.map_or(c, |m| m.min(c)));
+            self.closest = Some(Closest {
+                clearance_m,
+                time_s,
+                box_index,
+            });
         }
         self.last = Some(point_ned_m);
     }
@@ -206,6 +231,11 @@ impl TrackCheck {
 
     /// Smallest distance of an airborne track point to a box, metres (`None`: never within 20 m).
     pub fn min_clearance_m(&self) -> Option<f64> {
-        self.min_clearance_m
+        self.closest.map(|c| c.clearance_m)
+    }
+
+    /// The closest approach of an airborne track point to a box (`None`: never within 20 m).
+    pub fn closest(&self) -> Option<Closest> {
+        self.closest
     }
 }

@@ -8,6 +8,7 @@
 //! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
 //! - [`sensing`]: range-sensor readings and the [`sensing::RouteWatcher`] hook that replans in flight.
 //! - [`sensor`]: the simulated range sensor (rays against the true world's boxes).
+//! - [`modes`]: the one table of autopilot mode numbers (ArduCopter's, PX4's).
 //! - [`auto`]: flying the uploaded mission in AUTO (`skyplan fly --upload`), same states and
 //!   outcomes as [`executor`].
 //!
@@ -20,6 +21,7 @@ pub mod auto;
 pub mod collision;
 pub mod executor;
 pub mod flat_earth;
+pub mod modes;
 pub mod sensing;
 pub mod sensor;
 pub mod sim;

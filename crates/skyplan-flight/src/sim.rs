@@ -44,25 +44,27 @@ pub enum SimMode {
 impl SimMode {
     /// ArduCopter's `custom_mode` number of this mode.
     pub fn arducopter_custom_mode(self) -> u32 {
+        use crate::modes::arducopter;
         match self {
-            SimMode::Stabilize => 0,
-            SimMode::Auto => 3,
-            SimMode::Guided => 4,
-            SimMode::Loiter => 5,
-            SimMode::Rtl => 6,
-            SimMode::Land => 9,
+            SimMode::Stabilize => arducopter::STABILIZE,
+            SimMode::Auto => arducopter::AUTO,
+            SimMode::Guided => arducopter::GUIDED,
+            SimMode::Loiter => arducopter::LOITER,
+            SimMode::Rtl => arducopter::RTL,
+            SimMode::Land => arducopter::LAND,
         }
     }
 
     /// The mode of an ArduCopter `custom_mode` number, if simulated.
     pub fn from_arducopter_custom_mode(mode: u32) -> Option<Self> {
+        use crate::modes::arducopter;
         Some(match mode {
-            0 => SimMode::Stabilize,
-            3 => SimMode::Auto,
-            4 => SimMode::Guided,
-            5 => SimMode::Loiter,
-            6 => SimMode::Rtl,
-            9 => SimMode::Land,
+            arducopter::STABILIZE => SimMode::Stabilize,
+            arducopter::AUTO => SimMode::Auto,
+            arducopter::GUIDED => SimMode::Guided,
+            arducopter::LOITER => SimMode::Loiter,
+            arducopter::RTL => SimMode::Rtl,
+            arducopter::LAND => SimMode::Land,
             _ => return None,
         })
     }
@@ -380,6 +382,42 @@ impl SimVehicle {
             self.advance_mission(&mut events);
         }
         let c = self.config;
+        let (v_cmd, yaw_target) = self.commanded_velocity();
+        // First-order velocity response, within the acceleration limit.
+        let k = (dt_s / c.velocity_tau_s).min(1.0);
+        let mut dv: [f64; 3] = std::array::from_fn(|i| (v_cmd[i] - self.velocity[i]) * k);
+        let dv_norm = (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]).sqrt();
+        let dv_max = c.max_accel_m_s2 * dt_s;
+        if dv_norm > dv_max {
+            for x in &mut dv {
+                *x *= dv_max / dv_norm;
+            }
+        }
+        for ((v, p), dv) in self.velocity.iter_mut().zip(&mut self.position).zip(dv) {
+            *v += dv;
+            *p += *v * dt_s;
+        }
+        self.ground_contact(v_cmd, &mut events);
+        // Heading, within the yaw-rate limit (only when flying).
+        if self.armed && !self.on_ground {
+            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
+            let max = c.max_yaw_rate_rad_s * dt_s;
+            let turn = err.clamp(-max, max);
+            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
+            self.yaw_rate_rad_s = turn / dt_s;
+        } else {
+            self.yaw_rate_rad_s = 0.0;
+        }
+        if !self.armed && self.on_ground {
+            self.velocity = [0.0; 3];
+        }
+        events
+    }
+
+    /// The velocity commanded now (north, east, down) and the heading to turn to: toward the
+    /// target in GUIDED, AUTO and RTL's return, straight down when landing.
+    fn commanded_velocity(&mut self) -> ([f64; 3], f64) {
+        let c = self.config;
         let mut v_cmd = [0.0; 3];
         let mut yaw_target = self.yaw_rad;
         if self.armed && self.mode == SimMode::Rtl && !self.rtl_descending {
@@ -417,21 +455,12 @@ impl SimVehicle {
                 }
             }
         }
-        // First-order velocity response, within the acceleration limit.
-        let k = (dt_s / c.velocity_tau_s).min(1.0);
-        let mut dv: [f64; 3] = std::array::from_fn(|i| (v_cmd[i] - self.velocity[i]) * k);
-        let dv_norm = (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]).sqrt();
-        let dv_max = c.max_accel_m_s2 * dt_s;
-        if dv_norm > dv_max {
-            for x in &mut dv {
-                *x *= dv_max / dv_norm;
-            }
-        }
-        for ((v, p), dv) in self.velocity.iter_mut().zip(&mut self.position).zip(dv) {
-            *v += dv;
-            *p += *v * dt_s;
-        }
-        // The ground.
+        (v_cmd, yaw_target)
+    }
+
+    /// The ground stops the descent; touching down is told, and disarms in LAND, RTL and a
+    /// mission's landing.
+    fn ground_contact(&mut self, v_cmd: [f64; 3], events: &mut Vec<SimEvent>) {
         let was_on_ground = self.on_ground;
         if self.position[2] >= 0.0 {
             self.position[2] = 0.0;
@@ -462,20 +491,6 @@ impl SimVehicle {
                 self.mission_landing = false;
             }
         }
-        // Heading, within the yaw-rate limit (only when flying).
-        if self.armed && !self.on_ground {
-            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
-            let max = c.max_yaw_rate_rad_s * dt_s;
-            let turn = err.clamp(-max, max);
-            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
-            self.yaw_rate_rad_s = turn / dt_s;
-        } else {
-            self.yaw_rate_rad_s = 0.0;
-        }
-        if !self.armed && self.on_ground {
-            self.velocity = [0.0; 3];
-        }
-        events
     }
 
     /// Horizontal velocity command toward a point: proportional, braking, speed-limited.

@@ -1,4 +1,7 @@
-//! The MAVLink link layer of skyplan: the only library crate that touches sockets and clocks.
+//! The MAVLink link layer of skyplan: the only library crate that touches sockets and clocks,
+//! and only in short loops: the ground station's protocol ([`ground::protocol`]) and the
+//! simulator's ([`vehicle::protocol`]) are state machines fed messages and time that return
+//! messages, driven as they are by the fuzz harnesses.
 //!
 //! - [`Link`]: one MAVLink connection (TCP client or accepted server socket, UDP in/out) with a
 //!   reader thread, so that nothing blocks on the network, and an optional heartbeat thread that
@@ -8,27 +11,21 @@
 //! - [`obstacle`]: MAVLink `OBSTACLE_DISTANCE` to and from skyplan-flight's `ObstacleReading`.
 //! - [`ground`]: `skyplan fly`'s side: vehicle messages → executor events, executor commands →
 //!   MAVLink, link-loss detection, the flight loop and the mission upload.
-//! - [`flight`]: one flight, told line by line to an observer and summed up (`fly`, `bench --replan`).
 //! - [`in_process`]: the simulator on a thread of this process (`fly --sim`, `bench --replan`).
+//! - [`streams`]: the one table of streamed messages (the dialect's ids, rates, groups).
 //! - [`messages`]: MAVLink messages built in one place (commands, heartbeats, frames).
-//! - [`mission`]: a planned mission as a vehicle's autopilot gets it (items, true-north headings).
-//! - [`runner`]: a whole run for any front end: the simulator started, the vehicle waited for,
-//!   the plan (a replanner watching), the upload or the flight; `bench --replan`'s flights.
-//! - [`words`]: the flight told in lines (notes, updates) and the flight log as CSV.
 //!
-//! Only the `common` dialect is compiled (build time); ArduPilot's custom modes are numbers.
+//! Only the `common` dialect is compiled (build time); ArduPilot's and PX4's custom modes are
+//! numbers, tabled once in `skyplan_flight::modes`.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod flight;
 pub mod ground;
 pub mod in_process;
 pub mod messages;
-pub mod mission;
 pub mod obstacle;
-pub mod runner;
+pub mod streams;
 pub mod vehicle;
-pub mod words;
 
 use mavlink::dialects::common::MavMessage;
 use mavlink::error::MessageReadError;

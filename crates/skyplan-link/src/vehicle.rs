@@ -30,14 +30,12 @@
 //! [`SimServerConfig::sensor_range_m`], each a ray cast at the vehicle's altitude against the
 //! true world ([`skyplan_flight::sensor`]; see [`crate::obstacle`] for the encoding).
 
-use crate::obstacle::obstacle_distance;
+use crate::streams::{STREAMS, in_group};
 use crate::{Address, Link, LinkError};
 use mavlink::MessageData;
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
 use skyplan_flight::flat_earth::FlatEarth;
-use skyplan_flight::sensing::SectorRange;
-use skyplan_flight::sensor::RangeSensor;
 use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimVehicle};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_map::colliders::ObstacleBox;
@@ -47,6 +45,9 @@ use std::time::{Duration, Instant};
 
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod protocol;
+
+pub use protocol::SimProtocol;
 
 /// Simulated seconds after boot until the simulated EKF has a position, by default.
 pub const DEFAULT_EKF_DELAY_S: f64 = 5.0;
@@ -199,18 +200,6 @@ pub struct SimServer {
     map_frame: LocalFrame,
 }
 
-/// The streamed messages, ArduCopter's way: off until requested. Message id (the dialect's) and
-/// default period.
-const STREAMS: [(u32, f64); 7] = [
-    (ATTITUDE_DATA::ID, 0.1),
-    (MISSION_ITEM_REACHED_DATA::ID, 1.0),
-    (LOCAL_POSITION_NED_DATA::ID, 0.1),
-    (GLOBAL_POSITION_INT_DATA::ID, 0.1),
-    (MISSION_CURRENT_DATA::ID, 0.5),
-    (GPS_GLOBAL_ORIGIN_DATA::ID, 1.0),
-    (EXTENDED_SYS_STATE_DATA::ID, 0.5),
-];
-
 /// Requested stream periods (simulated seconds) and when each was last sent.
 #[derive(Debug, Clone, Default)]
 struct Streams {
@@ -221,13 +210,13 @@ struct Streams {
 impl Streams {
     /// SET_MESSAGE_INTERVAL: −1 stops, 0 is the default rate; `false` for an unknown message.
     fn set_interval(&mut self, id: u32, interval_us: f32) -> bool {
-        let Some(k) = STREAMS.iter().position(|(m, _)| *m == id) else {
+        let Some(k) = STREAMS.iter().position(|m| m.id == id) else {
             return false;
         };
         self.period_s[k] = if interval_us < 0.0 {
             None
         } else if interval_us == 0.0 {
-            Some(STREAMS[k].1)
+            Some(STREAMS[k].default_period_s)
         } else {
             Some(f64::from(interval_us) * 1e-6)
         };
@@ -239,32 +228,25 @@ impl Streams {
     /// by MAVLink, still what older ground stations send and what ArduPilot honours.
     #[allow(deprecated)]
     fn request(&mut self, stream: MavDataStream, rate_hz: u16, start: bool) {
-        let ids: &[u32] = match stream {
-            MavDataStream::MAV_DATA_STREAM_ALL => &[30, 32, 33, 42, 46, 49, 245],
-            MavDataStream::MAV_DATA_STREAM_POSITION => &[32, 33],
-            MavDataStream::MAV_DATA_STREAM_EXTRA1 => &[30],
-            MavDataStream::MAV_DATA_STREAM_EXTENDED_STATUS => &[42, 46, 49, 245],
-            _ => &[],
-        };
         let interval_us = if start && rate_hz > 0 {
             1e6 / f32::from(rate_hz)
         } else {
             -1.0
         };
-        for id in ids {
-            self.set_interval(*id, interval_us);
+        for s in STREAMS.iter().filter(|s| in_group(s, stream)) {
+            self.set_interval(s.id, interval_us);
         }
     }
 
     /// The messages due at `now_s` (and marks them sent).
     fn due(&mut self, now_s: f64) -> Vec<u32> {
         let mut ids = Vec::new();
-        for (k, (id, _)) in STREAMS.iter().enumerate() {
+        for (k, stream) in STREAMS.iter().enumerate() {
             if let Some(p) = self.period_s[k]
                 && now_s - self.last_s[k] >= p
             {
                 self.last_s[k] = now_s;
-                ids.push(*id);
+                ids.push(stream.id);
             }
         }
         ids
@@ -274,7 +256,8 @@ impl Streams {
 struct Upload {
     count: u16,
     items: Vec<SimMissionItem>,
-    last_request: Instant,
+    /// Wall seconds of the last request.
+    last_request_s: f64,
     retries: u32,
 }
 
@@ -387,7 +370,8 @@ impl SimServer {
     }
 
     /// As [`SimServer::run`], and reports the vehicle's state to `state` every `period` of wall
-    /// time (a live view: `skyplan sim --view`).
+    /// time (a live view: `skyplan sim --view`). The vehicle is a [`SimProtocol`] fed the wall
+    /// clock and the messages received; this loop accepts connections and moves the messages.
     pub fn run_with_state(
         mut self,
         world: Option<&BoxWorld>,
@@ -396,61 +380,14 @@ impl SimServer {
         period: Duration,
         mut state: impl FnMut(&SimStatus),
     ) -> SimReport {
-        let cfg = self.config.clone();
-        // The true world: the map's boxes and the hidden ones (their indices follow the map's).
-        let truth = match (world, cfg.hidden.is_empty()) {
-            (Some(w), true) => Some(w.clone()),
-            (Some(w), false) => Some(BoxWorld::new(&[w.boxes(), &cfg.hidden[..]].concat())),
-            (None, false) => Some(BoxWorld::new(&cfg.hidden)),
-            (None, true) => None,
-        };
-        let sensor = RangeSensor {
-            min_range_m: RangeSensor::default().min_range_m,
-            max_range_m: cfg.sensor_range_m.clamp(0.5, 650.0),
-        };
-        // Sector 0 is true north; the map's boxes are in its grid-north frame.
-        let convergence_rad =
-            crate::ground::grid_convergence_rad(&self.map_frame, cfg.home).unwrap_or(0.0);
-        let mut sweeps: Vec<(f64, Vec<SectorRange>)> = Vec::new();
-        let mut next_sweep_s = 0.0;
-        let mut last_status: Option<Instant> = None;
-        let mut status = SimStatus {
-            time_s: 0.0,
-            position_ned: [0.0; 3],
-            heading_rad: 0.0,
-            ground_speed_m_s: 0.0,
-            mode: SimMode::Stabilize,
-            armed: false,
-            hits_ne: Vec::new(),
-        };
-        let speedup = cfg.speedup.max(0.1);
-        let step_s = cfg.step_s.clamp(0.001, 0.05);
-        let mut vehicle = SimVehicle::new(cfg.sim);
-        let mut track = TrackCheck::default();
+        let mut sim = SimProtocol::new(self.config.clone(), self.earth, self.map_frame, world);
         let mut link: Option<Link> = match &mut self.listener {
             Listener::Udp(l) => l.take(),
             Listener::Tcp(_) => None,
         };
         let wall0 = Instant::now();
-        let mut last_hb_sim = f64::NEG_INFINITY;
-        let mut last_hb_wall = wall0 - Duration::from_secs(10);
-        let mut side = Side {
-            earth: self.earth,
-            home_alt_m: cfg.home.alt_m,
-            ekf_delay_s: cfg.ekf_delay_s.max(0.0),
-            streams: Streams::default(),
-            last_reached: u16::MAX,
-        };
-        let mut last_gcs = Instant::now();
-        let mut upload: Option<Upload> = None;
-        let mut dropped = false;
-        let mut restored = false;
-        let mut collided = false;
-        let mut max_alt_m: f64 = 0.0;
-        let mut distance_m = 0.0;
-        let mut last_mode = vehicle.state().mode;
-        let mut last_armed = false;
-        let mut failsafe_done = false;
+        let now_s = || wall0.elapsed().as_secs_f64();
+        let mut last_status: Option<Instant> = None;
         while !stop.load(Ordering::Relaxed) {
             // A ground station connects (TCP: one at a time, again after it leaves).
             if link.is_none()
@@ -460,230 +397,49 @@ impl SimServer {
                 match Link::from_tcp_stream(stream, SYSTEM_ID, COMPONENT_ID) {
                     Ok(new) => {
                         note(SimNote::Connected(peer.to_string()));
-                        last_gcs = Instant::now();
+                        sim.connected(now_s());
                         link = Some(new);
                     }
                     Err(e) => note(SimNote::Disconnected(e.to_string())),
                 }
             }
-            // Physics up to the scaled wall clock.
-            let target_s = wall0.elapsed().as_secs_f64() * speedup;
-            while vehicle.state().time_s + step_s <= target_s {
-                let before = vehicle.state();
-                for e in vehicle.step(step_s) {
-                    match e {
-                        skyplan_flight::sim::SimEvent::MissionItemReached(seq) => {
-                            note(SimNote::MissionItemReached(seq));
-                            side.last_reached = seq;
-                            if !dropped && let Some(l) = &link {
-                                let _ = l.send(&MavMessage::MISSION_ITEM_REACHED(
-                                    MISSION_ITEM_REACHED_DATA { seq },
-                                ));
-                            }
-                        }
-                        skyplan_flight::sim::SimEvent::Landed => note(SimNote::Landed),
-                        skyplan_flight::sim::SimEvent::AutoDisarmed => {}
-                    }
-                }
-                let s = vehicle.state();
-                max_alt_m = max_alt_m.max(-s.position_ned_m[2]);
-                distance_m += (s.position_ned_m[0] - before.position_ned_m[0])
-                    .hypot(s.position_ned_m[1] - before.position_ned_m[1]);
-                let (lat_deg, lon_deg) = self
-                    .earth
-                    .lat_lon_from_ne(s.position_ned_m[0], s.position_ned_m[1]);
-                let map_ned = self.map_frame.ned_from_lla(Lla {
-                    lat_deg,
-                    lon_deg,
-                    alt_m: 0.0,
-                });
-                if let Ok(ned) = &map_ned {
-                    status.position_ned = [ned.north_m, ned.east_m, s.position_ned_m[2]];
-                }
-                if s.time_s >= next_sweep_s {
-                    next_sweep_s = s.time_s + SENSOR_PERIOD_S - 0.5 * step_s;
-                    let sweep = match (&truth, &map_ned) {
-                        (Some(w), Ok(_)) => sensor.scan(w, status.position_ned, -convergence_rad),
-                        _ => vec![SectorRange::Clear; skyplan_flight::sensor::SECTORS],
-                    };
-                    status.hits_ne = sweep
-                        .iter()
-                        .enumerate()
-                        .filter_map(|(i, r)| match r {
-                            SectorRange::Obstacle(d) => {
-                                let b = sensor.increment_rad() * i as f64 - convergence_rad;
-                                Some([
-                                    status.position_ned[0] + d * b.cos(),
-                                    status.position_ned[1] + d * b.sin(),
-                                ])
-                            }
-                            _ => None,
-                        })
-                        .collect();
-                    // Kept until sent (at most 5 s of them when no one listens).
-                    if sweeps.len() >= 50 {
-                        sweeps.remove(0);
-                    }
-                    sweeps.push((s.time_s, sweep));
-                }
-                if let Some(w) = &truth {
-                    if map_ned.is_ok() {
-                        track.add(w, s.time_s, status.position_ned);
-                    }
-                    if !collided && let Some(c) = track.collision() {
-                        collided = true;
-                        note(SimNote::Collision(c));
-                    }
-                }
-            }
-            let s = vehicle.state();
+            let sends = sim.advance(now_s());
+            send_all(link.as_ref(), &sends);
+            sim.take_notes().into_iter().for_each(&mut note);
             if last_status.is_none_or(|t| t.elapsed() >= period) {
                 last_status = Some(Instant::now());
-                status.time_s = s.time_s;
-                status.heading_rad = s.yaw_rad - convergence_rad;
-                status.ground_speed_m_s = s.velocity_ned_m_s[0].hypot(s.velocity_ned_m_s[1]);
-                status.mode = s.mode;
-                status.armed = s.armed;
-                state(&status);
-            }
-            if s.mode != last_mode {
-                note(SimNote::Mode(s.mode));
-                last_mode = s.mode;
-            }
-            if s.armed != last_armed {
-                note(SimNote::Armed(s.armed));
-                last_armed = s.armed;
-            }
-            // The injected fault.
-            if !dropped
-                && !restored
-                && let Some(after) = cfg.drop_link_after_s
-                && s.time_s >= after
-            {
-                dropped = true;
-                note(SimNote::LinkDropped);
-            }
-            if dropped
-                && !restored
-                && let (Some(after), Some(gap)) = (cfg.drop_link_after_s, cfg.link_gap_s)
-                && s.time_s >= after + gap
-            {
-                dropped = false;
-                restored = true;
-                note(SimNote::LinkRestored);
-            }
-            // GCS failsafe.
-            if let Some(fs) = cfg.gcs_failsafe_s
-                && !failsafe_done
-                && s.armed
-                && !s.on_ground
-                && s.mode == SimMode::Guided
-                && last_gcs.elapsed().as_secs_f64() > fs
-            {
-                failsafe_done = true;
-                vehicle.land();
-                note(SimNote::Failsafe(format!(
-                    "no ground station heartbeat for {fs:.1} s: LAND"
-                )));
+                state(&sim.status());
             }
             let Some(l) = link.as_mut() else {
                 std::thread::sleep(Duration::from_millis(5));
                 continue;
             };
             // Inbound, waiting a little for the first message.
-            let mut first = true;
-            loop {
-                let wait = if first {
-                    Duration::from_millis(4)
-                } else {
-                    Duration::ZERO
-                };
-                first = false;
-                let Some(r) = l.recv_timeout(wait) else {
-                    break;
-                };
-                if dropped {
-                    continue;
-                }
-                let replies = handle_message(
-                    &mut vehicle,
-                    &mut side,
-                    &mut upload,
-                    &mut last_gcs,
-                    r.message,
-                    &mut note,
-                );
-                for m in replies {
-                    let _ = l.send(&m);
-                }
+            let mut wait = Duration::from_millis(4);
+            while let Some(r) = l.recv_timeout(wait) {
+                wait = Duration::ZERO;
+                let replies = sim.handle(now_s(), r.message);
+                send_all(Some(l), &replies);
             }
+            sim.take_notes().into_iter().for_each(&mut note);
             if let Some(why) = l.closed() {
                 note(SimNote::Disconnected(why.to_string()));
                 link = None;
-                upload = None;
+                sim.disconnected();
                 continue;
             }
-            if dropped {
-                continue;
-            }
-            // Mission upload retries: re-request the awaited item.
-            if let Some(u) = &mut upload
-                && u.last_request.elapsed() > Duration::from_millis(500)
-            {
-                if u.retries >= 5 {
-                    let _ = l.send(&MavMessage::MISSION_ACK(MISSION_ACK_DATA {
-                        target_system: 0,
-                        target_component: 0,
-                        mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
-                        ..Default::default()
-                    }));
-                    upload = None;
-                } else {
-                    u.retries += 1;
-                    u.last_request = Instant::now();
-                    let seq = u.items.len() as u16;
-                    let _ = l.send(&request_int(seq));
-                }
-            }
-            // Outbound telemetry.
-            let s = vehicle.state();
-            if s.time_s - last_hb_sim >= 1.0 || last_hb_wall.elapsed() >= Duration::from_secs(1) {
-                last_hb_sim = s.time_s;
-                last_hb_wall = Instant::now();
-                let _ = l.send(&heartbeat_of(&s));
-            }
-            for id in side.streams.due(s.time_s) {
-                if let Some(m) = side.message(id, &s, vehicle.mission().len()) {
-                    let _ = l.send(&m);
-                }
-            }
-            // The proximity sensor's sweeps, once the EKF has a position (every one of them:
-            // ≥ 10 Hz of vehicle time at any speed-up).
-            for (time_s, sweep) in sweeps.drain(..) {
-                if side.position_ready(&s) {
-                    let time_usec = (time_s * 1e6) as u64;
-                    let _ = l.send(&obstacle_distance(&sweep, &sensor, time_usec));
-                }
-            }
+            send_all(Some(l), &sim.outbound(now_s()));
         }
-        // A mode or arming change made in the last iteration (the ground station may stop the
-        // simulator as soon as it sees it in a heartbeat) is still reported.
-        let s = vehicle.state();
-        if s.mode != last_mode {
-            note(SimNote::Mode(s.mode));
-        }
-        if s.armed != last_armed {
-            note(SimNote::Armed(s.armed));
-        }
-        SimReport {
-            sim_time_s: vehicle.state().time_s,
-            wall_time_s: wall0.elapsed().as_secs_f64(),
-            final_state: vehicle.state(),
-            track,
-            max_alt_m,
-            distance_m,
-            map_boxes: world.map_or(0, |w| w.boxes().len()),
-            hidden_boxes: cfg.hidden.len(),
+        sim.finish().into_iter().for_each(&mut note);
+        sim.report(now_s())
+    }
+}
+
+/// Sends messages over the link, if any (a failed send shows up as a closed link).
+fn send_all(link: Option<&Link>, messages: &[MavMessage]) {
+    if let Some(l) = link {
+        for m in messages {
+            let _ = l.send(m);
         }
     }
 }
@@ -842,18 +598,12 @@ fn item_to_sim(side: &Side, command: MavCmd, mav_frame: MavFrame, p: [f64; 4]) -
 // SET_MODE and MISSION_ITEM are deprecated but still sent by ground stations: answer them.
 #[allow(deprecated)]
 fn handle_message(
-    v: &mut SimVehicle,
-    side: &mut Side,
-    upload: &mut Option<Upload>,
-    last_gcs: &mut Instant,
+    (v, side, upload): (&mut SimVehicle, &mut Side, &mut Option<Upload>),
+    (now_s, last_gcs_s): (f64, &mut f64),
     message: MavMessage,
     note: &mut impl FnMut(SimNote),
 ) -> Vec<MavMessage> {
     let mut out = Vec::new();
-    let mut refuse = |out: &mut Vec<MavMessage>, text: String| {
-        out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
-        note(SimNote::Refused(text));
-    };
     // Addressed to another system (vehicles may share a network): not ours to obey.
     if mavlink::Message::target_system_id(&message).is_some_and(|t| t != 0 && t != SYSTEM_ID) {
         return out;
@@ -863,79 +613,9 @@ fn handle_message(
             if h.mavtype == MavType::MAV_TYPE_GCS
                 || h.autopilot == MavAutopilot::MAV_AUTOPILOT_INVALID =>
         {
-            *last_gcs = Instant::now();
+            *last_gcs_s = now_s;
         }
-        MavMessage::COMMAND_LONG(c) => {
-            if c.target_system != 0 && c.target_system != SYSTEM_ID {
-                return out;
-            }
-            let result = match c.command {
-                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
-                    if c.param1 >= 0.5 && !side.position_ready(&v.state()) =>
-                {
-                    refuse(&mut out, "PreArm: Need Position Estimate".into());
-                    MavResult::MAV_RESULT_FAILED
-                }
-                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
-                    let r = if c.param1 >= 0.5 { v.arm() } else { v.disarm() };
-                    match r {
-                        Ok(()) => MavResult::MAV_RESULT_ACCEPTED,
-                        Err(e) => {
-                            refuse(&mut out, e.0);
-                            MavResult::MAV_RESULT_DENIED
-                        }
-                    }
-                }
-                MavCmd::MAV_CMD_NAV_TAKEOFF => match v.takeoff(f64::from(c.param7)) {
-                    Ok(()) => {
-                        note(SimNote::Takeoff(f64::from(c.param7)));
-                        MavResult::MAV_RESULT_ACCEPTED
-                    }
-                    Err(e) => {
-                        refuse(&mut out, e.0);
-                        MavResult::MAV_RESULT_FAILED
-                    }
-                },
-                MavCmd::MAV_CMD_NAV_LAND => {
-                    v.land();
-                    MavResult::MAV_RESULT_ACCEPTED
-                }
-                MavCmd::MAV_CMD_DO_SET_MODE => {
-                    match SimMode::from_arducopter_custom_mode(c.param2 as u32) {
-                        Some(m) if (c.param1 as u32) & 1 == 1 => {
-                            v.set_mode(m);
-                            MavResult::MAV_RESULT_ACCEPTED
-                        }
-                        _ => {
-                            refuse(
-                                &mut out,
-                                format!("Mode change to {} not supported", c.param2),
-                            );
-                            MavResult::MAV_RESULT_UNSUPPORTED
-                        }
-                    }
-                }
-                MavCmd::MAV_CMD_MISSION_START => {
-                    if v.mission().len() <= 1 {
-                        refuse(&mut out, "Mission: no items".into());
-                        MavResult::MAV_RESULT_DENIED
-                    } else {
-                        v.set_mode(SimMode::Auto);
-                        MavResult::MAV_RESULT_ACCEPTED
-                    }
-                }
-                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => {
-                    if side.streams.set_interval(c.param1 as u32, c.param2) {
-                        MavResult::MAV_RESULT_ACCEPTED
-                    } else {
-                        MavResult::MAV_RESULT_UNSUPPORTED
-                    }
-                }
-                MavCmd::MAV_CMD_REQUEST_MESSAGE => MavResult::MAV_RESULT_ACCEPTED,
-                _ => MavResult::MAV_RESULT_UNSUPPORTED,
-            };
-            out.push(ack(c.command, result));
-        }
+        MavMessage::COMMAND_LONG(c) => command_long(v, side, &c, &mut out, note),
         MavMessage::SET_MODE(m) => {
             if let Some(mode) = SimMode::from_arducopter_custom_mode(m.custom_mode) {
                 v.set_mode(mode);
@@ -945,35 +625,7 @@ fn handle_message(
             side.streams
                 .request(r.req_stream_id, r.req_message_rate, r.start_stop == 1);
         }
-        MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => {
-            let mask = t.type_mask.bits();
-            let relative = matches!(
-                t.coordinate_frame,
-                MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
-                    | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
-            );
-            let absolute = matches!(
-                t.coordinate_frame,
-                MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL
-            );
-            if mask & 0x7 == 0 && (relative || absolute) {
-                let [north_m, east_m] = side
-                    .earth
-                    .ne_from_lat_lon(f64::from(t.lat_int) * 1e-7, f64::from(t.lon_int) * 1e-7);
-                let alt_m = if relative {
-                    f64::from(t.alt)
-                } else {
-                    f64::from(t.alt) - side.home_alt_m
-                };
-                let yaw = if mask & 0x400 != 0 {
-                    f64::NAN
-                } else {
-                    f64::from(t.yaw)
-                };
-                // Ignored outside GUIDED, as ArduPilot does.
-                let _ = v.set_position_target([north_m, east_m, -alt_m], yaw);
-            }
-        }
+        MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => position_target_global(v, side, &t),
         MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) => {
             let mask = t.type_mask.bits();
             let position_ignored = mask & 0x7 != 0;
@@ -997,7 +649,7 @@ fn handle_message(
                 *upload = Some(Upload {
                     count: c.count,
                     items: Vec::new(),
-                    last_request: Instant::now(),
+                    last_request_s: now_s,
                     retries: 0,
                 });
                 out.push(request_int(0));
@@ -1011,7 +663,7 @@ fn handle_message(
                 f64::from(i.z),
             ];
             let item = item_to_sim(side, i.command, i.frame, p);
-            accept_item(v, upload, i.seq, item, &mut out, note);
+            accept_item(v, (upload, now_s), i.seq, item, &mut out, note);
         }
         MavMessage::MISSION_ITEM(i) => {
             let p = [
@@ -1021,7 +673,7 @@ fn handle_message(
                 f64::from(i.z),
             ];
             let item = item_to_sim(side, i.command, i.frame, p);
-            accept_item(v, upload, i.seq, item, &mut out, note);
+            accept_item(v, (upload, now_s), i.seq, item, &mut out, note);
         }
         MavMessage::MISSION_CLEAR_ALL(_) => {
             v.set_mission(Vec::new());
@@ -1030,6 +682,121 @@ fn handle_message(
         _ => {}
     }
     out
+}
+
+/// A COMMAND_LONG: obeyed or refused (the reason as STATUSTEXT), always acknowledged.
+fn command_long(
+    v: &mut SimVehicle,
+    side: &mut Side,
+    c: &COMMAND_LONG_DATA,
+    out: &mut Vec<MavMessage>,
+    note: &mut impl FnMut(SimNote),
+) {
+    let mut refuse = |out: &mut Vec<MavMessage>, text: String| {
+        out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &text));
+        note(SimNote::Refused(text));
+    };
+    if c.target_system != 0 && c.target_system != SYSTEM_ID {
+        return;
+    }
+    let result = match c.command {
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
+            if c.param1 >= 0.5 && !side.position_ready(&v.state()) =>
+        {
+            refuse(out, "PreArm: Need Position Estimate".into());
+            MavResult::MAV_RESULT_FAILED
+        }
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+            let r = if c.param1 >= 0.5 { v.arm() } else { v.disarm() };
+            match r {
+                Ok(()) => MavResult::MAV_RESULT_ACCEPTED,
+                Err(e) => {
+                    refuse(out, e.0);
+                    MavResult::MAV_RESULT_DENIED
+                }
+            }
+        }
+        MavCmd::MAV_CMD_NAV_TAKEOFF => match v.takeoff(f64::from(c.param7)) {
+            Ok(()) => {
+                note(SimNote::Takeoff(f64::from(c.param7)));
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+            Err(e) => {
+                refuse(out, e.0);
+                MavResult::MAV_RESULT_FAILED
+            }
+        },
+        MavCmd::MAV_CMD_NAV_LAND => {
+            v.land();
+            MavResult::MAV_RESULT_ACCEPTED
+        }
+        MavCmd::MAV_CMD_DO_SET_MODE => {
+            match SimMode::from_arducopter_custom_mode(c.param2 as u32) {
+                Some(m) if (c.param1 as u32) & 1 == 1 => {
+                    v.set_mode(m);
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                _ => {
+                    refuse(out, format!("Mode change to {} not supported", c.param2));
+                    MavResult::MAV_RESULT_UNSUPPORTED
+                }
+            }
+        }
+        MavCmd::MAV_CMD_MISSION_START => {
+            if v.mission().len() <= 1 {
+                refuse(out, "Mission: no items".into());
+                MavResult::MAV_RESULT_DENIED
+            } else {
+                v.set_mode(SimMode::Auto);
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+        }
+        MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => {
+            if side.streams.set_interval(c.param1 as u32, c.param2) {
+                MavResult::MAV_RESULT_ACCEPTED
+            } else {
+                MavResult::MAV_RESULT_UNSUPPORTED
+            }
+        }
+        MavCmd::MAV_CMD_REQUEST_MESSAGE => MavResult::MAV_RESULT_ACCEPTED,
+        _ => MavResult::MAV_RESULT_UNSUPPORTED,
+    };
+    out.push(ack(c.command, result));
+}
+
+/// A SET_POSITION_TARGET_GLOBAL_INT (relative or absolute altitude; yaw unless masked).
+#[allow(deprecated)] // the non-INT global frames: still sent by ground stations.
+fn position_target_global(
+    v: &mut SimVehicle,
+    side: &Side,
+    t: &SET_POSITION_TARGET_GLOBAL_INT_DATA,
+) {
+    let mask = t.type_mask.bits();
+    let relative = matches!(
+        t.coordinate_frame,
+        MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
+    );
+    let absolute = matches!(
+        t.coordinate_frame,
+        MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL
+    );
+    if mask & 0x7 == 0 && (relative || absolute) {
+        let [north_m, east_m] = side
+            .earth
+            .ne_from_lat_lon(f64::from(t.lat_int) * 1e-7, f64::from(t.lon_int) * 1e-7);
+        let alt_m = if relative {
+            f64::from(t.alt)
+        } else {
+            f64::from(t.alt) - side.home_alt_m
+        };
+        let yaw = if mask & 0x400 != 0 {
+            f64::NAN
+        } else {
+            f64::from(t.yaw)
+        };
+        // Ignored outside GUIDED, as ArduPilot does.
+        let _ = v.set_position_target([north_m, east_m, -alt_m], yaw);
+    }
 }
 
 fn mission_ack(result: MavMissionResult) -> MavMessage {
@@ -1043,7 +810,7 @@ fn mission_ack(result: MavMissionResult) -> MavMessage {
 
 fn accept_item(
     v: &mut SimVehicle,
-    upload: &mut Option<Upload>,
+    (upload, now_s): (&mut Option<Upload>, f64),
     seq: u16,
     item: SimMissionItem,
     out: &mut Vec<MavMessage>,
@@ -1065,7 +832,7 @@ fn accept_item(
         item
     });
     u.retries = 0;
-    u.last_request = Instant::now();
+    u.last_request_s = now_s;
     if u.items.len() as u16 == u.count {
         let items = std::mem::take(&mut u.items);
         note(SimNote::MissionUploaded(items.len()));

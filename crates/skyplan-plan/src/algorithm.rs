@@ -8,6 +8,7 @@
 use crate::failure::PlanFailure;
 use crate::request::Resolved;
 use crate::session::{Query, Route, Session};
+use crate::world::World;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_sampling::PlannerKind;
 use skyplan_search::{
@@ -30,9 +31,9 @@ pub(crate) struct Memory {
 
 impl Memory {
     /// `bytes_per_cell` for every cell of the request's grid.
-    fn cells(session: &Session, r: &Resolved, bytes_per_cell: u64) -> Option<Memory> {
+    fn cells(world: &World, r: &Resolved, bytes_per_cell: u64) -> Option<Memory> {
         Some(Memory {
-            units: session.cells_at(r.cell_m),
+            units: world.cells_at(r.cell_m),
             bytes_per_unit: bytes_per_cell,
             what: "cells",
             change: "use a larger cell_m",
@@ -43,7 +44,7 @@ impl Memory {
 /// One planner behind the registry.
 pub(crate) trait Algorithm: Sync {
     /// The memory a request needs (`None`: nothing that grows with the map).
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory>;
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory>;
 
     /// The route for a resolved query, through the session's caches.
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure>;
@@ -147,8 +148,8 @@ pub(crate) trait CellPlanner: Sync {
 }
 
 impl<T: CellPlanner> Algorithm for T {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, self.bytes_per_cell())
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, self.bytes_per_cell())
     }
 
     fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
@@ -264,71 +265,61 @@ impl CellPlanner for HierarchyCells {
     }
 }
 
+/// A planner on the request's grid that is not a cell search: its bytes per cell, its plan,
+/// and whether its route comes with a navigation field.
+pub(crate) struct OnGrid {
+    bytes_per_cell: u64,
+    plan: fn(&mut Session, &Query) -> Result<Route, PlanFailure>,
+    field: bool,
+}
+
+impl Algorithm for OnGrid {
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        Memory::cells(world, r, self.bytes_per_cell)
+    }
+
+    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
+        (self.plan)(session, q)
+    }
+
+    fn has_field(&self) -> bool {
+        self.field
+    }
+}
+
 /// Exact any-angle paths over the visibility graph kept per grid.
-pub(crate) struct AnyAngleGraph;
+pub(crate) const ANY_ANGLE: OnGrid = OnGrid {
+    bytes_per_cell: 24,
+    plan: crate::any_angle::plan,
+    field: false,
+};
 
-impl Algorithm for AnyAngleGraph {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 24)
-    }
+/// The wavefront navigation function (its distance field).
+pub(crate) const WAVEFRONT: OnGrid = OnGrid {
+    bytes_per_cell: 48,
+    plan: crate::navfn::wavefront,
+    field: true,
+};
 
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::any_angle::plan(session, q)
-    }
-}
-
-/// The wavefront navigation function.
-pub(crate) struct Wavefront;
-
-impl Algorithm for Wavefront {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 48)
-    }
-
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::navfn::wavefront(session, q)
-    }
-
-    fn has_field(&self) -> bool {
-        true
-    }
-}
-
-/// A\* over the inflated cost map.
-pub(crate) struct Costmap;
-
-impl Algorithm for Costmap {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 48)
-    }
-
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::navfn::costmap(session, q)
-    }
-
-    fn has_field(&self) -> bool {
-        true
-    }
-}
+/// A\* over the inflated cost map (its cost to go).
+pub(crate) const COSTMAP: OnGrid = OnGrid {
+    bytes_per_cell: 48,
+    plan: crate::navfn::costmap,
+    field: true,
+};
 
 /// The Voronoi roadmap, kept per altitude, margin and cell size.
-pub(crate) struct Voronoi;
-
-impl Algorithm for Voronoi {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        Memory::cells(session, r, 24)
-    }
-
-    fn plan(&self, session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
-        crate::voronoi::plan(session, q)
-    }
-}
+pub(crate) const VORONOI: OnGrid = OnGrid {
+    bytes_per_cell: 24,
+    plan: crate::voronoi::plan,
+    field: false,
+};
 
 /// PRM, lazy PRM, RRT-Connect, RRT\* among the grown boxes.
 pub(crate) struct Sampling(pub PlannerKind);
 
 impl Algorithm for Sampling {
-    fn memory(&self, _: &Session, _: &Resolved) -> Option<Memory> {
+    fn memory(&self, _: &World, _: &Resolved) -> Option<Memory> {
         None
     }
 
@@ -345,8 +336,8 @@ impl Algorithm for Sampling {
 pub(crate) struct Voxel;
 
 impl Algorithm for Voxel {
-    fn memory(&self, session: &Session, r: &Resolved) -> Option<Memory> {
-        let b = session.world().bounds_ne(r.cell_m);
+    fn memory(&self, world: &World, r: &Resolved) -> Option<Memory> {
+        let b = world.bounds_ne(r.cell_m);
         let n = ((b.north_max_m - b.north_min_m) / r.voxel_m).ceil()
             * ((b.east_max_m - b.east_min_m) / r.voxel_m).ceil()
             * ((r.max_alt_m - r.min_alt_m) / r.layer_m).ceil().max(1.0);

@@ -111,6 +111,7 @@ impl clap::ValueEnum for crate::PlannerId {
 /// assert_eq!(in_cli_words("goal_alt_m is not used by planner jps: it needs a planner that uses it (prm)"),
 ///            "--goal-alt-m is not used by --planner jps: it needs a planner that uses it (prm)");
 /// assert_eq!(in_cli_words("planner ch: the deadline passed"), "--planner ch: the deadline passed");
+/// assert!(in_cli_words("raise the limit (max_memory)").ends_with("(--max-memory)"));
 /// ```
 #[cfg(feature = "clap")]
 pub fn in_cli_words(message: &str) -> String {
@@ -123,6 +124,8 @@ pub fn in_cli_words(message: &str) -> String {
             .get_arguments()
             .filter_map(|a| Some((a.get_id().to_string(), format!("--{}", a.get_long()?))))
             .filter(|(key, _)| key.contains('_'))
+            // The session's memory limit (`Limits`), an option of every command that plans.
+            .chain([("max_memory".to_string(), "--max-memory".to_string())])
             .collect()
     });
     let mut out = String::with_capacity(message.len() + 8);

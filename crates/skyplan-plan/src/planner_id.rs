@@ -52,9 +52,9 @@ pub enum OptionGroup {
     /// `time_limit_ms`: a planning or preprocessing time budget.
     TimeLimit,
     /// The voxel lattice: `climb_weight`, `voxel_m`, `layer_m`.
-    Voxel,
+    Lattice,
     /// The inflated cost map: `inscribed_radius_m`, `inflation_radius_m`, `cost_scaling`, `cost_weight`.
-    Costmap,
+    Inflation,
     /// The wavefront's `field`.
     Field,
 }
@@ -65,8 +65,8 @@ impl OptionGroup {
         OptionGroup::GridPath,
         OptionGroup::ThreeD,
         OptionGroup::TimeLimit,
-        OptionGroup::Voxel,
-        OptionGroup::Costmap,
+        OptionGroup::Lattice,
+        OptionGroup::Inflation,
         OptionGroup::Field,
     ];
 }
@@ -166,16 +166,16 @@ planners! {
     Theta => "theta", "Theta*", 2, AnyAngle, AnyGrid, [GridPath], "", &OnlineCells(G::ThetaStar),
         "Theta*: any-angle routes through cell centres, shorter than any grid path";
     /// Exact any-angle shortest paths.
-    AnyAngle => "any-angle", "exact any-angle", 2, ExactAnyAngle, AnyGrid, [], "the visibility graph per grid", &a::AnyAngleGraph,
+    AnyAngle => "any-angle", "exact any-angle", 2, ExactAnyAngle, AnyGrid, [], "the visibility graph per grid", &a::ANY_ANGLE,
         "exact any-angle: the Euclidean-shortest route through the free cells, turning at obstacle corners";
     /// Wavefront navigation function.
-    Wavefront => "wavefront", "wavefront", 2, Exact, AnyGrid, [GridPath, Field], "", &a::Wavefront,
+    Wavefront => "wavefront", "wavefront", 2, Exact, AnyGrid, [GridPath, Field], "", &a::WAVEFRONT,
         "wavefront navigation function: distance field from the goal, then gradient descent";
     /// Inflated cost map A\*.
-    Costmap => "costmap", "costmap A*", 2, ExactForObjective, AnyGrid, [GridPath, Costmap], "", &a::Costmap,
+    Costmap => "costmap", "costmap A*", 2, ExactForObjective, AnyGrid, [GridPath, Inflation], "", &a::COSTMAP,
         "inflated cost map (Nav2-style): A* minimising length + weight x cost";
     /// Voronoi roadmap.
-    Voronoi => "voronoi", "Voronoi roadmap", 2, Feasible, CollidersOnly, [], "the roadmap per altitude, margin and cell size", &a::Voronoi,
+    Voronoi => "voronoi", "Voronoi roadmap", 2, Feasible, CollidersOnly, [], "the roadmap per altitude, margin and cell size", &a::VORONOI,
         "Voronoi roadmap of the grown footprints at the altitude: exactly free edges, graph A*";
     /// Probabilistic roadmap in 3D.
     Prm => "prm", "PRM", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::Prm),
@@ -190,7 +190,7 @@ planners! {
     RrtStar => "rrt-star", "RRT*", 3, AsymptoticallyOptimal, CollidersOnly, [ThreeD, TimeLimit], "the grown boxes per flight volume", &a::Sampling(K::RrtStar),
         "3D Informed RRT*: improves the path until the time limit";
     /// Voxel A\* in 3D.
-    Voxel => "voxel", "voxel A*", 3, ExactForObjective, CollidersOnly, [ThreeD, TimeLimit, Voxel], "the grown boxes per flight volume", &a::Voxel,
+    Voxel => "voxel", "voxel A*", 3, ExactForObjective, CollidersOnly, [ThreeD, TimeLimit, Lattice], "the grown boxes per flight volume", &a::Voxel,
         "3D voxel A* (26-connected, altitude layers, climb cost): may climb over low buildings";
 }
 

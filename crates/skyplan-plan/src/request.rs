@@ -222,6 +222,34 @@ impl PlanRequest {
     }
 }
 
+/// The flight altitude when none is given, metres above home.
+const DEFAULT_ALT_M: f64 = 5.0;
+/// The safety margin when none is given, metres.
+const DEFAULT_SAFETY_M: f64 = 5.0;
+/// The cell size of colliders grids when none is given, metres.
+const DEFAULT_CELL_M: f64 = 1.0;
+
+impl Default for PlanSpec {
+    /// The spec of a request that gives nothing: 5 m altitude and margin, 1 m cells, 8-connected
+    /// without corner cutting, the flight volume 0 to 120 m.
+    ///
+    /// ```
+    /// use skyplan_plan::{PlanRequest, PlanSpec};
+    /// assert_eq!(PlanSpec::default(), PlanRequest::default().spec()?);
+    /// # Ok::<(), skyplan_plan::PlanFailure>(())
+    /// ```
+    fn default() -> Self {
+        PlanSpec {
+            alt_m: DEFAULT_ALT_M,
+            safety_m: DEFAULT_SAFETY_M,
+            cell_m: DEFAULT_CELL_M,
+            move_model: MoveModel::Octile,
+            min_alt_m: 0.0,
+            max_alt_m: 120.0,
+        }
+    }
+}
+
 /// Highest altitude any option takes, metres.
 pub const MAX_ALT_M: f64 = 10_000.0;
 /// Longest time budget, milliseconds (10 minutes).
@@ -363,12 +391,12 @@ fn given(r: &PlanRequest, group: OptionGroup) -> Vec<&'static str> {
             ("max_alt_m", r.max_alt_m.is_some()),
         ],
         OptionGroup::TimeLimit => &[("time_limit_ms", r.time_limit_ms.is_some())],
-        OptionGroup::Voxel => &[
+        OptionGroup::Lattice => &[
             ("climb_weight", r.climb_weight.is_some()),
             ("voxel_m", r.voxel_m.is_some()),
             ("layer_m", r.layer_m.is_some()),
         ],
-        OptionGroup::Costmap => &[
+        OptionGroup::Inflation => &[
             ("inscribed_radius_m", r.inscribed_radius_m.is_some()),
             ("inflation_radius_m", r.inflation_radius_m.is_some()),
             ("cost_scaling", r.cost_scaling.is_some()),
@@ -401,6 +429,65 @@ fn check_applicable(r: &PlanRequest, planner: PlannerId) -> Result<(), PlanFailu
     Ok(())
 }
 
+/// The move model of `connectivity` and `corner_cutting`.
+fn move_model(r: &PlanRequest) -> Result<MoveModel, PlanFailure> {
+    match (
+        r.connectivity.unwrap_or(8),
+        r.corner_cutting.unwrap_or(false),
+    ) {
+        (8, false) => Ok(MoveModel::Octile),
+        (8, true) => Ok(MoveModel::OctileCornerCutting),
+        (4, false) => Ok(MoveModel::FourConnected),
+        (4, true) => Err(bad(
+            "corner_cutting needs diagonal moves: use it with connectivity 8".into(),
+        )),
+        (other, _) => Err(bad(format!("connectivity {other}: expected 4 or 8"))),
+    }
+}
+
+/// The pruning of `prune` and `epsilon`.
+fn prune(r: &PlanRequest) -> Result<Prune, PlanFailure> {
+    match (r.epsilon, r.prune) {
+        (Some(eps), _) if !(eps.is_finite() && eps >= 0.0) => {
+            Err(bad(format!("epsilon {eps}: expected a tolerance ≥ 0")))
+        }
+        (Some(_), Some(PruneMode::None)) => {
+            Err(bad("epsilon asks for pruning, prune none forbids it".into()))
+        }
+        (Some(eps), _) => Ok(Prune::Epsilon(eps)),
+        (None, Some(PruneMode::None)) => Ok(Prune::None),
+        (None, _) => Ok(Prune::Collinear),
+    }
+}
+
+/// The flight volume's floor and ceiling (the ceiling at least 10 m above both ends unless given).
+fn volume(r: &PlanRequest, start: &End, goal: &End) -> Result<(f64, f64), PlanFailure> {
+    let min_alt_m = in_range(
+        "min_alt_m",
+        r.min_alt_m.unwrap_or(0.0),
+        0.0,
+        MAX_ALT_M,
+        " m",
+    )?;
+    let max_alt_m = match r.max_alt_m {
+        Some(v) => in_range("max_alt_m", v, 0.0, MAX_ALT_M, " m")?,
+        None => 120f64
+            .max(start.alt_m + 10.0)
+            .max(goal.alt_m + 10.0)
+            .min(MAX_ALT_M),
+    };
+    if min_alt_m >= max_alt_m {
+        let (which, given) = match (r.min_alt_m, r.max_alt_m) {
+            (_, Some(_)) => ("max_alt_m", format!("{max_alt_m}")),
+            _ => ("min_alt_m", format!("{min_alt_m}")),
+        };
+        return Err(bad(format!(
+            "{which} {given}: the floor of the flight volume ({min_alt_m} m) must be below its ceiling ({max_alt_m} m)"
+        )));
+    }
+    Ok((min_alt_m, max_alt_m))
+}
+
 impl Resolved {
     /// The values every front end reads back from a plan.
     pub(crate) fn spec(&self) -> PlanSpec {
@@ -417,60 +504,26 @@ impl Resolved {
     pub(crate) fn new(r: &PlanRequest) -> Result<Self, PlanFailure> {
         let planner = r.planner.unwrap_or_default();
         check_applicable(r, planner)?;
-        let alt_m = in_range("alt_m", r.alt_m.unwrap_or(5.0), 0.0, MAX_ALT_M, " m")?;
-        let safety_m = in_range("safety_m", r.safety_m.unwrap_or(5.0), 0.0, 1000.0, " m")?;
-        let cell_m = positive("cell_m", r.cell_m.unwrap_or(1.0), 1000.0)?;
-        let connectivity = r.connectivity.unwrap_or(8);
-        let corner_cutting = r.corner_cutting.unwrap_or(false);
-        let model = match (connectivity, corner_cutting) {
-            (8, false) => MoveModel::Octile,
-            (8, true) => MoveModel::OctileCornerCutting,
-            (4, false) => MoveModel::FourConnected,
-            (4, true) => {
-                return Err(bad(
-                    "corner_cutting needs diagonal moves: use it with connectivity 8".into(),
-                ));
-            }
-            (other, _) => {
-                return Err(bad(format!("connectivity {other}: expected 4 or 8")));
-            }
-        };
-        let prune = match (r.epsilon, r.prune) {
-            (Some(eps), _) if !(eps.is_finite() && eps >= 0.0) => {
-                return Err(bad(format!("epsilon {eps}: expected a tolerance ≥ 0")));
-            }
-            (Some(_), Some(PruneMode::None)) => {
-                return Err(bad("epsilon asks for pruning, prune none forbids it".into()));
-            }
-            (Some(eps), _) => Prune::Epsilon(eps),
-            (None, Some(PruneMode::None)) => Prune::None,
-            (None, _) => Prune::Collinear,
-        };
-        let start = End::of("start", (r.start_ne, r.start_lla, r.start_alt_m), alt_m)?;
-        let goal = End::of("goal", (r.goal_ne, r.goal_lla, r.goal_alt_m), alt_m)?;
-        let min_alt_m = in_range(
-            "min_alt_m",
-            r.min_alt_m.unwrap_or(0.0),
+        let alt_m = in_range(
+            "alt_m",
+            r.alt_m.unwrap_or(DEFAULT_ALT_M),
             0.0,
             MAX_ALT_M,
             " m",
         )?;
-        let max_alt_m = match r.max_alt_m {
-            Some(v) => in_range("max_alt_m", v, 0.0, MAX_ALT_M, " m")?,
-            None => 120f64
-                .max(start.alt_m + 10.0)
-                .max(goal.alt_m + 10.0)
-                .min(MAX_ALT_M),
-        };
-        if min_alt_m >= max_alt_m {
-            let (which, given) = match (r.min_alt_m, r.max_alt_m) {
-                (_, Some(_)) => ("max_alt_m", format!("{max_alt_m}")),
-                _ => ("min_alt_m", format!("{min_alt_m}")),
-            };
-            return Err(bad(format!(
-                "{which} {given}: the floor of the flight volume ({min_alt_m} m) must be below its ceiling ({max_alt_m} m)"
-            )));
-        }
+        let safety_m = in_range(
+            "safety_m",
+            r.safety_m.unwrap_or(DEFAULT_SAFETY_M),
+            0.0,
+            1000.0,
+            " m",
+        )?;
+        let cell_m = positive("cell_m", r.cell_m.unwrap_or(DEFAULT_CELL_M), 1000.0)?;
+        let model = move_model(r)?;
+        let prune = prune(r)?;
+        let start = End::of("start", (r.start_ne, r.start_lla, r.start_alt_m), alt_m)?;
+        let goal = End::of("goal", (r.goal_ne, r.goal_lla, r.goal_alt_m), alt_m)?;
+        let (min_alt_m, max_alt_m) = volume(r, &start, &goal)?;
         let time_limit_ms = r.time_limit_ms.unwrap_or(1000);
         if !(1..=MAX_TIME_LIMIT_MS).contains(&time_limit_ms) {
             return Err(bad(format!(

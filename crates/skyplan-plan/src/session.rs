@@ -217,7 +217,7 @@ impl Session {
         if let Some(g) = self.grids.get(&k) {
             return Ok(Arc::clone(g));
         }
-        let cells = self.cells_at(cell_m);
+        let cells = self.world.cells_at(cell_m);
         check_memory(
             cells.saturating_mul(GRID_BYTES_PER_CELL),
             &self.limits,
@@ -398,25 +398,9 @@ impl Session {
         Ok(put(&mut self.boxes, k, Arc::new(world)))
     }
 
-    /// Cells of the grid at this cell size (before building it), saturating.
-    pub(crate) fn cells_at(&self, cell_m: f64) -> u64 {
-        if let Some(g) = self.world.fixed_grid() {
-            return g.len() as u64;
-        }
-        let b = self.world.bounds_ne(cell_m);
-        let rows = ((b.north_max_m - b.north_min_m) / cell_m).ceil();
-        let cols = ((b.east_max_m - b.east_min_m) / cell_m).ceil();
-        let cells = rows * cols;
-        if cells.is_finite() && cells < 1.8e19 {
-            cells as u64
-        } else {
-            u64::MAX
-        }
-    }
-
     /// The memory a request needs, estimated by its planner before anything is allocated.
     fn check_request_memory(&self, r: &Resolved) -> Result<(), PlanFailure> {
-        let Some(m) = r.planner.algorithm().memory(self, r) else {
+        let Some(m) = r.planner.algorithm().memory(&self.world, r) else {
             return Ok(());
         };
         check_memory(
@@ -512,65 +496,74 @@ impl Session {
     }
 }
 
-/// The plan from a re-checked route: places with lat/lon, the mission, statistics.
-fn assemble(
+/// A route's end as a [`Place`]: its lat/lon as given, else from the map's frame (if any).
+fn place_of(
     world: &World,
-    r: &Resolved,
-    mut route: Route,
-    given_lla: [Option<[f64; 2]>; 2],
-    t0: Instant,
-) -> Result<Plan, PlanFailure> {
-    let info = r.planner.info();
-    let [start_lla, goal_lla] = given_lla;
-    let place =
-        |p: [f64; 3], cell: Option<Cell>, given: Option<[f64; 2]>| -> Result<Place, PlanFailure> {
-            let lla = match (given, world.frame()) {
-                (Some(ll), _) => Some(ll),
-                (None, Some(frame)) => {
-                    let l = frame
-                        .lla_from_ned(Ned {
-                            north_m: p[0],
-                            east_m: p[1],
-                            down_m: -p[2],
-                        })
-                        .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
-                    Some([l.lat_deg, l.lon_deg])
-                }
-                (None, None) => None,
-            };
-            Ok(Place {
-                north_m: p[0],
-                east_m: p[1],
-                alt_m: p[2],
-                lat_deg: lla.map(|l| l[0]),
-                lon_deg: lla.map(|l| l[1]),
-                cell: cell.map(|c| [c.row, c.col]),
-            })
-        };
-    let first = *route
-        .points
-        .first()
-        .ok_or_else(|| PlanFailure::internal("empty route"))?;
-    let last = *route
-        .points
-        .last()
-        .ok_or_else(|| PlanFailure::internal("empty route"))?;
-    let start = place(first, route.start_cell, start_lla)?;
-    let goal = place(last, route.goal_cell, goal_lla)?;
-    let (mission, waypoints, waypoints_lla) = match world.frame() {
+    p: [f64; 3],
+    cell: Option<Cell>,
+    given: Option<[f64; 2]>,
+) -> Result<Place, PlanFailure> {
+    let lla = match (given, world.frame()) {
+        (Some(ll), _) => Some(ll),
+        (None, Some(frame)) => {
+            let l = frame
+                .lla_from_ned(Ned {
+                    north_m: p[0],
+                    east_m: p[1],
+                    down_m: -p[2],
+                })
+                .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
+            Some([l.lat_deg, l.lon_deg])
+        }
+        (None, None) => None,
+    };
+    Ok(Place {
+        north_m: p[0],
+        east_m: p[1],
+        alt_m: p[2],
+        lat_deg: lla.map(|l| l[0]),
+        lon_deg: lla.map(|l| l[1]),
+        cell: cell.map(|c| [c.row, c.col]),
+    })
+}
+
+/// The mission of a route's points (maps with a geodetic home), its rows
+/// `[north, east, alt, heading]` and their lat/lon.
+type MissionRows = (Option<Mission>, Vec<[f64; 4]>, Option<Vec<[f64; 2]>>);
+
+fn mission_rows(
+    world: &World,
+    points: &[[f64; 3]],
+    start_heading_rad: f64,
+) -> Result<MissionRows, PlanFailure> {
+    Ok(match world.frame() {
         Some(frame) => {
-            let m = Mission::from_points_nea(frame, &route.points, r.start_heading_rad)
+            let m = Mission::from_points_nea(frame, points, start_heading_rad)
                 .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
             let rows = m.rows();
             let lla = m.waypoints.iter().map(|w| [w.lat_deg, w.lon_deg]).collect();
             (Some(m), rows, Some(lla))
         }
-        None => (
-            None,
-            rows_without_frame(&route.points, r.start_heading_rad),
-            None,
-        ),
+        None => (None, rows_without_frame(points, start_heading_rad), None),
+    })
+}
+
+/// The plan from a re-checked route: places with lat/lon, the mission, statistics.
+fn assemble(
+    world: &World,
+    r: &Resolved,
+    mut route: Route,
+    [start_lla, goal_lla]: [Option<[f64; 2]>; 2],
+    t0: Instant,
+) -> Result<Plan, PlanFailure> {
+    let info = r.planner.info();
+    let (Some(&first), Some(&last)) = (route.points.first(), route.points.last()) else {
+        return Err(PlanFailure::internal("empty route"));
     };
+    let start = place_of(world, first, route.start_cell, start_lla)?;
+    let goal = place_of(world, last, route.goal_cell, goal_lla)?;
+    let (mission, waypoints, waypoints_lla) =
+        mission_rows(world, &route.points, r.start_heading_rad)?;
     let mission_length_m = route
         .points
         .windows(2)

@@ -66,6 +66,18 @@ fn volume(world: &BoxWorld3) -> serde_json::Value {
     json!({ "min": world.bounds().min, "max": world.bounds().max })
 }
 
+/// What a sampling run hands back beside its solution.
+#[derive(Default)]
+struct Extras {
+    /// Roadmap or tree edges (with geometry).
+    edges: Vec<(Neu, Neu)>,
+    /// The path before shortcutting (PRM, with geometry).
+    raw_path: Vec<Neu>,
+    /// The roadmap's bytes, when asked to save it.
+    saved: Option<Vec<u8>>,
+    details: serde_json::Map<String, serde_json::Value>,
+}
+
 /// PRM, lazy PRM, RRT-Connect or RRT\*.
 pub(crate) fn sampling(
     session: &mut Session,
@@ -78,66 +90,8 @@ pub(crate) fn sampling(
     let world_us = micros(t_world.elapsed());
     let (start, goal) = check_ends(&world, q)?;
     let budget = Budget::time(r.time_limit);
-    let mut edges: Vec<(Neu, Neu)> = Vec::new();
-    let mut raw_path = Vec::new();
-    let mut saved = None;
-    let mut details = serde_json::Map::new();
-    let solution = match kind {
-        PlannerKind::Prm | PlannerKind::LazyPrm => {
-            let (roadmap, mut solution) = run_prm(session, &world, kind, q, budget)?;
-            let st = roadmap.stats;
-            let mut info = json!({
-                "vertices": roadmap.vertices().len(),
-                "edges": roadmap.edges(),
-                "unchecked_edges": roadmap.unchecked_edges(),
-                "edges_tested": st.edges_tested,
-                "edges_removed": st.edges_removed,
-                "connector_tests": st.connector_tests,
-                "build_us": st.build_us,
-                "loaded_from": q.roadmap.load.as_ref().map(|(name, _)| name.clone()),
-            });
-            if q.roadmap.save {
-                let bytes = roadmap.to_json(&world);
-                info["saved_bytes"] = json!(bytes.len());
-                saved = Some(bytes);
-            }
-            details.insert("roadmap".into(), info);
-            if r.geometry {
-                let points = roadmap.vertices();
-                edges = roadmap
-                    .edge_list()
-                    .into_iter()
-                    .map(|(a, b)| (points[a as usize], points[b as usize]))
-                    .collect();
-            }
-            if solution.status == Status::Exact {
-                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(r.seed ^ 0x5eed_5eed);
-                raw_path = solution.path.clone();
-                solution.path = skyplan_sampling::shortcut::simplify(
-                    world.as_ref(),
-                    &solution.path,
-                    &mut rng,
-                    200,
-                );
-                solution.cost_m = skyplan_world3::path_length_m(&solution.path);
-            }
-            let key = [
-                r.safety_m,
-                r.min_alt_m,
-                r.max_alt_m,
-                if kind == PlannerKind::LazyPrm {
-                    1.0
-                } else {
-                    0.0
-                },
-            ]
-            .map(f64::to_bits);
-            if session.prm.len() >= 8 {
-                session.prm.clear();
-            }
-            session.prm.insert(key, roadmap);
-            solution
-        }
+    let (solution, extras) = match kind {
+        PlannerKind::Prm | PlannerKind::LazyPrm => prm(session, &world, kind, q, budget)?,
         PlannerKind::RrtConnect | PlannerKind::RrtStar => {
             let req = Request {
                 start,
@@ -147,20 +101,22 @@ pub(crate) fn sampling(
                 range_m: None,
                 simplify: true,
             };
-            if r.geometry {
+            let mut extras = Extras::default();
+            let s = if r.geometry {
                 let (s, tree) = skyplan_sampling::plan_with_tree(world.as_ref(), kind, &req);
-                edges = tree;
+                extras.edges = tree;
                 s
             } else {
                 skyplan_sampling::plan(world.as_ref(), kind, &req)
-            }
+            };
+            (s, extras)
         }
     };
-    let mut route = finish(&world, q, kind.name(), solution, world_us)?;
-    route.details.extend(details);
-    route.saved_roadmap = saved;
+    let mut route = finish(&world, q, r.planner.name(), solution, world_us)?;
+    route.details.extend(extras.details);
+    route.saved_roadmap = extras.saved;
     if r.geometry {
-        route.geometry.edges = edges.into_iter().map(|(a, b)| [a, b]).collect();
+        route.geometry.edges = extras.edges.into_iter().map(|(a, b)| [a, b]).collect();
         route.geometry.edges_label = match kind {
             PlannerKind::Prm => "PRM roadmap",
             PlannerKind::LazyPrm => "lazy PRM roadmap (unchecked edges included)",
@@ -168,9 +124,64 @@ pub(crate) fn sampling(
             PlannerKind::RrtStar => "RRT* tree",
         }
         .into();
-        route.geometry.raw_path = raw_path;
+        route.geometry.raw_path = extras.raw_path;
     }
     Ok(route)
+}
+
+/// PRM or lazy PRM: the run, its roadmap's statistics (saved if asked), the shortcut path, and
+/// the roadmap kept by the session for the next request on this volume.
+fn prm(
+    session: &mut Session,
+    world: &Arc<BoxWorld3>,
+    kind: PlannerKind,
+    q: &Query,
+    budget: Budget,
+) -> Result<(Solution, Extras), PlanFailure> {
+    let r = q.r;
+    let mut extras = Extras::default();
+    let (roadmap, mut solution) = run_prm(session, world, kind, q, budget)?;
+    let st = roadmap.stats;
+    let mut info = json!({
+        "vertices": roadmap.vertices().len(),
+        "edges": roadmap.edges(),
+        "unchecked_edges": roadmap.unchecked_edges(),
+        "edges_tested": st.edges_tested,
+        "edges_removed": st.edges_removed,
+        "connector_tests": st.connector_tests,
+        "build_us": st.build_us,
+        "loaded_from": q.roadmap.load.as_ref().map(|(name, _)| name.clone()),
+    });
+    if q.roadmap.save {
+        let bytes = roadmap.to_json(world);
+        info["saved_bytes"] = json!(bytes.len());
+        extras.saved = Some(bytes);
+    }
+    extras.details.insert("roadmap".into(), info);
+    if r.geometry {
+        let points = roadmap.vertices();
+        extras.edges = (roadmap.edge_list().into_iter())
+            .map(|(a, b)| (points[a as usize], points[b as usize]))
+            .collect();
+    }
+    if solution.status == Status::Exact {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(r.seed ^ 0x5eed_5eed);
+        extras.raw_path = solution.path.clone();
+        solution.path =
+            skyplan_sampling::shortcut::simplify(world.as_ref(), &solution.path, &mut rng, 200);
+        solution.cost_m = skyplan_world3::path_length_m(&solution.path);
+    }
+    let lazy = if kind == PlannerKind::LazyPrm {
+        1.0
+    } else {
+        0.0
+    };
+    let key = [r.safety_m, r.min_alt_m, r.max_alt_m, lazy].map(f64::to_bits);
+    if session.prm.len() >= 8 {
+        session.prm.clear();
+    }
+    session.prm.insert(key, roadmap);
+    Ok((solution, extras))
 }
 
 /// A PRM run keeping the roadmap: from a saved roadmap, from the session's last roadmap for

@@ -10,6 +10,31 @@ use skyplan_roadmap::{Roadmap, RoadmapError, RoadmapSpec};
 use std::sync::Arc;
 use std::time::Instant;
 
+/// The session's roadmap at the request's altitude, margin and cell size, built if it has none.
+fn kept_roadmap(
+    session: &mut Session,
+    map: &skyplan_map::colliders::CollidersMap,
+    grid: &skyplan_cspace::Grid2,
+    r: &crate::request::Resolved,
+) -> Arc<Roadmap> {
+    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0].map(f64::to_bits);
+    if let Some(m) = session.voronoi.get(&k) {
+        return Arc::clone(m);
+    }
+    let m = Arc::new(Roadmap::build(
+        map,
+        grid,
+        r.alt_m,
+        r.safety_m,
+        &RoadmapSpec::default(),
+    ));
+    if session.voronoi.len() >= 8 {
+        session.voronoi.clear();
+    }
+    session.voronoi.insert(k, Arc::clone(&m));
+    m
+}
+
 pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
     let r = q.r;
     let map = q
@@ -18,24 +43,7 @@ pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailur
         .ok_or_else(|| PlanFailure::bad_request("planner voronoi needs an FCND colliders map"))?;
     let (grid, grid_us) = grid_for(session, q)?;
     let t_build = Instant::now();
-    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0].map(f64::to_bits);
-    let roadmap = match session.voronoi.get(&k) {
-        Some(m) => Arc::clone(m),
-        None => {
-            let m = Arc::new(Roadmap::build(
-                map,
-                &grid,
-                r.alt_m,
-                r.safety_m,
-                &RoadmapSpec::default(),
-            ));
-            if session.voronoi.len() >= 8 {
-                session.voronoi.clear();
-            }
-            session.voronoi.insert(k, Arc::clone(&m));
-            m
-        }
-    };
+    let roadmap = kept_roadmap(session, map, &grid, r);
     let build_us = grid_us + micros(t_build.elapsed());
     let t = Instant::now();
     let found = roadmap.query(&grid, q.start_ne, q.goal_ne);

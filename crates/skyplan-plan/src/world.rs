@@ -1,6 +1,7 @@
 //! [`World`]: one loaded map of any kind, with one set of bounds for every planner family.
 
 use crate::failure::PlanFailure;
+use crate::request::{PlanRequest, Resolved};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_imagemap::MapYaml;
@@ -53,7 +54,7 @@ pub(crate) fn check_memory(
         return Ok(());
     }
     Err(PlanFailure::bad_request(format!(
-        "{what} needs about {} of memory, above the limit of {}; {change}, or raise the limit (--max-memory)",
+        "{what} needs about {} of memory, above the limit of {}; {change}, or raise the limit (max_memory)",
         human_bytes(estimate),
         human_bytes(limits.max_memory_bytes)
     )))
@@ -174,6 +175,48 @@ fn frame_at(lat_deg: f64, lon_deg: f64, what: &str) -> Result<LocalFrame, PlanFa
 }
 
 impl World {
+    /// Cells of the grid at this cell size (before building it), saturating; the map's own
+    /// grid's cells for image, MovingAI and random maps.
+    pub fn cells_at(&self, cell_m: f64) -> u64 {
+        if let Some(g) = self.fixed_grid() {
+            return g.len() as u64;
+        }
+        let b = self.bounds_ne(cell_m);
+        let rows = ((b.north_max_m - b.north_min_m) / cell_m).ceil();
+        let cols = ((b.east_max_m - b.east_min_m) / cell_m).ceil();
+        let cells = rows * cols;
+        if cells.is_finite() && cells < 1.8e19 {
+            cells as u64
+        } else {
+            u64::MAX
+        }
+    }
+
+    /// What `request`'s planner would build on this world, estimated before anything is
+    /// allocated (the estimate a session checks against its memory limit): how many units and
+    /// what they are (`cells` of its grid, `voxels` of its lattice), or `None` for a planner
+    /// whose memory does not grow with the map. A bad request is refused as a plan is.
+    ///
+    /// ```
+    /// use skyplan_plan::{PlanRequest, PlannerId, World};
+    /// let city = World::fcnd_city();
+    /// let (cells, what) = city.estimate(&PlanRequest::default())?.unwrap();
+    /// assert_eq!((cells, what), (921 * 921, "cells"));
+    /// let voxel = PlanRequest { planner: Some(PlannerId::Voxel), voxel_m: Some(10.0), ..Default::default() };
+    /// assert_eq!(city.estimate(&voxel)?.map(|e| e.1), Some("voxels"));
+    /// # Ok::<(), skyplan_plan::PlanFailure>(())
+    /// ```
+    pub fn estimate(
+        &self,
+        request: &PlanRequest,
+    ) -> Result<Option<(u64, &'static str)>, PlanFailure> {
+        let r = Resolved::new(request)?;
+        Ok(r.planner
+            .algorithm()
+            .memory(self, &r)
+            .map(|m| (m.units, m.what)))
+    }
+
     fn grid_world(name: String, kind: MapKind, grid: Grid2) -> Self {
         Self {
             name,

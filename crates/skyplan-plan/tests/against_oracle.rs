@@ -1,10 +1,30 @@
-//! The facade's exact planners against the exact Dijkstra oracle on random grids, start and goal
-//! drawn among free cells (no case is skipped).
+//! Every exact grid planner of the registry against the exact Dijkstra oracle on random grids,
+//! start and goal drawn among free cells (no case is skipped).
 
 use proptest::prelude::*;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
-use skyplan_plan::{FailureKind, PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{FailureKind, MapKinds, Optimality, PlanRequest, PlannerId, Session, World};
 use skyplan_search::{MoveModel, oracle::dijkstra_exact};
+
+/// The registry's exact planners (`Optimality::Exact`: shortest among grid paths under the move
+/// model) that run on grids: a new one is checked here without an edit.
+fn exact_grid_planners() -> Vec<PlannerId> {
+    (PlannerId::ALL.iter().copied())
+        .filter(|p| p.info().optimality == Optimality::Exact)
+        .filter(|p| p.is_cell_planner() || p.info().maps == MapKinds::AnyGrid)
+        .collect()
+}
+
+#[test]
+fn every_exact_planner_is_a_grid_planner_taking_the_move_model() {
+    // The oracle's truth is the shortest grid path under the move model: an exact planner that
+    // did not take the move model, or no grid, would have nothing here to be checked against.
+    let exact = exact_grid_planners();
+    assert!(!exact.is_empty());
+    for p in exact {
+        assert!(p.is_cell_planner(), "{p} is exact but takes no move model");
+    }
+}
 
 fn grid_and_ends() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
     (2u32..14, 2u32..14, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
@@ -36,7 +56,7 @@ proptest! {
         let mut session = Session::new(World::from_grid("random", grid.clone()));
         let (sn, se) = grid.center_ne(start);
         let (gn, ge) = grid.center_ne(goal);
-        for planner in [PlannerId::Jps, PlannerId::JpsPlus, PlannerId::Astar, PlannerId::Dijkstra, PlannerId::Wavefront] {
+        for planner in exact_grid_planners() {
             let r = session.plan(&PlanRequest {
                 planner: Some(planner),
                 start_ne: Some([sn, se]),

@@ -27,9 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .boxes
         .iter()
         .copied()
-        .filter(|b| {
-            b.top_m() + spec.safety_m > spec.alt_m && b.bottom_m() - spec.safety_m < spec.alt_m
-        })
+        .filter(|b| b.meets_altitude(spec.alt_m, spec.safety_m))
         .collect();
 
     // A made-up path: grid steps (8-connected) through a few corners, and a pruned version that

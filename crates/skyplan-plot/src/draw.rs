@@ -1,6 +1,7 @@
 //! The drawing itself, written once for every plotters backend.
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::ComposedElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::HPos;
@@ -36,6 +37,39 @@ fn px(v: f64) -> u32 {
     v.round().max(1.0) as u32
 }
 
+/// The plot area's chart: east right, north up, metres.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Line styles and marker radii, scaled to the picture (`k`: 1 for an 800 px picture).
+struct Styles {
+    graph: ShapeStyle,
+    connector: ShapeStyle,
+    raw: ShapeStyle,
+    pruned: ShapeStyle,
+    replanned: ShapeStyle,
+    track: ShapeStyle,
+    /// Radii of a waypoint, of the start and goal markers, of a learned cell's dot.
+    r_wp: u32,
+    r_end: u32,
+    r_learned: u32,
+}
+
+impl Styles {
+    fn new(k: f64) -> Self {
+        Styles {
+            graph: GRAPH_COLOR.stroke_width(px(1.0 * k)),
+            connector: CONNECTOR_COLOR.stroke_width(px(2.0 * k)),
+            raw: RAW_COLOR.stroke_width(px(1.6 * k)),
+            pruned: PRUNED_COLOR.stroke_width(px(3.0 * k)),
+            replanned: REPLANNED_COLOR.stroke_width(px(2.4 * k)),
+            track: TRACK_COLOR.stroke_width(px(1.4 * k)),
+            r_wp: px(4.5 * k),
+            r_end: px(8.0 * k),
+            r_learned: px(2.5 * k),
+        }
+    }
+}
+
 /// Draws the scene on the whole picture `root`; with `heat`, its colours (one level per cell,
 /// row-major from the southern row; `None`: no value) fill the grid instead of the
 /// configuration space, blocked cells black.
@@ -48,10 +82,29 @@ pub(crate) fn draw<DB: DrawingBackend>(
 ) -> Result<(), PlotError> {
     root.fill(&WHITE).map_err(err)?;
     let (x0, y0, w, h) = l.plot;
-    let (x1, y1) = (x0 + w as i32 - 1, y0 + h as i32 - 1);
-    let k = l.fonts.k;
+    let styles = Styles::new(l.fonts.k);
+    draw_grid_lines(root, l)?;
+    let area = root.clone().shrink((x0, y0), (w, h));
+    let mut chart = ChartBuilder::on(&area)
+        .build_cartesian_2d(l.east_m.0..l.east_m.1, l.north_m.0..l.north_m.1)
+        .map_err(err)?;
+    if let Some(levels) = heat {
+        draw_heat(root, scene, l, levels)?;
+    }
+    draw_obstacles(&mut chart, scene, heat.is_none())?;
+    draw_roadmap(&mut chart, scene, &styles)?;
+    draw_routes(&mut chart, scene, &styles)?;
+    draw_axes(root, l, mode)?;
+    draw_legend(root, l, mode, &styles)
+}
 
-    // Light grid lines at the ticks, under everything else.
+/// Light grid lines at the ticks, under everything else.
+fn draw_grid_lines<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    l: &PlotLayout,
+) -> Result<(), PlotError> {
+    let (x0, y0, w, h) = l.plot;
+    let (x1, y1) = (x0 + w as i32 - 1, y0 + h as i32 - 1);
     for &e in &l.x_ticks {
         let x = l.pixel_of_ne(l.north_m.0, e).0;
         root.draw(&PathElement::new(vec![(x, y0), (x, y1)], GRID_LINE_COLOR))
@@ -62,21 +115,21 @@ pub(crate) fn draw<DB: DrawingBackend>(
         root.draw(&PathElement::new(vec![(x0, y), (x1, y)], GRID_LINE_COLOR))
             .map_err(err)?;
     }
+    Ok(())
+}
 
-    let area = root.clone().shrink((x0, y0), (w, h));
-    let mut chart = ChartBuilder::on(&area)
-        .build_cartesian_2d(l.east_m.0..l.east_m.1, l.north_m.0..l.north_m.1)
-        .map_err(err)?;
-
-    if let Some(levels) = heat {
-        draw_heat(root, scene, l, levels)?;
-    }
-    // Configuration space (unless a heat map shows it), then the obstacles themselves.
+/// The configuration space (with `cspace`; a heat map shows it instead), then the obstacles
+/// themselves.
+fn draw_obstacles<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    scene: &Scene,
+    cspace: bool,
+) -> Result<(), PlotError> {
     let f = scene.grid.frame();
-    let cspace = if heat.is_some() {
-        Vec::new()
-    } else {
+    let cspace = if cspace {
         blocked_rects(scene.grid)
+    } else {
+        Vec::new()
     };
     chart
         .draw_series(cspace.into_iter().map(|r| {
@@ -90,13 +143,18 @@ pub(crate) fn draw<DB: DrawingBackend>(
     chart
         .draw_series(scene.obstacles.iter().map(|o| footprint(o, OBSTACLE_COLOR)))
         .map_err(err)?;
+    Ok(())
+}
 
-    // A roadmap's edges thin and light, its connectors a little stronger.
-    let graph_style = GRAPH_COLOR.stroke_width(px(1.0 * k));
-    let connector_style = CONNECTOR_COLOR.stroke_width(px(2.0 * k));
+/// A roadmap's edges thin and light, its connectors a little stronger.
+fn draw_roadmap<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    scene: &Scene,
+    styles: &Styles,
+) -> Result<(), PlotError> {
     for (segments, style) in [
-        (scene.graph_ne, graph_style),
-        (scene.connectors_ne, connector_style),
+        (scene.graph_ne, styles.graph),
+        (scene.connectors_ne, styles.connector),
     ] {
         chart
             .draw_series(
@@ -106,19 +164,23 @@ pub(crate) fn draw<DB: DrawingBackend>(
             )
             .map_err(err)?;
     }
+    Ok(())
+}
 
-    // Paths: the raw grid path thin, the pruned one thick with a circle at each waypoint.
+/// The routes: a flight's hidden obstacles and learned cells, the raw grid path thin, the
+/// pruned one thick with a circle at each waypoint, the flight's replanned routes and track,
+/// then the start and goal markers.
+fn draw_routes<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    scene: &Scene,
+    styles: &Styles,
+) -> Result<(), PlotError> {
     let en = |&(n, e): &(f64, f64)| (e, n);
-    let flight_styles = (
-        REPLANNED_COLOR.stroke_width(px(2.4 * k)),
-        TRACK_COLOR.stroke_width(px(1.4 * k)),
-        px(2.5 * k),
-    );
     if let Some(f) = scene.flight {
         chart
             .draw_series(f.hidden.iter().map(|o| footprint(o, HIDDEN_COLOR)))
             .map_err(err)?;
-        let r = flight_styles.2;
+        let r = styles.r_learned;
         chart
             .draw_series(
                 f.learned_ne
@@ -127,19 +189,19 @@ pub(crate) fn draw<DB: DrawingBackend>(
             )
             .map_err(err)?;
     }
-    let raw_style = RAW_COLOR.stroke_width(px(1.6 * k));
-    let pruned_style = PRUNED_COLOR.stroke_width(px(3.0 * k));
-    let (r_wp, r_end) = (px(4.5 * k), px(8.0 * k));
     if scene.raw_path_ne.len() > 1 {
         chart
-            .draw_series(LineSeries::new(scene.raw_path_ne.iter().map(en), raw_style))
+            .draw_series(LineSeries::new(
+                scene.raw_path_ne.iter().map(en),
+                styles.raw,
+            ))
             .map_err(err)?;
     }
     if scene.pruned_path_ne.len() > 1 {
         chart
             .draw_series(LineSeries::new(
                 scene.pruned_path_ne.iter().map(en),
-                pruned_style,
+                styles.pruned,
             ))
             .map_err(err)?;
     }
@@ -148,31 +210,40 @@ pub(crate) fn draw<DB: DrawingBackend>(
             scene
                 .pruned_path_ne
                 .iter()
-                .map(|p| waypoint_marker(en(p), r_wp)),
+                .map(|p| waypoint_marker(en(p), styles.r_wp)),
         )
         .map_err(err)?;
     if let Some(f) = scene.flight {
         for route in f.replanned_ne {
             chart
-                .draw_series(LineSeries::new(route.iter().map(en), flight_styles.0))
+                .draw_series(LineSeries::new(route.iter().map(en), styles.replanned))
                 .map_err(err)?;
         }
         chart
-            .draw_series(LineSeries::new(f.track_ne.iter().map(en), flight_styles.1))
+            .draw_series(LineSeries::new(f.track_ne.iter().map(en), styles.track))
             .map_err(err)?;
     }
     if let Some(p) = scene.start_ne {
         chart
-            .draw_series(std::iter::once(start_marker(en(&p), r_end)))
+            .draw_series(std::iter::once(start_marker(en(&p), styles.r_end)))
             .map_err(err)?;
     }
     if let Some(p) = scene.goal_ne {
         chart
-            .draw_series(std::iter::once(goal_marker(en(&p), r_end)))
+            .draw_series(std::iter::once(goal_marker(en(&p), styles.r_end)))
             .map_err(err)?;
     }
+    Ok(())
+}
 
-    // Frame, outward ticks and their labels.
+/// The plot's frame, outward ticks and their labels, the axis titles and the picture's title.
+fn draw_axes<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    l: &PlotLayout,
+    mode: TextMode,
+) -> Result<(), PlotError> {
+    let (x0, y0, w, h) = l.plot;
+    let (x1, y1) = (x0 + w as i32 - 1, y0 + h as i32 - 1);
     root.draw(&Rectangle::new(
         [(x0, y0), (x1, y1)],
         FRAME_COLOR.stroke_width(1),
@@ -201,8 +272,6 @@ pub(crate) fn draw<DB: DrawingBackend>(
         let anchor = (HPos::Right, VAlign::Middle);
         draw_tick(root, mode, (at, FRAME_COLOR), (&text, tick_size), anchor)?;
     }
-
-    // Axis titles and the picture's title.
     let desc = l.fonts.desc;
     let x_mid = x0 + w as i32 / 2;
     let at = (x_mid, l.x_desc_baseline);
@@ -246,15 +315,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
             },
         )?;
     }
-    let styles = [
-        graph_style,
-        connector_style,
-        raw_style,
-        pruned_style,
-        flight_styles.0,
-        flight_styles.1,
-    ];
-    draw_legend(root, l, mode, styles, (r_wp, r_end, flight_styles.2))
+    Ok(())
 }
 
 /// Paints every pixel of the plot area with the colour of the cell under its centre.
@@ -296,15 +357,7 @@ fn draw_legend<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     l: &PlotLayout,
     mode: TextMode,
-    [
-        graph_style,
-        connector_style,
-        raw_style,
-        pruned_style,
-        replanned_style,
-        track_style,
-    ]: [ShapeStyle; 6],
-    (r_wp, r_end, r_learned): (u32, u32, u32),
+    styles: &Styles,
 ) -> Result<(), PlotError> {
     let legend = &l.legend;
     if legend.entries.is_empty() {
@@ -330,20 +383,22 @@ fn draw_legend<DB: DrawingBackend>(
         match entry.kind {
             LegendKind::CSpace => root.draw(&swatch(CSPACE_COLOR)),
             LegendKind::Obstacle => root.draw(&swatch(OBSTACLE_COLOR)),
-            LegendKind::Graph => root.draw(&line(graph_style)),
-            LegendKind::Connector => root.draw(&line(connector_style)),
-            LegendKind::Raw => root.draw(&line(raw_style)),
+            LegendKind::Graph => root.draw(&line(styles.graph)),
+            LegendKind::Connector => root.draw(&line(styles.connector)),
+            LegendKind::Raw => root.draw(&line(styles.raw)),
             LegendKind::Pruned => root
-                .draw(&line(pruned_style))
-                .and_then(|()| root.draw(&waypoint_marker((cx, cy), r_wp))),
-            LegendKind::Start => root.draw(&start_marker((cx, cy), r_end)),
-            LegendKind::Goal => root.draw(&goal_marker((cx, cy), r_end)),
+                .draw(&line(styles.pruned))
+                .and_then(|()| root.draw(&waypoint_marker((cx, cy), styles.r_wp))),
+            LegendKind::Start => root.draw(&start_marker((cx, cy), styles.r_end)),
+            LegendKind::Goal => root.draw(&goal_marker((cx, cy), styles.r_end)),
             LegendKind::Hidden => root.draw(&swatch(HIDDEN_COLOR)),
-            LegendKind::Learned => {
-                root.draw(&Circle::new((cx, cy), r_learned, LEARNED_COLOR.filled()))
-            }
-            LegendKind::Replanned => root.draw(&line(replanned_style)),
-            LegendKind::Track => root.draw(&line(track_style)),
+            LegendKind::Learned => root.draw(&Circle::new(
+                (cx, cy),
+                styles.r_learned,
+                LEARNED_COLOR.filled(),
+            )),
+            LegendKind::Replanned => root.draw(&line(styles.replanned)),
+            LegendKind::Track => root.draw(&line(styles.track)),
             LegendKind::HeatBlocked => root.draw(&swatch(HEAT_BLOCKED_COLOR)),
             LegendKind::Heat(level) => root.draw(&swatch(heat_color(level))),
             LegendKind::NoValue => root.draw(&swatch(NO_VALUE_COLOR)),
@@ -368,7 +423,6 @@ type Dot = Circle<(i32, i32), u32>;
 type TwoDots<C, DB> = ComposedElement<C, DB, Dot, Dot>;
 type Star<C, DB> = ComposedElement<C, DB, Polygon<(i32, i32)>, PathElement<(i32, i32)>>;
 
-/// A waypoint: a white disc ringed in the pruned path's blue.
 /// A box's footprint (east right, north up), filled.
 fn footprint(o: &skyplan_map::colliders::ObstacleBox, color: RGBColor) -> Rectangle<(f64, f64)> {
     let nw = (o.east_m - o.half_east_m, o.north_m + o.half_north_m);
@@ -376,6 +430,7 @@ fn footprint(o: &skyplan_map::colliders::ObstacleBox, color: RGBColor) -> Rectan
     Rectangle::new([nw, se], color.filled())
 }
 
+/// A waypoint: a white disc ringed in the pruned path's blue.
 fn waypoint_marker<C, DB: DrawingBackend>(at: C, r: u32) -> TwoDots<C, DB> {
     let inner = r - (f64::from(r) * 0.45).round().max(1.0) as u32;
     EmptyElement::at(at)

@@ -337,37 +337,49 @@ pub fn layout(scene: &Scene, width_px: u32, height_px: u32) -> Result<PlotLayout
     layout_with(scene, width_px, height_px, None)
 }
 
-/// [`layout`] for a heat map: blocked cells are drawn black, and the colour scale's entries
-/// follow the scene's in the legend.
-pub(crate) fn layout_with(
-    scene: &Scene,
-    width_px: u32,
-    height_px: u32,
-    heat_legend: Option<Vec<LegendEntry>>,
-) -> Result<PlotLayout, PlotError> {
-    let size_ok = |v: u32| (MIN_SIZE_PX..=MAX_SIZE_PX).contains(&v);
-    if !size_ok(width_px) || !size_ok(height_px) {
-        return Err(PlotError::BadSize {
-            width: width_px,
-            height: height_px,
-        });
+impl Fonts {
+    /// The font sizes at scale `k` (1 for an 800 px picture), before the title is fitted.
+    fn at_scale(k: f64) -> Self {
+        Fonts {
+            k,
+            title: even(21.0 * k),
+            desc: even(16.0 * k),
+            tick: even(13.5 * k),
+            legend: even(13.5 * k),
+        }
     }
-    ensure_font()?;
-    let (e0, e1, n0, n1) = world_bounds(scene)?;
-    let (wi, hi) = (width_px as i32, height_px as i32);
-    let k = (f64::from(width_px.min(height_px)) / 800.0).clamp(0.75, 4.0);
-    // Even sizes: plotters' rasteriser then puts every glyph on the same baseline.
-    let even = |v: f64| 2.0 * (v / 2.0).round();
-    let mut fonts = Fonts {
-        k,
-        title: even(21.0 * k),
-        desc: even(16.0 * k),
-        tick: even(13.5 * k),
-        legend: even(13.5 * k),
-    };
-    let px = |v: f64| v.round() as i32;
+}
 
-    // Axis labels: room for the widest tick label either axis may need.
+/// A length in pixels, rounded.
+fn px(v: f64) -> i32 {
+    v.round() as i32
+}
+
+/// A font size rounded to an even number of pixels: plotters' rasteriser then puts every glyph
+/// on the same baseline.
+fn even(v: f64) -> f64 {
+    2.0 * (v / 2.0).round()
+}
+
+/// The room the axes take: tick marks, their labels and the axis titles, pixels.
+struct AxisRoom {
+    /// Width of the widest east tick label.
+    widest_x: f64,
+    tick_len: i32,
+    tick_gap: i32,
+    /// From the plot's left edge to the baseline of the (rotated) y axis title.
+    y_desc_off: f64,
+    /// Width of the y axis labels and title.
+    y_label_w: i32,
+    /// From the plot's bottom edge to the baseline of the x axis title.
+    x_desc_off: f64,
+    /// Height of the x axis labels and title.
+    x_label_h: i32,
+}
+
+/// Room for the widest tick label either axis may need, and for the axis titles.
+fn axis_room((e0, e1, n0, n1): (f64, f64, f64, f64), fonts: &Fonts) -> AxisRoom {
+    let k = fonts.k;
     let est_decimals = decimals_for_step(nice_step((e1 - e0).min(n1 - n0) / 20.0));
     let widest = |lo: f64, hi: f64| {
         [lo, hi, 0.5 * (lo + hi)]
@@ -378,38 +390,85 @@ pub(crate) fn layout_with(
     let (widest_x, widest_y) = (widest(e0, e1), widest(n0, n1));
     let tick_len = px(5.0 * k);
     let tick_gap = px(4.0 * k);
-    // From the plot's edge to the baseline of the axis title.
     let y_desc_off = f64::from(tick_len + tick_gap) + widest_y + 0.6 * fonts.desc;
-    let y_label_w = px(y_desc_off + 0.8 * fonts.desc);
     let x_desc_off =
         f64::from(tick_len + tick_gap) + CAP * fonts.tick + 0.8 * fonts.desc + CAP * fonts.desc;
-    let x_label_h = px(x_desc_off + DESCENT * fonts.desc);
-    let outer = px(14.0 * k);
-    // A title wider than the picture is set smaller, down to 10 px, then shortened.
-    let room = f64::from(wi - 2 * outer);
-    let mut title = scene.title.clone();
-    let fitted = even(fonts.title * room / text_width(&title, fonts.title).max(1.0) - 1.0);
-    fonts.title = fonts.title.min(fitted).max(10.0);
-    while !title.is_empty() && text_width(&title, fonts.title) > room {
+    AxisRoom {
+        widest_x,
+        tick_len,
+        tick_gap,
+        y_desc_off,
+        y_label_w: px(y_desc_off + 0.8 * fonts.desc),
+        x_desc_off,
+        x_label_h: px(x_desc_off + DESCENT * fonts.desc),
+    }
+}
+
+/// The title as drawn and its font size: a title wider than `room` pixels is set smaller,
+/// down to 10 px, then shortened with an ellipsis.
+fn fit_title(title: &str, size: f64, room: f64) -> (String, f64) {
+    let mut title = title.to_string();
+    let fitted = even(size * room / text_width(&title, size).max(1.0) - 1.0);
+    let size = size.min(fitted).max(10.0);
+    while !title.is_empty() && text_width(&title, size) > room {
         title.pop();
         while title.ends_with(' ') {
             title.pop();
         }
-        if text_width(&format!("{title}…"), fonts.title) <= room {
+        if text_width(&format!("{title}…"), size) <= room {
             title.push('…');
             break;
         }
     }
-    let title_h = if title.is_empty() {
-        px(0.5 * fonts.tick)
-    } else {
-        px((CAP + 0.85) * fonts.title)
-    };
-    let right_pad = px(0.5 * widest_x + 6.0 * k).max(outer);
+    (title, size)
+}
 
-    // Legend: a column beside the plot or a row under it.
+/// The room around the plot area, pixels.
+struct Margins {
+    /// The picture's width and height.
+    wi: i32,
+    hi: i32,
+    /// Kept clear at the picture's edges.
+    outer: i32,
+    /// Height of the title.
+    title_h: i32,
+    /// Width of the y axis labels, height of the x axis labels.
+    y_label_w: i32,
+    x_label_h: i32,
+    /// Right of the plot when no legend is there.
+    right_pad: i32,
+    /// Between the plot and a legend.
+    legend_gap: i32,
+}
+
+/// The legend's measures before it is placed: one column beside the plot, or a grid of
+/// columns under it.
+struct LegendShape {
+    entries: Vec<LegendEntry>,
+    sample_w: i32,
+    text_gap: i32,
+    row_h: i32,
+    pad: i32,
+    /// Between the columns of the grid under the plot.
+    entry_sep: i32,
+    /// Width and height of the single column.
+    column: (i32, i32),
+    /// The grid under the plot: its column widths, width and height (`None`: no entries).
+    below: Option<(Vec<i32>, i32, i32)>,
+    /// A heat map's colour scale reads top to bottom: its legend is a column beside the plot.
+    column_only: bool,
+}
+
+/// The legend's entries (the heat map's scale after the scene's) and its measures, with a grid
+/// under the plot as wide as `room_w` pixels at most.
+fn legend_shape(
+    scene: &Scene,
+    heat_legend: Option<Vec<LegendEntry>>,
+    fonts: &Fonts,
+    room_w: i32,
+) -> LegendShape {
+    let k = fonts.k;
     let mut entries = legend_entries(scene);
-    // A heat map's colour scale reads top to bottom: its legend is a column beside the plot.
     let column_only = heat_legend.is_some();
     if let Some(heat) = heat_legend {
         for e in &mut entries {
@@ -446,49 +505,171 @@ pub(crate) fn layout_with(
     // The fewest rows that fit, then as few columns as those rows need.
     let below = (1..=entries.len())
         .rev()
-        .find(|&c| grid_of(c).1 <= wi - 2 * outer)
+        .find(|&c| grid_of(c).1 <= room_w)
         .map(|c| grid_of(entries.len().div_ceil(entries.len().div_ceil(c))));
-    let legend_gap = px(16.0 * k);
+    LegendShape {
+        entries,
+        sample_w,
+        text_gap,
+        row_h,
+        pad,
+        entry_sep,
+        column,
+        below,
+        column_only,
+    }
+}
 
-    // The scale each placement allows; keep the best.
-    let (espan, nspan) = (e1 - e0, n1 - n0);
-    let fit = |aw: i32, ah: i32| -> f64 {
-        if aw < 20 || ah < 20 {
-            0.0
-        } else {
-            (f64::from(aw - 1) / espan).min(f64::from(ah - 1) / nspan)
-        }
-    };
-    let base_w = wi - outer - y_label_w - right_pad;
-    let base_h = hi - outer - title_h - x_label_h - outer;
+/// The scale (pixels per metre) an `aw` × `ah` plot area allows for the spans (0: too small).
+fn fit(aw: i32, ah: i32, (espan, nspan): (f64, f64)) -> f64 {
+    if aw < 20 || ah < 20 {
+        0.0
+    } else {
+        (f64::from(aw - 1) / espan).min(f64::from(ah - 1) / nspan)
+    }
+}
+
+/// Where the legend goes and the plot area's room there: the placement allowing the largest
+/// scale; no legend on a picture too small for one beside or under the plot.
+fn choose_place(legend: &LegendShape, m: &Margins, spans: (f64, f64)) -> (Place, i32, i32) {
+    let base_w = m.wi - m.outer - m.y_label_w - m.right_pad;
+    let base_h = m.hi - m.outer - m.title_h - m.x_label_h - m.outer;
     let mut candidates = vec![];
-    if entries.is_empty() {
+    if legend.entries.is_empty() {
         candidates.push((Place::Nowhere, base_w, base_h));
     } else {
         candidates.push((
             Place::Right,
-            base_w + right_pad - legend_gap.max(right_pad) - column.0 - outer,
+            base_w + m.right_pad - m.legend_gap.max(m.right_pad) - legend.column.0 - m.outer,
             base_h,
         ));
-        if let Some((_, _, h)) = below.as_ref().filter(|_| !column_only) {
-            candidates.push((Place::Below, base_w, base_h - legend_gap - h));
+        if let Some((_, _, h)) = legend.below.as_ref().filter(|_| !legend.column_only) {
+            candidates.push((Place::Below, base_w, base_h - m.legend_gap - h));
         }
     }
     let best = candidates
         .iter()
         .copied()
-        .max_by(|a, b| fit(a.1, a.2).total_cmp(&fit(b.1, b.2)));
-    // A picture too small for a legend beside or under the plot goes without.
-    let (place, aw, ah) = match best {
-        Some(c) if fit(c.1, c.2) >= 0.5 * fit(base_w, base_h) => c,
+        .max_by(|a, b| fit(a.1, a.2, spans).total_cmp(&fit(b.1, b.2, spans)));
+    match best {
+        Some(c) if fit(c.1, c.2, spans) >= 0.5 * fit(base_w, base_h, spans) => c,
         _ => (Place::Nowhere, base_w, base_h),
+    }
+}
+
+/// A pixel rectangle: left, top, width, height.
+type PixelRect = (i32, i32, u32, u32);
+
+/// The legend's entry origins and frame for a plot area (left, top, width, height).
+fn place_legend(
+    legend: &LegendShape,
+    place: Place,
+    m: &Margins,
+    (plot_x, plot_y, pw, ph): (i32, i32, i32, i32),
+) -> (Vec<(i32, i32)>, PixelRect) {
+    let (pad, row_h) = (legend.pad, legend.row_h);
+    let mut origins = Vec::new();
+    let frame = match place {
+        Place::Nowhere => (0, 0, 0, 0),
+        Place::Right => {
+            let n = legend.entries.len() as i32;
+            let (lx, ly) = (plot_x + pw + m.legend_gap.max(m.right_pad), plot_y);
+            origins.extend((0..n).map(|i| (lx + pad, ly + pad + i * row_h + row_h / 3)));
+            (lx, ly, legend.column.0 as u32, legend.column.1 as u32)
+        }
+        Place::Below => {
+            let (widths, gw, gh) = legend.below.clone().unwrap_or_default();
+            let lx = (plot_x + (pw - gw) / 2).clamp(m.outer, (m.wi - m.outer - gw).max(m.outer));
+            let ly = plot_y + ph + m.x_label_h + m.legend_gap;
+            let cols = widths.len().max(1);
+            for i in 0..legend.entries.len() {
+                let x = lx
+                    + pad
+                    + widths[..i % cols]
+                        .iter()
+                        .map(|w| w + legend.entry_sep)
+                        .sum::<i32>();
+                origins.push((x, ly + pad + (i / cols) as i32 * row_h + row_h / 3));
+            }
+            (lx, ly, gw as u32, gh as u32)
+        }
     };
-    let entries = if place == Place::Nowhere {
-        Vec::new()
-    } else {
-        entries
+    (origins, frame)
+}
+
+/// The top-left corner of the group (title, axis labels, plot, legend) centred on the picture,
+/// for a `pw` × `ph` plot area.
+fn centre_group(
+    m: &Margins,
+    legend: &LegendShape,
+    place: Place,
+    (pw, ph): (i32, i32),
+) -> (i32, i32) {
+    let group_w = m.y_label_w
+        + pw
+        + if place == Place::Right {
+            m.legend_gap.max(m.right_pad) + legend.column.0
+        } else {
+            m.right_pad
+        };
+    let group_h = m.title_h
+        + ph
+        + m.x_label_h
+        + match (place, &legend.below) {
+            (Place::Below, Some((_, _, h))) => m.legend_gap + h,
+            _ => 0,
+        };
+    let gx = ((m.wi - group_w) / 2).max(m.outer);
+    let gy = ((m.hi - group_h) / 2).max(m.outer);
+    (gx, gy)
+}
+
+/// [`layout`] for a heat map: blocked cells are drawn black, and the colour scale's entries
+/// follow the scene's in the legend.
+pub(crate) fn layout_with(
+    scene: &Scene,
+    width_px: u32,
+    height_px: u32,
+    heat_legend: Option<Vec<LegendEntry>>,
+) -> Result<PlotLayout, PlotError> {
+    let size_ok = |v: u32| (MIN_SIZE_PX..=MAX_SIZE_PX).contains(&v);
+    if !size_ok(width_px) || !size_ok(height_px) {
+        return Err(PlotError::BadSize {
+            width: width_px,
+            height: height_px,
+        });
+    }
+    ensure_font()?;
+    let bounds = world_bounds(scene)?;
+    let (e0, e1, n0, n1) = bounds;
+    let (wi, hi) = (width_px as i32, height_px as i32);
+    let k = (f64::from(width_px.min(height_px)) / 800.0).clamp(0.75, 4.0);
+    let mut fonts = Fonts::at_scale(k);
+    let axes = axis_room(bounds, &fonts);
+    let outer = px(14.0 * k);
+    let (title, title_font) = fit_title(&scene.title, fonts.title, f64::from(wi - 2 * outer));
+    fonts.title = title_font;
+    let m = Margins {
+        wi,
+        hi,
+        outer,
+        title_h: if title.is_empty() {
+            px(0.5 * fonts.tick)
+        } else {
+            px((CAP + 0.85) * fonts.title)
+        },
+        y_label_w: axes.y_label_w,
+        x_label_h: axes.x_label_h,
+        right_pad: px(0.5 * axes.widest_x + 6.0 * k).max(outer),
+        legend_gap: px(16.0 * k),
     };
-    let s = fit(aw, ah);
+    let mut legend = legend_shape(scene, heat_legend, &fonts, wi - 2 * outer);
+    let (espan, nspan) = (e1 - e0, n1 - n0);
+    let (place, aw, ah) = choose_place(&legend, &m, (espan, nspan));
+    if place == Place::Nowhere {
+        legend.entries = Vec::new();
+    }
+    let s = fit(aw, ah, (espan, nspan));
     if s <= 0.0 {
         return Err(PlotError::BadSize {
             width: width_px,
@@ -500,64 +681,16 @@ pub(crate) fn layout_with(
     let east_m = (e0, e0 + f64::from(pw - 1) / s);
     let north_m = (n0, n0 + f64::from(ph - 1) / s);
 
-    // Centre the group (axis labels, plot, legend) on the picture.
-    let legend_sep = legend_gap.max(right_pad);
-    let group_w = y_label_w
-        + pw
-        + if place == Place::Right {
-            legend_sep + column.0
-        } else {
-            right_pad
-        };
-    let group_h = title_h
-        + ph
-        + x_label_h
-        + match (place, &below) {
-            (Place::Below, Some((_, _, h))) => legend_gap + h,
-            _ => 0,
-        };
-    let gx = ((wi - group_w) / 2).max(outer);
-    let gy = ((hi - group_h) / 2).max(outer);
-    let (plot_x, plot_y) = (gx + y_label_w, gy + title_h);
+    let (gx, gy) = centre_group(&m, &legend, place, (pw, ph));
+    let (plot_x, plot_y) = (gx + m.y_label_w, gy + m.title_h);
     let title_half_w = (0.5 * text_width(&title, fonts.title)).ceil() as i32;
-
-    let mut origins = Vec::new();
-    let frame = match place {
-        Place::Nowhere => (0, 0, 0, 0),
-        Place::Right => {
-            let (lx, ly) = (plot_x + pw + legend_sep, plot_y);
-            origins.extend((0..n).map(|i| (lx + pad, ly + pad + i * row_h + row_h / 3)));
-            (lx, ly, column.0 as u32, column.1 as u32)
-        }
-        Place::Below => {
-            let (widths, gw, gh) = below.unwrap_or_default();
-            let lx = (plot_x + (pw - gw) / 2).clamp(outer, (wi - outer - gw).max(outer));
-            let ly = plot_y + ph + x_label_h + legend_gap;
-            let cols = widths.len().max(1);
-            for i in 0..entries.len() {
-                let x = lx
-                    + pad
-                    + widths[..i % cols]
-                        .iter()
-                        .map(|w| w + entry_sep)
-                        .sum::<i32>();
-                origins.push((x, ly + pad + (i / cols) as i32 * row_h + row_h / 3));
-            }
-            (lx, ly, gw as u32, gh as u32)
-        }
-    };
+    let (origins, frame) = place_legend(&legend, place, &m, (plot_x, plot_y, pw, ph));
 
     // Ticks: labels never closer than their own size allows, about ten per axis at most.
-    let (x_ticks, x_step) = ticks(
-        east_m.0,
-        east_m.1,
-        (widest_x + 2.5 * fonts.tick).max(f64::from(pw) / 10.0) / s,
-    );
-    let (y_ticks, y_step) = ticks(
-        north_m.0,
-        north_m.1,
-        (3.0 * fonts.tick).max(f64::from(ph) / 10.0) / s,
-    );
+    let x_min_m = (axes.widest_x + 2.5 * fonts.tick).max(f64::from(pw) / 10.0) / s;
+    let (x_ticks, x_step) = ticks(east_m.0, east_m.1, x_min_m);
+    let y_min_m = (3.0 * fonts.tick).max(f64::from(ph) / 10.0) / s;
+    let (y_ticks, y_step) = ticks(north_m.0, north_m.1, y_min_m);
     Ok(PlotLayout {
         width: width_px,
         height: height_px,
@@ -568,10 +701,10 @@ pub(crate) fn layout_with(
         x_ticks,
         y_ticks,
         decimals: decimals_for_step(x_step.min(y_step)),
-        tick_len,
-        tick_gap,
-        x_desc_baseline: plot_y + ph + px(x_desc_off),
-        y_desc_baseline: plot_x - px(y_desc_off),
+        tick_len: axes.tick_len,
+        tick_gap: axes.tick_gap,
+        x_desc_baseline: plot_y + ph + px(axes.x_desc_off),
+        y_desc_baseline: plot_x - px(axes.y_desc_off),
         title_top: gy,
         title_x: (plot_x + pw / 2).clamp(
             outer + title_half_w,
@@ -579,11 +712,11 @@ pub(crate) fn layout_with(
         ),
         title,
         legend: LegendLayout {
-            entries,
+            entries: legend.entries,
             origins,
             frame,
-            sample_w,
-            text_gap,
+            sample_w: legend.sample_w,
+            text_gap: legend.text_gap,
         },
     })
 }

@@ -3,8 +3,8 @@
 //! profile, or a heat map of a navigation function's field.
 
 use crate::{FlightLayers, PlotError, PlotFormat};
-use skyplan_cspace::Cell;
-use skyplan_plan::{Plan, Ride, World};
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_plan::{Geometry, Plan, Ride, World};
 use std::path::Path;
 
 /// What the picture of a plan is.
@@ -62,101 +62,147 @@ pub fn plan_picture(
     flight: Option<&FlightLayers>,
 ) -> Result<Vec<u8>, PlotError> {
     let geometry = plan.geometry.clone().unwrap_or_default();
-    let info = plan.planner.info();
-    let grid = plan.grid_used.as_deref();
     let map = short_name(world.name());
-    match (kind, grid) {
-        (PictureKind::Heatmap, Some(grid)) => {
-            let cell = |p: &[f64]| grid.cell_at_ne(p[0], p[1]);
-            let path: Vec<Cell> = geometry.raw_path.iter().filter_map(|p| cell(p)).collect();
-            let values = match geometry.field {
-                Some(v) if v.len() == grid.len() => v,
-                _ => vec![0.0; grid.len()],
-            };
-            let measure = match plan.planner {
-                skyplan_plan::PlannerId::Costmap => "cost-to-go (cells of length + weight × cost)",
-                _ if plan.details.get("field").and_then(|v| v.as_str()) == Some("steps") => {
-                    "steps to the goal"
-                }
-                _ => "distance to the goal (cells)",
-            };
-            let heat = crate::Heatmap {
-                title: format!(
-                    "{map}, {}{}: {:.1} m, field of {measure}",
-                    info.label,
-                    grid_at(plan),
-                    plan.cost_m
-                ),
+    match (kind, plan.grid_used.as_deref()) {
+        (PictureKind::Heatmap, Some(grid)) => field_picture(plan, &geometry, grid, map),
+        (PictureKind::Scene(format), Some(grid)) if plan.planner.info().dims == 2 => {
+            let picture = MapPicture {
+                plan,
+                geometry: &geometry,
                 grid,
-                values: &values,
-                measure,
-                path: &path,
-                start: plan.start.cell.map(|[r, c]| Cell::new(r, c)),
-                goal: plan.goal.cell.map(|[r, c]| Cell::new(r, c)),
-            };
-            crate::render_heatmap_png(&heat, 1000)
-        }
-        (PictureKind::Scene(format), Some(grid)) if info.dims == 2 => {
-            let ne = |p: &[f64]| (p[0], p[1]);
-            let raw: Vec<_> = geometry.raw_path.iter().map(|p| ne(p)).collect();
-            let waypoints: Vec<_> = plan.waypoints.iter().map(|w| ne(w)).collect();
-            let seg = |s: &[[f64; 3]; 2]| (ne(&s[0]), ne(&s[1]));
-            let graph: Vec<_> = geometry.edges.iter().map(seg).collect();
-            let connectors: Vec<_> = geometry.connectors.iter().map(seg).collect();
-            let how = match plan.details.get("fallback") {
-                Some(v) if !v.is_null() => "grid fallback".to_string(),
-                _ => info.label.to_string(),
-            };
-            let at = grid_at(plan);
-            let scene = crate::Scene {
-                title: format!(
-                    "{map}, {how}{at}: {:.1} m, {} waypoints",
-                    plan.cost_m,
-                    waypoints.len()
-                ),
-                grid,
-                obstacles: &geometry.active_boxes,
-                raw_path_ne: &raw,
-                pruned_path_ne: &waypoints,
-                start_ne: Some((plan.start.north_m, plan.start.east_m)),
-                goal_ne: Some((plan.goal.north_m, plan.goal.east_m)),
-                graph_ne: &graph,
-                connectors_ne: &connectors,
+                map,
                 flight,
             };
-            crate::render(&scene, *format, 1000, 1000)
+            picture.render(*format)
         }
-        (PictureKind::Scene(format), _) => {
-            let boxes = world
-                .colliders()
-                .map(|m| m.boxes.as_slice())
-                .unwrap_or_default();
-            let points = plan.points_nea();
-            let edges: Vec<_> = geometry.edges.iter().map(|s| (s[0], s[1])).collect();
-            let safety_m = plan.spec.safety_m;
-            let scene = crate::Scene3d {
-                title: format!(
-                    "{map}: {}, {:.0} m, margin {safety_m} m",
-                    info.name, plan.cost_m
-                ),
-                obstacles: boxes,
-                safety_m,
-                path: &points,
-                raw_path: &geometry.raw_path,
-                raw_label: if plan.planner == skyplan_plan::PlannerId::Voxel {
-                    "voxel path"
-                } else {
-                    "before shortcutting"
-                },
-                edges: &edges,
-                edges_label: &geometry.edges_label,
-            };
-            crate::render_plan3d(&scene, *format, 1500, 900)
-        }
+        (PictureKind::Scene(format), _) => picture3d(world, plan, &geometry, map, *format),
         (PictureKind::Heatmap, None) => Err(PlotError::BadScene {
             what: "a heat map needs a grid planner",
         }),
     }
+}
+
+/// The heat map of a grid planner's field (distance, steps or cost to the goal) with its path.
+fn field_picture(
+    plan: &Plan,
+    geometry: &Geometry,
+    grid: &Grid2,
+    map: &str,
+) -> Result<Vec<u8>, PlotError> {
+    let cell = |p: &[f64]| grid.cell_at_ne(p[0], p[1]);
+    let path: Vec<Cell> = geometry.raw_path.iter().filter_map(|p| cell(p)).collect();
+    let zeros;
+    let values: &[f64] = match &geometry.field {
+        Some(v) if v.len() == grid.len() => v,
+        _ => {
+            zeros = vec![0.0; grid.len()];
+            &zeros
+        }
+    };
+    let measure = match plan.planner {
+        skyplan_plan::PlannerId::Costmap => "cost-to-go (cells of length + weight × cost)",
+        _ if plan.details.get("field").and_then(|v| v.as_str()) == Some("steps") => {
+            "steps to the goal"
+        }
+        _ => "distance to the goal (cells)",
+    };
+    let heat = crate::Heatmap {
+        title: format!(
+            "{map}, {}{}: {:.1} m, field of {measure}",
+            plan.planner.info().label,
+            grid_at(plan),
+            plan.cost_m
+        ),
+        grid,
+        values,
+        measure,
+        path: &path,
+        start: plan.start.cell.map(|[r, c]| Cell::new(r, c)),
+        goal: plan.goal.cell.map(|[r, c]| Cell::new(r, c)),
+    };
+    crate::render_heatmap_png(&heat, 1000)
+}
+
+/// What the 2D map picture of a plan shows.
+struct MapPicture<'a> {
+    plan: &'a Plan,
+    geometry: &'a Geometry,
+    grid: &'a Grid2,
+    /// The map's short name, for the title.
+    map: &'a str,
+    flight: Option<&'a FlightLayers<'a>>,
+}
+
+impl MapPicture<'_> {
+    /// The 2D map with the grid path, the waypoints and a roadmap's edges and connectors.
+    fn render(&self, format: PlotFormat) -> Result<Vec<u8>, PlotError> {
+        let (plan, geometry) = (self.plan, self.geometry);
+        let ne = |p: &[f64]| (p[0], p[1]);
+        let raw: Vec<_> = geometry.raw_path.iter().map(|p| ne(p)).collect();
+        let waypoints: Vec<_> = plan.waypoints.iter().map(|w| ne(w)).collect();
+        let seg = |s: &[[f64; 3]; 2]| (ne(&s[0]), ne(&s[1]));
+        let graph: Vec<_> = geometry.edges.iter().map(seg).collect();
+        let connectors: Vec<_> = geometry.connectors.iter().map(seg).collect();
+        let how = match plan.details.get("fallback") {
+            Some(v) if !v.is_null() => "grid fallback".to_string(),
+            _ => plan.planner.info().label.to_string(),
+        };
+        let at = grid_at(plan);
+        let scene = crate::Scene {
+            title: format!(
+                "{}, {how}{at}: {:.1} m, {} waypoints",
+                self.map,
+                plan.cost_m,
+                waypoints.len()
+            ),
+            grid: self.grid,
+            obstacles: &geometry.active_boxes,
+            raw_path_ne: &raw,
+            pruned_path_ne: &waypoints,
+            start_ne: Some((plan.start.north_m, plan.start.east_m)),
+            goal_ne: Some((plan.goal.north_m, plan.goal.east_m)),
+            graph_ne: &graph,
+            connectors_ne: &connectors,
+            flight: self.flight,
+        };
+        crate::render(&scene, format, 1000, 1000)
+    }
+}
+
+/// The 3D top view and side profile of a plan on the world's buildings.
+fn picture3d(
+    world: &World,
+    plan: &Plan,
+    geometry: &Geometry,
+    map: &str,
+    format: PlotFormat,
+) -> Result<Vec<u8>, PlotError> {
+    let boxes = world
+        .colliders()
+        .map(|m| m.boxes.as_slice())
+        .unwrap_or_default();
+    let points = plan.points_nea();
+    let edges: Vec<_> = geometry.edges.iter().map(|s| (s[0], s[1])).collect();
+    let safety_m = plan.spec.safety_m;
+    let scene = crate::Scene3d {
+        title: format!(
+            "{map}: {}, {:.0} m, margin {safety_m} m",
+            plan.planner.info().name,
+            plan.cost_m
+        ),
+        obstacles: boxes,
+        safety_m,
+        path: &points,
+        raw_path: &geometry.raw_path,
+        raw_label: if plan.planner == skyplan_plan::PlannerId::Voxel {
+            "voxel path"
+        } else {
+            "before shortcutting"
+        },
+        edges: &edges,
+        edges_label: &geometry.edges_label,
+    };
+    crate::render_plan3d(&scene, format, 1500, 900)
 }
 
 fn grid_at(plan: &Plan) -> String {

@@ -92,10 +92,8 @@ pub fn profile_columns(
     let near: Vec<&ObstacleBox> = obstacles
         .iter()
         .filter(|b| {
-            b.north_m + b.half_north_m + safety_m >= lo[0]
-                && b.north_m - b.half_north_m - safety_m <= hi[0]
-                && b.east_m + b.half_east_m + safety_m >= lo[1]
-                && b.east_m - b.half_east_m - safety_m <= hi[1]
+            let (b_lo, b_hi) = b.grown(safety_m);
+            b_hi[0] >= lo[0] && b_lo[0] <= hi[0] && b_hi[1] >= lo[1] && b_lo[1] <= hi[1]
         })
         .collect();
     let n = ((total_m / step_m).ceil() as usize).max(1);
@@ -349,6 +347,23 @@ fn building_color(top_m: f64, tallest_m: f64) -> RGBColor {
     RGBColor(lerp(178.0, 38.0), lerp(184.0, 42.0), lerp(196.0, 52.0))
 }
 
+/// What every part of the 3D picture is scaled by: the text mode, the font size and the
+/// stroke scale.
+#[derive(Clone, Copy)]
+struct Look {
+    mode: TextMode,
+    font: f64,
+    /// Stroke widths are given for an 18 px font and scaled by this.
+    k: f64,
+}
+
+impl Look {
+    /// A stroke width for an 18 px font, scaled to this picture's font (at least 1 px).
+    fn stroke(&self, v: f64) -> u32 {
+        (v * self.k).round().max(1.0) as u32
+    }
+}
+
 fn draw3d<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     scene: &Scene3d,
@@ -358,10 +373,36 @@ fn draw3d<DB: DrawingBackend>(
     let (w, h) = root.dim_in_pixel();
     let (w, h) = (w as i32, h as i32);
     let font = (f64::from(h.min(w)) / 50.0).clamp(10.0, 28.0);
-    let k = font / 18.0;
-    let stroke = |v: f64| (v * k).round().max(1.0) as u32;
+    let look = Look {
+        mode,
+        font,
+        k: font / 18.0,
+    };
+    let tallest = scene
+        .obstacles
+        .iter()
+        .map(ObstacleBox::top_m)
+        .fold(1.0, f64::max);
+    let top = top_panel(scene, (w, h), font);
+    draw_top_view(root, scene, &top, tallest, look)?;
+    let prof = draw_side_profile(root, scene, &top, w, tallest, look)?;
+    draw_legend3d(root, scene, &prof, tallest, look)?;
+    draw_label(
+        root,
+        mode,
+        &Label {
+            text: &scene.title,
+            size: font * 1.15,
+            at: (w / 2, (0.7 * font) as i32),
+            h: HPos::Center,
+            v: VAlign::Top,
+            vertical: false,
+        },
+    )
+}
 
-    // Top view: the route's surroundings, equal scales, square.
+/// The top view's panel: the route's surroundings, equal scales, square, on the left.
+fn top_panel(scene: &Scene3d, (w, h): (i32, i32), font: f64) -> Panel {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in scene.path.iter().chain(scene.raw_path) {
         for a in 0..2 {
@@ -375,20 +416,26 @@ fn draw3d<DB: DrawingBackend>(
     let left = (4.6 * font) as i32;
     let bottom = (3.6 * font) as i32;
     let size = (h - title_h - bottom - (0.6 * font) as i32).min(w * 11 / 20 - left);
-    let top = Panel {
+    Panel {
         x0: left,
         y0: title_h,
         w: size,
         h: size,
         xr: (centre[1] - side / 2.0, centre[1] + side / 2.0),
         yr: (centre[0] - side / 2.0, centre[0] + side / 2.0),
-    };
-    top.grid(root, font)?;
-    let tallest = scene
-        .obstacles
-        .iter()
-        .map(ObstacleBox::top_m)
-        .fold(1.0, f64::max);
+    }
+}
+
+/// The top view: buildings shaded by height (tallest drawn last), the roadmap's edges, the raw
+/// and the final route, the axes and the start and goal markers.
+fn draw_top_view<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene3d,
+    top: &Panel,
+    tallest: f64,
+    look: Look,
+) -> Result<(), PlotError> {
+    top.grid(root, look.font)?;
     {
         let area = root
             .clone()
@@ -422,25 +469,36 @@ fn draw3d<DB: DrawingBackend>(
             chart
                 .draw_series(LineSeries::new(
                     scene.raw_path.iter().map(en),
-                    RAW_COLOR.stroke_width(stroke(2.0)),
+                    RAW_COLOR.stroke_width(look.stroke(2.0)),
                 ))
                 .map_err(err)?;
         }
         chart
             .draw_series(LineSeries::new(
                 scene.path.iter().map(en),
-                ROUTE_COLOR.stroke_width(stroke(3.5)),
+                ROUTE_COLOR.stroke_width(look.stroke(3.5)),
             ))
             .map_err(err)?;
     }
-    top.axes(root, mode, font, ("EAST (m)", "NORTH (m)"))?;
-    let r = stroke(7.0);
+    top.axes(root, look.mode, look.font, ("EAST (m)", "NORTH (m)"))?;
+    let r = look.stroke(7.0);
     let first = scene.path[0];
     let last = scene.path[scene.path.len() - 1];
     marker(root, top.px(first[1], first[0]), r, START_COLOR)?;
-    marker(root, top.px(last[1], last[0]), r, GOAL_COLOR)?;
+    marker(root, top.px(last[1], last[0]), r, GOAL_COLOR)
+}
 
-    // Side profile on the right.
+/// The side profile right of the top view: the buildings and their margins under the route,
+/// the route's altitude against horizontal distance, and the axes. Returns its panel.
+fn draw_side_profile<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene3d,
+    top: &Panel,
+    width_px: i32,
+    tallest: f64,
+    look: Look,
+) -> Result<Panel, PlotError> {
+    let font = look.font;
     let horizontal_m: f64 = scene
         .path
         .windows(2)
@@ -459,17 +517,33 @@ fn draw3d<DB: DrawingBackend>(
         .chain(cols.iter().map(|c| c.margin_top_m))
         .fold(10.0, f64::max);
     let px0 = top.x0 + top.w + (6.0 * font) as i32;
-    let pw = w - px0 - (1.4 * font) as i32;
-    let ph = size * 11 / 20;
     let prof = Panel {
         x0: px0,
-        y0: title_h,
-        w: pw,
-        h: ph,
+        y0: top.y0,
+        w: width_px - px0 - (1.4 * font) as i32,
+        h: top.w * 11 / 20,
         xr: (-0.02 * total_m.max(1.0), 1.02 * total_m.max(1.0)),
         yr: (0.0, max_alt * 1.15),
     };
     prof.grid(root, font)?;
+    draw_columns(root, &prof, &cols, tallest)?;
+    draw_profile_route(root, &prof, scene.path, look)?;
+    prof.axes(
+        root,
+        look.mode,
+        font,
+        ("DISTANCE ALONG THE ROUTE (m)", "ALTITUDE (m)"),
+    )?;
+    Ok(prof)
+}
+
+/// The profile's columns: every margin first, then every building over it.
+fn draw_columns<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    prof: &Panel,
+    cols: &[ProfileColumn],
+    tallest: f64,
+) -> Result<(), PlotError> {
     for (color, top_of) in [
         (
             MARGIN_COLOR,
@@ -477,7 +551,7 @@ fn draw3d<DB: DrawingBackend>(
         ),
         (RGBColor(0, 0, 0), |c: &ProfileColumn| c.top_m),
     ] {
-        for c in &cols {
+        for c in cols {
             let t = top_of(c);
             if t <= 0.0 {
                 continue;
@@ -496,37 +570,52 @@ fn draw3d<DB: DrawingBackend>(
             .map_err(err)?;
         }
     }
-    // The route against horizontal distance.
+    Ok(())
+}
+
+/// The route against horizontal distance: its line, a ring at each inner waypoint, the start
+/// and goal markers.
+fn draw_profile_route<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    prof: &Panel,
+    path: &[[f64; 3]],
+    look: Look,
+) -> Result<(), PlotError> {
     let mut d = 0.0;
-    let mut pts = Vec::with_capacity(scene.path.len());
-    for (i, p) in scene.path.iter().enumerate() {
+    let mut pts = Vec::with_capacity(path.len());
+    for (i, p) in path.iter().enumerate() {
         if i > 0 {
-            let q = scene.path[i - 1];
+            let q = path[i - 1];
             d += (p[0] - q[0]).hypot(p[1] - q[1]);
         }
         pts.push(prof.px(d, p[2]));
     }
     root.draw(&PathElement::new(
         pts.clone(),
-        ROUTE_COLOR.stroke_width(stroke(3.5)),
+        ROUTE_COLOR.stroke_width(look.stroke(3.5)),
     ))
     .map_err(err)?;
     for &p in &pts[1..pts.len() - 1] {
-        root.draw(&Circle::new(p, stroke(4.0), ROUTE_COLOR.filled()))
+        root.draw(&Circle::new(p, look.stroke(4.0), ROUTE_COLOR.filled()))
             .map_err(err)?;
-        root.draw(&Circle::new(p, stroke(2.0), WHITE.filled()))
+        root.draw(&Circle::new(p, look.stroke(2.0), WHITE.filled()))
             .map_err(err)?;
     }
+    let r = look.stroke(7.0);
     marker(root, pts[0], r, START_COLOR)?;
-    marker(root, pts[pts.len() - 1], r, GOAL_COLOR)?;
-    prof.axes(
-        root,
-        mode,
-        font,
-        ("DISTANCE ALONG THE ROUTE (m)", "ALTITUDE (m)"),
-    )?;
+    marker(root, pts[pts.len() - 1], r, GOAL_COLOR)
+}
 
-    // Legend under the profile.
+/// The legend under the profile: route, raw route, markers, three building heights, the
+/// margin and the roadmap's edges.
+fn draw_legend3d<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene3d,
+    prof: &Panel,
+    tallest: f64,
+    look: Look,
+) -> Result<(), PlotError> {
+    let font = look.font;
     let mut entries: Vec<(&str, Swatch)> = vec![
         ("route", Swatch::Line(ROUTE_COLOR, 3.5)),
         ("start", Swatch::Dot(START_COLOR)),
@@ -549,6 +638,7 @@ fn draw3d<DB: DrawingBackend>(
     if !scene.edges.is_empty() && !scene.edges_label.is_empty() {
         entries.push((scene.edges_label, Swatch::Line(EDGE_COLOR, 1.0)));
     }
+    let r = look.stroke(7.0);
     let line_h = (1.7 * font) as i32;
     let lx = prof.x0;
     let mut ly = prof.y0 + prof.h + (5.2 * font) as i32;
@@ -557,7 +647,7 @@ fn draw3d<DB: DrawingBackend>(
         match swatch {
             Swatch::Line(c, width) => root.draw(&PathElement::new(
                 vec![(lx, ly), (lx + sw, ly)],
-                c.stroke_width(stroke(width)),
+                c.stroke_width(look.stroke(width)),
             )),
             Swatch::Dot(c) => {
                 marker(root, (lx + sw / 2, ly), r, c)?;
@@ -574,7 +664,7 @@ fn draw3d<DB: DrawingBackend>(
         .map_err(err)?;
         draw_label(
             root,
-            mode,
+            look.mode,
             &Label {
                 text,
                 size: font * 0.9,
@@ -586,19 +676,7 @@ fn draw3d<DB: DrawingBackend>(
         )?;
         ly += line_h;
     }
-
-    draw_label(
-        root,
-        mode,
-        &Label {
-            text: &scene.title,
-            size: font * 1.15,
-            at: (w / 2, (0.7 * font) as i32),
-            h: HPos::Center,
-            v: VAlign::Top,
-            vertical: false,
-        },
-    )
+    Ok(())
 }
 
 enum Swatch {

@@ -9,7 +9,7 @@ mod common;
 
 use skyplan_flight::executor::Target;
 use skyplan_flight::sensing::{ObstacleReading, RouteDecision, RouteWatcher};
-use skyplan_map::colliders::{ObstacleBox, parse_colliders};
+use skyplan_map::colliders::{CollidersMap, ObstacleBox, parse_colliders};
 use skyplan_plan::{FCND_CITY_CSV, FCND_DEFAULT_GOAL_NE, PlanRequest, Session, World};
 use skyplan_replan::hidden::{place_hidden, true_world};
 use skyplan_replan::{ReplanOptions, Replanner, ReplannerKind};
@@ -50,6 +50,42 @@ impl RouteWatcher for Timed<'_> {
     }
 }
 
+/// What the flights of one replanner measured.
+#[derive(Default)]
+struct Tally {
+    /// Replan latencies, ms.
+    latencies: Vec<f64>,
+    /// Expansions per replan.
+    expansions: Vec<f64>,
+    /// Flown length ÷ the full-knowledge optimum, per flight.
+    ratios: Vec<f64>,
+    /// Flights that reached the goal without a collision.
+    reached: usize,
+    replans: usize,
+    /// The slowest replan: latency (ms), expansions and reason.
+    slowest: Option<(f64, u64, String)>,
+    /// Every reading's call time, ms.
+    calls: Vec<f64>,
+    /// Replan CPU times, ms.
+    cpu: Vec<f64>,
+    /// A* from scratch at the same replans, cells expanded.
+    astar: Vec<f64>,
+}
+
+/// The `p`-th percentile (nearest rank; NaN for no value).
+fn pct(v: &[f64], p: f64) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v[(((p / 100.0) * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let seeds: u64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(10);
@@ -66,109 +102,122 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("scratch", ReplannerKind::Scratch, None),
     ];
     for (label, kind, budget) in configs {
-        let (mut latencies, mut expansions, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
-        let (mut reached, mut replans) = (0, 0);
-        let mut slowest: Option<(f64, u64, String)> = None;
-        let mut calls = Vec::new();
-        let mut cpu = Vec::new();
-        let mut astar = Vec::new();
+        let mut tally = Tally::default();
         for seed in 0..seeds {
             let options = ReplanOptions {
                 replanner: kind,
                 dstar_budget_expansions: budget,
                 ..Default::default()
             };
-            let mut r = Replanner::new(Session::new(World::fcnd_city()), &request, options)?;
-            let spec = common::city_hidden_spec(
-                common::route_ne(&r.initial_plan().waypoints),
-                count,
-                seed,
-            );
-            let hidden = place_hidden(&map, &spec)?;
-            let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&hidden).copied().collect();
-            let targets = r.initial_targets();
-            let mut timed = Timed {
-                inner: &mut r,
-                calls_ms: Vec::new(),
-                astar_expansions: Vec::new(),
-            };
-            let flight = common::fly(
-                &mut timed,
-                targets,
-                &truth,
-                [0.0, 0.0, 5.0],
-                5.0,
-                0.1,
-                1800.0,
-            );
-            calls.extend(timed.calls_ms);
-            astar.extend(timed.astar_expansions);
-            let collided = common::first_collision(&flight.track, &truth, 2.5).is_some();
-            if flight.reached_goal && !collided {
-                reached += 1;
-            }
-            replans += flight.replans.len();
-            for e in &flight.replans {
-                if slowest.as_ref().is_none_or(|s| e.latency_ms > s.0) {
-                    slowest = Some((e.latency_ms, e.expansions, e.reason.clone()));
-                }
-            }
-            latencies.extend(flight.replans.iter().map(|e| e.latency_ms));
-            cpu.extend(flight.replans.iter().filter_map(|e| e.cpu_ms));
-            expansions.extend(flight.replans.iter().map(|e| e.expansions as f64));
-            let flown = common::track_length_m(&flight.track);
-            let truth_world = true_world(&World::fcnd_city(), &hidden)?;
-            let optimum = Session::new(truth_world).plan(&PlanRequest {
-                planner: Some(skyplan_plan::PlannerId::Jps),
-                ..request.clone()
-            })?;
-            ratios.push(flown / optimum.mission_length_m);
+            fly_one(&map, &request, options, (count, seed), &mut tally)?;
         }
-        let pct = |v: &[f64], p: f64| -> f64 {
-            let mut v = v.to_vec();
-            v.sort_by(f64::total_cmp);
-            if v.is_empty() {
-                return f64::NAN;
-            }
-            v[(((p / 100.0) * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
-        };
-        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        tally.print(label, seeds);
+    }
+    Ok(())
+}
+
+/// One flight among `count` hidden buildings placed with `seed`, measured into `tally`.
+fn fly_one(
+    map: &CollidersMap,
+    request: &PlanRequest,
+    options: ReplanOptions,
+    (count, seed): (usize, u64),
+    tally: &mut Tally,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let mut r = Replanner::new(Session::new(World::fcnd_city()), request, options)?;
+    let spec = common::city_hidden_spec(common::route_ne(&r.initial_plan().waypoints), count, seed);
+    let hidden = place_hidden(map, &spec)?;
+    let truth: Vec<ObstacleBox> = map.boxes.iter().chain(&hidden).copied().collect();
+    let targets = r.initial_targets();
+    let mut timed = Timed {
+        inner: &mut r,
+        calls_ms: Vec::new(),
+        astar_expansions: Vec::new(),
+    };
+    let flight = common::fly(
+        &mut timed,
+        targets,
+        &truth,
+        [0.0, 0.0, 5.0],
+        5.0,
+        0.1,
+        1800.0,
+    );
+    tally.calls.extend(timed.calls_ms);
+    tally.astar.extend(timed.astar_expansions);
+    let collided = common::first_collision(&flight.track, &truth, 2.5).is_some();
+    if flight.reached_goal && !collided {
+        tally.reached += 1;
+    }
+    tally.replans += flight.replans.len();
+    for e in &flight.replans {
+        if tally.slowest.as_ref().is_none_or(|s| e.latency_ms > s.0) {
+            tally.slowest = Some((e.latency_ms, e.expansions, e.reason.clone()));
+        }
+    }
+    let replans = &flight.replans;
+    tally.latencies.extend(replans.iter().map(|e| e.latency_ms));
+    tally.cpu.extend(replans.iter().filter_map(|e| e.cpu_ms));
+    tally
+        .expansions
+        .extend(replans.iter().map(|e| e.expansions as f64));
+    let flown = common::track_length_m(&flight.track);
+    let truth_world = true_world(&World::fcnd_city(), &hidden)?;
+    let optimum = Session::new(truth_world).plan(&PlanRequest {
+        planner: Some(skyplan_plan::PlannerId::Jps),
+        ..request.clone()
+    })?;
+    tally.ratios.push(flown / optimum.mission_length_m);
+    Ok(())
+}
+
+impl Tally {
+    /// The replanner's row of the table and its detail lines.
+    fn print(&self, label: &str, seeds: u64) {
+        let Tally {
+            latencies,
+            expansions,
+            ratios,
+            calls,
+            cpu,
+            astar,
+            ..
+        } = self;
         println!(
             "{:<11} {:>7}  {:>7}  {:>14.1}  {:>6.2}  {:>6.2}  {:>6.2}  {:>17.0}  {:>8.3}",
             label,
             seeds,
-            reached,
-            replans as f64 / seeds as f64,
-            pct(&latencies, 50.0),
-            pct(&latencies, 99.0),
-            pct(&latencies, 100.0),
-            mean(&expansions),
-            pct(&ratios, 50.0)
+            self.reached,
+            self.replans as f64 / seeds as f64,
+            pct(latencies, 50.0),
+            pct(latencies, 99.0),
+            pct(latencies, 100.0),
+            mean(expansions),
+            pct(ratios, 50.0)
         );
         println!(
             "  every reading (learn + check, replans included): p50 {:.3} ms, p99 {:.3} ms over {} readings",
-            pct(&calls, 50.0),
-            pct(&calls, 99.0),
+            pct(calls, 50.0),
+            pct(calls, 99.0),
             calls.len()
         );
         println!(
             "  expansions per replan: mean {:.0}, p50 {:.0}, p99 {:.0}; A* from scratch at the same replans: mean {:.0}, p50 {:.0}, p99 {:.0}",
-            mean(&expansions),
-            pct(&expansions, 50.0),
-            pct(&expansions, 99.0),
-            mean(&astar),
-            pct(&astar, 50.0),
-            pct(&astar, 99.0)
+            mean(expansions),
+            pct(expansions, 50.0),
+            pct(expansions, 99.0),
+            mean(astar),
+            pct(astar, 50.0),
+            pct(astar, 99.0)
         );
         println!(
             "  replan CPU time: p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms",
-            pct(&cpu, 50.0),
-            pct(&cpu, 99.0),
-            pct(&cpu, 100.0)
+            pct(cpu, 50.0),
+            pct(cpu, 99.0),
+            pct(cpu, 100.0)
         );
-        if let Some((ms, n, why)) = slowest {
+        if let Some((ms, n, why)) = &self.slowest {
             println!("  slowest replan: {ms:.2} ms, {n} expansions ({why})");
         }
     }
-    Ok(())
 }

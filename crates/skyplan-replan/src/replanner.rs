@@ -6,7 +6,7 @@ use crate::world_model::WorldModel;
 use skyplan_cspace::{Cell, Grid2, GridFrame, Touch};
 use skyplan_flight::executor::Target;
 use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteDecision, RouteWatcher};
-use skyplan_plan::{Plan, PlanFailure, PlanRequest, Session};
+use skyplan_plan::{Plan, PlanFailure, PlanRequest, PlannerId, Session};
 use skyplan_postprocess::{prune_collinear, shortcut, touch_for};
 use skyplan_search::{GridSearch, MoveModel, Planner};
 use std::fmt;
@@ -335,15 +335,12 @@ impl Replanner {
         let plan = session.plan(request)?;
         let Some(info) = plan.grid else {
             return Err(PlanFailure::bad_request(format!(
-                "replanning needs a 2D grid planner (jps, jps-plus, a-star, …), not {}",
+                "replanning needs a 2D grid planner ({}), not {}",
+                PlannerId::names_where(PlannerId::is_cell_search),
                 plan.planner
             )));
         };
-        let model = match (request.connectivity, request.corner_cutting) {
-            (Some(4), _) => MoveModel::FourConnected,
-            (_, Some(true)) => MoveModel::OctileCornerCutting,
-            _ => MoveModel::Octile,
-        };
+        let model = plan.spec.move_model;
         let touch = touch_for(model);
         let goal_ne = [plan.goal.north_m, plan.goal.east_m];
         let mut layers = Vec::new();

@@ -201,18 +201,11 @@ pub fn boundary_sites(
         (-1..=1).any(|dr| (-1..=1).any(|dc| grid.is_free_at(r + dr, c + dc)))
     };
     for b in &map.boxes {
-        if !(b.top_m() + safety_m > alt_m && b.bottom_m() - safety_m < alt_m) {
+        if !b.meets_altitude(alt_m, safety_m) {
             continue;
         }
-        let lo = [
-            b.north_m - b.half_north_m - safety_m,
-            b.east_m - b.half_east_m - safety_m,
-        ];
-        let hi = [
-            b.north_m + b.half_north_m + safety_m,
-            b.east_m + b.half_east_m + safety_m,
-        ];
-        rectangle_samples(lo, hi, spacing_m, |p| {
+        let (lo, hi) = b.grown(safety_m);
+        rectangle_samples([lo[0], lo[1]], [hi[0], hi[1]], spacing_m, |p| {
             if near_free(p) {
                 sites.push(p);
             }
@@ -275,6 +268,142 @@ pub fn grid_boundary_sites(grid: &Grid2) -> Vec<Ne> {
     sites
 }
 
+/// The Delaunay triangulation of the sites, deduplicated (the triangulation would merge them
+/// anyway) and without the non-finite ones.
+fn triangulate(sites: &[Ne], stats: &mut BuildStats) -> DelaunayTriangulation<Point2<f64>> {
+    let mut seen = HashMap::new();
+    let points: Vec<Point2<f64>> = sites
+        .iter()
+        .filter(|p| p[0].is_finite() && p[1].is_finite())
+        .filter(|p| seen.insert(key(**p), ()).is_none())
+        .map(|p| Point2::new(p[0], p[1]))
+        .collect();
+    stats.sites = points.len();
+    let triangulation: DelaunayTriangulation<Point2<f64>> =
+        Triangulation::bulk_load(points).unwrap_or_default();
+    stats.triangles = triangulation.num_inner_faces();
+    triangulation
+}
+
+/// The Voronoi vertices in free cells: the node of each face (by face index; `None` for a
+/// blocked circumcentre) and the nodes, merged by position.
+fn voronoi_nodes(
+    grid: &Grid2,
+    triangulation: &DelaunayTriangulation<Point2<f64>>,
+) -> (Vec<Option<u32>>, Vec<Ne>) {
+    let mut node_of_face: Vec<Option<u32>> = vec![None; triangulation.num_all_faces()];
+    let mut ids: HashMap<(i64, i64), u32> = HashMap::new();
+    let mut nodes: Vec<Ne> = Vec::new();
+    for face in triangulation.inner_faces() {
+        let c = face.circumcenter();
+        let p = [c.x, c.y];
+        if !(p[0].is_finite() && p[1].is_finite() && point_free(grid, p)) {
+            continue;
+        }
+        let id = *ids.entry(key(p)).or_insert_with(|| {
+            nodes.push(p);
+            (nodes.len() - 1) as u32
+        });
+        node_of_face[face.fix().index()] = Some(id);
+    }
+    (node_of_face, nodes)
+}
+
+/// The Voronoi edges between free nodes that are exactly free, once each, with their lengths.
+fn voronoi_edges(
+    grid: &Grid2,
+    triangulation: &DelaunayTriangulation<Point2<f64>>,
+    node_of_face: &[Option<u32>],
+    nodes: &[Ne],
+    stats: &mut BuildStats,
+) -> Vec<(u32, u32, f64)> {
+    let mut edges: Vec<(u32, u32, f64)> = Vec::new();
+    let mut edge_seen: HashMap<(u32, u32), ()> = HashMap::new();
+    for e in triangulation.undirected_edges() {
+        let d = e.as_directed();
+        let (Some(f1), Some(f2)) = (d.face().as_inner(), d.rev().face().as_inner()) else {
+            continue;
+        };
+        stats.voronoi_edges += 1;
+        let (Some(a), Some(b)) = (
+            node_of_face[f1.fix().index()],
+            node_of_face[f2.fix().index()],
+        ) else {
+            stats.dropped_edges += 1;
+            continue;
+        };
+        if a == b {
+            continue;
+        }
+        let k = (a.min(b), a.max(b));
+        if edge_seen.contains_key(&k) {
+            continue;
+        }
+        if !free(grid, nodes[a as usize], nodes[b as usize]) {
+            stats.dropped_edges += 1;
+            continue;
+        }
+        edge_seen.insert(k, ());
+        edges.push((k.0, k.1, dist(nodes[a as usize], nodes[b as usize])));
+    }
+    edges
+}
+
+/// The adjacency of `n` nodes in compressed rows: where each node's neighbours start (n + 1
+/// entries) and the (neighbour, length) pairs, each edge in both directions in edge order.
+fn adjacency(n: usize, edges: &[(u32, u32, f64)]) -> (Vec<u32>, Vec<(u32, f64)>) {
+    let mut degree = vec![0u32; n + 1];
+    for &(a, b, _) in edges {
+        degree[a as usize] += 1;
+        degree[b as usize] += 1;
+    }
+    let mut adj_start = vec![0u32; n + 1];
+    for i in 0..n {
+        adj_start[i + 1] = adj_start[i] + degree[i];
+    }
+    let mut fill = adj_start.clone();
+    let mut adj = vec![(0u32, 0.0); edges.len() * 2];
+    for &(a, b, w) in edges {
+        adj[fill[a as usize] as usize] = (b, w);
+        fill[a as usize] += 1;
+        adj[fill[b as usize] as usize] = (a, w);
+        fill[b as usize] += 1;
+    }
+    (adj_start, adj)
+}
+
+/// The connected components of `n` nodes (union-find): each node's label, labels numbered in
+/// the order of their lowest node, and each component's size.
+fn components(n: usize, edges: &[(u32, u32, f64)]) -> (Vec<u32>, Vec<usize>) {
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    }
+    for &(a, b, _) in edges {
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    let mut label_of_root: HashMap<u32, u32> = HashMap::new();
+    let mut component = vec![0u32; n];
+    let mut component_sizes = Vec::new();
+    for (v, slot) in component.iter_mut().enumerate() {
+        let root = find(&mut parent, v as u32);
+        let label = *label_of_root.entry(root).or_insert_with(|| {
+            component_sizes.push(0);
+            (component_sizes.len() - 1) as u32
+        });
+        component_sizes[label as usize] += 1;
+        *slot = label;
+    }
+    (component, component_sizes)
+}
+
 impl Roadmap {
     /// The roadmap of a colliders map at `alt_m` on its grid (built by
     /// `Grid2::from_colliders` with the same altitude and margin): [`boundary_sites`], then
@@ -299,63 +428,9 @@ impl Roadmap {
     pub fn from_sites(grid: &Grid2, sites: &[Ne], spec: &RoadmapSpec) -> Self {
         let t = Instant::now();
         let mut stats = BuildStats::default();
-        // Deduplicate sites (the triangulation would merge them anyway) and drop non-finite ones.
-        let mut seen = HashMap::new();
-        let points: Vec<Point2<f64>> = sites
-            .iter()
-            .filter(|p| p[0].is_finite() && p[1].is_finite())
-            .filter(|p| seen.insert(key(**p), ()).is_none())
-            .map(|p| Point2::new(p[0], p[1]))
-            .collect();
-        stats.sites = points.len();
-        let triangulation: DelaunayTriangulation<Point2<f64>> =
-            Triangulation::bulk_load(points).unwrap_or_default();
-        stats.triangles = triangulation.num_inner_faces();
-        // Free circumcentres → node ids (merged by position).
-        let mut node_of_face: Vec<Option<u32>> = vec![None; triangulation.num_all_faces()];
-        let mut ids: HashMap<(i64, i64), u32> = HashMap::new();
-        let mut nodes: Vec<Ne> = Vec::new();
-        for face in triangulation.inner_faces() {
-            let c = face.circumcenter();
-            let p = [c.x, c.y];
-            if !(p[0].is_finite() && p[1].is_finite() && point_free(grid, p)) {
-                continue;
-            }
-            let id = *ids.entry(key(p)).or_insert_with(|| {
-                nodes.push(p);
-                (nodes.len() - 1) as u32
-            });
-            node_of_face[face.fix().index()] = Some(id);
-        }
-        let mut edges: Vec<(u32, u32, f64)> = Vec::new();
-        let mut edge_seen: HashMap<(u32, u32), ()> = HashMap::new();
-        for e in triangulation.undirected_edges() {
-            let d = e.as_directed();
-            let (Some(f1), Some(f2)) = (d.face().as_inner(), d.rev().face().as_inner()) else {
-                continue;
-            };
-            stats.voronoi_edges += 1;
-            let (Some(a), Some(b)) = (
-                node_of_face[f1.fix().index()],
-                node_of_face[f2.fix().index()],
-            ) else {
-                stats.dropped_edges += 1;
-                continue;
-            };
-            if a == b {
-                continue;
-            }
-            let k = (a.min(b), a.max(b));
-            if edge_seen.contains_key(&k) {
-                continue;
-            }
-            if !free(grid, nodes[a as usize], nodes[b as usize]) {
-                stats.dropped_edges += 1;
-                continue;
-            }
-            edge_seen.insert(k, ());
-            edges.push((k.0, k.1, dist(nodes[a as usize], nodes[b as usize])));
-        }
+        let triangulation = triangulate(sites, &mut stats);
+        let (node_of_face, nodes) = voronoi_nodes(grid, &triangulation);
+        let edges = voronoi_edges(grid, &triangulation, &node_of_face, &nodes, &mut stats);
         // Keep only nodes with an edge, renumbered.
         let mut new_id = vec![u32::MAX; nodes.len()];
         let mut kept = Vec::new();
@@ -367,55 +442,12 @@ impl Roadmap {
                 }
             }
         }
-        let n = kept.len();
-        let mut degree = vec![0u32; n + 1];
-        for &(a, b, _) in &edges {
-            degree[new_id[a as usize] as usize] += 1;
-            degree[new_id[b as usize] as usize] += 1;
-        }
-        let mut adj_start = vec![0u32; n + 1];
-        for i in 0..n {
-            adj_start[i + 1] = adj_start[i] + degree[i];
-        }
-        let mut fill = adj_start.clone();
-        let mut adj = vec![(0u32, 0.0); edges.len() * 2];
-        for &(a, b, w) in &edges {
-            let (a, b) = (new_id[a as usize], new_id[b as usize]);
-            adj[fill[a as usize] as usize] = (b, w);
-            fill[a as usize] += 1;
-            adj[fill[b as usize] as usize] = (a, w);
-            fill[b as usize] += 1;
-        }
-        // Components by union-find.
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn find(parent: &mut [u32], mut x: u32) -> u32 {
-            while parent[x as usize] != x {
-                parent[x as usize] = parent[parent[x as usize] as usize];
-                x = parent[x as usize];
-            }
-            x
-        }
-        for &(a, b, _) in &edges {
-            let (ra, rb) = (
-                find(&mut parent, new_id[a as usize]),
-                find(&mut parent, new_id[b as usize]),
-            );
-            if ra != rb {
-                parent[ra.max(rb) as usize] = ra.min(rb);
-            }
-        }
-        let mut label_of_root: HashMap<u32, u32> = HashMap::new();
-        let mut component = vec![0u32; n];
-        let mut component_sizes = Vec::new();
-        for (v, slot) in component.iter_mut().enumerate() {
-            let root = find(&mut parent, v as u32);
-            let label = *label_of_root.entry(root).or_insert_with(|| {
-                component_sizes.push(0);
-                (component_sizes.len() - 1) as u32
-            });
-            component_sizes[label as usize] += 1;
-            *slot = label;
-        }
+        let edges: Vec<(u32, u32, f64)> = edges
+            .into_iter()
+            .map(|(a, b, w)| (new_id[a as usize], new_id[b as usize], w))
+            .collect();
+        let (adj_start, adj) = adjacency(kept.len(), &edges);
+        let (component, component_sizes) = components(kept.len(), &edges);
         stats.build_us = t.elapsed().as_micros() as u64;
         Self {
             nodes: kept,

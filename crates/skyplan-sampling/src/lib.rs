@@ -212,7 +212,7 @@ impl Solution {
     }
 }
 
-/// The 3D planners.
+/// The 3D planners (the planning API's registry names them: `prm`, `lazy-prm`, …).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PlannerKind {
     /// Probabilistic roadmap (k-nearest, grown until start and goal connect), then graph A\*.
@@ -225,18 +225,6 @@ pub enum PlannerKind {
     /// Asymptotically optimal RRT\* with informed sampling once a solution exists; uses the whole
     /// budget.
     RrtStar,
-}
-
-impl PlannerKind {
-    /// The name used on the command line: `prm`, `lazy-prm`, `rrt-connect`, `rrt-star`.
-    pub fn name(self) -> &'static str {
-        match self {
-            PlannerKind::Prm => "prm",
-            PlannerKind::LazyPrm => "lazy-prm",
-            PlannerKind::RrtConnect => "rrt-connect",
-            PlannerKind::RrtStar => "rrt-star",
-        }
-    }
 }
 
 /// One planning request for [`plan`].

@@ -322,97 +322,155 @@ impl Roadmap {
             let s = Solution::with_path(Status::Exact, vec![start, goal], goal);
             return (done(s), learned);
         }
-        // Eager: attach each end to up to k free vertices among its 3k nearest (checked).
-        // Lazy: to its k nearest, unchecked.
         let k = k_for(self.k, n.max(2));
-        let lazy = self.lazy;
-        let mut eager_tests = 0;
-        let mut attach = |p: Neu| -> Vec<(u32, f64)> {
-            if lazy {
-                return self
-                    .nearest(p, k)
-                    .into_iter()
-                    .map(|v| (v, distance_m(p, self.vertices[v as usize])))
-                    .collect();
-            }
-            self.nearest(p, 3 * k)
-                .into_iter()
-                .filter(|&v| {
-                    eager_tests += 1;
-                    checker.segment_is_free(p, self.vertices[v as usize])
-                })
-                .take(k)
-                .map(|v| (v, distance_m(p, self.vertices[v as usize])))
-                .collect()
-        };
-        let from_start = attach(start);
-        let to_goal = attach(goal);
-        learned.connector_tests += eager_tests;
+        let from_start = self.attach(checker, start, k, &mut learned.connector_tests);
+        let to_goal = self.attach(checker, goal, k, &mut learned.connector_tests);
         if from_start.is_empty() || to_goal.is_empty() {
             return (done(Solution::failed(Status::Timeout, 0, n, 0)), learned);
         }
-        // Nodes n (start) and n + 1 (goal) join a copy of the adjacency lists.
+        let mut graph = QueryGraph::new(self, (start, from_start), (goal, to_goal));
+        let (s, g) = (graph.s, graph.g);
+        let mut connectors_free: HashSet<(u32, u32)> = HashSet::new();
+        loop {
+            let heuristic = |v| distance_m(graph.point(v), goal);
+            let Some((nodes, _)) = astar(&graph.adjacency, s, g, heuristic) else {
+                return (done(Solution::failed(Status::Timeout, 0, n, 0)), learned);
+            };
+            let checked = self.first_blocked_edge(
+                checker,
+                &graph,
+                &nodes,
+                &mut connectors_free,
+                &mut learned,
+            );
+            let Some(((a, b), connector)) = checked else {
+                let path = nodes.into_iter().map(|v| graph.point(v)).collect();
+                return (
+                    done(Solution::with_path(Status::Exact, path, goal)),
+                    learned,
+                );
+            };
+            graph.adjacency[a as usize].retain(|&(w, _)| w != b);
+            graph.adjacency[b as usize].retain(|&(w, _)| w != a);
+            if !connector {
+                learned.blocked.push((a, b));
+            }
+        }
+    }
+
+    /// The vertices an end `p` joins, with the distances. Eager: up to k free vertices among its
+    /// 3k nearest (checked, each test counted in `tests`). Lazy: its k nearest, unchecked.
+    fn attach(
+        &self,
+        checker: &impl CollisionChecker,
+        p: Neu,
+        k: usize,
+        tests: &mut usize,
+    ) -> Vec<(u32, f64)> {
+        if self.lazy {
+            return self
+                .nearest(p, k)
+                .into_iter()
+                .map(|v| (v, distance_m(p, self.vertices[v as usize])))
+                .collect();
+        }
+        self.nearest(p, 3 * k)
+            .into_iter()
+            .filter(|&v| {
+                *tests += 1;
+                checker.segment_is_free(p, self.vertices[v as usize])
+            })
+            .take(k)
+            .map(|v| (v, distance_m(p, self.vertices[v as usize])))
+            .collect()
+    }
+
+    /// Checks the path's unchecked edges in order (what is learned goes in `connectors_free`
+    /// and `learned`); the first blocked one and whether it is a connector, if any.
+    fn first_blocked_edge(
+        &self,
+        checker: &impl CollisionChecker,
+        graph: &QueryGraph,
+        nodes: &[u32],
+        connectors_free: &mut HashSet<(u32, u32)>,
+        learned: &mut Learned,
+    ) -> Option<((u32, u32), bool)> {
+        for w in nodes.windows(2) {
+            let e = (w[0].min(w[1]), w[0].max(w[1]));
+            let connector = e.1 >= graph.s;
+            let unchecked = if connector {
+                self.lazy && !connectors_free.contains(&e)
+            } else {
+                self.unchecked.contains(&e) && !learned.free.contains(&e)
+            };
+            if !unchecked {
+                continue;
+            }
+            if connector {
+                learned.connector_tests += 1;
+            } else {
+                learned.tested += 1;
+            }
+            if checker.segment_is_free(graph.point(e.0), graph.point(e.1)) {
+                if connector {
+                    connectors_free.insert(e);
+                } else {
+                    learned.free.insert(e);
+                }
+            } else {
+                return Some((e, connector));
+            }
+        }
+        None
+    }
+}
+
+/// The roadmap with a query's ends joined: nodes n (start) and n + 1 (goal) on a copy of the
+/// adjacency lists.
+struct QueryGraph<'r> {
+    vertices: &'r [Neu],
+    adjacency: Vec<Vec<(u32, f64)>>,
+    start: Neu,
+    goal: Neu,
+    /// The start's and the goal's node.
+    s: u32,
+    g: u32,
+}
+
+impl<'r> QueryGraph<'r> {
+    /// Joins the start and the goal, each with the vertices it attaches to and the distances.
+    fn new(
+        roadmap: &'r Roadmap,
+        (start, from_start): (Neu, Vec<(u32, f64)>),
+        (goal, to_goal): (Neu, Vec<(u32, f64)>),
+    ) -> Self {
+        let n = roadmap.vertices.len();
         let (s, g) = (n as u32, n as u32 + 1);
-        let mut adjacency = self.adjacency.clone();
-        adjacency.push(from_start.clone());
-        adjacency.push(to_goal.clone());
+        let mut adjacency = roadmap.adjacency.clone();
         for &(v, d) in &from_start {
             adjacency[v as usize].push((s, d));
         }
         for &(v, d) in &to_goal {
             adjacency[v as usize].push((g, d));
         }
-        let point = |v: u32| match v {
-            v if v == s => start,
-            v if v == g => goal,
+        adjacency.push(from_start);
+        adjacency.push(to_goal);
+        QueryGraph {
+            vertices: &roadmap.vertices,
+            adjacency,
+            start,
+            goal,
+            s,
+            g,
+        }
+    }
+
+    /// A node's point.
+    fn point(&self, v: u32) -> Neu {
+        match v {
+            v if v == self.s => self.start,
+            v if v == self.g => self.goal,
             v => self.vertices[v as usize],
-        };
-        let mut connectors_free: HashSet<(u32, u32)> = HashSet::new();
-        loop {
-            let Some((nodes, _)) = astar(&adjacency, s, g, |v| distance_m(point(v), goal)) else {
-                return (done(Solution::failed(Status::Timeout, 0, n, 0)), learned);
-            };
-            // Check the path's unchecked edges in order; the first blocked one is removed.
-            let mut blocked = None;
-            for w in nodes.windows(2) {
-                let e = (w[0].min(w[1]), w[0].max(w[1]));
-                let connector = e.1 >= s;
-                let unchecked = if connector {
-                    lazy && !connectors_free.contains(&e)
-                } else {
-                    self.unchecked.contains(&e) && !learned.free.contains(&e)
-                };
-                if !unchecked {
-                    continue;
-                }
-                if connector {
-                    learned.connector_tests += 1;
-                } else {
-                    learned.tested += 1;
-                }
-                if checker.segment_is_free(point(e.0), point(e.1)) {
-                    if connector {
-                        connectors_free.insert(e);
-                    } else {
-                        learned.free.insert(e);
-                    }
-                } else {
-                    blocked = Some((e, connector));
-                    break;
-                }
-            }
-            let Some(((a, b), connector)) = blocked else {
-                let path = nodes.into_iter().map(point).collect();
-                return (
-                    done(Solution::with_path(Status::Exact, path, goal)),
-                    learned,
-                );
-            };
-            adjacency[a as usize].retain(|&(w, _)| w != b);
-            adjacency[b as usize].retain(|&(w, _)| w != a);
-            if !connector {
-                learned.blocked.push((a, b));
-            }
         }
     }
 }

@@ -64,6 +64,110 @@ struct Tree {
 }
 
 impl Tree {
+    /// A tree of one vertex: the start (its own parent).
+    fn new(start: Neu) -> Self {
+        let mut tree = Tree {
+            points: Vec::new(),
+            parent: Vec::new(),
+            cost_m: Vec::new(),
+            children: Vec::new(),
+            index: NearIndex::default(),
+        };
+        tree.add(start, 0, 0.0);
+        tree
+    }
+
+    /// The goal link whose branch plus the segment to the goal is cheapest, and that cost.
+    fn best_link(&self, links: &[u32], goal: Neu) -> Option<(u32, f64)> {
+        links
+            .iter()
+            .map(|&v| {
+                (
+                    v,
+                    self.cost_m[v as usize] + distance_m(self.points[v as usize], goal),
+                )
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// The cheapest of the `near` vertices that sees `new` by a free segment, with the cost of
+    /// `new` through it (cheapest first, the first free one wins).
+    fn choose_parent(
+        &self,
+        checker: &impl CollisionChecker,
+        near: &[u32],
+        new: Neu,
+    ) -> Option<(f64, u32)> {
+        let mut candidates: Vec<(f64, u32)> = near
+            .iter()
+            .map(|&v| {
+                let d = distance_m(self.points[v as usize], new);
+                (self.cost_m[v as usize] + d, v)
+            })
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+        candidates
+            .into_iter()
+            .find(|&(_, v)| checker.segment_is_free(self.points[v as usize], new))
+    }
+
+    /// Rewires the `near` vertices (but `parent`) that become cheaper through the new vertex
+    /// `id`; true if any did.
+    fn rewire(
+        &mut self,
+        checker: &impl CollisionChecker,
+        near: &[u32],
+        parent: u32,
+        id: u32,
+    ) -> bool {
+        let (new, new_cost) = (self.points[id as usize], self.cost_m[id as usize]);
+        let mut changed = false;
+        for &v in near {
+            if v == parent {
+                continue;
+            }
+            let through = new_cost + distance_m(new, self.points[v as usize]);
+            if through < self.cost_m[v as usize]
+                && checker.segment_is_free(new, self.points[v as usize])
+            {
+                self.reparent(v, id, through);
+                changed = true;
+            }
+        }
+        changed
+    }
+
+    /// The best goal link's branch plus the goal (`Exact`), else the branch to the vertex
+    /// nearest the goal (`Approximate`), or `Timeout` if that is the start.
+    fn solution(&self, goal_links: &[u32], goal: Neu) -> Solution {
+        match self.best_link(goal_links, goal) {
+            Some((v, _)) => {
+                let mut path = trace(&self.points, &self.parent, v);
+                if path.last() != Some(&goal) {
+                    path.push(goal);
+                }
+                Solution::with_path(Status::Exact, path, goal)
+            }
+            None => {
+                let closest = (0..self.points.len() as u32)
+                    .min_by(|&a, &b| {
+                        distance_m(self.points[a as usize], goal)
+                            .total_cmp(&distance_m(self.points[b as usize], goal))
+                    })
+                    .unwrap_or(0);
+                if closest == 0 {
+                    Solution::failed(Status::Timeout, 0, 0, 0)
+                } else {
+                    Solution::with_path(
+                        Status::Approximate,
+                        trace(&self.points, &self.parent, closest),
+                        goal,
+                    )
+                }
+            }
+        }
+    }
+
     fn add(&mut self, p: Neu, parent: u32, cost_m: f64) -> u32 {
         let id = self.points.len() as u32;
         self.points.push(p);
@@ -155,27 +259,9 @@ impl TreeConfig for RrtStarConfig {
     fn grow(&self, checker: &impl CollisionChecker, run: Run<'_>) -> Solution {
         let config = self;
         let (start, goal, mut clock, bounds, range_m, mut rng, edges) = run.0;
-        let mut tree = Tree {
-            points: Vec::new(),
-            parent: Vec::new(),
-            cost_m: Vec::new(),
-            children: Vec::new(),
-            index: NearIndex::default(),
-        };
-        tree.add(start, 0, 0.0);
+        let mut tree = Tree::new(start);
         let mut goal_links: Vec<u32> = Vec::new();
         let mut first_solution_us = None;
-        let best_link = |tree: &Tree, links: &[u32]| -> Option<(u32, f64)> {
-            links
-                .iter()
-                .map(|&v| {
-                    (
-                        v,
-                        tree.cost_m[v as usize] + distance_m(tree.points[v as usize], goal),
-                    )
-                })
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-        };
         if start == goal
             || (distance_m(start, goal) <= range_m && checker.segment_is_free(start, goal))
         {
@@ -183,7 +269,9 @@ impl TreeConfig for RrtStarConfig {
             first_solution_us = Some(clock.elapsed_us());
         }
         let k_rrg = std::f64::consts::E * (1.0 + 1.0 / 3.0);
-        let mut c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
+        let mut c_best = tree
+            .best_link(&goal_links, goal)
+            .map_or(f64::INFINITY, |b| b.1);
         while clock.tick() {
             if c_best <= distance_m(start, goal) {
                 break; // the straight line: nothing left to improve
@@ -207,7 +295,9 @@ impl TreeConfig for RrtStarConfig {
                 {
                     goal_links.push(nearest);
                     first_solution_us.get_or_insert(clock.elapsed_us());
-                    c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
+                    c_best = tree
+                        .best_link(&goal_links, goal)
+                        .map_or(f64::INFINITY, |b| b.1);
                 }
                 continue;
             }
@@ -217,36 +307,11 @@ impl TreeConfig for RrtStarConfig {
             if !near.contains(&nearest) {
                 near.push(nearest);
             }
-            // Choose the parent: cheapest first, the first free one wins.
-            let mut candidates: Vec<(f64, u32)> = near
-                .iter()
-                .map(|&v| {
-                    let d = distance_m(tree.points[v as usize], new);
-                    (tree.cost_m[v as usize] + d, v)
-                })
-                .collect();
-            candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let Some(&(new_cost, parent)) = candidates
-                .iter()
-                .find(|&&(_, v)| checker.segment_is_free(tree.points[v as usize], new))
-            else {
+            let Some((new_cost, parent)) = tree.choose_parent(checker, &near, new) else {
                 continue;
             };
             let id = tree.add(new, parent, new_cost);
-            // Rewire: neighbours that become cheaper through the new vertex.
-            let mut changed = false;
-            for &v in &near {
-                if v == parent {
-                    continue;
-                }
-                let through = new_cost + distance_m(new, tree.points[v as usize]);
-                if through < tree.cost_m[v as usize]
-                    && checker.segment_is_free(new, tree.points[v as usize])
-                {
-                    tree.reparent(v, id, through);
-                    changed = true;
-                }
-            }
+            let changed = tree.rewire(checker, &near, parent, id);
             let mut linked = false;
             if distance_m(new, goal) <= range_m && checker.segment_is_free(new, goal) {
                 goal_links.push(id);
@@ -254,38 +319,14 @@ impl TreeConfig for RrtStarConfig {
                 linked = true;
             }
             if (changed || linked) && !goal_links.is_empty() {
-                c_best = best_link(&tree, &goal_links).map_or(f64::INFINITY, |b| b.1);
+                c_best = tree
+                    .best_link(&goal_links, goal)
+                    .map_or(f64::INFINITY, |b| b.1);
             }
         }
-        let vertices = tree.points.len();
-        let mut solution = match best_link(&tree, &goal_links) {
-            Some((v, _)) => {
-                let mut path = trace(&tree.points, &tree.parent, v);
-                if path.last() != Some(&goal) {
-                    path.push(goal);
-                }
-                Solution::with_path(Status::Exact, path, goal)
-            }
-            None => {
-                let closest = (0..vertices as u32)
-                    .min_by(|&a, &b| {
-                        distance_m(tree.points[a as usize], goal)
-                            .total_cmp(&distance_m(tree.points[b as usize], goal))
-                    })
-                    .unwrap_or(0);
-                if closest == 0 {
-                    Solution::failed(Status::Timeout, 0, 0, 0)
-                } else {
-                    Solution::with_path(
-                        Status::Approximate,
-                        trace(&tree.points, &tree.parent, closest),
-                        goal,
-                    )
-                }
-            }
-        };
+        let mut solution = tree.solution(&goal_links, goal);
         solution.iterations = clock.iterations();
-        solution.vertices = vertices;
+        solution.vertices = tree.points.len();
         solution.elapsed_us = clock.elapsed_us();
         solution.first_solution_us = first_solution_us;
         if let Some(edges) = edges {

@@ -9,6 +9,7 @@
 //! both directions), so the backward search uses the same moves as the forward one.
 
 use crate::astar::check_endpoints;
+use crate::jps::DIRS;
 use crate::{GridPath, MoveModel, OpenEntry, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::collections::BinaryHeap;
@@ -86,16 +87,7 @@ struct Meeting {
 fn moves(grid: &Grid2, cell: Cell, model: MoveModel, out: &mut Vec<(u32, f64)>) {
     out.clear();
     let (r, c) = (i64::from(cell.row), i64::from(cell.col));
-    for (dr, dc) in [
-        (1, 0),
-        (-1, 0),
-        (0, 1),
-        (0, -1),
-        (1, 1),
-        (1, -1),
-        (-1, 1),
-        (-1, -1),
-    ] {
+    for (dr, dc) in DIRS {
         let diagonal = dr != 0 && dc != 0;
         if diagonal && !model.has_diagonals() {
             continue;
@@ -188,10 +180,9 @@ pub fn bidirectional_astar(
         backward: t,
     });
     let mut scratch = Vec::with_capacity(8);
-    loop {
-        let (Some(f0), Some(f1)) = (sides[0].top_f(), sides[1].top_f()) else {
-            break; // one side has closed its whole region: every meeting has been seen
-        };
+    // Until one side has closed its whole region (then every meeting has been seen) or
+    // neither side can improve the best meeting.
+    while let (Some(f0), Some(f1)) = (sides[0].top_f(), sides[1].top_f()) {
         if best.is_some_and(|m| f0 >= m.cost || f1 >= m.cost) {
             break;
         }

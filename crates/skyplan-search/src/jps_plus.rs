@@ -257,113 +257,14 @@ impl JpsPlusTable {
         let grid = &*self.grid;
         crate::astar::check_endpoints(grid, start, goal)?;
         let view = View::new(grid, goal, self.model);
+        let scan = Scan {
+            table: &self.table,
+            escape: self.escape,
+            esc: i64::from(self.escape),
+            cols: view.cols,
+            goal: view.goal,
+        };
         let table = &self.table;
-        let escape = self.escape;
-        let esc = i64::from(escape);
-        let cols = view.cols;
-        let (gr, gc) = view.goal;
-        let entry = |r: i64, c: i64, k: usize| -> Entry {
-            // Codes are checked when built or loaded; an impossible one reads as a wall.
-            decode(table[(r * cols + c) as usize][k], escape).unwrap_or(Entry::Wall(0))
-        };
-        // How many cells one entry lets the scan examine.
-        let reach = |e: Entry| match e {
-            Entry::Wall(w) => i64::from(w),
-            Entry::Jump(k) => i64::from(k),
-            Entry::Escape => esc,
-        };
-        // True if the straight scan from (r, c) along DIRS[k] examines the cell t steps on.
-        let straight_reaches = |mut r: i64, mut c: i64, k: usize, mut t: i64| -> bool {
-            if t < 1 {
-                return false;
-            }
-            let (dr, dc) = DIRS[k];
-            loop {
-                match entry(r, c, k) {
-                    Entry::Escape if t > esc => {
-                        r += esc * dr;
-                        c += esc * dc;
-                        t -= esc;
-                    }
-                    e => return t <= reach(e),
-                }
-            }
-        };
-        // A jump point found: its entry is read now, so that the memory access overlaps the
-        // offer's own (the entry is needed again if the point is expanded).
-        let found = |r: i64, c: i64| -> Option<(i64, i64)> {
-            std::hint::black_box(table[(r * cols + c) as usize]);
-            Some((r, c))
-        };
-        let jump = |mut r: i64, mut c: i64, dr: i64, dc: i64| -> Option<(i64, i64)> {
-            let k = dir_index(dr, dc);
-            if dr == 0 || dc == 0 {
-                loop {
-                    let e = entry(r, c, k);
-                    let t = if dr == 0 {
-                        (gr == r).then(|| (gc - c) * dc)
-                    } else {
-                        (gc == c).then(|| (gr - r) * dr)
-                    };
-                    if let Some(t) = t
-                        && t >= 1
-                        && t <= reach(e)
-                    {
-                        return found(gr, gc);
-                    }
-                    match e {
-                        Entry::Jump(s) => {
-                            let s = i64::from(s);
-                            return found(r + s * dr, c + s * dc);
-                        }
-                        Entry::Wall(_) => return None,
-                        Entry::Escape => {
-                            r += esc * dr;
-                            c += esc * dc;
-                        }
-                    }
-                }
-            }
-            let (vert, horiz) = (dir_index(dr, 0), dir_index(0, dc));
-            loop {
-                let e = entry(r, c, k);
-                let limit = reach(e);
-                let mut best = match e {
-                    Entry::Jump(s) => Some(i64::from(s)),
-                    _ => None,
-                };
-                let mut consider = |i: i64| {
-                    if i >= 1 && i <= limit && best.is_none_or(|b| i < b) {
-                        best = Some(i);
-                    }
-                };
-                let i_col = (gc - c) * dc; // step at which the scan stands in the goal's column
-                let i_row = (gr - r) * dr; // step at which it stands in the goal's row
-                if i_col == i_row {
-                    consider(i_col);
-                }
-                if i_col >= 1 && i_col <= limit {
-                    let (qr, qc) = (r + i_col * dr, c + i_col * dc);
-                    if straight_reaches(qr, qc, vert, (gr - qr) * dr) {
-                        consider(i_col);
-                    }
-                }
-                if i_row >= 1 && i_row <= limit {
-                    let (qr, qc) = (r + i_row * dr, c + i_row * dc);
-                    if straight_reaches(qr, qc, horiz, (gc - qc) * dc) {
-                        consider(i_row);
-                    }
-                }
-                if let Some(i) = best {
-                    return found(r + i * dr, c + i * dc);
-                }
-                if e != Entry::Escape {
-                    return None;
-                }
-                r += esc * dr;
-                c += esc * dc;
-            }
-        };
         // A cell's free neighbours, read from its own entry (same cache line as its jumps): a
         // direction's code is 0 exactly when the neighbour that way is blocked or off the grid.
         let mask = |_: i64, _: i64, i: usize| -> u8 {
@@ -372,7 +273,157 @@ impl JpsPlusTable {
                 .enumerate()
                 .fold(0u8, |m, (k, &code)| m | (u8::from(code != 0) << k))
         };
+        let jump = |r: i64, c: i64, dr: i64, dc: i64| scan.jump(r, c, dr, dc);
         search.jump_point_search(grid, start, goal, &view, mask, jump)
+    }
+}
+
+/// One query's scans over a table: the jumps of [`JpsPlusTable::search`], goal-aware.
+struct Scan<'a> {
+    /// The table's entries, one row of 8 codes per cell.
+    table: &'a [[u8; 8]],
+    /// The escape length `E` (module docs).
+    escape: u8,
+    /// `E` as a step count.
+    esc: i64,
+    /// Grid columns (cell index = `r * cols + c`).
+    cols: i64,
+    /// The goal cell (row, column).
+    goal: (i64, i64),
+}
+
+impl Scan<'_> {
+    /// The decoded entry of cell (r, c) in direction `k`.
+    #[inline(always)]
+    fn entry(&self, r: i64, c: i64, k: usize) -> Entry {
+        // Codes are checked when built or loaded; an impossible one reads as a wall.
+        decode(self.table[(r * self.cols + c) as usize][k], self.escape).unwrap_or(Entry::Wall(0))
+    }
+
+    /// How many cells one entry lets the scan examine.
+    #[inline(always)]
+    fn reach(&self, e: Entry) -> i64 {
+        match e {
+            Entry::Wall(w) => i64::from(w),
+            Entry::Jump(k) => i64::from(k),
+            Entry::Escape => self.esc,
+        }
+    }
+
+    /// True if the straight scan from (r, c) along `DIRS[k]` examines the cell `t` steps on.
+    #[inline(always)]
+    fn straight_reaches(&self, mut r: i64, mut c: i64, k: usize, mut t: i64) -> bool {
+        if t < 1 {
+            return false;
+        }
+        let (dr, dc) = DIRS[k];
+        loop {
+            match self.entry(r, c, k) {
+                Entry::Escape if t > self.esc => {
+                    r += self.esc * dr;
+                    c += self.esc * dc;
+                    t -= self.esc;
+                }
+                e => return t <= self.reach(e),
+            }
+        }
+    }
+
+    /// A jump point found: its entry is read now, so that the memory access overlaps the
+    /// offer's own (the entry is needed again if the point is expanded).
+    #[inline(always)]
+    fn found(&self, r: i64, c: i64) -> Option<(i64, i64)> {
+        std::hint::black_box(self.table[(r * self.cols + c) as usize]);
+        Some((r, c))
+    }
+
+    /// The jump point the scan from (r, c) along (dr, dc) stops at (the goal included), if any.
+    #[inline(always)]
+    fn jump(&self, r: i64, c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
+        if dr == 0 || dc == 0 {
+            self.jump_straight(r, c, dr, dc)
+        } else {
+            self.jump_diagonal(r, c, dr, dc)
+        }
+    }
+
+    /// A straight scan: the next table jump point, or the goal if the scan passes over it.
+    #[inline(always)]
+    fn jump_straight(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
+        let k = dir_index(dr, dc);
+        let (gr, gc) = self.goal;
+        loop {
+            let e = self.entry(r, c, k);
+            let t = if dr == 0 {
+                (gr == r).then(|| (gc - c) * dc)
+            } else {
+                (gc == c).then(|| (gr - r) * dr)
+            };
+            if let Some(t) = t
+                && t >= 1
+                && t <= self.reach(e)
+            {
+                return self.found(gr, gc);
+            }
+            match e {
+                Entry::Jump(s) => {
+                    let s = i64::from(s);
+                    return self.found(r + s * dr, c + s * dc);
+                }
+                Entry::Wall(_) => return None,
+                Entry::Escape => {
+                    r += self.esc * dr;
+                    c += self.esc * dc;
+                }
+            }
+        }
+    }
+
+    /// A diagonal scan: the first of the table's jump point, the goal, and a cell in the goal's
+    /// row or column whose straight scan reaches the goal.
+    #[inline(always)]
+    fn jump_diagonal(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
+        let k = dir_index(dr, dc);
+        let (gr, gc) = self.goal;
+        let (vert, horiz) = (dir_index(dr, 0), dir_index(0, dc));
+        loop {
+            let e = self.entry(r, c, k);
+            let limit = self.reach(e);
+            let mut best = match e {
+                Entry::Jump(s) => Some(i64::from(s)),
+                _ => None,
+            };
+            let mut consider = |i: i64| {
+                if i >= 1 && i <= limit && best.is_none_or(|b| i < b) {
+                    best = Some(i);
+                }
+            };
+            let i_col = (gc - c) * dc; // step at which the scan stands in the goal's column
+            let i_row = (gr - r) * dr; // step at which it stands in the goal's row
+            if i_col == i_row {
+                consider(i_col);
+            }
+            if i_col >= 1 && i_col <= limit {
+                let (qr, qc) = (r + i_col * dr, c + i_col * dc);
+                if self.straight_reaches(qr, qc, vert, (gr - qr) * dr) {
+                    consider(i_col);
+                }
+            }
+            if i_row >= 1 && i_row <= limit {
+                let (qr, qc) = (r + i_row * dr, c + i_row * dc);
+                if self.straight_reaches(qr, qc, horiz, (gc - qc) * dc) {
+                    consider(i_row);
+                }
+            }
+            if let Some(i) = best {
+                return self.found(r + i * dr, c + i * dc);
+            }
+            if e != Entry::Escape {
+                return None;
+            }
+            r += self.esc * dr;
+            c += self.esc * dc;
+        }
     }
 }
 

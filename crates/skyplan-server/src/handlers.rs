@@ -75,7 +75,9 @@ pub(crate) async fn map(
 ) -> Result<Json<Value>, ApiError> {
     let Query(q) = query.map_err(|e| ApiError::bad_request(e.body_text()))?;
     let mut info = s.map_info.clone();
-    if let Some([alt_m, safety_m, cell_m]) = q.grid_spec() {
+    if let Some(request) = q.request() {
+        let spec = request.spec()?;
+        let (alt_m, safety_m, cell_m) = (spec.alt_m, spec.safety_m, spec.cell_m);
         check_grid_size(s.pool.world(), cell_m, "cell_m")?;
         let grid = s
             .pool
@@ -114,30 +116,15 @@ fn check_limits(s: &AppState, r: &PlanRequest) -> Result<(), ApiError> {
             "time_limit_ms {ms}: more than this server's budget of {budget_ms} ms per request"
         )));
     }
+    // The planning API resolves the request (defaults, ranges) and estimates what it builds.
     let world = s.pool.world();
-    check_grid_size(
-        world,
-        r.cell_m.unwrap_or(crate::map::DEFAULT_CELL_M),
-        "cell_m",
-    )?;
-    if r.planner == Some(PlannerId::Voxel) {
-        let b = world.bounds_ne(1.0);
-        let (voxel_m, layer_m) = (r.voxel_m.unwrap_or(5.0), r.layer_m.unwrap_or(5.0));
-        let alt = |v: Option<f64>| v.or(r.alt_m).unwrap_or(crate::map::DEFAULT_ALT_M);
-        let top_m = r.max_alt_m.unwrap_or_else(|| {
-            120f64
-                .max(alt(r.start_alt_m) + 10.0)
-                .max(alt(r.goal_alt_m) + 10.0)
-        });
-        let voxels = ((b.north_max_m - b.north_min_m) / voxel_m)
-            * ((b.east_max_m - b.east_min_m) / voxel_m)
-            * ((top_m - r.min_alt_m.unwrap_or(0.0)) / layer_m);
-        // Non-finite or negative pitches are the planner's to refuse, with its own message.
-        if voxels.is_finite() && voxels > MAX_VOXELS && voxel_m > 0.0 && layer_m > 0.0 {
-            return Err(ApiError::bad_request(format!(
-                "voxel_m/layer_m: the lattice would have {voxels:.0} voxels, more than this server's {MAX_VOXELS:.0}; use larger pitches"
-            )));
-        }
+    check_grid_size(world, r.spec()?.cell_m, "cell_m")?;
+    if let Some((voxels, "voxels")) = world.estimate(r)?
+        && voxels as f64 > MAX_VOXELS
+    {
+        return Err(ApiError::bad_request(format!(
+            "voxel_m/layer_m: the lattice would have {voxels} voxels, more than this server's {MAX_VOXELS:.0}; use larger pitches"
+        )));
     }
     Ok(())
 }

@@ -5,12 +5,7 @@ use crate::error::ApiError;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use skyplan_cspace::Grid2;
-use skyplan_plan::World;
-
-/// Default altitude, margin and cell size of `?alt_m=&safety_m=&cell_m=` (the planners').
-pub(crate) const DEFAULT_ALT_M: f64 = 5.0;
-pub(crate) const DEFAULT_SAFETY_M: f64 = 5.0;
-pub(crate) const DEFAULT_CELL_M: f64 = 1.0;
+use skyplan_plan::{PlanRequest, PlanSpec, World};
 
 /// Most cells a grid may have (in `/api/map` and in plans): 16 million, about 4000 × 4000.
 pub const MAX_GRID_CELLS: f64 = 16_000_000.0;
@@ -26,14 +21,16 @@ pub(crate) struct MapQuery {
 }
 
 impl MapQuery {
-    /// The altitude, margin and cell size, when the grid is asked for.
-    pub fn grid_spec(&self) -> Option<[f64; 3]> {
+    /// The grid's slice as a plan request (resolved and checked by the planning API, with its
+    /// defaults), when the grid is asked for.
+    pub fn request(&self) -> Option<PlanRequest> {
         (self.alt_m.is_some() || self.safety_m.is_some() || self.cell_m.is_some()).then(|| {
-            [
-                self.alt_m.unwrap_or(DEFAULT_ALT_M),
-                self.safety_m.unwrap_or(DEFAULT_SAFETY_M),
-                self.cell_m.unwrap_or(DEFAULT_CELL_M),
-            ]
+            PlanRequest {
+                alt_m: self.alt_m,
+                safety_m: self.safety_m,
+                cell_m: self.cell_m,
+                ..PlanRequest::default()
+            }
         })
     }
 }
@@ -107,7 +104,7 @@ pub(crate) fn map_info(world: &World) -> Value {
         let h = f.home();
         json!({ "lat_deg": h.lat_deg, "lon_deg": h.lon_deg })
     });
-    let bounds = world.bounds_ne(DEFAULT_CELL_M);
+    let bounds = world.bounds_ne(PlanSpec::default().cell_m);
     let obstacles: Vec<[f64; 6]> = world
         .colliders()
         .map(|m| {

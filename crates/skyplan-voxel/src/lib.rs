@@ -44,7 +44,7 @@
 #![warn(missing_docs)]
 
 use skyplan_search::{OpenEntry, OpenList};
-use skyplan_world3::{BoxWorld3, CollisionChecker, Neu, distance_m};
+use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, distance_m};
 use std::time::Instant;
 
 /// Slack added around a voxel's neighbourhood box before calling it clear of every inflated box,
@@ -211,15 +211,65 @@ pub struct VoxelGrid<'w> {
 /// Most voxels a grid may have.
 pub const MAX_VOXELS: usize = 50_000_000;
 
-/// The 26 neighbour offsets.
-fn offsets() -> impl Iterator<Item = [i64; 3]> {
-    (-1..=1_i64).flat_map(|a| {
-        (-1..=1_i64).flat_map(move |b| {
-            (-1..=1_i64)
-                .filter(move |&c| (a, b, c) != (0, 0, 0))
-                .map(move |c| [a, b, c])
-        })
-    })
+/// The 26 neighbour offsets, in the order of nested loops over north, east and altitude.
+const OFFSETS: [[i64; 3]; 26] = offsets();
+
+const fn offsets() -> [[i64; 3]; 26] {
+    let mut out = [[0; 3]; 26];
+    let mut n = 0;
+    let mut a = -1;
+    while a <= 1 {
+        let mut b = -1;
+        while b <= 1 {
+            let mut c = -1;
+            while c <= 1 {
+                if !(a == 0 && b == 0 && c == 0) {
+                    out[n] = [a, b, c];
+                    n += 1;
+                }
+                c += 1;
+            }
+            b += 1;
+        }
+        a += 1;
+    }
+    out
+}
+
+/// An inclusive range of lattice indices per axis.
+type IndexRanges = [(usize, usize); 3];
+
+/// The lattice along axis `a` at pitch `step[a]`: its first coordinate and point count, every
+/// point inside the bounds (the lowest layer above the ground).
+fn lattice_axis(bounds: &Aabb, step: Neu, a: usize) -> Result<(f64, usize), VoxelError> {
+    let none_fits = || {
+        VoxelError::InvalidSpec(format!(
+            "no lattice point fits in the flight volume on axis {a} (pitch {} m)",
+            step[a]
+        ))
+    };
+    let mut first = (bounds.min[a] / step[a]).ceil();
+    if a == 2 && first < 1.0 {
+        first = 1.0; // no layer on or under the ground at altitude 0
+    }
+    let mut origin = first * step[a];
+    let span = ((bounds.max[a] - origin) / step[a]).floor();
+    if span.is_nan() || span < 0.0 {
+        return Err(none_fits());
+    }
+    let mut n = span as usize + 1;
+    // Every lattice point must lie inside the bounds, as computed.
+    while n > 0 && origin + (n - 1) as f64 * step[a] > bounds.max[a] {
+        n -= 1;
+    }
+    while origin < bounds.min[a] {
+        origin += step[a];
+        n = n.saturating_sub(1);
+    }
+    if n == 0 {
+        return Err(none_fits());
+    }
+    Ok((origin, n))
 }
 
 impl<'w> VoxelGrid<'w> {
@@ -239,34 +289,7 @@ impl<'w> VoxelGrid<'w> {
         let mut origin = [0.0; 3];
         let mut dims = [0usize; 3];
         for a in 0..3 {
-            let mut first = (bounds.min[a] / step[a]).ceil();
-            if a == 2 && first < 1.0 {
-                first = 1.0; // no layer on or under the ground at altitude 0
-            }
-            origin[a] = first * step[a];
-            let span = ((bounds.max[a] - origin[a]) / step[a]).floor();
-            if span.is_nan() || span < 0.0 {
-                return Err(VoxelError::InvalidSpec(format!(
-                    "no lattice point fits in the flight volume on axis {a} (pitch {} m)",
-                    step[a]
-                )));
-            }
-            let mut n = span as usize + 1;
-            // Every lattice point must lie inside the bounds, as computed.
-            while n > 0 && origin[a] + (n - 1) as f64 * step[a] > bounds.max[a] {
-                n -= 1;
-            }
-            while origin[a] < bounds.min[a] {
-                origin[a] += step[a];
-                n = n.saturating_sub(1);
-            }
-            if n == 0 {
-                return Err(VoxelError::InvalidSpec(format!(
-                    "no lattice point fits in the flight volume on axis {a} (pitch {} m)",
-                    step[a]
-                )));
-            }
-            dims[a] = n;
+            (origin[a], dims[a]) = lattice_axis(&bounds, step, a)?;
         }
         let total = dims[0]
             .checked_mul(dims[1])
@@ -291,67 +314,76 @@ impl<'w> VoxelGrid<'w> {
             build_us: 0,
         };
         for b in world.inflated_boxes() {
-            // Per axis: the lattice indices whose neighbourhood meets the box (near), and those
-            // whose coordinate lies within it (the centre is inside iff on all three axes).
-            let mut near = [(0usize, 0usize); 3];
-            let mut inside = [(1usize, 0usize); 3];
-            let mut any = true;
-            for a in 0..3 {
-                let lo = ((b.min[a] - grid.origin[a]) / step[a]).floor() as i64 - 2;
-                let hi = ((b.max[a] - grid.origin[a]) / step[a]).ceil() as i64 + 2;
-                let lo = lo.clamp(0, dims[a] as i64 - 1) as usize;
-                let hi = hi.clamp(0, dims[a] as i64 - 1) as usize;
-                let (mut n0, mut n1) = (usize::MAX, 0);
-                let (mut i0, mut i1) = (usize::MAX, 0);
-                for i in lo..=hi {
-                    let below = grid.coord(a, i as f64 - 1.0) - CLEAR_SLACK_M;
-                    let above = grid.coord(a, i as f64 + 1.0) + CLEAR_SLACK_M;
-                    if below <= b.max[a] && above >= b.min[a] {
-                        n0 = n0.min(i);
-                        n1 = n1.max(i);
-                    }
-                    let c = grid.coord(a, i as f64);
-                    if c >= b.min[a] && c <= b.max[a] {
-                        i0 = i0.min(i);
-                        i1 = i1.max(i);
-                    }
+            grid.rasterise(b);
+        }
+        grid.build_us = t0.elapsed().as_micros() as u64;
+        Ok(grid)
+    }
+
+    /// Per axis, the lattice index ranges of a box: those whose neighbourhood meets it (near),
+    /// and those whose coordinate lies within it (the centre is inside iff on all three axes;
+    /// an empty range is `(i, j)` with `i > j`). `None` if no voxel is near the box.
+    fn box_ranges(&self, b: &Aabb) -> Option<(IndexRanges, IndexRanges)> {
+        let mut near = [(0usize, 0usize); 3];
+        let mut inside = [(1usize, 0usize); 3];
+        for a in 0..3 {
+            let lo = ((b.min[a] - self.origin[a]) / self.step[a]).floor() as i64 - 2;
+            let hi = ((b.max[a] - self.origin[a]) / self.step[a]).ceil() as i64 + 2;
+            let lo = lo.clamp(0, self.dims[a] as i64 - 1) as usize;
+            let hi = hi.clamp(0, self.dims[a] as i64 - 1) as usize;
+            let (mut n0, mut n1) = (usize::MAX, 0);
+            let (mut i0, mut i1) = (usize::MAX, 0);
+            for i in lo..=hi {
+                let below = self.coord(a, i as f64 - 1.0) - CLEAR_SLACK_M;
+                let above = self.coord(a, i as f64 + 1.0) + CLEAR_SLACK_M;
+                if below <= b.max[a] && above >= b.min[a] {
+                    n0 = n0.min(i);
+                    n1 = n1.max(i);
                 }
-                if n0 == usize::MAX {
-                    any = false;
-                    break;
-                }
-                near[a] = (n0, n1);
-                inside[a] = (i0, i1);
-            }
-            if !any {
-                continue;
-            }
-            for i in near[0].0..=near[0].1 {
-                for j in near[1].0..=near[1].1 {
-                    for k in near[2].0..=near[2].1 {
-                        let v = grid.index([i, j, k]);
-                        if grid.state[v] == CLEAR {
-                            grid.state[v] = NEAR;
-                        }
-                    }
+                let c = self.coord(a, i as f64);
+                if c >= b.min[a] && c <= b.max[a] {
+                    i0 = i0.min(i);
+                    i1 = i1.max(i);
                 }
             }
-            if inside[0].0 > inside[0].1 || inside[1].0 > inside[1].1 {
-                continue;
+            if n0 == usize::MAX {
+                return None;
             }
-            for i in inside[0].0..=inside[0].1 {
-                for j in inside[1].0..=inside[1].1 {
-                    let t = &mut grid.heights.top_m[i * dims[1] + j];
-                    *t = t.max(b.max[2]);
-                    for k in inside[2].0..=inside[2].1 {
-                        let v = grid.index([i, j, k]);
-                        grid.state[v] = BLOCKED;
+            near[a] = (n0, n1);
+            inside[a] = (i0, i1);
+        }
+        Some((near, inside))
+    }
+
+    /// Marks the voxels near an inflated box (their edges need a test), blocks those inside it
+    /// and raises the height map under it.
+    fn rasterise(&mut self, b: &Aabb) {
+        let Some((near, inside)) = self.box_ranges(b) else {
+            return;
+        };
+        for i in near[0].0..=near[0].1 {
+            for j in near[1].0..=near[1].1 {
+                for k in near[2].0..=near[2].1 {
+                    let v = self.index([i, j, k]);
+                    if self.state[v] == CLEAR {
+                        self.state[v] = NEAR;
                     }
                 }
             }
         }
-        grid.build_us = t0.elapsed().as_micros() as u64;
-        Ok(grid)
+        if inside[0].0 > inside[0].1 || inside[1].0 > inside[1].1 {
+            return;
+        }
+        for i in inside[0].0..=inside[0].1 {
+            for j in inside[1].0..=inside[1].1 {
+                let t = &mut self.heights.top_m[i * self.dims[1] + j];
+                *t = t.max(b.max[2]);
+                for k in inside[2].0..=inside[2].1 {
+                    let v = self.index([i, j, k]);
+                    self.state[v] = BLOCKED;
+                }
+            }
+        }
     }
 
     fn coord(&self, axis: usize, i: f64) -> f64 {
@@ -480,150 +512,12 @@ impl<'w> VoxelGrid<'w> {
         if !self.world.is_free(goal) {
             return Err(VoxelError::Invalid(End::Goal));
         }
-        let mut edge_checks = 0usize;
-        let join = |p: Neu, forward: bool, checks: &mut usize| -> Vec<(usize, f64)> {
-            self.connector_candidates(p)
-                .into_iter()
-                .filter_map(|v| {
-                    let q = self.point(v);
-                    *checks += 1;
-                    let (a, b) = if forward { (p, q) } else { (q, p) };
-                    self.world
-                        .segment_is_free(a, b)
-                        .then(|| (v, edge_cost(a, b, w)))
-                })
-                .collect()
-        };
-        let from_start = join(start, true, &mut edge_checks);
-        let mut to_goal = join(goal, false, &mut edge_checks);
-        edge_checks += 1;
-        let direct = self.world.segment_is_free(start, goal);
-        if !direct {
-            if from_start.is_empty() {
-                return Err(VoxelError::NoConnector(End::Start));
-            }
-            if to_goal.is_empty() {
-                return Err(VoxelError::NoConnector(End::Goal));
-            }
-        }
-        to_goal.sort_unstable_by_key(|&(v, _)| v);
-
-        let n = self.len();
-        let (start_id, goal_id) = (n, n + 1);
-        let mut g = vec![f64::INFINITY; n + 2];
-        let mut parent = vec![u32::MAX; n + 2];
-        let point_of = |id: usize| -> Neu {
-            if id == start_id {
-                start
-            } else if id == goal_id {
-                goal
-            } else {
-                self.point(id)
-            }
-        };
-        let h = |p: Neu| distance_m(p, goal) + w * (goal[2] - p[2]).max(0.0);
-        let mut open = OpenList::new(n + 2);
-        g[start_id] = 0.0;
-        open.push(OpenEntry {
-            f: h(start),
-            g: 0.0,
-            node: start_id as u32,
-        });
-        let relax = |open: &mut OpenList,
-                     g: &mut [f64],
-                     parent: &mut [u32],
-                     from: usize,
-                     to: usize,
-                     cost: f64| {
-            let ng = g[from] + cost;
-            if ng < g[to] {
-                g[to] = ng;
-                parent[to] = from as u32;
-                open.push(OpenEntry {
-                    f: ng + h(point_of(to)),
-                    g: ng,
-                    node: to as u32,
-                });
-            }
-        };
-        while let Some(OpenEntry { node: u, .. }) = open.pop() {
-            let u = u as usize;
-            if u == goal_id {
-                break;
-            }
-            if u == start_id {
-                if direct {
-                    relax(
-                        &mut open,
-                        &mut g,
-                        &mut parent,
-                        u,
-                        goal_id,
-                        edge_cost(start, goal, w),
-                    );
-                }
-                for &(v, c) in &from_start {
-                    relax(&mut open, &mut g, &mut parent, u, v, c);
-                }
-                continue;
-            }
-            let p = self.point(u);
-            if let Ok(k) = to_goal.binary_search_by_key(&u, |&(v, _)| v) {
-                relax(&mut open, &mut g, &mut parent, u, goal_id, to_goal[k].1);
-            }
-            let ijk = self.ijk(u);
-            let near = self.state[u] == NEAR;
-            for d in offsets() {
-                let mut nb = [0usize; 3];
-                let mut inside = true;
-                for a in 0..3 {
-                    let c = ijk[a] as i64 + d[a];
-                    if c < 0 || c >= self.dims[a] as i64 {
-                        inside = false;
-                        break;
-                    }
-                    nb[a] = c as usize;
-                }
-                if !inside {
-                    continue;
-                }
-                let v = self.index(nb);
-                if open.is_closed(v as u32) || self.state[v] == BLOCKED {
-                    continue;
-                }
-                let q = self.point(v);
-                let cost = edge_cost(p, q, w);
-                if g[u] + cost >= g[v] {
-                    continue;
-                }
-                if near {
-                    edge_checks += 1;
-                    if !self.world.segment_is_free(p, q) {
-                        continue;
-                    }
-                }
-                relax(&mut open, &mut g, &mut parent, u, v, cost);
-            }
-        }
-        let expansions = open.expansions() as usize;
-        if !open.is_closed(goal_id as u32) {
-            return Err(VoxelError::NoPath { expansions });
-        }
-        let mut ids = vec![goal_id];
-        while *ids.last().unwrap() != start_id {
-            ids.push(parent[*ids.last().unwrap()] as usize);
-        }
-        ids.reverse();
-        let mut raw: Vec<Neu> = Vec::with_capacity(ids.len());
-        for &id in &ids {
-            let p = point_of(id);
-            if raw.last() != Some(&p) {
-                raw.push(p);
-            }
-        }
-        if raw.len() == 1 {
-            raw.push(goal);
-        }
+        let mut edge_checks = 0;
+        let joins = self.joins(start, goal, w, &mut edge_checks)?;
+        let mut search = Search::new(self, start, goal, w);
+        search.edge_checks = edge_checks;
+        let raw = search.run(&joins)?;
+        let expansions = search.open.expansions() as usize;
         if let Some(k) = skyplan_world3::first_blocked_segment(self.world, &raw) {
             return Err(VoxelError::Internal(k));
         }
@@ -646,8 +540,231 @@ impl<'w> VoxelGrid<'w> {
             path,
             raw_cost,
             expansions,
-            edge_checks,
+            edge_checks: search.edge_checks,
             search_us: t0.elapsed().as_micros() as u64,
         })
+    }
+
+    /// The voxels `p` joins with a free segment, and their costs (from `p` if `forward`, else to
+    /// it); each segment tested counts in `checks`.
+    fn join(&self, p: Neu, forward: bool, w: f64, checks: &mut usize) -> Vec<(usize, f64)> {
+        self.connector_candidates(p)
+            .into_iter()
+            .filter_map(|v| {
+                let q = self.point(v);
+                *checks += 1;
+                let (a, b) = if forward { (p, q) } else { (q, p) };
+                self.world
+                    .segment_is_free(a, b)
+                    .then(|| (v, edge_cost(a, b, w)))
+            })
+            .collect()
+    }
+
+    /// The start and goal joined to the lattice (an error if one has no connector and the
+    /// straight segment between them is blocked).
+    fn joins(
+        &self,
+        start: Neu,
+        goal: Neu,
+        w: f64,
+        checks: &mut usize,
+    ) -> Result<Joins, VoxelError> {
+        let from_start = self.join(start, true, w, checks);
+        let mut to_goal = self.join(goal, false, w, checks);
+        *checks += 1;
+        let direct = self.world.segment_is_free(start, goal);
+        if !direct {
+            if from_start.is_empty() {
+                return Err(VoxelError::NoConnector(End::Start));
+            }
+            if to_goal.is_empty() {
+                return Err(VoxelError::NoConnector(End::Goal));
+            }
+        }
+        to_goal.sort_unstable_by_key(|&(v, _)| v);
+        Ok(Joins {
+            from_start,
+            to_goal,
+            direct,
+        })
+    }
+}
+
+/// The start and goal joined to the lattice.
+struct Joins {
+    /// The voxels the start reaches and the costs.
+    from_start: Vec<(usize, f64)>,
+    /// The voxels that reach the goal and the costs, by voxel.
+    to_goal: Vec<(usize, f64)>,
+    /// Whether the straight segment from start to goal is free.
+    direct: bool,
+}
+
+/// One A\* over the voxel graph, with the start and goal as two extra nodes after the voxels.
+struct Search<'g, 'w> {
+    grid: &'g VoxelGrid<'w>,
+    start: Neu,
+    goal: Neu,
+    /// The climb weight.
+    w: f64,
+    start_id: usize,
+    goal_id: usize,
+    g: Vec<f64>,
+    parent: Vec<u32>,
+    open: OpenList,
+    /// Segments tested so far (joins included).
+    edge_checks: usize,
+}
+
+impl<'g, 'w> Search<'g, 'w> {
+    fn new(grid: &'g VoxelGrid<'w>, start: Neu, goal: Neu, w: f64) -> Self {
+        let n = grid.len();
+        Search {
+            grid,
+            start,
+            goal,
+            w,
+            start_id: n,
+            goal_id: n + 1,
+            g: vec![f64::INFINITY; n + 2],
+            parent: vec![u32::MAX; n + 2],
+            open: OpenList::new(n + 2),
+            edge_checks: 0,
+        }
+    }
+
+    /// The point of a node: a voxel's centre, the start or the goal.
+    #[inline(always)]
+    fn point_of(&self, id: usize) -> Neu {
+        if id == self.start_id {
+            self.start
+        } else if id == self.goal_id {
+            self.goal
+        } else {
+            self.grid.point(id)
+        }
+    }
+
+    /// The heuristic: distance to the goal plus the weighted climb still needed.
+    #[inline(always)]
+    fn h(&self, p: Neu) -> f64 {
+        distance_m(p, self.goal) + self.w * (self.goal[2] - p[2]).max(0.0)
+    }
+
+    /// Offers `to` reached from `from` over an edge of `cost`.
+    #[inline(always)]
+    fn relax(&mut self, from: usize, to: usize, cost: f64) {
+        let ng = self.g[from] + cost;
+        if ng < self.g[to] {
+            self.g[to] = ng;
+            self.parent[to] = from as u32;
+            let f = ng + self.h(self.point_of(to));
+            self.open.push(OpenEntry {
+                f,
+                g: ng,
+                node: to as u32,
+            });
+        }
+    }
+
+    /// Searches from the start until the goal is closed; the raw path (start to goal, no
+    /// repeated point).
+    fn run(&mut self, joins: &Joins) -> Result<Vec<Neu>, VoxelError> {
+        let (start_id, goal_id) = (self.start_id, self.goal_id);
+        self.g[start_id] = 0.0;
+        self.open.push(OpenEntry {
+            f: self.h(self.start),
+            g: 0.0,
+            node: start_id as u32,
+        });
+        while let Some(OpenEntry { node: u, .. }) = self.open.pop() {
+            let u = u as usize;
+            if u == goal_id {
+                break;
+            }
+            if u == start_id {
+                if joins.direct {
+                    let cost = edge_cost(self.start, self.goal, self.w);
+                    self.relax(u, goal_id, cost);
+                }
+                for &(v, c) in &joins.from_start {
+                    self.relax(u, v, c);
+                }
+                continue;
+            }
+            if let Ok(k) = joins.to_goal.binary_search_by_key(&u, |&(v, _)| v) {
+                self.relax(u, goal_id, joins.to_goal[k].1);
+            }
+            self.expand(u);
+        }
+        if !self.open.is_closed(goal_id as u32) {
+            let expansions = self.open.expansions() as usize;
+            return Err(VoxelError::NoPath { expansions });
+        }
+        Ok(self.raw_path())
+    }
+
+    /// Relaxes the 26 lattice neighbours of voxel `u` (testing the edge's segment when `u` is
+    /// near a box).
+    #[inline(always)]
+    fn expand(&mut self, u: usize) {
+        let grid = self.grid;
+        let p = grid.point(u);
+        let ijk = grid.ijk(u);
+        let near = grid.state[u] == NEAR;
+        for d in OFFSETS {
+            let mut nb = [0usize; 3];
+            let mut inside = true;
+            for a in 0..3 {
+                let c = ijk[a] as i64 + d[a];
+                if c < 0 || c >= grid.dims[a] as i64 {
+                    inside = false;
+                    break;
+                }
+                nb[a] = c as usize;
+            }
+            if !inside {
+                continue;
+            }
+            let v = grid.index(nb);
+            if self.open.is_closed(v as u32) || grid.state[v] == BLOCKED {
+                continue;
+            }
+            let q = grid.point(v);
+            let cost = edge_cost(p, q, self.w);
+            if self.g[u] + cost >= self.g[v] {
+                continue;
+            }
+            if near {
+                self.edge_checks += 1;
+                if !grid.world.segment_is_free(p, q) {
+                    continue;
+                }
+            }
+            self.relax(u, v, cost);
+        }
+    }
+
+    /// The points from the start to the closed goal along the parents, without repeats.
+    fn raw_path(&self) -> Vec<Neu> {
+        let mut ids = vec![self.goal_id];
+        let mut last = self.goal_id;
+        while last != self.start_id {
+            last = self.parent[last] as usize;
+            ids.push(last);
+        }
+        ids.reverse();
+        let mut raw: Vec<Neu> = Vec::with_capacity(ids.len());
+        for &id in &ids {
+            let p = self.point_of(id);
+            if raw.last() != Some(&p) {
+                raw.push(p);
+            }
+        }
+        if raw.len() == 1 {
+            raw.push(self.goal);
+        }
+        raw
     }
 }

@@ -1,54 +1,30 @@
-//! Fuzzing and hostile-input tests only (not an API): the ground station's handling of one
-//! received message — `absorb` (what the station learns, which vehicle it listens to), the
-//! position converted to the map's frame, the executor fed, its commands sent — without a
-//! vehicle. Every station talks over one loopback connection whose peer never speaks and
-//! drains what it is sent (a connection per station would exhaust the ports in TIME_WAIT).
+//! Fuzzing and hostile-input tests only (not an API): the ground station's flight loop
+//! ([`FlightLoop`] over a [`GroundProtocol`]) fed one received message at a time — what the
+//! station learns, which vehicle it listens to, the position converted to the map's frame, the
+//! executor fed, its commands built — without a socket or a clock.
 
 use super::*;
+use crate::Received;
 use skyplan_flight::executor::{ExecutorConfig, MissionExecutor};
-use std::io::Read;
-use std::net::{TcpListener, TcpStream};
-use std::sync::OnceLock;
-
-/// The shared connection's station end (the peer is drained on its own thread).
-fn shared_stream() -> std::io::Result<TcpStream> {
-    static STREAM: OnceLock<Option<TcpStream>> = OnceLock::new();
-    let stream = STREAM.get_or_init(|| {
-        let listener = TcpListener::bind("127.0.0.1:0").ok()?;
-        let ours = TcpStream::connect(listener.local_addr().ok()?).ok()?;
-        let (mut peer, _) = listener.accept().ok()?;
-        std::thread::spawn(move || {
-            let mut buf = [0u8; 65536];
-            while let Ok(1..) = peer.read(&mut buf) {}
-        });
-        Some(ours)
-    });
-    match stream {
-        Some(s) => s.try_clone(),
-        None => Err(std::io::Error::other("no loopback connection")),
-    }
-}
 
 /// A ground station flying a short GUIDED route, driven one message at a time.
 pub struct GroundHarness {
-    station: GroundStation,
+    protocol: GroundProtocol,
+    flight: FlightLoop,
     executor: MissionExecutor,
-    frame: LocalFrame,
     now_s: f64,
+    sent: usize,
 }
 
 impl GroundHarness {
-    /// A station over the shared loopback connection, with its executor ready.
-    pub fn new() -> std::io::Result<Self> {
-        let link = Link::from_tcp_stream(shared_stream()?, SYSTEM_ID, COMPONENT_ID)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-        let station = GroundStation::over(link, GroundConfig::default());
+    /// A station at the FCND home with its executor ready.
+    pub fn new() -> Result<Self, String> {
         let home = Lla {
             lat_deg: 37.79248,
             lon_deg: -122.39745,
             alt_m: 0.0,
         };
-        let frame = LocalFrame::new(home).map_err(|e| std::io::Error::other(e.to_string()))?;
+        let frame = LocalFrame::new(home).map_err(|e| e.to_string())?;
         let targets = [
             Target {
                 north_m: 0.0,
@@ -63,18 +39,34 @@ impl GroundHarness {
                 heading_rad: 0.5,
             },
         ];
-        let executor = MissionExecutor::new(&targets, ExecutorConfig::default())
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
+        let executor =
+            MissionExecutor::new(&targets, ExecutorConfig::default()).map_err(|e| e.to_string())?;
+        let convergence_rad = grid_convergence_rad(&frame, home).map_err(|e| e.to_string())?;
+        let flight = FlightLoop::with_convergence(
+            &frame,
+            GroundConfig::default(),
+            convergence_rad,
+            None,
+            0.0,
+        );
         Ok(Self {
-            station,
+            protocol: GroundProtocol::new(),
+            flight,
             executor,
-            frame,
             now_s: 0.0,
+            sent: 0,
         })
     }
 
-    /// One message from `system_id`/`component_id`, then a tick of `dt_s` executor seconds.
-    pub fn handle(&mut self, system_id: u8, component_id: u8, message: MavMessage, dt_s: f64) {
+    /// One message from `system_id`/`component_id` at the station's clock, then `dt_s` wall
+    /// seconds (at most 10) pass with a turn of the loop; the messages the station would send.
+    pub fn handle(
+        &mut self,
+        system_id: u8,
+        component_id: u8,
+        message: MavMessage,
+        dt_s: f64,
+    ) -> Vec<MavMessage> {
         let r = Received {
             header: mavlink::MavHeader {
                 system_id: u32::from(system_id),
@@ -83,39 +75,13 @@ impl GroundHarness {
             },
             message,
         };
-        let mut events: Vec<Event> = self.station.absorb(&r).into_iter().collect();
-        if let MavMessage::GLOBAL_POSITION_INT(g) = &r.message
-            && self.station.is_from_vehicle(&r)
-        {
-            let at = global_lla(g);
-            if let (Ok(convergence_rad), Ok(ned)) = (
-                grid_convergence_rad(&self.frame, at),
-                self.frame.ned_from_lla(at),
-            ) {
-                events.push(Event::Telemetry(Telemetry {
-                    north_m: ned.north_m,
-                    east_m: ned.east_m,
-                    down_m: -f64::from(g.relative_alt) * 1e-3,
-                    velocity_ned_m_s: [
-                        f64::from(g.vx) * 0.01,
-                        f64::from(g.vy) * 0.01,
-                        f64::from(g.vz) * 0.01,
-                    ],
-                    yaw_rad: wrap_angle_rad(self.station.yaw_rad - convergence_rad),
-                    armed: self.station.armed,
-                    guided: self.station.guided(),
-                    on_ground: self.station.on_ground,
-                }));
-            }
-        }
+        let (p, ex) = (&mut self.protocol, &mut self.executor);
+        let mut out = self.flight.step(p, ex, self.now_s, Some(&r), (None, false));
         self.now_s += dt_s.clamp(0.0, 10.0);
-        events.push(Event::Tick);
-        for e in events {
-            let out = self.executor.handle(self.now_s, e);
-            for c in out.commands {
-                let _ = self.station.send(c, &self.frame, 0.0);
-            }
-        }
+        out.extend(self.flight.step(p, ex, self.now_s, None, (None, false)));
+        let _ = self.flight.take_updates();
+        self.sent += out.len();
+        out
     }
 
     /// The executor's last telemetry, in the map's frame (for tests).
@@ -126,5 +92,10 @@ impl GroundHarness {
     /// The executor's state now (for tests).
     pub fn state(&self) -> FlightState {
         self.executor.state()
+    }
+
+    /// Messages the station has built so far.
+    pub fn sent(&self) -> usize {
+        self.sent
     }
 }

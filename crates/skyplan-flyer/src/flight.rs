@@ -4,11 +4,11 @@
 //! The observer decides where lines go (a terminal above a progress bar, a live view, nowhere);
 //! this module only makes them.
 
-use crate::ground::{FlightSummary, GroundError, GroundStation, LogRow, Update};
-use crate::vehicle::{SimReport, SimServerConfig};
 use crate::words::{note_line, tidy, update_line};
 use skyplan_flight::executor::{FlightExecutor, Note, Outcome};
 use skyplan_frames::LocalFrame;
+use skyplan_link::ground::{FlightSummary, GroundError, GroundStation, LogRow, Update};
+use skyplan_link::vehicle::{SimReport, SimServerConfig};
 
 /// Where a flight's story goes.
 pub trait Observer {
@@ -122,27 +122,27 @@ pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<
     lines
 }
 
-/// The simulator's account of the flown track: its length and clearance, or the collision.
-pub fn track_line(report: &SimReport) -> String {
-    let clearance = report
-        .track
-        .min_clearance_m()
-        .map_or("no obstacle within 20 m".to_string(), |c| {
-            format!("closest obstacle {c:.2} m")
-        });
+/// The simulator's account of the flown track: its length, its closest approach to an obstacle
+/// and the route's safety margin `margin_m` (if known), or the collision.
+pub fn track_line(report: &SimReport, margin_m: Option<f64>) -> String {
+    let margin = margin_m.map_or(String::new(), |m| format!(", safety margin {m} m"));
+    let clearance = match report.track.closest() {
+        Some(c) => format!(
+            "closest obstacle {:.2} m ({}) at {:.1} s{margin}",
+            c.clearance_m,
+            obstacle_name(report, c.box_index),
+            c.time_s
+        ),
+        None => format!("no obstacle within 20 m{margin}"),
+    };
     let hidden = report.hidden_boxes;
     match report.track.collision() {
-        Some(c) => {
-            let which = match c.box_index.checked_sub(report.map_boxes) {
-                Some(k) if hidden > 0 => format!("hidden building #{} of {hidden}", k + 1),
-                _ => format!("map obstacle #{}", c.box_index),
-            };
-            format!(
-                "track      COLLISION: {} samples inside obstacles, first at {:.1} s ({which})",
-                report.track.colliding_samples(),
-                c.time_s,
-            )
-        }
+        Some(c) => format!(
+            "track      COLLISION: {} samples inside obstacles, first at {:.1} s ({})",
+            report.track.colliding_samples(),
+            c.time_s,
+            obstacle_name(report, c.box_index)
+        ),
         None => {
             let what = match hidden {
                 0 => "the map's obstacles".to_string(),
@@ -157,6 +157,15 @@ pub fn track_line(report: &SimReport) -> String {
     }
 }
 
+/// An obstacle of the simulated world by its index: a map obstacle or a hidden building.
+pub fn obstacle_name(report: &SimReport, box_index: usize) -> String {
+    let hidden = report.hidden_boxes;
+    match box_index.checked_sub(report.map_boxes) {
+        Some(k) if hidden > 0 => format!("hidden building #{} of {hidden}", k + 1),
+        _ => format!("map obstacle #{box_index}"),
+    }
+}
+
 /// The simulator's account when it starts (`skyplan sim`): where it listens, how fast, where
 /// the vehicle is, what the track is checked against (the map and the hidden obstacles, read from
 /// `hidden_from`) and what its sensor sees.
@@ -166,7 +175,7 @@ pub fn track_line(report: &SimReport) -> String {
 /// use skyplan_link::vehicle::SimServerConfig;
 /// let home = Lla { lat_deg: 37.5, lon_deg: -122.25, alt_m: 0.0 };
 /// let config = SimServerConfig { speedup: 2.0, ..SimServerConfig::at(home) };
-/// let line = skyplan_link::flight::sim_listening_line("tcp:127.0.0.1:5760", &config, "city.csv", None);
+/// let line = skyplan_flyer::flight::sim_listening_line("tcp:127.0.0.1:5760", &config, "city.csv", None);
 /// assert!(line.contains("listening on tcp:127.0.0.1:5760, 2× real time, home lat 37.5000000, lon -122.2500000;"));
 /// assert!(line.ends_with("obstacles from city.csv; OBSTACLE_DISTANCE at 10 Hz, range 30 m"));
 /// ```

@@ -7,15 +7,15 @@
 //! use skyplan_flight::executor::{FlightState, Note};
 //! let note = Note::State { from: FlightState::Arming, to: FlightState::Takeoff };
 //! assert_eq!(
-//!     skyplan_link::words::note_line(3.5, 4, &note).as_deref(),
+//!     skyplan_flyer::words::note_line(3.5, 4, &note).as_deref(),
 //!     Some("state          3.5 s  ARMING → TAKEOFF")
 //! );
 //! ```
 
-use crate::ground::{LogRow, Progress, Update};
-use crate::vehicle::SimNote;
 use skyplan_flight::executor::{FailsafeAction, FlightState, Note};
 use skyplan_flight::sensing::ReplanEvent;
+use skyplan_link::ground::{LogRow, Progress, Update};
+use skyplan_link::vehicle::SimNote;
 
 /// How an executor note reads (`None`: not worth a line); `n` is the number of waypoints.
 pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
@@ -163,7 +163,7 @@ pub const LOG_COLUMNS: [&str; 21] = [
 ///     reason: "learned obstacle at N 20.5 E 5.5 blocks the leg to waypoint 2".into(),
 ///     planner: "dstar-lite".into(), latency_ms: 0.8, cpu_ms: Some(0.7), expansions: 300,
 ///     route_length_m: 120.0, learned_cells: 9 };
-/// let csv = skyplan_link::words::log_csv(&[], &[replan]);
+/// let csv = skyplan_flyer::words::log_csv(&[], &[replan]);
 /// let row = csv.lines().nth(1).unwrap();
 /// assert_eq!(row, "2.000,REPLAN,10.000,5.000,5.000,,,,,,,,,,\"dstar-lite\",0.800,0.700,300,120.0,9,\
 ///     \"learned obstacle at N 20.5 E 5.5 blocks the leg to waypoint 2\"");

@@ -1,10 +1,10 @@
 //! A planned mission as a vehicle gets it (`skyplan fly --upload`): MISSION_ITEM_INTs for its
 //! autopilot, headings turned from the map's grid north to true north.
 
-use crate::ground::{Autopilot, VehicleInfo, grid_convergence_rad};
 use skyplan_flight::executor::ConfigError;
 use skyplan_flight::upload::{GlobalWaypoint, MissionPlan, mission_items};
 use skyplan_frames::{Lla, LocalFrame};
+use skyplan_link::ground::{Autopilot, VehicleInfo, grid_convergence_rad};
 use skyplan_mission::Mission;
 
 /// The items to upload for `mission` to this vehicle: ArduPilot gets its home as item 0 (PX4

@@ -4,18 +4,20 @@
 //! files.
 
 use crate::flight::{self, Observer, Quiet};
-use crate::ground::{Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, Waiting};
-use crate::in_process::InProcessSim;
-use crate::vehicle::SimServerConfig;
 use crate::words::sim_note_line;
-use crate::{Address, LinkError};
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
     ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, Target, Telemetry,
 };
-use skyplan_flight::upload::UploadConfig;
+use skyplan_flight::upload::{MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
+use skyplan_link::ground::{
+    Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, VehicleInfo, Waiting,
+};
+use skyplan_link::in_process::InProcessSim;
+use skyplan_link::vehicle::SimServerConfig;
+use skyplan_link::{Address, LinkError};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
 use skyplan_plan::{Limits, Plan, PlanFailure, PlanRequest, Session, World};
 use skyplan_replan::bench::{FlightResult, Scenario, ScenarioSpec, SharedReplanner};
@@ -195,30 +197,12 @@ pub fn fly_mission<O: RunObserver>(
     interrupt: Arc<AtomicBool>,
     observer: &mut O,
 ) -> Result<Flight, O::Error> {
-    let speedup = o.ground.speedup;
     let mut gcs = GroundStation::connect(address, o.ground).map_err(RunError::from)?;
     gcs.set_interrupt(interrupt);
     observer.say(&format!(
         "link       {address}: connected, sending heartbeats at 1 Hz"
     ));
-    let mut last = None;
-    let wall = Duration::from_secs_f64(o.wait_s / speedup);
-    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
-        if last != Some(waiting) {
-            last = Some(waiting);
-            observer.say(&format!(
-                "wait       {:7.1} s  for the vehicle's {waiting}",
-                wall_s * speedup
-            ));
-        }
-        observer.waiting(waiting, wall_s * speedup);
-    });
-    let info = info.map_err(RunError::from)?;
-    sim_notes(sim, observer);
-    observer.say(&format!(
-        "vehicle    {}",
-        crate::mission::vehicle_line(&info)
-    ));
+    let info = wait_for_vehicle(&mut gcs, o, sim, observer)?;
 
     // PLANNING: the heartbeat thread keeps the link alive meanwhile.
     observer.say("state      PLANNING");
@@ -269,26 +253,8 @@ pub fn fly_mission<O: RunObserver>(
     };
     // `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
     // then flown in AUTO.
-    let items = crate::mission::items_for(mission, frame, &info).map_err(bad)?;
-    observer.say(&format!(
-        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
-        items.items.len(),
-        if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
-        request.alt_m.unwrap_or(5.0),
-        targets.len(),
-        if items.waypoint_stride == 2 {
-            " (each after a CONDITION_YAW to its heading)"
-        } else {
-            ""
-        }
-    ));
-    let report = gcs
-        .upload_mission(&items, UploadConfig::default())
-        .map_err(RunError::from)?;
-    observer.say(&format!(
-        "upload     accepted: {} items in {:.3} s wall ({} requests answered, {} resends)",
-        report.items, report.wall_time_s, report.requests, report.resends
-    ));
+    let alt_m = plan.spec.alt_m;
+    let items = upload(&mut gcs, (frame, &info), mission, alt_m, observer)?;
     let (log, ended) = if !fly {
         observer.say("result     mission uploaded (--upload-only: not flown)");
         (Vec::new(), Ended::Uploaded)
@@ -305,6 +271,65 @@ pub fn fly_mission<O: RunObserver>(
         watcher: None,
         replanned: Vec::new(),
     })
+}
+
+/// Uploads `mission` (flown at `alt_m`) to the vehicle, telling its items and the upload.
+fn upload<O: RunObserver>(
+    gcs: &mut GroundStation,
+    (frame, info): (&LocalFrame, &VehicleInfo),
+    mission: &skyplan_mission::Mission,
+    alt_m: f64,
+    observer: &mut O,
+) -> Result<MissionPlan, RunError> {
+    let items = crate::mission::items_for(mission, frame, info).map_err(bad)?;
+    observer.say(&format!(
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        items.items.len(),
+        if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
+        alt_m,
+        mission.waypoints.len(),
+        if items.waypoint_stride == 2 {
+            " (each after a CONDITION_YAW to its heading)"
+        } else {
+            ""
+        }
+    ));
+    let report = gcs
+        .upload_mission(&items, UploadConfig::default())
+        .map_err(RunError::from)?;
+    observer.say(&format!(
+        "upload     accepted: {} items in {:.3} s wall ({} requests answered, {} resends)",
+        report.items, report.wall_time_s, report.requests, report.resends
+    ));
+    Ok(items)
+}
+
+/// Waits for the vehicle (`o.wait_s` vehicle seconds), telling what is awaited, then who it is.
+fn wait_for_vehicle<O: RunObserver>(
+    gcs: &mut GroundStation,
+    o: &FlyOptions,
+    sim: Option<&InProcessSim>,
+    observer: &mut O,
+) -> Result<VehicleInfo, RunError> {
+    let speedup = o.ground.speedup;
+    let mut last = None;
+    let wall = Duration::from_secs_f64(o.wait_s / speedup);
+    let info = gcs.wait_for_vehicle(wall, |waiting, wall_s| {
+        if last != Some(waiting) {
+            last = Some(waiting);
+            observer.say(&format!(
+                "wait       {:7.1} s  for the vehicle's {waiting}",
+                wall_s * speedup
+            ));
+        }
+        observer.waiting(waiting, wall_s * speedup);
+    })?;
+    sim_notes(sim, observer);
+    observer.say(&format!(
+        "vehicle    {}",
+        crate::mission::vehicle_line(&info)
+    ));
+    Ok(info)
 }
 
 /// The simulator's new notes, told as lines.
@@ -421,7 +446,7 @@ pub fn hidden_random(
         alt_m: grid.alt_m,
         safety_m: grid.safety_m,
         cell_m: grid.cell_m,
-        model: skyplan_search::MoveModel::Octile,
+        model: plan.spec.move_model,
     };
     place_hidden(map, &spec).map_err(bad)
 }
@@ -439,6 +464,21 @@ pub enum Unfinished {
         /// When, simulated seconds.
         time_s: f64,
     },
+    /// Every waypoint was reached without a collision, but the vehicle flew closer to an
+    /// obstacle than half the safety margin: it entered the obstacles grown by half the margin.
+    #[error(
+        "the flight completed but the vehicle came within {clearance_m:.2} m of {obstacle} at {time_s:.1} s, closer than half ({half_m} m) the route's {margin_m} m safety margin: not done", half_m = margin_m / 2.0
+    )]
+    TooClose {
+        /// The closest approach, metres.
+        clearance_m: f64,
+        /// The safety margin the route was planned with, metres.
+        margin_m: f64,
+        /// The obstacle: a map obstacle or a hidden building, by its number.
+        obstacle: String,
+        /// When, simulated seconds.
+        time_s: f64,
+    },
     /// No route in the true world: the "no path" of planning.
     #[error("flight failed: {0}")]
     NoRoute(skyplan_flight::executor::Failure),
@@ -450,29 +490,50 @@ pub enum Unfinished {
     NotLanded,
 }
 
+/// The safety margin a plan was made with, metres (its resolved spec; every planner has one).
+pub fn plan_margin_m(plan: &Plan) -> Option<f64> {
+    Some(plan.spec.safety_m)
+}
+
 /// A flight's verdict from its outcome ([`Ended::Flight`]) and, on the simulator, its track
-/// report: done only when it landed and disarmed with every waypoint reached and no collision.
+/// report judged against the route's safety margin `margin_m`: done only when it landed and
+/// disarmed with every waypoint reached, no collision, and never closer to an obstacle (the map's
+/// or a hidden one) than half the margin.
 ///
 /// ```
 /// use skyplan_flight::executor::Outcome;
-/// use skyplan_link::runner::{Unfinished, verdict};
+/// use skyplan_flyer::runner::{Unfinished, verdict};
 ///
-/// assert_eq!(verdict(Some(Outcome::Completed), None), Ok(()));
-/// assert_eq!(verdict(None, None), Err(Unfinished::NotLanded));
+/// assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0)), Ok(()));
+/// assert_eq!(verdict(None, None, Some(5.0)), Err(Unfinished::NotLanded));
 /// ```
 pub fn verdict(
     outcome: Option<Outcome>,
-    report: Option<&crate::vehicle::SimReport>,
+    report: Option<&skyplan_link::vehicle::SimReport>,
+    margin_m: Option<f64>,
 ) -> Result<(), Unfinished> {
     use skyplan_flight::executor::Failure;
     match outcome {
-        Some(Outcome::Completed) => match report.and_then(|r| r.track.collision()) {
-            Some(c) => Err(Unfinished::Collided {
-                box_index: c.box_index,
-                time_s: c.time_s,
-            }),
-            None => Ok(()),
-        },
+        Some(Outcome::Completed) => {
+            let track = report.map(|r| &r.track);
+            if let Some(c) = track.and_then(|t| t.collision()) {
+                return Err(Unfinished::Collided {
+                    box_index: c.box_index,
+                    time_s: c.time_s,
+                });
+            }
+            match (report, track.and_then(|t| t.closest()), margin_m) {
+                (Some(r), Some(c), Some(margin_m)) if c.clearance_m < 0.5 * margin_m => {
+                    Err(Unfinished::TooClose {
+                        clearance_m: c.clearance_m,
+                        margin_m,
+                        obstacle: flight::obstacle_name(r, c.box_index),
+                        time_s: c.time_s,
+                    })
+                }
+                _ => Ok(()),
+            }
+        }
         Some(Outcome::Failed(f @ Failure::NoRoute { .. })) => Err(Unfinished::NoRoute(f)),
         Some(Outcome::Failed(f)) => Err(Unfinished::Failed(f)),
         None => Err(Unfinished::NotLanded),
@@ -575,20 +636,92 @@ mod tests {
         let no_route = Failure::NoRoute {
             reason: "the goal is walled in".into(),
         };
-        let got = verdict(Some(Outcome::Failed(no_route.clone())), None);
+        let got = verdict(Some(Outcome::Failed(no_route.clone())), None, Some(5.0));
         assert_eq!(got, Err(Unfinished::NoRoute(no_route)));
         let lost = Failure::LinkLost {
             state: FlightState::Waypoint,
             silent_s: 6.0,
         };
-        let got = verdict(Some(Outcome::Failed(lost.clone())), None).unwrap_err();
+        let got = verdict(Some(Outcome::Failed(lost.clone())), None, Some(5.0)).unwrap_err();
         assert_eq!(got.to_string(), format!("flight failed: {lost}"));
-        assert_eq!(verdict(Some(Outcome::Completed), None), Ok(()));
+        assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0)), Ok(()));
         assert!(
-            verdict(None, None)
+            verdict(None, None, Some(5.0))
                 .unwrap_err()
                 .to_string()
                 .contains("did not land in time")
         );
+    }
+
+    /// A simulator's report of a track flown at 5 m altitude from N 0 to N 40 along E 0, past
+    /// a 2 m × 2 m tower centred at E `tower_east_m`.
+    fn report_past_tower(tower_east_m: f64) -> skyplan_link::vehicle::SimReport {
+        use skyplan_flight::collision::{BoxWorld, TrackCheck};
+        use skyplan_flight::sim::{SimConfig, SimVehicle};
+        let tower = ObstacleBox {
+            north_m: 20.0,
+            east_m: tower_east_m,
+            up_m: 15.0,
+            half_north_m: 1.0,
+            half_east_m: 1.0,
+            half_up_m: 15.0,
+        };
+        let world = BoxWorld::new(&[tower]);
+        let mut track = TrackCheck::default();
+        for k in 0..=40 {
+            track.add(&world, f64::from(k), [f64::from(k), 0.0, -5.0]);
+        }
+        skyplan_link::vehicle::SimReport {
+            sim_time_s: 40.0,
+            wall_time_s: 1.0,
+            final_state: SimVehicle::new(SimConfig::default()).state(),
+            track,
+            max_alt_m: 5.0,
+            distance_m: 40.0,
+            map_boxes: 1,
+            hidden_boxes: 0,
+        }
+    }
+
+    #[test]
+    fn a_completed_flight_closer_than_half_the_margin_is_not_done() {
+        // The tower's face is 2 m from the track: inside half of a 5 m margin, outside half of 3 m.
+        let report = report_past_tower(3.0);
+        let got = verdict(Some(Outcome::Completed), Some(&report), Some(5.0));
+        let Err(Unfinished::TooClose {
+            clearance_m,
+            margin_m,
+            time_s,
+            ..
+        }) = &got
+        else {
+            panic!("{got:?}");
+        };
+        assert!(
+            (clearance_m - 2.0).abs() < 1e-9 && *margin_m == 5.0,
+            "{got:?}"
+        );
+        assert!((19.0..=21.0).contains(time_s), "{got:?}");
+        let text = got.unwrap_err().to_string();
+        assert!(
+            text.contains("within 2.00 m of map obstacle #0")
+                && text.contains("closer than half (2.5 m) the route's 5 m safety margin"),
+            "{text}"
+        );
+        assert_eq!(
+            verdict(Some(Outcome::Completed), Some(&report), Some(3.0)),
+            Ok(())
+        );
+        // Without a margin to judge by, only collisions count.
+        assert_eq!(
+            verdict(Some(Outcome::Completed), Some(&report), None),
+            Ok(())
+        );
+        // A collision is told as one, whatever the margin.
+        let hit = report_past_tower(0.5);
+        assert!(matches!(
+            verdict(Some(Outcome::Completed), Some(&hit), Some(5.0)),
+            Err(Unfinished::Collided { box_index: 0, .. })
+        ));
     }
 }
