@@ -3,11 +3,12 @@
 # binary (built first if missing): docs/plan.png, plan3d.png, voronoi.png, heatmap.png, flight.png.
 # The server's screenshots (docs/serve.png, serve-flight.png) come from its browser test:
 #   SKYPLAN_PYTHON=.ci-venv/bin/python SKYPLAN_SCREENSHOT=1 bash crates/skyplan-server/ci.sh
-# Usage, from anywhere in the clone: bash docs/make-pictures.sh   (about 15 s once built)
+# Usage, from anywhere in the clone: bash docs/make-pictures.sh   (about 10 s once built)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-[ -x target/release/skyplan ] || cargo build --release
-skyplan=target/release/skyplan
+# The binary: $SKYPLAN if set, else the clone's release build (built first if missing).
+skyplan=${SKYPLAN:-${CARGO_TARGET_DIR:-target}/release/skyplan}
+[ -x "$skyplan" ] || cargo build --release
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
