@@ -19,7 +19,9 @@ fn stderr(out: &Output) -> String {
 }
 
 fn movingai(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/movingai").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/movingai")
+        .join(name)
 }
 
 #[test]
@@ -27,7 +29,10 @@ fn a_position_typed_with_a_space_gets_the_comma_hint() {
     let dir = tempfile::tempdir().unwrap();
     let cases: &[(&[&str], &str)] = &[
         (&["plan", "--goal-ne", "420", "390"], "--goal-ne 420,390"),
-        (&["plan", "--start-ne", "-100", "-50"], "--start-ne -100,-50"),
+        (
+            &["plan", "--start-ne", "-100", "-50"],
+            "--start-ne -100,-50",
+        ),
         (
             &["fly", "--start-lla", "37.79", "-122.39"],
             "--start-lla 37.79,-122.39",
@@ -92,11 +97,20 @@ fn scen_json_has_no_float_noise_and_matches_the_published_lengths() {
         .collect();
     // The scenario file's own count, read independently: its lines after the version line.
     let published = std::fs::read_to_string(&scen).unwrap();
-    let scenarios: Vec<&str> = published.lines().skip(1).filter(|l| !l.is_empty()).collect();
-    assert_eq!(lines.len(), scenarios.len() + 1, "one line per scenario, one summary");
+    let scenarios: Vec<&str> = published
+        .lines()
+        .skip(1)
+        .filter(|l| !l.is_empty())
+        .collect();
+    assert_eq!(
+        lines.len(),
+        scenarios.len() + 1,
+        "one line per scenario, one summary"
+    );
     let decimals = |v: &Value| {
         let text = v.to_string();
-        text.split_once('.').map_or(0, |(_, fraction)| fraction.len())
+        text.split_once('.')
+            .map_or(0, |(_, fraction)| fraction.len())
     };
     for (line, row) in lines.iter().zip(&scenarios) {
         let optimal: f64 = row.split_whitespace().nth(8).unwrap().parse().unwrap();
@@ -119,11 +133,22 @@ fn bench_replan_redirected_has_no_carriage_returns() {
     let dir = tempfile::tempdir().unwrap();
     let out = skyplan(
         dir.path(),
-        &["bench", "--replan", "1", "--hidden-random", "2", "--seed", "1"],
+        &[
+            "bench",
+            "--replan",
+            "1",
+            "--hidden-random",
+            "2",
+            "--seed",
+            "1",
+        ],
     );
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let table = String::from_utf8(out.stdout.clone()).unwrap();
-    assert!(table.lines().any(|l| l.starts_with("dstar-lite")), "{table}");
+    assert!(
+        table.lines().any(|l| l.starts_with("dstar-lite")),
+        "{table}"
+    );
     for stream in [&out.stdout, &out.stderr] {
         assert!(
             !stream.iter().any(|b| b.is_ascii_control() && *b != b'\n'),
