@@ -22,7 +22,7 @@ mod show;
 mod sim_cmd;
 mod world_load;
 
-use clap::Parser;
+use clap::{CommandFactory, Parser};
 use exit::Failure;
 use std::process::ExitCode;
 
@@ -58,7 +58,19 @@ fn quiet_on_closed_stdout() {
 
 fn main() -> ExitCode {
     quiet_on_closed_stdout();
-    let cli = args::Cli::parse();
+    let cli = match args::Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => {
+            let argv: Vec<String> = std::env::args().collect();
+            let Some(hint) = comma_hint(&error, &argv) else {
+                error.exit()
+            };
+            let _ = error.print();
+            eprintln!("\nhint: {hint}");
+            std::process::exit(error.exit_code());
+        }
+    };
+    let flying = matches!(cli.command, args::Command::Fly(_));
     let result = match cli.command {
         args::Command::Plan(a) => plan_cmd::run(*a),
         args::Command::Scen(a) => scen_cmd::run(a),
@@ -73,7 +85,61 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure { kind, error, .. }) => {
             eprintln!("error: {error:#}");
+            if flying && refused(&error) {
+                eprintln!(
+                    "hint: no vehicle listens there; start the simulator first \
+                     (skyplan sim --listen tcp:127.0.0.1:5760), or fly the built-in one with skyplan fly --sim"
+                );
+            }
             ExitCode::from(kind.code())
         }
     }
+}
+
+/// clap's "unexpected argument '390'" after `--goal-ne 420`: a position typed with a space where
+/// its comma belongs. The hint names the option and the value as it should be written.
+fn comma_hint(error: &clap::Error, argv: &[String]) -> Option<String> {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    if error.kind() != ErrorKind::UnknownArgument {
+        return None;
+    }
+    let Some(ContextValue::String(extra)) = error.get(ContextKind::InvalidArg) else {
+        return None;
+    };
+    let command = args::Cli::command();
+    // Every option whose value is a pair (`N,E`, `LAT,LON`), in any subcommand.
+    let takes_a_pair = |long: &str| {
+        let mut commands = vec![&command];
+        let mut found = false;
+        while let Some(c) = commands.pop() {
+            commands.extend(c.get_subcommands());
+            found |= c.get_arguments().any(|a| {
+                a.get_long() == Some(long)
+                    && a.get_value_names()
+                        .is_some_and(|names| names.iter().any(|n| n.contains(',')))
+            });
+        }
+        found
+    };
+    argv.windows(3).find_map(|w| {
+        let (option, first, second) = (&w[0], &w[1], &w[2]);
+        let long = option.strip_prefix("--")?;
+        // A negative second number (`-122.39`) is reported by its first flag-like part (`-1`).
+        let second_is_extra = second == extra || second.starts_with(extra.as_str());
+        let numbers = first.parse::<f64>().is_ok() && second.parse::<f64>().is_ok();
+        (second_is_extra && numbers && takes_a_pair(long)).then(|| {
+            format!(
+                "a position is two numbers with a comma and no space: {option} {first},{second}"
+            )
+        })
+    })
+}
+
+/// Whether a connection was refused somewhere in the error's causes (nobody listens on the port).
+fn refused(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::ConnectionRefused)
+    })
 }

@@ -4,7 +4,7 @@ use crate::args::PlanArgs;
 use crate::exit::{Classify, Failure, Kind, Result, bad_input};
 use crate::files::{Target, output_target, read_bytes, write_target};
 use crate::picture::PictureKind;
-use crate::report::Written;
+use crate::report::{Human, Written};
 use skyplan_cspace::Cell;
 use skyplan_export::Format;
 use skyplan_plan::{Plan, PlanRequest, PlannerId, Session, World};
@@ -65,6 +65,8 @@ fn check_outputs(
                 world.name()
             )));
         }
+        // `--json` puts the plan on stdout: no waypoint file unless one is asked for.
+        (None, Some(_)) if args.json => None,
         (out, Some(_)) => {
             let out = out.unwrap_or_else(|| PathBuf::from("waypoints.json"));
             let (target, format) = output_file(&out, format.as_deref())?;
@@ -87,11 +89,40 @@ fn check_outputs(
     let roadmap = (args.save_roadmap.as_ref())
         .map(|p| Ok::<_, Failure>((p.clone(), output_target("--save-roadmap", p)?)))
         .transpose()?;
-    Ok(Outputs {
+    let outputs = Outputs {
         waypoints,
         plot,
         roadmap,
-    })
+    };
+    let on_stdout = outputs.on_stdout();
+    if on_stdout.len() + usize::from(args.json) > 1 {
+        let mut names = on_stdout;
+        if args.json {
+            names.push("--json");
+        }
+        return Err(bad_input(format!(
+            "{} would all write to standard output; send all but one to a file",
+            names.join(" and ")
+        )));
+    }
+    Ok(outputs)
+}
+
+impl Outputs {
+    /// The options whose output goes to standard output (`-`).
+    fn on_stdout(&self) -> Vec<&'static str> {
+        let mut names = Vec::new();
+        if matches!(&self.waypoints, Some((_, Target::Stdout, _))) {
+            names.push("--out -");
+        }
+        if matches!(&self.plot, Some((_, Target::Stdout, _))) {
+            names.push("--plot -");
+        }
+        if matches!(&self.roadmap, Some((_, Target::Stdout))) {
+            names.push("--save-roadmap -");
+        }
+        names
+    }
 }
 
 /// On a grid map without a default start or goal, ask on a terminal.
@@ -123,6 +154,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     } = crate::world_load::resolve(&args.route)?;
     let planner = request.planner.unwrap_or_default();
     let outputs = check_outputs(&args, &config, &world, planner)?;
+    // A document on stdout (`--json`, `--out -`) is all stdout carries: the rest is for people.
+    let human = Human::when_stdout_is_data(args.json || !outputs.on_stdout().is_empty());
     request.geometry = Some(outputs.plot.is_some() || args.show);
     request.roadmap.save = outputs.roadmap.is_some();
     if let Some(path) = &args.load_roadmap {
@@ -137,14 +170,14 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         Ok(plan) => plan,
         Err(f) => {
             if args.show && f.kind == skyplan_plan::FailureKind::NoPath {
-                show_failure(&mut session, &request);
+                show_failure(human, &mut session, &request);
             }
             return Err(f.into());
         }
     };
     let written = write_outputs(session.world(), &plan, &outputs)?;
     if args.show {
-        show_plan(&plan, &request);
+        show_plan(human, &plan, &request);
     }
     if args.json {
         println!(
@@ -152,7 +185,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
             crate::report::json_report(&plan, &written, t0.elapsed().as_micros() as u64)
         );
     } else {
-        crate::report::print(&plan, &written, t0.elapsed().as_secs_f64() * 1000.0);
+        let wall_ms = t0.elapsed().as_secs_f64() * 1000.0;
+        human.print(&crate::report::summary(&plan, &written, wall_ms));
     }
     Ok(())
 }
@@ -197,7 +231,7 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
     Ok(written)
 }
 
-fn show_plan(plan: &Plan, request: &PlanRequest) {
+fn show_plan(human: Human, plan: &Plan, request: &PlanRequest) {
     let (Some(grid), [Some(s), Some(g)]) =
         (plan.grid_used.as_deref(), [plan.start.cell, plan.goal.cell])
     else {
@@ -206,10 +240,10 @@ fn show_plan(plan: &Plan, request: &PlanRequest) {
     };
     let (s, g) = (Cell::new(s[0], s[1]), Cell::new(g[0], g[1]));
     let (model, steps) = (request.move_model(), request.counts_steps());
-    crate::show::print(grid, s, g, &plan.path_cells(), model, steps);
+    crate::show::print_to(human, grid, s, g, &plan.path_cells(), model, steps);
 }
 
-fn show_failure(session: &mut Session, request: &PlanRequest) {
+fn show_failure(human: Human, session: &mut Session, request: &PlanRequest) {
     let Some(grid) = session.world().fixed_grid().cloned() else {
         return;
     };
@@ -217,6 +251,6 @@ fn show_failure(session: &mut Session, request: &PlanRequest) {
     let (ds, dg) = session.world().default_endpoints_ne();
     if let (Some(s), Some(g)) = (cell(request.start_ne.or(ds)), cell(request.goal_ne.or(dg))) {
         let (model, steps) = (request.move_model(), request.counts_steps());
-        crate::show::print(&grid, s, g, &[], model, steps);
+        crate::show::print_to(human, &grid, s, g, &[], model, steps);
     }
 }

@@ -36,10 +36,16 @@ impl ReplannerArg {
 
 /// `skyplan bench --replan N`: N seeded flights per replanner, one row each, progress on stderr.
 pub fn bench(world: &World, spec: &ScenarioSpec, speedup: f64) -> Result<String> {
+    // The `\r` progress line only on a terminal: redirected stderr gets no control characters.
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let table = skyplan_flyer::runner::replan_bench(world, spec, speedup, |kind, k, n| {
-        eprint!("\rbench --replan: {kind} flight {k}/{n}   ")
+        if terminal {
+            eprint!("\rbench --replan: {kind} flight {k}/{n}   ")
+        }
     })?;
-    eprintln!();
+    if terminal {
+        eprintln!();
+    }
     Ok(table)
 }
 

@@ -25,17 +25,46 @@ pub fn json_report(plan: &Plan, written: &Written, wall_time_us: u64) -> Value {
     v
 }
 
-/// The human summary: the plan, the files written, the time.
-pub fn print(plan: &Plan, written: &Written, wall_ms: f64) {
-    print!("{plan}");
+/// The human summary as text: the plan, the files written, the time.
+pub fn summary(plan: &Plan, written: &Written, wall_ms: f64) -> String {
+    let mut text = plan.to_string();
     let mut files: Vec<String> = Vec::new();
     if let Some((path, format)) = &written.waypoints {
+        let path = if path == "-" { "standard output" } else { path };
         files.push(format!("{path} ({format})"));
     }
     files.extend(written.plot.iter().cloned());
     files.extend(written.roadmap.iter().map(|r| format!("{r} (roadmap)")));
     if !files.is_empty() {
-        println!("wrote      {}", files.join(", "));
+        text.push_str(&format!("wrote      {}\n", files.join(", ")));
     }
-    println!("time       {wall_ms:.2} ms in all");
+    text.push_str(&format!("time       {wall_ms:.2} ms in all\n"));
+    text
+}
+
+/// Where the human lines of a command go: standard output, or standard error when standard
+/// output carries a document (`--json`, `--out -`) that a script reads whole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Human {
+    Stdout,
+    Stderr,
+}
+
+impl Human {
+    /// Human lines go to stderr when `stdout_is_data`.
+    pub fn when_stdout_is_data(stdout_is_data: bool) -> Self {
+        if stdout_is_data {
+            Human::Stderr
+        } else {
+            Human::Stdout
+        }
+    }
+
+    /// Prints `text` as it is (its own line ends) on the chosen stream.
+    pub fn print(self, text: &str) {
+        match self {
+            Human::Stdout => print!("{text}"),
+            Human::Stderr => eprint!("{text}"),
+        }
+    }
 }

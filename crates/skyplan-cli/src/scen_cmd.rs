@@ -28,7 +28,7 @@ pub fn run(args: ScenArgs) -> Result<()> {
     }
     let replayed = replay(&grid, &scenarios, args.planner, |o| {
         if args.json {
-            println!("{}", json!(o));
+            println!("{}", rounded(json!(o)));
         }
         progress.inc(1);
     })?;
@@ -40,7 +40,7 @@ pub fn run(args: ScenArgs) -> Result<()> {
         planner: args.planner,
     };
     if args.json {
-        println!("{}", replayed.json_summary(&of));
+        println!("{}", rounded(replayed.json_summary(&of)));
     } else {
         print!("{}", replayed.table(&of));
     }
@@ -48,4 +48,26 @@ pub fn run(args: ScenArgs) -> Result<()> {
         Some(why) => Err(crate::exit::runtime(why)),
         None => Ok(()),
     }
+}
+
+/// The JSON lines without float noise (`5.3229999999999995`): times (`…_us`, `…_ms`) to the
+/// nanosecond or microsecond they mean (3 decimals), lengths (`cost`, `optimal_length`) to 1e-9
+/// (MovingAI's published lengths have 8 decimals).
+fn rounded(mut v: serde_json::Value) -> serde_json::Value {
+    if let Some(fields) = v.as_object_mut() {
+        for (key, value) in fields.iter_mut() {
+            let decimals = if key.ends_with("_us") || key.ends_with("_ms") {
+                3
+            } else if key == "cost" || key == "optimal_length" {
+                9
+            } else {
+                continue;
+            };
+            if let Some(x) = value.as_f64().filter(|x| x.is_finite() && value.is_f64()) {
+                let scale = 10f64.powi(decimals);
+                *value = json!((x * scale).round() / scale);
+            }
+        }
+    }
+    v
 }

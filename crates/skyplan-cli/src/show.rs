@@ -2,6 +2,7 @@
 //! start or goal on grid maps without defaults; progress bars.
 
 use crate::exit::{Classify, Kind, Result, bad_input};
+use crate::report::Human;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_navfn::{FieldMetric, show};
@@ -9,15 +10,28 @@ use skyplan_search::MoveModel;
 use std::io::{BufRead, Write};
 
 /// Prints the workspace (with the wavefront field's unreachable cells), the distance matrix and
-/// the path.
+/// the path on standard output.
 pub fn print(grid: &Grid2, start: Cell, goal: Cell, path: &[Cell], model: MoveModel, steps: bool) {
+    print_to(Human::Stdout, grid, start, goal, path, model, steps);
+}
+
+/// As [`print`], on the stream `to` (standard error when standard output carries a document).
+pub fn print_to(
+    to: Human,
+    grid: &Grid2,
+    start: Cell,
+    goal: Cell,
+    path: &[Cell],
+    model: MoveModel,
+    steps: bool,
+) {
     let metric = if steps {
         FieldMetric::Steps
     } else {
         FieldMetric::Length
     };
     match show::picture(grid, start, goal, path, model, metric) {
-        Ok(text) => print!("{text}"),
+        Ok(text) => to.print(&text),
         Err(why) => eprintln!("--show: {why} (use --plot)"),
     }
 }

@@ -37,7 +37,7 @@ fn read_json(dir: &Path, name: &str) -> Value {
 #[test]
 fn default_plan_is_optimal_free_and_headed() {
     let dir = tempfile::tempdir().unwrap();
-    let v = run_json(dir.path(), "");
+    let v = run_json(dir.path(), "--out waypoints.json");
     assert_eq!(v["status"], "ok");
     assert_eq!(v["grid"]["rows"], 921);
     assert_eq!(v["grid"]["blocked_cells"], 519_210);
