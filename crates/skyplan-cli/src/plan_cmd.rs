@@ -239,7 +239,7 @@ fn show_plan(human: Human, plan: &Plan, request: &PlanRequest) {
         return;
     };
     let (s, g) = (Cell::new(s[0], s[1]), Cell::new(g[0], g[1]));
-    let (model, steps) = (request.move_model(), request.counts_steps());
+    let (model, steps) = (plan.spec.move_model, request.counts_steps());
     crate::show::print_to(human, grid, s, g, &plan.path_cells(), model, steps);
 }
 
@@ -250,7 +250,8 @@ fn show_failure(human: Human, session: &mut Session, request: &PlanRequest) {
     let cell = |ne: Option<[f64; 2]>| ne.and_then(|p| grid.cell_at_ne(p[0], p[1]));
     let (ds, dg) = session.world().default_endpoints_ne();
     if let (Some(s), Some(g)) = (cell(request.start_ne.or(ds)), cell(request.goal_ne.or(dg))) {
-        let (model, steps) = (request.move_model(), request.counts_steps());
-        crate::show::print_to(human, &grid, s, g, &[], model, steps);
+        // The request's move model as resolved (the default one if the request itself is bad).
+        let model = request.spec().map(|s| s.move_model).unwrap_or_default();
+        crate::show::print_to(human, &grid, s, g, &[], model, request.counts_steps());
     }
 }

@@ -163,19 +163,6 @@ macro_rules! merge_fields {
 }
 
 impl PlanRequest {
-    /// The move model the request names, leniently (for pictures, before or after a failed
-    /// plan): 4-connected, else 8-connected with or without corner cutting.
-    pub fn move_model(&self) -> MoveModel {
-        match (
-            self.connectivity.unwrap_or(8),
-            self.corner_cutting.unwrap_or(false),
-        ) {
-            (4, _) => MoveModel::FourConnected,
-            (_, true) => MoveModel::OctileCornerCutting,
-            _ => MoveModel::Octile,
-        }
-    }
-
     /// The seed, or its default (1): the sampling planners', and the one front ends draw a
     /// random workspace or random hidden buildings with.
     pub fn seed_or_default(&self) -> u64 {
