@@ -68,19 +68,21 @@ impl From<PlanFailure> for Failure {
     }
 }
 
-/// With `--json`, scripts get one JSON object on stdout for failures too:
-/// `{"status": "bad_input" | "no_path" | "error", "kind": "invalid_goal" | …, "error": "…"}`.
-/// Returns the result as it was.
+/// With `--json`, scripts get one JSON object on stdout for failures too, in the HTTP API's
+/// shape: `{"status": "error", "kind": "invalid_goal" | "no_path" | "bad_request" | …, "message":
+/// "…"}` (the planning failure's kind; `bad_request` for other bad input, `runtime` for a
+/// runtime error such as an unwritable file). Returns the result as it was.
 pub fn print_json_failure<T>(json: bool, result: Result<T>) -> Result<T> {
     if let (true, Err(f)) = (json, &result) {
-        let status = match f.kind {
-            Kind::NoPath => "no_path",
-            Kind::BadInput => "bad_input",
-            Kind::Runtime => "error",
+        let kind = match (f.plan_kind, f.kind) {
+            (Some(k), _) => serde_json::json!(k),
+            (None, Kind::BadInput) => serde_json::json!("bad_request"),
+            (None, Kind::NoPath) => serde_json::json!("no_path"),
+            (None, Kind::Runtime) => serde_json::json!("runtime"),
         };
         println!(
             "{}",
-            serde_json::json!({ "status": status, "kind": f.plan_kind, "error": format!("{:#}", f.error) })
+            serde_json::json!({ "status": "error", "kind": kind, "message": format!("{:#}", f.error) })
         );
     }
     result

@@ -316,8 +316,11 @@ fn an_enclosed_goal_is_reported_unreachable_with_exit_3() {
     .unwrap();
     assert_eq!(out.status.code(), Some(3));
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["status"], "no_path");
-    let msg = v["error"].as_str().unwrap();
+    assert_eq!(
+        (&v["status"], &v["kind"]),
+        (&"error".into(), &"no_path".into())
+    );
+    let msg = v["message"].as_str().unwrap();
     assert!(
         msg.contains("unreachable") && msg.contains("goal's") && msg.contains("cells"),
         "{msg}"

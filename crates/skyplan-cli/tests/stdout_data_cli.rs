@@ -200,8 +200,11 @@ fn two_documents_for_stdout_are_refused_before_planning() {
     assert_eq!(out.status.code(), Some(2));
     // The refusal is a JSON object, as every --json failure is, and names both options.
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["status"], "bad_input");
-    let why = v["error"].as_str().unwrap();
+    assert_eq!(
+        (&v["status"], &v["kind"]),
+        (&"error".into(), &"bad_request".into())
+    );
+    let why = v["message"].as_str().unwrap();
     assert!(why.contains("--out -") && why.contains("--json"), "{why}");
     assert!(files_in(dir.path()).is_empty());
 }

@@ -63,11 +63,11 @@ fn bad_ends_and_options_exit_2_and_a_low_ceiling_exits_3() {
     // The goal inside the 60 m building.
     let (code, v) = run(dir.path(), "--goal-ne 200,330 --goal-alt-m 30");
     assert_eq!(code, 2, "{v}");
-    assert!(v["error"].as_str().unwrap().contains("goal"), "{v}");
+    assert!(v["message"].as_str().unwrap().contains("goal"), "{v}");
     // Below --min-alt-m.
     let (code, v) = run(dir.path(), "--min-alt-m 10");
     assert_eq!(code, 2, "{v}");
-    assert!(v["error"].as_str().unwrap().contains("below"), "{v}");
+    assert!(v["message"].as_str().unwrap().contains("below"), "{v}");
     // The rooftop goal under a ceiling lower than its approach: no path.
     let (code, v) = run(
         dir.path(),
