@@ -130,13 +130,16 @@ pub(crate) trait CellPlanner: Sync {
         24
     }
 
-    /// Prepared on a session's grid: kept preprocessing is reused, new preprocessing is kept.
+    /// Prepared on a session's grid: kept preprocessing is reused, new preprocessing is kept
+    /// (by default there is none to keep: prepared as [`CellPlanner::prepare_alone`]).
     fn prepare(
         &self,
-        session: &mut Session,
+        _session: &mut Session,
         grid: &Arc<Grid2>,
         r: &Resolved,
-    ) -> Result<Prepared, PlanFailure>;
+    ) -> Result<Prepared, PlanFailure> {
+        self.prepare_alone(grid, r.model).map(Prepared::plain)
+    }
 
     /// Prepared on its own (many queries on one grid, outside a session).
     fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure>;
@@ -165,15 +168,6 @@ impl<T: CellPlanner> Algorithm for T {
 pub(crate) struct OnlineCells(pub Planner);
 
 impl CellPlanner for OnlineCells {
-    fn prepare(
-        &self,
-        _: &mut Session,
-        _: &Arc<Grid2>,
-        _: &Resolved,
-    ) -> Result<Prepared, PlanFailure> {
-        Ok(Prepared::plain(Engine::Online(self.0)))
-    }
-
     fn prepare_alone(&self, _: &Grid2, _: MoveModel) -> Result<Engine, PlanFailure> {
         Ok(Engine::Online(self.0))
     }
@@ -187,15 +181,6 @@ impl CellPlanner for OnlineCells {
 pub(crate) struct CellFunction(pub SearchFn);
 
 impl CellPlanner for CellFunction {
-    fn prepare(
-        &self,
-        _: &mut Session,
-        _: &Arc<Grid2>,
-        _: &Resolved,
-    ) -> Result<Prepared, PlanFailure> {
-        Ok(Prepared::plain(Engine::Function(self.0)))
-    }
-
     fn prepare_alone(&self, _: &Grid2, _: MoveModel) -> Result<Engine, PlanFailure> {
         Ok(Engine::Function(self.0))
     }
