@@ -18,6 +18,7 @@ use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
 use skyplan_link::{Address, Role};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
+use skyplan_plan::FailureKind;
 use skyplan_plan::Plan;
 use std::io::IsTerminal;
 use std::sync::Arc;
@@ -95,6 +96,9 @@ pub fn run(args: FlyArgs) -> Result<()> {
             Ok::<_, Failure>((crate::files::output_target("--plot", path)?, kind))
         })
         .transpose()?;
+    if args.sim {
+        check_ends(&world, &limits, &request)?;
+    }
     let hidden = hidden_obstacles(&args, &world, &request, &map)?;
     println!(
         "map        {}: {} obstacles, home lat {:.6}, lon {:.6}",
@@ -132,6 +136,40 @@ pub fn run(args: FlyArgs) -> Result<()> {
     let report = sim.and_then(finish_sim);
     let flight = result?;
     conclude(&args, &flight, drawing, &hidden, report.as_ref(), t0)
+}
+
+/// With the built-in simulator the start is known, so a 2D route that cannot begin or end where
+/// asked (a goal in a building or its margin, an end off the map) is refused before a vehicle is
+/// started, by planning the same ends on the same grid with JPS (milliseconds, whatever
+/// preprocessing the chosen planner needs). 3D planners check their ends after connecting.
+fn check_ends(
+    world: &skyplan_plan::World,
+    limits: &skyplan_plan::Limits,
+    request: &skyplan_plan::PlanRequest,
+) -> Result<()> {
+    if request.planner.unwrap_or_default().info().dims != 2 {
+        return Ok(());
+    }
+    // The grid's options only: the planner's own (a field, a cost map, a time limit) and the
+    // replanner's climbing limit are not JPS's.
+    let probe = skyplan_plan::PlanRequest {
+        planner: Some(skyplan_plan::PlannerId::Jps),
+        field: None,
+        inscribed_radius_m: None,
+        inflation_radius_m: None,
+        cost_scaling: None,
+        cost_weight: None,
+        time_limit_ms: None,
+        max_alt_m: None,
+        ..request.clone()
+    };
+    let mut session = skyplan_plan::Session::new(world.clone()).with_limits(limits.clone());
+    match session.plan(&probe) {
+        Err(f) if matches!(f.kind, FailureKind::InvalidStart | FailureKind::InvalidGoal) => {
+            Err(f.into())
+        }
+        _ => Ok(()),
+    }
 }
 
 /// After the flight: the replanner's account, the picture, the flight log and the exit.

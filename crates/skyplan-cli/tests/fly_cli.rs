@@ -862,3 +862,21 @@ fn a_hidden_wall_sealing_the_goal_ends_in_hold_then_land_exit_3() {
         .any(|l| l.starts_with("hold ") && l.contains("no route"));
     assert!(held, "{}", r.stdout);
 }
+
+/// A goal inside a building is refused before any vehicle is started: no simulator line, no
+/// waiting, the planner's own sentence and exit 2 (it used to connect first and fail later).
+#[test]
+fn a_goal_in_a_building_is_refused_before_the_simulator_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    // The bundled map has a box at N −310.2, E −439.2 rising to 171 m.
+    let r = run(
+        dir.path(),
+        "fly --sim --speedup 50 --goal-ne -310.2389,-439.2315",
+    );
+    assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
+    r.stderr_has(&[
+        "goal N -310.24 m, E -439.23 m",
+        "inside an obstacle or its 5 m safety margin",
+    ]);
+    assert!(r.stdout.is_empty(), "a vehicle was started:\n{}", r.stdout);
+}
