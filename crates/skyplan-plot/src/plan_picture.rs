@@ -238,9 +238,18 @@ fn grid_at(plan: &Plan) -> String {
 
 /// The normalised cost map of a ride with its trace, as a PNG heat map.
 pub fn ride_heatmap_png(ride: &Ride) -> Result<Vec<u8>, PlotError> {
+    // The targets that changed mid-ride, in the title (the star marks the last target).
+    let changes: String = (ride.legs.iter().filter(|l| l.replaced))
+        .map(|l| {
+            format!(
+                "; target N {:.1}, E {:.1} replaced at step {}",
+                l.target.north_m, l.target.east_m, l.to_step
+            )
+        })
+        .collect();
     let heat = crate::Heatmap {
         title: format!(
-            "navigation over the inflated cost map: {} steps",
+            "navigation over the inflated cost map: {} steps{changes}",
             ride.trace.len().saturating_sub(1)
         ),
         grid: &ride.grid,
