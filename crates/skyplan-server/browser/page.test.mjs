@@ -36,6 +36,18 @@ try {
     return { drawn, total: d.length / 4, colours: colours.size };
   });
   check("the map canvas is drawn", pixels.drawn > 0.5 * pixels.total && pixels.colours > 10, JSON.stringify(pixels));
+  // At 1400 × 900 the whole map — its east axis and scale bar at the canvas's bottom — and the
+  // status line fit in the window, without scrolling.
+  await page.setViewportSize({ width: 1400, height: 900 });
+  await page.waitForTimeout(300);
+  const fold = await page.evaluate(() => ({
+    canvas: document.getElementById("map").getBoundingClientRect().bottom,
+    status: document.getElementById("status").getBoundingClientRect().bottom,
+    height: window.innerHeight,
+  }));
+  check("at 1400 × 900 the map and the status line are above the fold", fold.canvas <= fold.height && fold.status <= fold.height, JSON.stringify(fold));
+  await page.setViewportSize({ width: 1280, height: 1000 });
+  await page.waitForTimeout(300);
   const name = await page.textContent("#map-name");
   check("the header names the map and its buildings", /3845 buildings/.test(name), name);
 
