@@ -155,7 +155,13 @@ fn enclosed_destination_exits_3_and_show_marks_unreachable_cells() {
     .output()
     .unwrap();
     assert_eq!(out.status.code(), Some(3));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("\"status\":\"no_path\""));
+    // The HTTP API's error shape, with the planning failure's kind.
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (&v["status"], &v["kind"]),
+        (&"error".into(), &"no_path".into()),
+        "{v}"
+    );
 }
 
 #[test]
