@@ -163,7 +163,7 @@ fn check_ends(
         max_alt_m: None,
         ..request.clone()
     };
-    let mut session = skyplan_plan::Session::new(world.clone()).with_limits(limits.clone());
+    let mut session = skyplan_plan::Session::new(world.clone()).with_limits(*limits);
     match session.plan(&probe) {
         Err(f) if matches!(f.kind, FailureKind::InvalidStart | FailureKind::InvalidGoal) => {
             Err(f.into())
