@@ -62,6 +62,23 @@ impl Aabb {
         }
     }
 
+    /// Whether two closed boxes share a point (touching counts).
+    ///
+    /// ```
+    /// use skyplan_world3::Aabb;
+    /// let a = Aabb { min: [0.0; 3], max: [1.0; 3] };
+    /// assert!(a.meets(&Aabb { min: [1.0, 0.0, 0.0], max: [2.0; 3] }));
+    /// assert!(!a.meets(&Aabb { min: [1.01, 0.0, 0.0], max: [2.0; 3] }));
+    /// ```
+    pub fn meets(&self, other: &Aabb) -> bool {
+        (0..3).all(|i| self.min[i] <= other.max[i] && other.min[i] <= self.max[i])
+    }
+
+    /// Whether `other` lies inside this closed box.
+    pub fn holds(&self, other: &Aabb) -> bool {
+        (0..3).all(|i| self.min[i] <= other.min[i] && other.max[i] <= self.max[i])
+    }
+
     /// Edge lengths `[north, east, alt]`, metres.
     pub fn extent_m(&self) -> Neu {
         [
@@ -341,6 +358,47 @@ impl BoxWorld3 {
             .find(|&k| self.boxes[k].contains(p))
     }
 
+    /// Whether the closed box `b` lies inside the bounds (above the ground) and meets no
+    /// inflated box: every point of it is free. Exact; the index only picks candidates.
+    ///
+    /// ```
+    /// use skyplan_map::colliders::ObstacleBox;
+    /// use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
+    /// let b = ObstacleBox { north_m: 0.0, east_m: 0.0, up_m: 10.0, half_north_m: 5.0, half_east_m: 5.0, half_up_m: 10.0 };
+    /// let spec = WorldSpec { safety_m: 1.0, margin_bounds_m: 50.0, ..WorldSpec::default() };
+    /// let w = BoxWorld3::new(&[b], &spec).unwrap();
+    /// assert!(w.box_is_free(&Aabb { min: [6.5, -2.0, 5.0], max: [9.0, 2.0, 6.0] }));
+    /// assert!(!w.box_is_free(&Aabb { min: [5.5, -2.0, 5.0], max: [9.0, 2.0, 6.0] })); // in the margin
+    /// assert!(w.box_is_free(&Aabb { min: [-2.0, -2.0, 21.5], max: [2.0, 2.0, 30.0] })); // above it
+    /// ```
+    pub fn box_is_free(&self, b: &Aabb) -> bool {
+        if !self.bounds.holds(b) {
+            return false;
+        }
+        let cell = |v: f64, axis: usize| -> usize {
+            let c = ((v - self.origin_ne[axis]) / BUCKET_M).floor();
+            c.clamp(0.0, (self.cells_ne[axis] - 1) as f64) as usize
+        };
+        let (r0, r1) = (cell(b.min[0], 0), cell(b.max[0], 0));
+        let (c0, c1) = (cell(b.min[1], 1), cell(b.max[1], 1));
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let i = r * self.cells_ne[1] + c;
+                if self.cell_top_m[i] < b.min[2] {
+                    continue;
+                }
+                if self
+                    .cell(i)
+                    .iter()
+                    .any(|&k| self.boxes[k as usize].meets(b))
+                {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     fn cell_index(&self, north_m: f64, east_m: f64) -> Option<usize> {
         let r = ((north_m - self.origin_ne[0]) / BUCKET_M).floor();
         let c = ((east_m - self.origin_ne[1]) / BUCKET_M).floor();
@@ -443,6 +501,13 @@ pub struct BruteForce<'a> {
     pub boxes: &'a [Aabb],
     /// The flyable bounds (the ground is their floor).
     pub bounds: Aabb,
+}
+
+impl BruteForce<'_> {
+    /// [`BoxWorld3::box_is_free`] testing every box.
+    pub fn box_is_free(&self, b: &Aabb) -> bool {
+        self.bounds.holds(b) && !self.boxes.iter().any(|o| o.meets(b))
+    }
 }
 
 impl CollisionChecker for BruteForce<'_> {

@@ -156,3 +156,34 @@ fn city_map_agrees_with_brute_force_on_long_segments() {
     assert_eq!(disagreements, 0);
     assert!(free > 0, "some long segments over the city are free");
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// The indexed box test agrees with testing every box, and a box it calls free has no
+    /// corner, centre or face centre inside an inflated box (independent point tests).
+    #[test]
+    fn box_test_agrees_with_brute_force_and_points(
+        boxes in prop::collection::vec(arb_box(), 1..40),
+        safety_m in prop_oneof![Just(0.0), 0.0..6.0],
+        corners in prop::collection::vec((arb_point(), arb_point()), 1..40),
+    ) {
+        let w = world(&boxes, safety_m);
+        let bf = w.brute_force();
+        for (p, q) in corners {
+            let b = Aabb {
+                min: [p[0].min(q[0]), p[1].min(q[1]), p[2].min(q[2])],
+                max: [p[0].max(q[0]), p[1].max(q[1]), p[2].max(q[2])],
+            };
+            let free = w.box_is_free(&b);
+            prop_assert_eq!(free, bf.box_is_free(&b), "box {:?}", b);
+            if free {
+                for i in 0..27 {
+                    let f = [i % 3, (i / 3) % 3, i / 9].map(|k| k as f64 / 2.0);
+                    let pt = [0, 1, 2].map(|k| b.min[k] + f[k] * (b.max[k] - b.min[k]));
+                    prop_assert!(bf.is_free(pt), "free box {:?} holds blocked point {:?}", b, pt);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,453 @@
+//! Minimum-jerk quintic Bézier pieces in the corridor (one quadratic programme per axis,
+//! clarabel), and the time allocation that makes the limits tight.
+
+use crate::check::piece_bounds;
+use crate::{CorridorCell, Limits, Piece, Region};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use skyplan_world3::Aabb;
+use std::time::Instant;
+
+/// Control points per piece (quintic).
+const K: usize = 6;
+
+/// `∫₀¹ Bᵢ² Bⱼ²` for the quadratic Bernstein basis (the jerk curve's degree).
+const M2: [[f64; 3]; 3] = [
+    [1.0 / 5.0, 1.0 / 10.0, 1.0 / 30.0],
+    [1.0 / 10.0, 2.0 / 15.0, 1.0 / 10.0],
+    [1.0 / 30.0, 1.0 / 10.0, 1.0 / 5.0],
+];
+
+/// The jerk Hessian of one piece of unit duration: `D3ᵀ M2 D3` with `D3` the third difference.
+fn jerk_hessian() -> [[f64; K]; K] {
+    let d3 = [
+        [-1.0, 3.0, -3.0, 1.0, 0.0, 0.0],
+        [0.0, -1.0, 3.0, -3.0, 1.0, 0.0],
+        [0.0, 0.0, -1.0, 3.0, -3.0, 1.0],
+    ];
+    let mut h = [[0.0; K]; K];
+    for (i, hi) in h.iter_mut().enumerate() {
+        for (j, hij) in hi.iter_mut().enumerate() {
+            let mut s = 0.0;
+            for a in 0..3 {
+                for b in 0..3 {
+                    s += d3[a][i] * M2[a][b] * d3[b][j];
+                }
+            }
+            *hij = s;
+        }
+    }
+    h
+}
+
+/// Why a solve failed.
+enum SolveError {
+    /// No curve meets the corridor and the limits on control points at these durations.
+    Infeasible,
+    /// Anything else, in a sentence.
+    Other(String),
+}
+
+/// Rows of `A x + s = b`, in cone order: equalities, then inequalities, then second-order
+/// cones of `dims + 1` rows each.
+#[derive(Default)]
+struct Rows {
+    i: Vec<usize>,
+    j: Vec<usize>,
+    v: Vec<f64>,
+    b: Vec<f64>,
+}
+
+impl Rows {
+    fn push(&mut self, terms: &[(usize, f64)], rhs: f64) {
+        let row = self.b.len();
+        for &(j, v) in terms {
+            self.i.push(row);
+            self.j.push(j);
+            self.v.push(v);
+        }
+        self.b.push(rhs);
+    }
+}
+
+/// The problem: `D` moving axes, `x[(p·K + k)·D + d]` the control point `k` of piece `p` on
+/// axis `d` (shifted so the start is the origin).
+struct Problem<'a> {
+    lo: Vec<[f64; 3]>,
+    hi: Vec<[f64; 3]>,
+    goal: [f64; 3],
+    times: &'a [f64],
+    dims: usize,
+    lim: &'a Limits,
+}
+
+impl Problem<'_> {
+    fn var(&self, p: usize, k: usize, d: usize) -> usize {
+        (p * K + k) * self.dims + d
+    }
+
+    /// The objective: jerk² integrated over every piece (scaled by the mean duration⁵).
+    fn hessian(&self) -> CscMatrix<f64> {
+        let n = self.times.len();
+        let h = jerk_hessian();
+        let mean = self.times.iter().sum::<f64>() / n as f64;
+        let (mut pi, mut pj, mut pv) = (Vec::new(), Vec::new(), Vec::new());
+        for (p, &t) in self.times.iter().enumerate() {
+            let w = (mean / t).powi(5);
+            for d in 0..self.dims {
+                for (i, hi) in h.iter().enumerate() {
+                    for (j, &hij) in hi.iter().enumerate().skip(i) {
+                        if hij != 0.0 {
+                            pi.push(self.var(p, i, d));
+                            pj.push(self.var(p, j, d));
+                            pv.push(hij * w);
+                        }
+                    }
+                }
+            }
+        }
+        let nv = n * K * self.dims;
+        CscMatrix::new_from_triplets(nv, nv, pi, pj, pv)
+    }
+
+    /// Rest at both ends and C² joins.
+    fn equalities(&self, rows: &mut Rows) {
+        let n = self.times.len();
+        let l = n - 1;
+        for d in 0..self.dims {
+            let x = |p, k| self.var(p, k, d);
+            rows.push(&[(x(0, 0), 1.0)], 0.0);
+            rows.push(&[(x(0, 1), 1.0), (x(0, 0), -1.0)], 0.0);
+            rows.push(&[(x(0, 2), 1.0), (x(0, 1), -2.0), (x(0, 0), 1.0)], 0.0);
+            rows.push(&[(x(l, 5), 1.0)], self.goal[d]);
+            rows.push(&[(x(l, 5), 1.0), (x(l, 4), -1.0)], 0.0);
+            rows.push(&[(x(l, 5), 1.0), (x(l, 4), -2.0), (x(l, 3), 1.0)], 0.0);
+            for p in 0..l {
+                let (ta, tc) = (self.times[p], self.times[p + 1]);
+                rows.push(&[(x(p, 5), 1.0), (x(p + 1, 0), -1.0)], 0.0);
+                let (ua, uc) = (1.0 / ta, 1.0 / tc);
+                rows.push(
+                    &[
+                        (x(p, 5), ua),
+                        (x(p, 4), -ua),
+                        (x(p + 1, 1), -uc),
+                        (x(p + 1, 0), uc),
+                    ],
+                    0.0,
+                );
+                let (qa, qc) = (ua * ua, uc * uc);
+                rows.push(
+                    &[
+                        (x(p, 5), qa),
+                        (x(p, 4), -2.0 * qa),
+                        (x(p, 3), qa),
+                        (x(p + 1, 2), -qc),
+                        (x(p + 1, 1), 2.0 * qc),
+                        (x(p + 1, 0), -qc),
+                    ],
+                    0.0,
+                );
+            }
+            // A box flat along this axis (a stretch hemmed in on both sides): points fixed.
+            for p in 0..n {
+                if self.hi[p][d] - self.lo[p][d] < 1e-6 {
+                    for k in 0..K {
+                        rows.push(&[(x(p, k), 1.0)], 0.5 * (self.lo[p][d] + self.hi[p][d]));
+                    }
+                }
+            }
+        }
+    }
+
+    /// The corridor (a hair inside each box, so the solver's tolerance stays in it) and the
+    /// climb and descent limits on the vertical velocity's control points.
+    fn inequalities(&self, rows: &mut Rows) {
+        for p in 0..self.times.len() {
+            for d in 0..self.dims {
+                let (lo, hi) = (self.lo[p][d], self.hi[p][d]);
+                if hi - lo < 1e-6 {
+                    continue;
+                }
+                let hair = (1e-7_f64).min((hi - lo) / 4.0);
+                for k in 0..K {
+                    rows.push(&[(self.var(p, k, d), 1.0)], hi - hair);
+                    rows.push(&[(self.var(p, k, d), -1.0)], -(lo + hair));
+                }
+            }
+            if self.dims == 3 {
+                let c = 5.0 / self.times[p];
+                for k in 0..K - 1 {
+                    let (up, now) = (self.var(p, k + 1, 2), self.var(p, k, 2));
+                    rows.push(&[(up, c), (now, -c)], self.lim.max_climb_m_s);
+                    rows.push(&[(up, -c), (now, c)], self.lim.max_descent_m_s);
+                }
+            }
+        }
+    }
+
+    /// Norm limits on the control points of velocity, acceleration and jerk (second-order
+    /// cones): each bounds its whole derivative curve by the hull property.
+    fn cones(&self, rows: &mut Rows) -> usize {
+        let mut count = 0;
+        let diffs: [(&[f64], f64, f64); 3] = [
+            (&[-1.0, 1.0], 5.0, self.lim.max_speed_m_s),
+            (&[1.0, -2.0, 1.0], 20.0, self.lim.max_accel_m_s2),
+            (&[-1.0, 3.0, -3.0, 1.0], 60.0, self.lim.max_jerk_m_s3),
+        ];
+        for (p, &t) in self.times.iter().enumerate() {
+            for (order, &(stencil, factor, max)) in diffs.iter().enumerate() {
+                let scale = factor / t.powi(order as i32 + 1);
+                for k in 0..K - stencil.len() + 1 {
+                    rows.push(&[], max);
+                    for d in 0..self.dims {
+                        let terms: Vec<(usize, f64)> = stencil
+                            .iter()
+                            .enumerate()
+                            .map(|(m, &w)| (self.var(p, k + m, d), -w * scale))
+                            .collect();
+                        rows.push(&terms, 0.0);
+                    }
+                    count += 1;
+                }
+            }
+        }
+        count
+    }
+
+    fn solve(&self, deadline: Instant) -> Result<Vec<f64>, SolveError> {
+        let nv = self.times.len() * K * self.dims;
+        let mut rows = Rows::default();
+        self.equalities(&mut rows);
+        let n_eq = rows.b.len();
+        self.inequalities(&mut rows);
+        let n_ineq = rows.b.len() - n_eq;
+        let n_soc = self.cones(&mut rows);
+        let mut cones = vec![
+            SupportedConeT::ZeroConeT(n_eq),
+            SupportedConeT::NonnegativeConeT(n_ineq),
+        ];
+        cones.extend((0..n_soc).map(|_| SupportedConeT::SecondOrderConeT(self.dims + 1)));
+        let m = rows.b.len();
+        let a_mat = CscMatrix::new_from_triplets(m, nv, rows.i, rows.j, rows.v);
+        let left = deadline
+            .saturating_duration_since(Instant::now())
+            .as_secs_f64();
+        if left <= 0.0 {
+            return Err(SolveError::Other(OUT_OF_TIME.into()));
+        }
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .time_limit(left)
+            .build()
+            .map_err(|e| SolveError::Other(format!("solver settings: {e}")))?;
+        let q = vec![0.0; nv];
+        let mut solver = DefaultSolver::new(&self.hessian(), &q, &a_mat, &rows.b, &cones, settings)
+            .map_err(|e| SolveError::Other(format!("the solver refused the problem: {e}")))?;
+        solver.solve();
+        match solver.solution.status {
+            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(solver.solution.x.clone()),
+            SolverStatus::MaxTime => Err(SolveError::Other(OUT_OF_TIME.into())),
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+                Err(SolveError::Infeasible)
+            }
+            other => Err(SolveError::Other(format!(
+                "the solver ended with {}",
+                status_words(other)
+            ))),
+        }
+    }
+}
+
+/// The reason given when the budget runs out.
+pub(crate) const OUT_OF_TIME: &str = "the time budget ran out";
+
+fn status_words(s: SolverStatus) -> &'static str {
+    match s {
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+            "no solution in the corridor"
+        }
+        SolverStatus::MaxIterations => "too many iterations",
+        SolverStatus::NumericalError | SolverStatus::InsufficientProgress => "a numerical failure",
+        _ => "no solution",
+    }
+}
+
+/// Per-piece nominal durations: each stretch at the speed it can reach from rest at the start
+/// and still stop at the goal (`√(2 a d)`), at most the speed the climb and descent limits
+/// allow on it.
+fn initial_times(cells: &[CorridorCell], lim: &Limits) -> Vec<f64> {
+    let lens: Vec<f64> = cells
+        .iter()
+        .map(|c| skyplan_world3::distance_m(c.from, c.to))
+        .collect();
+    let total: f64 = lens.iter().sum();
+    let mut before = 0.0;
+    let times: Vec<f64> = cells
+        .iter()
+        .zip(&lens)
+        .map(|(c, &len)| {
+            let mid = before + len / 2.0;
+            before += len;
+            let v = crate::leg_speed_m_s(c.from, c.to, lim);
+            let ramp = (2.0 * lim.max_accel_m_s2 * mid.min(total - mid)).sqrt();
+            len / v.min(ramp).max(0.05 * v)
+        })
+        .collect();
+    // No piece much shorter in time than the typical one: the jerk weights go as 1/T⁵.
+    let mut sorted = times.clone();
+    sorted.sort_by(f64::total_cmp);
+    let floor = 0.2 * sorted[sorted.len() / 2];
+    times.into_iter().map(|t| t.max(floor)).collect()
+}
+
+/// How much slower each piece must be flown for its bounds to meet the limits (1 = tight).
+fn ratios(pieces: &[Piece], lim: &Limits) -> Vec<f64> {
+    pieces
+        .iter()
+        .map(|p| {
+            let b = piece_bounds(&p.control_points_neu, p.duration_s);
+            [
+                b.speed_m_s / lim.max_speed_m_s,
+                b.climb_m_s / lim.max_climb_m_s,
+                b.descent_m_s / lim.max_descent_m_s,
+                (b.accel_m_s2 / lim.max_accel_m_s2).sqrt(),
+                (b.jerk_m_s3 / lim.max_jerk_m_s3).cbrt(),
+            ]
+            .into_iter()
+            .fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+/// The pieces for given durations, from one solve per moving axis.
+fn shape(
+    cells: &[CorridorCell],
+    planar: bool,
+    times: &[f64],
+    lim: &Limits,
+    deadline: Instant,
+) -> Result<Vec<Piece>, SolveError> {
+    let n = cells.len();
+    let start = cells[0].from;
+    let goal = cells[n - 1].to;
+    let dims = if planar { 2 } else { 3 };
+    let shifted = |v: [f64; 3]| [0, 1, 2].map(|d| v[d] - start[d]);
+    let problem = Problem {
+        lo: cells.iter().map(|c| shifted(c.region.min)).collect(),
+        hi: cells.iter().map(|c| shifted(c.region.max)).collect(),
+        goal: shifted(goal),
+        times,
+        dims,
+        lim,
+    };
+    let x = problem.solve(deadline)?;
+    let mut ctrl = vec![[start; K]; n];
+    for (p, c) in ctrl.iter_mut().enumerate() {
+        for (k, point) in c.iter_mut().enumerate() {
+            for d in 0..dims {
+                point[d] = (x[problem.var(p, k, d)] + start[d])
+                    .clamp(cells[p].region.min[d], cells[p].region.max[d]);
+            }
+        }
+    }
+    // Exact joins (in both boxes) and exact rest at the ends.
+    for p in 0..n - 1 {
+        let both = intersect(&cells[p].region, &cells[p + 1].region);
+        let joint = [0, 1, 2]
+            .map(|a| (0.5 * (ctrl[p][5][a] + ctrl[p + 1][0][a])).clamp(both.min[a], both.max[a]));
+        ctrl[p][5] = joint;
+        ctrl[p + 1][0] = joint;
+    }
+    for k in 0..3 {
+        ctrl[0][k] = start;
+        ctrl[n - 1][5 - k] = goal;
+    }
+    Ok(ctrl
+        .into_iter()
+        .zip(cells)
+        .zip(times)
+        .map(|((c, cell), &t)| Piece {
+            duration_s: t,
+            control_points_neu: c.to_vec(),
+            region: Region::of_box(&cell.region),
+        })
+        .collect())
+}
+
+fn intersect(a: &Aabb, b: &Aabb) -> Aabb {
+    Aabb {
+        min: [0, 1, 2].map(|k| a.min[k].max(b.min[k])),
+        max: [0, 1, 2].map(|k| a.max[k].min(b.max[k])),
+    }
+}
+
+/// Scales every duration by one factor so the tightest limit is exactly met.
+fn scale_to_limits(mut pieces: Vec<Piece>, lim: &Limits) -> Vec<Piece> {
+    let s = ratios(&pieces, lim).into_iter().fold(0.0, f64::max) * (1.0 + 1e-9);
+    if s > 0.0 && s.is_finite() {
+        for p in &mut pieces {
+            p.duration_s *= s;
+        }
+    }
+    pieces
+}
+
+fn total(pieces: &[Piece]) -> f64 {
+    pieces.iter().map(|p| p.duration_s).sum()
+}
+
+/// Minimum-jerk pieces in the corridor with durations tight to the limits, or why not.
+pub(crate) fn minimum_jerk(
+    cells: &[CorridorCell],
+    planar: bool,
+    lim: &Limits,
+    deadline: Instant,
+    rounds: u32,
+) -> Result<Vec<Piece>, String> {
+    if cells.is_empty() {
+        return Err("the corridor is empty".into());
+    }
+    let mut times = initial_times(cells, lim);
+    // Longer durations until the shaping bounds can be met (they cannot at the start when the
+    // nominal durations ignore jerk and corners).
+    let mut first = None;
+    for _ in 0..12 {
+        match shape(cells, planar, &times, lim, deadline) {
+            Ok(p) => {
+                first = Some(p);
+                break;
+            }
+            Err(SolveError::Infeasible) => times.iter_mut().for_each(|t| *t *= 1.3),
+            Err(SolveError::Other(why)) => return Err(why),
+        }
+    }
+    let Some(first) = first else {
+        return Err("no curve met the corridor at any duration tried".into());
+    };
+    let mut best = scale_to_limits(first, lim);
+    for _ in 0..rounds {
+        if Instant::now() >= deadline {
+            break;
+        }
+        // Shorten the pieces that are slower than they need be; keep the result if the whole
+        // is faster once scaled to the limits again.
+        let r = ratios(&best, lim);
+        times = best
+            .iter()
+            .zip(&r)
+            .map(|(p, &ri)| p.duration_s * ri.clamp(0.25, 1.0).powf(0.7))
+            .collect();
+        let Ok(next) = shape(cells, planar, &times, lim, deadline) else {
+            break;
+        };
+        let next = scale_to_limits(next, lim);
+        if total(&next) < total(&best) * 0.999 {
+            best = next;
+        } else {
+            break;
+        }
+    }
+    Ok(best)
+}
