@@ -201,6 +201,9 @@ pub struct PlanArgs {
     /// wavefront/costmap: a .png heat map).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
+    /// With --trajectory: write its samples (t_s, north_m, east_m, alt_m, velocities, accelerations, yaw_deg at --sample-hz) to this file: .csv, or .h5 (HDF5 dataset `samples`).
+    #[arg(long, value_name = "FILE")]
+    pub samples: Option<PathBuf>,
     /// Print one JSON object on stdout instead of the human summary.
     #[arg(long)]
     pub json: bool,

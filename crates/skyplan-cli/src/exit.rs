@@ -57,7 +57,7 @@ impl From<PlanFailure> for Failure {
             FailureKind::InvalidStart | FailureKind::InvalidGoal | FailureKind::BadRequest => {
                 Kind::BadInput
             }
-            FailureKind::NoPath | FailureKind::Timeout => Kind::NoPath,
+            FailureKind::NoPath | FailureKind::Timeout | FailureKind::NoCorridor => Kind::NoPath,
             FailureKind::Internal => Kind::Runtime,
         };
         Failure {

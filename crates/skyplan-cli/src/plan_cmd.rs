@@ -47,6 +47,7 @@ struct Outputs {
     waypoints: Option<WaypointFile>,
     plot: Option<(PathBuf, Target, PictureKind)>,
     roadmap: Option<(PathBuf, Target)>,
+    samples: Option<(PathBuf, Target, bool)>,
 }
 
 fn check_outputs(
@@ -54,6 +55,7 @@ fn check_outputs(
     cfg: &crate::config::Config,
     world: &World,
     planner: PlannerId,
+    trajectory: bool,
 ) -> Result<Outputs> {
     let given_out = args.out.clone().or(cfg.path(&cfg.text.out));
     let format = args.format.clone().or(cfg.text.format.clone());
@@ -89,10 +91,37 @@ fn check_outputs(
     let roadmap = (args.save_roadmap.as_ref())
         .map(|p| Ok::<_, Failure>((p.clone(), output_target("--save-roadmap", p)?)))
         .transpose()?;
+    let samples = match &args.samples {
+        None => None,
+        Some(_) if !trajectory => {
+            return Err(bad_input(
+                "--samples writes a trajectory's samples: add --trajectory",
+            ));
+        }
+        Some(p) => {
+            let ext = p
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(str::to_ascii_lowercase);
+            let hdf5 = match ext.as_deref() {
+                Some("csv") => false,
+                Some("h5" | "hdf5") => true,
+                _ if p.as_os_str() == "-" => false,
+                _ => {
+                    return Err(bad_input(format!(
+                        "--samples {}: expected a .csv or .h5 file (or - for CSV on standard output)",
+                        p.display()
+                    )));
+                }
+            };
+            Some((p.clone(), output_target("--samples", p)?, hdf5))
+        }
+    };
     let outputs = Outputs {
         waypoints,
         plot,
         roadmap,
+        samples,
     };
     let on_stdout = outputs.on_stdout();
     if on_stdout.len() + usize::from(args.json) > 1 {
@@ -120,6 +149,9 @@ impl Outputs {
         }
         if matches!(&self.roadmap, Some((_, Target::Stdout))) {
             names.push("--save-roadmap -");
+        }
+        if matches!(&self.samples, Some((_, Target::Stdout, _))) {
+            names.push("--samples -");
         }
         names
     }
@@ -153,7 +185,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         config,
     } = crate::world_load::resolve(&args.route)?;
     let planner = request.planner.unwrap_or_default();
-    let outputs = check_outputs(&args, &config, &world, planner)?;
+    let trajectory = request.trajectory == Some(true);
+    let outputs = check_outputs(&args, &config, &world, planner, trajectory)?;
     // A document on stdout (`--json`, `--out -`) is all stdout carries: the rest is for people.
     let human = Human::when_stdout_is_data(args.json || !outputs.on_stdout().is_empty());
     request.geometry = Some(outputs.plot.is_some() || args.show);
@@ -209,6 +242,7 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
         waypoints: None,
         plot: None,
         roadmap: None,
+        samples: None,
     };
     if let Some(file @ (path, _, format)) = &outputs.waypoints {
         let mission = plan
@@ -223,6 +257,16 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
     if let Some((path, target, kind)) = &outputs.plot {
         write_target(target, &crate::picture::render(world, plan, kind, None)?)?;
         written.plot = Some(path.display().to_string());
+    }
+    if let (Some((path, target, hdf5)), Some(t)) = (&outputs.samples, &plan.trajectory) {
+        let bytes = if *hdf5 {
+            skyplan_export::samples_hdf5(&t.columns, &t.samples)
+        } else {
+            skyplan_export::samples_csv(&t.columns, &t.samples).map(String::into_bytes)
+        }
+        .or_exit(Kind::Runtime)?;
+        write_target(target, &bytes)?;
+        written.samples = Some(path.display().to_string());
     }
     if let (Some((path, target)), Some(bytes)) = (&outputs.roadmap, &plan.saved_roadmap) {
         write_target(target, bytes)?;

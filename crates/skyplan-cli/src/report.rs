@@ -9,6 +9,7 @@ pub struct Written {
     pub waypoints: Option<(String, &'static str)>,
     pub plot: Option<String>,
     pub roadmap: Option<String>,
+    pub samples: Option<String>,
 }
 
 /// The `--json` object: the plan as the planning API serialises it, plus the outputs.
@@ -20,6 +21,7 @@ pub fn json_report(plan: &Plan, written: &Written, wall_time_us: u64) -> Value {
         "format": written.waypoints.as_ref().map(|w| w.1),
         "plot": written.plot,
         "roadmap": written.roadmap,
+        "samples": written.samples,
     });
     v["wall_time_us"] = json!(wall_time_us);
     v
@@ -35,6 +37,12 @@ pub fn summary(plan: &Plan, written: &Written, wall_ms: f64) -> String {
     }
     files.extend(written.plot.iter().cloned());
     files.extend(written.roadmap.iter().map(|r| format!("{r} (roadmap)")));
+    files.extend(
+        written
+            .samples
+            .iter()
+            .map(|r| format!("{r} (trajectory samples)")),
+    );
     if !files.is_empty() {
         text.push_str(&format!("wrote      {}\n", files.join(", ")));
     }

@@ -37,6 +37,7 @@ mod fmt_geojson;
 mod fmt_hdf5;
 mod fmt_json;
 mod fmt_qgc;
+mod fmt_samples;
 
 use std::fmt;
 use std::path::Path;
@@ -49,6 +50,7 @@ pub use fmt_geojson::to_geojson;
 pub use fmt_hdf5::{HDF5_DATASET, to_hdf5};
 pub use fmt_json::{JSON_COLUMNS, JSON_FORMAT_ID, JSON_FORMAT_VERSION, to_json};
 pub use fmt_qgc::{QgcPlanOptions, mavlink, to_qgc_plan};
+pub use fmt_samples::{SAMPLES_DATASET, samples_csv, samples_hdf5};
 
 /// A waypoint file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -7,6 +7,8 @@
 pub const GRID: &str = "Grid paths";
 /// Help heading of the navigation functions' options.
 pub const NAVFN: &str = "Navigation functions (wavefront, costmap)";
+/// Help heading of the trajectory options.
+pub const TRAJECTORY: &str = "Trajectories (any planner)";
 /// Help heading of the 3D planners' options, naming them from the registry.
 pub fn three_d() -> &'static str {
     static HEADING: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
@@ -111,6 +113,8 @@ impl clap::ValueEnum for crate::PlannerId {
 /// assert_eq!(in_cli_words("goal_alt_m is not used by planner jps: it needs a planner that uses it (prm)"),
 ///            "--goal-alt-m is not used by --planner jps: it needs a planner that uses it (prm)");
 /// assert_eq!(in_cli_words("planner ch: the deadline passed"), "--planner ch: the deadline passed");
+/// assert_eq!(in_cli_words("sample_hz is used only with a trajectory: ask for one (trajectory true)"),
+///            "--sample-hz is used only with a trajectory: ask for one (--trajectory)");
 /// assert!(in_cli_words("raise the limit (max_memory)").ends_with("(--max-memory)"));
 /// ```
 #[cfg(feature = "clap")]
@@ -150,4 +154,5 @@ pub fn in_cli_words(message: &str) -> String {
         out.insert_str(0, "--");
     }
     out.replace("by planner ", "by --planner ")
+        .replace("(trajectory true)", "(--trajectory)")
 }

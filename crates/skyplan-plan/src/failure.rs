@@ -16,6 +16,9 @@ pub enum FailureKind {
     NoPath,
     /// The planner's budget ran out before it found a path.
     Timeout,
+    /// A route was found, but no safe corridor for a trajectory around it (too tight for the
+    /// margin somewhere; the message says where).
+    NoCorridor,
     /// The request (or the map) is invalid: a value out of range, a planner that does not take
     /// this map, a broken roadmap file.
     BadRequest,
@@ -31,14 +34,18 @@ impl FailureKind {
             FailureKind::InvalidGoal => "invalid_goal",
             FailureKind::NoPath => "no_path",
             FailureKind::Timeout => "timeout",
+            FailureKind::NoCorridor => "no_corridor",
             FailureKind::BadRequest => "bad_request",
             FailureKind::Internal => "internal",
         }
     }
 
-    /// True for "valid input, no route" (no path or timeout).
+    /// True for "valid input, no route" (no path, timeout, or no corridor for a trajectory).
     pub fn is_no_route(self) -> bool {
-        matches!(self, FailureKind::NoPath | FailureKind::Timeout)
+        matches!(
+            self,
+            FailureKind::NoPath | FailureKind::Timeout | FailureKind::NoCorridor
+        )
     }
 
     /// True for input the user must change (start, goal or request).

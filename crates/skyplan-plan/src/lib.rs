@@ -94,14 +94,16 @@ pub use grid::waypoint_points;
 pub use map_file::{MapFileError, MapFileOptions};
 pub use navfn::CostmapOptions;
 pub use plan::{
-    Geometry, GridInfo, GridPathStats, Home, Place, Plan, PlanSpec, Segment3, Timings,
-    WaypointCounts,
+    Geometry, GridInfo, GridPathStats, Home, Place, Plan, PlanSpec, Segment3, TRAJECTORY_COLUMNS,
+    Timings, TrajectoryReport, WaypointCounts,
 };
 pub use planner_id::{MapKinds, Optimality, OptionGroup, PlannerId, PlannerInfo, UnknownPlanner};
 pub use request::{FieldMode, MAX_ALT_M, MAX_TIME_LIMIT_MS, PlanRequest, PruneMode, RoadmapIo};
 pub use ride::{Ride, RideChange, RideLeg, RidePlace, RideRequest};
 pub use session::{Session, model_name, recheck_grid_route};
 pub use skyplan_imagemap::MapYaml;
+pub use skyplan_trajectory as trajectory;
+pub use skyplan_trajectory::Limits as TrajectoryLimits;
 pub use world::{
     BoundsNe, FCND_CITY_CSV, FCND_CITY_NAME, FCND_DEFAULT_GOAL_NE, Limits, MapFormat, MapKind,
     World, human_bytes,

@@ -259,6 +259,9 @@ pub struct Plan {
     /// Pictures' geometry, when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub geometry: Option<Geometry>,
+    /// The trajectory, when asked for (`trajectory`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trajectory: Option<TrajectoryReport>,
     /// The mission (maps with a geodetic home): waypoints with lat/lon and headings.
     #[serde(skip)]
     pub mission: Option<Mission>,
@@ -268,6 +271,35 @@ pub struct Plan {
     /// The PRM roadmap as bytes, when the request asked to save it.
     #[serde(skip)]
     pub saved_roadmap: Option<Vec<u8>>,
+}
+
+/// The columns of a trajectory's samples.
+pub const TRAJECTORY_COLUMNS: [&str; 11] = [
+    "t_s", "north_m", "east_m", "alt_m", "v_north", "v_east", "v_up", "a_north", "a_east", "a_up",
+    "yaw_deg",
+];
+
+/// A plan's trajectory with its samples and the two times it is measured against.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrajectoryReport {
+    /// Total duration, seconds.
+    pub duration_s: f64,
+    /// Samples per second.
+    pub sample_hz: f64,
+    /// The samples' columns ([`TRAJECTORY_COLUMNS`]).
+    pub columns: [&'static str; 11],
+    /// Rows `[t_s, north_m, east_m, alt_m, v_north, v_east, v_up, a_north, a_east, a_up,
+    /// yaw_deg]`, from 0 to the end.
+    pub samples: Vec<[f64; 11]>,
+    /// Length of the flown curve, metres.
+    pub length_m: f64,
+    /// Duration of the jerk-limited stop-at-each-waypoint profile of the same route, seconds.
+    pub stop_at_waypoints_s: f64,
+    /// The route's length over the speed limit, seconds (no trajectory is faster).
+    pub length_over_max_speed_s: f64,
+    /// The trajectory: method, pieces, proven bounds, limits.
+    #[serde(flatten)]
+    pub trajectory: skyplan_trajectory::Trajectory,
 }
 
 impl Plan {

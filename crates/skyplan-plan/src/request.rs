@@ -9,6 +9,7 @@ use crate::navfn::CostmapOptions;
 use crate::plan::PlanSpec;
 use crate::planner_id::{OptionGroup, PlannerId};
 use serde::{Deserialize, Serialize};
+use skyplan_trajectory::Limits as TrajectoryLimits;
 use std::time::Duration;
 
 /// Collinearity pruning of grid paths.
@@ -147,6 +148,30 @@ pub struct PlanRequest {
     /// voxel: vertical pitch between altitude layers, metres [default: 5].
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_negative_numbers = true, help_heading = cli::three_d()))]
     pub layer_m: Option<f64>,
+    /// Make a smooth, time-parametrised trajectory of the route: minimum jerk in a corridor of free boxes, within the limits below, proven inside free space [default: false].
+    #[cfg_attr(feature = "clap", arg(long, num_args = 0..=1, value_name = "BOOL", default_missing_value = "true", hide_possible_values = true, help_heading = cli::TRAJECTORY))]
+    pub trajectory: Option<bool>,
+    /// Largest speed, m/s, above 0 and at most 100 [default: 10].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M/S", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub max_speed_m_s: Option<f64>,
+    /// Largest acceleration, m/s², above 0 and at most 50 [default: 4].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M/S2", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub max_accel_m_s2: Option<f64>,
+    /// Largest jerk, m/s³, above 0 and at most 1000 [default: 10].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M/S3", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub max_jerk_m_s3: Option<f64>,
+    /// Largest climb rate, m/s, above 0 and at most 100 [default: 3].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M/S", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub max_climb_m_s: Option<f64>,
+    /// Largest descent rate, m/s, above 0 and at most 100 [default: 1.5].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M/S", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub max_descent_m_s: Option<f64>,
+    /// Largest yaw rate, degrees per second, above 0 and at most 3600 [default: 90].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "DEG/S", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub max_yaw_rate_deg_s: Option<f64>,
+    /// Trajectory samples per second in outputs, above 0 and at most 1000 [default: 10].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "HZ", value_parser = cli::finite, allow_hyphen_values = true, help_heading = cli::TRAJECTORY))]
+    pub sample_hz: Option<f64>,
     /// Return the geometry pictures need (grid path, roadmap, trees, field) [default: false].
     #[cfg_attr(feature = "clap", arg(skip))]
     pub geometry: Option<bool>,
@@ -189,7 +214,21 @@ impl PlanRequest {
             goal_lla, start_alt_m, goal_alt_m, start_heading_deg, connectivity, corner_cutting,
             prune, epsilon, shortcut, time_limit_ms, seed, min_alt_m, max_alt_m, climb_weight,
             voxel_m, layer_m, field, inscribed_radius_m, inflation_radius_m, cost_scaling,
-            cost_weight, geometry)
+            cost_weight, trajectory, max_speed_m_s, max_accel_m_s2, max_jerk_m_s3, max_climb_m_s,
+            max_descent_m_s, max_yaw_rate_deg_s, sample_hz, geometry)
+    }
+
+    /// The trajectory limits given, each over its default.
+    pub fn trajectory_limits(&self) -> TrajectoryLimits {
+        let d = TrajectoryLimits::default();
+        TrajectoryLimits {
+            max_speed_m_s: self.max_speed_m_s.unwrap_or(d.max_speed_m_s),
+            max_accel_m_s2: self.max_accel_m_s2.unwrap_or(d.max_accel_m_s2),
+            max_jerk_m_s3: self.max_jerk_m_s3.unwrap_or(d.max_jerk_m_s3),
+            max_climb_m_s: self.max_climb_m_s.unwrap_or(d.max_climb_m_s),
+            max_descent_m_s: self.max_descent_m_s.unwrap_or(d.max_descent_m_s),
+            max_yaw_rate_deg_s: self.max_yaw_rate_deg_s.unwrap_or(d.max_yaw_rate_deg_s),
+        }
     }
 
     /// The request's altitude, margin, cell size, move model and flight volume with the
@@ -276,6 +315,46 @@ impl End {
     }
 }
 
+/// The trajectory asked for, resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct TrajectorySpec {
+    pub limits: TrajectoryLimits,
+    pub sample_hz: f64,
+}
+
+/// The trajectory of `r`, if asked for, its limits checked; limits given without it are
+/// refused (nothing is silently ignored).
+fn trajectory(r: &PlanRequest) -> Result<Option<TrajectorySpec>, PlanFailure> {
+    let given: Vec<&str> = [
+        ("max_speed_m_s", r.max_speed_m_s),
+        ("max_accel_m_s2", r.max_accel_m_s2),
+        ("max_jerk_m_s3", r.max_jerk_m_s3),
+        ("max_climb_m_s", r.max_climb_m_s),
+        ("max_descent_m_s", r.max_descent_m_s),
+        ("max_yaw_rate_deg_s", r.max_yaw_rate_deg_s),
+        ("sample_hz", r.sample_hz),
+    ]
+    .iter()
+    .filter(|f| f.1.is_some())
+    .map(|f| f.0)
+    .collect();
+    if r.trajectory != Some(true) {
+        if given.is_empty() {
+            return Ok(None);
+        }
+        let one = given.len() == 1;
+        return Err(bad(format!(
+            "{} {} used only with a trajectory: ask for one (trajectory true)",
+            given.join(", "),
+            if one { "is" } else { "are" }
+        )));
+    }
+    let limits = r.trajectory_limits();
+    limits.check().map_err(|e| bad(e.to_string()))?;
+    let sample_hz = positive("sample_hz", r.sample_hz.unwrap_or(10.0), 1000.0)?;
+    Ok(Some(TrajectorySpec { limits, sample_hz }))
+}
+
 /// The request with defaults applied and every value checked.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Resolved {
@@ -302,6 +381,7 @@ pub(crate) struct Resolved {
     pub field: FieldMode,
     pub costmap: CostmapOptions,
     pub geometry: bool,
+    pub trajectory: Option<TrajectorySpec>,
 }
 
 /// Collinearity pruning, resolved.
@@ -553,6 +633,7 @@ impl Resolved {
             }
             .checked()?,
             geometry: r.geometry.unwrap_or(false),
+            trajectory: trajectory(r)?,
         })
     }
 }
@@ -616,6 +697,37 @@ mod tests {
                     ..Default::default()
                 },
                 "either start_ne or start_lla",
+            ),
+            (
+                PlanRequest {
+                    trajectory: Some(true),
+                    max_accel_m_s2: Some(80.0),
+                    ..Default::default()
+                },
+                "max_accel_m_s2 = 80: expected a number above 0 and at most 50",
+            ),
+            (
+                PlanRequest {
+                    trajectory: Some(true),
+                    max_speed_m_s: Some(f64::NAN),
+                    ..Default::default()
+                },
+                "max_speed_m_s = NaN",
+            ),
+            (
+                PlanRequest {
+                    trajectory: Some(true),
+                    sample_hz: Some(0.0),
+                    ..Default::default()
+                },
+                "sample_hz 0",
+            ),
+            (
+                PlanRequest {
+                    max_speed_m_s: Some(5.0),
+                    ..Default::default()
+                },
+                "max_speed_m_s is used only with a trajectory",
             ),
         ] {
             let e = Resolved::new(&req).unwrap_err();

@@ -3,9 +3,12 @@
 
 use crate::algorithm::Workspace;
 use crate::failure::{FailureKind, PlanFailure};
-use crate::plan::{Geometry, GridInfo, GridPathStats, Home, Place, Plan, Timings, WaypointCounts};
+use crate::plan::{
+    Geometry, GridInfo, GridPathStats, Home, Place, Plan, TRAJECTORY_COLUMNS, Timings,
+    TrajectoryReport, WaypointCounts,
+};
 use crate::planner_id::{MapKinds, PlannerId};
-use crate::request::{PlanRequest, Position, Resolved, RoadmapIo};
+use crate::request::{PlanRequest, Position, Resolved, RoadmapIo, TrajectorySpec};
 use crate::world::{Limits, Source, World, check_memory};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
@@ -447,7 +450,60 @@ impl Session {
         };
         let route = r.planner.algorithm().plan(self, &q)?;
         recheck(&route)?;
-        assemble(&world, &r, route, [start_lla, goal_lla], t0)
+        let mut plan = assemble(&world, &r, route, [start_lla, goal_lla], t0)?;
+        if let Some(spec) = r.trajectory {
+            plan.trajectory = Some(self.trajectory(&r, &plan, spec)?);
+            plan.timings_us.total_us = micros(t0.elapsed());
+        }
+        Ok(plan)
+    }
+
+    /// The trajectory of a plan's waypoints, in the free space the plan was checked in: the 3D
+    /// boxes grown by the margin on colliders maps, the grid used (at the flight altitude)
+    /// on the others.
+    fn trajectory(
+        &mut self,
+        r: &Resolved,
+        plan: &Plan,
+        spec: TrajectorySpec,
+    ) -> Result<TrajectoryReport, PlanFailure> {
+        use skyplan_trajectory as tj;
+        let route = plan.points_nea();
+        let (boxes, layer);
+        let free: &dyn tj::FreeSpace = if self.world.colliders().is_some() {
+            boxes = self.boxes(r)?;
+            boxes.as_ref()
+        } else if let Some(grid) = &plan.grid_used {
+            layer = tj::GridLayer::new(grid.as_ref().clone(), r.alt_m);
+            &layer
+        } else {
+            return Err(PlanFailure::bad_request(format!(
+                "trajectory: planner {} gives no grid on {} to build a corridor in",
+                r.planner,
+                self.world.name()
+            )));
+        };
+        let traj =
+            tj::plan(&route, free, &spec.limits, &tj::Options::default()).map_err(|e| match e {
+                tj::TrajectoryError::Corridor { .. } => {
+                    PlanFailure::new(FailureKind::NoCorridor, format!("trajectory: {e}"))
+                }
+                tj::TrajectoryError::Limit { .. } => PlanFailure::bad_request(e.to_string()),
+                _ => PlanFailure::internal(format!("trajectory: {e}")),
+            })?;
+        let stop = tj::stop_at_waypoints(&route, &spec.limits)
+            .map_err(|e| PlanFailure::internal(format!("trajectory: {e}")))?;
+        let length: f64 = skyplan_world3::path_length_m(&route);
+        Ok(TrajectoryReport {
+            duration_s: traj.duration_s(),
+            sample_hz: spec.sample_hz,
+            columns: TRAJECTORY_COLUMNS,
+            samples: traj.samples(spec.sample_hz),
+            length_m: traj.length_m(),
+            stop_at_waypoints_s: stop.duration_s(),
+            length_over_max_speed_s: length / spec.limits.max_speed_m_s,
+            trajectory: traj,
+        })
     }
 
     /// Plans `request` again from another start (where the vehicle is now), reusing the caches.
@@ -622,6 +678,7 @@ fn assemble(
         waypoints_lla,
         details: std::mem::take(&mut route.details),
         geometry: r.geometry.then(|| std::mem::take(&mut route.geometry)),
+        trajectory: None,
         mission,
         grid_used: route.grid.take(),
         saved_roadmap: route.saved_roadmap.take(),

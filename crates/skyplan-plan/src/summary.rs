@@ -99,7 +99,48 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             plan.mission_length_m
         ),
     }?;
+    if let Some(t) = &plan.trajectory {
+        trajectory_lines(t, f)?;
+    }
     Ok(())
+}
+
+fn trajectory_lines(t: &crate::TrajectoryReport, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let tr = &t.trajectory;
+    let (b, l) = (&tr.bounds, &tr.limits);
+    let how = match &tr.fallback_reason {
+        None => format!(
+            "minimum jerk in a corridor of {} free boxes",
+            tr.pieces.len()
+        ),
+        Some(why) => format!("stopping at each waypoint, because {why}"),
+    };
+    writeln!(
+        f,
+        "trajectory {:.1} s, {:.1} m ({how}), made in {:.2} ms; stopping at each waypoint takes {:.1} s, the route at {} m/s {:.1} s",
+        t.duration_s,
+        t.length_m,
+        ms(tr.compute_us),
+        t.stop_at_waypoints_s,
+        l.max_speed_m_s,
+        t.length_over_max_speed_s
+    )?;
+    writeln!(
+        f,
+        "           proven: speed ≤ {:.2} of {} m/s, acceleration ≤ {:.2} of {} m/s², jerk ≤ {:.2} of {} m/s³, climb ≤ {:.2} of {} m/s, descent ≤ {:.2} of {} m/s, yaw rate ≤ {:.1} of {} °/s; inside free space",
+        b.speed_m_s,
+        l.max_speed_m_s,
+        b.accel_m_s2,
+        l.max_accel_m_s2,
+        b.jerk_m_s3,
+        l.max_jerk_m_s3,
+        b.climb_m_s,
+        l.max_climb_m_s,
+        b.descent_m_s,
+        l.max_descent_m_s,
+        b.yaw_rate_deg_s,
+        l.max_yaw_rate_deg_s
+    )
 }
 
 fn altitude(plan: &Plan, alt_m: f64) -> String {

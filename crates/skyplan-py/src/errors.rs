@@ -16,6 +16,7 @@ fn class_name(kind: FailureKind) -> &'static str {
         FailureKind::InvalidGoal => "InvalidGoal",
         FailureKind::NoPath => "NoPath",
         FailureKind::Timeout => "Timeout",
+        FailureKind::NoCorridor => "NoPath",
         FailureKind::BadRequest => "BadInput",
         FailureKind::Internal => "PlanError",
     }

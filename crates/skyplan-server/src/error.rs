@@ -59,7 +59,8 @@ impl ErrorKind {
                 FailureKind::InvalidStart
                 | FailureKind::InvalidGoal
                 | FailureKind::NoPath
-                | FailureKind::Timeout,
+                | FailureKind::Timeout
+                | FailureKind::NoCorridor,
             ) => StatusCode::UNPROCESSABLE_ENTITY,
             ErrorKind::Plan(FailureKind::Internal) => StatusCode::INTERNAL_SERVER_ERROR,
             ErrorKind::TooLarge => StatusCode::PAYLOAD_TOO_LARGE,

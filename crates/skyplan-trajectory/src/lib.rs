@@ -264,6 +264,11 @@ pub struct Trajectory {
 
 /// Finds the piece holding time `t` (clamped to the whole duration) and the local `τ`.
 fn locate<T>(items: &[T], dur: impl Fn(&T) -> f64, t: f64) -> Option<(&T, f64)> {
+    let total: f64 = items.iter().map(&dur).sum();
+    if t >= total {
+        // The end exactly (the running sum below may fall short of it by rounding).
+        return items.last().map(|it| (it, 1.0));
+    }
     let mut start = 0.0;
     for (k, it) in items.iter().enumerate() {
         let d = dur(it);
@@ -390,7 +395,7 @@ pub struct Options {
     /// The corridor's pieces and growth (default: pieces of `max_speed² / max_accel`, clamped
     /// to 5–50 m, boxes grown up to 20 m a side).
     pub corridor: Option<CorridorOptions>,
-    /// Wall-time budget for optimising; over it, the fallback is used (default 200 ms).
+    /// Wall-time budget for optimising; over it, the fallback is used (default 1 s).
     pub budget: Duration,
     /// Rounds of per-piece time re-allocation (default 6).
     pub refine_rounds: u32,
@@ -400,7 +405,7 @@ impl Default for Options {
     fn default() -> Self {
         Self {
             corridor: None,
-            budget: Duration::from_millis(200),
+            budget: Duration::from_millis(1000),
             refine_rounds: 6,
         }
     }

@@ -7,7 +7,7 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
-use skyplan_world3::Aabb;
+use skyplan_world3::{Aabb, Neu, distance_m};
 use std::time::Instant;
 
 /// Control points per piece (quintic).
@@ -81,6 +81,10 @@ struct Problem<'a> {
     times: &'a [f64],
     dims: usize,
     lim: &'a Limits,
+    /// Norm limits on the derivative control points (second-order cones).
+    cones: bool,
+    /// Bounds of each join (the point between piece `p` and `p + 1`), shifted like `lo`/`hi`.
+    joints: Option<Vec<([f64; 3], [f64; 3])>>,
 }
 
 impl Problem<'_> {
@@ -176,6 +180,15 @@ impl Problem<'_> {
                     rows.push(&[(self.var(p, k, d), -1.0)], -(lo + hair));
                 }
             }
+            if let Some(j) = self.joints.as_ref().and_then(|j| j.get(p)) {
+                for d in 0..self.dims {
+                    let (lo, hi) = (j.0[d].max(self.lo[p][d]), j.1[d].min(self.hi[p][d]));
+                    if hi - lo > 1e-6 {
+                        rows.push(&[(self.var(p, 5, d), 1.0)], hi);
+                        rows.push(&[(self.var(p, 5, d), -1.0)], -lo);
+                    }
+                }
+            }
             if self.dims == 3 {
                 let c = 5.0 / self.times[p];
                 for k in 0..K - 1 {
@@ -223,7 +236,7 @@ impl Problem<'_> {
         let n_eq = rows.b.len();
         self.inequalities(&mut rows);
         let n_ineq = rows.b.len() - n_eq;
-        let n_soc = self.cones(&mut rows);
+        let n_soc = if self.cones { self.cones(&mut rows) } else { 0 };
         let mut cones = vec![
             SupportedConeT::ZeroConeT(n_eq),
             SupportedConeT::NonnegativeConeT(n_ineq),
@@ -240,6 +253,11 @@ impl Problem<'_> {
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
             .time_limit(left)
+            // Millimetre-level accuracy is plenty: the result is clamped into its boxes and
+            // every guarantee is checked again from the final pieces.
+            .tol_gap_abs(1e-6)
+            .tol_gap_rel(1e-6)
+            .tol_feas(1e-7)
             .build()
             .map_err(|e| SolveError::Other(format!("solver settings: {e}")))?;
         let q = vec![0.0; nv];
@@ -274,32 +292,83 @@ fn status_words(s: SolverStatus) -> &'static str {
     }
 }
 
-/// Per-piece nominal durations: each stretch at the speed it can reach from rest at the start
-/// and still stop at the goal (`√(2 a d)`), at most the speed the climb and descent limits
-/// allow on it.
-fn initial_times(cells: &[CorridorCell], lim: &Limits) -> Vec<f64> {
-    let lens: Vec<f64> = cells
-        .iter()
-        .map(|c| skyplan_world3::distance_m(c.from, c.to))
-        .collect();
-    let total: f64 = lens.iter().sum();
-    let mut before = 0.0;
-    let times: Vec<f64> = cells
-        .iter()
-        .zip(&lens)
-        .map(|(c, &len)| {
-            let mid = before + len / 2.0;
-            before += len;
-            let v = crate::leg_speed_m_s(c.from, c.to, lim);
-            let ramp = (2.0 * lim.max_accel_m_s2 * mid.min(total - mid)).sqrt();
-            len / v.min(ramp).max(0.05 * v)
-        })
-        .collect();
-    // No piece much shorter in time than the typical one: the jerk weights go as 1/T⁵.
+/// How far a join may move from where the shape put it when the durations change, metres.
+const JOINT_SLACK_M: f64 = 0.5;
+
+/// Durations at the limit speed on every stretch (the climb and descent limits included): the
+/// first solve only finds the shape.
+fn shape_times(cells: &[CorridorCell], lim: &Limits) -> Vec<f64> {
+    floored(
+        cells
+            .iter()
+            .map(|c| distance_m(c.from, c.to) / crate::leg_speed_m_s(c.from, c.to, lim))
+            .collect(),
+    )
+}
+
+/// No piece much shorter in time than the typical one: the jerk weights go as 1/T⁵, and short
+/// stretches (left by splitting near obstacles) would make the problem badly conditioned.
+fn floored(times: Vec<f64>) -> Vec<f64> {
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
     let floor = 0.2 * sorted[sorted.len() / 2];
     times.into_iter().map(|t| t.max(floor)).collect()
+}
+
+/// The radius of the circle through three points (infinite when they are collinear).
+fn circumradius(a: Neu, b: Neu, c: Neu) -> f64 {
+    let (ab, bc, ca) = (distance_m(a, b), distance_m(b, c), distance_m(c, a));
+    let u = [0, 1, 2].map(|k| b[k] - a[k]);
+    let v = [0, 1, 2].map(|k| c[k] - a[k]);
+    let cross = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let twice_area = crate::bezier::norm(cross);
+    if twice_area <= 1e-12 * (ab * bc).max(1e-12) {
+        f64::INFINITY
+    } else {
+        ab * bc * ca / (2.0 * twice_area)
+    }
+}
+
+/// Durations from a speed profile along the shape's joins: at each join the speed a turn of
+/// its radius allows at half the acceleration limit, then forward and backward passes with
+/// half the acceleration limit from rest at both ends; each piece lasts its length over its
+/// mean speed.
+fn profile_times(points: &[Neu], lim: &Limits) -> Vec<f64> {
+    let n = points.len() - 1; // pieces
+    let a = 0.5 * lim.max_accel_m_s2;
+    let lens: Vec<f64> = points.windows(2).map(|w| distance_m(w[0], w[1])).collect();
+    let mut v: Vec<f64> = (0..=n)
+        .map(|i| {
+            if i == 0 || i == n {
+                return 0.0;
+            }
+            let leg = crate::leg_speed_m_s(points[i - 1], points[i], lim)
+                .min(crate::leg_speed_m_s(points[i], points[i + 1], lim));
+            leg.min((a * circumradius(points[i - 1], points[i], points[i + 1])).sqrt())
+        })
+        .collect();
+    for i in 1..=n {
+        v[i] = v[i].min((v[i - 1] * v[i - 1] + 2.0 * a * lens[i - 1]).sqrt());
+    }
+    for i in (0..n).rev() {
+        v[i] = v[i].min((v[i + 1] * v[i + 1] + 2.0 * a * lens[i]).sqrt());
+    }
+    floored(
+        (0..n)
+            .map(|i| {
+                let mean = 0.5 * (v[i] + v[i + 1]);
+                if mean > 1e-9 {
+                    lens[i] / mean
+                } else {
+                    2.0 * (lens[i] / a).sqrt()
+                }
+            })
+            .collect(),
+    )
 }
 
 /// How much slower each piece must be flown for its bounds to meet the limits (1 = tight).
@@ -327,6 +396,7 @@ fn shape(
     planar: bool,
     times: &[f64],
     lim: &Limits,
+    joints: Option<&[Neu]>,
     deadline: Instant,
 ) -> Result<Vec<Piece>, SolveError> {
     let n = cells.len();
@@ -341,6 +411,15 @@ fn shape(
         times,
         dims,
         lim,
+        cones: false,
+        joints: joints.map(|j| {
+            j.iter()
+                .map(|&q| {
+                    let q = shifted(q);
+                    (q.map(|v| v - JOINT_SLACK_M), q.map(|v| v + JOINT_SLACK_M))
+                })
+                .collect()
+        }),
     };
     let x = problem.solve(deadline)?;
     let mut ctrl = vec![[start; K]; n];
@@ -409,44 +488,52 @@ pub(crate) fn minimum_jerk(
     if cells.is_empty() {
         return Err("the corridor is empty".into());
     }
-    let mut times = initial_times(cells, lim);
-    // Longer durations until the shaping bounds can be met (they cannot at the start when the
-    // nominal durations ignore jerk and corners).
-    let mut first = None;
-    for _ in 0..12 {
-        match shape(cells, planar, &times, lim, deadline) {
-            Ok(p) => {
-                first = Some(p);
-                break;
-            }
-            Err(SolveError::Infeasible) => times.iter_mut().for_each(|t| *t *= 1.3),
-            Err(SolveError::Other(why)) => return Err(why),
+    // 1. The shape, at the limit speed everywhere.
+    let times = shape_times(cells, lim);
+    let first = match shape(cells, planar, &times, lim, None, deadline) {
+        Ok(p) => p,
+        Err(SolveError::Infeasible) => return Err("no curve met the corridor".into()),
+        Err(SolveError::Other(why)) => return Err(why),
+    };
+    // 2. Durations from a speed profile along it; the joins stay near the shape's.
+    let mut points: Vec<Neu> = first.iter().map(|p| p.control_points_neu[0]).collect();
+    points.push(cells[cells.len() - 1].to);
+    let joints: Vec<Neu> = points[1..points.len() - 1].to_vec();
+    let times = profile_times(&points, lim);
+    let shaped = shape(cells, planar, &times, lim, Some(&joints), deadline)
+        .or_else(|_| shape(cells, planar, &times, lim, None, deadline));
+    let mut best = scale_to_limits(first, lim);
+    if let Ok(p) = shaped {
+        let p = scale_to_limits(p, lim);
+        if total(&p) < total(&best) {
+            best = p;
         }
     }
-    let Some(first) = first else {
-        return Err("no curve met the corridor at any duration tried".into());
-    };
-    let mut best = scale_to_limits(first, lim);
+    // 3. Shorten the pieces that are slower than they need be; keep the result if the whole
+    // is faster once scaled to the limits again.
+    let mut misses = 0;
+    let mut current = best.clone();
     for _ in 0..rounds {
-        if Instant::now() >= deadline {
+        if Instant::now() >= deadline || misses >= 2 {
             break;
         }
-        // Shorten the pieces that are slower than they need be; keep the result if the whole
-        // is faster once scaled to the limits again.
-        let r = ratios(&best, lim);
-        times = best
-            .iter()
-            .zip(&r)
-            .map(|(p, &ri)| p.duration_s * ri.clamp(0.25, 1.0).powf(0.7))
-            .collect();
-        let Ok(next) = shape(cells, planar, &times, lim, deadline) else {
+        let r = ratios(&current, lim);
+        let times = floored(
+            current
+                .iter()
+                .zip(&r)
+                .map(|(p, &ri)| p.duration_s * ri.clamp(0.25, 1.0).powf(0.7))
+                .collect(),
+        );
+        let Ok(next) = shape(cells, planar, &times, lim, Some(&joints), deadline) else {
             break;
         };
-        let next = scale_to_limits(next, lim);
-        if total(&next) < total(&best) * 0.999 {
-            best = next;
+        current = scale_to_limits(next, lim);
+        if total(&current) < total(&best) * 0.999 {
+            best = current.clone();
+            misses = 0;
         } else {
-            break;
+            misses += 1;
         }
     }
     Ok(best)
