@@ -545,9 +545,9 @@ impl SimVehicle {
         }
         // The target moves on over the step too (constant acceleration), as AC_PosControl's
         // does between updates.
-        for i in 0..3 {
-            p_t[i] += ff.velocity[i] * dt_s + 0.5 * ff.accel[i] * dt_s * dt_s;
-            ff.velocity[i] += ff.accel[i] * dt_s;
+        for ((p, v), a) in p_t.iter_mut().zip(&mut ff.velocity).zip(ff.accel) {
+            *p += *v * dt_s + 0.5 * a * dt_s * dt_s;
+            *v += a * dt_s;
         }
         self.target = Some((p_t, yaw));
         self.feed_forward = Some(ff);
