@@ -358,6 +358,39 @@ mod tests {
         );
     }
 
+    /// A vehicle that never gets to the start at rest: the approach times out (its leg budget)
+    /// and the executor lands; the reference clock never started.
+    #[test]
+    fn an_unreached_start_times_out_and_lands_without_starting_the_clock() {
+        let r = MinJerkLine::new(vec![[50.0, 0.0, -5.0], [80.0, 0.0, -5.0]], vec![10.0]).unwrap();
+        let config = ExecutorConfig {
+            leg_timeout_base_s: 5.0,
+            leg_timeout_per_m_s: 0.1,
+            ..ExecutorConfig::default()
+        };
+        let mut ex = ReferenceExecutor::new(Arc::new(r), config).unwrap();
+        let hovering = crate::testkit::hovering();
+        let mut commands = Vec::new();
+        for k in 0..200 {
+            let t = f64::from(k) * 0.1;
+            commands.extend(ex.handle(t, Event::Telemetry(hovering)).commands);
+        }
+        assert!(commands.contains(&Command::GoTo {
+            north_m: 50.0,
+            east_m: 0.0,
+            down_m: -5.0,
+            yaw_rad: 0.0
+        }));
+        assert!(!commands.iter().any(|c| matches!(c, Command::Track { .. })));
+        assert_eq!(commands.last(), Some(&Command::Land), "{commands:?}");
+        assert_eq!(ex.state(), FlightState::Landing);
+        let report = ex.tracking().unwrap();
+        assert_eq!(
+            (report.started_s, report.flown_s, report.samples),
+            (None, None, 0)
+        );
+    }
+
     #[test]
     fn a_reference_that_is_not_finite_is_refused() {
         struct Bad;
