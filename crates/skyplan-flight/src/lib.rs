@@ -8,7 +8,7 @@
 //! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
 //! - [`sensing`]: range-sensor readings and the [`sensing::RouteWatcher`] hook that replans in flight.
 //! - [`sensor`]: the simulated range sensor (rays against the true world's boxes).
-//! - [`reference`]: a time-parametrised reference ([`Setpoint`], [`Reference`]) and a simple
+//! - [`reference`](mod@reference): a time-parametrised reference ([`Setpoint`], [`Reference`]) and a simple
 //!   one, [`reference::MinJerkLine`], that [`executor::ReferenceExecutor`] flies.
 //! - [`modes`]: the one table of autopilot mode numbers (ArduCopter's, PX4's).
 //! - [`auto`]: flying the uploaded mission in AUTO (`skyplan fly --upload`), same states and

@@ -300,6 +300,9 @@ pub fn fly_mission_with<O: RunObserver>(
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
     let config = o.executor;
     if let Some(source) = reference {
+        if matches!(o.mode, Mode::Guided(Some(_))) {
+            observer.say("replan     none: a flight by a reference is not replanned in flight");
+        }
         let r = source.reference(&plan)?;
         let (start, end) = (
             r.setpoint(0.0).point_ned,

@@ -9,7 +9,8 @@
 //! `Command`s become COMMAND_LONG (DO_SET_MODE GUIDED, COMPONENT_ARM_DISARM, NAV_TAKEOFF,
 //! NAV_LAND) and SET_POSITION_TARGET_GLOBAL_INT (`MAV_FRAME_GLOBAL_RELATIVE_ALT_INT`, `type_mask`
 //! 0x9F8: position + yaw; a reference's setpoint, `Command::Track`, with `type_mask` 0x0800:
-//! position, velocity, acceleration and yaw, stamped with the vehicle's time it holds at). Heartbeats go out at 1 Hz from their own thread; a vehicle silent for
+//! position, velocity, acceleration and yaw, stamped with the vehicle's time it holds at).
+//! Heartbeats go out at 1 Hz from their own thread; a vehicle silent for
 //! [`GroundConfig::link_timeout_s`] is a lost link. Autopilots stream nothing by default
 //! (ArduCopter's rates are 0): every message needed is requested with SET_MESSAGE_INTERVAL, and
 //! with REQUEST_DATA_STREAM as well when that brings nothing.

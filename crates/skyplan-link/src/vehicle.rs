@@ -3,12 +3,13 @@
 //! It behaves like ArduCopter where it matters to a ground station: system 1, component 1,
 //! `MAV_AUTOPILOT_ARDUPILOTMEGA` with ArduCopter's custom mode numbers; answers COMMAND_LONG
 //! (ARM_DISARM, NAV_TAKEOFF, NAV_LAND, DO_SET_MODE, MISSION_START, SET_MESSAGE_INTERVAL), SET_MODE,
-//! SET_POSITION_TARGET_LOCAL_NED and _GLOBAL_INT (position, optional yaw), the mission upload (MISSION_COUNT →
-//! MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0 is the home, as on
-//! ArduPilot) and MISSION_CLEAR_ALL. Position targets (SET_POSITION_TARGET_GLOBAL_INT and
-//! _LOCAL_NED) may carry a velocity and an acceleration (their `type_mask` bits clear), followed
-//! as feed-forward ([`skyplan_flight::sim::SimVehicle::set_target`]); unlike ArduCopter, a
-//! stamped target (`time_boot_ms`) is brought to the vehicle's time first ([`stamped`]). Like ArduCopter, it sends only HEARTBEAT (1 Hz), command
+//! SET_POSITION_TARGET_LOCAL_NED and _GLOBAL_INT (position, optional yaw), the mission upload
+//! (MISSION_COUNT → MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0
+//! is the home, as on ArduPilot) and MISSION_CLEAR_ALL. Position targets may carry a velocity and
+//! an acceleration (their `type_mask` bits clear), followed as feed-forward
+//! ([`skyplan_flight::sim::SimVehicle::set_target`]); unlike ArduCopter, a stamped target
+//! (`time_boot_ms`) is brought to the vehicle's time first ([`stamped`]).
+//! Like ArduCopter, it sends only HEARTBEAT (1 Hz), command
 //! and mission answers, MISSION_ITEM_REACHED and STATUSTEXT (the reason of every refusal)
 //! unrequested: LOCAL_POSITION_NED, GLOBAL_POSITION_INT, ATTITUDE, EXTENDED_SYS_STATE,
 //! MISSION_CURRENT and GPS_GLOBAL_ORIGIN stream only once asked for with SET_MESSAGE_INTERVAL or
