@@ -16,20 +16,23 @@
 //! ```
 //!
 //! One [`Executor`] core (arming, landing, disarming, timeouts, link loss, stop, hold, RTL)
-//! flies either mission strategy: [`MissionExecutor`] streams GUIDED position targets,
-//! [`crate::auto::AutoExecutor`] follows the uploaded mission in AUTO.
+//! flies each mission strategy: [`MissionExecutor`] streams GUIDED position targets,
+//! [`crate::auto::AutoExecutor`] follows the uploaded mission in AUTO, [`ReferenceExecutor`]
+//! streams a time-parametrised [`crate::Reference`] with feed-forward.
 //!
 //! - `io`: states, targets, telemetry, events in and commands out;
 //! - `report`: notes, failures, outcomes and the configuration;
 //! - `core`: the shared state machine and its fault handling;
 //! - `faults`: link-loss, hold and return-to-launch bookkeeping;
-//! - `guided`: the GUIDED strategy.
+//! - `guided`: the GUIDED strategy;
+//! - `tracking`: the reference-tracking strategy.
 
 mod core;
 mod faults;
 mod guided;
 mod interface;
 mod report;
+mod tracking;
 
 pub use self::core::{Core, Executor, FlightExecutor, Strategy};
 pub use guided::{GuidedTargets, MissionExecutor};
@@ -37,7 +40,12 @@ pub use interface::{
     Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
     wrap_angle_rad,
 };
-pub use report::{ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached};
+pub use report::{
+    ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached, TrackingReport,
+};
+pub use tracking::{
+    REFERENCE_PERIOD_S, ReferenceExecutor, ReferenceTracking, START_SPEED_M_S, START_TOLERANCE_M,
+};
 
 #[cfg(test)]
 mod tests;

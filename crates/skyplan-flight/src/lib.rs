@@ -8,6 +8,8 @@
 //! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
 //! - [`sensing`]: range-sensor readings and the [`sensing::RouteWatcher`] hook that replans in flight.
 //! - [`sensor`]: the simulated range sensor (rays against the true world's boxes).
+//! - [`reference`](mod@reference): a time-parametrised reference ([`Setpoint`], [`Reference`]) and a simple
+//!   one, [`reference::MinJerkLine`], that [`executor::ReferenceExecutor`] flies.
 //! - [`modes`]: the one table of autopilot mode numbers (ArduCopter's, PX4's).
 //! - [`auto`]: flying the uploaded mission in AUTO (`skyplan fly --upload`), same states and
 //!   outcomes as [`executor`].
@@ -22,10 +24,13 @@ pub mod collision;
 pub mod executor;
 pub mod flat_earth;
 pub mod modes;
+pub mod reference;
 pub mod sensing;
 pub mod sensor;
 pub mod sim;
 pub mod upload;
+
+pub use reference::{Reference, Setpoint};
 
 #[cfg(test)]
 mod testkit;

@@ -6,6 +6,16 @@
 //! [`SimConfig::velocity_tau_s`], its change clamped to the acceleration limit; the heading turns
 //! toward the target heading at most at the yaw-rate limit. The ground stops descent.
 //!
+//! A GUIDED target with velocity and acceleration ([`SimVehicle::set_target`]) is followed as
+//! ArduCopter's position-velocity-acceleration controller does: the target moves on with its own
+//! velocity and acceleration between updates (constant acceleration), and the vehicle's
+//! acceleration is the target's (feed-forward) plus a velocity loop (gain 1 /
+//! [`SimConfig::velocity_tau_s`]) on the target's velocity plus a position loop
+//! ([`SimConfig::position_gain_per_s`]) on its position, within the acceleration limit; the
+//! speed limits apply to the position loop's correction only (the reference sets the speed).
+//! Without an update for [`GUIDED_TIMEOUT_S`] the target stops where it is (ArduCopter's
+//! `GUID_TIMEOUT`). A position-only target is flown exactly as before.
+//!
 //! Modes follow ArduCopter: GUIDED obeys position targets and NAV_TAKEOFF, LAND descends where it
 //! is, AUTO flies the uploaded mission, LOITER holds, RTL flies straight back over the home at
 //! the altitude it had when RTL began (ArduCopter would first climb to `RTL_ALT`), then lands
@@ -23,6 +33,61 @@
 
 use crate::executor::wrap_angle_rad;
 use std::fmt;
+
+/// Seconds a GUIDED target with velocity and acceleration is followed without an update; then
+/// its velocity and acceleration are dropped and the vehicle stops at it (ArduCopter's
+/// `GUID_TIMEOUT`, 3 s).
+pub const GUIDED_TIMEOUT_S: f64 = 3.0;
+
+/// A GUIDED target: a position and heading, with the velocity and acceleration it has now
+/// (feed-forward), either of them absent when the sender masked it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimTarget {
+    /// Position, metres north, east, down of home.
+    pub position_ned_m: [f64; 3],
+    /// Velocity, m/s north, east, down (`None`: not given).
+    pub velocity_ned_m_s: Option<[f64; 3]>,
+    /// Acceleration, m/s² north, east, down (`None`: not given).
+    pub accel_ned_m_s2: Option<[f64; 3]>,
+    /// Heading, radians clockwise from north (NaN: keep the current one).
+    pub yaw_rad: f64,
+}
+
+impl SimTarget {
+    /// The target `dt_s` seconds later (earlier if negative), moved on at constant acceleration:
+    /// how a target stamped at another time is brought to the vehicle's now.
+    ///
+    /// ```
+    /// use skyplan_flight::sim::SimTarget;
+    /// let t = SimTarget { position_ned_m: [0.0; 3], velocity_ned_m_s: Some([1.0, 0.0, 0.0]),
+    ///     accel_ned_m_s2: Some([2.0, 0.0, 0.0]), yaw_rad: 0.0 };
+    /// let later = t.advanced(0.5);
+    /// assert_eq!(later.position_ned_m, [0.75, 0.0, 0.0]);
+    /// assert_eq!(later.velocity_ned_m_s, Some([2.0, 0.0, 0.0]));
+    /// ```
+    pub fn advanced(self, dt_s: f64) -> Self {
+        let v = self.velocity_ned_m_s.unwrap_or([0.0; 3]);
+        let a = self.accel_ned_m_s2.unwrap_or([0.0; 3]);
+        Self {
+            position_ned_m: std::array::from_fn(|i| {
+                self.position_ned_m[i] + v[i] * dt_s + 0.5 * a[i] * dt_s * dt_s
+            }),
+            velocity_ned_m_s: self
+                .velocity_ned_m_s
+                .map(|v| std::array::from_fn(|i| v[i] + a[i] * dt_s)),
+            ..self
+        }
+    }
+}
+
+/// The moving part of a GUIDED target with feed-forward.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FeedForward {
+    velocity: [f64; 3],
+    accel: [f64; 3],
+    /// Simulated time of the last update.
+    updated_s: f64,
+}
 
 /// Flight modes (ArduCopter numbering in [`SimMode::arducopter_custom_mode`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -208,6 +273,8 @@ pub struct SimVehicle {
     on_ground: bool,
     /// Position and heading target (NED, yaw) of GUIDED, LOITER and AUTO.
     target: Option<([f64; 3], f64)>,
+    /// The target's velocity and acceleration (GUIDED, [`SimVehicle::set_target`]).
+    feed_forward: Option<FeedForward>,
     mission: Vec<SimMissionItem>,
     mission_current: usize,
     /// RTL: the home has been reached and the vehicle descends.
@@ -234,6 +301,7 @@ impl SimVehicle {
             mode: SimMode::Stabilize,
             on_ground: true,
             target: None,
+            feed_forward: None,
             mission: Vec::new(),
             mission_current: 0,
             rtl_descending: false,
@@ -294,6 +362,7 @@ impl SimVehicle {
             return;
         }
         self.mode = mode;
+        self.feed_forward = None;
         match mode {
             SimMode::Guided | SimMode::Loiter | SimMode::Stabilize => {
                 self.target = (!self.on_ground).then_some((self.position, self.yaw_rad));
@@ -330,6 +399,7 @@ impl SimVehicle {
             return Err(SimRefusal("Takeoff: already flying".into()));
         }
         self.target = Some(([self.position[0], self.position[1], -alt_m], self.yaw_rad));
+        self.feed_forward = None;
         Ok(())
     }
 
@@ -362,6 +432,30 @@ impl SimVehicle {
             self.yaw_rad
         };
         self.target = Some((position_ned_m, yaw));
+        self.feed_forward = None;
+        Ok(())
+    }
+
+    /// A GUIDED target with heading and, when given, velocity and acceleration (feed-forward;
+    /// see the module documentation). Without either it is [`SimVehicle::set_position_target`]
+    /// exactly. GUIDED only, and only once flying.
+    pub fn set_target(&mut self, target: SimTarget) -> Result<(), SimRefusal> {
+        if target.velocity_ned_m_s.is_none() && target.accel_ned_m_s2.is_none() {
+            return self.set_position_target(target.position_ned_m, target.yaw_rad);
+        }
+        let velocity = target.velocity_ned_m_s.unwrap_or([0.0; 3]);
+        let accel = target.accel_ned_m_s2.unwrap_or([0.0; 3]);
+        if velocity.iter().chain(&accel).any(|x| !x.is_finite()) {
+            return Err(SimRefusal(
+                "target velocity or acceleration is not finite".into(),
+            ));
+        }
+        self.set_position_target(target.position_ned_m, target.yaw_rad)?;
+        self.feed_forward = Some(FeedForward {
+            velocity,
+            accel,
+            updated_s: self.time_s,
+        });
         Ok(())
     }
 
@@ -382,6 +476,88 @@ impl SimVehicle {
             self.advance_mission(&mut events);
         }
         let c = self.config;
+        let (v_cmd, yaw_target) = if self.follows_feed_forward() {
+            self.feed_forward_step(dt_s)
+        } else {
+            self.position_step(dt_s)
+        };
+        self.ground_contact(v_cmd, &mut events);
+        // Heading, within the yaw-rate limit (only when flying).
+        if self.armed && !self.on_ground {
+            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
+            let max = c.max_yaw_rate_rad_s * dt_s;
+            let turn = err.clamp(-max, max);
+            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
+            self.yaw_rate_rad_s = turn / dt_s;
+        } else {
+            self.yaw_rate_rad_s = 0.0;
+        }
+        if !self.armed && self.on_ground {
+            self.velocity = [0.0; 3];
+            self.feed_forward = None;
+        }
+        events
+    }
+
+    /// Whether a GUIDED target with feed-forward is being followed now.
+    fn follows_feed_forward(&self) -> bool {
+        self.feed_forward.is_some()
+            && self.armed
+            && self.mode == SimMode::Guided
+            && self.target.is_some()
+    }
+
+    /// One step after a target with feed-forward: the target moves on, the vehicle accelerates
+    /// by its acceleration plus the velocity and position loops, within the acceleration limit;
+    /// the commanded velocity and the heading to turn to.
+    fn feed_forward_step(&mut self, dt_s: f64) -> ([f64; 3], f64) {
+        let c = self.config;
+        let (Some(mut ff), Some((mut p_t, yaw))) = (self.feed_forward, self.target) else {
+            return ([0.0; 3], self.yaw_rad);
+        };
+        if self.time_s - ff.updated_s > GUIDED_TIMEOUT_S {
+            ff.velocity = [0.0; 3];
+            ff.accel = [0.0; 3];
+        }
+        // Position loop: a velocity correction within the speed limits.
+        let mut corr: [f64; 3] =
+            std::array::from_fn(|i| c.position_gain_per_s * (p_t[i] - self.position[i]));
+        let h = norm2([corr[0], corr[1]]);
+        if h > c.max_ground_speed_m_s {
+            corr[0] *= c.max_ground_speed_m_s / h;
+            corr[1] *= c.max_ground_speed_m_s / h;
+        }
+        corr[2] = corr[2].clamp(-c.max_climb_m_s, c.max_descent_m_s);
+        let v_cmd: [f64; 3] = std::array::from_fn(|i| ff.velocity[i] + corr[i]);
+        // Velocity loop plus the feed-forward, within the acceleration limit.
+        let mut a: [f64; 3] = std::array::from_fn(|i| {
+            ff.accel[i] + (v_cmd[i] - self.velocity[i]) / c.velocity_tau_s.max(dt_s)
+        });
+        let a_norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        if a_norm > c.max_accel_m_s2 {
+            for x in &mut a {
+                *x *= c.max_accel_m_s2 / a_norm;
+            }
+        }
+        for ((v, p), a) in self.velocity.iter_mut().zip(&mut self.position).zip(a) {
+            *p += *v * dt_s + 0.5 * a * dt_s * dt_s;
+            *v += a * dt_s;
+        }
+        // The target moves on over the step too (constant acceleration), as AC_PosControl's
+        // does between updates.
+        for ((p, v), a) in p_t.iter_mut().zip(&mut ff.velocity).zip(ff.accel) {
+            *p += *v * dt_s + 0.5 * a * dt_s * dt_s;
+            *v += a * dt_s;
+        }
+        self.target = Some((p_t, yaw));
+        self.feed_forward = Some(ff);
+        (v_cmd, yaw)
+    }
+
+    /// One step after a position target (or none): the commanded velocity followed as a
+    /// first-order lag within the acceleration limit; the commanded velocity and the heading.
+    fn position_step(&mut self, dt_s: f64) -> ([f64; 3], f64) {
+        let c = self.config;
         let (v_cmd, yaw_target) = self.commanded_velocity();
         // First-order velocity response, within the acceleration limit.
         let k = (dt_s / c.velocity_tau_s).min(1.0);
@@ -397,21 +573,7 @@ impl SimVehicle {
             *v += dv;
             *p += *v * dt_s;
         }
-        self.ground_contact(v_cmd, &mut events);
-        // Heading, within the yaw-rate limit (only when flying).
-        if self.armed && !self.on_ground {
-            let err = wrap_angle_rad(yaw_target - self.yaw_rad);
-            let max = c.max_yaw_rate_rad_s * dt_s;
-            let turn = err.clamp(-max, max);
-            self.yaw_rad = wrap_angle_rad(self.yaw_rad + turn);
-            self.yaw_rate_rad_s = turn / dt_s;
-        } else {
-            self.yaw_rate_rad_s = 0.0;
-        }
-        if !self.armed && self.on_ground {
-            self.velocity = [0.0; 3];
-        }
-        events
+        (v_cmd, yaw_target)
     }
 
     /// The velocity commanded now (north, east, down) and the heading to turn to: toward the
@@ -593,6 +755,119 @@ mod tests {
         v.takeoff(alt_m).unwrap();
         run(&mut v, 15.0);
         v
+    }
+
+    /// A scripted GUIDED flight with position-only targets: take-off, two targets.
+    fn scripted(target: impl Fn(&mut SimVehicle, [f64; 3], f64)) -> SimState {
+        let mut v = SimVehicle::new(SimConfig::default());
+        v.set_mode(SimMode::Guided);
+        v.arm().unwrap();
+        v.takeoff(7.0).unwrap();
+        run(&mut v, 8.0);
+        target(&mut v, [40.0, -25.0, -9.0], 1.0);
+        run(&mut v, 14.0);
+        target(&mut v, [10.0, 30.0, -4.0], -2.0);
+        run(&mut v, 6.0);
+        v.state()
+    }
+
+    /// Position-only targets fly bit for bit as before feed-forward targets existed: the state
+    /// after 28 s equals the one the earlier simulator reached (recorded from its code, commit
+    /// c3335f7), through `set_position_target` and through `set_target` without velocity and
+    /// acceleration alike.
+    #[test]
+    fn position_only_targets_fly_exactly_as_before() {
+        let golden: [u64; 7] = [
+            4628503901139262748,
+            13836276021142905310,
+            13839570665719688474,
+            13835945745410316564,
+            4616628159875639513,
+            4582988312324080819,
+            13835058055282163711,
+        ];
+        let bits = |s: SimState| -> Vec<u64> {
+            (s.position_ned_m.iter().chain(&s.velocity_ned_m_s))
+                .chain([&s.yaw_rad])
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        let old = scripted(|v, p, yaw| v.set_position_target(p, yaw).unwrap());
+        assert_eq!(bits(old), golden, "{old:?}");
+        let new = scripted(|v, p, yaw| {
+            v.set_target(SimTarget {
+                position_ned_m: p,
+                velocity_ned_m_s: None,
+                accel_ned_m_s2: None,
+                yaw_rad: yaw,
+            })
+            .unwrap()
+        });
+        assert_eq!(bits(new), golden, "{new:?}");
+    }
+
+    /// A target moving at constant velocity, sent once with its velocity: the vehicle catches
+    /// it and then flies with it (the target moves on between updates), faster than the
+    /// position-only speed limit; with no update for GUIDED_TIMEOUT_S the target stops.
+    #[test]
+    fn a_moving_target_with_feed_forward_is_tracked_and_stops_after_the_guided_timeout() {
+        let mut v = flying(10.0);
+        let speed = 7.0; // above max_ground_speed_m_s: the reference sets the speed
+        let moving = |t_s: f64| SimTarget {
+            position_ned_m: [speed * t_s, 0.0, -10.0],
+            velocity_ned_m_s: Some([speed, 0.0, 0.0]),
+            accel_ned_m_s2: Some([0.0; 3]),
+            yaw_rad: 0.0,
+        };
+        let t0 = v.state().time_s;
+        // Updated at 10 Hz for 20 s.
+        let mut worst_late: f64 = 0.0;
+        for k in 0..200 {
+            let t = f64::from(k) * 0.1;
+            v.set_target(moving(t)).unwrap();
+            run(&mut v, 0.1);
+            let s = v.state();
+            let expected = speed * (s.time_s - t0);
+            if t > 10.0 {
+                worst_late = worst_late.max((s.position_ned_m[0] - expected).abs());
+            }
+        }
+        assert!(worst_late < 0.01, "{worst_late}");
+        // Silence: the target goes on for GUIDED_TIMEOUT_S, then stops where it got to.
+        let t_last = v.state().time_s - 0.1;
+        run(&mut v, 20.0);
+        let s = v.state();
+        let stop_n = speed * (t_last - t0) + speed * GUIDED_TIMEOUT_S;
+        assert!(
+            (s.position_ned_m[0] - stop_n).abs() < 0.3 * speed,
+            "{s:?} vs {stop_n}"
+        );
+        assert!(s.velocity_ned_m_s[0].abs() < 0.05, "{s:?}");
+    }
+
+    /// A start far from the target: the acceleration limit holds while it catches up.
+    #[test]
+    fn feed_forward_keeps_the_acceleration_limit() {
+        let c = SimConfig::default();
+        let mut v = flying(5.0);
+        let mut prev = v.state();
+        v.set_target(SimTarget {
+            position_ned_m: [50.0, 20.0, -5.0],
+            velocity_ned_m_s: Some([3.0, 0.0, 0.0]),
+            accel_ned_m_s2: Some([10.0, 0.0, 0.0]),
+            yaw_rad: 0.0,
+        })
+        .unwrap();
+        for _ in 0..100 {
+            v.step(0.02);
+            let s = v.state();
+            let dv: f64 = (0..3)
+                .map(|i| (s.velocity_ned_m_s[i] - prev.velocity_ned_m_s[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(dv <= c.max_accel_m_s2 * 0.02 + 1e-9, "accel {}", dv / 0.02);
+            prev = s;
+        }
     }
 
     #[test]

@@ -36,6 +36,7 @@ pub(crate) fn telemetry(v: &SimVehicle) -> Telemetry {
         armed: s.armed,
         guided: s.mode == SimMode::Guided,
         on_ground: Some(s.on_ground),
+        sample_time_s: Some(s.time_s),
     }
 }
 
@@ -68,6 +69,17 @@ pub(crate) fn apply(v: &mut SimVehicle, c: Command) -> Option<Event> {
             if let Some((position_ned_m, yaw_rad)) = c.position_target() {
                 let _ = v.set_position_target(position_ned_m, yaw_rad);
             }
+            None
+        }
+        Command::Track { setpoint, time_s } => {
+            let target = crate::sim::SimTarget {
+                position_ned_m: setpoint.point_ned,
+                velocity_ned_m_s: Some(setpoint.vel_ned_m_s),
+                accel_ned_m_s2: Some(setpoint.accel_ned_m_s2),
+                yaw_rad: setpoint.yaw_rad,
+            };
+            // Vehicle time is executor time here: brought to the vehicle's now.
+            let _ = v.set_target(target.advanced(v.state().time_s - time_s));
             None
         }
         Command::Land => {

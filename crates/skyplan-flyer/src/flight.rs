@@ -4,7 +4,7 @@
 //! The observer decides where lines go (a terminal above a progress bar, a live view, nowhere);
 //! this module only makes them.
 
-use crate::words::{note_line, tidy, update_line};
+use crate::words::{note_line, tidy, tracking_line, update_line};
 use skyplan_flight::executor::{FlightExecutor, Note, Outcome};
 use skyplan_frames::LocalFrame;
 use skyplan_link::ground::{FlightSummary, GroundError, GroundStation, LogRow, Update};
@@ -76,7 +76,8 @@ pub fn fly<E: FlightExecutor>(
     })
 }
 
-/// The flight summed up: times and counts, the vehicle at the end, the result.
+/// The flight summed up: times and counts, how a reference was followed (if flown by one), the
+/// vehicle at the end, the result.
 pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<String> {
     let n = ex.targets().len();
     let reached = ex.reached();
@@ -102,6 +103,9 @@ pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<
         summary.position_targets_sent,
         summary.heartbeats_received
     )];
+    if let Some(r) = ex.tracking() {
+        lines.push(tracking_line(&r));
+    }
     if let Some(t) = ex.last_telemetry() {
         lines.push(format!(
             "vehicle    at N {:.2} m, E {:.2} m, {:.2} m above home, {}, state {}",
@@ -113,6 +117,9 @@ pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<
         ));
     }
     lines.push(match ex.outcome() {
+        Some(Outcome::Completed) if ex.tracking().is_some() => {
+            "result     landed and disarmed after flying the reference to its end".to_string()
+        }
         Some(Outcome::Completed) => {
             format!("result     landed and disarmed after reaching all {n} waypoints")
         }

@@ -8,8 +8,10 @@ use crate::words::sim_note_line;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, Target, Telemetry,
+    ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, ReferenceExecutor,
+    Target, Telemetry,
 };
+use skyplan_flight::reference::Reference;
 use skyplan_flight::upload::{MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{
@@ -133,6 +135,43 @@ pub struct FlyOptions {
     pub user_start: bool,
 }
 
+/// A plan turned into the reference to fly (a time-parametrised trajectory through its
+/// waypoints, say); an error stops the run before the flight.
+pub type MakeReference = Arc<dyn Fn(&Plan) -> Result<Arc<dyn Reference>, String> + Send + Sync>;
+
+/// What a GUIDED run flies by instead of waypoint-by-waypoint position targets
+/// ([`fly_mission_with`]): setpoints with feed-forward streamed from a [`Reference`]'s clock
+/// ([`ReferenceExecutor`]). No replanner watches such a flight (a reference cannot be replanned
+/// in flight yet).
+#[derive(Clone)]
+pub enum ReferenceSource {
+    /// This reference, whatever the plan (its frame: the map's local NED about its home).
+    Given(Arc<dyn Reference>),
+    /// The reference made from the plan, once it is planned (from where the vehicle is).
+    FromPlan(MakeReference),
+}
+
+impl std::fmt::Debug for ReferenceSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReferenceSource::Given(r) => write!(f, "Given({} s)", r.duration_s()),
+            ReferenceSource::FromPlan(_) => f.write_str("FromPlan(..)"),
+        }
+    }
+}
+
+impl ReferenceSource {
+    /// The reference for `plan`.
+    pub fn reference(&self, plan: &Plan) -> Result<Arc<dyn Reference>, RunError> {
+        match self {
+            ReferenceSource::Given(r) => Ok(Arc::clone(r)),
+            ReferenceSource::FromPlan(make) => {
+                make(plan).map_err(|e| RunError::BadInput(format!("the reference: {e}")))
+            }
+        }
+    }
+}
+
 /// How a run ended: a flight (its outcome, `None` if an aborted flight did not land in time),
 /// or an upload without a flight.
 #[derive(Debug, Clone, PartialEq)]
@@ -191,12 +230,32 @@ impl Flight {
 pub fn fly_mission<O: RunObserver>(
     address: &Address,
     frame: &LocalFrame,
-    (world, limits, mut request): (World, Limits, PlanRequest),
+    inputs: (World, Limits, PlanRequest),
     o: &FlyOptions,
     sim: Option<&InProcessSim>,
     interrupt: Arc<AtomicBool>,
     observer: &mut O,
 ) -> Result<Flight, O::Error> {
+    fly_mission_with(address, frame, inputs, o, None, sim, interrupt, observer)
+}
+
+/// As [`fly_mission`]; with `reference` (GUIDED only), the flight follows the reference made
+/// for the plan (take-off over its start, its setpoints streamed with feed-forward from its
+/// clock, a hold at its end, the landing), and its summary tells the tracking.
+#[allow(clippy::too_many_arguments)]
+pub fn fly_mission_with<O: RunObserver>(
+    address: &Address,
+    frame: &LocalFrame,
+    (world, limits, mut request): (World, Limits, PlanRequest),
+    o: &FlyOptions,
+    reference: Option<&ReferenceSource>,
+    sim: Option<&InProcessSim>,
+    interrupt: Arc<AtomicBool>,
+    observer: &mut O,
+) -> Result<Flight, O::Error> {
+    if reference.is_some() && matches!(o.mode, Mode::Upload { .. }) {
+        return Err(bad("a reference is flown in GUIDED, not as an uploaded mission").into());
+    }
     let mut gcs = GroundStation::connect(address, o.ground).map_err(RunError::from)?;
     gcs.set_interrupt(interrupt);
     observer.say(&format!(
@@ -213,8 +272,8 @@ pub fn fly_mission<O: RunObserver>(
     let t_plan = Instant::now();
     let session = Session::new(world).with_limits(limits);
     let replanner = match o.mode {
-        Mode::Guided(replanner) => replanner,
-        Mode::Upload { .. } => None,
+        Mode::Guided(replanner) if reference.is_none() => replanner,
+        Mode::Guided(_) | Mode::Upload { .. } => None,
     };
     let (plan, watcher) =
         plan_with_replanner(session, request.clone(), replanner).map_err(RunError::from)?;
@@ -240,6 +299,35 @@ pub fn fly_mission<O: RunObserver>(
     observer.planned(&plan)?;
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
     let config = o.executor;
+    if let Some(source) = reference {
+        if matches!(o.mode, Mode::Guided(Some(_))) {
+            observer.say("replan     none: a flight by a reference is not replanned in flight");
+        }
+        let r = source.reference(&plan)?;
+        let (start, end) = (
+            r.setpoint(0.0).point_ned,
+            r.setpoint(r.duration_s()).point_ned,
+        );
+        observer.say(&format!(
+            "reference  {:.1} s from N {:.1} m, E {:.1} m, {:.1} m up to N {:.1} m, E {:.1} m, {:.1} m up, flown by setpoints with velocity and acceleration",
+            r.duration_s(),
+            start[0],
+            start[1],
+            -start[2],
+            end[0],
+            end[1],
+            -end[2]
+        ));
+        let mut ex = ReferenceExecutor::new(r, config).map_err(bad)?;
+        let (log, outcome, _) = fly_with(&mut gcs, &mut ex, frame, sim, observer)?;
+        return Ok(Flight {
+            log,
+            ended: Ended::Flight(outcome),
+            plan,
+            watcher: None,
+            replanned: Vec::new(),
+        });
+    }
     let Mode::Upload { fly } = o.mode else {
         let mut ex = MissionExecutor::new(&targets, config).map_err(bad)?;
         let (log, outcome, replanned) = fly_with(&mut gcs, &mut ex, frame, sim, observer)?;

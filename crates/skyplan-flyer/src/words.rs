@@ -12,7 +12,7 @@
 //! );
 //! ```
 
-use skyplan_flight::executor::{FailsafeAction, FlightState, Note};
+use skyplan_flight::executor::{FailsafeAction, FlightState, Note, TrackingReport};
 use skyplan_flight::sensing::ReplanEvent;
 use skyplan_link::ground::{LogRow, Progress, Update};
 use skyplan_link::vehicle::SimNote;
@@ -65,6 +65,37 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
         }
         Note::Finished => return None,
     })
+}
+
+/// How a flight by a reference went: the largest tracking error, the reference's duration and
+/// the time flown on it (from its clock's start to the arrival at its end) with their ratio.
+///
+/// ```
+/// use skyplan_flight::executor::TrackingReport;
+/// let r = TrackingReport {
+///     duration_s: 50.0,
+///     started_s: Some(8.0),
+///     flown_s: Some(50.5),
+///     max_tracking_error_m: 0.031,
+///     samples: 480,
+///     setpoints_sent: 790,
+/// };
+/// assert_eq!(
+///     skyplan_flyer::words::tracking_line(&r),
+///     "reference  max tracking error 0.03 m over 480 samples; reference duration 50.0 s, flown 50.5 s on it (1.010 of its duration); 790 setpoints sent"
+/// );
+/// ```
+pub fn tracking_line(r: &TrackingReport) -> String {
+    let flown = match (r.started_s, r.flown_s, r.time_ratio()) {
+        (_, Some(f), Some(ratio)) => format!("flown {f:.1} s on it ({ratio:.3} of its duration)"),
+        (_, Some(f), None) => format!("flown {f:.1} s on it"),
+        (Some(_), None, _) => "its end not reached".to_string(),
+        (None, None, _) => "its clock never started (the start was not reached)".to_string(),
+    };
+    format!(
+        "reference  max tracking error {:.2} m over {} samples; reference duration {:.1} s, {flown}; {} setpoints sent",
+        r.max_tracking_error_m, r.samples, r.duration_s, r.setpoints_sent
+    )
 }
 
 /// How a simulator note reads (`None`: not worth a line).

@@ -8,7 +8,9 @@
 //! STATUSTEXT → reasons, MISSION_ITEM_REACHED / MISSION_CURRENT → mission progress), its
 //! `Command`s become COMMAND_LONG (DO_SET_MODE GUIDED, COMPONENT_ARM_DISARM, NAV_TAKEOFF,
 //! NAV_LAND) and SET_POSITION_TARGET_GLOBAL_INT (`MAV_FRAME_GLOBAL_RELATIVE_ALT_INT`, `type_mask`
-//! 0x9F8: position + yaw). Heartbeats go out at 1 Hz from their own thread; a vehicle silent for
+//! 0x9F8: position + yaw; a reference's setpoint, `Command::Track`, with `type_mask` 0x0800:
+//! position, velocity, acceleration and yaw, stamped with the vehicle's time it holds at).
+//! Heartbeats go out at 1 Hz from their own thread; a vehicle silent for
 //! [`GroundConfig::link_timeout_s`] is a lost link. Autopilots stream nothing by default
 //! (ArduCopter's rates are 0): every message needed is requested with SET_MESSAGE_INTERVAL, and
 //! with REQUEST_DATA_STREAM as well when that brings nothing.
@@ -32,7 +34,8 @@
 use crate::{Address, Link, LinkError};
 use mavlink::dialects::common::*;
 use skyplan_flight::executor::{
-    FailsafeAction, FlightExecutor, FlightState, Note, Target, Telemetry, VehicleMode,
+    FailsafeAction, FlightExecutor, FlightState, Note, Target, Telemetry, TrackingReport,
+    VehicleMode,
 };
 use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteWatcher};
 use skyplan_flight::upload::{ItemCommand, MissionItem, MissionPlan, UploadConfig};
@@ -257,6 +260,9 @@ pub struct FlightSummary {
     pub readings: usize,
     /// Where the latest reading saw obstacles (map frame, north/east metres).
     pub last_hits_ne: Vec<[f64; 2]>,
+    /// How the reference was followed, for a flight by a reference (its executor's
+    /// [`FlightExecutor::tracking`]); times in the vehicle's clock when it stamps its positions.
+    pub tracking: Option<TrackingReport>,
 }
 
 /// A connection to one vehicle: the link and the clock around the station's protocol
@@ -383,8 +389,13 @@ impl GroundStation {
         let now_s = self.now_s();
         let mut flight =
             FlightLoop::start(&mut self.protocol, ex, frame, self.config, watcher, now_s)?;
+        // A reference's setpoints go out at ≥ 10 Hz of vehicle time, also at a speed-up.
+        let wait = match ex.tracking() {
+            Some(_) => Duration::from_millis(1),
+            None => Duration::from_millis(5),
+        };
         while !flight.finished(ex) {
-            let r = self.link.recv_timeout(Duration::from_millis(5));
+            let r = self.link.recv_timeout(wait);
             let interrupted = (self.interrupt.as_ref()).is_some_and(|f| f.load(Ordering::Relaxed));
             let now_s = self.now_s();
             let closed = self.link.closed();
@@ -401,7 +412,9 @@ impl GroundStation {
                 on_update(u);
             }
         }
-        Ok(flight.summary(&self.protocol, self.now_s()))
+        let mut summary = flight.summary(&self.protocol, self.now_s());
+        summary.tracking = ex.tracking();
+        Ok(summary)
     }
 }
 
@@ -485,6 +498,10 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
 
 /// `type_mask` of a position + yaw target: ignore velocity, acceleration and yaw rate.
 pub const POSITION_AND_YAW: u16 = 0x9F8;
+
+/// `type_mask` of a reference's setpoint: position, velocity, acceleration (not force) and yaw;
+/// only the yaw rate ignored.
+pub const POSITION_VELOCITY_ACCELERATION_AND_YAW: u16 = 0x0800;
 
 #[cfg(test)]
 mod tests {

@@ -3,9 +3,13 @@
 //! It behaves like ArduCopter where it matters to a ground station: system 1, component 1,
 //! `MAV_AUTOPILOT_ARDUPILOTMEGA` with ArduCopter's custom mode numbers; answers COMMAND_LONG
 //! (ARM_DISARM, NAV_TAKEOFF, NAV_LAND, DO_SET_MODE, MISSION_START, SET_MESSAGE_INTERVAL), SET_MODE,
-//! SET_POSITION_TARGET_LOCAL_NED (position, optional yaw), the mission upload (MISSION_COUNT →
-//! MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0 is the home, as on
-//! ArduPilot) and MISSION_CLEAR_ALL. Like ArduCopter, it sends only HEARTBEAT (1 Hz), command
+//! SET_POSITION_TARGET_LOCAL_NED and _GLOBAL_INT (position, optional yaw), the mission upload
+//! (MISSION_COUNT → MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0
+//! is the home, as on ArduPilot) and MISSION_CLEAR_ALL. Position targets may carry a velocity and
+//! an acceleration (their `type_mask` bits clear), followed as feed-forward
+//! ([`skyplan_flight::sim::SimVehicle::set_target`]); unlike ArduCopter, a stamped target
+//! (`time_boot_ms`) is brought to the vehicle's time first ([`stamped`]).
+//! Like ArduCopter, it sends only HEARTBEAT (1 Hz), command
 //! and mission answers, MISSION_ITEM_REACHED and STATUSTEXT (the reason of every refusal)
 //! unrequested: LOCAL_POSITION_NED, GLOBAL_POSITION_INT, ATTITUDE, EXTENDED_SYS_STATE,
 //! MISSION_CURRENT and GPS_GLOBAL_ORIGIN stream only once asked for with SET_MESSAGE_INTERVAL or
@@ -36,7 +40,7 @@ use mavlink::MessageData;
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
 use skyplan_flight::flat_earth::FlatEarth;
-use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimVehicle};
+use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimTarget, SimVehicle};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_map::colliders::ObstacleBox;
 use std::net::{SocketAddr, TcpListener};
@@ -631,14 +635,15 @@ fn handle_message(
             let position_ignored = mask & 0x7 != 0;
             let local = matches!(t.coordinate_frame, MavFrame::MAV_FRAME_LOCAL_NED);
             if !position_ignored && local {
-                let yaw = if mask & 0x400 != 0 {
-                    f64::NAN
-                } else {
-                    f64::from(t.yaw)
-                };
+                let target = sim_target(
+                    mask,
+                    [f64::from(t.x), f64::from(t.y), f64::from(t.z)],
+                    [t.vx, t.vy, t.vz],
+                    [t.afx, t.afy, t.afz],
+                    t.yaw,
+                );
                 // Ignored outside GUIDED, as ArduPilot does.
-                let _ =
-                    v.set_position_target([f64::from(t.x), f64::from(t.y), f64::from(t.z)], yaw);
+                let _ = v.set_target(stamped(target, t.time_boot_ms, v.state().time_s));
             }
         }
         MavMessage::MISSION_COUNT(c) => {
@@ -789,13 +794,60 @@ fn position_target_global(
         } else {
             f64::from(t.alt) - side.home_alt_m
         };
-        let yaw = if mask & 0x400 != 0 {
+        let target = sim_target(
+            mask,
+            [north_m, east_m, -alt_m],
+            [t.vx, t.vy, t.vz],
+            [t.afx, t.afy, t.afz],
+            t.yaw,
+        );
+        // Ignored outside GUIDED, as ArduPilot does.
+        let _ = v.set_target(stamped(target, t.time_boot_ms, v.state().time_s));
+    }
+}
+
+/// A position target's `type_mask` bits: velocity ignored (x, y, z)…
+const MASK_VELOCITY: u16 = 0x38;
+/// …acceleration ignored (x, y, z)…
+const MASK_ACCELERATION: u16 = 0x1C0;
+/// …the acceleration fields are a force…
+const MASK_FORCE: u16 = 0x200;
+/// …yaw ignored.
+const MASK_YAW: u16 = 0x400;
+
+/// A SET_POSITION_TARGET_* as the simulator's target: the position (NED, true north), the
+/// velocity (m/s NED) when no velocity bit of `mask` is set, the acceleration (m/s² NED) when no
+/// acceleration bit is set and it is not a force, the yaw unless masked.
+pub fn sim_target(
+    mask: u16,
+    position_ned_m: [f64; 3],
+    velocity: [f32; 3],
+    accel: [f32; 3],
+    yaw_rad: f32,
+) -> SimTarget {
+    let wide = |v: [f32; 3]| v.map(f64::from);
+    SimTarget {
+        position_ned_m,
+        velocity_ned_m_s: (mask & MASK_VELOCITY == 0).then(|| wide(velocity)),
+        accel_ned_m_s2: (mask & (MASK_ACCELERATION | MASK_FORCE) == 0).then(|| wide(accel)),
+        yaw_rad: if mask & MASK_YAW != 0 {
             f64::NAN
         } else {
-            f64::from(t.yaw)
-        };
-        // Ignored outside GUIDED, as ArduPilot does.
-        let _ = v.set_position_target([north_m, east_m, -alt_m], yaw);
+            f64::from(yaw_rad)
+        },
+    }
+}
+
+/// A target with velocity stamped `time_boot_ms` brought to the vehicle's time `now_s` (at
+/// constant acceleration), making up the transport delay as MAVLink describes the stamp;
+/// unchanged without a stamp (0), without a velocity, or with a stamp more than 1 s off (a
+/// clock that is not the vehicle's). ArduCopter ignores the stamp.
+pub fn stamped(target: SimTarget, time_boot_ms: u32, now_s: f64) -> SimTarget {
+    let dt_s = now_s - f64::from(time_boot_ms) * 1e-3;
+    if time_boot_ms == 0 || target.velocity_ned_m_s.is_none() || dt_s.abs() > 1.0 {
+        target
+    } else {
+        target.advanced(dt_s)
     }
 }
 

@@ -6,7 +6,9 @@ use super::faults::{Faults, PendingHold};
 use super::interface::{
     Command, CommandKind, Event, FailsafeAction, FlightState, Target, Telemetry, VehicleMode,
 };
-use super::report::{ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached};
+use super::report::{
+    ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached, TrackingReport,
+};
 use crate::sensing::ReplanEvent;
 use std::fmt;
 
@@ -35,6 +37,10 @@ pub trait Strategy: Clone + fmt::Debug {
     fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool;
     /// Sees every event first (mission progress, acknowledgements).
     fn observe(&mut self, core: &mut Core, now_s: f64, event: &Event, out: &mut Output);
+    /// How a reference is being followed, for a strategy that flies one.
+    fn tracking(&self) -> Option<TrackingReport> {
+        None
+    }
 }
 
 /// The state every executor keeps, and the steps all of them share.
@@ -66,7 +72,7 @@ pub struct Core {
     /// Entries of `reached` that belong to routes flown before the current one (replans).
     pub(crate) route_start: usize,
     /// Length of the current route's first leg (from the vehicle when it was replanned), metres.
-    first_leg_m: f64,
+    pub(crate) first_leg_m: f64,
     /// No route to fly: holding here before landing.
     no_route: Option<NoRouteHold>,
 }
@@ -767,6 +773,11 @@ pub trait FlightExecutor {
     ) -> Result<Output, ConfigError>;
     /// See [`Executor::hold_no_route`].
     fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output;
+    /// How the reference is being followed, for an executor that flies one
+    /// ([`super::ReferenceExecutor`]); `None` for the others.
+    fn tracking(&self) -> Option<TrackingReport> {
+        None
+    }
 }
 
 impl<S: Strategy> FlightExecutor for Executor<S> {
@@ -816,5 +827,8 @@ impl<S: Strategy> FlightExecutor for Executor<S> {
     }
     fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output {
         Executor::hold_no_route(self, now_s, reason)
+    }
+    fn tracking(&self) -> Option<TrackingReport> {
+        self.strategy.tracking()
     }
 }

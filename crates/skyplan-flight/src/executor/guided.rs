@@ -20,7 +20,7 @@ impl Executor<GuidedTargets> {
 }
 
 /// The target to stream for waypoint `w`.
-fn goto(w: &Target) -> Command {
+pub(super) fn goto(w: &Target) -> Command {
     Command::GoTo {
         north_m: w.north_m,
         east_m: w.east_m,
@@ -49,27 +49,7 @@ impl Strategy for GuidedTargets {
     fn observe(&mut self, _core: &mut Core, _now_s: f64, _event: &Event, _out: &mut Output) {}
 
     fn takeoff(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
-        let c = core.config;
-        let alt_m = core.targets[0].alt_m;
-        if !t.armed {
-            core.fail(Failure::DisarmedInFlight { state: core.state }, out);
-        } else if !t.guided {
-            core.fail(Failure::ControlLost { state: core.state }, out);
-        } else if t.alt_m() >= c.takeoff_fraction * alt_m {
-            core.enter(FlightState::Waypoint, now_s, out);
-            core.leg_since_s = now_s;
-            return true;
-        } else if now_s - core.state_since_s > c.takeoff_timeout_s {
-            let awaited = format!(
-                "the vehicle reached {:.1} m of the {:.1} m needed",
-                t.alt_m(),
-                c.takeoff_fraction * alt_m
-            );
-            core.time_out(now_s, c.takeoff_timeout_s, &awaited, out);
-        } else if !core.acked() && core.due(now_s, c.retry_s) {
-            out.commands.push(Command::Takeoff { alt_m });
-        }
-        false
+        takeoff_to_first(core, now_s, t, out)
     }
 
     fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
@@ -125,4 +105,35 @@ impl Strategy for GuidedTargets {
         }
         false
     }
+}
+
+/// TAKEOFF in GUIDED: NAV_TAKEOFF to the first target's altitude, re-sent until accepted;
+/// `true` once WAYPOINT is entered (at the take-off fraction of the altitude).
+pub(super) fn takeoff_to_first(
+    core: &mut Core,
+    now_s: f64,
+    t: &Telemetry,
+    out: &mut Output,
+) -> bool {
+    let c = core.config;
+    let alt_m = core.targets[0].alt_m;
+    if !t.armed {
+        core.fail(Failure::DisarmedInFlight { state: core.state }, out);
+    } else if !t.guided {
+        core.fail(Failure::ControlLost { state: core.state }, out);
+    } else if t.alt_m() >= c.takeoff_fraction * alt_m {
+        core.enter(FlightState::Waypoint, now_s, out);
+        core.leg_since_s = now_s;
+        return true;
+    } else if now_s - core.state_since_s > c.takeoff_timeout_s {
+        let awaited = format!(
+            "the vehicle reached {:.1} m of the {:.1} m needed",
+            t.alt_m(),
+            c.takeoff_fraction * alt_m
+        );
+        core.time_out(now_s, c.takeoff_timeout_s, &awaited, out);
+    } else if !core.acked() && core.due(now_s, c.retry_s) {
+        out.commands.push(Command::Takeoff { alt_m });
+    }
+    false
 }

@@ -1,5 +1,6 @@
 //! What goes in and out of an executor: vehicle states, telemetry, events and commands.
 
+use crate::reference::Setpoint;
 use std::f64::consts::PI;
 use std::fmt;
 
@@ -133,6 +134,9 @@ pub struct Telemetry {
     pub guided: bool,
     /// The vehicle's own landed flag, when it sends one (EXTENDED_SYS_STATE).
     pub on_ground: Option<bool>,
+    /// When the vehicle sampled this, in the executor's clock (seconds), when the link knows it
+    /// from the vehicle's own time stamp; `None`: at the time of the event.
+    pub sample_time_s: Option<f64>,
 }
 
 impl Telemetry {
@@ -208,6 +212,15 @@ pub enum Command {
         down_m: f64,
         /// Heading, radians clockwise from north.
         yaw_rad: f64,
+    },
+    /// Follow a reference: this position + velocity + acceleration + yaw target
+    /// (SET_POSITION_TARGET_*, only the yaw rate ignored), valid at executor time `time_s` (the
+    /// link stamps it with the vehicle's time of that instant).
+    Track {
+        /// The reference's setpoint, in the mission's local frame.
+        setpoint: Setpoint,
+        /// Executor time at which the setpoint holds, seconds.
+        time_s: f64,
     },
     /// Land where the vehicle is.
     Land,

@@ -270,6 +270,36 @@ impl Default for ExecutorConfig {
     }
 }
 
+/// How a reference was followed ([`super::ReferenceExecutor`]). Times are executor seconds;
+/// with the vehicle's time stamps (`Telemetry::sample_time_s`) they are the vehicle's own.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackingReport {
+    /// The reference's duration, seconds.
+    pub duration_s: f64,
+    /// When the reference clock started (the vehicle at rest over the start), if it has.
+    pub started_s: Option<f64>,
+    /// From the clock's start to the arrival within the deadband of the last point, seconds,
+    /// once arrived.
+    pub flown_s: Option<f64>,
+    /// The largest distance between the vehicle and the reference's setpoint at the same
+    /// reference time while streaming, metres (0 before any sample).
+    pub max_tracking_error_m: f64,
+    /// Telemetry samples compared with the reference.
+    pub samples: usize,
+    /// Setpoints sent.
+    pub setpoints_sent: usize,
+}
+
+impl TrackingReport {
+    /// Flown time over the reference's duration (`None` before the arrival or for a reference
+    /// of no duration).
+    pub fn time_ratio(&self) -> Option<f64> {
+        self.flown_s
+            .filter(|_| self.duration_s > 0.0)
+            .map(|f| f / self.duration_s)
+    }
+}
+
 /// A mission the executor cannot fly.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{0}")]

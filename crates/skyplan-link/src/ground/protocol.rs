@@ -14,8 +14,8 @@
 
 use super::{
     Autopilot, FlightSummary, GroundConfig, GroundError, LogRow, ORIGIN_GRACE_S, POSITION_AND_YAW,
-    Progress, SYSTEM_ID, Update, UploadReport, VehicleInfo, Waiting, global_lla,
-    grid_convergence_rad, mission_item_int,
+    POSITION_VELOCITY_ACCELERATION_AND_YAW, Progress, SYSTEM_ID, Update, UploadReport, VehicleInfo,
+    Waiting, global_lla, grid_convergence_rad, mission_item_int,
 };
 use crate::Received;
 use crate::obstacle::reading_from_obstacle_distance;
@@ -26,6 +26,7 @@ use skyplan_flight::executor::{
     wrap_angle_rad,
 };
 use skyplan_flight::modes::{arducopter, px4};
+use skyplan_flight::reference::Setpoint;
 use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteDecision, RouteWatcher};
 use skyplan_flight::upload::{
     MissionPlan, MissionUpload, UploadConfig, UploadEvent, UploadSend, UploadStatus,
@@ -282,7 +283,38 @@ impl GroundProtocol {
                 [north_m, east_m, down_m],
                 wrap_angle_rad(yaw_rad + convergence_rad),
             )?],
+            Command::Track { setpoint, .. } => {
+                vec![self.track_target(frame, &setpoint, convergence_rad, 0)?]
+            }
         })
+    }
+
+    /// SET_POSITION_TARGET_GLOBAL_INT of a reference's setpoint in the mission's frame:
+    /// position (altitude relative to home), velocity and acceleration (turned from the map's
+    /// grid north to true north by `convergence_rad`) and yaw, `type_mask`
+    /// [`POSITION_VELOCITY_ACCELERATION_AND_YAW`] (only the yaw rate ignored). `time_boot_ms` is
+    /// the vehicle's time at which the setpoint holds (0: unknown), for the vehicle to make up
+    /// the transport delay as MAVLink describes the field.
+    pub fn track_target(
+        &self,
+        frame: &LocalFrame,
+        setpoint: &Setpoint,
+        convergence_rad: f64,
+        time_boot_ms: u32,
+    ) -> Result<MavMessage, String> {
+        let yaw_rad = wrap_angle_rad(setpoint.yaw_rad + convergence_rad);
+        let mut m = self.position_target(frame, setpoint.point_ned, yaw_rad)?;
+        let (c, s) = (convergence_rad.cos(), convergence_rad.sin());
+        let true_north =
+            |[n, e, d]: [f64; 3]| [(n * c - e * s) as f32, (n * s + e * c) as f32, d as f32];
+        if let MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) = &mut m {
+            [t.vx, t.vy, t.vz] = true_north(setpoint.vel_ned_m_s);
+            [t.afx, t.afy, t.afz] = true_north(setpoint.accel_ned_m_s2);
+            t.type_mask =
+                PositionTargetTypemask::from_bits_truncate(POSITION_VELOCITY_ACCELERATION_AND_YAW);
+            t.time_boot_ms = time_boot_ms;
+        }
+        Ok(m)
     }
 
     /// SET_POSITION_TARGET_GLOBAL_INT of a point of the mission's frame (position and yaw,
@@ -368,6 +400,7 @@ impl GroundProtocol {
             armed: self.armed,
             guided: self.guided(),
             on_ground: self.on_ground,
+            sample_time_s: None,
         })
     }
 
@@ -647,6 +680,10 @@ pub struct FlightLoop {
     last_global_ms: Option<u32>,
     last_mode: Option<VehicleMode>,
     sent_targets: usize,
+    /// The vehicle's clock minus ours (vehicle seconds): the largest seen, i.e. the position
+    /// that came fastest; frozen once a reference's setpoints are stamped with it.
+    boot_offset_s: Option<f64>,
+    offset_frozen: bool,
     readings: usize,
     last_hits_ne: Vec<[f64; 2]>,
     warned: Vec<String>,
@@ -721,6 +758,8 @@ impl FlightLoop {
             last_global_ms: None,
             last_mode: None,
             sent_targets: 0,
+            boot_offset_s: None,
+            offset_frozen: false,
             readings: 0,
             last_hits_ne: Vec::new(),
             warned: Vec::new(),
@@ -844,12 +883,28 @@ impl FlightLoop {
         if let MavMessage::GLOBAL_POSITION_INT(g) = &r.message
             && p.is_from_vehicle(r)
             && self.last_global_ms != Some(g.time_boot_ms)
-            && let Some(tel) = p.telemetry(g, &self.frame, self.convergence_rad)
+            && let Some(mut tel) = p.telemetry(g, &self.frame, self.convergence_rad)
         {
             self.last_global_ms = Some(g.time_boot_ms);
+            tel.sample_time_s = self.sample_time_s(now_s, g.time_boot_ms);
             events.push(Event::Telemetry(tel));
         }
         FromMessage { events, reading }
+    }
+
+    /// The executor time at which the vehicle sampled a position stamped `time_boot_ms`,
+    /// received at `now_s`: its stamp less the offset between the clocks (learnt here until
+    /// frozen). `None` for a vehicle without a clock (stamp 0).
+    fn sample_time_s(&mut self, now_s: f64, time_boot_ms: u32) -> Option<f64> {
+        if time_boot_ms == 0 {
+            return None;
+        }
+        let boot_s = f64::from(time_boot_ms) * 1e-3;
+        let offset_s = boot_s - self.vehicle_s(now_s);
+        if !self.offset_frozen {
+            self.boot_offset_s = Some(self.boot_offset_s.map_or(offset_s, |o| o.max(offset_s)));
+        }
+        self.boot_offset_s.map(|o| boot_s - o)
     }
 
     /// An OBSTACLE_DISTANCE from the vehicle decoded at its last position (`None` before the
@@ -893,7 +948,12 @@ impl FlightLoop {
         interrupted: bool,
     ) -> Vec<Event> {
         let mut events = Vec::new();
-        if now_s - self.last_tick_s >= 0.05 {
+        // A reference is streamed at ≥ 10 Hz of vehicle time: ticks every 0.05 vehicle seconds.
+        let tick_s = match ex.tracking() {
+            Some(_) => 0.05_f64.min(0.05 / self.speedup),
+            None => 0.05,
+        };
+        if now_s - self.last_tick_s >= tick_s {
             self.last_tick_s = now_s;
             events.push(Event::Tick);
         }
@@ -947,8 +1007,20 @@ impl FlightLoop {
         out: &mut Vec<MavMessage>,
     ) {
         for c in &output.commands {
-            if matches!(c, Command::GoTo { .. }) {
+            if matches!(c, Command::GoTo { .. } | Command::Track { .. }) {
                 self.sent_targets += 1;
+            }
+            if let Command::Track { setpoint, time_s } = c {
+                // Stamped with the vehicle's time of the instant it holds at.
+                self.offset_frozen = true;
+                let stamp_ms = self.boot_offset_s.map_or(0, |o| {
+                    ((time_s + o) * 1e3).round().clamp(1.0, f64::from(u32::MAX)) as u32
+                });
+                if let Ok(m) = p.track_target(&self.frame, setpoint, self.convergence_rad, stamp_ms)
+                {
+                    out.push(m);
+                }
+                continue;
             }
             // A target without latitude/longitude is not sent; the executor sees no progress.
             if let Ok(messages) = p.command(*c, &self.frame, self.convergence_rad) {
@@ -1032,6 +1104,7 @@ impl FlightLoop {
             replans: self.replans,
             readings: self.readings,
             last_hits_ne: self.last_hits_ne,
+            tracking: None,
         }
     }
 }

@@ -1,0 +1,407 @@
+//! The reference-tracking strategy: fly a time-parametrised [`Reference`] instead of
+//! waypoint by waypoint.
+//!
+//! TAKEOFF as in GUIDED, to the altitude of the reference's start; then, in WAYPOINT:
+//! 1. *approach*: the start point streamed as a position + yaw target until the vehicle is within
+//!    [`START_TOLERANCE_M`] of it, heading within tolerance and slower than
+//!    [`START_SPEED_M_S`] (at rest: the reference starts at rest); that reaches target 0 and
+//!    starts the reference clock;
+//! 2. *streaming*: [`Command::Track`] of `setpoint(t)` every [`REFERENCE_PERIOD_S`] until
+//!    t ≥ the duration; each telemetry sample is compared with the setpoint at its own reference
+//!    time (the vehicle's time stamp, [`Telemetry::sample_time_s`], when the link has it);
+//! 3. *holding*: the last point streamed as a position target until the vehicle is within the
+//!    deadband (target 1 reached: the arrival), then the landing as in GUIDED.
+
+use super::core::{Core, Executor, Strategy};
+use super::guided::{goto, takeoff_to_first};
+use super::interface::{Command, Event, Target, Telemetry};
+use super::report::{ConfigError, ExecutorConfig, Failure, Output, TrackingReport};
+use crate::reference::Reference;
+use std::fmt;
+use std::sync::Arc;
+
+/// Executor seconds between two setpoints streamed (20 Hz: ≥ 10 Hz even when events come late);
+/// a setpoint goes out with the first event at least 90 % of it after the last one.
+pub const REFERENCE_PERIOD_S: f64 = 0.05;
+
+/// The reference clock starts once the vehicle is this close to the start, metres (and within
+/// the deadband vertically)…
+pub const START_TOLERANCE_M: f64 = 0.2;
+
+/// …and slower than this, m/s: at rest, as the reference starts.
+pub const START_SPEED_M_S: f64 = 0.1;
+
+/// Where the reference flight stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Approach,
+    Streaming,
+    Holding,
+}
+
+/// Reference tracking: see the module documentation.
+#[derive(Clone)]
+pub struct ReferenceTracking {
+    reference: Arc<dyn Reference>,
+    phase: Phase,
+    duration_s: f64,
+    clock_start_s: Option<f64>,
+    arrival_s: Option<f64>,
+    max_error_m: f64,
+    samples: usize,
+    last_sample_s: Option<f64>,
+    setpoints_sent: usize,
+}
+
+impl fmt::Debug for ReferenceTracking {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ReferenceTracking")
+            .field("phase", &self.phase)
+            .field("duration_s", &self.duration_s)
+            .field("clock_start_s", &self.clock_start_s)
+            .field("arrival_s", &self.arrival_s)
+            .field("max_error_m", &self.max_error_m)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The executor that flies a [`Reference`].
+pub type ReferenceExecutor = Executor<ReferenceTracking>;
+
+impl Executor<ReferenceTracking> {
+    /// An executor for `reference` (finite duration ≥ 0, its start above the ground). Its two
+    /// targets are the reference's start and end points (headings: the setpoints' yaw).
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use skyplan_flight::executor::{ExecutorConfig, ReferenceExecutor};
+    /// use skyplan_flight::reference::MinJerkLine;
+    /// let r = MinJerkLine::new(vec![[0.0, 0.0, -5.0], [30.0, 0.0, -5.0]], vec![10.0])?;
+    /// let ex = ReferenceExecutor::new(Arc::new(r), ExecutorConfig::default())?;
+    /// assert_eq!(ex.targets().len(), 2);
+    /// assert_eq!(ex.tracking().unwrap().duration_s, 10.0);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn new(reference: Arc<dyn Reference>, config: ExecutorConfig) -> Result<Self, ConfigError> {
+        let duration_s = reference.duration_s();
+        if !duration_s.is_finite() || duration_s < 0.0 {
+            return Err(ConfigError(format!(
+                "the reference's duration {duration_s} s is not a finite time"
+            )));
+        }
+        let (start, end) = (reference.setpoint(0.0), reference.setpoint(duration_s));
+        if !start.is_finite() || !end.is_finite() {
+            return Err(ConfigError(
+                "the reference's start or end is not finite".into(),
+            ));
+        }
+        let target = |s: crate::reference::Setpoint| Target {
+            north_m: s.point_ned[0],
+            east_m: s.point_ned[1],
+            alt_m: -s.point_ned[2],
+            heading_rad: s.yaw_rad,
+        };
+        let strategy = ReferenceTracking {
+            reference,
+            phase: Phase::Approach,
+            duration_s,
+            clock_start_s: None,
+            arrival_s: None,
+            max_error_m: 0.0,
+            samples: 0,
+            last_sample_s: None,
+            setpoints_sent: 0,
+        };
+        Self::with_strategy(&[target(start), target(end)], config, strategy)
+    }
+
+    /// How the reference is being followed.
+    pub fn tracking(&self) -> Option<TrackingReport> {
+        super::FlightExecutor::tracking(self)
+    }
+}
+
+impl ReferenceTracking {
+    /// Compares a new telemetry sample with the reference at its reference time.
+    fn measure(&mut self, t: &Telemetry, now_s: f64) {
+        let Some(start_s) = self.clock_start_s else {
+            return;
+        };
+        let sample_s = t.sample_time_s.unwrap_or(now_s);
+        if self.last_sample_s == Some(sample_s) {
+            return;
+        }
+        self.last_sample_s = Some(sample_s);
+        let t_ref = sample_s - start_s;
+        if (0.0..=self.duration_s).contains(&t_ref) {
+            let error_m = self
+                .reference
+                .setpoint(t_ref)
+                .distance_m([t.north_m, t.east_m, t.down_m]);
+            self.max_error_m = self.max_error_m.max(error_m);
+            self.samples += 1;
+        }
+    }
+}
+
+impl Strategy for ReferenceTracking {
+    const DISARM_WAIT_S: f64 = 0.0;
+    const COMMANDS_LANDING: bool = true;
+    const REPLANS: bool = false;
+
+    fn in_control(&self, _core: &Core, t: &Telemetry) -> bool {
+        t.guided
+    }
+
+    fn ready_to_fly(&self, _core: &Core, t: &Telemetry) -> bool {
+        t.guided && t.armed
+    }
+
+    fn start(&mut self, _core: &mut Core, _now_s: f64, _out: &mut Output) -> bool {
+        true
+    }
+
+    fn observe(&mut self, _core: &mut Core, now_s: f64, event: &Event, _out: &mut Output) {
+        if let Event::Telemetry(t) = event {
+            self.measure(t, now_s);
+        }
+    }
+
+    fn takeoff(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        let entered = takeoff_to_first(core, now_s, t, out);
+        if entered {
+            core.first_leg_m = core.targets[0].horizontal_error_m(t);
+        }
+        entered
+    }
+
+    fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        let c = core.config;
+        if !t.armed {
+            core.fail(Failure::DisarmedInFlight { state: core.state }, out);
+            return false;
+        }
+        if !t.guided {
+            core.fail(Failure::ControlLost { state: core.state }, out);
+            return false;
+        }
+        let sample_s = t.sample_time_s.unwrap_or(now_s);
+        if self.phase == Phase::Approach {
+            let start = core.targets[0];
+            if start.horizontal_error_m(t) <= START_TOLERANCE_M
+                && start.vertical_error_m(t) <= c.vertical_deadband_m.min(START_TOLERANCE_M)
+                && start.heading_error_rad(t) <= c.heading_tolerance_rad
+                && t.speed_m_s() < START_SPEED_M_S
+            {
+                core.reach(now_s, 0, out);
+                self.clock_start_s = Some(now_s);
+                self.phase = Phase::Streaming;
+                core.last_send_s = None;
+            } else {
+                let budget_s = core.leg_budget_s(0);
+                if now_s - core.leg_since_s > budget_s {
+                    let awaited = format!(
+                        "the reference's start not reached at rest: {:.1} m away horizontally, {:.1} m vertically, heading off by {:.1}°, {:.1} m/s",
+                        start.horizontal_error_m(t),
+                        start.vertical_error_m(t),
+                        start.heading_error_rad(t).to_degrees(),
+                        t.speed_m_s()
+                    );
+                    core.time_out(now_s, budget_s, &awaited, out);
+                } else if core.due(now_s, c.target_period_s) {
+                    out.commands.push(goto(&start));
+                }
+                return false;
+            }
+        }
+        let start_s = self.clock_start_s.unwrap_or(now_s);
+        if self.phase == Phase::Streaming {
+            let t_ref = now_s - start_s;
+            if t_ref < self.duration_s {
+                if core.due(now_s, 0.9 * REFERENCE_PERIOD_S) {
+                    out.commands.push(Command::Track {
+                        setpoint: self.reference.setpoint(t_ref),
+                        time_s: now_s,
+                    });
+                    self.setpoints_sent += 1;
+                }
+                return false;
+            }
+            self.phase = Phase::Holding;
+            core.leg_since_s = now_s;
+            core.last_send_s = None;
+        }
+        // Holding at the last point.
+        let end = core.targets[1];
+        if self.arrival_s.is_none()
+            && end.horizontal_error_m(t) <= c.deadband_m
+            && end.vertical_error_m(t) <= c.vertical_deadband_m
+        {
+            self.arrival_s = Some(sample_s.max(start_s));
+            core.reach(now_s, 1, out);
+        }
+        if self.arrival_s.is_some() && t.speed_m_s() < c.land_speed_m_s {
+            core.land_after_mission(now_s, Self::COMMANDS_LANDING, out);
+            return true;
+        }
+        if now_s - core.leg_since_s > c.leg_timeout_base_s {
+            let awaited = format!(
+                "the reference's end not reached and stopped at: {:.1} m away horizontally, {:.1} m vertically, {:.1} m/s",
+                end.horizontal_error_m(t),
+                end.vertical_error_m(t),
+                t.speed_m_s()
+            );
+            core.time_out(now_s, c.leg_timeout_base_s, &awaited, out);
+        } else if core.due(now_s, c.target_period_s) {
+            out.commands.push(goto(&end));
+        }
+        false
+    }
+
+    fn tracking(&self) -> Option<TrackingReport> {
+        Some(TrackingReport {
+            duration_s: self.duration_s,
+            started_s: self.clock_start_s,
+            flown_s: (self.arrival_s.zip(self.clock_start_s)).map(|(a, s)| a - s),
+            max_tracking_error_m: self.max_error_m,
+            samples: self.samples,
+            setpoints_sent: self.setpoints_sent,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::executor::{FlightState, Note, Outcome};
+    use crate::reference::MinJerkLine;
+    use crate::sim::{SimConfig, SimVehicle};
+    use crate::testkit::{apply, telemetry};
+
+    /// Three legs, up to 8 m/s, starting 10 m east of home (the vehicle flies there first).
+    fn three_legs() -> MinJerkLine {
+        let points = vec![
+            [0.0, 10.0, -12.0],
+            [90.0, 10.0, -12.0],
+            [90.0, 80.0, -15.0],
+            [20.0, 80.0, -15.0],
+        ];
+        MinJerkLine::at_peak_speed(points, 8.0).unwrap()
+    }
+
+    #[test]
+    fn flies_a_reference_against_the_simulated_vehicle_and_tracks_it_closely() {
+        let r = Arc::new(three_legs());
+        let mut ex = ReferenceExecutor::new(r.clone(), ExecutorConfig::default()).unwrap();
+        let mut v = SimVehicle::new(SimConfig::default());
+        let (mut t, mut pending, mut states) = (0.0, Vec::new(), vec![ex.state()]);
+        let mut worst: f64 = 0.0;
+        while ex.outcome().is_none() && t < 400.0 {
+            for _ in 0..5 {
+                v.step(0.01);
+            }
+            t += 0.05;
+            let mut events = std::mem::take(&mut pending);
+            events.push(Event::Telemetry(telemetry(&v)));
+            for e in events {
+                let out = ex.handle(t, e);
+                for n in &out.notes {
+                    if let Note::State { to, .. } = n {
+                        states.push(*to);
+                    }
+                }
+                for c in out.commands {
+                    pending.extend(apply(&mut v, c));
+                }
+            }
+            // Independent check: the vehicle against the reference at the same time.
+            if let Some(start) = ex.tracking().unwrap().started_s {
+                let tr = t - start;
+                if (0.0..=r.duration_s()).contains(&tr) {
+                    worst = worst.max(r.setpoint(tr).distance_m(v.state().position_ned_m));
+                }
+            }
+        }
+        assert_eq!(
+            ex.outcome(),
+            Some(&Outcome::Completed),
+            "{:?}",
+            ex.outcome()
+        );
+        use FlightState::*;
+        assert_eq!(
+            states,
+            vec![
+                Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+            ]
+        );
+        let report = ex.tracking().unwrap();
+        assert!(report.max_tracking_error_m <= 0.1, "{report:?}");
+        // The executor's own measure never exceeds the independent one (which also counts the
+        // sample at the clock's start, within START_TOLERANCE_M).
+        assert!(worst <= 0.2, "{worst}");
+        assert!(
+            report.max_tracking_error_m <= worst + 1e-9,
+            "{report:?} vs {worst}"
+        );
+        assert!(
+            report.samples as f64 > r.duration_s() / 0.05 - 2.0,
+            "{report:?}"
+        );
+        let ratio = report.time_ratio().unwrap();
+        assert!((1.0..1.05).contains(&ratio), "{report:?}");
+        let s = v.state();
+        assert!(s.on_ground && !s.armed);
+        assert!(
+            (s.position_ned_m[0] - 20.0).hypot(s.position_ned_m[1] - 80.0) < 1.0,
+            "{s:?}"
+        );
+    }
+
+    /// A vehicle that never gets to the start at rest: the approach times out (its leg budget)
+    /// and the executor lands; the reference clock never started.
+    #[test]
+    fn an_unreached_start_times_out_and_lands_without_starting_the_clock() {
+        let r = MinJerkLine::new(vec![[50.0, 0.0, -5.0], [80.0, 0.0, -5.0]], vec![10.0]).unwrap();
+        let config = ExecutorConfig {
+            leg_timeout_base_s: 5.0,
+            leg_timeout_per_m_s: 0.1,
+            ..ExecutorConfig::default()
+        };
+        let mut ex = ReferenceExecutor::new(Arc::new(r), config).unwrap();
+        let hovering = crate::testkit::hovering();
+        let mut commands = Vec::new();
+        for k in 0..200 {
+            let t = f64::from(k) * 0.1;
+            commands.extend(ex.handle(t, Event::Telemetry(hovering)).commands);
+        }
+        assert!(commands.contains(&Command::GoTo {
+            north_m: 50.0,
+            east_m: 0.0,
+            down_m: -5.0,
+            yaw_rad: 0.0
+        }));
+        assert!(!commands.iter().any(|c| matches!(c, Command::Track { .. })));
+        assert_eq!(commands.last(), Some(&Command::Land), "{commands:?}");
+        assert_eq!(ex.state(), FlightState::Landing);
+        let report = ex.tracking().unwrap();
+        assert_eq!(
+            (report.started_s, report.flown_s, report.samples),
+            (None, None, 0)
+        );
+    }
+
+    #[test]
+    fn a_reference_that_is_not_finite_is_refused() {
+        struct Bad;
+        impl Reference for Bad {
+            fn duration_s(&self) -> f64 {
+                f64::INFINITY
+            }
+            fn setpoint(&self, _t_s: f64) -> crate::reference::Setpoint {
+                crate::reference::Setpoint::at_rest([0.0, 0.0, -5.0], 0.0)
+            }
+        }
+        assert!(ReferenceExecutor::new(Arc::new(Bad), ExecutorConfig::default()).is_err());
+    }
+}

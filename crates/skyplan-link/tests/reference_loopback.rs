@@ -1,0 +1,171 @@
+//! A reference flown over a real loopback TCP socket: setpoints with velocity and acceleration
+//! (SET_POSITION_TARGET_GLOBAL_INT, type_mask 0x0800) from the ground station to the simulator.
+
+use skyplan_flight::executor::{ExecutorConfig, FlightState, Note, Outcome, ReferenceExecutor};
+use skyplan_flight::reference::{MinJerkLine, Reference, Setpoint};
+use skyplan_frames::{Lla, LocalFrame};
+use skyplan_link::ground::{
+    GroundConfig, GroundProtocol, GroundStation, POSITION_VELOCITY_ACCELERATION_AND_YAW, Update,
+    grid_convergence_rad,
+};
+use skyplan_link::in_process::InProcessSim;
+use skyplan_link::mavlink::dialects::common::MavMessage;
+use skyplan_link::vehicle::{SimNote, SimServerConfig, sim_target, stamped};
+use std::sync::Arc;
+use std::time::Duration;
+
+const HOME: Lla = Lla {
+    lat_deg: 37.792480,
+    lon_deg: -122.397450,
+    alt_m: 0.0,
+};
+
+/// The ground's message of a setpoint carries the mask 0x0800, the position, the velocity and
+/// the acceleration turned to true north, the stamp; the vehicle side decodes them back.
+#[test]
+fn a_setpoint_goes_out_with_velocity_and_acceleration_and_comes_back() {
+    let frame = LocalFrame::new(HOME).unwrap();
+    let gamma = grid_convergence_rad(&frame, HOME).unwrap();
+    assert!(gamma.to_degrees() > 0.3); // turned, so that a missing turn shows
+    let setpoint = Setpoint {
+        point_ned: [30.0, -20.0, -12.0],
+        vel_ned_m_s: [6.0, -2.0, 0.5],
+        accel_ned_m_s2: [-1.0, 0.25, 0.1],
+        yaw_rad: 0.5,
+    };
+    let m = GroundProtocol::new()
+        .track_target(&frame, &setpoint, gamma, 123_456)
+        .unwrap();
+    let MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) = &m else {
+        panic!("{m:?}");
+    };
+    assert_eq!(t.type_mask.bits(), 0x0800);
+    assert_eq!(POSITION_VELOCITY_ACCELERATION_AND_YAW, 0x0800);
+    assert_eq!(t.time_boot_ms, 123_456);
+    assert!((f64::from(t.alt) - 12.0).abs() < 1e-6);
+    assert!((f64::from(t.yaw) - (0.5 + gamma)).abs() < 1e-6);
+    // True north: the map's grid north is `gamma` east of it.
+    let (c, s) = (gamma.cos(), gamma.sin());
+    let turned = |[n, e, d]: [f64; 3]| [n * c - e * s, n * s + e * c, d];
+    let close = |a: [f32; 3], b: [f64; 3]| (0..3).all(|i| (f64::from(a[i]) - b[i]).abs() < 1e-5);
+    assert!(
+        close([t.vx, t.vy, t.vz], turned(setpoint.vel_ned_m_s)),
+        "{t:?}"
+    );
+    assert!(
+        close([t.afx, t.afy, t.afz], turned(setpoint.accel_ned_m_s2)),
+        "{t:?}"
+    );
+    // The map frame's point, back from the message's latitude and longitude.
+    let lla = Lla {
+        lat_deg: f64::from(t.lat_int) * 1e-7,
+        lon_deg: f64::from(t.lon_int) * 1e-7,
+        alt_m: 0.0,
+    };
+    let ned = frame.ned_from_lla(lla).unwrap();
+    assert!((ned.north_m - 30.0).abs() < 0.02 && (ned.east_m + 20.0).abs() < 0.02);
+    // The vehicle side: velocity and acceleration given (their mask bits clear), the yaw too.
+    let decoded = sim_target(
+        t.type_mask.bits(),
+        [1.0, 2.0, -12.0],
+        [t.vx, t.vy, t.vz],
+        [t.afx, t.afy, t.afz],
+        t.yaw,
+    );
+    let v = decoded.velocity_ned_m_s.unwrap();
+    let a = decoded.accel_ned_m_s2.unwrap();
+    assert!(close([t.vx, t.vy, t.vz], v) && close([t.afx, t.afy, t.afz], a));
+    assert!((decoded.yaw_rad - f64::from(t.yaw)).abs() < 1e-12);
+    // Stamped 0.2 s before the vehicle's now: brought forward at constant acceleration.
+    let now = stamped(decoded, t.time_boot_ms, 123.656);
+    assert!((now.position_ned_m[0] - (1.0 + v[0] * 0.2 + 0.5 * a[0] * 0.04)).abs() < 1e-9);
+    // A position-only target's mask (0x9F8) gives neither, as before.
+    let plain = sim_target(0x9F8, [1.0, 2.0, -3.0], [9.0; 3], [9.0; 3], 0.0);
+    assert_eq!((plain.velocity_ned_m_s, plain.accel_ned_m_s2), (None, None));
+    // A force is not an acceleration.
+    assert_eq!(
+        sim_target(0x0A00, [0.0; 3], [1.0; 3], [1.0; 3], 0.0).accel_ned_m_s2,
+        None
+    );
+}
+
+/// Three legs of 60–100 m at up to 8 m/s, flown by the simulator at 20× over TCP: lands at the
+/// goal, tracks the reference within 0.5 m, and takes its duration within 5 %.
+#[test]
+fn flies_a_min_jerk_reference_over_tcp_within_half_a_metre() {
+    let points = vec![
+        [0.0, 0.0, -10.0],
+        [90.0, 0.0, -10.0],
+        [90.0, 70.0, -12.0],
+        [30.0, 70.0, -12.0],
+    ];
+    let reference = Arc::new(MinJerkLine::at_peak_speed(points.clone(), 8.0).unwrap());
+    let config = SimServerConfig {
+        speedup: 20.0,
+        ..SimServerConfig::at(HOME)
+    };
+    let sim = InProcessSim::start(config, None).unwrap();
+    let ground = GroundConfig {
+        speedup: 20.0,
+        timeout_s: Some(60.0),
+        ..GroundConfig::default()
+    };
+    let mut gcs = GroundStation::connect(&sim.address(), ground).unwrap();
+    gcs.wait_for_vehicle(Duration::from_secs(10), |_, _| {})
+        .unwrap();
+    let mut ex = ReferenceExecutor::new(reference.clone(), ExecutorConfig::default()).unwrap();
+    let frame = LocalFrame::new(HOME).unwrap();
+    let mut states = vec![FlightState::Manual];
+    let summary = gcs
+        .fly(&mut ex, &frame, |u| {
+            if let Update::Notes(_, notes) = u {
+                for n in notes {
+                    if let Note::State { to, .. } = n {
+                        states.push(to);
+                    }
+                }
+            }
+        })
+        .unwrap();
+    let (report, sim_notes) = sim.finish();
+    let report = report.unwrap();
+    assert_eq!(ex.outcome(), Some(&Outcome::Completed), "{sim_notes:?}");
+    use FlightState::*;
+    assert_eq!(
+        states,
+        vec![
+            Manual, Arming, Takeoff, Waypoint, Landing, Disarming, Manual
+        ]
+    );
+    assert!(sim_notes.contains(&SimNote::Landed));
+    // Landed at the goal (the simulator's own final position, true-north frame about home:
+    // within the 0.37° turn of 80 m ≈ 0.5 m plus the acceptance radius of the map's goal).
+    let last = report.final_state.position_ned_m;
+    let goal = points[3];
+    assert!(
+        (last[0] - goal[0]).hypot(last[1] - goal[1]) < 2.0,
+        "{last:?}"
+    );
+    assert!(report.final_state.on_ground && !report.final_state.armed);
+    let tracking = summary.tracking.unwrap();
+    assert_eq!(tracking, ex.tracking().unwrap());
+    assert!(tracking.max_tracking_error_m <= 0.5, "{tracking:?}");
+    // The position stream is 10 Hz of vehicle time; at 20× on a busy machine some are late or
+    // merged: at least half of them compared.
+    let expected = reference.duration_s() / 0.1;
+    assert!(tracking.samples as f64 >= 0.5 * expected, "{tracking:?}");
+    assert!(
+        tracking.setpoints_sent as f64 >= reference.duration_s() * 10.0,
+        "{tracking:?}"
+    );
+    let ratio = tracking.time_ratio().unwrap();
+    assert!((0.95..=1.05).contains(&ratio), "{tracking:?}");
+    eprintln!(
+        "tracking: max error {:.3} m, flown {:.2} s of a {:.2} s reference (ratio {ratio:.4}), {} samples, {} setpoints",
+        tracking.max_tracking_error_m,
+        tracking.flown_s.unwrap(),
+        tracking.duration_s,
+        tracking.samples,
+        tracking.setpoints_sent
+    );
+}
