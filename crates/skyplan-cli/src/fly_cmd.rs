@@ -79,6 +79,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
+    if request.trajectory == Some(true) && (args.upload || args.upload_only) {
+        return Err(bad_input(
+            "--trajectory is flown in GUIDED by setpoints with velocity and acceleration; --upload flies waypoints in AUTO: drop one of them",
+        ));
+    }
     let format = args.format.as_deref().or(config.text.format.as_deref());
     let out = (args.out.clone().or(config.path(&config.text.out)))
         .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))
@@ -120,12 +125,14 @@ pub fn run(args: FlyArgs) -> Result<()> {
         in_flight: Arc::clone(&ctrl_c.in_flight),
     };
     let interrupt = Arc::clone(&ctrl_c.interrupt);
+    let reference = (request.trajectory == Some(true)).then(skyplan_flyer::trajectory::from_plan);
     let planned = (world, limits, request);
-    let result = runner::fly_mission(
+    let result = runner::fly_mission_with(
         &address,
         &frame,
         planned,
         &options,
+        reference.as_ref(),
         sim.as_ref(),
         interrupt,
         &mut terminal,
@@ -251,7 +258,19 @@ fn vehicle(
         let address = Address::parse(&args.connect, Role::Client).map_err(bad_input)?;
         return Ok((address, None));
     }
+    let mut vehicle = skyplan_flight::sim::SimConfig::default();
+    if request.trajectory == Some(true) {
+        // The trajectory's limits are the vehicle's: simulate one that can fly them, with
+        // headroom for its controllers (as a real autopilot's tilt limit gives).
+        let l = request.trajectory_limits();
+        vehicle.max_accel_m_s2 = vehicle.max_accel_m_s2.max(1.5 * l.max_accel_m_s2);
+        vehicle.max_ground_speed_m_s = vehicle.max_ground_speed_m_s.max(l.max_speed_m_s);
+        vehicle.max_climb_m_s = vehicle.max_climb_m_s.max(l.max_climb_m_s);
+        vehicle.max_descent_m_s = vehicle.max_descent_m_s.max(l.max_descent_m_s);
+        vehicle.max_yaw_rate_rad_s = vehicle.max_yaw_rate_rad_s.max(l.max_yaw_rate_rad_s());
+    }
     let config = SimServerConfig {
+        sim: vehicle,
         speedup: args.speedup,
         drop_link_after_s: args.sim_drop_link_after_s,
         link_gap_s: args.sim_link_gap_s,

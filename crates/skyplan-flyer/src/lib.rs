@@ -15,4 +15,5 @@
 pub mod flight;
 pub mod mission;
 pub mod runner;
+pub mod trajectory;
 pub mod words;

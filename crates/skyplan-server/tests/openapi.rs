@@ -447,9 +447,9 @@ fn answer_schema<'a>(doc: &'a Value, path: &str, method: &str, status: StatusCod
 }
 
 /// A request for every planner that each plans on the city quickly (a 5 m grid: `ch`'s
-/// preprocessing at 1 m takes minutes), with the pictures' geometry.
+/// preprocessing at 1 m takes minutes), with the pictures' geometry and a trajectory.
 fn quick_request(p: PlannerId) -> Value {
-    json!({ "planner": p.name(), "goal_ne": [60.0, 40.0], "cell_m": 5.0, "geometry": true })
+    json!({ "planner": p.name(), "goal_ne": [60.0, 40.0], "cell_m": 5.0, "geometry": true, "trajectory": true })
 }
 
 #[tokio::test]

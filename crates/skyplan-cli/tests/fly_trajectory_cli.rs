@@ -1,0 +1,113 @@
+//! `skyplan fly --sim --trajectory`: the default route's trajectory flown by setpoints with
+//! velocity and acceleration on the built-in simulator — landed at the goal, no collision, the
+//! vehicle within 0.5 m of the trajectory at every sample, the flight as long as the trajectory
+//! to 5 %; and the refusals.
+
+mod common;
+use common::cmd;
+
+fn run(line: &str) -> (Option<i32>, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = cmd(dir.path(), line).output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.status.code(), text)
+}
+
+/// The number after `prefix` in `text`.
+fn number_after(text: &str, prefix: &str) -> f64 {
+    let at = text
+        .find(prefix)
+        .unwrap_or_else(|| panic!("no {prefix:?} in {text}"))
+        + prefix.len();
+    let digits: String = text[at..]
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.')
+        .collect();
+    digits
+        .parse()
+        .unwrap_or_else(|_| panic!("no number after {prefix:?} in {text}"))
+}
+
+#[test]
+fn the_default_routes_trajectory_is_flown_within_half_a_metre_and_on_time() {
+    let (code, text) = run("fly --sim --trajectory --speedup 20 --timeout-s 300");
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        text.contains("result     landed and disarmed after flying the reference to its end"),
+        "{text}"
+    );
+    assert!(
+        text.contains("no collision with the map's obstacles"),
+        "{text}"
+    );
+    let error_m = number_after(&text, "reference  max tracking error ");
+    assert!(error_m <= 0.5, "tracking error {error_m} m: {text}");
+    let ratio = number_after(&text, "on it (");
+    assert!(
+        (0.95..=1.05).contains(&ratio),
+        "flown/duration {ratio}: {text}"
+    );
+    let at = text
+        .lines()
+        .find(|l| l.starts_with("vehicle    at N "))
+        .unwrap_or_else(|| panic!("no final position in {text}"));
+    let (at_n, at_e) = (number_after(at, "at N "), number_after(at, "m, E "));
+    assert!(
+        (at_n - 420.0).hypot(at_e - 390.0) < 1.5,
+        "landed at N {at_n}, E {at_e}: {text}"
+    );
+}
+
+#[test]
+fn a_trajectory_is_not_uploaded_and_limits_need_it() {
+    let (code, text) = run("fly --sim --trajectory --upload");
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("--trajectory is flown in GUIDED"), "{text}");
+    let (code, text) = run("fly --sim --max-speed-m-s 3");
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("--max-speed-m-s is used only with a trajectory: ask for one (--trajectory)"),
+        "{text}"
+    );
+}
+
+#[test]
+fn plan_writes_the_samples_as_csv_with_the_documented_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = cmd(
+        dir.path(),
+        "plan --trajectory --goal-ne 60,40 --samples traj.csv --out w.json",
+    )
+    .output()
+    .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.path().join("traj.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("t_s,north_m,east_m,alt_m,v_north,v_east,v_up,a_north,a_east,a_up,yaw_deg")
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() > 20);
+    // 10 Hz, from rest at the start to rest at the goal.
+    assert_eq!(rows[1][0], 0.1);
+    let last = rows.last().unwrap();
+    assert!((last[1] - 60.0).abs() < 1e-9 && (last[2] - 40.0).abs() < 1e-9);
+    assert!(last[4..10].iter().all(|v| v.abs() < 1e-9));
+    let (code, text) = run("plan --samples traj.csv");
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("--samples writes a trajectory's samples: add --trajectory"),
+        "{text}"
+    );
+}
