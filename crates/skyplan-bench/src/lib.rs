@@ -26,6 +26,7 @@ pub mod python_peers;
 pub mod replay;
 pub mod replay_report;
 pub mod three_d;
+pub mod trajectory_bench;
 
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;

@@ -19,6 +19,31 @@ const PEERS_PY: &str = include_str!("../../../bench/peers.py");
 /// The OMPL peers script (`bench/peers3d.py`), compiled in.
 const PEERS3D_PY: &str = include_str!("../../../bench/peers3d.py");
 
+/// The trajectory peers script (`bench/peers_trajectory.py`), compiled in.
+const PEERS_TRAJECTORY_PY: &str = include_str!("../../../bench/peers_trajectory.py");
+
+/// Runs TOPP-RA and ruckig (`bench/peers_trajectory.py`) on the routes with the limits: its
+/// stdout (one JSON object per peer and route), or the note why it did not run.
+pub fn trajectory_peers(
+    routes: &[Vec<Neu>],
+    limits: &skyplan_plan::TrajectoryLimits,
+) -> Result<String, String> {
+    let files = [("routes.json", json!(routes).to_string().into_bytes())];
+    run_script(
+        "trajectory peers",
+        ("peers_trajectory", PEERS_TRAJECTORY_PY),
+        &files,
+        |dir| {
+            vec![
+                dir.join("routes.json").into(),
+                limits.max_speed_m_s.to_string().into(),
+                limits.max_accel_m_s2.to_string().into(),
+                limits.max_jerk_m_s3.to_string().into(),
+            ]
+        },
+    )
+}
+
 /// The 3D peers' runs (name, one record per query) and notes.
 pub type PeerRuns3 = (Vec<(String, Vec<Rec3>)>, Vec<String>);
 

@@ -289,6 +289,9 @@ impl MovesArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
+    /// Trajectory mode: --random N far routes on the bundled city (default 20, at least 600 m apart), a trajectory of each within the default limits: compute time, duration against the route at the speed limit and against stopping at each waypoint, violations (checked independently); TOPP-RA and ruckig on the same routes with --peers.
+    #[arg(long, conflicts_with_all = ["three_d", "replan", "scen", "map"])]
+    pub trajectory: bool,
     /// 3D mode: every skyplan 3D planner (and OMPL's PRM, RRT-Connect and RRT* with --peers) on
     /// random free 3D queries plus the FCND route, among the boxes grown by --safety-m.
     #[arg(long = "3d")]

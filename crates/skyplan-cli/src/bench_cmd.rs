@@ -39,6 +39,9 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     if args.three_d {
         return crate::bench3d_cmd::run(args);
     }
+    if args.trajectory {
+        return crate::bench_traj_cmd::run(&args);
+    }
     if args.random == Some(0) {
         return Err(bad_input("--random 0: expected at least 1 query"));
     }

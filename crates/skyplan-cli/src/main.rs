@@ -4,6 +4,7 @@
 mod args;
 mod bench3d_cmd;
 mod bench_cmd;
+mod bench_traj_cmd;
 mod config;
 mod exit;
 mod files;

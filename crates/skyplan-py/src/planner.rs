@@ -341,6 +341,21 @@ impl Plan {
         Ok(Some(numpy::IntoPyArray::into_pyarray(a, py)))
     }
 
+    /// (n, 11) float64 array of the trajectory's samples (`trajectory=True`), rows `[t_s,
+    /// north_m, east_m, alt_m, v_north, v_east, v_up, a_north, a_east, a_up, yaw_deg]` at
+    /// `sample_hz`; None without a trajectory. Its method, pieces and proven bounds are in
+    /// `stats["trajectory"]`.
+    #[getter]
+    fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        let Some(t) = &self.inner.trajectory else {
+            return Ok(None);
+        };
+        let flat: Vec<f64> = t.samples.iter().flatten().copied().collect();
+        let a = Array2::from_shape_vec((t.samples.len(), 11), flat)
+            .map_err(|e| to_py(PlanFailure::internal(format!("trajectory: {e}"))))?;
+        Ok(Some(numpy::IntoPyArray::into_pyarray(a, py)))
+    }
+
     /// The planner's route length, metres (octile cost of a grid path; Euclidean length of
     /// any-angle, roadmap and 3D routes).
     #[getter]
@@ -363,6 +378,9 @@ impl Plan {
         if let Some(obj) = value.as_object_mut() {
             obj.remove("waypoints");
             obj.remove("waypoints_lla");
+            if let Some(t) = obj.get_mut("trajectory").and_then(|t| t.as_object_mut()) {
+                t.remove("samples"); // the `trajectory` array
+            }
         }
         json_to_py(py, &value)
     }

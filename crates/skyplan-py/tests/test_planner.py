@@ -70,6 +70,25 @@ def test_plan_equals_the_cli(city, cli, tmp_path, options, args):
     assert mine.read_bytes() == out.read_bytes()
 
 
+def test_trajectory_samples_are_the_clis_csv(city, cli, tmp_path):
+    """trajectory=True gives the samples as an (n, 11) array, equal to the CLI's --samples CSV."""
+    assert city.plan().trajectory is None
+    out = tmp_path / "traj.csv"
+    run_cli(cli, "plan", "--trajectory", "--goal-ne", "60,40", "--samples", str(out),
+            "--out", str(tmp_path / "w.json"), cwd=tmp_path)
+    want = np.loadtxt(out, delimiter=",", skiprows=1)
+    plan = city.plan(goal_ne=(60, 40), trajectory=True, max_speed_m_s=10.0)
+    got = plan.trajectory
+    assert got.dtype == np.float64 and got.shape == want.shape and got.shape[1] == 11
+    np.testing.assert_allclose(got[:, 1:10], want[:, 1:10], rtol=0, atol=1e-9)
+    assert np.all(np.linalg.norm(got[:, 4:7], axis=1) <= 10.0 + 1e-9)
+    stats = plan.stats["trajectory"]
+    assert stats["method"] == "minimum_jerk" and "samples" not in stats
+    assert stats["bounds"]["speed_m_s"] <= 10.0 + 1e-9
+    with pytest.raises(skyplan.BadInput, match="max_speed_m_s is used only with a trajectory"):
+        city.plan(max_speed_m_s=3.0)
+
+
 def test_positional_start_goal_are_north_east(city, cli, tmp_path):
     want, _ = cli_plan(cli, tmp_path, "--start-ne=-101.5,21.5", "--goal-ne", "250,-300")
     plan = city.plan((-101.5, 21.5), (250, -300))

@@ -139,6 +139,10 @@ class Plan:
     def lla(self) -> Optional[npt.NDArray[np.float64]]:
         """(n, 2) ``[lat_deg, lon_deg]``, None on maps without a geodetic home."""
     @property
+    def trajectory(self) -> Optional[npt.NDArray[np.float64]]:
+        """(n, 11) samples ``[t_s, north_m, east_m, alt_m, v_north, v_east, v_up, a_north,
+        a_east, a_up, yaw_deg]`` of the trajectory (``trajectory=True``), or None."""
+    @property
     def cost_m(self) -> float:
         """Route length of the planner, metres."""
     @property
