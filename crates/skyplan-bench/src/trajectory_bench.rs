@@ -142,6 +142,9 @@ pub fn skyplan_rows(
     Ok([opt, stop])
 }
 
+/// One peer's runs: its name, (duration s, compute ms) per route, its notes.
+type PeerRuns = (String, Vec<Option<(f64, f64)>>, Vec<String>);
+
 /// The peers' rows from the script's output lines, in route order (a route a peer failed is
 /// left out of its row and named in its notes).
 pub fn peer_rows(stdout: &str, routes: usize) -> Vec<TrajRow> {
@@ -153,7 +156,7 @@ pub fn peer_rows(stdout: &str, routes: usize) -> Vec<TrajRow> {
         other => other.to_string(),
     }
     };
-    let mut per: Vec<(String, Vec<Option<(f64, f64)>>, Vec<String>)> = Vec::new();
+    let mut per: Vec<PeerRuns> = Vec::new();
     for line in stdout.lines() {
         let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
             continue;

@@ -58,10 +58,7 @@ pub fn samples_hdf5<const N: usize>(
         ByteOrder::LittleEndian,
     )
     .data(&values)?
-    .attribute(AttributeBuilder::fixed_string(
-        "columns",
-        &columns.join(","),
-    ));
+    .attribute(AttributeBuilder::fixed_string("columns", columns.join(",")));
     let plan = Hdf5Builder::new().dataset(dataset).into_plan()?;
     let options = WriteOptions {
         byte_order: ByteOrder::LittleEndian,

@@ -10,13 +10,15 @@
 //! 2. **Minimum jerk**: one quintic Bézier piece per box, position, velocity and acceleration
 //!    continuous, at rest at both ends, every control point inside its box — so the whole
 //!    continuous curve is inside the box (a Bézier curve lies in the convex hull of its control
-//!    points). A quadratic programme per axis, solved by `clarabel`.
-//! 3. **Time**: the curve's shape does not change when all durations are scaled by one factor,
-//!    and its derivatives scale by powers of it: the factor that makes the tightest of the speed,
-//!    climb, descent, acceleration and jerk bounds exactly tight is computed in closed form from
-//!    bounds on the derivative curves (hull bounds after splitting, valid everywhere on the
-//!    curve, not just at samples). Durations are then re-allocated piece by piece while the
-//!    total falls.
+//!    points). One quadratic programme, solved by `clarabel`: first at the speed limit
+//!    everywhere, for the shape; then with durations from a speed profile along that shape (the
+//!    turns' radii, acceleration from rest and to rest), the joins held near the shape's.
+//! 3. **Time**: derivatives scale by powers of a common factor of the durations, so the factor
+//!    that makes the tightest of the speed, climb, descent, acceleration and jerk bounds exactly
+//!    tight is computed in closed form from bounds on the derivative curves (hull bounds after
+//!    splitting, valid everywhere on the curve, not just at samples). Durations are then
+//!    re-allocated piece by piece (a piece slower than its own bounds allow is shortened) while
+//!    the total falls.
 //! 4. **Proof** ([`verify`]): every guarantee is checked again from the final pieces; a
 //!    trajectory that fails is never returned. If optimising fails or runs out of time, the
 //!    jerk-limited stop-at-each-waypoint profile ([`stop_at_waypoints`]) is used instead (it

@@ -50,8 +50,7 @@ enum SolveError {
     Other(String),
 }
 
-/// Rows of `A x + s = b`, in cone order: equalities, then inequalities, then second-order
-/// cones of `dims + 1` rows each.
+/// Rows of `A x + s = b`, in cone order: equalities, then inequalities.
 #[derive(Default)]
 struct Rows {
     i: Vec<usize>,
@@ -81,8 +80,6 @@ struct Problem<'a> {
     times: &'a [f64],
     dims: usize,
     lim: &'a Limits,
-    /// Norm limits on the derivative control points (second-order cones).
-    cones: bool,
     /// Bounds of each join (the point between piece `p` and `p + 1`), shifted like `lo`/`hi`.
     joints: Option<Vec<([f64; 3], [f64; 3])>>,
 }
@@ -200,35 +197,6 @@ impl Problem<'_> {
         }
     }
 
-    /// Norm limits on the control points of velocity, acceleration and jerk (second-order
-    /// cones): each bounds its whole derivative curve by the hull property.
-    fn cones(&self, rows: &mut Rows) -> usize {
-        let mut count = 0;
-        let diffs: [(&[f64], f64, f64); 3] = [
-            (&[-1.0, 1.0], 5.0, self.lim.max_speed_m_s),
-            (&[1.0, -2.0, 1.0], 20.0, self.lim.max_accel_m_s2),
-            (&[-1.0, 3.0, -3.0, 1.0], 60.0, self.lim.max_jerk_m_s3),
-        ];
-        for (p, &t) in self.times.iter().enumerate() {
-            for (order, &(stencil, factor, max)) in diffs.iter().enumerate() {
-                let scale = factor / t.powi(order as i32 + 1);
-                for k in 0..K - stencil.len() + 1 {
-                    rows.push(&[], max);
-                    for d in 0..self.dims {
-                        let terms: Vec<(usize, f64)> = stencil
-                            .iter()
-                            .enumerate()
-                            .map(|(m, &w)| (self.var(p, k + m, d), -w * scale))
-                            .collect();
-                        rows.push(&terms, 0.0);
-                    }
-                    count += 1;
-                }
-            }
-        }
-        count
-    }
-
     fn solve(&self, deadline: Instant) -> Result<Vec<f64>, SolveError> {
         let nv = self.times.len() * K * self.dims;
         let mut rows = Rows::default();
@@ -236,12 +204,10 @@ impl Problem<'_> {
         let n_eq = rows.b.len();
         self.inequalities(&mut rows);
         let n_ineq = rows.b.len() - n_eq;
-        let n_soc = if self.cones { self.cones(&mut rows) } else { 0 };
-        let mut cones = vec![
+        let cones = [
             SupportedConeT::ZeroConeT(n_eq),
             SupportedConeT::NonnegativeConeT(n_ineq),
         ];
-        cones.extend((0..n_soc).map(|_| SupportedConeT::SecondOrderConeT(self.dims + 1)));
         let m = rows.b.len();
         let a_mat = CscMatrix::new_from_triplets(m, nv, rows.i, rows.j, rows.v);
         let left = deadline
@@ -411,7 +377,6 @@ fn shape(
         times,
         dims,
         lim,
-        cones: false,
         joints: joints.map(|j| {
             j.iter()
                 .map(|&q| {
