@@ -6,5 +6,5 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 python3 -m venv .venv
-.venv/bin/pip install --quiet --disable-pip-version-check numpy pyastar2d pathfinding ompl
+.venv/bin/pip install --quiet --disable-pip-version-check numpy pyastar2d pathfinding ompl toppra ruckig
 .venv/bin/python -c "import numpy, pyastar2d, pathfinding, ompl; print('peers ready: numpy', numpy.__version__)"

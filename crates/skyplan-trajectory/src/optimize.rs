@@ -224,6 +224,8 @@ impl Problem<'_> {
             .tol_gap_abs(1e-6)
             .tol_gap_rel(1e-6)
             .tol_feas(1e-7)
+            .iterative_refinement_enable(false)
+            .presolve_enable(false)
             .build()
             .map_err(|e| SolveError::Other(format!("solver settings: {e}")))?;
         let q = vec![0.0; nv];
