@@ -84,6 +84,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
             "--trajectory is flown in GUIDED by setpoints with velocity and acceleration; --upload flies waypoints in AUTO: drop one of them",
         ));
     }
+    if request.trajectory == Some(true) && (args.hidden.is_some() || args.hidden_random > 0) {
+        return Err(bad_input(
+            "--trajectory is not replanned in flight yet: with --hidden or --hidden-random the vehicle would fly into what the map lacks; drop one of them (without --trajectory the replanner flies around them)",
+        ));
+    }
     let format = args.format.as_deref().or(config.text.format.as_deref());
     let out = (args.out.clone().or(config.path(&config.text.out)))
         .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))

@@ -67,6 +67,12 @@ fn a_trajectory_is_not_uploaded_and_limits_need_it() {
     let (code, text) = run("fly --sim --trajectory --upload");
     assert_eq!(code, Some(2), "{text}");
     assert!(text.contains("--trajectory is flown in GUIDED"), "{text}");
+    let (code, text) = run("fly --sim --trajectory --hidden-random 2");
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("--trajectory is not replanned in flight yet"),
+        "{text}"
+    );
     let (code, text) = run("fly --sim --max-speed-m-s 3");
     assert_eq!(code, Some(2), "{text}");
     assert!(
