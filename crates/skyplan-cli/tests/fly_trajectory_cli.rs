@@ -117,3 +117,42 @@ fn plan_writes_the_samples_as_csv_with_the_documented_columns() {
         "{text}"
     );
 }
+
+#[test]
+#[ignore = "needs Python with mcap (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
+fn the_recording_carries_the_trajectory_as_python_mcap_reads_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = cmd(
+        dir.path(),
+        "fly --sim --speedup 20 --trajectory --goal-ne 60,40 --record flight.mcap",
+    )
+    .output()
+    .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = dir.path().join("flight.mcap");
+    let script = r#"
+import json, sys
+from mcap.reader import make_reader
+for schema, channel, msg in make_reader(open(sys.argv[1], 'rb')).iter_messages(topics=['/trajectory']):
+    t = json.loads(msg.data)
+    s = t['samples']
+    print(schema.name, t['method'], len(s), s[0][0], s[-1][0], t['duration_s'], s[-1][1], s[-1][2], t['columns'][10])
+"#;
+    let read = assert_cmd::Command::new(common::python())
+        .args(["-c", script])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&read.stdout).into_owned();
+    let words: Vec<&str> = text.split_whitespace().collect();
+    assert_eq!(words.len(), 9, "one /trajectory message: {text} {}", String::from_utf8_lossy(&read.stderr));
+    assert_eq!(&words[..2], ["skyplan.Trajectory", "minimum_jerk"], "{text}");
+    let n: f64 = words[2].parse().unwrap();
+    let (first, last, duration): (f64, f64, f64) =
+        (words[3].parse().unwrap(), words[4].parse().unwrap(), words[5].parse().unwrap());
+    assert_eq!(first, 0.0);
+    assert_eq!(last, duration);
+    // 10 Hz from 0 to the end, the end included.
+    assert_eq!(n, (duration * 10.0).floor() + 1.0 + f64::from(u8::from(duration * 10.0 % 1.0 != 0.0)));
+    assert_eq!((words[6], words[7], words[8]), ("60.0", "40.0", "yaw_deg"), "{text}");
+}

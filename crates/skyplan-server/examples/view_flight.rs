@@ -21,6 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         reason: "plan".into(),
         planner: plan.planner.to_string(),
         waypoints: plan.points_nea(),
+        trajectory: None,
     }));
     println!("view: http://{}/", view.addr());
 

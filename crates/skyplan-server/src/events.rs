@@ -88,6 +88,34 @@ pub struct RouteEvent {
     pub planner: String,
     /// Waypoints `[north_m, east_m, alt_m]`.
     pub waypoints: Vec<[f64; 3]>,
+    /// The route's trajectory (flights with `--trajectory`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trajectory: Option<TrajectoryEvent>,
+}
+
+/// A trajectory's samples, as `plan --json` gives them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrajectoryEvent {
+    /// How it was made: `minimum_jerk` or `stop_at_waypoints`.
+    pub method: &'static str,
+    /// Total duration, seconds.
+    pub duration_s: f64,
+    /// The samples' columns (`t_s`, `north_m`, … `yaw_deg`).
+    pub columns: [&'static str; 11],
+    /// The samples, one row per instant.
+    pub samples: Vec<[f64; 11]>,
+}
+
+impl TrajectoryEvent {
+    /// The event of a plan's trajectory, if it has one.
+    pub fn of(plan: &skyplan_plan::Plan) -> Option<Self> {
+        plan.trajectory.as_ref().map(|t| TrajectoryEvent {
+            method: t.trajectory.method.name(),
+            duration_s: t.duration_s,
+            columns: t.columns,
+            samples: t.samples.clone(),
+        })
+    }
 }
 
 /// One sweep of the vehicle's obstacle sensor: where it was, and where it saw obstacles.

@@ -42,7 +42,9 @@ mod record;
 mod view;
 
 pub use error::{ApiError, ErrorKind};
-pub use events::{EventSink, FlightEvent, PlanEvent, RouteEvent, SensedEvent, ViewEvent};
+pub use events::{
+    EventSink, FlightEvent, PlanEvent, RouteEvent, SensedEvent, TrajectoryEvent, ViewEvent,
+};
 pub use host::{host_allowed, with_host_check};
 pub use map::MAX_GRID_CELLS;
 pub use record::{RecordError, Recorder};

@@ -53,6 +53,7 @@ impl<W: Write + Seek> Live<W> {
             reason: reason.to_string(),
             planner: plan.planner.to_string(),
             waypoints: plan.points_nea(),
+            trajectory: crate::events::TrajectoryEvent::of(plan),
         });
         self.send(&event, 0.0);
     }
@@ -71,6 +72,7 @@ impl<W: Write + Seek> Live<W> {
                 .iter()
                 .map(|t| [t.north_m, t.east_m, t.alt_m])
                 .collect(),
+            trajectory: None,
         });
         self.send(&route, time_s);
     }

@@ -8,6 +8,8 @@
 //! | `/vehicle/state` | `skyplan.FlightState` (the [`FlightEvent`](crate::FlightEvent)) | flight events |
 //! | `/route` | `foxglove.PosesInFrame` (the waypoints) | route events |
 //! | `/plans` | `skyplan.Plan` (the [`PlanEvent`](crate::PlanEvent)) | plan events |
+//! | `/sensed` | `skyplan.SensedPoints` | sensor readings |
+//! | `/trajectory` | `skyplan.Trajectory` (the [`TrajectoryEvent`](crate::TrajectoryEvent): method, duration, columns, samples) | route events with a trajectory |
 
 use crate::events::ViewEvent;
 use serde_json::{Value, json};
@@ -35,6 +37,7 @@ struct Channels {
     route: u16,
     plans: u16,
     sensed: u16,
+    trajectory: u16,
 }
 
 /// Writes [`ViewEvent`]s to an MCAP file (uncompressed chunks, JSON messages).
@@ -180,6 +183,23 @@ impl<W: Write + Seek> Recorder<W> {
             &serde_json::to_vec(&sensed_schema)?,
         )?;
         let sensed = writer.add_channel(sensed_id, "/sensed", "json", &BTreeMap::new())?;
+        let trajectory_schema = json!({
+            "title": "skyplan.Trajectory",
+            "type": "object",
+            "properties": {
+                "method": { "type": "string" },
+                "duration_s": { "type": "number" },
+                "columns": { "type": "array", "items": { "type": "string" } },
+                "samples": { "type": "array", "items": { "type": "array", "items": { "type": "number" } } },
+            },
+        });
+        let trajectory_id = writer.add_schema(
+            "skyplan.Trajectory",
+            "jsonschema",
+            &serde_json::to_vec(&trajectory_schema)?,
+        )?;
+        let trajectory =
+            writer.add_channel(trajectory_id, "/trajectory", "json", &BTreeMap::new())?;
         let channels = Channels {
             location: ids[0],
             pose: ids[1],
@@ -187,6 +207,7 @@ impl<W: Write + Seek> Recorder<W> {
             route: ids[3],
             plans: ids[4],
             sensed,
+            trajectory,
         };
         Ok(Self {
             writer,
@@ -252,6 +273,10 @@ impl<W: Write + Seek> Recorder<W> {
                     .collect();
                 let m = json!({ "timestamp": timestamp, "frame_id": "map", "poses": poses });
                 self.write(self.channels.route, ns, &m)?;
+                if let Some(t) = &r.trajectory {
+                    let m = serde_json::to_value(t)?;
+                    self.write(self.channels.trajectory, ns, &m)?;
+                }
             }
             ViewEvent::Sensed(e) => {
                 let (ns, _) = stamp(e.time_s);

@@ -521,6 +521,7 @@ fn events_stream_plans_and_flights_and_disconnected_clients_are_freed() {
         reason: "plan".into(),
         planner: "jps".into(),
         waypoints: vec![[0.0, 0.0, 5.0], [10.0, 0.0, 5.0]],
+        trajectory: None,
     }));
     let (code, mut again) = open_events(addr);
     assert_eq!(code, 200);

@@ -28,6 +28,7 @@ fn recording() -> Vec<u8> {
             reason: "plan".into(),
             planner: "jps".into(),
             waypoints: vec![[0.0, 0.0, 5.0], [10.0, 20.0, 5.0]],
+            trajectory: None,
         }),
         0.0,
     )
