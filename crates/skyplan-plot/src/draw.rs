@@ -9,6 +9,7 @@ use plotters::style::text_anchor::HPos;
 use crate::layout::{LegendKind, PlotLayout};
 use crate::rects::blocked_rects;
 use crate::text::{Label, TextMode, VAlign, draw_label, draw_tick};
+use crate::trajectory::SpeedTrace;
 use crate::{PlotError, Scene};
 
 const CSPACE_COLOR: RGBColor = RGBColor(204, 207, 212);
@@ -48,6 +49,8 @@ struct Styles {
     pruned: ShapeStyle,
     replanned: ShapeStyle,
     track: ShapeStyle,
+    /// Width of a trajectory's curve, pixels.
+    trajectory: u32,
     /// Radii of a waypoint, of the start and goal markers, of a learned cell's dot.
     r_wp: u32,
     r_end: u32,
@@ -63,6 +66,7 @@ impl Styles {
             pruned: PRUNED_COLOR.stroke_width(px(3.0 * k)),
             replanned: REPLANNED_COLOR.stroke_width(px(2.4 * k)),
             track: TRACK_COLOR.stroke_width(px(1.4 * k)),
+            trajectory: px(3.0 * k),
             r_wp: px(4.5 * k),
             r_end: px(8.0 * k),
             r_learned: px(2.5 * k),
@@ -72,13 +76,15 @@ impl Styles {
 
 /// Draws the scene on the whole picture `root`; with `heat`, its colours (one level per cell,
 /// row-major from the southern row; `None`: no value) fill the grid instead of the
-/// configuration space, blocked cells black.
+/// configuration space, blocked cells black; with `trace`, a trajectory coloured by speed goes
+/// over the route.
 pub(crate) fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     scene: &Scene,
     l: &PlotLayout,
     mode: TextMode,
     heat: Option<&[Option<u8>]>,
+    trace: Option<&SpeedTrace>,
 ) -> Result<(), PlotError> {
     root.fill(&WHITE).map_err(err)?;
     let (x0, y0, w, h) = l.plot;
@@ -93,9 +99,9 @@ pub(crate) fn draw<DB: DrawingBackend>(
     }
     draw_obstacles(&mut chart, scene, heat.is_none())?;
     draw_roadmap(&mut chart, scene, &styles)?;
-    draw_routes(&mut chart, scene, &styles)?;
+    draw_routes(&mut chart, scene, &styles, trace)?;
     draw_axes(root, l, mode)?;
-    draw_legend(root, l, mode, &styles)
+    draw_legend(root, l, mode, &styles, trace)
 }
 
 /// Light grid lines at the ticks, under everything else.
@@ -168,12 +174,13 @@ fn draw_roadmap<DB: DrawingBackend>(
 }
 
 /// The routes: a flight's hidden obstacles and learned cells, the raw grid path thin, the
-/// pruned one thick with a circle at each waypoint, the flight's replanned routes and track,
-/// then the start and goal markers.
+/// pruned one thick, a trajectory over it, a circle at each waypoint, the flight's replanned
+/// routes and track, then the start and goal markers.
 fn draw_routes<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     scene: &Scene,
     styles: &Styles,
+    trace: Option<&SpeedTrace>,
 ) -> Result<(), PlotError> {
     let en = |&(n, e): &(f64, f64)| (e, n);
     if let Some(f) = scene.flight {
@@ -206,6 +213,9 @@ fn draw_routes<DB: DrawingBackend>(
                 styles.pruned,
             ))
             .map_err(err)?;
+    }
+    if let Some(trace) = trace {
+        crate::trajectory::draw_on_map(chart, trace, styles.trajectory)?;
     }
     chart
         .draw_series(
@@ -360,6 +370,7 @@ fn draw_legend<DB: DrawingBackend>(
     l: &PlotLayout,
     mode: TextMode,
     styles: &Styles,
+    trace: Option<&SpeedTrace>,
 ) -> Result<(), PlotError> {
     let legend = &l.legend;
     if legend.entries.is_empty() {
@@ -405,6 +416,18 @@ fn draw_legend<DB: DrawingBackend>(
             LegendKind::Heat(level) => root.draw(&swatch(heat_color(level))),
             LegendKind::NoValue => root.draw(&swatch(NO_VALUE_COLOR)),
             LegendKind::Caption => Ok(()),
+            LegendKind::SpeedScale => {
+                if let Some(trace) = trace {
+                    let hs = (0.3 * l.fonts.legend).round() as i32;
+                    let casing = Rectangle::new(
+                        [(x, cy - hs - 1), (x + sw - 1, cy + hs + 1)],
+                        FRAME_COLOR.filled(),
+                    );
+                    root.draw(&casing).map_err(err)?;
+                    crate::trajectory::draw_scale_sample(root, trace, (x + 1, cy), (sw - 2, hs))?;
+                }
+                Ok(())
+            }
         }
         .map_err(err)?;
         let at = (x + sw + legend.text_gap, cy);

@@ -160,7 +160,14 @@ pub fn render_heatmap_png(map: &Heatmap<'_>, edge_px: u32) -> Result<Vec<u8>, Pl
         )
         .map_err(|e| PlotError::Draw(e.to_string()))?;
         let root = backend.into_drawing_area();
-        draw(&root, &scene, &layout, TextMode::Glyphs, Some(&levels))?;
+        draw(
+            &root,
+            &scene,
+            &layout,
+            TextMode::Glyphs,
+            Some(&levels),
+            None,
+        )?;
         root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
     }
     encode_rgb_png(&rgb, width, height)

@@ -81,6 +81,8 @@ pub(crate) enum LegendKind {
     Heat(u8),
     NoValue,
     Caption,
+    /// A trajectory's speed scale (a gradient sample).
+    SpeedScale,
 }
 
 impl PlotLayout {
@@ -464,11 +466,13 @@ struct LegendShape {
 fn legend_shape(
     scene: &Scene,
     heat_legend: Option<Vec<LegendEntry>>,
+    extra: Vec<LegendEntry>,
     fonts: &Fonts,
     room_w: i32,
 ) -> LegendShape {
     let k = fonts.k;
     let mut entries = legend_entries(scene);
+    entries.extend(extra);
     let column_only = heat_legend.is_some();
     if let Some(heat) = heat_legend {
         for e in &mut entries {
@@ -632,6 +636,17 @@ pub(crate) fn layout_with(
     height_px: u32,
     heat_legend: Option<Vec<LegendEntry>>,
 ) -> Result<PlotLayout, PlotError> {
+    layout_full(scene, width_px, height_px, heat_legend, Vec::new())
+}
+
+/// [`layout_with`] with `extra` legend entries after the scene's own (a trajectory's scale).
+pub(crate) fn layout_full(
+    scene: &Scene,
+    width_px: u32,
+    height_px: u32,
+    heat_legend: Option<Vec<LegendEntry>>,
+    extra: Vec<LegendEntry>,
+) -> Result<PlotLayout, PlotError> {
     let size_ok = |v: u32| (MIN_SIZE_PX..=MAX_SIZE_PX).contains(&v);
     if !size_ok(width_px) || !size_ok(height_px) {
         return Err(PlotError::BadSize {
@@ -663,7 +678,7 @@ pub(crate) fn layout_with(
         right_pad: px(0.5 * axes.widest_x + 6.0 * k).max(outer),
         legend_gap: px(16.0 * k),
     };
-    let mut legend = legend_shape(scene, heat_legend, &fonts, wi - 2 * outer);
+    let mut legend = legend_shape(scene, heat_legend, extra, &fonts, wi - 2 * outer);
     let (espan, nspan) = (e1 - e0, n1 - n0);
     let (place, aw, ah) = choose_place(&legend, &m, (espan, nspan));
     if place == Place::Nowhere {

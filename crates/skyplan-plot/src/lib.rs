@@ -51,6 +51,7 @@ pub mod plan_picture;
 mod profile;
 mod rects;
 mod text;
+mod trajectory;
 
 use std::path::Path;
 
@@ -65,6 +66,8 @@ pub use crate::layout::{PlotLayout, layout};
 pub use crate::profile::{ProfileColumn, Scene3d, profile_columns, render_plan3d};
 pub use crate::rects::{CellRect, blocked_rects};
 use crate::text::TextMode;
+use crate::trajectory::SpeedTrace;
+pub use crate::trajectory::speed_color;
 
 /// Smallest picture edge accepted, pixels.
 pub const MIN_SIZE_PX: u32 = 200;
@@ -251,7 +254,7 @@ pub fn render_png(scene: &Scene, width_px: u32, height_px: u32) -> Result<Vec<u8
             BitMapBackend::<RGBPixel>::with_buffer_and_format(&mut rgb, (width_px, height_px))
                 .map_err(|e| PlotError::Draw(e.to_string()))?;
         let root = backend.into_drawing_area();
-        draw(&root, scene, &layout, TextMode::Glyphs, None)?;
+        draw(&root, scene, &layout, TextMode::Glyphs, None, None)?;
         root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
     }
     crate::heatmap::encode_rgb_png(&rgb, width_px, height_px)
@@ -265,8 +268,85 @@ pub fn render_svg(scene: &Scene, width_px: u32, height_px: u32) -> Result<String
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width_px, height_px)).into_drawing_area();
-        draw(&root, scene, &layout, TextMode::Strings, None)?;
+        draw(&root, scene, &layout, TextMode::Strings, None, None)?;
         root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
     }
     Ok(svg)
+}
+
+/// Renders a scene with a trajectory: the map (`width_px` × `map_height_px`) with the curve
+/// coloured by speed and the scale in the legend, above a strip of speed and acceleration
+/// against time.
+pub(crate) fn render_traced(
+    scene: &Scene,
+    trace: &SpeedTrace,
+    format: PlotFormat,
+    width_px: u32,
+    map_height_px: u32,
+) -> Result<Vec<u8>, PlotError> {
+    let extra = vec![crate::layout::LegendEntry {
+        kind: crate::layout::LegendKind::SpeedScale,
+        text: trace.legend_text(),
+    }];
+    let layout = crate::layout::layout_full(scene, width_px, map_height_px, None, extra)?;
+    let height_px = map_height_px + trajectory::panel_height(width_px);
+    if height_px > MAX_SIZE_PX {
+        return Err(PlotError::BadSize {
+            width: width_px,
+            height: height_px,
+        });
+    }
+    match format {
+        PlotFormat::Png => {
+            let mut rgb = vec![255_u8; width_px as usize * height_px as usize * 3];
+            {
+                let backend = BitMapBackend::<RGBPixel>::with_buffer_and_format(
+                    &mut rgb,
+                    (width_px, height_px),
+                )
+                .map_err(|e| PlotError::Draw(e.to_string()))?;
+                let root = backend.into_drawing_area();
+                draw_traced(
+                    &root,
+                    scene,
+                    &layout,
+                    trace,
+                    TextMode::Glyphs,
+                    map_height_px,
+                )?;
+            }
+            crate::heatmap::encode_rgb_png(&rgb, width_px, height_px)
+        }
+        PlotFormat::Svg => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, (width_px, height_px));
+                let root = root.into_drawing_area();
+                draw_traced(
+                    &root,
+                    scene,
+                    &layout,
+                    trace,
+                    TextMode::Strings,
+                    map_height_px,
+                )?;
+            }
+            Ok(svg.into_bytes())
+        }
+    }
+}
+
+/// The map with a trajectory over its top `map_height_px` pixels, the time panels under it.
+fn draw_traced<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    scene: &Scene,
+    layout: &PlotLayout,
+    trace: &SpeedTrace,
+    mode: TextMode,
+    map_height_px: u32,
+) -> Result<(), PlotError> {
+    let (map, strip) = root.split_vertically(map_height_px);
+    draw(&map, scene, layout, mode, None, Some(trace))?;
+    trajectory::draw_panels(&strip, trace, mode, layout.fonts.desc)?;
+    root.present().map_err(|e| PlotError::Draw(e.to_string()))
 }

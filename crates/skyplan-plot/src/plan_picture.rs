@@ -1,7 +1,13 @@
 //! One picture for any plan of the planning API (`skyplan plan --plot`, `fly --plot`,
 //! `navigate --plot`): the 2D map with the route (and a roadmap), the 3D top view and side
 //! profile, or a heat map of a navigation function's field.
+//!
+//! A plan with a trajectory (`Plan::trajectory`) shows it over the map or the top view, sampled
+//! every 0.05 s and coloured by speed from rest to the speed limit ([`crate::speed_color`], its
+//! scale in the legend), above a strip of speed and acceleration against time with both limits
+//! dashed; the title gives its duration. Without one, the picture is the same as ever.
 
+use crate::trajectory::SpeedTrace;
 use crate::{FlightLayers, PlotError, PlotFormat};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_plan::{Geometry, Plan, Ride, World};
@@ -177,6 +183,8 @@ impl MapPicture<'_> {
                 )
             }
         };
+        let trace = plan.trajectory.as_ref().map(SpeedTrace::of).transpose()?;
+        let title = title + &trajectory_title(trace.as_ref());
         let scene = crate::Scene {
             title,
             grid: self.grid,
@@ -189,7 +197,10 @@ impl MapPicture<'_> {
             connectors_ne: &connectors,
             flight: self.flight,
         };
-        crate::render(&scene, format, 1000, 1000)
+        match &trace {
+            None => crate::render(&scene, format, 1000, 1000),
+            Some(trace) => crate::render_traced(&scene, trace, format, 1000, 1000),
+        }
     }
 }
 
@@ -208,11 +219,13 @@ fn picture3d(
     let points = plan.points_nea();
     let edges: Vec<_> = geometry.edges.iter().map(|s| (s[0], s[1])).collect();
     let safety_m = plan.spec.safety_m;
+    let trace = plan.trajectory.as_ref().map(SpeedTrace::of).transpose()?;
     let scene = crate::Scene3d {
         title: format!(
-            "{map}: {}, {:.0} m, margin {safety_m} m",
+            "{map}: {}, {:.0} m, margin {safety_m} m{}",
             plan.planner.info().name,
-            plan.cost_m
+            plan.cost_m,
+            trajectory_title(trace.as_ref())
         ),
         obstacles: boxes,
         safety_m,
@@ -226,7 +239,14 @@ fn picture3d(
         edges: &edges,
         edges_label: &geometry.edges_label,
     };
-    crate::render_plan3d(&scene, format, 1500, 900)
+    crate::profile::render_plan3d_traced(&scene, trace.as_ref(), format, 1500, 900)
+}
+
+/// The title's words for a trajectory (nothing without one).
+fn trajectory_title(trace: Option<&SpeedTrace>) -> String {
+    trace.map_or_else(String::new, |t| {
+        format!(", trajectory {:.1} s", t.duration_s)
+    })
 }
 
 fn grid_at(plan: &Plan) -> String {

@@ -8,6 +8,7 @@ use plotters::style::text_anchor::HPos;
 use skyplan_map::colliders::ObstacleBox;
 
 use crate::text::{Label, TextMode, VAlign, draw_label, draw_tick, ensure_font};
+use crate::trajectory::SpeedTrace;
 use crate::{MAX_SIZE_PX, MIN_SIZE_PX, PlotError, PlotFormat};
 
 const ROUTE_COLOR: RGBColor = RGBColor(31, 96, 196);
@@ -162,7 +163,21 @@ pub fn render_plan3d(
     width_px: u32,
     height_px: u32,
 ) -> Result<Vec<u8>, PlotError> {
-    for s in [width_px, height_px] {
+    render_plan3d_traced(scene, None, format, width_px, height_px)
+}
+
+/// [`render_plan3d`], with a trajectory: its curve coloured by speed in the top view and its
+/// scale in the legend, and a strip of speed and acceleration against time under the picture
+/// (which grows by the strip's height).
+pub(crate) fn render_plan3d_traced(
+    scene: &Scene3d,
+    trace: Option<&SpeedTrace>,
+    format: PlotFormat,
+    width_px: u32,
+    map_height_px: u32,
+) -> Result<Vec<u8>, PlotError> {
+    let height_px = map_height_px + trace.map_or(0, |_| crate::trajectory::panel_height(width_px));
+    for s in [width_px, map_height_px, height_px] {
         if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&s) {
             return Err(PlotError::BadSize {
                 width: width_px,
@@ -192,7 +207,7 @@ pub fn render_plan3d(
                 )
                 .map_err(err)?;
                 let root = backend.into_drawing_area();
-                draw3d(&root, scene, TextMode::Glyphs)?;
+                draw_whole(&root, scene, trace, TextMode::Glyphs, map_height_px)?;
                 root.present().map_err(err)?;
             }
             let mut out = Vec::new();
@@ -210,10 +225,30 @@ pub fn render_plan3d(
             {
                 let root =
                     SVGBackend::with_string(&mut svg, (width_px, height_px)).into_drawing_area();
-                draw3d(&root, scene, TextMode::Strings)?;
+                draw_whole(&root, scene, trace, TextMode::Strings, map_height_px)?;
                 root.present().map_err(err)?;
             }
             Ok(svg.into_bytes())
+        }
+    }
+}
+
+/// The picture, and with a trace the time panels under its top `map_height_px` pixels.
+fn draw_whole<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene3d,
+    trace: Option<&SpeedTrace>,
+    mode: TextMode,
+    map_height_px: u32,
+) -> Result<(), PlotError> {
+    match trace {
+        None => draw3d(root, scene, mode, None),
+        Some(trace) => {
+            let (top, strip) = root.split_vertically(map_height_px);
+            draw3d(&top, scene, mode, Some(trace))?;
+            let (w, h) = top.dim_in_pixel();
+            let font = (f64::from(h.min(w)) / 50.0).clamp(10.0, 28.0);
+            crate::trajectory::draw_panels(&strip, trace, mode, font)
         }
     }
 }
@@ -245,17 +280,17 @@ fn ticks(lo: f64, hi: f64, n: f64) -> Vec<f64> {
 }
 
 /// A panel: a pixel rectangle showing `x` and `y` ranges.
-struct Panel {
-    x0: i32,
-    y0: i32,
-    w: i32,
-    h: i32,
-    xr: (f64, f64),
-    yr: (f64, f64),
+pub(crate) struct Panel {
+    pub(crate) x0: i32,
+    pub(crate) y0: i32,
+    pub(crate) w: i32,
+    pub(crate) h: i32,
+    pub(crate) xr: (f64, f64),
+    pub(crate) yr: (f64, f64),
 }
 
 impl Panel {
-    fn px(&self, x: f64, y: f64) -> (i32, i32) {
+    pub(crate) fn px(&self, x: f64, y: f64) -> (i32, i32) {
         let fx = (x - self.xr.0) / (self.xr.1 - self.xr.0);
         let fy = (y - self.yr.0) / (self.yr.1 - self.yr.0);
         (
@@ -265,7 +300,7 @@ impl Panel {
     }
 
     /// Frame, grid lines, ticks and the axis titles.
-    fn axes<DB: DrawingBackend>(
+    pub(crate) fn axes<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
         mode: TextMode,
@@ -320,7 +355,7 @@ impl Panel {
         )
     }
 
-    fn grid<DB: DrawingBackend>(
+    pub(crate) fn grid<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
         font: f64,
@@ -368,6 +403,7 @@ fn draw3d<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     scene: &Scene3d,
     mode: TextMode,
+    trace: Option<&SpeedTrace>,
 ) -> Result<(), PlotError> {
     root.fill(&WHITE).map_err(err)?;
     let (w, h) = root.dim_in_pixel();
@@ -384,9 +420,9 @@ fn draw3d<DB: DrawingBackend>(
         .map(ObstacleBox::top_m)
         .fold(1.0, f64::max);
     let top = top_panel(scene, (w, h), font);
-    draw_top_view(root, scene, &top, tallest, look)?;
+    draw_top_view(root, scene, &top, tallest, look, trace)?;
     let prof = draw_side_profile(root, scene, &top, w, tallest, look)?;
-    draw_legend3d(root, scene, &prof, tallest, look)?;
+    draw_legend3d(root, scene, &prof, tallest, look, trace)?;
     draw_label(
         root,
         mode,
@@ -427,13 +463,14 @@ fn top_panel(scene: &Scene3d, (w, h): (i32, i32), font: f64) -> Panel {
 }
 
 /// The top view: buildings shaded by height (tallest drawn last), the roadmap's edges, the raw
-/// and the final route, the axes and the start and goal markers.
+/// and the final route, a trajectory over it, the axes and the start and goal markers.
 fn draw_top_view<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     scene: &Scene3d,
     top: &Panel,
     tallest: f64,
     look: Look,
+    trace: Option<&SpeedTrace>,
 ) -> Result<(), PlotError> {
     top.grid(root, look.font)?;
     {
@@ -479,6 +516,9 @@ fn draw_top_view<DB: DrawingBackend>(
                 ROUTE_COLOR.stroke_width(look.stroke(3.5)),
             ))
             .map_err(err)?;
+        if let Some(trace) = trace {
+            crate::trajectory::draw_on_map(&mut chart, trace, look.stroke(3.0))?;
+        }
     }
     top.axes(root, look.mode, look.font, ("EAST (m)", "NORTH (m)"))?;
     let r = look.stroke(7.0);
@@ -614,8 +654,10 @@ fn draw_legend3d<DB: DrawingBackend>(
     prof: &Panel,
     tallest: f64,
     look: Look,
+    trace: Option<&SpeedTrace>,
 ) -> Result<(), PlotError> {
     let font = look.font;
+    let trace_text = trace.map(SpeedTrace::legend_text);
     let mut entries: Vec<(&str, Swatch)> = vec![
         ("route", Swatch::Line(ROUTE_COLOR, 3.5)),
         ("start", Swatch::Dot(START_COLOR)),
@@ -638,6 +680,9 @@ fn draw_legend3d<DB: DrawingBackend>(
     if !scene.edges.is_empty() && !scene.edges_label.is_empty() {
         entries.push((scene.edges_label, Swatch::Line(EDGE_COLOR, 1.0)));
     }
+    if let (Some(text), Some(trace)) = (&trace_text, trace) {
+        entries.insert(1, (text, Swatch::Speed(trace)));
+    }
     let r = look.stroke(7.0);
     let line_h = (1.7 * font) as i32;
     let lx = prof.x0;
@@ -651,6 +696,16 @@ fn draw_legend3d<DB: DrawingBackend>(
             )),
             Swatch::Dot(c) => {
                 marker(root, (lx + sw / 2, ly), r, c)?;
+                Ok(())
+            }
+            Swatch::Speed(trace) => {
+                let hs = (0.3 * font) as i32;
+                root.draw(&Rectangle::new(
+                    [(lx, ly - hs - 1), (lx + sw, ly + hs + 1)],
+                    FRAME_COLOR.filled(),
+                ))
+                .map_err(err)?;
+                crate::trajectory::draw_scale_sample(root, trace, (lx + 1, ly), (sw - 1, hs))?;
                 Ok(())
             }
             Swatch::Fill(c) => {
@@ -679,7 +734,9 @@ fn draw_legend3d<DB: DrawingBackend>(
     Ok(())
 }
 
-enum Swatch {
+enum Swatch<'a> {
+    /// A trajectory's speed scale.
+    Speed(&'a SpeedTrace),
     Line(RGBColor, f64),
     Dot(RGBColor),
     Fill(RGBColor),
