@@ -128,7 +128,11 @@ fn the_recording_carries_the_trajectory_as_python_mcap_reads_it() {
     )
     .output()
     .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let path = dir.path().join("flight.mcap");
     let script = r#"
 import json, sys
@@ -145,14 +149,33 @@ for schema, channel, msg in make_reader(open(sys.argv[1], 'rb')).iter_messages(t
         .unwrap();
     let text = String::from_utf8_lossy(&read.stdout).into_owned();
     let words: Vec<&str> = text.split_whitespace().collect();
-    assert_eq!(words.len(), 9, "one /trajectory message: {text} {}", String::from_utf8_lossy(&read.stderr));
-    assert_eq!(&words[..2], ["skyplan.Trajectory", "minimum_jerk"], "{text}");
+    assert_eq!(
+        words.len(),
+        9,
+        "one /trajectory message: {text} {}",
+        String::from_utf8_lossy(&read.stderr)
+    );
+    assert_eq!(
+        &words[..2],
+        ["skyplan.Trajectory", "minimum_jerk"],
+        "{text}"
+    );
     let n: f64 = words[2].parse().unwrap();
-    let (first, last, duration): (f64, f64, f64) =
-        (words[3].parse().unwrap(), words[4].parse().unwrap(), words[5].parse().unwrap());
+    let (first, last, duration): (f64, f64, f64) = (
+        words[3].parse().unwrap(),
+        words[4].parse().unwrap(),
+        words[5].parse().unwrap(),
+    );
     assert_eq!(first, 0.0);
     assert_eq!(last, duration);
     // 10 Hz from 0 to the end, the end included.
-    assert_eq!(n, (duration * 10.0).floor() + 1.0 + f64::from(u8::from(duration * 10.0 % 1.0 != 0.0)));
-    assert_eq!((words[6], words[7], words[8]), ("60.0", "40.0", "yaw_deg"), "{text}");
+    assert_eq!(
+        n,
+        (duration * 10.0).floor() + 1.0 + f64::from(u8::from(duration * 10.0 % 1.0 != 0.0))
+    );
+    assert_eq!(
+        (words[6], words[7], words[8]),
+        ("60.0", "40.0", "yaw_deg"),
+        "{text}"
+    );
 }
