@@ -489,6 +489,10 @@ impl Session {
                     PlanFailure::new(FailureKind::NoCorridor, format!("trajectory: {e}"))
                 }
                 tj::TrajectoryError::Limit { .. } => PlanFailure::bad_request(e.to_string()),
+                // Start and goal in the same place: nothing to fly, the request's to change.
+                tj::TrajectoryError::Route(_) => {
+                    PlanFailure::bad_request(format!("trajectory: {e}"))
+                }
                 _ => PlanFailure::internal(format!("trajectory: {e}")),
             })?;
         let stop = tj::stop_at_waypoints(&route, &spec.limits)

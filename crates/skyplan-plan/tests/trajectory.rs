@@ -163,6 +163,23 @@ fn limits_without_trajectory_and_out_of_range_are_refused_by_name() {
 }
 
 #[test]
+fn a_trajectory_from_the_goal_to_itself_is_a_bad_request_not_an_internal_error() {
+    let mut session = Session::new(World::fcnd_city());
+    let e = session
+        .plan(&PlanRequest {
+            goal_ne: Some([0.0, 0.0]),
+            trajectory: Some(true),
+            ..Default::default()
+        })
+        .unwrap_err();
+    assert_eq!(e.kind, FailureKind::BadRequest, "{}", e.message);
+    assert_eq!(
+        e.message,
+        "trajectory: the route has fewer than two distinct points: nothing to fly"
+    );
+}
+
+#[test]
 fn a_route_squeezing_between_diagonal_cells_has_no_corridor_and_says_where() {
     // Corner cutting lets the route pass between two diagonal blocked cells, through a point
     // that no free box can hold.
