@@ -4,7 +4,7 @@
 //! to 5 %; and the refusals.
 
 mod common;
-use common::cmd;
+use common::{cmd, ok};
 
 fn run(line: &str) -> (Option<i32>, String) {
     let dir = tempfile::tempdir().unwrap();
@@ -84,17 +84,10 @@ fn a_trajectory_is_not_uploaded_and_limits_need_it() {
 #[test]
 fn plan_writes_the_samples_as_csv_with_the_documented_columns() {
     let dir = tempfile::tempdir().unwrap();
-    let out = cmd(
+    ok(&mut cmd(
         dir.path(),
         "plan --trajectory --goal-ne 60,40 --samples traj.csv --out w.json",
-    )
-    .output()
-    .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ));
     let text = std::fs::read_to_string(dir.path().join("traj.csv")).unwrap();
     let mut lines = text.lines();
     assert_eq!(
@@ -122,17 +115,10 @@ fn plan_writes_the_samples_as_csv_with_the_documented_columns() {
 #[ignore = "needs Python with mcap (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn the_recording_carries_the_trajectory_as_python_mcap_reads_it() {
     let dir = tempfile::tempdir().unwrap();
-    let out = cmd(
+    ok(&mut cmd(
         dir.path(),
         "fly --sim --speedup 20 --trajectory --goal-ne 60,40 --record flight.mcap",
-    )
-    .output()
-    .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ));
     let path = dir.path().join("flight.mcap");
     let script = r#"
 import json, sys
