@@ -442,6 +442,17 @@ fn ctrl_c_with_on_interrupt_rtl_returns_to_launch_and_lands_there() {
         "sim        disarmed",
     ]);
     // Interrupted ~250 m from home, the vehicle ends back at the launch point, on the ground.
+    let (north_m, east_m, flown_m) = landed_and_flown(&run);
+    assert!(
+        north_m.hypot(east_m) < 1.0,
+        "landed at N {north_m} E {east_m}, not home"
+    );
+    assert!(flown_m > 400.0, "flew out and back: {flown_m} m");
+}
+
+/// Where the vehicle ended (north, east, metres) and the length of the track flown, from the
+/// summary lines.
+fn landed_and_flown(run: &Run) -> (f64, f64, f64) {
     let at = run
         .stdout
         .lines()
@@ -449,20 +460,59 @@ fn ctrl_c_with_on_interrupt_rtl_returns_to_launch_and_lands_there() {
     let at = at.unwrap_or_else(|| panic!("no final position:\n{}", run.stdout));
     let number = |s: &str| s.trim().trim_end_matches(" m").parse::<f64>().unwrap();
     let fields: Vec<&str> = at.split(',').collect();
-    let (north_m, east_m) = (
-        number(fields[0]),
-        number(fields[1].trim().trim_start_matches("E ")),
-    );
-    assert!(
-        north_m.hypot(east_m) < 1.0,
-        "landed at N {north_m} E {east_m}, not home"
-    );
     let flown = run
         .stdout
         .lines()
         .find_map(|l| l.strip_prefix("track      flown "));
-    let flown_m = number(flown.unwrap().split(',').next().unwrap());
-    assert!(flown_m > 400.0, "flew out and back: {flown_m} m");
+    (
+        number(fields[0]),
+        number(fields[1].trim().trim_start_matches("E ")),
+        number(flown.unwrap().split(',').next().unwrap()),
+    )
+}
+
+#[test]
+fn ctrl_c_with_on_interrupt_return_flies_a_planned_way_home_around_the_buildings() {
+    let run = fly_and_interrupt(
+        "fly --sim --speedup 20 --on-interrupt return",
+        "5 of 14 reached",
+    );
+    run.expect_code(1)
+        .stdout_has(&[
+            "interrupt  Ctrl-C: flying the planned way home",
+            "holding while the way home is planned",
+            "way home by jps: ",
+            "flown in GUIDED, landing there",
+            "result     FAILED: aborted (interrupted by Ctrl-C; flew the planned way home); the vehicle landed",
+            "sim        disarmed",
+        ])
+        .stdout_lacks("COLLISION")
+        .stdout_lacks("mode RTL");
+    // The way home ends above the launch point (the route's start, home here), and the
+    // vehicle lands there.
+    let way = run
+        .stdout
+        .lines()
+        .find(|l| l.contains("way home by jps: "))
+        .unwrap();
+    assert!(way.contains("to N 0.0 m, E 0.0 m"), "{way}");
+    let (north_m, east_m, flown_m) = landed_and_flown(&run);
+    assert!(
+        north_m.hypot(east_m) < 1.5,
+        "landed at N {north_m} E {east_m}, not at the launch point"
+    );
+    assert!(flown_m > 600.0, "flew out and back: {flown_m} m");
+}
+
+#[test]
+fn return_is_refused_with_an_uploaded_mission() {
+    let dir = tempfile::tempdir().unwrap();
+    run(
+        dir.path(),
+        "fly --sim --speedup 20 --upload --on-interrupt return",
+    )
+    .expect_code(2)
+    .stderr_has(&["the action 'return' flies a route planned home in GUIDED"]);
 }
 
 #[test]

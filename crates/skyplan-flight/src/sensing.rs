@@ -130,3 +130,27 @@ pub trait RouteWatcher {
     /// A new reading; `route` is what is still to be flown (the current target first).
     fn on_reading(&mut self, reading: &ObstacleReading, route: &[Target]) -> RouteDecision;
 }
+
+/// Plans the way home in flight: a route from where the vehicle is to its launch point, around
+/// the map's obstacles (the interrupt and failsafe action [`FailsafeAction::Return`]).
+///
+/// Called by the ground station once, when the executor asks for the way home; the vehicle
+/// holds its position meanwhile.
+///
+/// [`FailsafeAction::Return`]: crate::executor::FailsafeAction::Return
+pub trait HomeRouter {
+    /// The targets from `from_ned` (north, east, down about home, metres) to the launch point,
+    /// the last one above it; or why there is none, in the user's words.
+    fn route_home(&mut self, from_ned: [f64; 3]) -> Result<WayHome, String>;
+}
+
+/// A route home, as a [`HomeRouter`] found it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WayHome {
+    /// The targets, first one first; the last is above the launch point.
+    pub targets: Vec<Target>,
+    /// Length of the route from the vehicle, metres (3D).
+    pub length_m: f64,
+    /// The planner that found it.
+    pub planner: String,
+}

@@ -4,6 +4,7 @@
 //! - [`runner`]: a whole run: the simulator started, the vehicle waited for, the plan (a
 //!   replanner watching), the upload or the flight, the verdict; `bench --replan`'s flights and
 //!   the hidden buildings placed on a route.
+//! - [`home`]: the way home planned in flight (interrupt and failsafe `return`).
 //! - [`flight`]: one flight, told line by line to an [`flight::Observer`] and summed up.
 //! - [`mission`]: a planned mission as a vehicle's autopilot gets it (items, true-north headings).
 //! - [`words`]: the printers: the flight told in lines (notes, updates) and the flight log as CSV.
@@ -13,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod flight;
+pub mod home;
 pub mod mission;
 pub mod runner;
 pub mod trajectory;

@@ -4,12 +4,13 @@
 //! files.
 
 use crate::flight::{self, Observer, Quiet};
+use crate::home::PlannedHome;
 use crate::words::sim_note_line;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
-    ExecutorConfig, FlightExecutor, FlightState, MissionExecutor, Note, Outcome, ReferenceExecutor,
-    Target, Telemetry,
+    ExecutorConfig, FailsafeAction, FlightExecutor, FlightState, MissionExecutor, Note, Outcome,
+    ReferenceExecutor, Target, Telemetry,
 };
 use skyplan_flight::reference::Reference;
 use skyplan_flight::upload::{MissionPlan, UploadConfig};
@@ -256,6 +257,14 @@ pub fn fly_mission_with<O: RunObserver>(
     if reference.is_some() && matches!(o.mode, Mode::Upload { .. }) {
         return Err(bad("a reference is flown in GUIDED, not as an uploaded mission").into());
     }
+    let returns = o.ground.on_interrupt == FailsafeAction::Return
+        || o.executor.failsafe == Some(FailsafeAction::Return);
+    if returns && (reference.is_some() || matches!(o.mode, Mode::Upload { .. })) {
+        return Err(bad(
+            "the action 'return' flies a route planned home in GUIDED, waypoint by waypoint; an uploaded mission or a trajectory flight cannot change its route in flight: use 'rtl' (the autopilot's own way home) or 'land'",
+        )
+        .into());
+    }
     let mut gcs = GroundStation::connect(address, o.ground).map_err(RunError::from)?;
     gcs.set_interrupt(interrupt);
     observer.say(&format!(
@@ -270,6 +279,7 @@ pub fn fly_mission_with<O: RunObserver>(
         request.start_ne = None;
     }
     let t_plan = Instant::now();
+    let home_world = returns.then(|| world.clone());
     let session = Session::new(world).with_limits(limits);
     let replanner = match o.mode {
         Mode::Guided(replanner) if reference.is_none() => replanner,
@@ -297,6 +307,9 @@ pub fn fly_mission_with<O: RunObserver>(
         t_plan.elapsed().as_secs_f64() * 1000.0
     ));
     observer.planned(&plan)?;
+    if let Some(world) = home_world {
+        gcs.set_home_router(Box::new(PlannedHome::new(world, limits, &request, &plan)));
+    }
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
     let config = o.executor;
     if let Some(source) = reference {

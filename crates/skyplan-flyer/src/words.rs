@@ -43,6 +43,7 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
                 FailsafeAction::Land => "LAND (--failsafe land)",
                 FailsafeAction::ReturnToLaunch => "RTL (--failsafe rtl)",
                 FailsafeAction::Hold => "LOITER (--failsafe hold)",
+                FailsafeAction::Return => "the planned way home (--failsafe return)",
             }
         ),
         Note::Replanned { event, targets } => format!(
@@ -62,6 +63,25 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
         ),
         Note::Holding { reason, hold_s } => {
             format!("hold       {t:7.1} s  no route: {reason}; holding {hold_s:.1} s, then landing")
+        }
+        Note::WayHomeWanted { reason } => {
+            format!("home       {t:7.1} s  {reason}: holding while the way home is planned")
+        }
+        Note::ReturningHome {
+            targets,
+            length_m,
+            planner,
+        } => {
+            let last = targets.last().map_or(String::new(), |w| {
+                format!(" to N {:.1} m, E {:.1} m", w.north_m, w.east_m)
+            });
+            format!(
+                "home       {t:7.1} s  way home by {planner}: {} waypoints, {length_m:.1} m{last}, flown in GUIDED, landing there",
+                targets.len()
+            )
+        }
+        Note::NoWayHome { reason } => {
+            format!("home       {t:7.1} s  no way home ({reason}): landing where it is")
         }
         Note::Finished => return None,
     })
@@ -135,6 +155,7 @@ pub fn update_line(u: &Update) -> Option<String> {
                 FailsafeAction::Land => "landing",
                 FailsafeAction::ReturnToLaunch => "returning to launch",
                 FailsafeAction::Hold => "holding position (LOITER), then leaving it to the pilot",
+                FailsafeAction::Return => "flying the planned way home",
             }
         ),
         Update::Mode(m) => format!("mode       {m}"),

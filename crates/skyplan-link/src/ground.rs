@@ -37,7 +37,7 @@ use skyplan_flight::executor::{
     FailsafeAction, FlightExecutor, FlightState, Note, Target, Telemetry, TrackingReport,
     VehicleMode,
 };
-use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteWatcher};
+use skyplan_flight::sensing::{HomeRouter, ObstacleReading, ReplanEvent, RouteWatcher};
 use skyplan_flight::upload::{ItemCommand, MissionItem, MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use std::sync::Arc;
@@ -275,6 +275,7 @@ pub struct GroundStation {
     epoch: Instant,
     interrupt: Option<Arc<AtomicBool>>,
     watcher: Option<Box<dyn RouteWatcher + Send>>,
+    home_router: Option<Box<dyn HomeRouter + Send>>,
 }
 
 impl GroundStation {
@@ -290,6 +291,7 @@ impl GroundStation {
             epoch: Instant::now(),
             interrupt: None,
             watcher: None,
+            home_router: None,
         })
     }
 
@@ -298,6 +300,13 @@ impl GroundStation {
     /// [`GroundStation::fly`] refuses it with an uploaded mission.
     pub fn set_watcher(&mut self, watcher: Box<dyn RouteWatcher + Send>) {
         self.watcher = Some(watcher);
+    }
+
+    /// Plans the way home when the flight stops with [`FailsafeAction::Return`] (an interrupt
+    /// with `on_interrupt` return, or the failsafe after a lost link): without a router the
+    /// vehicle lands where it is.
+    pub fn set_home_router(&mut self, router: Box<dyn HomeRouter + Send>) {
+        self.home_router = Some(router);
     }
 
     /// A flag that, once set (by a Ctrl-C handler), aborts the flight: the executor lands.
@@ -389,6 +398,9 @@ impl GroundStation {
         let now_s = self.now_s();
         let mut flight =
             FlightLoop::start(&mut self.protocol, ex, frame, self.config, watcher, now_s)?;
+        if let Some(router) = self.home_router.take() {
+            flight = flight.with_home_router(router);
+        }
         // A reference's setpoints go out at ≥ 10 Hz of vehicle time, also at a speed-up.
         let wait = match ex.tracking() {
             Some(_) => Duration::from_millis(1),

@@ -9,7 +9,7 @@ use super::interface::{
 use super::report::{
     ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached, TrackingReport,
 };
-use crate::sensing::ReplanEvent;
+use crate::sensing::{ReplanEvent, WayHome};
 use std::fmt;
 
 /// How a mission is flown between the take-off and the landing: the part in which the GUIDED
@@ -75,6 +75,21 @@ pub struct Core {
     pub(crate) first_leg_m: f64,
     /// No route to fly: holding here before landing.
     no_route: Option<NoRouteHold>,
+    /// Stopped with [`FailsafeAction::Return`]: waiting for the way home, or flying it.
+    homing: Option<Homing>,
+}
+
+/// A stop with [`FailsafeAction::Return`] in WAYPOINT.
+#[derive(Debug, Clone, PartialEq)]
+enum Homing {
+    /// Holding at `target` until the way home comes, at most [`ExecutorConfig::replan_hold_s`].
+    Wanted {
+        since_s: f64,
+        target: Command,
+        from_ned: [f64; 3],
+    },
+    /// Flying the way home, which may take this long (its legs' budgets), seconds.
+    Flying { budget_s: f64 },
 }
 
 /// The hold after a route watcher found no route.
@@ -130,6 +145,7 @@ impl Core {
             route_start: 0,
             first_leg_m: 0.0,
             no_route: None,
+            homing: None,
         })
     }
 
@@ -291,11 +307,14 @@ impl Core {
     }
 
     /// Stops the flight early with `action`; `true` when the caller should return at once.
+    /// `replans`: the strategy can fly another route ([`FailsafeAction::Return`] needs it; the
+    /// others fall back to the autopilot's RTL).
     fn stop(
         &mut self,
         now_s: f64,
         reason: String,
         action: FailsafeAction,
+        replans: bool,
         out: &mut Output,
     ) -> bool {
         if self.ending.is_some() || self.faults.hold.is_some() {
@@ -323,7 +342,14 @@ impl Core {
                         return true;
                     }
                     FailsafeAction::Land => self.command_landing(now_s, Command::Land, out),
-                    FailsafeAction::ReturnToLaunch => {
+                    // Still climbing over the launch point: landing is the way home.
+                    FailsafeAction::Return if self.state == FlightState::Takeoff => {
+                        self.command_landing(now_s, Command::Land, out)
+                    }
+                    FailsafeAction::Return if replans && self.last.is_some() => {
+                        self.want_way_home(now_s, &reason, out);
+                    }
+                    FailsafeAction::ReturnToLaunch | FailsafeAction::Return => {
                         self.faults
                             .start_rtl(&self.config, self.last.as_ref(), &self.targets[0]);
                         self.command_landing(now_s, Command::ReturnToLaunch, out);
@@ -382,6 +408,61 @@ impl Core {
         }
     }
 
+    /// Holds where the vehicle is and asks for the way home ([`Note::WayHomeWanted`]).
+    fn want_way_home(&mut self, now_s: f64, reason: &str, out: &mut Output) {
+        let Some(t) = self.last else {
+            return;
+        };
+        let target = Command::GoTo {
+            north_m: t.north_m,
+            east_m: t.east_m,
+            down_m: t.down_m,
+            yaw_rad: t.yaw_rad,
+        };
+        self.homing = Some(Homing::Wanted {
+            since_s: now_s,
+            target,
+            from_ned: [t.north_m, t.east_m, t.down_m],
+        });
+        self.no_route = None;
+        out.notes.push(Note::WayHomeWanted {
+            reason: reason.to_string(),
+        });
+        self.last_send_s = Some(now_s);
+        out.commands.push(target);
+    }
+
+    /// One step of the hold while the way home is awaited: the held position re-sent; past
+    /// [`ExecutorConfig::replan_hold_s`] without a route, the landing.
+    fn hold_for_way_home(&mut self, now_s: f64, out: &mut Output) {
+        let Some(Homing::Wanted {
+            since_s, target, ..
+        }) = self.homing
+        else {
+            return;
+        };
+        if now_s - since_s >= self.config.replan_hold_s {
+            let hold_s = self.config.replan_hold_s;
+            self.land_without_way_home(
+                now_s,
+                format!("no way home came within {hold_s:.0} s"),
+                out,
+            );
+        } else if self.due(now_s, self.config.target_period_s) {
+            out.commands.push(target);
+        }
+    }
+
+    /// No way home: land where the vehicle is, saying why.
+    fn land_without_way_home(&mut self, now_s: f64, why: String, out: &mut Output) {
+        self.homing = None;
+        if let Some(Failure::Aborted { reason }) = &mut self.ending {
+            *reason = format!("{reason}; no way home ({why}): landed where it was");
+        }
+        out.notes.push(Note::NoWayHome { reason: why });
+        self.command_landing(now_s, Command::Land, out);
+    }
+
     /// Whether the flight is in WAYPOINT with nothing else going on (no stop, hold, lost link).
     fn flying_route(&self) -> bool {
         self.state == FlightState::Waypoint
@@ -402,8 +483,14 @@ impl Core {
     /// seconds: the landing timeout and the time to descend, and for a return to launch the
     /// time to fly back too.
     pub(crate) fn landing_budget_s(&self) -> f64 {
+        let homing_s = match self.homing {
+            None => 0.0,
+            Some(Homing::Wanted { .. }) => self.config.replan_hold_s,
+            Some(Homing::Flying { budget_s }) => budget_s,
+        };
         self.faults.landing_budget_s(&self.config)
             + self.landing_alt_m / self.config.landing_descent_m_s.max(0.1)
+            + homing_s
     }
 
     /// One step in LANDING; `true` when DISARMING was entered.
@@ -608,6 +695,78 @@ impl<S: Strategy> Executor<S> {
         out
     }
 
+    /// Where the vehicle was when it stopped with [`FailsafeAction::Return`] and now holds,
+    /// waiting for the way home (north, east, down about home, metres); `None` otherwise.
+    pub fn way_home_wanted(&self) -> Option<[f64; 3]> {
+        match (&self.core.homing, self.core.state) {
+            (Some(Homing::Wanted { from_ned, .. }), FlightState::Waypoint) => Some(*from_ned),
+            _ => None,
+        }
+    }
+
+    /// Flies `way` home (from where the vehicle holds, see [`Executor::way_home_wanted`]) and
+    /// lands at its last target; the flight still ends as stopped ([`Failure::Aborted`]),
+    /// saying it flew the way home. Refused (nothing changes) unless the way home is wanted or
+    /// for an unusable route.
+    pub fn return_home(&mut self, now_s: f64, way: &WayHome) -> Result<Output, ConfigError> {
+        if self.way_home_wanted().is_none() {
+            return Err(ConfigError(
+                "no way home is wanted: the flight was not stopped with the return action".into(),
+            ));
+        }
+        let targets = &way.targets;
+        if targets.is_empty()
+            || targets
+                .iter()
+                .any(|t| !t.is_finite() || t.alt_m <= self.core.config.landed_alt_m)
+        {
+            return Err(ConfigError(
+                "the way home is empty, or has a waypoint that is not finite or not above the ground"
+                    .into(),
+            ));
+        }
+        let mut out = Output::default();
+        let core = &mut self.core;
+        let budget_s = targets.windows(2).fold(
+            core.config.leg_timeout_base_s
+                + core.config.leg_timeout_per_m_s
+                    * targets[0].horizontal_error_m(&core.last.unwrap_or_default()),
+            |b, w| {
+                b + core.config.leg_timeout_base_s
+                    + core.config.leg_timeout_per_m_s * w[0].horizontal_distance_m(&w[1])
+            },
+        );
+        core.homing = Some(Homing::Flying { budget_s });
+        if let Some(Failure::Aborted { reason }) = &mut core.ending {
+            *reason = format!("{reason}; flew the planned way home");
+        }
+        core.route_start = core.reached.len();
+        core.targets = targets.clone();
+        core.first_leg_m = core
+            .last
+            .as_ref()
+            .map_or(0.0, |t| targets[0].horizontal_error_m(t));
+        core.leg_since_s = now_s;
+        core.last_send_s = None;
+        out.notes.push(Note::ReturningHome {
+            targets: targets.clone(),
+            length_m: way.length_m,
+            planner: way.planner.clone(),
+        });
+        self.step(now_s, &mut out);
+        Ok(out)
+    }
+
+    /// No way home (`reason`): the vehicle lands where it is. Ignored unless the way home is
+    /// wanted.
+    pub fn no_way_home(&mut self, now_s: f64, reason: String) -> Output {
+        let mut out = Output::default();
+        if self.way_home_wanted().is_some() {
+            self.core.land_without_way_home(now_s, reason, &mut out);
+        }
+        out
+    }
+
     /// How the flight ended, once it has.
     pub fn outcome(&self) -> Option<&Outcome> {
         self.core.outcome.as_ref()
@@ -666,18 +825,18 @@ impl<S: Strategy> Executor<S> {
                 if let Some((reason, action)) =
                     core.faults.link_regained(silent_s, &core.config, &mut out)
                     && matches!(core.state, FlightState::Takeoff | FlightState::Waypoint)
-                    && core.stop(now_s, reason, action, &mut out)
+                    && core.stop(now_s, reason, action, S::REPLANS, &mut out)
                 {
                     return out;
                 }
             }
             Event::Abort(reason) => {
-                if core.stop(now_s, reason, FailsafeAction::Land, &mut out) {
+                if core.stop(now_s, reason, FailsafeAction::Land, S::REPLANS, &mut out) {
                     return out;
                 }
             }
             Event::Stop { reason, action } => {
-                if core.stop(now_s, reason, action, &mut out) {
+                if core.stop(now_s, reason, action, S::REPLANS, &mut out) {
                     return out;
                 }
             }
@@ -721,6 +880,10 @@ impl<S: Strategy> Executor<S> {
             FlightState::Takeoff => self.strategy.takeoff(core, now_s, &t, out),
             FlightState::Waypoint if core.no_route.is_some() => {
                 core.hold_no_route(now_s, out);
+                false
+            }
+            FlightState::Waypoint if matches!(core.homing, Some(Homing::Wanted { .. })) => {
+                core.hold_for_way_home(now_s, out);
                 false
             }
             FlightState::Waypoint => self.strategy.waypoint(core, now_s, &t, out),
@@ -773,6 +936,12 @@ pub trait FlightExecutor {
     ) -> Result<Output, ConfigError>;
     /// See [`Executor::hold_no_route`].
     fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output;
+    /// See [`Executor::way_home_wanted`].
+    fn way_home_wanted(&self) -> Option<[f64; 3]>;
+    /// See [`Executor::return_home`].
+    fn return_home(&mut self, now_s: f64, way: &WayHome) -> Result<Output, ConfigError>;
+    /// See [`Executor::no_way_home`].
+    fn no_way_home(&mut self, now_s: f64, reason: String) -> Output;
     /// How the reference is being followed, for an executor that flies one
     /// ([`super::ReferenceExecutor`]); `None` for the others.
     fn tracking(&self) -> Option<TrackingReport> {
@@ -827,6 +996,15 @@ impl<S: Strategy> FlightExecutor for Executor<S> {
     }
     fn hold_no_route(&mut self, now_s: f64, reason: String) -> Output {
         Executor::hold_no_route(self, now_s, reason)
+    }
+    fn way_home_wanted(&self) -> Option<[f64; 3]> {
+        Executor::way_home_wanted(self)
+    }
+    fn return_home(&mut self, now_s: f64, way: &WayHome) -> Result<Output, ConfigError> {
+        Executor::return_home(self, now_s, way)
+    }
+    fn no_way_home(&mut self, now_s: f64, reason: String) -> Output {
+        Executor::no_way_home(self, now_s, reason)
     }
     fn tracking(&self) -> Option<TrackingReport> {
         self.strategy.tracking()

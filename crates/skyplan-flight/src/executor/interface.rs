@@ -293,6 +293,12 @@ pub enum FailsafeAction {
     /// Hold the position in the air (LOITER / PX4 HOLD); the flight ends once the vehicle
     /// confirms, leaving it to the pilot.
     Hold,
+    /// Fly a route planned from where the vehicle is back to the launch point around the map's
+    /// obstacles (same map, planner and margin, by the ground station's
+    /// [`HomeRouter`](crate::sensing::HomeRouter)) in GUIDED, and land there; without a route
+    /// home, land where it is. An executor that cannot change its route (AUTO) commands the
+    /// autopilot's RTL instead.
+    Return,
 }
 
 impl fmt::Display for FailsafeAction {
@@ -301,6 +307,7 @@ impl fmt::Display for FailsafeAction {
             FailsafeAction::Land => "land",
             FailsafeAction::ReturnToLaunch => "rtl",
             FailsafeAction::Hold => "hold",
+            FailsafeAction::Return => "return",
         })
     }
 }

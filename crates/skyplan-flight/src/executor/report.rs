@@ -60,6 +60,26 @@ pub enum Note {
         /// How long it holds before landing, seconds.
         hold_s: f64,
     },
+    /// The flight was stopped with [`FailsafeAction::Return`]: the vehicle holds where it is
+    /// while the way home is planned.
+    WayHomeWanted {
+        /// Why the flight stopped.
+        reason: String,
+    },
+    /// The way home was planned: the vehicle flies it and lands at the launch point.
+    ReturningHome {
+        /// The route home, first target first.
+        targets: Vec<Target>,
+        /// Its length, metres.
+        length_m: f64,
+        /// The planner that found it.
+        planner: String,
+    },
+    /// No way home could be planned: the vehicle lands where it is.
+    NoWayHome {
+        /// Why, in the user's words.
+        reason: String,
+    },
     /// The flight ended; see [`Executor::outcome`](super::Executor::outcome).
     Finished,
 }

@@ -16,7 +16,19 @@ fn fly(
     ex: &mut MissionExecutor,
     v: &mut SimVehicle,
     limit_s: f64,
+    fault: impl FnMut(f64, &mut SimVehicle) -> Option<Event>,
+) -> Flight {
+    fly_homing(ex, v, limit_s, fault, |_, _, _| None)
+}
+
+/// As [`fly`]; when the executor wants the way home, `home(executor, t, from_ned)` may answer
+/// (with [`MissionExecutor::return_home`] or [`MissionExecutor::no_way_home`]).
+fn fly_homing(
+    ex: &mut MissionExecutor,
+    v: &mut SimVehicle,
+    limit_s: f64,
     mut fault: impl FnMut(f64, &mut SimVehicle) -> Option<Event>,
+    mut home: impl FnMut(&mut MissionExecutor, f64, [f64; 3]) -> Option<Output>,
 ) -> Flight {
     let mut f = Flight {
         states: vec![ex.state()],
@@ -33,8 +45,11 @@ fn fly(
         let mut events = std::mem::take(&mut pending);
         events.extend(fault(t, v));
         events.push(Event::Telemetry(telemetry(v)));
-        for e in events {
-            let out = ex.handle(t, e);
+        let mut outputs: Vec<Output> = events.into_iter().map(|e| ex.handle(t, e)).collect();
+        if let Some(from_ned) = ex.way_home_wanted() {
+            outputs.extend(home(ex, t, from_ned));
+        }
+        for out in outputs {
             for n in &out.notes {
                 if let Note::State { to, .. } = n {
                     f.states.push(*to);
@@ -684,4 +699,141 @@ fn the_landing_budget_grows_with_the_altitude() {
             "{detail}"
         );
     }
+}
+
+/// A way home from `from_ned` that doglegs through (`from` north, 10 east) to the launch point
+/// (0, 0), at 5 m.
+fn dogleg_home(from_ned: [f64; 3]) -> crate::sensing::WayHome {
+    let targets = vec![
+        wp(from_ned[0], from_ned[1], 0.0),
+        wp(from_ned[0], 10.0, 0.0),
+        wp(0.0, 10.0, 0.0),
+        wp(0.0, 0.0, 0.0),
+    ];
+    let length_m = targets
+        .windows(2)
+        .map(|w| w[0].horizontal_distance_m(&w[1]))
+        .sum();
+    crate::sensing::WayHome {
+        targets,
+        length_m,
+        planner: "test".into(),
+    }
+}
+
+#[test]
+fn failsafe_return_holds_then_flies_the_way_home_it_is_given_and_lands_at_launch() {
+    let mut ex = MissionExecutor::new(&route(), with_failsafe(FailsafeAction::Return)).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut asked = Vec::new();
+    let f = fly_homing(
+        &mut ex,
+        &mut v,
+        300.0,
+        |t, _| gap(t),
+        |ex, t, from| {
+            asked.push(from);
+            Some(ex.return_home(t, &dogleg_home(from)).unwrap())
+        },
+    );
+    // Asked once, from where the vehicle was when the link came back (in the air, mid-route).
+    assert_eq!(asked.len(), 1, "{asked:?}");
+    assert!(asked[0][2] < -4.0, "{asked:?}");
+    // No RTL and no landing before the way home: the route's targets went out as GoTo.
+    assert!(!f.commands.contains(&Command::ReturnToLaunch));
+    assert!(f.commands.iter().any(|c| matches!(
+        c.position_target(),
+        Some(([n, e, _], _)) if (n - asked[0][0]).abs() < 1e-9 && (e - 10.0).abs() < 1e-9
+    )));
+    let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(
+        reason.contains("--failsafe return") && reason.contains("flew the planned way home"),
+        "{reason}"
+    );
+    let s = v.state();
+    assert!(s.on_ground && !s.armed, "{s:?}");
+    assert!(
+        s.position_ned_m[0].hypot(s.position_ned_m[1]) < 1.5,
+        "landed at {:?}, not at the launch point",
+        s.position_ned_m
+    );
+    use FlightState::*;
+    assert_eq!(
+        &f.states[f.states.len() - 3..],
+        &[Landing, Disarming, Manual]
+    );
+}
+
+#[test]
+fn ctrl_c_return_without_a_way_home_lands_where_the_vehicle_is() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut stopped_at = None;
+    fly_homing(
+        &mut ex,
+        &mut v,
+        300.0,
+        |t, v| {
+            (t > 12.0 && stopped_at.is_none()).then(|| {
+                stopped_at = Some(v.state().position_ned_m);
+                Event::Stop {
+                    reason: "interrupted by Ctrl-C".into(),
+                    action: FailsafeAction::Return,
+                }
+            })
+        },
+        |ex, t, _| Some(ex.no_way_home(t, "the start is inside an obstacle".into())),
+    );
+    let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(
+        reason.contains("no way home (the start is inside an obstacle): landed where it was"),
+        "{reason}"
+    );
+    let (s, at) = (v.state(), stopped_at.unwrap());
+    assert!(s.on_ground && !s.armed);
+    assert!(
+        (s.position_ned_m[0] - at[0]).hypot(s.position_ned_m[1] - at[1]) < 3.0,
+        "landed at {:?}, stopped at {at:?}",
+        s.position_ned_m
+    );
+}
+
+#[test]
+fn a_way_home_that_never_comes_ends_in_a_landing_after_the_hold() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut stop_t = None;
+    fly(&mut ex, &mut v, 300.0, |t, _| {
+        (t > 12.0 && stop_t.is_none()).then(|| {
+            stop_t = Some(t);
+            Event::Stop {
+                reason: "interrupted by Ctrl-C".into(),
+                action: FailsafeAction::Return,
+            }
+        })
+    });
+    let Some(Outcome::Failed(Failure::Aborted { reason })) = ex.outcome() else {
+        panic!("{:?}", ex.outcome())
+    };
+    assert!(reason.contains("no way home came within"), "{reason}");
+    // A second request is refused: the flight is over.
+    assert!(ex.way_home_wanted().is_none());
+    assert!(
+        ex.return_home(400.0, &dogleg_home([0.0, 0.0, -5.0]))
+            .is_err()
+    );
+}
+
+#[test]
+fn return_home_is_refused_unless_the_way_home_is_wanted() {
+    let (mut ex, _) = at_waypoint_state();
+    assert!(ex.way_home_wanted().is_none());
+    let err = ex
+        .return_home(1.0, &dogleg_home([5.0, 0.0, -5.0]))
+        .unwrap_err();
+    assert!(err.to_string().contains("no way home is wanted"), "{err}");
 }

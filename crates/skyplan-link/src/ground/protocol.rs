@@ -27,7 +27,9 @@ use skyplan_flight::executor::{
 };
 use skyplan_flight::modes::{arducopter, px4};
 use skyplan_flight::reference::Setpoint;
-use skyplan_flight::sensing::{ObstacleReading, ReplanEvent, RouteDecision, RouteWatcher};
+use skyplan_flight::sensing::{
+    HomeRouter, ObstacleReading, ReplanEvent, RouteDecision, RouteWatcher,
+};
 use skyplan_flight::upload::{
     MissionPlan, MissionUpload, UploadConfig, UploadEvent, UploadSend, UploadStatus,
 };
@@ -691,6 +693,7 @@ pub struct FlightLoop {
     log: Vec<LogRow>,
     updates: Vec<Update>,
     watcher: Option<Box<dyn RouteWatcher + Send>>,
+    home_router: Option<Box<dyn HomeRouter + Send>>,
 }
 
 /// What one message brought: executor events and a sensor reading.
@@ -767,7 +770,15 @@ impl FlightLoop {
             log: Vec::new(),
             updates: Vec::new(),
             watcher,
+            home_router: None,
         }
+    }
+
+    /// Plans the way home with `router` when the executor stops with
+    /// [`FailsafeAction::Return`] (without one, the vehicle lands where it is).
+    pub fn with_home_router(mut self, router: Box<dyn HomeRouter + Send>) -> Self {
+        self.home_router = Some(router);
+        self
     }
 
     /// Vehicle seconds since the flight started.
@@ -838,7 +849,34 @@ impl FlightLoop {
         if let Some(reading) = reading {
             self.consult_watcher(p, ex, now_s, &reading, &mut out);
         }
+        self.find_way_home(p, ex, now_s, &mut out);
         out
+    }
+
+    /// When the executor holds for the way home: the home router plans it, and the executor
+    /// flies it, or lands where it is without one.
+    fn find_way_home<E: FlightExecutor>(
+        &mut self,
+        p: &mut GroundProtocol,
+        ex: &mut E,
+        now_s: f64,
+        out: &mut Vec<MavMessage>,
+    ) {
+        let Some(from_ned) = ex.way_home_wanted() else {
+            return;
+        };
+        let t = self.vehicle_s(now_s);
+        let output = match self.home_router.as_mut() {
+            None => ex.no_way_home(t, "this flight has no planner for the way home".into()),
+            Some(router) => match router.route_home(from_ned) {
+                Ok(way) => match ex.return_home(t, &way) {
+                    Ok(output) => output,
+                    Err(e) => ex.no_way_home(t, format!("the way home was refused: {e}")),
+                },
+                Err(why) => ex.no_way_home(t, why),
+            },
+        };
+        self.dispatch(p, output, t, out);
     }
 
     /// Absorbs one message: its executor events (mode, ack, text, telemetry, a regained link)
