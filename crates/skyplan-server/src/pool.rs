@@ -1,7 +1,7 @@
 //! A pool of planning sessions behind a bounded FIFO queue: at most N jobs run at once, each on
 //! a blocking thread with its own `Session`; up to `queue_depth` more wait their turn in arrival
 //! order. Every request has one time budget from its arrival, queue included: a request the
-//! queue has no room for, or whose expected wait (from recent job durations) leaves no time to
+//! queue has no room for, or whose expected wait (the median of the last job durations) leaves no time to
 //! plan within the budget, is answered 503 at once (with `Retry-After`); one still waiting when
 //! its turn could no longer finish in time is answered 504 `queue_timeout`; a job running past
 //! the budget is answered 504 `over_budget`.
@@ -9,7 +9,7 @@
 use crate::error::{ApiError, ErrorKind};
 use serde::Serialize;
 use skyplan_plan::{Session, World};
-use std::collections::HashSet;
+use std::collections::{HashSet, VecDeque};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -22,6 +22,10 @@ const MAX_CACHED_SHAPES: usize = 8;
 /// The share of the budget a job's session may use before it gives up with a `timeout`
 /// failure (so the client hears why instead of a bare 504 while the work goes on).
 const SESSION_SHARE: f64 = 0.8;
+
+/// Jobs whose median duration estimates the queue's wait (the median, so that one slow job
+/// does not make the server refuse what it could serve).
+const RECENT_JOBS: usize = 16;
 
 /// Longest `Retry-After` the server suggests, seconds.
 const MAX_RETRY_AFTER_S: u64 = 60;
@@ -54,7 +58,7 @@ pub(crate) struct PoolStatus {
     pub queue_depth: usize,
     /// The time budget of one request, queue included, milliseconds.
     pub budget_ms: u64,
-    /// Recent job duration (moving average), milliseconds; `None` before the first job ends.
+    /// Median duration of the last 16 jobs, milliseconds; `None` before the first job ends.
     pub recent_job_ms: Option<u64>,
     /// Jobs a worker finished within the budget, whatever the planner answered.
     pub served: u64,
@@ -73,8 +77,8 @@ struct Counters {
     rejected: AtomicU64,
     queue_timeouts: AtomicU64,
     over_budget: AtomicU64,
-    /// Moving average of job durations, microseconds (0: none yet).
-    recent_job_us: AtomicU64,
+    /// The durations of the last jobs, microseconds, oldest first.
+    recent_jobs_us: Mutex<VecDeque<u64>>,
 }
 
 /// A place in the queue: leaving it (admitted, timed out, or the client gone) frees it.
@@ -258,23 +262,26 @@ impl Pool {
         })
     }
 
-    /// The moving average of job durations, once a job has ended.
-    fn recent_job(&self) -> Option<Duration> {
-        match self.counters.recent_job_us.load(Ordering::Relaxed) {
-            0 => None,
-            us => Some(Duration::from_micros(us)),
-        }
+    fn recent(&self) -> std::sync::MutexGuard<'_, VecDeque<u64>> {
+        // Push/pop only: a panic cannot leave the list half-changed.
+        (self.counters.recent_jobs_us.lock()).unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Folds a job's duration into the moving average (weight 1/8).
+    /// The median duration of the last jobs, once a job has ended.
+    fn recent_job(&self) -> Option<Duration> {
+        let mut us: Vec<u64> = self.recent().iter().copied().collect();
+        us.sort_unstable();
+        us.get(us.len() / 2).map(|&m| Duration::from_micros(m))
+    }
+
+    /// Keeps a job's duration among the last [`RECENT_JOBS`].
     fn record_job(&self, took: Duration) {
-        let us = u64::try_from(took.as_micros()).unwrap_or(u64::MAX).max(1);
-        let _ =
-            self.counters
-                .recent_job_us
-                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |old| {
-                    Some(if old == 0 { us } else { old - old / 8 + us / 8 })
-                });
+        let us = u64::try_from(took.as_micros()).unwrap_or(u64::MAX);
+        let mut recent = self.recent();
+        if recent.len() == RECENT_JOBS {
+            recent.pop_front();
+        }
+        recent.push_back(us);
     }
 
     /// The pool's state and counters.
