@@ -467,10 +467,13 @@ pub struct ServeArgs {
     /// Address to listen on; only loopback unless another address is named.
     #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:8080")]
     pub bind: std::net::SocketAddr,
-    /// Plans computed at once; more requests get 503 [default: the number of cores].
+    /// Plans computed at once; more requests wait in the queue [default: the number of cores].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub max_concurrent: Option<u16>,
-    /// Time budget of one request, milliseconds; past it the answer is 504.
+    /// Requests that may wait for a worker, first in first out; more get 503 with Retry-After (0: no queue) [default: 64 per worker].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+    pub queue_depth: Option<u32>,
+    /// Time budget of one request from its arrival, queue included, milliseconds; past it the answer is 504.
     #[arg(long, value_name = "MS", default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
     pub timeout_ms: u64,
 }

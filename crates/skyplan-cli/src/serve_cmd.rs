@@ -17,14 +17,18 @@ pub fn run(args: ServeArgs) -> Result<()> {
     if let Some(n) = args.max_concurrent {
         config.max_concurrent = usize::from(n);
     }
-    let (name, workers, budget_ms) = (
+    if let Some(n) = args.queue_depth {
+        config.queue_depth = Some(n as usize);
+    }
+    let (name, workers, queue, budget_ms) = (
         world.name().to_string(),
         config.max_concurrent,
+        config.effective_queue_depth(),
         args.timeout_ms,
     );
     skyplan_server::run(world, config, args.bind, |addr| {
         println!(
-            "skyplan serve: http://{addr}/ ({name}; {workers} concurrent plans, {budget_ms} ms per request; Ctrl-C stops)"
+            "skyplan serve: http://{addr}/ ({name}; {workers} concurrent plans, {queue} more queued, {budget_ms} ms per request; Ctrl-C stops)"
         );
     })
     .map_err(|e| runtime(format!("serve on {}: {e}", args.bind)))

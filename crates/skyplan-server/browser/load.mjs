@@ -1,13 +1,16 @@
 // Load test on loopback: 200 concurrent POST /api/plan between random far-apart free points of
-// the city, spread over the 2D planners of the served registry (/api/planners), answered 200 or
-// 503 (never anything else); then the same 200 with clients that retry on 503, all answered 200.
-// Prints p50/p99 latency and the server's peak RSS (VmHWM).
-// Usage: node load.mjs SKYPLAN_BIN [N]
+// the city, spread over the 2D planners of the served registry (/api/planners). The server
+// queues what its workers cannot start at once: each request is answered 200, or 503 `busy`
+// with Retry-After (queue full, or its wait would leave no time to plan), or 504
+// `queue_timeout`/`over_budget` (its budget ran out), never anything else, and /api/status
+// counts them so. Then the same 200 with clients that retry on 503, all answered 200. Prints
+// the answers, throughput, p50/p99 latency and the server's peak RSS (VmHWM).
+// Usage: node load.mjs SKYPLAN_BIN [N [SERVE_OPTIONS...]], e.g. `--queue-depth 0` for no queue.
 import fs from "node:fs";
 import { startServer, loadGrid, connectedClearCells, rng } from "./common.mjs";
 
-const [bin, nArg] = process.argv.slice(2);
-if (!bin) throw new Error("usage: node load.mjs SKYPLAN_BIN [N]");
+const [bin, nArg, ...serveArgs] = process.argv.slice(2);
+if (!bin) throw new Error("usage: node load.mjs SKYPLAN_BIN [N [SERVE_OPTIONS...]]");
 const N = Number(nArg || 200);
 let passed = 0, failed = 0;
 function check(name, ok, detail = "") {
@@ -20,7 +23,7 @@ const vm = (pid, key) => {
   return m ? Number(m[1]) / 1024 : NaN;
 };
 
-const server = await startServer(bin);
+const server = await startServer(bin, serveArgs);
 try {
   const grid = await loadGrid(server.url, 5, 5);
   const cells = connectedClearCells(grid, [0, 0], 1);
@@ -57,7 +60,7 @@ try {
     try {
       const res = await fetch(`${server.url}api/plan`, { method: "POST", headers: { "content-type": "application/json" }, body: body(i) });
       const json = await res.json();
-      return { status: res.status, ms: performance.now() - t0, json };
+      return { status: res.status, ms: performance.now() - t0, json, retryAfter: res.headers.get("retry-after") };
     } catch (e) {
       return { status: 0, ms: performance.now() - t0, json: { message: String(e) } };
     }
@@ -69,14 +72,27 @@ try {
   const wall1 = performance.now() - t1;
   const counts = {};
   for (const r of first) counts[r.status] = (counts[r.status] || 0) + 1;
-  const bad = first.filter((r) => r.status !== 200 && r.status !== 503);
-  check(`${N} concurrent requests answered 200 or 503`, bad.length === 0,
+  const bad = first.filter((r) => r.status !== 200 && r.status !== 503 && r.status !== 504);
+  check(`${N} concurrent requests answered 200, 503 or 504`, bad.length === 0,
     bad.slice(0, 3).map((r) => `${r.status} ${JSON.stringify(r.json).slice(0, 200)}`).join(" | "));
-  check("503s say busy", first.filter((r) => r.status === 503).every((r) => r.json.kind === "busy"));
+  check("503s say busy, with Retry-After", first.filter((r) => r.status === 503)
+    .every((r) => r.json.kind === "busy" && Number(r.retryAfter) >= 1));
+  check("504s say queue_timeout or over_budget", first.filter((r) => r.status === 504)
+    .every((r) => r.json.kind === "queue_timeout" || r.json.kind === "over_budget"));
   check("some requests were planned", (counts[200] || 0) > 0);
   const ok1 = first.filter((r) => r.status === 200).map((r) => r.ms);
   const all1 = first.map((r) => r.ms);
-  console.log(`phase 1 (no retries): ${JSON.stringify(counts)} in ${wall1.toFixed(0)} ms; latency p50 ${pct(all1, 0.5).toFixed(1)} ms, p99 ${pct(all1, 0.99).toFixed(1)} ms (200s: p50 ${pct(ok1, 0.5).toFixed(1)} ms, p99 ${pct(ok1, 0.99).toFixed(1)} ms)`);
+  console.log(`phase 1 (no retries, ${serveArgs.join(" ") || "default queue"}): ${JSON.stringify(counts)} in ${wall1.toFixed(0)} ms (${(1000 * ok1.length / wall1).toFixed(1)} plans/s); latency p50 ${pct(all1, 0.5).toFixed(1)} ms, p99 ${pct(all1, 0.99).toFixed(1)} ms (200s: p50 ${pct(ok1, 0.5).toFixed(1)} ms, p99 ${pct(ok1, 0.99).toFixed(1)} ms)`);
+  // The server's counters agree with what the clients saw (a job past its budget may still run).
+  const status = await (await fetch(`${server.url}api/status`)).json();
+  console.log(`status after phase 1: ${JSON.stringify(status)}`);
+  check("/api/status counts the 503s as rejected", status.rejected === (counts[503] || 0), JSON.stringify(status));
+  check("/api/status counts the 504s as timeouts", status.queue_timeouts + status.over_budget === (counts[504] || 0), JSON.stringify(status));
+  check("/api/status: nothing queued once all are answered", status.queued === 0, JSON.stringify(status));
+  // Every pool job so far: the grid, one probe per candidate planner, and phase 1.
+  const jobs = 1 + candidates.length + N;
+  check("/api/status: every job served, rejected or timed out",
+    status.served + status.rejected + status.queue_timeouts + status.over_budget === jobs, `${jobs} jobs: ${JSON.stringify(status)}`);
 
   // Phase 2: the same requests from clients that retry on 503 after a short pause.
   async function untilPlanned(i) {

@@ -19,8 +19,10 @@ pub enum ErrorKind {
     NotJson,
     /// Every planning worker (or event stream slot) is busy (503).
     Busy,
-    /// The request's time budget ran out (504).
+    /// The request's time budget ran out while it was planned (504).
     OverBudget,
+    /// The request waited in the queue until it could no longer finish within its budget (504).
+    QueueTimeout,
     /// No such path (404).
     NotFound,
     /// The path exists, the method does not (405).
@@ -36,6 +38,7 @@ impl ErrorKind {
             ErrorKind::NotJson => "not_json",
             ErrorKind::Busy => "busy",
             ErrorKind::OverBudget => "over_budget",
+            ErrorKind::QueueTimeout => "queue_timeout",
             ErrorKind::NotFound => "not_found",
             ErrorKind::MethodNotAllowed => "method_not_allowed",
         }
@@ -51,7 +54,7 @@ impl ErrorKind {
     /// | `too_large` | 413 |
     /// | `not_json` | 415 |
     /// | `busy` | 503 |
-    /// | `over_budget` | 504 |
+    /// | `over_budget`, `queue_timeout` | 504 |
     pub fn status(self) -> StatusCode {
         match self {
             ErrorKind::Plan(FailureKind::BadRequest) => StatusCode::BAD_REQUEST,
@@ -66,7 +69,7 @@ impl ErrorKind {
             ErrorKind::TooLarge => StatusCode::PAYLOAD_TOO_LARGE,
             ErrorKind::NotJson => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             ErrorKind::Busy => StatusCode::SERVICE_UNAVAILABLE,
-            ErrorKind::OverBudget => StatusCode::GATEWAY_TIMEOUT,
+            ErrorKind::OverBudget | ErrorKind::QueueTimeout => StatusCode::GATEWAY_TIMEOUT,
             ErrorKind::NotFound => StatusCode::NOT_FOUND,
             ErrorKind::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
         }
@@ -81,6 +84,8 @@ pub struct ApiError {
     pub kind: ErrorKind,
     /// What is wrong, for people.
     pub message: String,
+    /// Seconds after which a retry may succeed, sent as `Retry-After` with a 503 (1 if unset).
+    pub retry_after_s: Option<u64>,
 }
 
 impl ApiError {
@@ -89,7 +94,14 @@ impl ApiError {
         Self {
             kind,
             message: message.into(),
+            retry_after_s: None,
         }
+    }
+
+    /// The same error with a `Retry-After` of `seconds` (sent with a 503).
+    pub fn with_retry_after(mut self, seconds: u64) -> Self {
+        self.retry_after_s = Some(seconds);
+        self
     }
 
     /// A bad request (400).
@@ -124,7 +136,7 @@ impl IntoResponse for ApiError {
         if self.kind == ErrorKind::Busy {
             response.headers_mut().insert(
                 axum::http::header::RETRY_AFTER,
-                axum::http::HeaderValue::from_static("1"),
+                axum::http::HeaderValue::from(self.retry_after_s.unwrap_or(1)),
             );
         }
         response

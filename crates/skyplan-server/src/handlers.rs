@@ -68,6 +68,11 @@ pub(crate) async fn planners(State(s): State<AppState>) -> Json<Value> {
     Json(s.planners.clone())
 }
 
+/// `GET /api/status`: the planning workers, the queue and their counters.
+pub(crate) async fn status(State(s): State<AppState>) -> Json<crate::pool::PoolStatus> {
+    Json(s.pool.status())
+}
+
 /// `GET /api/map`.
 pub(crate) async fn map(
     State(s): State<AppState>,

@@ -9,6 +9,7 @@
 //! | `GET /api/map` | name, home, bounds, obstacles; `?alt_m=&safety_m=&cell_m=` adds the grid as run-length rows |
 //! | `POST /api/plan` | a `PlanRequest` (the CLI's long options with underscores) → the `Plan` as `skyplan plan --json` prints it |
 //! | `GET /api/planners` | the planner registry |
+//! | `GET /api/status` | workers, busy, queued, queue depth, served/rejected/timed-out counters |
 //! | `GET /api/events` | server-sent events: plan results, flight states, routes ([`ViewEvent`]) |
 //! | `GET /api/openapi.json` | the OpenAPI 3 description of all of this |
 //!
@@ -17,8 +18,11 @@
 //! [`live::Live`] turns a flight (progress, sensor readings, replans, the simulator's state) into
 //! those events for both.
 //!
-//! Safe by default: request bodies over 1 MiB get 413, at most N plans run at once (503
-//! beyond), each request has a time budget (504 past it), clients never name files, and a
+//! Safe by default: request bodies over 1 MiB get 413, at most N plans run at once and a bounded
+//! queue holds the rest first in first out (503 with `Retry-After` when it is full, or when its
+//! expected wait leaves no time to plan), each request has a time budget from its arrival, queue
+//! included (504 past it: `queue_timeout` while waiting, `over_budget` while planning), clients
+//! never name files, and a
 //! server bound to loopback answers only requests whose `Host` is its address or `localhost`
 //! (403 otherwise: DNS-rebinding protection, [`with_host_check`]).
 //!
@@ -67,21 +71,38 @@ pub const PAGE_HTML: &str = include_str!("../page/index.html");
 /// The OpenAPI 3 description, compiled in.
 pub const OPENAPI_JSON: &str = include_str!("../openapi.json");
 
+/// The default queue depth per planning worker.
+pub const QUEUE_PER_WORKER: usize = 64;
+
 /// How the server runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
-    /// Plans (and grids) computed at once; more get 503. Defaults to the number of cores.
+    /// Plans (and grids) computed at once; more wait in the queue. Defaults to the number of
+    /// cores.
     pub max_concurrent: usize,
-    /// Time budget of one request; past it the answer is 504. Default 10 s.
+    /// Requests that may wait for a worker, first in first out; more get 503. `None`: 64 per
+    /// worker ([`QUEUE_PER_WORKER`]); 0: no queue (503 as soon as every worker is busy).
+    pub queue_depth: Option<usize>,
+    /// Time budget of one request from its arrival, queue included; past it the answer is 504.
+    /// Default 10 s.
     pub timeout: Duration,
     /// Event-stream clients at once; more get 503. Default 64.
     pub max_event_clients: usize,
+}
+
+impl ServerConfig {
+    /// The queue depth in effect: [`ServerConfig::queue_depth`], or 64 per worker.
+    pub fn effective_queue_depth(&self) -> usize {
+        self.queue_depth
+            .unwrap_or_else(|| QUEUE_PER_WORKER.saturating_mul(self.max_concurrent.max(1)))
+    }
 }
 
 impl Default for ServerConfig {
     fn default() -> Self {
         Self {
             max_concurrent: std::thread::available_parallelism().map_or(1, usize::from),
+            queue_depth: None,
             timeout: Duration::from_secs(10),
             max_event_clients: 64,
         }
@@ -117,6 +138,7 @@ pub fn app(world: World, config: ServerConfig) -> App {
         pool: Arc::new(pool::Pool::new(
             world.clone(),
             config.max_concurrent,
+            config.effective_queue_depth(),
             config.timeout,
         )),
         map_info: map::map_info(&world),
@@ -131,6 +153,7 @@ pub fn app(world: World, config: ServerConfig) -> App {
         .route("/api/map", get(handlers::map))
         .route("/api/plan", post(handlers::plan))
         .route("/api/planners", get(handlers::planners))
+        .route("/api/status", get(handlers::status))
         .route("/api/events", get(handlers::events))
         .route("/api/openapi.json", get(handlers::openapi))
         .fallback(handlers::not_found)

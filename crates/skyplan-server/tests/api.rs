@@ -201,9 +201,10 @@ async fn bodies_over_one_mib_get_413() {
 }
 
 #[tokio::test]
-async fn past_the_concurrency_limit_requests_get_503() {
+async fn without_a_queue_past_the_concurrency_limit_requests_get_503() {
     let config = ServerConfig {
         max_concurrent: 1,
+        queue_depth: Some(0),
         ..ServerConfig::default()
     };
     let app = router(World::fcnd_city(), config);
@@ -221,6 +222,64 @@ async fn past_the_concurrency_limit_requests_get_503() {
     // The worker is free again.
     let (status, _) = post_plan(app, json!({})).await;
     assert_eq!(status, StatusCode::OK);
+}
+
+#[tokio::test]
+async fn a_burst_past_the_workers_waits_in_the_queue_and_every_request_is_planned() {
+    // One worker, the default queue (64 per worker), a budget long enough for a debug build to
+    // plan the burst one after another.
+    let config = ServerConfig {
+        max_concurrent: 1,
+        timeout: Duration::from_secs(300),
+        ..ServerConfig::default()
+    };
+    let app = router(World::fcnd_city(), config);
+    let goals = [[420.0, 390.0], [308.5, -250.5], [60.0, 40.0]];
+    let requests: Vec<Value> = ["theta", "jps-plus"]
+        .iter()
+        .flat_map(|p| goals.map(|g| json!({ "planner": p, "goal_ne": g, "cell_m": 5.0 })))
+        .collect();
+    let burst: Vec<_> = requests
+        .iter()
+        .map(|r| tokio::spawn(post_plan(app.clone(), r.clone())))
+        .collect();
+    let mut session = Session::new(World::fcnd_city());
+    let mut planned = 0;
+    for (task, request) in burst.into_iter().zip(&requests) {
+        let (status, v) = task.await.expect("the request is answered");
+        // The planning API's own answer for the same request, whatever it is.
+        let request: PlanRequest = serde_json::from_value(request.clone()).expect("a request");
+        match session.plan(&request) {
+            Ok(plan) => {
+                assert_eq!(status, StatusCode::OK, "{v}");
+                let want = serde_json::to_value(&plan).expect("serialisable");
+                assert_eq!(timeless(v), timeless(want));
+                planned += 1;
+            }
+            Err(failure) => {
+                assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+                assert_eq!(v["kind"], failure.kind.name());
+            }
+        }
+    }
+    assert!(planned >= 3, "{planned} of the burst planned");
+    let (status, s) = send(app, "GET", "/api/status", Body::empty()).await;
+    assert_eq!(status, StatusCode::OK, "{s}");
+    assert_eq!(s["workers"], 1);
+    assert_eq!(s["queue_depth"], 64);
+    assert_eq!(s["budget_ms"], 300_000);
+    // Every request was served by the worker; none refused, none timed out; nothing in flight.
+    assert_eq!(s["served"], requests.len());
+    for key in [
+        "busy",
+        "queued",
+        "rejected",
+        "queue_timeouts",
+        "over_budget",
+    ] {
+        assert_eq!(s[key], 0, "{key}: {s}");
+    }
+    assert!(s["recent_job_ms"].is_u64(), "{s}");
 }
 
 #[tokio::test]

@@ -16,7 +16,7 @@ use axum::http::{Request, StatusCode};
 use serde::Serialize;
 use serde_json::{Map, Value, json};
 use skyplan_plan::{PlanRequest, PlannerId, Session, World};
-use skyplan_server::{OPENAPI_JSON, ServerConfig, router};
+use skyplan_server::{ErrorKind, OPENAPI_JSON, ServerConfig, router};
 use std::collections::BTreeSet;
 use tower::ServiceExt;
 
@@ -532,6 +532,19 @@ async fn the_registry_the_map_and_errors_match_their_schemas() {
             );
         }
     }
+    // The status before any job (no recent duration: null) and, below, after some.
+    let status_matches = |status: StatusCode, v: &Value| {
+        let wrong = violations(
+            &doc,
+            answer_schema(&doc, "/api/status", "get", status),
+            v,
+            "status",
+        );
+        assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    };
+    let (status, v) = send(city.clone(), "GET", "/api/status", Value::Null).await;
+    assert!(v["recent_job_ms"].is_null(), "{v}");
+    status_matches(status, &v);
     let (status, v) = send(
         city.clone(),
         "GET",
@@ -567,6 +580,37 @@ async fn the_registry_the_map_and_errors_match_their_schemas() {
         );
         assert!(wrong.is_empty(), "{}", wrong.join("\n"));
     }
+    let (status, v) = send(city, "GET", "/api/status", Value::Null).await;
+    assert!(v["recent_job_ms"].is_u64(), "{v}");
+    status_matches(status, &v);
+}
+
+/// Every error kind the server sends is in the document's list.
+#[test]
+fn every_error_kind_is_documented() {
+    let doc = document();
+    let listed = &doc["components"]["schemas"]["Error"]["properties"]["kind"]["enum"];
+    let listed: Vec<&str> = listed
+        .as_array()
+        .expect("an enum")
+        .iter()
+        .filter_map(Value::as_str)
+        .collect();
+    for kind in [
+        ErrorKind::TooLarge,
+        ErrorKind::NotJson,
+        ErrorKind::Busy,
+        ErrorKind::OverBudget,
+        ErrorKind::QueueTimeout,
+        ErrorKind::NotFound,
+        ErrorKind::MethodNotAllowed,
+    ] {
+        assert!(
+            listed.contains(&kind.name()),
+            "{} undocumented",
+            kind.name()
+        );
+    }
 }
 
 #[tokio::test]
@@ -587,6 +631,7 @@ async fn the_served_document_is_the_file_and_documents_every_endpoint_and_status
         "/api/map",
         "/api/plan",
         "/api/planners",
+        "/api/status",
         "/api/events",
         "/api/openapi.json",
     ] {
