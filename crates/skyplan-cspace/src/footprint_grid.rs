@@ -106,6 +106,10 @@ fn rasterise(grid: &mut Grid2, f: &Footprint, margin_m: f64, crossings: &mut Vec
                 let c1 = (((xb + margin_m - e0) / c).floor() as i64).min(cols - 1);
                 let start = r as usize * cols as usize;
                 for col in c0..=c1 {
+                    let i = start + col as usize;
+                    if grid.blocked[i] {
+                        continue; // already blocked: skip the exact test
+                    }
                     let x0 = e0 + col as f64 * c;
                     let square = [[y0, x0], [y1, x0 + c]];
                     let hit = if margin_m > 0.0 {
@@ -114,7 +118,7 @@ fn rasterise(grid: &mut Grid2, f: &Footprint, margin_m: f64, crossings: &mut Vec
                         segment_meets_open_square(a, b, square)
                     };
                     if hit {
-                        grid.blocked[start + col as usize] = true;
+                        grid.blocked[i] = true;
                     }
                 }
             }
