@@ -90,7 +90,8 @@ pub struct GridMapArgs {
     #[arg(long, value_name = "P", value_parser = parse_probability, default_value_t = 0.25)]
     pub density: f64,
     /// Geodetic home LAT,LON of the map's origin, for lat/lon of waypoints on maps without one
-    /// (images, MovingAI, random).
+    /// (images, MovingAI, random); on a .geojson map, the home its footprints are placed about
+    /// (default: the centre of the data).
     #[arg(long, value_name = "LAT,LON", value_parser = skyplan_plan::cli::pair, allow_hyphen_values = true)]
     pub home: Option<[f64; 2]>,
 }

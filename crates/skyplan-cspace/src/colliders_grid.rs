@@ -51,27 +51,7 @@ impl Grid2 {
             safety_m,
             cell_m,
         } = spec;
-        if !alt_m.is_finite() {
-            return Err(GridError::BadParameter {
-                name: "alt_m",
-                value: alt_m,
-                expected: "a finite altitude",
-            });
-        }
-        if !(safety_m.is_finite() && safety_m >= 0.0) {
-            return Err(GridError::BadParameter {
-                name: "safety_m",
-                value: safety_m,
-                expected: "a finite margin ≥ 0",
-            });
-        }
-        if !(cell_m.is_finite() && cell_m > 0.0) {
-            return Err(GridError::BadParameter {
-                name: "cell_m",
-                value: cell_m,
-                expected: "a finite cell size > 0",
-            });
-        }
+        check_spec(spec)?;
         let fold = |f: fn(f64, f64) -> f64,
                     init: f64,
                     g: &dyn Fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
@@ -130,4 +110,35 @@ impl Grid2 {
             },
         )
     }
+}
+
+/// Refuses a non-finite altitude, a negative or non-finite margin, a cell size ≤ 0.
+pub(crate) fn check_spec(spec: GridSpec) -> Result<(), GridError> {
+    let GridSpec {
+        alt_m,
+        safety_m,
+        cell_m,
+    } = spec;
+    if !alt_m.is_finite() {
+        return Err(GridError::BadParameter {
+            name: "alt_m",
+            value: alt_m,
+            expected: "a finite altitude",
+        });
+    }
+    if !(safety_m.is_finite() && safety_m >= 0.0) {
+        return Err(GridError::BadParameter {
+            name: "safety_m",
+            value: safety_m,
+            expected: "a finite margin ≥ 0",
+        });
+    }
+    if !(cell_m.is_finite() && cell_m > 0.0) {
+        return Err(GridError::BadParameter {
+            name: "cell_m",
+            value: cell_m,
+            expected: "a finite cell size > 0",
+        });
+    }
+    Ok(())
 }

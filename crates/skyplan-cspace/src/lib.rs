@@ -3,7 +3,8 @@
 //! [`Grid2`] is a 2D occupancy grid: cell `(row, col)` covers north
 //! `[origin_north_m + row·cell_m, … + cell_m)` and east `[origin_east_m + col·cell_m, … + cell_m)`,
 //! so row 0 is the southern edge and column 0 the western edge. Planners only see rows and columns;
-//! the [`GridFrame`] turns them into local north/east metres.
+//! the [`GridFrame`] turns them into local north/east metres. [`Grid2::from_colliders`] and
+//! [`Grid2::from_footprints`] build the grid of a map at a flight altitude.
 //!
 //! ```
 //! use skyplan_cspace::{Cell, Grid2};
@@ -16,6 +17,7 @@
 #![warn(missing_docs)]
 
 mod colliders_grid;
+mod footprint_grid;
 mod line_of_sight;
 
 pub use colliders_grid::GridSpec;

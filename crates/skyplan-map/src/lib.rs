@@ -4,6 +4,8 @@
 //!   axis-aligned boxes `posX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ` in metres
 //!   (north, east, up; centre and half sizes).
 //! * [`movingai`]: MovingAI / GPPC benchmark grids (`.map`) and scenarios (`.scen`).
+//! * [`footprints`]: building footprints from GeoJSON (polygons with holes and heights, in
+//!   longitude/latitude), projected to local metres about a home.
 //!
 //! Every parser returns a [`ParseError`] that names the line, the column and what was expected;
 //! the caller adds the file name. No parser panics on any input.
@@ -22,6 +24,7 @@
 #![warn(missing_docs)]
 
 pub mod colliders;
+pub mod footprints;
 pub mod movingai;
 mod tile;
 

@@ -69,7 +69,7 @@ pub(crate) fn end_cell(
         ));
     };
     if grid.is_blocked(cell) {
-        let why = if q.world.colliders().is_some() {
+        let why = if q.world.colliders().is_some() || q.world.footprints().is_some() {
             format!(
                 "inside an obstacle or its {} m safety margin at {} m altitude",
                 q.r.safety_m, q.r.alt_m
@@ -119,7 +119,7 @@ pub(crate) fn unreachable(
         .min_by(|&a, &b| d(a).total_cmp(&d(b)))
         .unwrap_or(start);
     let (n, e) = grid.center_ne(nearest);
-    let at = if q.world.colliders().is_some() {
+    let at = if q.world.colliders().is_some() || q.world.footprints().is_some() {
         format!(
             " at {} m altitude with a {} m margin",
             q.r.alt_m, q.r.safety_m

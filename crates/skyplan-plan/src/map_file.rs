@@ -21,7 +21,7 @@ pub struct MapFileOptions {
 /// option its own way (`--resolution`, `resolution_m=`).
 #[derive(Debug)]
 pub enum MapFileError<E> {
-    /// The extension is none of `.csv`, `.yaml`/`.yml`, `.png`/`.pgm`, `.map`.
+    /// The extension is none of `.csv`, `.yaml`/`.yml`, `.png`/`.pgm`, `.map`, `.geojson`.
     UnknownType,
     /// A bare image without a resolution.
     NeedsResolution,
@@ -44,7 +44,8 @@ pub enum MapFileError<E> {
 impl World {
     /// The map in `path`, by its extension: `.csv` FCND colliders, `.yaml`/`.yml` ROS
     /// map_server (its image read next to it), `.png`/`.pgm` with `options.resolution_m`, `.map`
-    /// MovingAI. `read` reads a file's bytes (the caller's I/O).
+    /// MovingAI, `.geojson` building footprints (home at the data's centre; move it with
+    /// [`World::with_home`]). `read` reads a file's bytes (the caller's I/O).
     ///
     /// ```
     /// use skyplan_plan::{MapFileError, MapFileOptions, World};
@@ -87,6 +88,9 @@ impl World {
         match format {
             MapFormat::Colliders => {
                 World::from_colliders_csv(&name, &text(bytes(path, false)?)?).map_err(Map)
+            }
+            MapFormat::GeoJson => {
+                World::from_geojson(&name, &bytes(path, false)?, None).map_err(Map)
             }
             MapFormat::MovingAi => {
                 World::from_movingai(&name, &text(bytes(path, false)?)?).map_err(Map)

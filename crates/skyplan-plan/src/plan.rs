@@ -209,7 +209,7 @@ pub struct Plan {
     pub status: &'static str,
     /// The map's name.
     pub map: String,
-    /// Obstacle boxes (colliders maps).
+    /// Obstacles: boxes of a colliders map, polygons of a footprint (GeoJSON) map.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub obstacles: Option<usize>,
     /// The geodetic home.

@@ -209,9 +209,14 @@ impl Session {
         safety_m: f64,
         cell_m: f64,
     ) -> Result<Arc<Grid2>, PlanFailure> {
+        enum Obstacles {
+            Boxes(Arc<skyplan_map::colliders::CollidersMap>),
+            Footprints(Arc<crate::world::Footprints>),
+        }
         let map = match &self.world.source {
             Source::Grid(g) => return Ok(Arc::clone(g)),
-            Source::Colliders(m) => Arc::clone(m),
+            Source::Colliders(m) => Obstacles::Boxes(Arc::clone(m)),
+            Source::Footprints(f) => Obstacles::Footprints(Arc::clone(f)),
         };
         crate::request::in_range("alt_m", alt_m, 0.0, crate::MAX_ALT_M, " m").map_err(|f| {
             PlanFailure::bad_request(format!("{}: {}", self.world.name(), f.message))
@@ -235,8 +240,11 @@ impl Session {
             safety_m,
             cell_m,
         };
-        let grid = Grid2::from_colliders(&map, spec)
-            .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
+        let grid = match &map {
+            Obstacles::Boxes(m) => Grid2::from_colliders(m, spec),
+            Obstacles::Footprints(f) => Grid2::from_footprints(&f.local, spec),
+        }
+        .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
         Ok(put(&mut self.grids, k, Arc::new(grid)))
     }
 
@@ -292,7 +300,7 @@ impl Session {
         let (table, _) = self.jps_plus_table(&grid, r.model);
         let spec = match self.world.source {
             Source::Grid(_) => [f64::NAN; 3],
-            Source::Colliders(_) => [r.alt_m, r.safety_m, r.cell_m],
+            Source::Colliders(_) | Source::Footprints(_) => [r.alt_m, r.safety_m, r.cell_m],
         };
         table
             .write_to(out, spec)
@@ -427,8 +435,13 @@ impl Session {
         self.check_request_memory(&r)?;
         let info = r.planner.info();
         if info.maps == MapKinds::CollidersOnly && self.world.colliders().is_none() {
+            let why = if self.world.footprints().is_some() {
+                " (footprint maps have no boxes yet: the 3D planners and Voronoi refuse them)"
+            } else {
+                ""
+            };
             return Err(PlanFailure::bad_request(format!(
-                "planner {}: needs an FCND colliders map (a colliders CSV file, or the bundled map); on {} use one of {}",
+                "planner {}: needs an FCND colliders map (a colliders CSV file, or the bundled map){why}; on {} use one of {}",
                 r.planner,
                 self.world.name(),
                 PlannerId::for_maps(false)
@@ -656,7 +669,7 @@ fn assemble(
     Ok(Plan {
         status: "ok",
         map: world.name().to_string(),
-        obstacles: world.colliders().map(|m| m.boxes.len()),
+        obstacles: world.obstacle_count(),
         home: world.frame().map(|f| Home {
             lat_deg: f.home().lat_deg,
             lon_deg: f.home().lon_deg,

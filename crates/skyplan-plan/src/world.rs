@@ -5,7 +5,8 @@ use crate::request::{PlanRequest, Resolved};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_imagemap::MapYaml;
-use skyplan_map::colliders::CollidersMap;
+use skyplan_map::colliders::{CollidersMap, GeodeticHome};
+use skyplan_map::footprints::{DEFAULT_HEIGHT_M, FootprintMap, GeoFootprints};
 use std::sync::Arc;
 
 /// The FCND city map (Udacity FCND-Motion-Planning `colliders.csv`), compiled in.
@@ -74,6 +75,8 @@ pub enum MapKind {
     Random,
     /// A grid given directly.
     Grid,
+    /// GeoJSON building footprints: polygons with holes and height bands, projected about a home.
+    Footprints,
 }
 
 /// A map file's format, told by its extension.
@@ -87,6 +90,8 @@ pub enum MapFormat {
     Image,
     /// `.map`: a MovingAI grid ([`World::from_movingai`]).
     MovingAi,
+    /// `.geojson`: building footprints ([`World::from_geojson`]).
+    GeoJson,
 }
 
 impl MapFormat {
@@ -98,6 +103,7 @@ impl MapFormat {
             "yaml" | "yml" => Self::MapServer,
             "png" | "pgm" => Self::Image,
             "map" => Self::MovingAi,
+            "geojson" => Self::GeoJson,
             _ => return None,
         })
     }
@@ -107,6 +113,15 @@ impl MapFormat {
 pub(crate) enum Source {
     Colliders(Arc<CollidersMap>),
     Grid(Arc<Grid2>),
+    Footprints(Arc<Footprints>),
+}
+
+/// A footprint map: as parsed (longitude/latitude, kept to project about another home) and in
+/// the local frame.
+#[derive(Debug, Clone)]
+pub(crate) struct Footprints {
+    pub(crate) geo: Arc<GeoFootprints>,
+    pub(crate) local: FootprintMap,
 }
 
 /// Horizontal extent shared by every planner family, metres north/east of the map's origin.
@@ -263,6 +278,56 @@ impl World {
         })
     }
 
+    /// Building footprints from GeoJSON bytes ([`skyplan_map::footprints`]: a
+    /// `FeatureCollection` of `Polygon`/`MultiPolygon` features with heights), projected to
+    /// local metres about `home_lat_lon` (default: the centre of the data's bounding box), which
+    /// becomes the map's geodetic home; buildings without a height get
+    /// [`DEFAULT_HEIGHT_M`] (how many: [`FootprintMap::default_heights`]). The grid planners
+    /// plan on it at the flight altitude ([`Grid2::from_footprints`](skyplan_cspace::Grid2::from_footprints));
+    /// the 3D planners, which need boxes, refuse it. The default start is the home.
+    ///
+    /// ```
+    /// use skyplan_plan::{MapKind, World};
+    /// let text = br#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+    ///   "properties": {"height": 30}, "geometry": {"type": "Polygon", "coordinates":
+    ///   [[[-122.3975, 37.7925], [-122.3970, 37.7925], [-122.3970, 37.7930], [-122.3975, 37.7925]]]}}]}"#;
+    /// let world = World::from_geojson("one.geojson", text, None)?;
+    /// assert_eq!(world.kind(), MapKind::Footprints);
+    /// assert_eq!(world.obstacle_count(), Some(1));
+    /// assert_eq!(world.footprints().map(|f| f.default_heights), Some(0));
+    /// let home = world.frame().unwrap().home();
+    /// assert!((home.lat_deg - 37.79275).abs() < 1e-9);
+    /// let bad = World::from_geojson("bad.geojson", b"{}", None).unwrap_err();
+    /// assert!(bad.message.starts_with("bad.geojson: type: expected \"FeatureCollection\""), "{}", bad.message);
+    /// # Ok::<(), skyplan_plan::PlanFailure>(())
+    /// ```
+    pub fn from_geojson(
+        name: &str,
+        bytes: &[u8],
+        home_lat_lon: Option<[f64; 2]>,
+    ) -> Result<Self, PlanFailure> {
+        let geo = skyplan_map::footprints::parse_geojson_bytes(bytes, DEFAULT_HEIGHT_M)
+            .map_err(|e| parse_failure(name, e))?;
+        let home = home_lat_lon.map(|[lat_deg, lon_deg]| GeodeticHome { lat_deg, lon_deg });
+        let local = geo.project(home).map_err(|e| parse_failure(name, e))?;
+        let frame = frame_at(
+            local.home.lat_deg,
+            local.home.lon_deg,
+            &format!("{name}: home"),
+        )?;
+        Ok(Self {
+            name: name.to_string(),
+            kind: MapKind::Footprints,
+            source: Source::Footprints(Arc::new(Footprints {
+                geo: Arc::new(geo),
+                local,
+            })),
+            frame: Some(frame),
+            default_start_ne: Some([0.0, 0.0]),
+            default_goal_ne: None,
+        })
+    }
+
     /// A MovingAI `.map` from its text, north up (row 0 of the file is the northern edge), 1 m
     /// cells, origin at the south-west corner.
     pub fn from_movingai(name: &str, text: &str) -> Result<Self, PlanFailure> {
@@ -360,15 +425,27 @@ impl World {
     }
 
     /// Gives a map without a geodetic home (images, MovingAI, random, grids) one, so that
-    /// waypoints get lat/lon and positions may be given as lat/lon. Colliders maps carry their
-    /// own home and refuse another.
+    /// waypoints get lat/lon and positions may be given as lat/lon; moves a footprint map's
+    /// local frame to this home (its footprints are projected again). Colliders maps carry
+    /// their own home and refuse another.
     pub fn with_home(mut self, lat_deg: f64, lon_deg: f64) -> Result<Self, PlanFailure> {
         if self.kind == MapKind::Colliders {
             return Err(PlanFailure::bad_request(
                 "home: a colliders map carries its own home (line 1); drop the extra home",
             ));
         }
-        self.frame = Some(frame_at(lat_deg, lon_deg, "home")?);
+        let frame = frame_at(lat_deg, lon_deg, "home")?;
+        if let Source::Footprints(f) = &self.source {
+            let local = f
+                .geo
+                .project(Some(GeodeticHome { lat_deg, lon_deg }))
+                .map_err(|e| parse_failure(&self.name, e))?;
+            self.source = Source::Footprints(Arc::new(Footprints {
+                geo: Arc::clone(&f.geo),
+                local,
+            }));
+        }
+        self.frame = Some(frame);
         Ok(self)
     }
 
@@ -393,16 +470,34 @@ impl World {
     pub fn colliders(&self) -> Option<&CollidersMap> {
         match &self.source {
             Source::Colliders(m) => Some(m),
+            Source::Grid(_) | Source::Footprints(_) => None,
+        }
+    }
+
+    /// The footprints of a GeoJSON map, in the local frame about its home.
+    pub fn footprints(&self) -> Option<&FootprintMap> {
+        match &self.source {
+            Source::Footprints(f) => Some(&f.local),
+            Source::Grid(_) | Source::Colliders(_) => None,
+        }
+    }
+
+    /// The number of obstacles of a map made of them: boxes of a colliders map, footprints
+    /// (polygons) of a GeoJSON map.
+    pub fn obstacle_count(&self) -> Option<usize> {
+        match &self.source {
+            Source::Colliders(m) => Some(m.boxes.len()),
+            Source::Footprints(f) => Some(f.local.footprints.len()),
             Source::Grid(_) => None,
         }
     }
 
-    /// The fixed grid of an image, MovingAI, random or given grid map (colliders grids depend on
-    /// the altitude, margin and cell size: see `Session::grid`).
+    /// The fixed grid of an image, MovingAI, random or given grid map (colliders and footprint
+    /// grids depend on the altitude, margin and cell size: see `Session::grid`).
     pub fn fixed_grid(&self) -> Option<&Grid2> {
         match &self.source {
             Source::Grid(g) => Some(g),
-            Source::Colliders(_) => None,
+            Source::Colliders(_) | Source::Footprints(_) => None,
         }
     }
 
@@ -421,8 +516,25 @@ impl World {
     /// (`floor(min(north − half))` … as `Grid2::from_colliders` lays it) for colliders maps, the
     /// grid's for the others. The 3D planners' flight volume covers at least this.
     pub fn bounds_ne(&self, cell_m: f64) -> BoundsNe {
+        let cell_m = if cell_m.is_finite() && cell_m > 0.0 {
+            cell_m
+        } else {
+            1.0
+        };
+        let span = |lo: f64, hi: f64| ((hi - lo) / cell_m).ceil().max(1.0) * cell_m;
         match &self.source {
             Source::Grid(g) => grid_bounds(g),
+            Source::Footprints(f) => {
+                // As `Grid2::from_footprints` lays its grid out.
+                let (lo, hi) = f.local.bbox_ne();
+                let (north_min_m, east_min_m) = (lo[0].floor(), lo[1].floor());
+                BoundsNe {
+                    north_min_m,
+                    north_max_m: north_min_m + span(north_min_m, hi[0]),
+                    east_min_m,
+                    east_max_m: east_min_m + span(east_min_m, hi[1]),
+                }
+            }
             Source::Colliders(map) => {
                 let lo = |f: fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
                     map.boxes
@@ -438,12 +550,6 @@ impl World {
                 let east_min_m = lo(|b| b.east_m - b.half_east_m);
                 let north_max = hi(|b| b.north_m + b.half_north_m);
                 let east_max = hi(|b| b.east_m + b.half_east_m);
-                let cell_m = if cell_m.is_finite() && cell_m > 0.0 {
-                    cell_m
-                } else {
-                    1.0
-                };
-                let span = |lo: f64, hi: f64| ((hi - lo) / cell_m).ceil().max(1.0) * cell_m;
                 BoundsNe {
                     north_min_m,
                     north_max_m: north_min_m + span(north_min_m, north_max),

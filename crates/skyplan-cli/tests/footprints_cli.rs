@@ -1,0 +1,208 @@
+//! `skyplan plan --map FILE.geojson`: building footprints planned on with the grid planners, the
+//! route checked against the grid rasterised here from the same file, against the exact
+//! Dijkstra optimum, and against the polygons themselves (every flown point at least the margin
+//! from every footprint whose band holds the altitude).
+
+use serde_json::Value;
+use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
+use skyplan_map::colliders::GeodeticHome;
+use skyplan_map::footprints::{DEFAULT_HEIGHT_M, FootprintMap, parse_geojson};
+use skyplan_search::MoveModel;
+use skyplan_search::oracle::dijkstra_exact;
+use std::path::{Path, PathBuf};
+mod common;
+use common::{fails_with, ok_json, rows};
+
+const SAMPLE: &str = include_str!("../../../data/footprints-sample.geojson");
+
+fn sample_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/footprints-sample.geojson")
+}
+
+fn sample_map(home: Option<GeodeticHome>) -> FootprintMap {
+    parse_geojson(SAMPLE, DEFAULT_HEIGHT_M)
+        .unwrap()
+        .project(home)
+        .unwrap()
+}
+
+fn cell(p: &Value) -> Cell {
+    Cell::new(
+        p["cell"][0].as_u64().unwrap() as u32,
+        p["cell"][1].as_u64().unwrap() as u32,
+    )
+}
+
+fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len2 = d[0] * d[0] + d[1] * d[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a[0] + t * d[0] - p[0]).hypot(a[1] + t * d[1] - p[1])
+}
+
+fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Distance between two segments (0 when they cross).
+fn segment_segment(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
+    if orient(a, b, c) * orient(a, b, d) <= 0.0 && orient(c, d, a) * orient(c, d, b) <= 0.0 {
+        return 0.0;
+    }
+    point_segment(a, c, d)
+        .min(point_segment(b, c, d))
+        .min(point_segment(c, a, b))
+        .min(point_segment(d, a, b))
+}
+
+/// Even-odd inside test of a point in a polygon with holes.
+fn inside(p: [f64; 2], rings: &[Vec<[f64; 2]>]) -> bool {
+    let mut odd = false;
+    for ring in rings {
+        for k in 0..ring.len() {
+            let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+            if (a[0] <= p[0]) != (b[0] <= p[0])
+                && p[1] < a[1] + (p[0] - a[0]) / (b[0] - a[0]) * (b[1] - a[1])
+            {
+                odd = !odd;
+            }
+        }
+    }
+    odd
+}
+
+/// The smallest distance from the route's segments to the footprints whose band holds the
+/// altitude (0 if the route enters one).
+fn clearance_m(map: &FootprintMap, wps: &[[f64; 4]], alt_m: f64, margin_m: f64) -> f64 {
+    let mut best = f64::INFINITY;
+    for f in map
+        .footprints
+        .iter()
+        .filter(|f| f.meets_altitude(alt_m, margin_m))
+    {
+        for w in wps.windows(2) {
+            let (a, b) = ([w[0][0], w[0][1]], [w[1][0], w[1][1]]);
+            if inside(a, &f.rings) {
+                return 0.0;
+            }
+            for ring in &f.rings {
+                for k in 0..ring.len() {
+                    let d = segment_segment(a, b, ring[k], ring[(k + 1) % ring.len()]);
+                    best = best.min(d);
+                }
+            }
+        }
+    }
+    best
+}
+
+#[test]
+fn grid_planners_plan_on_footprints_keeping_the_margin() {
+    let dir = tempfile::tempdir().unwrap();
+    let map_arg = sample_path();
+    let map_arg = map_arg.display();
+    let map = sample_map(None);
+    assert_eq!(map.footprints.len(), 42); // 36 buildings, 6 of them two-winged
+    assert_eq!(map.default_heights, 9);
+    for (planner, alt_m, margin_m) in [("jps", 5.0, 5.0), ("astar", 25.0, 3.0), ("theta", 5.0, 5.0)]
+    {
+        let v = ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --map {map_arg} --planner {planner} --alt-m {alt_m} --safety-m {margin_m} --goal-ne 118,-61"
+            ),
+        );
+        assert_eq!(v["status"], "ok");
+        assert_eq!(v["obstacles"], 42);
+        let spec = GridSpec {
+            alt_m,
+            safety_m: margin_m,
+            cell_m: 1.0,
+        };
+        let grid = Grid2::from_footprints(&map, spec).unwrap();
+        assert_eq!(v["grid"]["rows"], grid.rows());
+        assert_eq!(v["grid"]["blocked_cells"], grid.blocked_count());
+        let wps = rows(&v);
+        assert_eq!(
+            (wps[0][0], wps[0][1]),
+            (0.0, 0.0),
+            "{planner}: starts at home"
+        );
+        let last = wps[wps.len() - 1];
+        assert_eq!((last[0], last[1]), (118.0, -61.0));
+        for w in wps.windows(2) {
+            assert!(
+                grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), Touch::Closed),
+                "{planner}: {w:?}"
+            );
+        }
+        let clearance = clearance_m(&map, &wps, alt_m, margin_m);
+        assert!(
+            clearance >= margin_m,
+            "{planner}: the route comes {clearance} m from a footprint"
+        );
+        if planner != "theta" {
+            let truth = dijkstra_exact(
+                &grid,
+                cell(&v["start"]),
+                cell(&v["goal"]),
+                MoveModel::Octile,
+            )
+            .unwrap();
+            assert_eq!(v["cost_m"].as_f64().unwrap(), truth.to_f64(), "{planner}");
+        }
+    }
+}
+
+#[test]
+fn home_moves_the_frame_and_3d_planners_refuse_footprints() {
+    let dir = tempfile::tempdir().unwrap();
+    let map_arg = sample_path();
+    let map_arg = map_arg.display();
+    // The FCND home, a few metres south-west of the data's centre: the same street corners,
+    // given as lat/lon, planned in the frame about the new home.
+    let v = ok_json(
+        dir.path(),
+        &format!(
+            "plan --json --map {map_arg} --home 37.7925,-122.3975 --start-lla 37.79255,-122.39745 --goal-lla 37.79361,-122.39814"
+        ),
+    );
+    assert_eq!(v["home"]["lat_deg"], 37.7925);
+    assert_eq!(v["home"]["lon_deg"], -122.3975);
+    let moved = sample_map(Some(GeodeticHome {
+        lat_deg: 37.7925,
+        lon_deg: -122.3975,
+    }));
+    let grid = Grid2::from_footprints(&moved, GridSpec::default()).unwrap();
+    assert_eq!(v["grid"]["blocked_cells"], grid.blocked_count());
+    let wps = rows(&v);
+    assert!(clearance_m(&moved, &wps, 5.0, 5.0) >= 5.0);
+    fails_with(
+        dir.path(),
+        &format!("plan --map {map_arg} --planner voxel --goal-ne 118,-61"),
+        2,
+        &["planner voxel", "footprint maps have no boxes"],
+    );
+}
+
+#[test]
+fn bad_geojson_names_file_feature_and_field() {
+    let dir = common::dir_with(&[(
+        "bad.geojson",
+        r#"{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {},
+            "geometry": {"type": "Polygon", "coordinates": [[[37.79, -122.39], [37.8, -122.39], [37.8, -122.38], [37.79, -122.39]]]}}]}"#,
+    )]);
+    fails_with(
+        dir.path(),
+        "plan --map bad.geojson",
+        2,
+        &[
+            "bad.geojson: feature 0, geometry.coordinates[0][0]",
+            "swapped",
+        ],
+    );
+}
