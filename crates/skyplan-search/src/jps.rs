@@ -7,6 +7,7 @@
 //! pushes those. Costs are exactly those of A\*; the tests compare both with the exact oracle.
 
 use crate::astar::NO_PARENT;
+use crate::bits::BlockGrid;
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;
@@ -88,8 +89,9 @@ impl<'a> View<'a> {
         })
     }
 
-    /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`.
-    #[inline]
+    /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`,
+    /// cell by cell: the reference the block scans are tested against.
+    #[cfg(test)]
     fn jump_straight(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
         loop {
             if !self.free(r, c) {
@@ -107,8 +109,9 @@ impl<'a> View<'a> {
         }
     }
 
-    /// Scans from `(r, c)` along `(dr, dc)`, diagonal or straight.
-    #[inline]
+    /// Scans from `(r, c)` along `(dr, dc)`, diagonal or straight, cell by cell (the reference
+    /// of [`View::jump_blocks`]).
+    #[cfg(test)]
     fn jump(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
         if dr == 0 || dc == 0 {
             return self.jump_straight(r, c, dr, dc);
@@ -123,6 +126,67 @@ impl<'a> View<'a> {
             if self.forced_diagonal(r, c, dr, dc)
                 || self.jump_straight(r + dr, c, dr, 0).is_some()
                 || self.jump_straight(r, c + dc, 0, dc).is_some()
+            {
+                return Some((r, c));
+            }
+            if !self.diagonal_continues(r, c, dr, dc) {
+                return None;
+            }
+            r += dr;
+            c += dc;
+        }
+    }
+
+    /// [`View::jump_straight`] 64 cells at a time on the grid's bits (the same stop).
+    #[inline]
+    fn jump_straight_blocks(
+        &self,
+        block: &BlockGrid,
+        r: i64,
+        c: i64,
+        dr: i64,
+        dc: i64,
+    ) -> Option<(i64, i64)> {
+        let (gr, gc) = self.goal;
+        if dc != 0 {
+            let goal = (gr == r).then_some(gc);
+            block
+                .rows
+                .scan(r, c, dc, self.corner_cutting, goal)
+                .map(|p| (r, p))
+        } else {
+            let goal = (gc == c).then_some(gr);
+            block
+                .cols
+                .scan(c, r, dr, self.corner_cutting, goal)
+                .map(|p| (p, c))
+        }
+    }
+
+    /// [`View::jump`] with its straight scans (and those a diagonal scan makes at each step)
+    /// done on the grid's bits: the same jump point, 64 cells per step along a straight line.
+    #[inline]
+    fn jump_blocks(
+        &self,
+        block: &BlockGrid,
+        mut r: i64,
+        mut c: i64,
+        dr: i64,
+        dc: i64,
+    ) -> Option<(i64, i64)> {
+        if dr == 0 || dc == 0 {
+            return self.jump_straight_blocks(block, r, c, dr, dc);
+        }
+        loop {
+            if !self.free(r, c) {
+                return None;
+            }
+            if (r, c) == self.goal {
+                return Some((r, c));
+            }
+            if self.forced_diagonal(r, c, dr, dc)
+                || self.jump_straight_blocks(block, r + dr, c, dr, 0).is_some()
+                || self.jump_straight_blocks(block, r, c + dc, 0, dc).is_some()
             {
                 return Some((r, c));
             }
@@ -305,14 +369,18 @@ impl GridSearch {
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
         let view = View::new(grid, goal, model);
-        self.jump_point_search(
+        let mut block = std::mem::take(&mut self.block);
+        block.update(grid);
+        let found = self.jump_point_search(
             grid,
             start,
             goal,
             &view,
             |r, c, _| view.neighbour_mask(r, c),
-            |r, c, a, b| view.jump(r + a, c + b, a, b),
-        )
+            |r, c, a, b| view.jump_blocks(&block, r + a, c + b, a, b),
+        );
+        self.block = block;
+        found
     }
 
     /// The best-first loop shared by JPS and JPS+: `jump(r, c, dr, dc)` returns the next jump
@@ -395,5 +463,118 @@ fn interpolate(jumps: GridPath) -> GridPath {
         diagonal_moves,
         expansions: jumps.expansions,
         any_angle_cells: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::oracle::dijkstra_exact;
+    use proptest::prelude::*;
+    use skyplan_cspace::GridFrame;
+
+    /// Grids across 64-cell word edges (up to 2 words and a bit), open to cluttered.
+    fn grid_strategy() -> impl Strategy<Value = Grid2> {
+        (1u32..140, 1u32..140, 0.0f64..0.6).prop_flat_map(|(rows, cols, density)| {
+            proptest::collection::vec(proptest::bool::weighted(density), (rows * cols) as usize)
+                .prop_map(move |blocked| {
+                    Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap()
+                })
+        })
+    }
+
+    fn query_strategy() -> impl Strategy<Value = (Grid2, Vec<(Cell, Cell)>)> {
+        grid_strategy().prop_flat_map(|g| {
+            let (r, c) = (g.rows(), g.cols());
+            let pair = (0..r, 0..c, 0..r, 0..c)
+                .prop_map(|(a, b, x, y)| (Cell::new(a, b), Cell::new(x, y)));
+            (Just(g), proptest::collection::vec(pair, 1..6))
+        })
+    }
+
+    const MODELS: [MoveModel; 2] = [MoveModel::Octile, MoveModel::OctileCornerCutting];
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Block JPS against the exact Dijkstra oracle, several queries per grid on one
+        /// workspace (the bits built once and reused): the oracle's move counts, a valid path,
+        /// and an error exactly where the oracle finds no path.
+        #[test]
+        fn block_jps_is_optimal_on_grids_across_word_edges((grid, queries) in query_strategy()) {
+            let mut search = GridSearch::new();
+            for model in MODELS {
+                for &(start, goal) in &queries {
+                    let truth = dijkstra_exact(&grid, start, goal, model);
+                    let found = search.search(&grid, start, goal, model, crate::Planner::Jps);
+                    match (found, truth) {
+                        (Ok(path), Some(cost)) => {
+                            prop_assert_eq!(
+                                (path.straight_moves, path.diagonal_moves),
+                                (cost.straight, cost.diagonal)
+                            );
+                            prop_assert_eq!(path.cells.first(), Some(&start));
+                            prop_assert_eq!(path.cells.last(), Some(&goal));
+                            prop_assert_eq!(crate::check_path(&grid, &path.cells, model), Ok(()));
+                        }
+                        (Err(_), None) => {}
+                        (got, want) => {
+                            prop_assert!(false, "{model:?}: got {got:?}, oracle {want:?}")
+                        }
+                    }
+                }
+            }
+        }
+
+        /// From every free cell in all 8 directions, the block jump stops exactly where the
+        /// cell-by-cell jump stops (straight and diagonal, both corner rules).
+        #[test]
+        fn block_jumps_equal_cell_jumps(grid in grid_strategy(), goal in (0u32..140, 0u32..140)) {
+            let goal = Cell::new(goal.0 % grid.rows(), goal.1 % grid.cols());
+            let mut block = BlockGrid::default();
+            block.update(&grid);
+            for model in MODELS {
+                let view = View::new(&grid, goal, model);
+                for r in 0..view.rows {
+                    for c in 0..view.cols {
+                        if !view.free(r, c) {
+                            continue;
+                        }
+                        for (a, b) in DIRS {
+                            prop_assert_eq!(
+                                view.jump_blocks(&block, r + a, c + b, a, b),
+                                view.jump(r + a, c + b, a, b),
+                                "from ({}, {}) along ({}, {}), {:?}", r, c, a, b, model
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// One workspace, a grid edited between two queries: the second query sees the edit.
+    #[test]
+    fn an_edited_grid_is_searched_as_edited() {
+        let open = Grid2::new(3, 70, vec![false; 210], GridFrame::default()).unwrap();
+        let mut walled = vec![false; 210];
+        for r in 0..3 {
+            walled[r * 70 + 65] = true;
+        }
+        walled[2 * 70 + 65] = false;
+        let walled = Grid2::new(3, 70, walled, GridFrame::default()).unwrap();
+        let mut search = GridSearch::new();
+        let (s, g) = (Cell::new(0, 0), Cell::new(0, 69));
+        for (grid, walls) in [(&open, false), (&walled, true), (&open, false)] {
+            let path = search
+                .search(grid, s, g, MoveModel::Octile, crate::Planner::Jps)
+                .unwrap();
+            let truth = dijkstra_exact(grid, s, g, MoveModel::Octile).unwrap();
+            assert_eq!((truth.straight, truth.diagonal) != (69, 0), walls);
+            assert_eq!(
+                (path.straight_moves, path.diagonal_moves),
+                (truth.straight, truth.diagonal)
+            );
+        }
     }
 }

@@ -28,6 +28,7 @@
 
 mod astar;
 mod bidirectional;
+mod bits;
 mod components;
 mod contraction;
 mod jps;
