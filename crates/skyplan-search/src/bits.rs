@@ -62,80 +62,6 @@ impl BitLines {
     fn behind(&self, line: i64, pos: i64) -> u64 {
         self.ahead(line, pos - 63)
     }
-
-    /// The scan of straight JPS along `line` from `pos` (the first cell past the expanded
-    /// node) in direction `dir` (±1): the first cell that is the goal (`goal`, its position if
-    /// it lies on this line) or has a forced neighbour in a line beside, before the first
-    /// blocked cell; `None` if a blocked cell or the grid's edge comes first. Forced means, for
-    /// a cell `p` and a side line `s` (`line ± 1`): with corner cutting, `s` is free at
-    /// `p + dir` and blocked at `p`; without, `s` is free at `p` and blocked at `p - dir` —
-    /// exactly `View::forced_straight`.
-    #[inline]
-    pub(crate) fn scan(
-        &self,
-        line: i64,
-        mut pos: i64,
-        dir: i64,
-        corner_cutting: bool,
-        goal: Option<i64>,
-    ) -> Option<i64> {
-        debug_assert!((0..self.lines as i64).contains(&line));
-        let (up, down) = (line - 1, line + 1);
-        if dir > 0 {
-            while pos >= 0 && pos < self.len as i64 {
-                let here = self.ahead(line, pos);
-                let forced = if corner_cutting {
-                    (self.ahead(up, pos + 1) & !self.ahead(up, pos))
-                        | (self.ahead(down, pos + 1) & !self.ahead(down, pos))
-                } else {
-                    (self.ahead(up, pos) & !self.ahead(up, pos - 1))
-                        | (self.ahead(down, pos) & !self.ahead(down, pos - 1))
-                };
-                let stop = (!here).trailing_zeros();
-                let mut hit = forced.trailing_zeros();
-                if let Some(g) = goal
-                    && g >= pos
-                    && g - pos < 64
-                {
-                    hit = hit.min((g - pos) as u32);
-                }
-                if hit < stop {
-                    return Some(pos + i64::from(hit));
-                }
-                if stop < 64 {
-                    return None;
-                }
-                pos += 64;
-            }
-        } else {
-            while pos >= 0 && pos < self.len as i64 {
-                let here = self.behind(line, pos);
-                let forced = if corner_cutting {
-                    (self.behind(up, pos - 1) & !self.behind(up, pos))
-                        | (self.behind(down, pos - 1) & !self.behind(down, pos))
-                } else {
-                    (self.behind(up, pos) & !self.behind(up, pos + 1))
-                        | (self.behind(down, pos) & !self.behind(down, pos + 1))
-                };
-                let stop = (!here).leading_zeros();
-                let mut hit = forced.leading_zeros();
-                if let Some(g) = goal
-                    && g <= pos
-                    && pos - g < 64
-                {
-                    hit = hit.min((pos - g) as u32);
-                }
-                if hit < stop {
-                    return Some(pos - i64::from(hit));
-                }
-                if stop < 64 {
-                    return None;
-                }
-                pos -= 64;
-            }
-        }
-        None
-    }
 }
 
 /// 8 bytes that are each 0 or 1 as 8 bits, byte `k` in bit `k` (each byte's low bit is moved
@@ -166,38 +92,43 @@ fn pack_free(blocked: &[bool]) -> u64 {
     !word & valid
 }
 
-/// A grid's free cells as bit rows and bit columns, built once per grid and kept while the
-/// queries use the same grid (checked by packing the grid's rows again and comparing, one read
-/// of the grid per query and no copy of it).
+/// Side of the square tiles the bits are checked against the grid by: one word of a row and
+/// one word of a column.
+const TILE: usize = 64;
+
+/// A grid's free cells as bit rows and bit columns, built once per grid shape and kept between
+/// queries. The grid may change between queries (the caller owns it), so the bits are checked
+/// lazily, by 64 × 64-cell tiles: each query starts a new epoch, and a scan first checks (and
+/// re-packs if they differ) the tiles it is about to read that were not checked in this epoch.
+/// A query thus reads the parts of the grid its scans read, not the whole grid.
 #[derive(Debug, Default)]
 pub(crate) struct BlockGrid {
     /// Row `r` is line `r`.
-    pub(crate) rows: BitLines,
+    rows: BitLines,
     /// Column `c` is line `c` (the transpose).
-    pub(crate) cols: BitLines,
+    cols: BitLines,
     /// `(rows, cols)` of the grid packed, `None` before the first.
     shape: Option<(u32, u32)>,
+    /// Tiles per tile row.
+    tiles_across: usize,
+    /// Epoch in which each tile was last checked, row-major.
+    checked: Vec<u32>,
+    /// The current query's epoch.
+    epoch: u32,
 }
 
 impl BlockGrid {
-    /// Makes these the bits of `grid`, rebuilding them unless they already are.
-    pub(crate) fn update(&mut self, grid: &Grid2) {
-        if self.shape != Some((grid.rows(), grid.cols())) || !self.rows_match(grid) {
+    /// Starts a query on `grid`: packs it if its shape changed, else marks every tile unchecked.
+    pub(crate) fn begin(&mut self, grid: &Grid2) {
+        if self.shape != Some((grid.rows(), grid.cols())) {
             self.build(grid);
+            return;
         }
-    }
-
-    fn rows_match(&self, grid: &Grid2) -> bool {
-        let cols = grid.cols() as usize;
-        grid.blocked_cells()
-            .chunks_exact(cols)
-            .enumerate()
-            .all(|(r, row)| {
-                let at = (r + 1) * self.rows.stride + 1;
-                row.chunks(64)
-                    .zip(&self.rows.words[at..])
-                    .all(|(cells, &w)| pack_free(cells) == w)
-            })
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.checked.fill(0);
+            self.epoch = 1;
+        }
     }
 
     #[cold]
@@ -220,6 +151,153 @@ impl BlockGrid {
             }
         }
         self.shape = Some((grid.rows(), grid.cols()));
+        self.tiles_across = cols.div_ceil(TILE);
+        self.checked = vec![1; rows.div_ceil(TILE) * self.tiles_across];
+        self.epoch = 1;
+    }
+
+    /// Checks, in this epoch, the tiles holding grid rows `r0 ..= r1` × columns `c0 ..= c1`
+    /// (clamped to the grid).
+    #[inline(always)]
+    fn check(&mut self, blocked: &[bool], (r0, r1): (i64, i64), (c0, c1): (i64, i64)) {
+        let last_r = self.rows.lines as i64 - 1;
+        let last_c = self.rows.len as i64 - 1;
+        let (tr0, tr1) = (
+            r0.clamp(0, last_r) as usize / TILE,
+            r1.clamp(0, last_r) as usize / TILE,
+        );
+        let (tc0, tc1) = (
+            c0.clamp(0, last_c) as usize / TILE,
+            c1.clamp(0, last_c) as usize / TILE,
+        );
+        for tr in tr0..=tr1 {
+            for tc in tc0..=tc1 {
+                if self.checked[tr * self.tiles_across + tc] != self.epoch {
+                    self.check_tile(blocked, tr, tc);
+                }
+            }
+        }
+    }
+
+    /// Compares tile `(tr, tc)`'s row words with the grid, re-packs its rows and columns if
+    /// they differ, and marks it checked.
+    #[cold]
+    fn check_tile(&mut self, blocked: &[bool], tr: usize, tc: usize) {
+        let (rows, cols) = (self.rows.lines, self.rows.len);
+        let (r0, r1) = (tr * TILE, ((tr + 1) * TILE).min(rows));
+        let (c0, c1) = (tc * TILE, ((tc + 1) * TILE).min(cols));
+        let mut changed = false;
+        for r in r0..r1 {
+            let word = pack_free(&blocked[r * cols + c0..r * cols + c1]);
+            let at = (r + 1) * self.rows.stride + 1 + tc;
+            changed |= self.rows.words[at] != word;
+            self.rows.words[at] = word;
+        }
+        if changed {
+            for c in c0..c1 {
+                let mut word = 0u64;
+                for r in r0..r1 {
+                    word |= u64::from(!blocked[r * cols + c]) << (r - r0);
+                }
+                self.cols.words[(c + 1) * self.cols.stride + 1 + tr] = word;
+            }
+        }
+        self.checked[tr * self.tiles_across + tc] = self.epoch;
+    }
+
+    /// The scan of straight JPS along row `line` (`vertical` false) or column `line` (true)
+    /// from `pos` (the first cell past the expanded node) in direction `dir` (±1) on the grid
+    /// `blocked` this query began on: the first cell that is the goal (`goal`, its position if
+    /// it lies on this line) or has a forced neighbour in a line beside, before the first
+    /// blocked cell; `None` if a blocked cell or the grid's edge comes first. Forced means, for
+    /// a cell `p` and a side line `s` (`line ± 1`): with corner cutting, `s` is free at
+    /// `p + dir` and blocked at `p`; without, `s` is free at `p` and blocked at `p - dir` —
+    /// exactly `View::forced_straight`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn scan(
+        &mut self,
+        blocked: &[bool],
+        vertical: bool,
+        line: i64,
+        mut pos: i64,
+        dir: i64,
+        corner_cutting: bool,
+        goal: Option<i64>,
+    ) -> Option<i64> {
+        let (up, down) = (line - 1, line + 1);
+        loop {
+            let len = if vertical {
+                self.cols.len
+            } else {
+                self.rows.len
+            };
+            if pos < 0 || pos >= len as i64 {
+                return None;
+            }
+            // The cells this step reads: lines beside included, one past either end.
+            let span = if dir > 0 {
+                (pos - 1, pos + 64)
+            } else {
+                (pos - 64, pos + 1)
+            };
+            if vertical {
+                self.check(blocked, span, (up, down));
+            } else {
+                self.check(blocked, (up, down), span);
+            }
+            let bits = if vertical { &self.cols } else { &self.rows };
+            debug_assert!((0..bits.lines as i64).contains(&line));
+            if dir > 0 {
+                let here = bits.ahead(line, pos);
+                let forced = if corner_cutting {
+                    (bits.ahead(up, pos + 1) & !bits.ahead(up, pos))
+                        | (bits.ahead(down, pos + 1) & !bits.ahead(down, pos))
+                } else {
+                    (bits.ahead(up, pos) & !bits.ahead(up, pos - 1))
+                        | (bits.ahead(down, pos) & !bits.ahead(down, pos - 1))
+                };
+                let stop = (!here).trailing_zeros();
+                let mut hit = forced.trailing_zeros();
+                if let Some(g) = goal
+                    && g >= pos
+                    && g - pos < 64
+                {
+                    hit = hit.min((g - pos) as u32);
+                }
+                if hit < stop {
+                    return Some(pos + i64::from(hit));
+                }
+                if stop < 64 {
+                    return None;
+                }
+                pos += 64;
+            } else {
+                let here = bits.behind(line, pos);
+                let forced = if corner_cutting {
+                    (bits.behind(up, pos - 1) & !bits.behind(up, pos))
+                        | (bits.behind(down, pos - 1) & !bits.behind(down, pos))
+                } else {
+                    (bits.behind(up, pos) & !bits.behind(up, pos + 1))
+                        | (bits.behind(down, pos) & !bits.behind(down, pos + 1))
+                };
+                let stop = (!here).leading_zeros();
+                let mut hit = forced.leading_zeros();
+                if let Some(g) = goal
+                    && g <= pos
+                    && pos - g < 64
+                {
+                    hit = hit.min((pos - g) as u32);
+                }
+                if hit < stop {
+                    return Some(pos - i64::from(hit));
+                }
+                if stop < 64 {
+                    return None;
+                }
+                pos -= 64;
+            }
+        }
     }
 }
 
@@ -263,59 +341,78 @@ mod tests {
         }
     }
 
+    /// Every straight scan from every cell of `grid`, in all four directions and both corner
+    /// rules, against the cell-by-cell scan, on bits that began a query on `grid`.
+    fn scans_agree(bits: &mut BlockGrid, grid: &Grid2, goal: Cell) -> Result<(), TestCaseError> {
+        for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
+            bits.begin(grid);
+            let view = View::new(grid, goal, model);
+            let cc = model == MoveModel::OctileCornerCutting;
+            let (gr, gc) = view.goal;
+            for r in 0..view.rows {
+                for c in 0..view.cols {
+                    for (dr, dc) in [(0, 1), (0, -1), (1, 0), (-1, 0)] {
+                        let want = cell_scan(&view, r, c, dr, dc);
+                        let blocked = grid.blocked_cells();
+                        let got = if dc != 0 {
+                            bits.scan(blocked, false, r, c, dc, cc, (gr == r).then_some(gc))
+                                .map(|p| (r, p))
+                        } else {
+                            bits.scan(blocked, true, c, r, dr, cc, (gc == c).then_some(gr))
+                                .map(|p| (p, c))
+                        };
+                        prop_assert_eq!(
+                            got,
+                            want,
+                            "from ({}, {}) along ({}, {}), {:?}",
+                            r,
+                            c,
+                            dr,
+                            dc,
+                            model
+                        );
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
-        /// Every straight scan from every free cell, in all four directions and both corner
-        /// rules, stops where the cell-by-cell scan stops.
+        /// Block scans stop where cell scans stop, on bits built for the grid.
         #[test]
         fn block_scans_stop_where_cell_scans_stop(
             grid in grid_strategy(),
             goal in (0u32..140, 0u32..140),
         ) {
             let goal = Cell::new(goal.0 % grid.rows(), goal.1 % grid.cols());
-            let mut bits = BlockGrid::default();
-            bits.update(&grid);
-            for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
-                let view = View::new(&grid, goal, model);
-                let cc = model == MoveModel::OctileCornerCutting;
-                let (gr, gc) = view.goal;
-                for r in 0..view.rows {
-                    for c in 0..view.cols {
-                        for (dr, dc) in [(0, 1), (0, -1), (1, 0), (-1, 0)] {
-                            let want = cell_scan(&view, r, c, dr, dc);
-                            let got = if dc != 0 {
-                                bits.rows.scan(r, c, dc, cc, (gr == r).then_some(gc)).map(|p| (r, p))
-                            } else {
-                                bits.cols.scan(c, r, dr, cc, (gc == c).then_some(gr)).map(|p| (p, c))
-                            };
-                            prop_assert_eq!(got, want, "from ({}, {}) along ({}, {}), {:?}", r, c, dr, dc, model);
-                        }
-                    }
-                }
-            }
+            scans_agree(&mut BlockGrid::default(), &grid, goal)?;
         }
 
-        /// The bits are rebuilt when the grid changes (same shape, one cell flipped) and kept
-        /// when it does not.
+        /// Bits packed for one grid and kept for an edited grid of the same shape (cells flipped
+        /// anywhere, so in tiles checked and re-packed lazily) scan the edited grid, and scan it
+        /// again the same in a later query; packing a third grid afresh and then the second
+        /// again agrees too.
         #[test]
-        fn bits_follow_the_grid(grid in grid_strategy(), flip in (0u32..140, 0u32..140)) {
+        fn kept_bits_follow_an_edited_grid(
+            grid in grid_strategy(),
+            flips in proptest::collection::vec((0u32..140, 0u32..140), 1..8),
+            goal in (0u32..140, 0u32..140),
+        ) {
+            let goal = Cell::new(goal.0 % grid.rows(), goal.1 % grid.cols());
             let mut bits = BlockGrid::default();
-            bits.update(&grid);
-            prop_assert!(bits.rows_match(&grid));
-            let fresh = |g: &Grid2| {
-                let mut b = BlockGrid::default();
-                b.build(g);
-                (b.rows, b.cols)
-            };
-            let cell = Cell::new(flip.0 % grid.rows(), flip.1 % grid.cols());
+            bits.begin(&grid);
             let mut blocked = grid.blocked_cells().to_vec();
-            let i = grid.index(cell);
-            blocked[i] = !blocked[i];
+            for (r, c) in flips {
+                let i = grid.index(Cell::new(r % grid.rows(), c % grid.cols()));
+                blocked[i] = !blocked[i];
+            }
             let edited = Grid2::new(grid.rows(), grid.cols(), blocked, GridFrame::default()).unwrap();
-            prop_assert!(!bits.rows_match(&edited));
-            bits.update(&edited);
-            prop_assert_eq!((bits.rows.clone(), bits.cols.clone()), fresh(&edited));
+            scans_agree(&mut bits, &edited, goal)?;
+            scans_agree(&mut bits, &grid, goal)?;
+            scans_agree(&mut bits, &edited, goal)?;
         }
     }
 }

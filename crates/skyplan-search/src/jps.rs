@@ -141,24 +141,23 @@ impl<'a> View<'a> {
     #[inline]
     fn jump_straight_blocks(
         &self,
-        block: &BlockGrid,
+        block: &mut BlockGrid,
         r: i64,
         c: i64,
         dr: i64,
         dc: i64,
     ) -> Option<(i64, i64)> {
         let (gr, gc) = self.goal;
+        let cc = self.corner_cutting;
         if dc != 0 {
             let goal = (gr == r).then_some(gc);
             block
-                .rows
-                .scan(r, c, dc, self.corner_cutting, goal)
+                .scan(self.blocked, false, r, c, dc, cc, goal)
                 .map(|p| (r, p))
         } else {
             let goal = (gc == c).then_some(gr);
             block
-                .cols
-                .scan(c, r, dr, self.corner_cutting, goal)
+                .scan(self.blocked, true, c, r, dr, cc, goal)
                 .map(|p| (p, c))
         }
     }
@@ -168,7 +167,7 @@ impl<'a> View<'a> {
     #[inline]
     fn jump_blocks(
         &self,
-        block: &BlockGrid,
+        block: &mut BlockGrid,
         mut r: i64,
         mut c: i64,
         dr: i64,
@@ -370,14 +369,14 @@ impl GridSearch {
     ) -> Result<GridPath, SearchError> {
         let view = View::new(grid, goal, model);
         let mut block = std::mem::take(&mut self.block);
-        block.update(grid);
+        block.begin(grid);
         let found = self.jump_point_search(
             grid,
             start,
             goal,
             &view,
             |r, c, _| view.neighbour_mask(r, c),
-            |r, c, a, b| view.jump_blocks(&block, r + a, c + b, a, b),
+            |r, c, a, b| view.jump_blocks(&mut block, r + a, c + b, a, b),
         );
         self.block = block;
         found
@@ -392,7 +391,7 @@ impl GridSearch {
         goal: Cell,
         view: &View<'_>,
         neighbour_mask: impl Fn(i64, i64, usize) -> u8,
-        jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
+        mut jump: impl FnMut(i64, i64, i64, i64) -> Option<(i64, i64)>,
     ) -> Result<GridPath, SearchError> {
         self.reset(grid, false);
         let cols = view.cols;
@@ -532,7 +531,7 @@ mod tests {
         fn block_jumps_equal_cell_jumps(grid in grid_strategy(), goal in (0u32..140, 0u32..140)) {
             let goal = Cell::new(goal.0 % grid.rows(), goal.1 % grid.cols());
             let mut block = BlockGrid::default();
-            block.update(&grid);
+            block.begin(&grid);
             for model in MODELS {
                 let view = View::new(&grid, goal, model);
                 for r in 0..view.rows {
@@ -542,7 +541,7 @@ mod tests {
                         }
                         for (a, b) in DIRS {
                             prop_assert_eq!(
-                                view.jump_blocks(&block, r + a, c + b, a, b),
+                                view.jump_blocks(&mut block, r + a, c + b, a, b),
                                 view.jump(r + a, c + b, a, b),
                                 "from ({}, {}) along ({}, {}), {:?}", r, c, a, b, model
                             );
