@@ -367,19 +367,31 @@ impl GridSearch {
         goal: Cell,
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
-        let view = View::new(grid, goal, model);
         let mut block = std::mem::take(&mut self.block);
         block.begin(grid);
-        let found = self.jump_point_search(
+        let found = self.search_jps_on(&mut block, grid, start, goal, model);
+        self.block = block;
+        found
+    }
+
+    /// JPS with block scans on `block`, which began this query on `grid`.
+    fn search_jps_on(
+        &mut self,
+        block: &mut BlockGrid,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+        model: MoveModel,
+    ) -> Result<GridPath, SearchError> {
+        let view = View::new(grid, goal, model);
+        self.jump_point_search(
             grid,
             start,
             goal,
             &view,
             |r, c, _| view.neighbour_mask(r, c),
-            |r, c, a, b| view.jump_blocks(&mut block, r + a, c + b, a, b),
-        );
-        self.block = block;
-        found
+            |r, c, a, b| view.jump_blocks(block, r + a, c + b, a, b),
+        )
     }
 
     /// The best-first loop shared by JPS and JPS+: `jump(r, c, dr, dc)` returns the next jump
@@ -433,6 +445,56 @@ impl GridSearch {
             }
         }
         Err(SearchError::Unreachable { expansions })
+    }
+}
+
+/// JPS prepared on one grid for many queries: the grid's bit rows and columns packed once. The
+/// grid stays borrowed, so it cannot change under the bits and queries skip the check that
+/// [`GridSearch::search`] makes of bits it kept from an earlier query (a read of the grid's
+/// cells the scans read). Answers exactly what [`GridSearch::search`] with [`crate::Planner::Jps`]
+/// answers.
+///
+/// ```
+/// use skyplan_cspace::{Cell, Grid2};
+/// use skyplan_search::{BlockJps, GridSearch, MoveModel};
+/// let grid = Grid2::from_ascii("....\n.##.\n....")?;
+/// let mut jps = BlockJps::new(&grid, MoveModel::Octile);
+/// let path = jps.search(&mut GridSearch::new(), Cell::new(0, 0), Cell::new(2, 3))?;
+/// assert_eq!((path.straight_moves, path.diagonal_moves), (5, 0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct BlockJps<'g> {
+    grid: &'g Grid2,
+    model: MoveModel,
+    block: BlockGrid,
+}
+
+impl<'g> BlockJps<'g> {
+    /// Packs `grid`'s free cells for JPS under `model` (a 4-connected model runs A\*, as
+    /// [`GridSearch::search`] does for JPS).
+    pub fn new(grid: &'g Grid2, model: MoveModel) -> Self {
+        let mut block = BlockGrid::default();
+        if model.has_diagonals() {
+            block.begin(grid);
+        }
+        BlockJps { grid, model, block }
+    }
+
+    /// An optimal path from `start` to `goal`, with `search`'s buffers; errors as
+    /// [`GridSearch::search`]'s.
+    pub fn search(
+        &mut self,
+        search: &mut GridSearch,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
+        if !self.model.has_diagonals() {
+            return search.search(self.grid, start, goal, self.model, crate::Planner::Jps);
+        }
+        crate::astar::check_endpoints(self.grid, start, goal)?;
+        // No `begin`: every tile was checked when the bits were packed, and the grid is borrowed.
+        search.search_jps_on(&mut self.block, self.grid, start, goal, self.model)
     }
 }
 
@@ -547,6 +609,26 @@ mod tests {
                             );
                         }
                     }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(100))]
+
+        /// A prepared [`BlockJps`] answers every query exactly as `GridSearch::search` does.
+        #[test]
+        fn prepared_block_jps_answers_like_grid_search((grid, queries) in query_strategy()) {
+            let mut search = GridSearch::new();
+            for model in [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting] {
+                let mut prepared = BlockJps::new(&grid, model);
+                let mut own = GridSearch::new();
+                for &(start, goal) in &queries {
+                    prop_assert_eq!(
+                        prepared.search(&mut own, start, goal),
+                        search.search(&grid, start, goal, model, crate::Planner::Jps)
+                    );
                 }
             }
         }

@@ -47,6 +47,7 @@ pub use contraction::{
     ChQuery, ContractionError, ContractionHierarchy, DIAGONAL as CH_DIAGONAL_COST,
     MAX_CELLS as CH_MAX_CELLS, STRAIGHT as CH_STRAIGHT_COST,
 };
+pub use jps::BlockJps;
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 pub use open::{OpenEntry, OpenList};
 
