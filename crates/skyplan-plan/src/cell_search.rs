@@ -5,7 +5,7 @@ use crate::algorithm::{Engine, Workspace};
 use crate::failure::PlanFailure;
 use crate::planner_id::PlannerId;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{GridPath, JpsPlusTable, MoveModel, SearchError};
+use skyplan_search::{BlockJps, GridPath, JpsPlusTable, MoveModel, SearchError};
 use std::sync::Arc;
 
 /// A grid planner prepared for many queries on one grid.
@@ -24,6 +24,8 @@ pub struct CellSearch<'g> {
     model: MoveModel,
     engine: Engine,
     workspace: Box<Workspace>,
+    /// For JPS: the grid's bit rows and columns packed once (the grid is borrowed for as long).
+    block_jps: Option<BlockJps<'g>>,
     precompute_us: u64,
 }
 
@@ -40,11 +42,13 @@ impl<'g> CellSearch<'g> {
         };
         let t = std::time::Instant::now();
         let engine = cells.prepare_alone(grid, model)?;
+        let block_jps = (planner == PlannerId::Jps).then(|| BlockJps::new(grid, model));
         Ok(Self {
             grid,
             model,
             engine,
             workspace: Box::default(),
+            block_jps,
             precompute_us: crate::session::micros(t.elapsed()),
         })
     }
@@ -68,12 +72,16 @@ impl<'g> CellSearch<'g> {
             model: table.model(),
             engine: Engine::Plus(table),
             workspace: Box::default(),
+            block_jps: None,
             precompute_us,
         })
     }
 
     /// One query.
     pub fn search(&mut self, start: Cell, goal: Cell) -> Result<GridPath, SearchError> {
+        if let Some(jps) = &mut self.block_jps {
+            return jps.search(&mut self.workspace.search, start, goal);
+        }
         self.engine
             .search(&mut self.workspace, self.grid, (start, goal), self.model)
     }

@@ -14,6 +14,8 @@ pub struct GridSearch {
     queue: BucketQueue,
     /// The moves each cell allows, on the flat A\*'s bordered layout ([`PagedNodes::padded`]).
     masks: MoveMasks,
+    /// The grid's free cells as bit rows and columns for JPS's block scans, kept like `masks`.
+    pub(crate) block: crate::bits::BlockGrid,
 }
 
 pub(crate) const NO_PARENT: u32 = u32::MAX;
@@ -342,6 +344,7 @@ impl GridSearch {
             nodes,
             queue,
             masks,
+            block: _,
         } = self;
         let (pool, open) = nodes.flat_pool()?;
         let moves = masks.get(grid, DIAGONALS, CORNER_CUTTING);

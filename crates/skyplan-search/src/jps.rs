@@ -7,6 +7,7 @@
 //! pushes those. Costs are exactly those of A\*; the tests compare both with the exact oracle.
 
 use crate::astar::NO_PARENT;
+use crate::bits::BlockGrid;
 use crate::{GridPath, GridSearch, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::f64::consts::SQRT_2;
@@ -88,8 +89,9 @@ impl<'a> View<'a> {
         })
     }
 
-    /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`.
-    #[inline]
+    /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`,
+    /// cell by cell: the reference the block scans are tested against.
+    #[cfg(test)]
     fn jump_straight(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
         loop {
             if !self.free(r, c) {
@@ -107,8 +109,9 @@ impl<'a> View<'a> {
         }
     }
 
-    /// Scans from `(r, c)` along `(dr, dc)`, diagonal or straight.
-    #[inline]
+    /// Scans from `(r, c)` along `(dr, dc)`, diagonal or straight, cell by cell (the reference
+    /// of [`View::jump_blocks`]).
+    #[cfg(test)]
     fn jump(&self, mut r: i64, mut c: i64, dr: i64, dc: i64) -> Option<(i64, i64)> {
         if dr == 0 || dc == 0 {
             return self.jump_straight(r, c, dr, dc);
@@ -123,6 +126,66 @@ impl<'a> View<'a> {
             if self.forced_diagonal(r, c, dr, dc)
                 || self.jump_straight(r + dr, c, dr, 0).is_some()
                 || self.jump_straight(r, c + dc, 0, dc).is_some()
+            {
+                return Some((r, c));
+            }
+            if !self.diagonal_continues(r, c, dr, dc) {
+                return None;
+            }
+            r += dr;
+            c += dc;
+        }
+    }
+
+    /// [`View::jump_straight`] 64 cells at a time on the grid's bits (the same stop).
+    #[inline]
+    fn jump_straight_blocks(
+        &self,
+        block: &mut BlockGrid,
+        r: i64,
+        c: i64,
+        dr: i64,
+        dc: i64,
+    ) -> Option<(i64, i64)> {
+        let (gr, gc) = self.goal;
+        let cc = self.corner_cutting;
+        if dc != 0 {
+            let goal = (gr == r).then_some(gc);
+            block
+                .scan(self.blocked, false, r, c, dc, cc, goal)
+                .map(|p| (r, p))
+        } else {
+            let goal = (gc == c).then_some(gr);
+            block
+                .scan(self.blocked, true, c, r, dr, cc, goal)
+                .map(|p| (p, c))
+        }
+    }
+
+    /// [`View::jump`] with its straight scans (and those a diagonal scan makes at each step)
+    /// done on the grid's bits: the same jump point, 64 cells per step along a straight line.
+    #[inline]
+    fn jump_blocks(
+        &self,
+        block: &mut BlockGrid,
+        mut r: i64,
+        mut c: i64,
+        dr: i64,
+        dc: i64,
+    ) -> Option<(i64, i64)> {
+        if dr == 0 || dc == 0 {
+            return self.jump_straight_blocks(block, r, c, dr, dc);
+        }
+        loop {
+            if !self.free(r, c) {
+                return None;
+            }
+            if (r, c) == self.goal {
+                return Some((r, c));
+            }
+            if self.forced_diagonal(r, c, dr, dc)
+                || self.jump_straight_blocks(block, r + dr, c, dr, 0).is_some()
+                || self.jump_straight_blocks(block, r, c + dc, 0, dc).is_some()
             {
                 return Some((r, c));
             }
@@ -304,6 +367,22 @@ impl GridSearch {
         goal: Cell,
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
+        let mut block = std::mem::take(&mut self.block);
+        block.begin(grid);
+        let found = self.search_jps_on(&mut block, grid, start, goal, model);
+        self.block = block;
+        found
+    }
+
+    /// JPS with block scans on `block`, which began this query on `grid`.
+    fn search_jps_on(
+        &mut self,
+        block: &mut BlockGrid,
+        grid: &Grid2,
+        start: Cell,
+        goal: Cell,
+        model: MoveModel,
+    ) -> Result<GridPath, SearchError> {
         let view = View::new(grid, goal, model);
         self.jump_point_search(
             grid,
@@ -311,7 +390,7 @@ impl GridSearch {
             goal,
             &view,
             |r, c, _| view.neighbour_mask(r, c),
-            |r, c, a, b| view.jump(r + a, c + b, a, b),
+            |r, c, a, b| view.jump_blocks(block, r + a, c + b, a, b),
         )
     }
 
@@ -324,7 +403,7 @@ impl GridSearch {
         goal: Cell,
         view: &View<'_>,
         neighbour_mask: impl Fn(i64, i64, usize) -> u8,
-        jump: impl Fn(i64, i64, i64, i64) -> Option<(i64, i64)>,
+        mut jump: impl FnMut(i64, i64, i64, i64) -> Option<(i64, i64)>,
     ) -> Result<GridPath, SearchError> {
         self.reset(grid, false);
         let cols = view.cols;
@@ -369,6 +448,56 @@ impl GridSearch {
     }
 }
 
+/// JPS prepared on one grid for many queries: the grid's bit rows and columns packed once. The
+/// grid stays borrowed, so it cannot change under the bits and queries skip the check that
+/// [`GridSearch::search`] makes of bits it kept from an earlier query (a read of the grid's
+/// cells the scans read). Answers exactly what [`GridSearch::search`] with [`crate::Planner::Jps`]
+/// answers.
+///
+/// ```
+/// use skyplan_cspace::{Cell, Grid2};
+/// use skyplan_search::{BlockJps, GridSearch, MoveModel};
+/// let grid = Grid2::from_ascii("....\n.##.\n....")?;
+/// let mut jps = BlockJps::new(&grid, MoveModel::Octile);
+/// let path = jps.search(&mut GridSearch::new(), Cell::new(0, 0), Cell::new(2, 3))?;
+/// assert_eq!((path.straight_moves, path.diagonal_moves), (5, 0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct BlockJps<'g> {
+    grid: &'g Grid2,
+    model: MoveModel,
+    block: BlockGrid,
+}
+
+impl<'g> BlockJps<'g> {
+    /// Packs `grid`'s free cells for JPS under `model` (a 4-connected model runs A\*, as
+    /// [`GridSearch::search`] does for JPS).
+    pub fn new(grid: &'g Grid2, model: MoveModel) -> Self {
+        let mut block = BlockGrid::default();
+        if model.has_diagonals() {
+            block.begin(grid);
+        }
+        BlockJps { grid, model, block }
+    }
+
+    /// An optimal path from `start` to `goal`, with `search`'s buffers; errors as
+    /// [`GridSearch::search`]'s.
+    pub fn search(
+        &mut self,
+        search: &mut GridSearch,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
+        if !self.model.has_diagonals() {
+            return search.search(self.grid, start, goal, self.model, crate::Planner::Jps);
+        }
+        crate::astar::check_endpoints(self.grid, start, goal)?;
+        // No `begin`: every tile was checked when the bits were packed, and the grid is borrowed.
+        search.search_jps_on(&mut self.block, self.grid, start, goal, self.model)
+    }
+}
+
 /// Expands a path of jump points (each segment straight or diagonal) into every cell.
 fn interpolate(jumps: GridPath) -> GridPath {
     let mut cells = Vec::with_capacity(jumps.cells.len() * 8);
@@ -395,5 +524,138 @@ fn interpolate(jumps: GridPath) -> GridPath {
         diagonal_moves,
         expansions: jumps.expansions,
         any_angle_cells: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::oracle::dijkstra_exact;
+    use proptest::prelude::*;
+    use skyplan_cspace::GridFrame;
+
+    /// Grids across 64-cell word edges (up to 2 words and a bit), open to cluttered.
+    fn grid_strategy() -> impl Strategy<Value = Grid2> {
+        (1u32..140, 1u32..140, 0.0f64..0.6).prop_flat_map(|(rows, cols, density)| {
+            proptest::collection::vec(proptest::bool::weighted(density), (rows * cols) as usize)
+                .prop_map(move |blocked| {
+                    Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap()
+                })
+        })
+    }
+
+    fn query_strategy() -> impl Strategy<Value = (Grid2, Vec<(Cell, Cell)>)> {
+        grid_strategy().prop_flat_map(|g| {
+            let (r, c) = (g.rows(), g.cols());
+            let pair = (0..r, 0..c, 0..r, 0..c)
+                .prop_map(|(a, b, x, y)| (Cell::new(a, b), Cell::new(x, y)));
+            (Just(g), proptest::collection::vec(pair, 1..6))
+        })
+    }
+
+    const MODELS: [MoveModel; 2] = [MoveModel::Octile, MoveModel::OctileCornerCutting];
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Block JPS against the exact Dijkstra oracle, several queries per grid on one
+        /// workspace (the bits built once and reused): the oracle's move counts, a valid path,
+        /// and an error exactly where the oracle finds no path.
+        #[test]
+        fn block_jps_is_optimal_on_grids_across_word_edges((grid, queries) in query_strategy()) {
+            let mut search = GridSearch::new();
+            for model in MODELS {
+                for &(start, goal) in &queries {
+                    let truth = dijkstra_exact(&grid, start, goal, model);
+                    let found = search.search(&grid, start, goal, model, crate::Planner::Jps);
+                    match (found, truth) {
+                        (Ok(path), Some(cost)) => {
+                            prop_assert_eq!(
+                                (path.straight_moves, path.diagonal_moves),
+                                (cost.straight, cost.diagonal)
+                            );
+                            prop_assert_eq!(path.cells.first(), Some(&start));
+                            prop_assert_eq!(path.cells.last(), Some(&goal));
+                            prop_assert_eq!(crate::check_path(&grid, &path.cells, model), Ok(()));
+                        }
+                        (Err(_), None) => {}
+                        (got, want) => {
+                            prop_assert!(false, "{model:?}: got {got:?}, oracle {want:?}")
+                        }
+                    }
+                }
+            }
+        }
+
+        /// From every free cell in all 8 directions, the block jump stops exactly where the
+        /// cell-by-cell jump stops (straight and diagonal, both corner rules).
+        #[test]
+        fn block_jumps_equal_cell_jumps(grid in grid_strategy(), goal in (0u32..140, 0u32..140)) {
+            let goal = Cell::new(goal.0 % grid.rows(), goal.1 % grid.cols());
+            let mut block = BlockGrid::default();
+            block.begin(&grid);
+            for model in MODELS {
+                let view = View::new(&grid, goal, model);
+                for r in 0..view.rows {
+                    for c in 0..view.cols {
+                        if !view.free(r, c) {
+                            continue;
+                        }
+                        for (a, b) in DIRS {
+                            prop_assert_eq!(
+                                view.jump_blocks(&mut block, r + a, c + b, a, b),
+                                view.jump(r + a, c + b, a, b),
+                                "from ({}, {}) along ({}, {}), {:?}", r, c, a, b, model
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(100))]
+
+        /// A prepared [`BlockJps`] answers every query exactly as `GridSearch::search` does.
+        #[test]
+        fn prepared_block_jps_answers_like_grid_search((grid, queries) in query_strategy()) {
+            let mut search = GridSearch::new();
+            for model in [MoveModel::FourConnected, MoveModel::Octile, MoveModel::OctileCornerCutting] {
+                let mut prepared = BlockJps::new(&grid, model);
+                let mut own = GridSearch::new();
+                for &(start, goal) in &queries {
+                    prop_assert_eq!(
+                        prepared.search(&mut own, start, goal),
+                        search.search(&grid, start, goal, model, crate::Planner::Jps)
+                    );
+                }
+            }
+        }
+    }
+
+    /// One workspace, a grid edited between two queries: the second query sees the edit.
+    #[test]
+    fn an_edited_grid_is_searched_as_edited() {
+        let open = Grid2::new(3, 70, vec![false; 210], GridFrame::default()).unwrap();
+        let mut walled = vec![false; 210];
+        for r in 0..3 {
+            walled[r * 70 + 65] = true;
+        }
+        walled[2 * 70 + 65] = false;
+        let walled = Grid2::new(3, 70, walled, GridFrame::default()).unwrap();
+        let mut search = GridSearch::new();
+        let (s, g) = (Cell::new(0, 0), Cell::new(0, 69));
+        for (grid, walls) in [(&open, false), (&walled, true), (&open, false)] {
+            let path = search
+                .search(grid, s, g, MoveModel::Octile, crate::Planner::Jps)
+                .unwrap();
+            let truth = dijkstra_exact(grid, s, g, MoveModel::Octile).unwrap();
+            assert_eq!((truth.straight, truth.diagonal) != (69, 0), walls);
+            assert_eq!(
+                (path.straight_moves, path.diagonal_moves),
+                (truth.straight, truth.diagonal)
+            );
+        }
     }
 }

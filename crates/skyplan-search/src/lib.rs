@@ -28,6 +28,7 @@
 
 mod astar;
 mod bidirectional;
+mod bits;
 mod components;
 mod contraction;
 mod jps;
@@ -46,6 +47,7 @@ pub use contraction::{
     ChQuery, ContractionError, ContractionHierarchy, DIAGONAL as CH_DIAGONAL_COST,
     MAX_CELLS as CH_MAX_CELLS, STRAIGHT as CH_STRAIGHT_COST,
 };
+pub use jps::BlockJps;
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 pub use open::{OpenEntry, OpenList};
 
