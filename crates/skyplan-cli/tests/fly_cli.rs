@@ -482,6 +482,7 @@ fn ctrl_c_with_on_interrupt_return_flies_a_planned_way_home_around_the_buildings
             "interrupt  Ctrl-C: flying the planned way home",
             "holding while the way home is planned",
             "way home by jps: ",
+            "rtl        a straight way home (the autopilot's RTL) from this route passes over obstacle #",
             "flown in GUIDED, landing there",
             "result     FAILED: aborted (interrupted by Ctrl-C; flew the planned way home); the vehicle landed",
             "sim        disarmed",
@@ -502,6 +503,16 @@ fn ctrl_c_with_on_interrupt_return_flies_a_planned_way_home_around_the_buildings
         "landed at N {north_m} E {east_m}, not at the launch point"
     );
     assert!(flown_m > 600.0, "flew out and back: {flown_m} m");
+    // The straight way home needs more than the route's buildings allow at 5 m: the RTL
+    // altitude that clears it is well above the flight altitude.
+    let rtl_alt_m: f64 = run
+        .stdout
+        .split("only an RTL altitude of at least ")
+        .nth(1)
+        .and_then(|rest| rest.split(" m clears").next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no RTL altitude:\n{}", run.stdout));
+    assert!(rtl_alt_m > 50.0, "{rtl_alt_m}");
 }
 
 #[test]

@@ -90,7 +90,8 @@ pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<
         .map(|r| r.heading_error_rad.to_degrees())
         .fold(0.0, f64::max);
     let replans = summary.replans.len();
-    let how_many = match replans {
+    // Every replan and a way home start a new route; `n` is the last one's length.
+    let how_many = match replans + usize::from(ex.flew_way_home()) {
         0 => format!("{} of {n}", reached.len()),
         r => format!("{} (over {} routes)", reached.len(), r + 1),
     };

@@ -4,7 +4,7 @@
 //! files.
 
 use crate::flight::{self, Observer, Quiet};
-use crate::home::PlannedHome;
+use crate::home::{PlannedHome, rtl_clearance};
 use crate::words::sim_note_line;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
@@ -280,6 +280,7 @@ pub fn fly_mission_with<O: RunObserver>(
     }
     let t_plan = Instant::now();
     let home_world = returns.then(|| world.clone());
+    let map_boxes = world.colliders().map(|m| m.boxes.clone());
     let session = Session::new(world).with_limits(limits);
     let replanner = match o.mode {
         Mode::Guided(replanner) if reference.is_none() => replanner,
@@ -307,6 +308,9 @@ pub fn fly_mission_with<O: RunObserver>(
         t_plan.elapsed().as_secs_f64() * 1000.0
     ));
     observer.planned(&plan)?;
+    if let Some(boxes) = &map_boxes {
+        observer.say(&rtl_line(boxes, mission, plan.spec.safety_m));
+    }
     if let Some(world) = home_world {
         gcs.set_home_router(Box::new(PlannedHome::new(world, limits, &request, &plan)));
     }
@@ -465,6 +469,26 @@ impl<O: Observer + ?Sized> Observer for Story<'_, O> {
             }
         }
         self.inner.update(u);
+    }
+}
+
+/// What the autopilot's own way home (RTL: a straight line to the launch point, the route's
+/// start) would fly over from anywhere on the route, and the altitude that clears it.
+fn rtl_line(boxes: &[ObstacleBox], mission: &skyplan_mission::Mission, margin_m: f64) -> String {
+    let route: Vec<[f64; 2]> = mission
+        .waypoints
+        .iter()
+        .map(|w| [w.north_m, w.east_m])
+        .collect();
+    let Some(&launch) = route.first() else {
+        return "rtl        the route is empty".into();
+    };
+    match rtl_clearance(boxes, &route, launch, margin_m) {
+        Some(c) => format!(
+            "rtl        a straight way home (the autopilot's RTL) from this route passes over obstacle #{}: only an RTL altitude of at least {:.1} m clears it with the margin; --on-interrupt return and --failsafe return fly a planned way home instead",
+            c.obstacle, c.alt_m
+        ),
+        None => "rtl        no obstacle under a straight way home (the autopilot's RTL) from any point of this route".into(),
     }
 }
 

@@ -757,6 +757,11 @@ impl<S: Strategy> Executor<S> {
         Ok(out)
     }
 
+    /// Whether the vehicle was sent on a planned way home ([`Executor::return_home`]).
+    pub fn flew_way_home(&self) -> bool {
+        matches!(self.core.homing, Some(Homing::Flying { .. }))
+    }
+
     /// No way home (`reason`): the vehicle lands where it is. Ignored unless the way home is
     /// wanted.
     pub fn no_way_home(&mut self, now_s: f64, reason: String) -> Output {
@@ -942,6 +947,8 @@ pub trait FlightExecutor {
     fn return_home(&mut self, now_s: f64, way: &WayHome) -> Result<Output, ConfigError>;
     /// See [`Executor::no_way_home`].
     fn no_way_home(&mut self, now_s: f64, reason: String) -> Output;
+    /// See [`Executor::flew_way_home`].
+    fn flew_way_home(&self) -> bool;
     /// How the reference is being followed, for an executor that flies one
     /// ([`super::ReferenceExecutor`]); `None` for the others.
     fn tracking(&self) -> Option<TrackingReport> {
@@ -1005,6 +1012,9 @@ impl<S: Strategy> FlightExecutor for Executor<S> {
     }
     fn no_way_home(&mut self, now_s: f64, reason: String) -> Output {
         Executor::no_way_home(self, now_s, reason)
+    }
+    fn flew_way_home(&self) -> bool {
+        Executor::flew_way_home(self)
     }
     fn tracking(&self) -> Option<TrackingReport> {
         self.strategy.tracking()
