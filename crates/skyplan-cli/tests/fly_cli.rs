@@ -288,6 +288,7 @@ fn pymavlink_drives_skyplan_sim() {
         &[
             "no telemetry before it is requested",
             "refusal reason: Takeoff: vehicle not armed",
+            "param RTL_ALT = 4200",
             "mission upload accepted after 4 items",
             "took off to 95 % of 5 m",
             "position target reached",
@@ -435,12 +436,22 @@ fn ctrl_c_with_on_interrupt_rtl_returns_to_launch_and_lands_there() {
         "fly --sim --speedup 20 --on-interrupt rtl",
         "3 of 14 reached",
     );
-    run.expect_code(1).stdout_has(&[
-        "interrupt  Ctrl-C: returning to launch",
-        "sim        mode RTL",
-        "result     FAILED: aborted (interrupted by Ctrl-C); the vehicle landed",
-        "sim        disarmed",
-    ]);
+    // Before take-off, fly set RTL_ALT above everything under a straight way home from the route
+    // (179.01 m on this route: obstacle #2195's top and the 5 m margin, in centimetres) and the cone off; the simulator
+    // confirmed both, climbed to it on RTL and flew home over the city without a collision.
+    run.expect_code(1)
+        .stdout_has(&[
+            "rtl        RTL_ALT set to 1790",
+            "(the autopilot's RTL returns at 179.0",
+            "rtl        WARNING: that is above the altitude ceiling of 120 m",
+            "interrupt  Ctrl-C: returning to launch",
+            "sim        mode RTL",
+            "result     FAILED: aborted (interrupted by Ctrl-C); the vehicle landed",
+            "sim        disarmed",
+            "max altitude 179.",
+            "no collision with the map's obstacles",
+        ])
+        .stdout_lacks("RTL_CONE_SLOPE not confirmed");
     // Interrupted ~250 m from home, the vehicle ends back at the launch point, on the ground.
     let (north_m, east_m, flown_m) = landed_and_flown(&run);
     assert!(

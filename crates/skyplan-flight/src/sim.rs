@@ -18,7 +18,7 @@
 //!
 //! Modes follow ArduCopter: GUIDED obeys position targets and NAV_TAKEOFF, LAND descends where it
 //! is, AUTO flies the uploaded mission, LOITER holds, RTL flies straight back over the home at
-//! the altitude it had when RTL began (ArduCopter would first climb to `RTL_ALT`), then lands
+//! the altitude it had when RTL began or at `RTL_ALT` (climbing to it first when below, as ArduCopter does), then lands
 //! there and disarms. Positions are NED metres about the home.
 //!
 //! ```
@@ -187,6 +187,9 @@ impl Default for SimConfig {
     }
 }
 
+/// ArduCopter's default `RTL_ALT`, metres (1500 cm).
+pub const DEFAULT_RTL_ALT_M: f64 = 15.0;
+
 /// One item of an uploaded mission, in the local frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SimMissionItem {
@@ -279,6 +282,12 @@ pub struct SimVehicle {
     mission_current: usize,
     /// RTL: the home has been reached and the vehicle descends.
     rtl_descending: bool,
+    /// RTL is climbing to its return altitude before going home.
+    rtl_climbing: bool,
+    /// The return altitude above home, metres (ArduCopter `RTL_ALT`, set in centimetres).
+    rtl_alt_m: f64,
+    /// ArduCopter `RTL_CONE_SLOPE` (kept and echoed; this simulator has no cone).
+    rtl_cone_slope: f32,
     /// AUTO: the land item is being flown.
     mission_landing: bool,
 }
@@ -305,6 +314,9 @@ impl SimVehicle {
             mission: Vec::new(),
             mission_current: 0,
             rtl_descending: false,
+            rtl_climbing: false,
+            rtl_alt_m: DEFAULT_RTL_ALT_M,
+            rtl_cone_slope: 3.0,
             mission_landing: false,
         }
     }
@@ -374,11 +386,61 @@ impl SimVehicle {
             }
             SimMode::Land => self.target = None,
             SimMode::Rtl => {
+                // As ArduCopter: below RTL_ALT, climb where it is first, then go home at it.
                 self.rtl_descending = false;
-                self.target =
-                    (!self.on_ground).then_some(([0.0, 0.0, self.position[2]], self.yaw_rad));
+                let alt_m = -self.position[2];
+                self.rtl_climbing = !self.on_ground && alt_m < self.rtl_alt_m - 0.1;
+                self.target = (!self.on_ground).then_some(if self.rtl_climbing {
+                    (
+                        [self.position[0], self.position[1], -self.rtl_alt_m],
+                        self.yaw_rad,
+                    )
+                } else {
+                    ([0.0, 0.0, self.position[2]], self.yaw_rad)
+                });
             }
         }
+    }
+
+    /// PARAM_SET of the parameters this simulator has: `RTL_ALT` (centimetres, 200 to 300000
+    /// as ArduCopter takes it; RTL climbs to it before going home) and `RTL_CONE_SLOPE`
+    /// (kept, without effect). Returns the value now held (what PARAM_VALUE echoes), or `None`
+    /// for a name it does not have or a value out of range (ArduPilot then sends nothing).
+    ///
+    /// ```
+    /// use skyplan_flight::sim::{SimConfig, SimVehicle};
+    /// let mut v = SimVehicle::new(SimConfig::default());
+    /// assert_eq!(v.set_param("RTL_ALT", 18000.0), Some(18000.0));
+    /// assert_eq!(v.rtl_alt_m(), 180.0);
+    /// assert_eq!(v.set_param("RTL_ALT", -5.0), None);
+    /// assert_eq!(v.set_param("NO_SUCH", 1.0), None);
+    /// ```
+    pub fn set_param(&mut self, name: &str, value: f32) -> Option<f32> {
+        match name {
+            "RTL_ALT" if (200.0..=300_000.0).contains(&value) => {
+                self.rtl_alt_m = f64::from(value) / 100.0;
+                Some(value)
+            }
+            "RTL_CONE_SLOPE" if (0.0..=10.0).contains(&value) => {
+                self.rtl_cone_slope = value;
+                Some(value)
+            }
+            _ => None,
+        }
+    }
+
+    /// The value of a parameter this simulator has (see [`SimVehicle::set_param`]).
+    pub fn param(&self, name: &str) -> Option<f32> {
+        match name {
+            "RTL_ALT" => Some((self.rtl_alt_m * 100.0) as f32),
+            "RTL_CONE_SLOPE" => Some(self.rtl_cone_slope),
+            _ => None,
+        }
+    }
+
+    /// The return altitude of RTL above home, metres.
+    pub fn rtl_alt_m(&self) -> f64 {
+        self.rtl_alt_m
     }
 
     /// NAV_TAKEOFF: climb to `alt_m` above home where the vehicle is (GUIDED, armed, on the ground).
@@ -582,7 +644,12 @@ impl SimVehicle {
         let c = self.config;
         let mut v_cmd = [0.0; 3];
         let mut yaw_target = self.yaw_rad;
-        if self.armed && self.mode == SimMode::Rtl && !self.rtl_descending {
+        if self.armed && self.mode == SimMode::Rtl && self.rtl_climbing {
+            if -self.position[2] >= self.rtl_alt_m - 0.2 {
+                self.rtl_climbing = false;
+                self.target = Some(([0.0, 0.0, -self.rtl_alt_m], self.yaw_rad));
+            }
+        } else if self.armed && self.mode == SimMode::Rtl && !self.rtl_descending {
             let d = norm2([self.position[0], self.position[1]]);
             let speed = norm2([self.velocity[0], self.velocity[1]]);
             if d <= c.acceptance_radius_m && speed < 0.5 {
@@ -1011,8 +1078,40 @@ mod tests {
     }
 
     #[test]
-    fn rtl_flies_home_at_its_altitude_then_lands_and_disarms() {
+    fn rtl_below_rtl_alt_climbs_to_it_then_flies_home_at_it() {
         let mut v = flying(7.0);
+        assert_eq!(v.set_param("RTL_ALT", 4000.0), Some(4000.0));
+        v.set_position_target([30.0, -40.0, -7.0], 0.0).unwrap();
+        run(&mut v, 30.0);
+        v.set_mode(SimMode::Rtl);
+        let mut max_alt_m: f64 = 0.0;
+        for _ in 0..6000 {
+            v.step(0.02);
+            let s = v.state();
+            let d = s.position_ned_m[0].hypot(s.position_ned_m[1]);
+            max_alt_m = max_alt_m.max(-s.position_ned_m[2]);
+            // Straight up first: below 39.5 m it is still over where RTL began (50 m out).
+            if -s.position_ned_m[2] < 39.5 && !s.on_ground && d > 2.0 {
+                assert!(
+                    d > 49.0,
+                    "left for home at {:.1} m, {d:.1} m out",
+                    -s.position_ned_m[2]
+                );
+            }
+        }
+        assert!((max_alt_m - 40.0).abs() < 0.5, "{max_alt_m}");
+        let s = v.state();
+        assert!(s.on_ground && !s.armed, "{s:?}");
+        assert!(
+            s.position_ned_m[0].hypot(s.position_ned_m[1]) < 1.0,
+            "{s:?}"
+        );
+    }
+
+    #[test]
+    fn rtl_at_or_above_rtl_alt_flies_home_at_its_altitude_then_lands_and_disarms() {
+        let mut v = flying(7.0);
+        assert_eq!(v.set_param("RTL_ALT", 500.0), Some(500.0));
         v.set_position_target([30.0, -40.0, -7.0], 0.0).unwrap();
         run(&mut v, 30.0);
         v.set_mode(SimMode::Rtl);

@@ -4,7 +4,7 @@
 //! files.
 
 use crate::flight::{self, Observer, Quiet};
-use crate::home::{PlannedHome, rtl_clearance};
+use crate::home::{PlannedHome, RtlClearance, rtl_clearance};
 use crate::words::sim_note_line;
 use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
@@ -13,6 +13,7 @@ use skyplan_flight::executor::{
     ReferenceExecutor, Target, Telemetry,
 };
 use skyplan_flight::reference::Reference;
+use skyplan_flight::sim::DEFAULT_RTL_ALT_M;
 use skyplan_flight::upload::{MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{
@@ -308,14 +309,18 @@ pub fn fly_mission_with<O: RunObserver>(
         t_plan.elapsed().as_secs_f64() * 1000.0
     ));
     observer.planned(&plan)?;
+    let mut config = o.executor;
     if let Some(boxes) = &map_boxes {
-        observer.say(&rtl_line(boxes, mission, plan.spec.safety_m));
+        let clearance = mission_rtl_clearance(boxes, mission, plan.spec.safety_m);
+        observer.say(&rtl_line(clearance));
+        // The ceiling: the request's climbing limit, else the 120 m most rules set for drones.
+        let ceiling_m = request.max_alt_m.unwrap_or(RTL_CEILING_M);
+        config.rtl_alt_m = set_rtl_alt(&mut gcs, info.autopilot, clearance, ceiling_m, observer);
     }
     if let Some(world) = home_world {
         gcs.set_home_router(Box::new(PlannedHome::new(world, limits, &request, &plan)));
     }
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
-    let config = o.executor;
     if let Some(source) = reference {
         if matches!(o.mode, Mode::Guided(Some(_))) {
             observer.say("replan     none: a flight by a reference is not replanned in flight");
@@ -472,20 +477,78 @@ impl<O: Observer + ?Sized> Observer for Story<'_, O> {
     }
 }
 
-/// What the autopilot's own way home (RTL: a straight line to the launch point, the route's
-/// start) would fly over from anywhere on the route, and the altitude that clears it.
-fn rtl_line(boxes: &[ObstacleBox], mission: &skyplan_mission::Mission, margin_m: f64) -> String {
+/// The altitude above which `fly` warns about the RTL altitude it sets (without `max_alt_m`),
+/// metres: the ceiling of the open category in the EU and of Part 107 in the US (~400 ft).
+const RTL_CEILING_M: f64 = 120.0;
+
+/// The highest obstacle the autopilot's own way home (RTL: a straight line to the launch point,
+/// the route's start) would fly over from anywhere on the route.
+fn mission_rtl_clearance(
+    boxes: &[ObstacleBox],
+    mission: &skyplan_mission::Mission,
+    margin_m: f64,
+) -> Option<RtlClearance> {
     let route: Vec<[f64; 2]> = mission
         .waypoints
         .iter()
         .map(|w| [w.north_m, w.east_m])
         .collect();
-    let Some(&launch) = route.first() else {
-        return "rtl        the route is empty".into();
+    rtl_clearance(boxes, &route, *route.first()?, margin_m)
+}
+
+/// Sets the autopilot's RTL altitude (ArduPilot `RTL_ALT` in centimetres with `RTL_CONE_SLOPE`
+/// 0, so that it is not lowered near home; PX4 `RTL_RETURN_ALT` in metres) to clear what a
+/// straight way home flies over, at least ArduCopter's default 15 m; warns above `ceiling_m`.
+/// The altitude the vehicle confirmed, or `None` (said why).
+fn set_rtl_alt<O: RunObserver>(
+    gcs: &mut GroundStation,
+    autopilot: Autopilot,
+    clearance: Option<RtlClearance>,
+    ceiling_m: f64,
+    observer: &mut O,
+) -> Option<f64> {
+    let alt_m = clearance.map_or(DEFAULT_RTL_ALT_M, |c| c.alt_m.max(DEFAULT_RTL_ALT_M));
+    // Rounded up to whole centimetres (ArduPilot's unit), float noise under 0.01 mm aside.
+    let alt_cm = (alt_m * 100.0 - 1e-3).ceil();
+    let (name, value) = match autopilot {
+        Autopilot::Px4 => ("RTL_RETURN_ALT", alt_cm / 100.0),
+        Autopilot::ArduPilot | Autopilot::Other => ("RTL_ALT", alt_cm),
     };
-    match rtl_clearance(boxes, &route, launch, margin_m) {
+    let held = match gcs.set_param(name, value as f32) {
+        Ok(held) => f64::from(held),
+        Err(e) => {
+            observer.say(&format!(
+                "rtl        WARNING: {e}; the autopilot's own RTL may fly through what is under a straight way home"
+            ));
+            return None;
+        }
+    };
+    let held_m = if name == "RTL_ALT" {
+        held / 100.0
+    } else {
+        held
+    };
+    if name == "RTL_ALT" && gcs.set_param("RTL_CONE_SLOPE", 0.0).is_err() {
+        observer.say(
+            "rtl        RTL_CONE_SLOPE not confirmed: near home the RTL altitude may be lower",
+        );
+    }
+    observer.say(&format!(
+        "rtl        {name} set to {value:.0} (the autopilot's RTL returns at {held_m:.2} m above home)"
+    ));
+    if held_m > ceiling_m {
+        observer.say(&format!(
+            "rtl        WARNING: that is above the altitude ceiling of {ceiling_m:.0} m: the autopilot's own RTL would break it; --failsafe return flies a planned way home at the route's altitude"
+        ));
+    }
+    Some(held_m)
+}
+
+/// What [`mission_rtl_clearance`] found, in a line.
+fn rtl_line(clearance: Option<RtlClearance>) -> String {
+    match clearance {
         Some(c) => format!(
-            "rtl        a straight way home (the autopilot's RTL) from this route passes over obstacle #{}: only an RTL altitude of at least {:.1} m clears it with the margin; --on-interrupt return and --failsafe return fly a planned way home instead",
+            "rtl        a straight way home (the autopilot's RTL) from this route passes over obstacle #{}: only an RTL altitude of at least {:.2} m clears it with the margin; --on-interrupt return and --failsafe return fly a planned way home instead",
             c.obstacle, c.alt_m
         ),
         None => "rtl        no obstacle under a straight way home (the autopilot's RTL) from any point of this route".into(),

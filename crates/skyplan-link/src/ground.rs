@@ -108,6 +108,14 @@ pub enum GroundError {
     /// A route watcher was given for a flight that cannot change its route.
     #[error("replanning in flight: {0}")]
     Replan(String),
+    /// The vehicle did not confirm a parameter.
+    #[error("parameter {name}: {why}")]
+    Param {
+        /// The parameter.
+        name: String,
+        /// What happened.
+        why: String,
+    },
 }
 
 /// How a mission upload went.
@@ -350,6 +358,37 @@ impl GroundStation {
             let sends = driver.step(&mut self.protocol, now_s, r.as_ref());
             self.send_all(&sends)?;
         }
+    }
+
+    /// Sets the vehicle's parameter `name` to `value` (PARAM_SET) and returns the value it then
+    /// holds, from its PARAM_VALUE; sent up to 3 times, 1 s apart. Call after
+    /// [`GroundStation::wait_for_vehicle`]. A vehicle without the parameter (or that refuses the
+    /// value) does not answer: an error saying so.
+    pub fn set_param(&mut self, name: &str, value: f32) -> Result<f32, GroundError> {
+        for _ in 0..3 {
+            self.link.send(&self.protocol.param_set(name, value))?;
+            let sent_s = self.now_s();
+            while self.now_s() - sent_s < 1.0 {
+                if let Some(why) = self.link.closed() {
+                    return Err(GroundError::Param {
+                        name: name.into(),
+                        why: format!("the connection closed: {why}"),
+                    });
+                }
+                let Some(r) = self.link.recv_timeout(Duration::from_millis(20)) else {
+                    continue;
+                };
+                if let Some(held) = self.protocol.param_value(&r, name) {
+                    return Ok(held);
+                }
+                let now_s = self.now_s();
+                let _ = self.protocol.absorb(now_s, &r);
+            }
+        }
+        Err(GroundError::Param {
+            name: name.into(),
+            why: "the vehicle did not confirm it after 3 tries (no such parameter, or a value it refuses)".into(),
+        })
     }
 
     /// Waits, like a ground station, for the vehicle's heartbeat, its EKF origin and its

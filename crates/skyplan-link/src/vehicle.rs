@@ -599,6 +599,9 @@ fn item_to_sim(side: &Side, command: MavCmd, mav_frame: MavFrame, p: [f64; 4]) -
     }
 }
 
+/// The parameters the simulated vehicle has (PARAM_SET / PARAM_VALUE).
+const SIM_PARAMS: [&str; 2] = ["RTL_ALT", "RTL_CONE_SLOPE"];
+
 // SET_MODE and MISSION_ITEM are deprecated but still sent by ground stations: answer them.
 #[allow(deprecated)]
 fn handle_message(
@@ -620,6 +623,20 @@ fn handle_message(
             *last_gcs_s = now_s;
         }
         MavMessage::COMMAND_LONG(c) => command_long(v, side, &c, &mut out, note),
+        MavMessage::PARAM_SET(p) => {
+            // As ArduPilot: the value now held is echoed in PARAM_VALUE; an unknown name or a
+            // value out of range gets no answer.
+            let name = p.param_id.to_str().unwrap_or("").trim_end_matches('\0');
+            if let Some(value) = v.set_param(name, p.param_value) {
+                out.push(MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
+                    param_value: value,
+                    param_count: SIM_PARAMS.len() as u16,
+                    param_index: SIM_PARAMS.iter().position(|n| *n == name).unwrap_or(0) as u16,
+                    param_id: p.param_id,
+                    param_type: p.param_type,
+                }));
+            }
+        }
         MavMessage::SET_MODE(m) => {
             if let Some(mode) = SimMode::from_arducopter_custom_mode(m.custom_mode) {
                 v.set_mode(mode);

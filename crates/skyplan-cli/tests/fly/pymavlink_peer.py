@@ -86,6 +86,12 @@ if not TEXTS:
     wait(conn, "STATUSTEXT")
 print("refusal reason:", TEXTS[-1], flush=True)
 
+# PARAM_SET -> PARAM_VALUE, as ArduPilot answers it (RTL_ALT in centimetres).
+conn.mav.param_set_send(conn.target_system, conn.target_component, b"RTL_ALT", 4200.0,
+                        mavutil.mavlink.MAV_PARAM_TYPE_REAL32)
+pv = wait(conn, "PARAM_VALUE", lambda m: m.param_id == "RTL_ALT")
+print(f"param RTL_ALT = {pv.param_value:.0f}", flush=True)
+
 # Mission upload: COUNT -> REQUEST_INT -> ITEM_INT -> ACK (item 0 is the home, as on ArduPilot).
 lat0, lon0 = g.lat, g.lon
 items = [

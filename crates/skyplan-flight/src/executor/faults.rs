@@ -97,8 +97,15 @@ impl Faults {
         let far_m = t.map_or(0.0, |t| {
             (home.north_m - t.north_m).hypot(home.east_m - t.east_m)
         });
-        self.rtl_budget_s =
-            Some(c.landing_timeout_s + c.leg_timeout_base_s + c.leg_timeout_per_m_s * far_m);
+        // Climbing to RTL_ALT (at 1 m/s, slower than any autopilot's default) and descending
+        // from it at the landing rate.
+        let alt_m = t.map_or(0.0, Telemetry::alt_m);
+        let rtl_alt_s = c.rtl_alt_m.map_or(0.0, |rtl_m| {
+            (rtl_m - alt_m).max(0.0) + rtl_m.max(alt_m) / c.landing_descent_m_s.max(0.1)
+        });
+        self.rtl_budget_s = Some(
+            c.landing_timeout_s + c.leg_timeout_base_s + c.leg_timeout_per_m_s * far_m + rtl_alt_s,
+        );
     }
 
     /// Drives a pending hold: `Err(reason)` when unconfirmed too long (land instead), the

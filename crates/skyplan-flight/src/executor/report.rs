@@ -260,6 +260,9 @@ pub struct ExecutorConfig {
     /// When a route watcher finds no route, the vehicle holds its position this many seconds
     /// before landing.
     pub replan_hold_s: f64,
+    /// The autopilot's RTL altitude above home, metres, when known (`fly` sets `RTL_ALT`): a
+    /// return to launch climbs to it first and descends from it, which its budget counts.
+    pub rtl_alt_m: Option<f64>,
 }
 
 impl Default for ExecutorConfig {
@@ -286,6 +289,7 @@ impl Default for ExecutorConfig {
             link_regain_wait_s: 30.0,
             hold_confirm_s: 10.0,
             replan_hold_s: 2.0,
+            rtl_alt_m: None,
         }
     }
 }

@@ -109,6 +109,34 @@ impl GroundProtocol {
         self.vehicle.unwrap_or((1, 1))
     }
 
+    /// PARAM_SET of `name` (at most 16 bytes) to `value` on the vehicle, as a REAL32 (ArduPilot
+    /// and PX4 both take a parameter's value as a float in PARAM_SET).
+    pub fn param_set(&self, name: &str, value: f32) -> MavMessage {
+        let (target_system, target_component) = self.target();
+        MavMessage::PARAM_SET(PARAM_SET_DATA {
+            param_value: value,
+            target_system,
+            target_component,
+            param_id: name.into(),
+            param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+        })
+    }
+
+    /// The value of parameter `name` that a PARAM_VALUE from the vehicle carries, if `r` is one.
+    pub fn param_value(&self, r: &Received, name: &str) -> Option<f32> {
+        match &r.message {
+            MavMessage::PARAM_VALUE(p)
+                if self.is_from_vehicle(r)
+                    && p.param_id
+                        .to_str()
+                        .is_ok_and(|id| id.trim_end_matches('\0') == name) =>
+            {
+                Some(p.param_value)
+            }
+            _ => None,
+        }
+    }
+
     /// The message comes from our vehicle (or any, before one has been heard).
     pub fn is_from_vehicle(&self, r: &Received) -> bool {
         self.vehicle
