@@ -408,6 +408,32 @@ impl Core {
         }
     }
 
+    /// Makes `targets` the route to fly from where the vehicle is now (a replan, the way home):
+    /// the current target restarts at its first, the leg clock restarts. Refused (nothing
+    /// changes) for an empty route or a waypoint not finite or not above the ground.
+    fn start_route(&mut self, now_s: f64, targets: &[Target]) -> Result<(), ConfigError> {
+        if targets.is_empty() {
+            return Err(ConfigError("the new route has no waypoint".into()));
+        }
+        if targets
+            .iter()
+            .any(|t| !t.is_finite() || t.alt_m <= self.config.landed_alt_m)
+        {
+            return Err(ConfigError(
+                "the new route has a waypoint that is not finite or not above the ground".into(),
+            ));
+        }
+        self.route_start = self.reached.len();
+        self.targets = targets.to_vec();
+        self.first_leg_m = self
+            .last
+            .as_ref()
+            .map_or(0.0, |t| targets[0].horizontal_error_m(t));
+        self.leg_since_s = now_s;
+        self.last_send_s = None;
+        Ok(())
+    }
+
     /// Holds where the vehicle is and asks for the way home ([`Note::WayHomeWanted`]).
     fn want_way_home(&mut self, now_s: f64, reason: &str, out: &mut Output) {
         let Some(t) = self.last else {
@@ -634,27 +660,8 @@ impl<S: Strategy> Executor<S> {
                 self.core.state
             )));
         }
-        if targets.is_empty() {
-            return Err(ConfigError("the new route has no waypoint".into()));
-        }
-        if targets
-            .iter()
-            .any(|t| !t.is_finite() || t.alt_m <= self.core.config.landed_alt_m)
-        {
-            return Err(ConfigError(
-                "the new route has a waypoint that is not finite or not above the ground".into(),
-            ));
-        }
+        self.core.start_route(now_s, targets)?;
         let mut out = Output::default();
-        let core = &mut self.core;
-        core.route_start = core.reached.len();
-        core.targets = targets.to_vec();
-        core.first_leg_m = core
-            .last
-            .as_ref()
-            .map_or(0.0, |t| targets[0].horizontal_error_m(t));
-        core.leg_since_s = now_s;
-        core.last_send_s = None;
         out.notes.push(Note::Replanned {
             event,
             targets: targets.to_vec(),
@@ -715,39 +722,14 @@ impl<S: Strategy> Executor<S> {
             ));
         }
         let targets = &way.targets;
-        if targets.is_empty()
-            || targets
-                .iter()
-                .any(|t| !t.is_finite() || t.alt_m <= self.core.config.landed_alt_m)
-        {
-            return Err(ConfigError(
-                "the way home is empty, or has a waypoint that is not finite or not above the ground"
-                    .into(),
-            ));
-        }
-        let mut out = Output::default();
         let core = &mut self.core;
-        let budget_s = targets.windows(2).fold(
-            core.config.leg_timeout_base_s
-                + core.config.leg_timeout_per_m_s
-                    * targets[0].horizontal_error_m(&core.last.unwrap_or_default()),
-            |b, w| {
-                b + core.config.leg_timeout_base_s
-                    + core.config.leg_timeout_per_m_s * w[0].horizontal_distance_m(&w[1])
-            },
-        );
+        core.start_route(now_s, targets)?;
+        let budget_s = (0..targets.len()).map(|i| core.leg_budget_s(i)).sum();
         core.homing = Some(Homing::Flying { budget_s });
         if let Some(Failure::Aborted { reason }) = &mut core.ending {
             *reason = format!("{reason}; flew the planned way home");
         }
-        core.route_start = core.reached.len();
-        core.targets = targets.clone();
-        core.first_leg_m = core
-            .last
-            .as_ref()
-            .map_or(0.0, |t| targets[0].horizontal_error_m(t));
-        core.leg_since_s = now_s;
-        core.last_send_s = None;
+        let mut out = Output::default();
         out.notes.push(Note::ReturningHome {
             targets: targets.clone(),
             length_m: way.length_m,
