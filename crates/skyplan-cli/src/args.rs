@@ -379,7 +379,7 @@ pub struct FlyArgs {
     /// Record the flight (route, vehicle pose and state) as MCAP with Foxglove's JSON schemas.
     #[arg(long, value_name = "FILE.mcap")]
     pub record: Option<PathBuf>,
-    /// Upload the plan as a mission (take-off, waypoints with headings, land) and fly it in AUTO.
+    /// Upload the plan as a mission (take-off, waypoints with headings, land) and fly it in AUTO. With --trajectory, each leg's speed (DO_CHANGE_SPEED) and each waypoint's acceptance radius come from the trajectory.
     #[arg(long)]
     pub upload: bool,
     /// Upload the mission and exit without flying (interop tests).

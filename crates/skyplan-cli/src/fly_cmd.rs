@@ -79,11 +79,6 @@ pub fn run(args: FlyArgs) -> Result<()> {
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
-    if request.trajectory == Some(true) && (args.upload || args.upload_only) {
-        return Err(bad_input(
-            "--trajectory is flown in GUIDED by setpoints with velocity and acceleration; --upload flies waypoints in AUTO: drop one of them",
-        ));
-    }
     if request.trajectory == Some(true) && (args.hidden.is_some() || args.hidden_random > 0) {
         return Err(bad_input(
             "--trajectory is not replanned in flight yet: with --hidden or --hidden-random the vehicle would fly into what the map lacks; drop one of them (without --trajectory the replanner flies around them)",
@@ -130,7 +125,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
         in_flight: Arc::clone(&ctrl_c.in_flight),
     };
     let interrupt = Arc::clone(&ctrl_c.interrupt);
-    let reference = (request.trajectory == Some(true)).then(skyplan_flyer::trajectory::from_plan);
+    // With --upload, the trajectory paces the uploaded mission (leg speeds, acceptance radii)
+    // instead of being streamed as setpoints.
+    let uploads = args.upload || args.upload_only;
+    let reference =
+        (request.trajectory == Some(true) && !uploads).then(skyplan_flyer::trajectory::from_plan);
     let planned = (world, limits, request);
     let result = runner::fly_mission_with(
         &address,

@@ -302,6 +302,28 @@ fn pymavlink_drives_skyplan_sim() {
 #[test]
 #[ignore = "needs Python with mavsdk (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
+    upload_to_mavsdk("", &[]);
+}
+
+/// A trajectory paces the mission: MAVSDK reads a DO_CHANGE_SPEED before each waypoint, its
+/// speed within the trajectory's, and each waypoint's acceptance radius.
+#[test]
+#[ignore = "needs Python with mavsdk (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
+fn a_trajectory_paced_mission_reaches_mavsdk_with_its_leg_speeds() {
+    let samples = tempfile::tempdir().unwrap();
+    // The same plan (the vehicle is at the home, the default start), its samples for the peer.
+    ok(&mut cmd(
+        samples.path(),
+        "plan --trajectory --samples traj.csv",
+    ));
+    let csv = samples.path().join("traj.csv");
+    let peer_out = upload_to_mavsdk(" --trajectory", &[csv.to_str().unwrap()]);
+    assert!(peer_out.contains("DO_CHANGE_SPEED items"), "{peer_out}");
+}
+
+/// `fly --upload-only` (plus `extra`) to MAVSDK's mission server (its script given `peer_args`),
+/// which checks the items against the plan; returns what the peer printed.
+fn upload_to_mavsdk(extra: &str, peer_args: &[&str]) -> String {
     // A free UDP port for MAVSDK to listen on.
     let port = free_udp_port();
     let dir = tempfile::tempdir().unwrap();
@@ -315,6 +337,7 @@ fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
             "-122.397450",
             plan.to_str().unwrap(),
         ])
+        .args(peer_args)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
@@ -325,7 +348,9 @@ fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
     let reader = std::thread::spawn(move || lines.map_while(|l| l.ok()).collect::<Vec<_>>());
     let r = run(
         dir.path(),
-        &format!("fly --connect udpout:127.0.0.1:{port} --upload-only --out plan.json --wait-s 20"),
+        &format!(
+            "fly --connect udpout:127.0.0.1:{port} --upload-only --out plan.json --wait-s 20{extra}"
+        ),
     );
     let status = peer.wait().unwrap();
     let peer_out = reader.join().unwrap().join("\n");
@@ -344,6 +369,7 @@ fn skyplan_uploads_its_mission_to_mavsdk_mission_raw_server() {
     assert!(r.stdout.contains("upload     accepted:"), "{}", r.stdout);
     let n_items = peer_out.lines().filter(|l| l.starts_with("item ")).count();
     assert!(n_items >= 5, "{peer_out}");
+    peer_out
 }
 
 /// Starts `skyplan LINE` (split into words), sends it SIGINT (`kill -INT`, as a terminal's

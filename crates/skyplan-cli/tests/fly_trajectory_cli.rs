@@ -62,11 +62,75 @@ fn the_default_routes_trajectory_is_flown_within_half_a_metre_and_on_time() {
     );
 }
 
+/// `--trajectory --upload`: the default route as an AUTO mission paced by its trajectory — a
+/// DO_CHANGE_SPEED before each waypoint, the simulator (which, as ArduCopter, flies a leg at the
+/// speed set before it, in place of its own 5 m/s) faster than 5 m/s on the long legs and never
+/// above the fastest leg speed, landed at the goal, no collision.
 #[test]
-fn a_trajectory_is_not_uploaded_and_limits_need_it() {
-    let (code, text) = run("fly --sim --trajectory --upload");
-    assert_eq!(code, Some(2), "{text}");
-    assert!(text.contains("--trajectory is flown in GUIDED"), "{text}");
+fn an_uploaded_trajectory_paces_the_mission_with_leg_speeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = "fly --sim --trajectory --upload --speedup 20 --timeout-s 300 --log flight.csv";
+    let out = cmd(dir.path(), line).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("DO_CHANGE_SPEED to its leg's speed"),
+        "{text}"
+    );
+    assert!(
+        text.contains("no collision with the map's obstacles"),
+        "{text}"
+    );
+    assert!(
+        text.contains("lost in AUTO: the curve between waypoints"),
+        "{text}"
+    );
+    let pace = text
+        .lines()
+        .find(|l| l.starts_with("pace "))
+        .expect("a pace line");
+    let speeds = &pace[pace.find("leg speeds ").unwrap() + 11..];
+    let (lo, hi) = speeds
+        .split_once(" m/s")
+        .unwrap()
+        .0
+        .split_once('–')
+        .unwrap();
+    let (lo, hi): (f64, f64) = (lo.parse().unwrap(), hi.parse().unwrap());
+    assert!(0.5 <= lo && lo <= hi && hi <= 10.0, "{pace}");
+    assert!(
+        hi > 6.0,
+        "the long legs are flown near the 10 m/s limit: {pace}"
+    );
+    // Items: home, take-off, (CONDITION_YAW, DO_CHANGE_SPEED, NAV_WAYPOINT) per waypoint, land.
+    let items = number_after(&text, "mission    ") as usize;
+    let waypoints = number_after(
+        &text,
+        &format!("mission    {items} items: home, take-off to 5 m, "),
+    ) as usize;
+    assert_eq!(items, 3 * waypoints + 3, "{text}");
+    let log = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
+    let mut lines = log.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (speed, north, east) = (col("ground_speed_m_s"), col("north_m"), col("east_m"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let fastest_flown = rows
+        .iter()
+        .map(|r| r[speed].parse::<f64>().unwrap())
+        .fold(0.0, f64::max);
+    assert!(fastest_flown > 5.5, "flew at most {fastest_flown} m/s");
+    assert!(
+        fastest_flown <= hi + 0.3,
+        "flew {fastest_flown} m/s, legs at most {hi}"
+    );
+    let last = rows.last().unwrap();
+    let (n, e): (f64, f64) = (last[north].parse().unwrap(), last[east].parse().unwrap());
+    assert!((n - 420.0).hypot(e - 390.0) < 1.5, "landed at N {n}, E {e}");
+}
+
+#[test]
+fn limits_need_a_trajectory_and_it_is_not_replanned() {
     let (code, text) = run("fly --sim --trajectory --hidden-random 2");
     assert_eq!(code, Some(2), "{text}");
     assert!(

@@ -216,6 +216,12 @@ pub enum SimMissionItem {
         /// Heading, radians clockwise from north.
         yaw_rad: f64,
     },
+    /// DO_CHANGE_SPEED: as ArduCopter's, the horizontal speed of the leg being flown and the
+    /// legs after it (until another one), in place of the configured speed limit.
+    Speed {
+        /// Ground speed, m/s (positive).
+        speed_m_s: f64,
+    },
     /// Land where the vehicle is, staying in AUTO, then disarm; as on ArduCopter, the item is
     /// reported reached (MISSION_ITEM_REACHED) only after the touchdown.
     Land,
@@ -290,6 +296,8 @@ pub struct SimVehicle {
     rtl_cone_slope: f32,
     /// AUTO: the land item is being flown.
     mission_landing: bool,
+    /// AUTO: the speed a DO_CHANGE_SPEED set, m/s (`None`: the configured limit).
+    mission_speed_m_s: Option<f64>,
 }
 
 fn norm2(v: [f64; 2]) -> f64 {
@@ -318,6 +326,7 @@ impl SimVehicle {
             rtl_alt_m: DEFAULT_RTL_ALT_M,
             rtl_cone_slope: 3.0,
             mission_landing: false,
+            mission_speed_m_s: None,
         }
     }
 
@@ -382,6 +391,7 @@ impl SimVehicle {
             SimMode::Auto => {
                 self.mission_current = 0;
                 self.mission_landing = false;
+                self.mission_speed_m_s = None;
                 self.target = None;
             }
             SimMode::Land => self.target = None,
@@ -730,9 +740,13 @@ impl SimVehicle {
         if d < 1e-9 {
             return [0.0, 0.0];
         }
+        let limit_m_s = match (self.mode, self.mission_speed_m_s) {
+            (SimMode::Auto, Some(s)) => s,
+            _ => c.max_ground_speed_m_s,
+        };
         let speed = (c.position_gain_per_s * d)
             .min((2.0 * c.max_accel_m_s2 * d).sqrt())
-            .min(c.max_ground_speed_m_s);
+            .min(limit_m_s);
         [e[0] / d * speed, e[1] / d * speed]
     }
 
@@ -762,9 +776,18 @@ impl SimVehicle {
                     let d_h = norm2([p[0] - self.position[0], p[1] - self.position[1]]);
                     // A CONDITION_YAW before the waypoint holds its heading on the way; else
                     // face the waypoint (WP_YAW_BEHAVIOR 2), keeping the heading in the last 2 m.
-                    let before = self.mission_current.checked_sub(1);
-                    let yaw = match before.and_then(|i| self.mission.get(i)) {
-                        Some(SimMissionItem::Yaw { yaw_rad }) => *yaw_rad,
+                    // The "do" items right before the waypoint (CONDITION_YAW, DO_CHANGE_SPEED).
+                    let before = self.mission[..self.mission_current].iter().rev();
+                    let held = before
+                        .take_while(|i| {
+                            matches!(i, SimMissionItem::Yaw { .. } | SimMissionItem::Speed { .. })
+                        })
+                        .find_map(|i| match i {
+                            SimMissionItem::Yaw { yaw_rad } => Some(*yaw_rad),
+                            _ => None,
+                        });
+                    let yaw = match held {
+                        Some(yaw_rad) => yaw_rad,
                         _ if d_h > 2.0 => (p[1] - self.position[1]).atan2(p[0] - self.position[0]),
                         _ => self.target.map_or(self.yaw_rad, |(_, y)| y),
                     };
@@ -779,6 +802,11 @@ impl SimVehicle {
                 }
                 SimMissionItem::Yaw { .. } => {
                     // Started with the next waypoint (the vehicle turns within the yaw-rate limit).
+                    events.push(SimEvent::MissionItemReached(seq));
+                    self.mission_current += 1;
+                }
+                SimMissionItem::Speed { speed_m_s } => {
+                    self.mission_speed_m_s = Some(speed_m_s);
                     events.push(SimEvent::MissionItemReached(seq));
                     self.mission_current += 1;
                 }
@@ -1014,6 +1042,56 @@ mod tests {
             s.on_ground && !s.armed && s.position_ned_m[2] == 0.0,
             "{s:?}"
         );
+    }
+
+    /// DO_CHANGE_SPEED sets the speed of the leg after it, above or below the configured limit,
+    /// and a CONDITION_YAW before it still holds its heading on that leg.
+    #[test]
+    fn a_change_of_speed_paces_the_next_legs() {
+        let wp = |north_m| SimMissionItem::Waypoint {
+            north_m,
+            east_m: 0.0,
+            alt_m: 5.0,
+        };
+        let mut v = SimVehicle::new(SimConfig::default());
+        v.set_mission(vec![
+            SimMissionItem::Takeoff { alt_m: 5.0 },
+            SimMissionItem::Speed { speed_m_s: 8.0 },
+            wp(150.0),
+            SimMissionItem::Yaw { yaw_rad: 1.0 },
+            SimMissionItem::Speed { speed_m_s: 2.0 },
+            wp(250.0),
+            SimMissionItem::Land,
+        ]);
+        v.arm().unwrap();
+        v.set_mode(SimMode::Auto);
+        // The fastest ground speed on each leg (by the item being flown) and the heading held.
+        let mut fastest = [0.0f64; 8];
+        let mut yaw_on_slow_leg = Vec::new();
+        for _ in 0..20_000 {
+            v.step(0.02);
+            let s = v.state();
+            let ground = norm2([s.velocity_ned_m_s[0], s.velocity_ned_m_s[1]]);
+            let item = usize::from(s.mission_current).min(7);
+            // (On the slow leg, once the vehicle has slowed down from the fast one.)
+            if item != 5 || s.position_ned_m[0] > 170.0 {
+                fastest[item] = fastest[item].max(ground);
+            }
+            if item == 5 && s.position_ned_m[0] > 170.0 {
+                yaw_on_slow_leg.push(s.yaw_rad);
+            }
+            if !s.armed && s.on_ground {
+                break;
+            }
+        }
+        assert!(fastest[2] > 7.9 && fastest[2] <= 8.0 + 1e-9, "{fastest:?}");
+        assert!(fastest[5] > 1.9 && fastest[5] <= 2.0 + 1e-9, "{fastest:?}");
+        assert!(!yaw_on_slow_leg.is_empty());
+        assert!(yaw_on_slow_leg.iter().all(|y| (y - 1.0).abs() < 1e-6));
+        // A new AUTO run starts at the configured speed again.
+        v.set_mode(SimMode::Loiter);
+        v.set_mode(SimMode::Auto);
+        assert_eq!(v.mission_speed_m_s, None);
     }
 
     #[test]

@@ -35,6 +35,9 @@ pub enum ItemCommand {
     /// MAV_CMD_CONDITION_YAW (115): face `yaw_deg` (absolute, `param1`) on the way to the
     /// NAV_WAYPOINT after it.
     ConditionYaw,
+    /// MAV_CMD_DO_CHANGE_SPEED (178): fly the leg to the NAV_WAYPOINT after it at `speed_m_s`
+    /// (`param1` 1: ground speed, `param2` the speed, `param3` −1: throttle unchanged).
+    ChangeSpeed,
 }
 
 impl ItemCommand {
@@ -45,6 +48,7 @@ impl ItemCommand {
             ItemCommand::Takeoff => 22,
             ItemCommand::Land => 21,
             ItemCommand::ConditionYaw => 115,
+            ItemCommand::ChangeSpeed => 178,
         }
     }
 }
@@ -69,6 +73,11 @@ pub struct MissionItem {
     /// The yaw at the point, degrees clockwise from north in [0, 360) (`param4` of
     /// NAV_WAYPOINT, `param1` of CONDITION_YAW); NaN keeps the vehicle's heading.
     pub yaw_deg: f32,
+    /// DO_CHANGE_SPEED: the ground speed, m/s (`param2`); NaN on other items.
+    pub speed_m_s: f32,
+    /// NAV_WAYPOINT: the acceptance radius, metres (`param2`; PX4 honours it, ArduCopter turns by
+    /// its own waypoint radius); 0 leaves it to the autopilot.
+    pub acceptance_radius_m: f32,
 }
 
 /// The items and where the flown parts are in them.
@@ -81,7 +90,8 @@ pub struct MissionPlan {
     /// The NAV_WAYPOINT of the first waypoint; waypoint `k` is item
     /// `first_waypoint_seq + waypoint_stride · k`.
     pub first_waypoint_seq: u16,
-    /// Items per waypoint: 1, or 2 when each NAV_WAYPOINT is preceded by its CONDITION_YAW.
+    /// Items per waypoint: 1, plus 1 when each NAV_WAYPOINT is preceded by its CONDITION_YAW,
+    /// plus 1 when it is preceded by a DO_CHANGE_SPEED (a paced mission).
     pub waypoint_stride: u16,
     /// The NAV_LAND item (the last one).
     pub land_seq: u16,
@@ -141,6 +151,60 @@ pub fn mission_items(
     home: Option<(f64, f64)>,
     condition_yaw: bool,
 ) -> Result<MissionPlan, ConfigError> {
+    paced_mission_items(waypoints, home, condition_yaw, None)
+}
+
+/// How one leg of a paced mission is flown: the leg to a waypoint and that waypoint's radius.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegPace {
+    /// The ground speed on the leg to the waypoint, m/s (a DO_CHANGE_SPEED before it).
+    pub speed_m_s: f64,
+    /// The waypoint's acceptance radius, metres (NAV_WAYPOINT `param2`).
+    pub acceptance_radius_m: f64,
+}
+
+/// As [`mission_items`]; with `pace` (one per waypoint), each NAV_WAYPOINT is preceded by a
+/// DO_CHANGE_SPEED to its leg's speed and carries its acceptance radius. The "do" items between
+/// two NAV items start when the first is reached, so the speed holds on the leg to the waypoint.
+///
+/// ```
+/// use skyplan_flight::upload::{paced_mission_items, GlobalWaypoint, ItemCommand, LegPace};
+/// let w = |lat_deg| GlobalWaypoint { lat_deg, lon_deg: -122.4, alt_m: 5.0, heading_rad: 0.0 };
+/// let pace = [LegPace { speed_m_s: 2.0, acceptance_radius_m: 0.5 }; 2];
+/// let p = paced_mission_items(&[w(37.79), w(37.791)], None, true, Some(&pace)).unwrap();
+/// // take-off, then CONDITION_YAW, DO_CHANGE_SPEED, NAV_WAYPOINT for each waypoint, land.
+/// assert_eq!(p.waypoint_stride, 3);
+/// assert_eq!(p.items[2].command, ItemCommand::ChangeSpeed);
+/// assert_eq!(p.items[2].speed_m_s, 2.0);
+/// assert_eq!(p.items[3].acceptance_radius_m, 0.5);
+/// assert_eq!(p.land_seq, 7);
+/// ```
+pub fn paced_mission_items(
+    waypoints: &[GlobalWaypoint],
+    home: Option<(f64, f64)>,
+    condition_yaw: bool,
+    pace: Option<&[LegPace]>,
+) -> Result<MissionPlan, ConfigError> {
+    if let Some(pace) = pace {
+        if pace.len() != waypoints.len() {
+            return Err(ConfigError(format!(
+                "{} leg paces for {} waypoints: one per waypoint expected",
+                pace.len(),
+                waypoints.len()
+            )));
+        }
+        let fine = |l: &LegPace| {
+            l.speed_m_s.is_finite()
+                && l.speed_m_s > 0.0
+                && l.acceptance_radius_m.is_finite()
+                && l.acceptance_radius_m >= 0.0
+        };
+        if let Some(k) = pace.iter().position(|l| !fine(l)) {
+            return Err(ConfigError(format!(
+                "leg {k}: the speed must be a positive number of m/s and the acceptance radius a non-negative number of metres"
+            )));
+        }
+    }
     let (Some(first), Some(last)) = (waypoints.first(), waypoints.last()) else {
         return Err(ConfigError("the mission has no waypoint".into()));
     };
@@ -158,15 +222,16 @@ pub fn mission_items(
         ));
     }
     // Home (optional), take-off, the waypoints, land: must fit the u16 sequence numbers.
-    let waypoint_stride: u16 = if condition_yaw { 2 } else { 1 };
+    let waypoint_stride: u16 = 1 + u16::from(condition_yaw) + u16::from(pace.is_some());
     if usize::from(waypoint_stride) * waypoints.len() + 3 > usize::from(u16::MAX) {
         return Err(ConfigError(format!(
             "{} waypoints do not fit in one MAVLink mission",
             waypoints.len()
         )));
     }
-    let mut items = Vec::with_capacity(waypoints.len() + 3);
-    let mut push = |command, lat_deg, lon_deg, alt_m: f64, yaw_deg| {
+    let mut items = Vec::with_capacity(usize::from(waypoint_stride) * waypoints.len() + 3);
+    // (speed, acceptance radius): NaN and 0 unless a leg's pace says otherwise.
+    let mut push = |command, lat_deg, lon_deg, alt_m: f64, yaw_deg, (speed, radius)| {
         let seq = items.len() as u16;
         items.push(MissionItem {
             seq,
@@ -175,34 +240,47 @@ pub fn mission_items(
             lon_e7: e7(lon_deg),
             alt_m: alt_m as f32,
             yaw_deg,
+            speed_m_s: speed,
+            acceptance_radius_m: radius,
         });
         seq
     };
+    let unpaced = (f32::NAN, 0.0);
     if let Some((lat, lon)) = home {
-        push(ItemCommand::Waypoint, lat, lon, 0.0, f32::NAN);
+        push(ItemCommand::Waypoint, lat, lon, 0.0, f32::NAN, unpaced);
     }
-    let takeoff_seq = push(
-        ItemCommand::Takeoff,
-        first.lat_deg,
-        first.lon_deg,
-        first.alt_m,
-        f32::NAN,
-    );
+    let (lat, lon, alt) = (first.lat_deg, first.lon_deg, first.alt_m);
+    let takeoff_seq = push(ItemCommand::Takeoff, lat, lon, alt, f32::NAN, unpaced);
     let first_waypoint_seq = takeoff_seq + waypoint_stride;
-    for w in waypoints {
+    for (k, w) in waypoints.iter().enumerate() {
         let yaw_deg = yaw_param_deg(w.heading_rad);
         if condition_yaw {
-            push(ItemCommand::ConditionYaw, 0.0, 0.0, 0.0, yaw_deg);
+            push(ItemCommand::ConditionYaw, 0.0, 0.0, 0.0, yaw_deg, unpaced);
         }
+        let mut radius = 0.0;
+        if let Some(leg) = pace.and_then(|p| p.get(k)) {
+            let speed = (leg.speed_m_s as f32, 0.0);
+            push(ItemCommand::ChangeSpeed, 0.0, 0.0, 0.0, f32::NAN, speed);
+            radius = leg.acceptance_radius_m as f32;
+        }
+        let (lat, lon, alt) = (w.lat_deg, w.lon_deg, w.alt_m);
         push(
             ItemCommand::Waypoint,
-            w.lat_deg,
-            w.lon_deg,
-            w.alt_m,
+            lat,
+            lon,
+            alt,
             yaw_deg,
+            (f32::NAN, radius),
         );
     }
-    let land_seq = push(ItemCommand::Land, last.lat_deg, last.lon_deg, 0.0, f32::NAN);
+    let land_seq = push(
+        ItemCommand::Land,
+        last.lat_deg,
+        last.lon_deg,
+        0.0,
+        f32::NAN,
+        unpaced,
+    );
     Ok(MissionPlan {
         items,
         takeoff_seq,
@@ -467,6 +545,73 @@ mod tests {
         assert_eq!((p.items[2].yaw_deg, p.items[4].yaw_deg), (0.0, 270.0));
         let wp_of: Vec<Option<usize>> = (0..7).map(|s| p.waypoint_index(s)).collect();
         assert_eq!(wp_of, [None, None, None, Some(0), None, Some(1), None]);
+    }
+
+    #[test]
+    fn a_paced_mission_has_a_change_of_speed_before_each_waypoint() {
+        let pace = [
+            LegPace {
+                speed_m_s: 3.5,
+                acceptance_radius_m: 0.5,
+            },
+            LegPace {
+                speed_m_s: 7.25,
+                acceptance_radius_m: 1.5,
+            },
+        ];
+        let home = Some((37.7924801, -122.3974504));
+        let p = paced_mission_items(&wps(), home, true, Some(&pace)).unwrap();
+        let cmds: Vec<ItemCommand> = p.items.iter().map(|i| i.command).collect();
+        use ItemCommand::*;
+        assert_eq!(
+            cmds,
+            [
+                Waypoint,
+                Takeoff,
+                ConditionYaw,
+                ChangeSpeed,
+                Waypoint,
+                ConditionYaw,
+                ChangeSpeed,
+                Waypoint,
+                Land
+            ]
+        );
+        assert_eq!(ChangeSpeed.mav_cmd(), 178);
+        let layout = (p.takeoff_seq, p.first_waypoint_seq, p.waypoint_stride);
+        assert_eq!((layout, p.land_seq), ((1, 4, 3), 8));
+        assert_eq!((p.items[3].speed_m_s, p.items[6].speed_m_s), (3.5, 7.25));
+        let radii = (
+            p.items[4].acceptance_radius_m,
+            p.items[7].acceptance_radius_m,
+        );
+        assert_eq!(radii, (0.5, 1.5));
+        // The waypoints are where the unpaced mission has them.
+        let plain = mission_items(&wps(), home, true).unwrap();
+        assert_eq!(p.items[4].lat_e7, plain.items[3].lat_e7);
+        assert_eq!(p.items[7].lon_e7, plain.items[5].lon_e7);
+        let wp_of: Vec<Option<usize>> = (0..9).map(|s| p.waypoint_index(s)).collect();
+        let mut want = [None; 9];
+        (want[4], want[7]) = (Some(0), Some(1));
+        assert_eq!(wp_of, want);
+        // Without CONDITION_YAW (PX4): stride 2.
+        let px4 = paced_mission_items(&wps(), None, false, Some(&pace)).unwrap();
+        assert_eq!(
+            (px4.first_waypoint_seq, px4.waypoint_stride, px4.land_seq),
+            (2, 2, 5)
+        );
+        // One pace per waypoint, each a positive speed and a non-negative radius.
+        assert!(paced_mission_items(&wps(), None, false, Some(&pace[..1])).is_err());
+        for bad in [
+            (0.0, 1.0),
+            (f64::NAN, 1.0),
+            (2.0, -1.0),
+            (2.0, f64::INFINITY),
+        ] {
+            let mut p2 = pace;
+            (p2[1].speed_m_s, p2[1].acceptance_radius_m) = bad;
+            assert!(paced_mission_items(&wps(), None, false, Some(&p2)).is_err());
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ use skyplan_flight::executor::{
 };
 use skyplan_flight::reference::Reference;
 use skyplan_flight::sim::DEFAULT_RTL_ALT_M;
-use skyplan_flight::upload::{MissionPlan, UploadConfig};
+use skyplan_flight::upload::{LegPace, MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{
     Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, VehicleInfo, Waiting,
@@ -364,7 +364,18 @@ pub fn fly_mission_with<O: RunObserver>(
     // `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
     // then flown in AUTO.
     let alt_m = plan.spec.alt_m;
-    let items = upload(&mut gcs, (frame, &info), mission, alt_m, observer)?;
+    let pace = (plan.trajectory.as_ref()).map(|t| {
+        let pace = crate::mission::trajectory_pace(&t.trajectory, mission, plan.spec.safety_m);
+        observer.say(&pace_line(&t.trajectory, &pace));
+        pace
+    });
+    let items = upload(
+        &mut gcs,
+        (frame, &info),
+        (mission, pace.as_deref()),
+        alt_m,
+        observer,
+    )?;
     let (log, ended) = if !fly {
         observer.say("result     mission uploaded (--upload-only: not flown)");
         (Vec::new(), Ended::Uploaded)
@@ -383,26 +394,46 @@ pub fn fly_mission_with<O: RunObserver>(
     })
 }
 
-/// Uploads `mission` (flown at `alt_m`) to the vehicle, telling its items and the upload.
+/// What a trajectory becomes in an uploaded mission, and what it loses, in one line.
+fn pace_line(trajectory: &skyplan_plan::trajectory::Trajectory, pace: &[LegPace]) -> String {
+    let range = |f: fn(&LegPace) -> f64| {
+        let lo = pace.iter().map(f).fold(f64::INFINITY, f64::min);
+        let hi = pace.iter().map(f).fold(0.0, f64::max);
+        format!("{lo:.1}–{hi:.1}")
+    };
+    format!(
+        "pace       the trajectory ({}, {:.1} s) as leg speeds {} m/s (DO_CHANGE_SPEED) and acceptance radii {} m; lost in AUTO: the curve between waypoints (the autopilot flies the checked straight legs, its own way round corners), the trajectory's clock and its acceleration and jerk profile (the autopilot's own limits), the yaw profile (one heading per leg); PX4 honours the radii, ArduCopter turns by its own WPNAV_RADIUS",
+        trajectory.method.name(),
+        trajectory.duration_s(),
+        range(|l| l.speed_m_s),
+        range(|l| l.acceptance_radius_m),
+    )
+}
+
+/// Uploads `mission` (flown at `alt_m`, paced when `pace` is given) to the vehicle, telling its
+/// items and the upload.
 fn upload<O: RunObserver>(
     gcs: &mut GroundStation,
     (frame, info): (&LocalFrame, &VehicleInfo),
-    mission: &skyplan_mission::Mission,
+    (mission, pace): (&skyplan_mission::Mission, Option<&[LegPace]>),
     alt_m: f64,
     observer: &mut O,
 ) -> Result<MissionPlan, RunError> {
-    let items = crate::mission::items_for(mission, frame, info).map_err(bad)?;
+    let items = crate::mission::items_for(mission, frame, info, pace).map_err(bad)?;
+    let before = match (info.autopilot == Autopilot::ArduPilot, pace.is_some()) {
+        (true, true) => {
+            " (each after a CONDITION_YAW to its heading and a DO_CHANGE_SPEED to its leg's speed)"
+        }
+        (true, false) => " (each after a CONDITION_YAW to its heading)",
+        (false, true) => " (each after a DO_CHANGE_SPEED to its leg's speed)",
+        (false, false) => "",
+    };
     observer.say(&format!(
-        "mission    {} items: {}take-off to {} m, {} waypoints with headings{}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
+        "mission    {} items: {}take-off to {} m, {} waypoints with headings{before}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
         if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
         alt_m,
         mission.waypoints.len(),
-        if items.waypoint_stride == 2 {
-            " (each after a CONDITION_YAW to its heading)"
-        } else {
-            ""
-        }
     ));
     let report = gcs
         .upload_mission(&items, UploadConfig::default())

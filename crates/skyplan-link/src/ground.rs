@@ -503,14 +503,15 @@ pub fn grid_convergence_rad(frame: &LocalFrame, at: Lla) -> Result<f64, GroundEr
 }
 
 /// An item as MISSION_ITEM_INT (relative-altitude frame, auto-continue; a CONDITION_YAW carries
-/// its absolute heading in `param1`, at the default rate, the shortest way).
+/// its absolute heading in `param1`, at the default rate, the shortest way; a DO_CHANGE_SPEED its
+/// ground speed in `param2`; a NAV_WAYPOINT its acceptance radius in `param2`).
 #[allow(deprecated)] // MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: what ArduPilot and PX4 expect here.
 pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component: u8) -> MavMessage {
     let (command, frame, params) = match item.command {
         ItemCommand::Waypoint => (
             MavCmd::MAV_CMD_NAV_WAYPOINT,
             MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-            [0.0, 0.0, 0.0, item.yaw_deg],
+            [0.0, item.acceptance_radius_m, 0.0, item.yaw_deg],
         ),
         ItemCommand::Takeoff => (
             MavCmd::MAV_CMD_NAV_TAKEOFF,
@@ -526,6 +527,12 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
             MavCmd::MAV_CMD_CONDITION_YAW,
             MavFrame::MAV_FRAME_MISSION,
             [item.yaw_deg, 0.0, 0.0, 0.0],
+        ),
+        // Ground speed (type 1), the speed, throttle unchanged (−1).
+        ItemCommand::ChangeSpeed => (
+            MavCmd::MAV_CMD_DO_CHANGE_SPEED,
+            MavFrame::MAV_FRAME_MISSION,
+            [1.0, item.speed_m_s, -1.0, 0.0],
         ),
     };
     MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {

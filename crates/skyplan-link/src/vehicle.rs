@@ -572,10 +572,10 @@ fn ack(command: MavCmd, result: MavResult) -> MavMessage {
 }
 
 /// A mission item in the vehicle's frame (the deprecated `_INT` frame is what ArduPilot sends).
-/// `p` holds `param1`, the latitude and longitude (degrees) and `z`.
+/// `p` holds `param1`, `param2`, the latitude and longitude (degrees) and `z`.
 #[allow(deprecated)]
-fn item_to_sim(side: &Side, command: MavCmd, mav_frame: MavFrame, p: [f64; 4]) -> SimMissionItem {
-    let [param1, lat_deg, lon_deg, z] = p;
+fn item_to_sim(side: &Side, command: MavCmd, mav_frame: MavFrame, p: [f64; 5]) -> SimMissionItem {
+    let [param1, param2, lat_deg, lon_deg, z] = p;
     let relative = matches!(
         mav_frame,
         MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
@@ -595,6 +595,10 @@ fn item_to_sim(side: &Side, command: MavCmd, mav_frame: MavFrame, p: [f64; 4]) -
         MavCmd::MAV_CMD_CONDITION_YAW if param1.is_finite() => SimMissionItem::Yaw {
             yaw_rad: param1.to_radians(),
         },
+        // ArduCopter: a speed of −1 (or 0) leaves the speed as it is.
+        MavCmd::MAV_CMD_DO_CHANGE_SPEED if param2.is_finite() && param2 > 0.0 => {
+            SimMissionItem::Speed { speed_m_s: param2 }
+        }
         _ => SimMissionItem::Unsupported,
     }
 }
@@ -680,6 +684,7 @@ fn handle_message(
         MavMessage::MISSION_ITEM_INT(i) => {
             let p = [
                 f64::from(i.param1),
+                f64::from(i.param2),
                 f64::from(i.x) * 1e-7,
                 f64::from(i.y) * 1e-7,
                 f64::from(i.z),
@@ -690,6 +695,7 @@ fn handle_message(
         MavMessage::MISSION_ITEM(i) => {
             let p = [
                 f64::from(i.param1),
+                f64::from(i.param2),
                 f64::from(i.x),
                 f64::from(i.y),
                 f64::from(i.z),

@@ -50,11 +50,13 @@ mod check;
 mod corridor;
 mod fallback;
 mod optimize;
+mod passes;
 mod yaw;
 
 pub use check::{Bounds, verify};
 pub use corridor::{CorridorCell, CorridorOptions, FreeSpace, GridLayer, build_corridor};
 pub use fallback::stop_at_waypoints;
+pub use passes::Pass;
 use skyplan_world3::{Aabb, Neu};
 use std::time::{Duration, Instant};
 

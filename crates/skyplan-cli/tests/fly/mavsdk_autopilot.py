@@ -1,13 +1,18 @@
 """MAVSDK as the AUTOPILOT side: skyplan uploads its mission to MAVSDK's MissionRawServer.
 
-Usage: python3 mavsdk_autopilot.py PORT HOME_LAT HOME_LON PLAN.json
+Usage: python3 mavsdk_autopilot.py PORT HOME_LAT HOME_LON PLAN.json [SAMPLES.csv]
 Listens on udpin://127.0.0.1:PORT as an autopilot component (MAVSDK's C++ core, `pip install
 mavsdk`), publishes a position with TelemetryServer (skyplan waits for one before planning),
 prints "listening PORT", then waits for one mission upload, prints its items and checks them
 against skyplan's plan (PLAN.json, written by `skyplan fly --out` before it uploads): the home,
 NAV_TAKEOFF to the altitude, one NAV_WAYPOINT per waypoint (lat/lon within 1e-7°, altitude, yaw
-in param4: the plan's grid heading turned to true north), NAV_LAND at the last one, all in MAV_FRAME_GLOBAL_RELATIVE_ALT_INT. Prints "OK" at the
-end, or "FAIL ..." and exits 1.
+in param4: the plan's grid heading turned to true north), NAV_LAND at the last one, all in MAV_FRAME_GLOBAL_RELATIVE_ALT_INT. With
+SAMPLES.csv (the trajectory's samples from `skyplan plan --trajectory --samples`: a mission
+uploaded by `fly --trajectory --upload`), each NAV_WAYPOINT comes after a DO_CHANGE_SPEED (frame
+MISSION, param1 1 = ground speed, param2 the speed, param3 -1) whose speed is within the
+trajectory's ground speeds, the fastest leg at the trajectory's top speed, and carries an
+acceptance radius (param2) between 0.5 m and half the 5 m margin. Prints "OK" at the end, or
+"FAIL ..." and exits 1.
 """
 import json
 import math
@@ -35,6 +40,7 @@ def fail(msg):
 port = int(sys.argv[1])
 home_lat, home_lon = float(sys.argv[2]), float(sys.argv[3])
 plan_path = sys.argv[4]
+samples_path = sys.argv[5] if len(sys.argv) > 5 else None
 
 mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.AUTOPILOT))
 result = mavsdk.add_any_connection(f"udpin://127.0.0.1:{port}")
@@ -83,6 +89,9 @@ for it in plan.mission_items:
                 "frame": it.frame,
                 "command": it.command,
                 "autocontinue": it.autocontinue,
+                "param1": it.param1,
+                "param2": it.param2,
+                "param3": it.param3,
                 "param4": None if it.param4 != it.param4 else it.param4,  # NaN → null
                 "x": it.x,
                 "y": it.y,
@@ -114,8 +123,26 @@ def near_deg(e7, deg, what):
     check(abs(e7 * 1e-7 - deg) <= 1e-7, f"{what}: {e7} vs {deg}")
 
 
-check(len(items) == n + 3, f"{len(items)} items for {n} waypoints (expected home + takeoff + {n} + land)")
+DO_CHANGE_SPEED, MISSION_FRAME = 178, 2
 check([it.seq for it in items] == list(range(len(items))), "sequence numbers")
+if samples_path:
+    with open(samples_path) as f:
+        header = f.readline().strip().split(",")
+        check(header[4:6] == ["v_north", "v_east"], f"samples columns {header}")
+        samples = [[float(v) for v in line.split(",")] for line in f if line.strip()]
+    fastest = max(math.hypot(r[4], r[5]) for r in samples)
+    speeds = items[2:-1:2]
+    check(len(speeds) == n, f"{len(speeds)} DO_CHANGE_SPEED for {n} waypoints")
+    for k, it in enumerate(speeds):
+        check(it.command == DO_CHANGE_SPEED and it.frame == MISSION_FRAME, f"item {it.seq}: command {it.command} frame {it.frame}")
+        check(it.param1 == 1 and it.param3 == -1, f"item {it.seq}: speed type {it.param1}, throttle {it.param3}")
+        check(0.5 <= it.param2 <= fastest + 1e-4, f"leg {k + 1}: speed {it.param2} m/s, the trajectory at most {fastest}")
+    check(max(it.param2 for it in speeds) >= fastest - 0.15, f"fastest leg {max(it.param2 for it in speeds)} vs {fastest}")
+    for it in items[3:-1:2]:
+        check(0.5 <= it.param2 <= 2.5, f"item {it.seq}: acceptance radius {it.param2}")
+    print(f"checked {n} DO_CHANGE_SPEED items ({min(it.param2 for it in speeds):.1f}..{max(it.param2 for it in speeds):.1f} m/s, the trajectory at most {fastest:.2f} m/s)", flush=True)
+    items = items[:2] + items[3:-1:2] + items[-1:]
+check(len(items) == n + 3, f"{len(items)} items for {n} waypoints (expected home + takeoff + {n} + land)")
 check(all(it.frame == GLOBAL_RELATIVE_ALT_INT for it in items), f"frames {[it.frame for it in items]}")
 check(all(it.autocontinue == 1 for it in items), "autocontinue")
 check(all(it.mission_type == 0 for it in items), "mission_type MISSION")
