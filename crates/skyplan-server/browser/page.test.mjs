@@ -96,6 +96,37 @@ try {
   }, null, { timeout: 30000 });
   check("the roadmap toggle returns and draws the roadmap", true);
 
+  // The trajectory toggle: the plan comes back with its trajectory (the CLI's duration for the
+  // same request), drawn by speed; pointing at a sample shows its time and speed.
+  await page.uncheck("#geometry");
+  await page.selectOption("#planner", "jps");
+  await page.check("#trajectory");
+  await page.waitForFunction(() => {
+    const p = window.skyplanView.state.plan;
+    return p && p.planner === "jps" && p.trajectory && p.trajectory.samples.length > 10;
+  }, null, { timeout: 30000 });
+  const traj = await page.evaluate(() => window.skyplanView.state.plan.trajectory);
+  const cliTraj = JSON.parse(execFileSync(bin, [
+    "plan", "--json", "--trajectory", "--planner", "jps", "--alt-m", String(request.alt_m), "--safety-m", String(request.safety_m),
+    "--start-ne", request.start_ne.join(","), "--goal-ne", request.goal_ne.join(","),
+  ], { encoding: "utf8", cwd: os.tmpdir() })).trajectory;
+  check("the page's trajectory lasts as long as skyplan plan --trajectory's",
+    Math.abs(traj.duration_s - cliTraj.duration_s) < 1e-6, `${traj.duration_s} vs ${cliTraj.duration_s}`);
+  const summary = (await page.textContent("#traj")).trim();
+  check("the trajectory's duration is shown", summary.startsWith(`${traj.duration_s.toFixed(1)} s, top `), summary);
+  const row = traj.samples[Math.floor(traj.samples.length / 2)];
+  const at = await page.evaluate(([n, e]) => window.skyplanView.toClient(n, e), [row[1], row[2]]);
+  await page.mouse.move(at.x, at.y);
+  await page.waitForFunction(() => /^t /.test(document.getElementById("traj-at").textContent), null, { timeout: 5000 });
+  const pointed = (await page.textContent("#traj-at")).trim();
+  const speed = Math.hypot(row[4], row[5], row[6]);
+  // Samples are 0.1 s apart and the nearest one to the pointer is shown: within a sample or two.
+  const shownT = Number(/^t ([0-9.]+) s, ([0-9.]+) m\/s/.exec(pointed)?.[1]);
+  const shownV = Number(/^t ([0-9.]+) s, ([0-9.]+) m\/s/.exec(pointed)?.[2]);
+  check("pointing at the trajectory shows the time and speed there",
+    Math.abs(shownT - row[0]) <= 0.25 && Math.abs(shownV - speed) <= 0.5, `${pointed} vs t ${row[0]}, ${speed} m/s`);
+  await page.uncheck("#trajectory");
+
   // A start inside a building: the status line says so.
   const b = grid.map.obstacles.filter((o) => o[5] > 10).sort((x, y) => y[2] * y[3] - x[2] * x[3])[0];
   await page.selectOption("#planner", "jps");
