@@ -1,5 +1,6 @@
 //! `skyplan bench --3d` without the terminal: every 3D planner of skyplan's registry (and, with
-//! peers, OMPL's through `bench/peers3d.py`) on the same 3D queries of a colliders map, and the
+//! peers, OMPL's in C++ through `bench/peers3d.cpp` and in Python through `bench/peers3d.py`) on
+//! the same 3D queries of a colliders map, and the
 //! report: a JSON object or the text the CLI prints.
 
 use crate::python_peers::ompl_peers;
@@ -20,7 +21,8 @@ pub struct Bench3d {
     pub seed: u64,
     /// Budget of every run, seconds (RRT\* uses all of it; the others stop at the first path).
     pub budget_s: f64,
-    /// Also run OMPL's planners (Python); a missing peer is a note, not an error.
+    /// Also run OMPL's planners (C++ against libompl-dev, and Python); a missing peer is a note,
+    /// not an error.
     pub peers: bool,
 }
 
@@ -57,6 +59,13 @@ pub fn run(name: &str, map: CollidersMap, bench: Bench3d) -> Result<Report3d, St
     let mut runs = skyplan_runs(&mut session, &qs, safety_m, seed, budget_s);
     let mut notes = Vec::new();
     if bench.peers {
+        match crate::cpp_peers::ompl_cpp_peers(&world, &qs, budget_s) {
+            Ok(((peer_runs, peer_notes), _)) => {
+                runs.extend(peer_runs);
+                notes.extend(peer_notes);
+            }
+            Err(e) => notes.push(e),
+        }
         match ompl_peers(&world, &qs, budget_s) {
             Ok((peer_runs, peer_notes)) => {
                 runs.extend(peer_runs);

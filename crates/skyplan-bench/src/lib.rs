@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 pub mod bench3d;
+pub mod cpp_peers;
 pub mod grid_bench;
 mod peer_pathfinding;
 pub mod python_peers;
