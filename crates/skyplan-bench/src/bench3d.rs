@@ -43,15 +43,20 @@ pub struct Report3d {
     pub notes: Vec<String>,
 }
 
-/// Runs the 3D bench on `map` (named `name`); errors name what is wrong with the map.
-pub fn run(name: &str, map: CollidersMap, bench: Bench3d) -> Result<Report3d, String> {
+/// The 3D world the bench plans in: the map's boxes grown by `safety_m` on every axis, 0–120 m.
+pub fn bench_world(map: &CollidersMap, safety_m: f64) -> Result<BoxWorld3, String> {
     let spec = WorldSpec {
-        safety_m: bench.safety_m,
+        safety_m,
         min_alt_m: 0.0,
         max_alt_m: 120.0,
         margin_bounds_m: 0.0,
     };
-    let world = BoxWorld3::new(&map.boxes, &spec).map_err(|e| e.to_string())?;
+    BoxWorld3::new(&map.boxes, &spec).map_err(|e| e.to_string())
+}
+
+/// Runs the 3D bench on `map` (named `name`); errors name what is wrong with the map.
+pub fn run(name: &str, map: CollidersMap, bench: Bench3d) -> Result<Report3d, String> {
+    let world = bench_world(&map, bench.safety_m)?;
     let qs = random_queries(&world, bench.random, bench.seed);
     let boxes = map.boxes.len();
     let mut session = Session::new(World::from_colliders(name, map).map_err(|e| e.message)?);

@@ -138,7 +138,6 @@ pub fn ompl_cpp_peers(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use skyplan_world3::WorldSpec;
 
     /// OMPL C++ on the city: every path it calls solved starts and ends at its query and is free
     /// by skyplan's own exact segment test (an independent re-check of the peer's), and the peer's
@@ -147,13 +146,7 @@ mod tests {
     #[ignore = "needs libompl-dev, pkg-config and a C++ compiler (.ci/run installs them)"]
     fn ompl_in_cpp_solves_the_city_queries_with_exactly_free_paths() {
         let map = skyplan_map::colliders::parse_colliders(skyplan_plan::FCND_CITY_CSV).unwrap();
-        let spec = WorldSpec {
-            safety_m: 5.0,
-            min_alt_m: 0.0,
-            max_alt_m: 120.0,
-            margin_bounds_m: 0.0,
-        };
-        let world = BoxWorld3::new(&map.boxes, &spec).unwrap();
+        let world = crate::bench3d::bench_world(&map, 5.0).unwrap();
         let qs = crate::three_d::random_queries(&world, 4, 3);
         let ((runs, notes), lines) = ompl_cpp_peers(&world, &qs, 1.0).unwrap();
         assert!(notes.is_empty(), "{notes:?}");
