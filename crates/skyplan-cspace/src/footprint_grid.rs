@@ -1,7 +1,7 @@
 //! The 2D grid of a footprint map at a flight altitude: exact rasterisation of polygons with
 //! holes grown by a disc of radius margin (the Minkowski sum shapely's `buffer` approximates).
 
-use crate::{Grid2, GridError, GridFrame, GridSpec, check_size};
+use crate::{Grid2, GridError, GridFrame, GridSpec};
 use skyplan_map::footprints::{Footprint, FootprintMap};
 
 impl Grid2 {
@@ -41,30 +41,7 @@ impl Grid2 {
         } = spec;
         crate::colliders_grid::check_spec(spec)?;
         let (lo, hi) = map.bbox_ne();
-        let north_min = lo[0].floor();
-        let east_min = lo[1].floor();
-        let rows_f = ((hi[0] - north_min) / cell_m).ceil().max(1.0);
-        let cols_f = ((hi[1] - east_min) / cell_m).ceil().max(1.0);
-        if !(rows_f.is_finite() && cols_f.is_finite()) || rows_f * cols_f > crate::MAX_CELLS as f64
-        {
-            return Err(GridError::TooLarge {
-                rows: rows_f as u64,
-                cols: cols_f as u64,
-            });
-        }
-        let (rows, cols) = (rows_f as u32, cols_f as u32);
-        check_size(u64::from(rows), u64::from(cols))?;
-        let frame = GridFrame {
-            origin_north_m: north_min,
-            origin_east_m: east_min,
-            cell_m,
-        };
-        let mut grid = Grid2::new(
-            rows,
-            cols,
-            vec![false; rows as usize * cols as usize],
-            frame,
-        )?;
+        let mut grid = Grid2::empty_over(lo, hi, cell_m)?;
         let mut crossings = Vec::new();
         for f in &map.footprints {
             if f.meets_altitude(alt_m, safety_m) {
