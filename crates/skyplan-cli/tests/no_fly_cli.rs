@@ -161,3 +161,39 @@ fn bad_zone_files_name_file_feature_and_field() {
     );
     common::assert_no_waypoints(dir.path(), "nothing written on bad input");
 }
+
+/// `--out FILE.plan` carries the zones that hold the flight as QGroundControl's geoFence, and
+/// `--no-fly FILE.plan` reads them back: the same route as from the GeoJSON.
+#[test]
+fn a_plan_files_geofence_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    let from_geojson = ok_json(
+        dir.path(),
+        &format!(
+            "plan --json --no-fly {} --out route.plan",
+            zones_path.display()
+        ),
+    );
+    let text = std::fs::read_to_string(dir.path().join("route.plan")).unwrap();
+    let plan: Value = serde_json::from_str(&text).unwrap();
+    let fence = &plan["geoFence"];
+    assert_eq!(fence["version"], 2);
+    // The stadium circle and the helipad square; the 60–120 m approach path does not hold 5 m.
+    assert_eq!(fence["circles"].as_array().map(Vec::len), Some(1));
+    assert_eq!(fence["polygons"].as_array().map(Vec::len), Some(1));
+    let circle = &fence["circles"][0];
+    assert_eq!(circle["inclusion"], false);
+    assert_eq!(circle["circle"]["radius"], 30.0);
+    assert_eq!(circle["circle"]["center"][0], 37.7947324); // [lat, lon]
+    assert_eq!(
+        fence["polygons"][0]["polygon"].as_array().map(Vec::len),
+        Some(4)
+    );
+    let geo = parse_no_fly(&std::fs::read_to_string(&zones_path).unwrap()).unwrap();
+    let back = parse_no_fly(&text).unwrap();
+    assert_eq!(back.zones[0].shape, geo.zones[1].shape);
+    assert_eq!(back.zones[1].shape, geo.zones[0].shape);
+    let from_plan = ok_json(dir.path(), "plan --json --no-fly route.plan");
+    assert_eq!(from_plan["waypoints"], from_geojson["waypoints"]);
+}

@@ -8,6 +8,9 @@
 //! - `start` and `end` (optional): RFC 3339 times between which the zone is active.
 //! - `"inclusion": true`: the zone is a boundary to stay inside (default: a zone to stay out of).
 //!
+//! A QGroundControl `.plan` file (`"fileType": "Plan"`) is read too: its `geoFence` polygons
+//! and circles with their `inclusion` flags, at every altitude (a fence has no band).
+//!
 //! Parsing ([`parse_no_fly`]) checks every field, naming the feature, the field and what was
 //! expected; projecting ([`NoFlyZones::project`]) turns the zones into local metres north/east
 //! of the map's home with altitudes above home ([`Zone`]).
@@ -239,6 +242,9 @@ pub fn parse_no_fly(text: &str) -> Result<NoFlyZones, FootprintError> {
 
 /// [`parse_no_fly`] of an already parsed JSON document.
 pub fn parse_no_fly_value(root: &Value) -> Result<NoFlyZones, FootprintError> {
+    if root.get("fileType").and_then(Value::as_str) == Some("Plan") {
+        return parse_qgc_geofence(root);
+    }
     let kind = root.get("type").and_then(Value::as_str);
     if kind != Some("FeatureCollection") {
         return Err(err(
@@ -265,6 +271,152 @@ pub fn parse_no_fly_value(root: &Value) -> Result<NoFlyZones, FootprintError> {
             None,
             "features",
             "the collection has no features; expected at least one zone",
+        ));
+    }
+    Ok(NoFlyZones { zones })
+}
+
+/// The `geoFence` of a QGroundControl `.plan` file (`"fileType": "Plan"`): its polygons
+/// (`[lat, lon]` vertices, not closed) then its circles, numbered in that order, each with its
+/// `inclusion` flag. A fence has no altitude band: every zone spans every altitude.
+fn parse_qgc_geofence(root: &Value) -> Result<NoFlyZones, FootprintError> {
+    let fence = root
+        .get("geoFence")
+        .filter(|f| f.is_object())
+        .ok_or_else(|| {
+            err(
+                None,
+                "geoFence",
+                "a .plan file without a geoFence object has no zones",
+            )
+        })?;
+    let list = |key: &str| -> Result<Vec<Value>, FootprintError> {
+        match fence.get(key) {
+            None | Some(Value::Null) => Ok(Vec::new()),
+            Some(Value::Array(a)) => Ok(a.clone()),
+            Some(v) => Err(err(
+                None,
+                format!("geoFence.{key}"),
+                format!("expected an array, found {}", shown(v)),
+            )),
+        }
+    };
+    let (polygons, circles) = (list("polygons")?, list("circles")?);
+    let inclusion_of = |item: &Value, field: &str| match item.get("inclusion") {
+        Some(Value::Bool(b)) => Ok(*b),
+        None => Ok(true), // QGroundControl's default
+        Some(v) => Err(err(
+            None,
+            format!("{field}.inclusion"),
+            format!("expected true or false, found {}", shown(v)),
+        )),
+    };
+    let lat_lon = |v: &Value, field: &str| -> Result<[f64; 2], FootprintError> {
+        let a = v.as_array().filter(|a| a.len() >= 2);
+        let pair = a.and_then(|a| Some([a[0].as_f64()?, a[1].as_f64()?]));
+        match pair {
+            Some([lat, lon])
+                if (-90.0..=90.0).contains(&lat) && (-180.0..=180.0).contains(&lon) =>
+            {
+                Ok([lon, lat])
+            }
+            _ => Err(err(
+                None,
+                field,
+                format!(
+                    "expected [latitude, longitude] within ±90° and ±180°, found {}",
+                    shown(v)
+                ),
+            )),
+        }
+    };
+    let mut zones = Vec::new();
+    for (i, p) in polygons.iter().enumerate() {
+        let field = format!("geoFence.polygons[{i}]");
+        let inclusion = inclusion_of(p, &field)?;
+        let vertices = p.get("polygon").and_then(Value::as_array).ok_or_else(|| {
+            err(
+                None,
+                format!("{field}.polygon"),
+                "expected an array of [latitude, longitude] vertices",
+            )
+        })?;
+        if vertices.len() > crate::footprints::MAX_VERTICES {
+            return Err(err(
+                None,
+                format!("{field}.polygon"),
+                format!("more than {} vertices", crate::footprints::MAX_VERTICES),
+            ));
+        }
+        let mut ring = vertices
+            .iter()
+            .enumerate()
+            .map(|(k, v)| lat_lon(v, &format!("{field}.polygon[{k}]")))
+            .collect::<Result<Vec<_>, _>>()?;
+        ring.dedup();
+        while ring.len() > 1 && ring.first() == ring.last() {
+            ring.pop();
+        }
+        if ring.len() < 3 {
+            return Err(err(
+                None,
+                format!("{field}.polygon"),
+                "expected at least 3 distinct vertices",
+            ));
+        }
+        if let Some((a, b)) = crate::footprints::self_intersection(&ring) {
+            return Err(err(
+                None,
+                format!("{field}.polygon"),
+                format!("the polygon crosses or touches itself: its edges {a} and {b} meet"),
+            ));
+        }
+        zones.push(GeoZone {
+            feature: i,
+            shape: ZoneShape::Polygon(vec![ring]),
+            floor_m: 0.0,
+            ceiling_m: f64::INFINITY,
+            reference: AltReference::Home,
+            inclusion,
+            start_unix_s: None,
+            end_unix_s: None,
+        });
+    }
+    for (i, c) in circles.iter().enumerate() {
+        let field = format!("geoFence.circles[{i}]");
+        let inclusion = inclusion_of(c, &field)?;
+        let circle = c.get("circle");
+        let centre = lat_lon(
+            circle.and_then(|c| c.get("center")).unwrap_or(&Value::Null),
+            &format!("{field}.circle.center"),
+        )?;
+        let radius_m = circle
+            .and_then(|c| c.get("radius"))
+            .and_then(Value::as_f64)
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .ok_or_else(|| {
+                err(
+                    None,
+                    format!("{field}.circle.radius"),
+                    "expected a radius in metres > 0",
+                )
+            })?;
+        zones.push(GeoZone {
+            feature: polygons.len() + i,
+            shape: ZoneShape::Circle { centre, radius_m },
+            floor_m: 0.0,
+            ceiling_m: f64::INFINITY,
+            reference: AltReference::Home,
+            inclusion,
+            start_unix_s: None,
+            end_unix_s: None,
+        });
+    }
+    if zones.is_empty() {
+        return Err(err(
+            None,
+            "geoFence",
+            "the fence has no polygons and no circles; expected at least one zone",
         ));
     }
     Ok(NoFlyZones { zones })
@@ -583,6 +735,61 @@ mod tests {
             panic!("a polygon")
         };
         assert!((rings[0][1][1] - 87.9).abs() < 0.2, "{:?}", rings[0][1]);
+    }
+
+    #[test]
+    fn qgc_plan_geofence_is_read_with_its_inclusion_flags() {
+        let plan = r#"{"fileType": "Plan", "geoFence": {"version": 2,
+            "polygons": [{"inclusion": true, "polygon": [[37.79, -122.40], [37.80, -122.40], [37.80, -122.39]], "version": 1}],
+            "circles": [{"circle": {"center": [37.795, -122.395], "radius": 30.5}, "inclusion": false, "version": 1}]},
+            "mission": {}, "version": 1}"#;
+        let z = parse_no_fly(plan).unwrap().zones;
+        assert_eq!(z.len(), 2);
+        assert_eq!(
+            z[0].shape,
+            ZoneShape::Polygon(vec![vec![
+                [-122.40, 37.79],
+                [-122.40, 37.80],
+                [-122.39, 37.80]
+            ]])
+        );
+        assert!(z[0].inclusion && !z[1].inclusion);
+        assert_eq!(
+            z[1].shape,
+            ZoneShape::Circle {
+                centre: [-122.395, 37.795],
+                radius_m: 30.5
+            }
+        );
+        assert_eq!(
+            (z[1].feature, z[1].floor_m, z[1].ceiling_m),
+            (1, 0.0, f64::INFINITY)
+        );
+        for (bad, want) in [
+            (
+                r#"{"fileType": "Plan", "mission": {}}"#,
+                "geoFence: a .plan file without a geoFence",
+            ),
+            (
+                r#"{"fileType": "Plan", "geoFence": {"circles": [], "polygons": []}}"#,
+                "geoFence: the fence has no polygons and no circles",
+            ),
+            (
+                r#"{"fileType": "Plan", "geoFence": {"circles": [{"circle": {"center": [37.7, -122.4], "radius": 0}}]}}"#,
+                "geoFence.circles[0].circle.radius: expected a radius in metres > 0",
+            ),
+            (
+                r#"{"fileType": "Plan", "geoFence": {"polygons": [{"polygon": [[37.7, -122.4], [37.8, -122.4], [-122.3, 37.8]]}]}}"#,
+                "geoFence.polygons[0].polygon[2]: expected [latitude, longitude]",
+            ),
+            (
+                r#"{"fileType": "Plan", "geoFence": {"polygons": [{"polygon": [[0, 0], [1, 1], [0, 1], [1, 0]]}]}}"#,
+                "geoFence.polygons[0].polygon: the polygon crosses or touches itself",
+            ),
+        ] {
+            let e = parse_no_fly(bad).unwrap_err().to_string();
+            assert!(e.starts_with(want), "{e}\nwanted {want}");
+        }
     }
 
     #[test]
