@@ -269,3 +269,34 @@ fn routes_keep_the_margin_from_circles_on_the_way() {
     println!("{planned} routes around circles, the closest {tightest:.3} m from one");
     assert!(planned >= 15 && tightest < 6.5, "{planned} {tightest}");
 }
+
+/// The smooth trajectory's corridor is built in the grid with the zones: every sample keeps the
+/// margin from them. A ride on the cost map refuses zones rather than ignoring them.
+#[test]
+fn trajectories_keep_the_margin_and_rides_refuse_zones() {
+    let zones = parse_no_fly(ZONES)
+        .unwrap()
+        .project(CITY_HOME, None)
+        .unwrap();
+    let mut session = Session::new(World::fcnd_city());
+    let plan = session
+        .plan(&PlanRequest {
+            no_fly: Some(ZONES.to_string()),
+            trajectory: Some(true),
+            ..Default::default()
+        })
+        .unwrap();
+    let samples = plan.trajectory.unwrap().samples;
+    assert!(samples.len() > 100);
+    let points: Vec<[f64; 4]> = samples.iter().map(|s| [s[1], s[2], s[3], 0.0]).collect();
+    let c = clearances(&points, &zones);
+    assert!(c[0] >= 5.0 - 1e-6 && c[1] >= 5.0 - 1e-6, "{c:?}");
+    let mut ride = skyplan_plan::RideRequest::new([0.0, 0.0], vec![[420.0, 390.0]]);
+    ride.route.no_fly = Some(ZONES.to_string());
+    let e = session.ride(&ride).unwrap_err();
+    assert!(
+        e.message.starts_with("no_fly: rides on the cost map"),
+        "{}",
+        e.message
+    );
+}
