@@ -100,6 +100,12 @@ pub struct RouteArgs {
     /// TOML file with default values for these options (command-line options win).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// No-fly zones: a GeoJSON FeatureCollection (Polygon features, or Point features with
+    /// radius_m; floor_m and ceiling_m above home; "inclusion": true for a boundary to stay
+    /// inside) or a QGroundControl .plan file's geoFence. Grown by the margin; the 2D planners
+    /// go around the zones whose band holds the flight altitude.
+    #[arg(long = "no-fly", value_name = "FILE")]
+    pub no_fly: Option<PathBuf>,
     #[command(flatten)]
     pub request: PlanRequest,
     #[command(flatten)]

@@ -123,6 +123,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         wait_s: args.wait_s,
         out,
         in_flight: Arc::clone(&ctrl_c.in_flight),
+        request: request.clone(),
     };
     let interrupt = Arc::clone(&ctrl_c.interrupt);
     // With --upload, the trajectory paces the uploaded mission (leg speeds, acceptance radii)
@@ -377,6 +378,8 @@ struct Terminal {
     wait_s: f64,
     out: Option<crate::plan_cmd::WaypointFile>,
     in_flight: Arc<AtomicBool>,
+    /// The request (its no-fly zones go into a `.plan` file's geoFence).
+    request: skyplan_plan::PlanRequest,
 }
 
 impl Observer for Terminal {
@@ -425,7 +428,9 @@ impl RunObserver for Terminal {
         self.live.events.route(plan, "plan");
         if let (Some(file @ (path, _, format)), Some(mission)) = (&self.out, &plan.mission) {
             let summary = serde_json::json!({ "map_home": plan.home, "planner": plan.planner });
-            crate::plan_cmd::write_waypoints(file, mission, &summary)?;
+            let fence =
+                crate::plan_cmd::geo_fence(&self.request, plan.spec.alt_m, plan.spec.safety_m);
+            crate::plan_cmd::write_waypoints(file, mission, &summary, &fence)?;
             println!("wrote      {} ({})", path.display(), format.name());
         }
         Ok(())

@@ -32,14 +32,72 @@ pub(crate) fn output_file(out: &Path, format: Option<&str>) -> Result<(Target, F
 /// A waypoint file: the path as given, where it goes, its format.
 pub(crate) type WaypointFile = (PathBuf, Target, Format);
 
-/// Writes `mission` (with a summary of its plan) to a waypoint file.
+/// Writes `mission` (with a summary of its plan) to a waypoint file; a `.plan` file carries
+/// `fence` as its `geoFence`.
 pub(crate) fn write_waypoints(
     (_, target, format): &WaypointFile,
     mission: &skyplan_mission::Mission,
     summary: &serde_json::Value,
+    fence: &skyplan_export::GeoFence,
 ) -> Result<()> {
-    let bytes = skyplan_export::encode(*format, mission, summary).or_exit(Kind::Runtime)?;
+    let options = skyplan_export::ExportOptions {
+        qgc_plan: skyplan_export::QgcPlanOptions {
+            geo_fence: fence.clone(),
+            ..Default::default()
+        },
+    };
+    let bytes =
+        skyplan_export::encode_with(*format, mission, summary, &options).or_exit(Kind::Runtime)?;
     write_target(target, &bytes)
+}
+
+/// The `geoFence` of a plan's no-fly zones (`request.no_fly`, already checked by the plan): the
+/// inclusion boundaries, and the exclusion zones whose band grown by the margin holds the
+/// flight altitude (the ones the route was planned around; an autopilot's fence has no band).
+/// An inclusion polygon's holes become exclusion polygons; an exclusion polygon's holes are
+/// dropped (the vehicle then keeps out of them too: the safe side).
+pub(crate) fn geo_fence(
+    request: &PlanRequest,
+    alt_m: f64,
+    margin_m: f64,
+) -> skyplan_export::GeoFence {
+    use skyplan_map::nofly::ZoneShape;
+    let mut fence = skyplan_export::GeoFence::default();
+    let Some(Ok(zones)) = request
+        .no_fly
+        .as_deref()
+        .map(skyplan_map::nofly::parse_no_fly)
+    else {
+        return fence;
+    };
+    let lat_lon = |ring: &[[f64; 2]]| ring.iter().map(|&[lon, lat]| [lat, lon]).collect();
+    for z in &zones.zones {
+        let holds = z.floor_m - margin_m < alt_m && alt_m < z.ceiling_m + margin_m;
+        if !(z.inclusion || holds) {
+            continue;
+        }
+        match &z.shape {
+            ZoneShape::Circle { centre, radius_m } => {
+                fence.circles.push(skyplan_export::FenceCircle {
+                    inclusion: z.inclusion,
+                    centre_lat_lon_deg: [centre[1], centre[0]],
+                    radius_m: *radius_m,
+                })
+            }
+            ZoneShape::Polygon(rings) => {
+                for (k, ring) in rings.iter().enumerate() {
+                    if k > 0 && !z.inclusion {
+                        break;
+                    }
+                    fence.polygons.push(skyplan_export::FencePolygon {
+                        inclusion: z.inclusion && k == 0,
+                        vertices_lat_lon_deg: lat_lon(ring),
+                    });
+                }
+            }
+        }
+    }
+    fence
 }
 
 /// Every output of a run, checked before planning so that a failing run writes nothing.
@@ -208,7 +266,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
             return Err(f.into());
         }
     };
-    let written = write_outputs(session.world(), &plan, &outputs)?;
+    let fence = geo_fence(&request, plan.spec.alt_m, plan.spec.safety_m);
+    let written = write_outputs(session.world(), &plan, &outputs, &fence)?;
     if args.show {
         show_plan(human, &plan, &request);
     }
@@ -237,7 +296,12 @@ fn spinner(planner: PlannerId) -> indicatif::ProgressBar {
     bar
 }
 
-fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Written> {
+fn write_outputs(
+    world: &World,
+    plan: &Plan,
+    outputs: &Outputs,
+    fence: &skyplan_export::GeoFence,
+) -> Result<Written> {
     let mut written = Written {
         waypoints: None,
         plot: None,
@@ -251,7 +315,7 @@ fn write_outputs(world: &World, plan: &Plan, outputs: &Outputs) -> Result<Writte
             .ok_or_else(|| bad_input("waypoint files need a map with a geodetic home"))?;
         let summary =
             serde_json::json!({ "map": plan.map, "planner": plan.planner, "cost_m": plan.cost_m });
-        write_waypoints(file, mission, &summary)?;
+        write_waypoints(file, mission, &summary, fence)?;
         written.waypoints = Some((path.display().to_string(), format.name()));
     }
     if let Some((path, target, kind)) = &outputs.plot {

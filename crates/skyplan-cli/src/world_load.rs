@@ -88,7 +88,14 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
     };
     let map: Option<PathBuf> = a.map.clone().or(config.path(&config.text.map));
     let limits = a.memory.limits();
-    let request = a.request.clone().or(config.text.request.clone());
+    let mut request = a.request.clone().or(config.text.request.clone());
+    if let Some(path) = a.no_fly.clone().or(config.path(&config.text.no_fly)) {
+        let text = crate::files::read_text(&path)?;
+        // Checked here so that the error names the file.
+        skyplan_map::nofly::parse_no_fly(&text)
+            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        request.no_fly = Some(text);
+    }
     let world = load_world(map.as_deref(), &a.grid, request.seed_or_default(), &limits)?;
     Ok(Resolved {
         world,

@@ -57,22 +57,17 @@ impl Grid2 {
                     g: &dyn Fn(&skyplan_map::colliders::ObstacleBox) -> f64| {
             map.boxes.iter().map(g).fold(init, f)
         };
-        let north_min = fold(f64::min, f64::INFINITY, &|b| b.north_m - b.half_north_m).floor();
-        let east_min = fold(f64::min, f64::INFINITY, &|b| b.east_m - b.half_east_m).floor();
+        let north_min = fold(f64::min, f64::INFINITY, &|b| b.north_m - b.half_north_m);
+        let east_min = fold(f64::min, f64::INFINITY, &|b| b.east_m - b.half_east_m);
         let north_max = fold(f64::max, f64::NEG_INFINITY, &|b| b.north_m + b.half_north_m);
         let east_max = fold(f64::max, f64::NEG_INFINITY, &|b| b.east_m + b.half_east_m);
-        let rows_f = ((north_max - north_min) / cell_m).ceil().max(1.0);
-        let cols_f = ((east_max - east_min) / cell_m).ceil().max(1.0);
-        if !(rows_f.is_finite() && cols_f.is_finite()) || rows_f * cols_f > crate::MAX_CELLS as f64
-        {
-            return Err(GridError::TooLarge {
-                rows: rows_f as u64,
-                cols: cols_f as u64,
-            });
-        }
-        let (rows, cols) = (rows_f as u32, cols_f as u32);
-        check_size(u64::from(rows), u64::from(cols))?;
-        let mut blocked = vec![false; rows as usize * cols as usize];
+        let mut grid = Grid2::empty_over([north_min, east_min], [north_max, east_max], cell_m)?;
+        let GridFrame {
+            origin_north_m: north_min,
+            origin_east_m: east_min,
+            ..
+        } = grid.frame;
+        let (rows, cols) = (grid.rows, grid.cols);
         // Half-open cell range [first, last] whose interiors meet [lo, hi] (in cells).
         let span = |lo: f64, hi: f64, n: u32| -> Option<(usize, usize)> {
             let first = lo.floor();
@@ -96,13 +91,33 @@ impl Grid2 {
             };
             for r in r0..=r1 {
                 let start = r * cols as usize;
-                blocked[start + c0..=start + c1].fill(true);
+                grid.blocked[start + c0..=start + c1].fill(true);
             }
         }
+        Ok(grid)
+    }
+
+    /// The free grid laid out over the extent `[lo, hi]` (`[north, east]`, metres) as every map
+    /// kind's grid is: origin `floor(lo)`, size `ceil((hi − origin) / cell_m)` (at least 1 × 1),
+    /// refused when larger than [`crate::MAX_CELLS`]. `cell_m` must have passed [`check_spec`].
+    pub(crate) fn empty_over(lo: [f64; 2], hi: [f64; 2], cell_m: f64) -> Result<Self, GridError> {
+        let north_min = lo[0].floor();
+        let east_min = lo[1].floor();
+        let rows_f = ((hi[0] - north_min) / cell_m).ceil().max(1.0);
+        let cols_f = ((hi[1] - east_min) / cell_m).ceil().max(1.0);
+        if !(rows_f.is_finite() && cols_f.is_finite()) || rows_f * cols_f > crate::MAX_CELLS as f64
+        {
+            return Err(GridError::TooLarge {
+                rows: rows_f as u64,
+                cols: cols_f as u64,
+            });
+        }
+        let (rows, cols) = (rows_f as u32, cols_f as u32);
+        check_size(u64::from(rows), u64::from(cols))?;
         Grid2::new(
             rows,
             cols,
-            blocked,
+            vec![false; rows as usize * cols as usize],
             GridFrame {
                 origin_north_m: north_min,
                 origin_east_m: east_min,

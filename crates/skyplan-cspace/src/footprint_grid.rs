@@ -1,14 +1,14 @@
 //! The 2D grid of a footprint map at a flight altitude: exact rasterisation of polygons with
 //! holes grown by a disc of radius margin (the Minkowski sum shapely's `buffer` approximates).
 
-use crate::{Grid2, GridError, GridFrame, GridSpec, check_size};
-use skyplan_map::footprints::{Footprint, FootprintMap};
+use crate::{Grid2, GridError, GridFrame, GridSpec};
+use skyplan_map::footprints::FootprintMap;
 
 impl Grid2 {
     /// The occupancy grid of a footprint map at `spec.alt_m`.
     ///
     /// A footprint counts if its height band grown by the margin holds the altitude
-    /// ([`Footprint::meets_altitude`]). It then blocks every cell whose closed square lies closer
+    /// ([`Footprint::meets_altitude`](skyplan_map::footprints::Footprint::meets_altitude)). It then blocks every cell whose closed square lies closer
     /// than the margin to the footprint (the region inside the outer ring and outside the
     /// holes, boundary included): the cell's interior meets the footprint grown by a disc of
     /// radius margin. With a zero margin a cell is blocked when its interior meets the footprint.
@@ -41,60 +41,45 @@ impl Grid2 {
         } = spec;
         crate::colliders_grid::check_spec(spec)?;
         let (lo, hi) = map.bbox_ne();
-        let north_min = lo[0].floor();
-        let east_min = lo[1].floor();
-        let rows_f = ((hi[0] - north_min) / cell_m).ceil().max(1.0);
-        let cols_f = ((hi[1] - east_min) / cell_m).ceil().max(1.0);
-        if !(rows_f.is_finite() && cols_f.is_finite()) || rows_f * cols_f > crate::MAX_CELLS as f64
-        {
-            return Err(GridError::TooLarge {
-                rows: rows_f as u64,
-                cols: cols_f as u64,
-            });
-        }
-        let (rows, cols) = (rows_f as u32, cols_f as u32);
-        check_size(u64::from(rows), u64::from(cols))?;
-        let frame = GridFrame {
-            origin_north_m: north_min,
-            origin_east_m: east_min,
-            cell_m,
-        };
-        let mut grid = Grid2::new(
-            rows,
-            cols,
-            vec![false; rows as usize * cols as usize],
-            frame,
-        )?;
+        let mut grid = Grid2::empty_over(lo, hi, cell_m)?;
         let mut crossings = Vec::new();
         for f in &map.footprints {
             if f.meets_altitude(alt_m, safety_m) {
-                rasterise(&mut grid, f, safety_m, &mut crossings);
+                block_near_edges(&mut grid, &f.rings, safety_m);
+                fill_inside(&mut grid, &f.rings, f.bbox_ne(), &mut crossings);
             }
         }
         Ok(grid)
     }
 }
 
-/// Blocks the cells of `grid` that `f` grown by `margin_m` reaches (see [`Grid2::from_footprints`]).
-fn rasterise(grid: &mut Grid2, f: &Footprint, margin_m: f64, crossings: &mut Vec<f64>) {
+/// The cell-row range `[r0, r1]` of `grid` (clamped to it) holding norths `lo..=hi`.
+fn row_range(grid: &Grid2, lo: f64, hi: f64) -> (i64, i64) {
+    let GridFrame {
+        origin_north_m: n0,
+        cell_m: c,
+        ..
+    } = grid.frame;
+    let r0 = (((lo - n0) / c).floor() as i64).max(0);
+    let r1 = (((hi - n0) / c).floor() as i64).min(grid.rows as i64 - 1);
+    (r0, r1)
+}
+
+/// Blocks the cells of `grid` closer than `margin_m` to an edge of `rings` (with no margin:
+/// the cells whose interior an edge crosses); see [`Grid2::from_footprints`].
+pub(crate) fn block_near_edges(grid: &mut Grid2, rings: &[Vec<[f64; 2]>], margin_m: f64) {
     let GridFrame {
         origin_north_m: n0,
         origin_east_m: e0,
         cell_m: c,
     } = grid.frame;
-    let (rows, cols) = (grid.rows as i64, grid.cols as i64);
-    let row_range = |lo: f64, hi: f64| -> (i64, i64) {
-        let r0 = (((lo - n0) / c).floor() as i64).max(0);
-        let r1 = (((hi - n0) / c).floor() as i64).min(rows - 1);
-        (r0, r1)
-    };
-    // 1. Cells near an edge: closer than the margin (or, with no margin, crossed inside).
-    for ring in &f.rings {
+    let cols = grid.cols as i64;
+    for ring in rings {
         let n = ring.len();
         for k in 0..n {
             let a = ring[k];
             let b = ring[(k + 1) % n];
-            let (r0, r1) = row_range(a[0].min(b[0]) - margin_m, a[0].max(b[0]) + margin_m);
+            let (r0, r1) = row_range(grid, a[0].min(b[0]) - margin_m, a[0].max(b[0]) + margin_m);
             for r in r0..=r1 {
                 let y0 = n0 + r as f64 * c;
                 let y1 = y0 + c;
@@ -124,14 +109,28 @@ fn rasterise(grid: &mut Grid2, f: &Footprint, margin_m: f64, crossings: &mut Vec
             }
         }
     }
-    // 2. Cells whose centre lies inside the footprint (even-odd over every ring): a cell that no
-    //    edge reaches lies wholly inside or wholly outside.
-    let (lo, hi) = f.bbox_ne();
-    let (r0, r1) = row_range(lo[0], hi[0]);
+}
+
+/// Blocks the cells of `grid` whose centre lies inside `rings` (even-odd over every ring; `bbox`
+/// is theirs, `(min, max)`): with [`block_near_edges`], a cell that no edge reaches lies wholly
+/// inside or wholly outside.
+pub(crate) fn fill_inside(
+    grid: &mut Grid2,
+    rings: &[Vec<[f64; 2]>],
+    (lo, hi): ([f64; 2], [f64; 2]),
+    crossings: &mut Vec<f64>,
+) {
+    let GridFrame {
+        origin_north_m: n0,
+        origin_east_m: e0,
+        cell_m: c,
+    } = grid.frame;
+    let cols = grid.cols as i64;
+    let (r0, r1) = row_range(grid, lo[0], hi[0]);
     for r in r0..=r1 {
         let y = n0 + (r as f64 + 0.5) * c;
         crossings.clear();
-        for ring in &f.rings {
+        for ring in rings {
             let n = ring.len();
             for k in 0..n {
                 let a = ring[k];
@@ -242,9 +241,10 @@ fn segment_meets_open_square(a: [f64; 2], b: [f64; 2], square: [[f64; 2]; 2]) ->
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use skyplan_map::colliders::{CollidersMap, GeodeticHome, ObstacleBox};
+    use skyplan_map::footprints::Footprint;
 
     const HOME: GeodeticHome = GeodeticHome {
         lat_deg: 37.7925,
@@ -301,8 +301,72 @@ mod tests {
         }
     }
 
-    /// Independent truth: every cell against every edge by segment–segment distances to the
-    /// square's four sides, and a winding-number inside test of the centre.
+    fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    }
+    fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+        orient(a, b, c) * orient(a, b, d) <= 0.0 && orient(c, d, a) * orient(c, d, b) <= 0.0
+    }
+    fn seg_seg2(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
+        if cross(a, b, c, d) {
+            return 0.0;
+        }
+        point_segment_dist2(a, c, d)
+            .min(point_segment_dist2(b, c, d))
+            .min(point_segment_dist2(c, a, b))
+            .min(point_segment_dist2(d, a, b))
+    }
+    fn winding(p: [f64; 2], ring: &[[f64; 2]]) -> i32 {
+        let mut w = 0;
+        for k in 0..ring.len() {
+            let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+            if a[0] <= p[0] && b[0] > p[0] && orient(a, b, p) > 0.0 {
+                w += 1;
+            } else if a[0] > p[0] && b[0] <= p[0] && orient(a, b, p) < 0.0 {
+                w -= 1;
+            }
+        }
+        w
+    }
+
+    /// Independent truth for one cell, the closed square `[lo, hi]`, against a polygon's
+    /// `rings`: whether its centre lies inside (winding numbers), and whether an edge comes
+    /// closer than `margin_m` (segment–segment distances to the square's four sides).
+    pub(crate) fn brute_cell(
+        rings: &[Vec<[f64; 2]>],
+        lo: [f64; 2],
+        hi: [f64; 2],
+        margin_m: f64,
+    ) -> (bool, bool) {
+        let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+        let sides = [
+            (lo, [lo[0], hi[1]]),
+            ([lo[0], hi[1]], hi),
+            (hi, [hi[0], lo[1]]),
+            ([hi[0], lo[1]], lo),
+        ];
+        let inside =
+            winding(centre, &rings[0]) != 0 && rings[1..].iter().all(|h| winding(centre, h) == 0);
+        let near = rings.iter().any(|ring| {
+            (0..ring.len()).any(|k| {
+                let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+                let inside_square =
+                    (lo[0]..=hi[0]).contains(&a[0]) && (lo[1]..=hi[1]).contains(&a[1]);
+                let d2 = if inside_square {
+                    0.0
+                } else {
+                    sides
+                        .iter()
+                        .map(|&(c, d)| seg_seg2(a, b, c, d))
+                        .fold(f64::INFINITY, f64::min)
+                };
+                d2 < margin_m * margin_m
+            })
+        });
+        (inside, near)
+    }
+
+    /// Independent truth: every cell against every edge ([`brute_cell`]).
     fn brute_force(
         map: &FootprintMap,
         spec: GridSpec,
@@ -310,33 +374,6 @@ mod tests {
         rows: u32,
         cols: u32,
     ) -> Vec<bool> {
-        fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-        }
-        fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-            orient(a, b, c) * orient(a, b, d) <= 0.0 && orient(c, d, a) * orient(c, d, b) <= 0.0
-        }
-        fn seg_seg2(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
-            if cross(a, b, c, d) {
-                return 0.0;
-            }
-            point_segment_dist2(a, c, d)
-                .min(point_segment_dist2(b, c, d))
-                .min(point_segment_dist2(c, a, b))
-                .min(point_segment_dist2(d, a, b))
-        }
-        fn winding(p: [f64; 2], ring: &[[f64; 2]]) -> i32 {
-            let mut w = 0;
-            for k in 0..ring.len() {
-                let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
-                if a[0] <= p[0] && b[0] > p[0] && orient(a, b, p) > 0.0 {
-                    w += 1;
-                } else if a[0] > p[0] && b[0] <= p[0] && orient(a, b, p) < 0.0 {
-                    w -= 1;
-                }
-            }
-            w
-        }
         let mut out = vec![false; rows as usize * cols as usize];
         for r in 0..rows {
             for col in 0..cols {
@@ -345,36 +382,12 @@ mod tests {
                     frame.origin_east_m + f64::from(col) * frame.cell_m,
                 ];
                 let hi = [lo[0] + frame.cell_m, lo[1] + frame.cell_m];
-                let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-                let sides = [
-                    (lo, [lo[0], hi[1]]),
-                    ([lo[0], hi[1]], hi),
-                    (hi, [hi[0], lo[1]]),
-                    ([hi[0], lo[1]], lo),
-                ];
                 out[r as usize * cols as usize + col as usize] = map
                     .footprints
                     .iter()
                     .filter(|f| f.meets_altitude(spec.alt_m, spec.safety_m))
                     .any(|f| {
-                        let inside = winding(centre, &f.rings[0]) != 0
-                            && f.rings[1..].iter().all(|h| winding(centre, h) == 0);
-                        let near = f.rings.iter().any(|ring| {
-                            (0..ring.len()).any(|k| {
-                                let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
-                                let inside_square = (lo[0]..=hi[0]).contains(&a[0])
-                                    && (lo[1]..=hi[1]).contains(&a[1]);
-                                let d2 = if inside_square {
-                                    0.0
-                                } else {
-                                    sides
-                                        .iter()
-                                        .map(|&(c, d)| seg_seg2(a, b, c, d))
-                                        .fold(f64::INFINITY, f64::min)
-                                };
-                                d2 < spec.safety_m * spec.safety_m
-                            })
-                        });
+                        let (inside, near) = brute_cell(&f.rings, lo, hi, spec.safety_m);
                         inside || near
                     });
             }

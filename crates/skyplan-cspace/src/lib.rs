@@ -19,6 +19,7 @@
 mod colliders_grid;
 mod footprint_grid;
 mod line_of_sight;
+mod zone_grid;
 
 pub use colliders_grid::GridSpec;
 pub use line_of_sight::Touch;

@@ -30,8 +30,98 @@ pub mod mavlink {
 
 use mavlink::*;
 
-/// Mission-wide settings of a `.plan` file.
+/// A `.plan` file's `geoFence`: polygons and circles, each to stay inside (`inclusion`) or
+/// out of. QGroundControl's layout: `{"circles": [{"circle": {"center": [lat, lon], "radius":
+/// r}, "inclusion": b, "version": 1}], "polygons": [{"inclusion": b, "polygon": [[lat, lon],
+/// …], "version": 1}], "version": 2}` (polygons open: the first vertex is not repeated).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct GeoFence {
+    /// The polygons.
+    pub polygons: Vec<FencePolygon>,
+    /// The circles.
+    pub circles: Vec<FenceCircle>,
+}
+
+/// A fence polygon.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FencePolygon {
+    /// Stay inside (`true`) or out (`false`).
+    pub inclusion: bool,
+    /// The vertices, `[latitude, longitude]` in degrees, not closed.
+    pub vertices_lat_lon_deg: Vec<[f64; 2]>,
+}
+
+/// A fence circle.
 #[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FenceCircle {
+    /// Stay inside (`true`) or out (`false`).
+    pub inclusion: bool,
+    /// The centre, `[latitude, longitude]` in degrees.
+    pub centre_lat_lon_deg: [f64; 2],
+    /// The radius, metres.
+    pub radius_m: f64,
+}
+
+impl GeoFence {
+    /// The `geoFence` object.
+    fn to_json(&self) -> Value {
+        let polygons: Vec<Value> = self
+            .polygons
+            .iter()
+            .map(|p| json!({ "inclusion": p.inclusion, "polygon": p.vertices_lat_lon_deg, "version": 1 }))
+            .collect();
+        let circles: Vec<Value> = self
+            .circles
+            .iter()
+            .map(|c| {
+                json!({
+                    "circle": { "center": c.centre_lat_lon_deg, "radius": c.radius_m },
+                    "inclusion": c.inclusion,
+                    "version": 1,
+                })
+            })
+            .collect();
+        json!({ "circles": circles, "polygons": polygons, "version": 2 })
+    }
+
+    fn validate(&self) -> Result<(), ExportError> {
+        let bad = |value: f64, reason: &'static str| ExportError::InvalidOption {
+            name: "geo_fence",
+            value,
+            reason,
+        };
+        for p in &self.polygons {
+            if p.vertices_lat_lon_deg.len() < 3 {
+                return Err(bad(
+                    p.vertices_lat_lon_deg.len() as f64,
+                    "a fence polygon needs at least 3 vertices",
+                ));
+            }
+            for v in p.vertices_lat_lon_deg.iter().flatten() {
+                if !v.is_finite() {
+                    return Err(bad(*v, "fence coordinates must be finite"));
+                }
+            }
+        }
+        for c in &self.circles {
+            if !(c.radius_m.is_finite() && c.radius_m > 0.0) {
+                return Err(bad(
+                    c.radius_m,
+                    "a fence radius must be finite and positive",
+                ));
+            }
+            for v in c.centre_lat_lon_deg {
+                if !v.is_finite() {
+                    return Err(bad(v, "fence coordinates must be finite"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Mission-wide settings of a `.plan` file.
+#[derive(Debug, Clone, PartialEq)]
 pub struct QgcPlanOptions {
     /// `cruiseSpeed`, m/s: the default speed of fixed-wing and VTOL vehicles. Default 15.
     pub cruise_speed_m_s: f64,
@@ -41,6 +131,8 @@ pub struct QgcPlanOptions {
     pub firmware_type: u8,
     /// `vehicleType`, a `MAV_TYPE` value. Default [`mavlink::MAV_TYPE_QUADROTOR`].
     pub vehicle_type: u8,
+    /// The `geoFence` (default: none).
+    pub geo_fence: GeoFence,
 }
 
 impl Default for QgcPlanOptions {
@@ -50,6 +142,7 @@ impl Default for QgcPlanOptions {
             hover_speed_m_s: 5.0,
             firmware_type: MAV_AUTOPILOT_PX4,
             vehicle_type: MAV_TYPE_QUADROTOR,
+            geo_fence: GeoFence::default(),
         }
     }
 }
@@ -68,7 +161,7 @@ impl QgcPlanOptions {
                 });
             }
         }
-        Ok(())
+        self.geo_fence.validate()
     }
 }
 
@@ -140,7 +233,7 @@ fn items(wps: &[Waypoint]) -> Vec<Value> {
 /// 3. `MAV_CMD_NAV_LAND` (21) at the last waypoint.
 ///
 /// So an `n`-waypoint mission gives `n + 1` items. `plannedHomePosition` is the mission home
-/// `[lat, lon, alt]`; geofence and rally points are empty. An empty mission is an error
+/// `[lat, lon, alt]`; the geofence is `options.geo_fence` ([`GeoFence`]); rally points are empty. An empty mission is an error
 /// ([`ExportError::TooFewWaypoints`]), as are non-positive speeds
 /// ([`ExportError::InvalidOption`]).
 pub fn to_qgc_plan(mission: &Mission, options: &QgcPlanOptions) -> Result<String, ExportError> {
@@ -150,7 +243,7 @@ pub fn to_qgc_plan(mission: &Mission, options: &QgcPlanOptions) -> Result<String
     let home = &mission.home;
     let plan = json!({
         "fileType": "Plan",
-        "geoFence": { "circles": [], "polygons": [], "version": 2 },
+        "geoFence": options.geo_fence.to_json(),
         "groundStation": "QGroundControl",
         "mission": {
             "cruiseSpeed": options.cruise_speed_m_s,

@@ -49,7 +49,7 @@ pub use fmt_csv::{CSV_HEADER, csv_row, to_csv};
 pub use fmt_geojson::to_geojson;
 pub use fmt_hdf5::{HDF5_DATASET, to_hdf5};
 pub use fmt_json::{JSON_COLUMNS, JSON_FORMAT_ID, JSON_FORMAT_VERSION, to_json};
-pub use fmt_qgc::{QgcPlanOptions, mavlink, to_qgc_plan};
+pub use fmt_qgc::{FenceCircle, FencePolygon, GeoFence, QgcPlanOptions, mavlink, to_qgc_plan};
 pub use fmt_samples::{SAMPLES_DATASET, samples_csv, samples_hdf5};
 
 /// A waypoint file format.
@@ -209,7 +209,7 @@ pub enum ExportError {
 }
 
 /// Options for [`encode_with`]; each format reads only its own.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct ExportOptions {
     /// Options for [`Format::QgcPlan`].
     pub qgc_plan: QgcPlanOptions,

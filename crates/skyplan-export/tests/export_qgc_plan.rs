@@ -2,7 +2,7 @@ mod common;
 
 use common::{assert_close, num, parse};
 use serde_json::json;
-use skyplan_export::{QgcPlanOptions, mavlink, to_qgc_plan};
+use skyplan_export::{FenceCircle, FencePolygon, GeoFence, QgcPlanOptions, mavlink, to_qgc_plan};
 
 fn plan(mission: &skyplan_mission::Mission) -> serde_json::Value {
     parse(&to_qgc_plan(mission, &QgcPlanOptions::default()).unwrap())
@@ -134,9 +134,51 @@ fn plan_options_are_written() {
         hover_speed_m_s: 3.0,
         firmware_type: mavlink::MAV_AUTOPILOT_ARDUPILOTMEGA,
         vehicle_type: mavlink::MAV_TYPE_QUADROTOR,
+        geo_fence: GeoFence::default(),
     };
     let doc = parse(&to_qgc_plan(&common::sample(), &options).unwrap());
     assert_eq!(num(&doc["mission"]["cruiseSpeed"]), 8.5);
     assert_eq!(num(&doc["mission"]["hoverSpeed"]), 3.0);
     assert_eq!(doc["mission"]["firmwareType"], 3);
+    assert_eq!(
+        doc["geoFence"],
+        serde_json::json!({"circles": [], "polygons": [], "version": 2})
+    );
+}
+
+/// The geoFence as QGroundControl writes it (`QGCFencePolygon` / `QGCFenceCircle::saveToJson`:
+/// `polygon` of `[lat, lon]`, `circle.center` `[lat, lon]`, `circle.radius`, `inclusion`,
+/// item version 1, fence version 2); a bad radius or a two-vertex polygon is refused.
+#[test]
+fn geofence_is_written_in_qgroundcontrols_layout() {
+    let fence = GeoFence {
+        polygons: vec![FencePolygon {
+            inclusion: true,
+            vertices_lat_lon_deg: vec![[37.79, -122.40], [37.80, -122.40], [37.80, -122.39]],
+        }],
+        circles: vec![FenceCircle {
+            inclusion: false,
+            centre_lat_lon_deg: [37.795, -122.395],
+            radius_m: 30.5,
+        }],
+    };
+    let options = QgcPlanOptions {
+        geo_fence: fence.clone(),
+        ..QgcPlanOptions::default()
+    };
+    let doc = parse(&to_qgc_plan(&common::sample(), &options).unwrap());
+    assert_eq!(
+        doc["geoFence"],
+        serde_json::json!({
+            "circles": [{"circle": {"center": [37.795, -122.395], "radius": 30.5}, "inclusion": false, "version": 1}],
+            "polygons": [{"inclusion": true, "polygon": [[37.79, -122.40], [37.80, -122.40], [37.80, -122.39]], "version": 1}],
+            "version": 2
+        })
+    );
+    let mut bad = options.clone();
+    bad.geo_fence.circles[0].radius_m = 0.0;
+    assert!(to_qgc_plan(&common::sample(), &bad).is_err());
+    let mut bad = options;
+    bad.geo_fence.polygons[0].vertices_lat_lon_deg.pop();
+    assert!(to_qgc_plan(&common::sample(), &bad).is_err());
 }

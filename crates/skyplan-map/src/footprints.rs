@@ -55,7 +55,7 @@ impl fmt::Display for FootprintError {
     }
 }
 
-fn err(
+pub(crate) fn err(
     feature: Option<usize>,
     field: impl Into<String>,
     message: impl Into<String>,
@@ -333,7 +333,7 @@ pub fn parse_geojson_bytes(
     Ok(out)
 }
 
-fn json_reason(e: &serde_json::Error) -> String {
+pub(crate) fn json_reason(e: &serde_json::Error) -> String {
     // serde_json's message ends with " at line L column C"; the place is given separately.
     let s = e.to_string();
     match s.find(" at line ") {
@@ -342,7 +342,7 @@ fn json_reason(e: &serde_json::Error) -> String {
     }
 }
 
-fn shorten(s: &str) -> String {
+pub(crate) fn shorten(s: &str) -> String {
     const MAX: usize = 40;
     let mut out: String = s.chars().take(MAX).collect();
     if s.chars().count() > MAX {
@@ -452,7 +452,7 @@ fn parse_feature(
 }
 
 /// A non-negative finite number, or a string holding one (optionally ending in `m`).
-fn metres(i: usize, field: &str, v: &Value) -> Result<f64, FootprintError> {
+pub(crate) fn metres(i: usize, field: &str, v: &Value) -> Result<f64, FootprintError> {
     let x = match v {
         Value::Number(n) => n.as_f64(),
         Value::String(s) => {
@@ -475,7 +475,7 @@ fn metres(i: usize, field: &str, v: &Value) -> Result<f64, FootprintError> {
     }
 }
 
-fn shown(v: &Value) -> String {
+pub(crate) fn shown(v: &Value) -> String {
     match v {
         Value::String(s) => format!("\"{}\"", shorten(s)),
         Value::Number(n) => n.to_string(),
@@ -483,7 +483,7 @@ fn shown(v: &Value) -> String {
     }
 }
 
-fn parse_polygon(
+pub(crate) fn parse_polygon(
     i: usize,
     v: &Value,
     field: &str,
@@ -573,7 +573,7 @@ fn parse_polygon(
     Ok(out)
 }
 
-fn position(i: usize, p: &Value, field: &str) -> Result<[f64; 2], FootprintError> {
+pub(crate) fn position(i: usize, p: &Value, field: &str) -> Result<[f64; 2], FootprintError> {
     let at = Some(i);
     let arr = p.as_array().filter(|a| a.len() >= 2).ok_or_else(|| {
         err(

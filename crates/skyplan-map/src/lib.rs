@@ -26,6 +26,7 @@
 pub mod colliders;
 pub mod footprints;
 pub mod movingai;
+pub mod nofly;
 mod tile;
 
 pub use tile::{tile, to_colliders_csv};

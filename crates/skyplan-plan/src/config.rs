@@ -17,6 +17,9 @@ pub struct ConfigText {
     pub format: Option<String>,
     /// `plot`: the picture file, as written.
     pub plot: Option<String>,
+    /// `no_fly`: the no-fly zone file (GeoJSON or QGroundControl `.plan`), relative to the
+    /// config file (the CLI reads it into [`PlanRequest::no_fly`]).
+    pub no_fly: Option<String>,
 }
 
 /// Why a config text was refused (the caller prefixes the file's name).
@@ -54,6 +57,7 @@ pub fn parse_config_toml(text: &str) -> Result<ConfigText, ConfigError> {
     let out = take("out")?;
     let plot = take("plot")?;
     let format = take("format")?;
+    let no_fly = take("no_fly")?;
     let request: PlanRequest = table
         .try_into()
         .map_err(|e: toml::de::Error| ConfigError::Invalid(e.to_string()))?;
@@ -66,6 +70,7 @@ pub fn parse_config_toml(text: &str) -> Result<ConfigText, ConfigError> {
         out,
         format,
         plot,
+        no_fly,
     })
 }
 

@@ -89,10 +89,25 @@ pub(crate) fn end_cell(
     Ok(cell)
 }
 
-/// The grid for a 2D request, with the time it took (0 when cached).
+/// The grid for a 2D request, with the time it took (0 when cached): the map's grid at the
+/// altitude, with the request's no-fly zones blocked on a copy.
 pub(crate) fn grid_for(session: &mut Session, q: &Query) -> Result<(Arc<Grid2>, u64), PlanFailure> {
     let t = Instant::now();
-    let grid = session.grid(q.r.alt_m, q.r.safety_m, q.r.cell_m)?;
+    let mut grid = session.grid(q.r.alt_m, q.r.safety_m, q.r.cell_m)?;
+    if !q.zones.is_empty() {
+        let mut zoned = grid.as_ref().clone();
+        zoned
+            .block_zones(
+                q.zones,
+                skyplan_cspace::GridSpec {
+                    alt_m: q.r.alt_m,
+                    safety_m: q.r.safety_m,
+                    cell_m: q.r.cell_m,
+                },
+            )
+            .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))?;
+        grid = Arc::new(zoned);
+    }
     Ok((grid, micros(t.elapsed())))
 }
 

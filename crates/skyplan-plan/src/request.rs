@@ -175,6 +175,12 @@ pub struct PlanRequest {
     /// Return the geometry pictures need (grid path, roadmap, trees, field) [default: false].
     #[cfg_attr(feature = "clap", arg(skip))]
     pub geometry: Option<bool>,
+    /// No-fly zones: the text of a GeoJSON FeatureCollection of zones (see
+    /// [`skyplan_map::nofly`]) or of a QGroundControl `.plan` file (its `geoFence`). The CLI's
+    /// `--no-fly FILE` reads the file into it. Honoured by the 2D planners on colliders and
+    /// footprint maps; the 3D planners and Voronoi refuse it.
+    #[cfg_attr(feature = "clap", arg(skip))]
+    pub no_fly: Option<String>,
     /// A saved PRM roadmap to start from / return the roadmap (Rust callers only).
     #[serde(skip)]
     #[cfg_attr(feature = "clap", arg(skip))]
@@ -215,7 +221,7 @@ impl PlanRequest {
             prune, epsilon, shortcut, time_limit_ms, seed, min_alt_m, max_alt_m, climb_weight,
             voxel_m, layer_m, field, inscribed_radius_m, inflation_radius_m, cost_scaling,
             cost_weight, trajectory, max_speed_m_s, max_accel_m_s2, max_jerk_m_s3, max_climb_m_s,
-            max_descent_m_s, max_yaw_rate_deg_s, sample_hz, geometry)
+            max_descent_m_s, max_yaw_rate_deg_s, sample_hz, geometry, no_fly)
     }
 
     /// The trajectory limits given, each over its default.
@@ -382,6 +388,8 @@ pub(crate) struct Resolved {
     pub costmap: CostmapOptions,
     pub geometry: bool,
     pub trajectory: Option<TrajectorySpec>,
+    /// The request's no-fly zones, parsed (longitude/latitude).
+    pub no_fly: Option<skyplan_map::nofly::NoFlyZones>,
 }
 
 /// Collinearity pruning, resolved.
@@ -634,6 +642,12 @@ impl Resolved {
             .checked()?,
             geometry: r.geometry.unwrap_or(false),
             trajectory: trajectory(r)?,
+            no_fly: r
+                .no_fly
+                .as_deref()
+                .map(skyplan_map::nofly::parse_no_fly)
+                .transpose()
+                .map_err(|e| bad(format!("no_fly: {e}")))?,
         })
     }
 }

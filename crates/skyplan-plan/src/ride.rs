@@ -69,6 +69,11 @@ impl RideRequest {
                 "a ride's ends are its start_ne and targets_ne, not the route's start or goal",
             ));
         }
+        if r.no_fly.is_some() {
+            return Err(PlanFailure::bad_request(
+                "no_fly: rides on the cost map do not honour no-fly zones yet; plan with a grid planner instead",
+            ));
+        }
         Resolved::new(&PlanRequest {
             planner: Some(PlannerId::Costmap),
             ..r.clone()

@@ -130,6 +130,8 @@ pub(crate) struct Query<'a> {
     pub world: &'a World,
     /// A PRM roadmap to start from, and whether to return it.
     pub roadmap: &'a RoadmapIo,
+    /// The request's no-fly zones in the map's frame (empty: none).
+    pub zones: &'a [skyplan_map::nofly::Zone],
 }
 
 /// A world loaded once and the caches its requests share.
@@ -450,6 +452,7 @@ impl Session {
                     .join(", ")
             )));
         }
+        let zones = self.zones(&r)?;
         let (start_ne, start_lla) =
             self.endpoint(r.start.at, self.world.default_start_ne, "start")?;
         let (goal_ne, goal_lla) = self.endpoint(r.goal.at, self.world.default_goal_ne, "goal")?;
@@ -460,6 +463,7 @@ impl Session {
             goal_ne,
             world: &world,
             roadmap: &request.roadmap,
+            zones: &zones,
         };
         let route = r.planner.algorithm().plan(self, &q)?;
         recheck(&route)?;
@@ -469,6 +473,47 @@ impl Session {
             plan.timings_us.total_us = micros(t0.elapsed());
         }
         Ok(plan)
+    }
+
+    /// The request's no-fly zones in the map's frame, or a bad request: zones need a map whose
+    /// grid is at an altitude (colliders or footprints) and a 2D planner. Timed zones count as
+    /// active whatever their times (a request carries no departure time: the safe side).
+    fn zones(&self, r: &Resolved) -> Result<Vec<skyplan_map::nofly::Zone>, PlanFailure> {
+        let Some(geo) = &r.no_fly else {
+            return Ok(Vec::new());
+        };
+        let name = self.world.name();
+        if !matches!(
+            self.world.source,
+            Source::Colliders(_) | Source::Footprints(_)
+        ) {
+            return Err(PlanFailure::bad_request(format!(
+                "no_fly: {name} is a fixed grid, not a map at an altitude; no-fly zones need a colliders or footprint map"
+            )));
+        }
+        if r.planner.info().maps == MapKinds::CollidersOnly {
+            return Err(PlanFailure::bad_request(format!(
+                "no_fly: planner {} does not honour no-fly zones (only the 2D grid planners do); use one of {}",
+                r.planner,
+                PlannerId::for_maps(false)
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+        let home = self.world.frame().map(|f| f.home()).ok_or_else(|| {
+            PlanFailure::bad_request(format!(
+                "no_fly: {name} has no geodetic home to place the zones at"
+            ))
+        })?;
+        geo.project(
+            skyplan_map::colliders::GeodeticHome {
+                lat_deg: home.lat_deg,
+                lon_deg: home.lon_deg,
+            },
+            None,
+        )
+        .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))
     }
 
     /// The trajectory of a plan's waypoints, in the free space the plan was checked in: the 3D
@@ -483,7 +528,7 @@ impl Session {
         use skyplan_trajectory as tj;
         let route = plan.points_nea();
         let (boxes, layer);
-        let free: &dyn tj::FreeSpace = if self.world.colliders().is_some() {
+        let free: &dyn tj::FreeSpace = if self.world.colliders().is_some() && r.no_fly.is_none() {
             boxes = self.boxes(r)?;
             boxes.as_ref()
         } else if let Some(grid) = &plan.grid_used {

@@ -76,6 +76,8 @@ async fn plans_equal_the_planning_api_for_the_same_request() {
         json!({ "planner": "jps-plus", "goal_ne": [420.0, 390.0] }),
         json!({ "planner": "theta", "start_ne": [-200.0, 150.0], "goal_ne": [308.5, -250.5], "alt_m": 12.0, "safety_m": 3.0 }),
         json!({ "planner": "rrt-connect", "goal_ne": [60.0, 40.0], "goal_alt_m": 20.0, "seed": 7, "geometry": true }),
+        // No-fly zones as the zone file's text: around a circle and a square across the route.
+        json!({ "planner": "jps", "no_fly": include_str!("../../../data/no-fly-sample.geojson") }),
     ] {
         let (status, got) = post_plan(city(), body.clone()).await;
         assert_eq!(status, StatusCode::OK, "{got}");
@@ -615,5 +617,31 @@ async fn app_events_reach_a_oneshot_stream() {
         a.events.clients(),
         0,
         "dropping the response frees the subscription"
+    );
+}
+
+/// A bad zone document is a 400 naming the feature and the field; a planner that cannot honour
+/// zones says so.
+#[tokio::test]
+async fn bad_no_fly_zones_are_bad_requests() {
+    let missing = r#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+        "properties": {"radius_m": 10}, "geometry": {"type": "Point", "coordinates": [-122.39, 37.79]}}]}"#;
+    let (status, got) = post_plan(city(), json!({ "no_fly": missing })).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{got}");
+    assert!(
+        got.to_string()
+            .contains("no_fly: feature 0, properties.floor_m: missing"),
+        "{got}"
+    );
+    let zones = include_str!("../../../data/no-fly-sample.geojson");
+    let (status, got) = post_plan(
+        city(),
+        json!({ "planner": "voxel", "goal_ne": [60.0, 40.0], "no_fly": zones }),
+    )
+    .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{got}");
+    assert!(
+        got.to_string().contains("does not honour no-fly zones"),
+        "{got}"
     );
 }

@@ -196,9 +196,12 @@ class Planner:
         goal_alt_m: Optional[float] = None,
         time_limit_ms: Optional[int] = None,
         seed: Optional[int] = None,
+        no_fly: Optional[str] = None,
         **options: Any,
     ) -> Plan:
         """Plans a route from ``start`` to ``goal`` ((north_m, east_m)); options as the CLI's.
 
         ``planner``: a ``name`` from :func:`planners` (every planner of the registry).
+        ``no_fly``: the text of a no-fly zone file (GeoJSON or a QGroundControl ``.plan``), e.g.
+        ``open("data/no-fly-sample.geojson").read()``; the 2D planners go around the zones.
         """

@@ -1,0 +1,199 @@
+//! `skyplan plan --no-fly FILE`: routes on the bundled city and on a footprint map keep the
+//! margin from every zone whose band holds the altitude (distances computed here from the
+//! zones as parsed), the grid has the cells the zones block, the TOML key gives the same route,
+//! and bad zone files are refused naming the file, the feature and the field.
+
+use serde_json::Value;
+use skyplan_cspace::{Grid2, GridSpec};
+use skyplan_map::colliders::GeodeticHome;
+use skyplan_map::nofly::{Zone, ZoneShape, parse_no_fly};
+use std::path::{Path, PathBuf};
+mod common;
+use common::{fails_with, ok_json, rows};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data")
+        .join(name)
+}
+
+fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len2 = d[0] * d[0] + d[1] * d[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a[0] + t * d[0] - p[0]).hypot(a[1] + t * d[1] - p[1])
+}
+
+/// The route's smallest distance to a zone: circles by their centre; polygons by sampling
+/// every segment each 1 cm against the edges and an even-odd inside test.
+fn clearance(wps: &[[f64; 4]], z: &Zone) -> f64 {
+    let mut best = f64::INFINITY;
+    for w in wps.windows(2) {
+        let (a, b) = ([w[0][0], w[0][1]], [w[1][0], w[1][1]]);
+        match &z.shape {
+            ZoneShape::Circle { centre, radius_m } => {
+                best = best.min(point_segment(*centre, a, b) - radius_m);
+            }
+            ZoneShape::Polygon(rings) => {
+                let n = ((a[0] - b[0]).hypot(a[1] - b[1]) / 0.01).ceil().max(1.0) as usize;
+                for k in 0..=n {
+                    let t = k as f64 / n as f64;
+                    let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+                    let mut odd = false;
+                    let mut d = f64::INFINITY;
+                    for ring in rings {
+                        for i in 0..ring.len() {
+                            let (c, e) = (ring[i], ring[(i + 1) % ring.len()]);
+                            d = d.min(point_segment(p, c, e));
+                            if (c[0] > p[0]) != (e[0] > p[0])
+                                && p[1] < c[1] + (p[0] - c[0]) / (e[0] - c[0]) * (e[1] - c[1])
+                            {
+                                odd = !odd;
+                            }
+                        }
+                    }
+                    best = best.min(if odd { 0.0 } else { d });
+                }
+            }
+        }
+    }
+    best
+}
+
+fn zones_of(path: &Path, home: &Value) -> Vec<Zone> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let home = GeodeticHome {
+        lat_deg: home["lat_deg"].as_f64().unwrap(),
+        lon_deg: home["lon_deg"].as_f64().unwrap(),
+    };
+    parse_no_fly(&text).unwrap().project(home, None).unwrap()
+}
+
+#[test]
+fn the_default_route_goes_around_the_sample_zones() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    let plain = ok_json(dir.path(), "plan --json");
+    let v = ok_json(
+        dir.path(),
+        &format!("plan --json --no-fly {}", zones_path.display()),
+    );
+    let zones = zones_of(&zones_path, &v["home"]);
+    let wps = rows(&v);
+    let before = rows(&plain);
+    for z in zones.iter().filter(|z| z.meets_altitude(5.0, 5.0)) {
+        assert!(clearance(&before, z) <= 0.0, "zone {} is across", z.feature);
+        assert!(clearance(&wps, z) >= 5.0 - 1e-6, "zone {}", z.feature);
+    }
+    // The grid the route was planned on: the city's at 5 m with the zones blocked.
+    let city = skyplan_map::colliders::parse_colliders(
+        &std::fs::read_to_string(data("colliders.csv")).unwrap(),
+    )
+    .unwrap();
+    let mut grid = Grid2::from_colliders(&city, GridSpec::default()).unwrap();
+    let by_zones = grid.block_zones(&zones, GridSpec::default()).unwrap();
+    assert!(by_zones > 1000, "{by_zones}");
+    assert_eq!(v["grid"]["blocked_cells"], grid.blocked_count());
+    assert!(v["cost_m"].as_f64() > plain["cost_m"].as_f64());
+    // The same from the config file's key (relative to the config).
+    std::fs::copy(&zones_path, dir.path().join("zones.geojson")).unwrap();
+    std::fs::write(dir.path().join("c.toml"), "no_fly = \"zones.geojson\"\n").unwrap();
+    let from_config = ok_json(dir.path(), "plan --json --config c.toml");
+    assert_eq!(from_config["waypoints"], v["waypoints"]);
+}
+
+#[test]
+fn a_circle_on_a_footprint_map_counts_only_in_its_band() {
+    let dir = common::dir_with(&[(
+        "circle.geojson",
+        r#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+            "properties": {"radius_m": 3, "floor_m": 0, "ceiling_m": 30},
+            "geometry": {"type": "Point", "coordinates": [-122.3978892, 37.7930556]}}]}"#,
+    )]);
+    let map = data("footprints-sample.geojson");
+    let line = format!("plan --json --map {} --goal-ne 118,-61", map.display());
+    let plain = ok_json(dir.path(), &line);
+    let v = ok_json(dir.path(), &format!("{line} --no-fly circle.geojson"));
+    let zones = zones_of(&dir.path().join("circle.geojson"), &v["home"]);
+    assert!(clearance(&rows(&plain), &zones[0]) < 5.0);
+    let c = clearance(&rows(&v), &zones[0]);
+    assert!(c >= 5.0 - 1e-6, "{c}");
+    // At 40 m the 0–30 m zone (grown to 35 m) does not count: the same route as without it.
+    let high = format!("{line} --alt-m 40");
+    assert_eq!(
+        ok_json(dir.path(), &format!("{high} --no-fly circle.geojson"))["waypoints"],
+        ok_json(dir.path(), &high)["waypoints"]
+    );
+}
+
+#[test]
+fn bad_zone_files_name_file_feature_and_field() {
+    let dir = common::dir_with(&[
+        (
+            "band.geojson",
+            r#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+                "properties": {"radius_m": 3, "floor_m": 0},
+                "geometry": {"type": "Point", "coordinates": [-122.39, 37.79]}}]}"#,
+        ),
+        ("text.geojson", "no zones here"),
+    ]);
+    fails_with(
+        dir.path(),
+        "plan --no-fly band.geojson",
+        2,
+        &["band.geojson: feature 0, properties.ceiling_m: missing"],
+    );
+    fails_with(
+        dir.path(),
+        "plan --no-fly text.geojson",
+        2,
+        &["text.geojson: JSON: line 1, column 2: expected ident"],
+    );
+    fails_with(
+        dir.path(),
+        "plan --no-fly missing.geojson",
+        2,
+        &["cannot read missing.geojson"],
+    );
+    common::assert_no_waypoints(dir.path(), "nothing written on bad input");
+}
+
+/// `--out FILE.plan` carries the zones that hold the flight as QGroundControl's geoFence, and
+/// `--no-fly FILE.plan` reads them back: the same route as from the GeoJSON.
+#[test]
+fn a_plan_files_geofence_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    let from_geojson = ok_json(
+        dir.path(),
+        &format!(
+            "plan --json --no-fly {} --out route.plan",
+            zones_path.display()
+        ),
+    );
+    let text = std::fs::read_to_string(dir.path().join("route.plan")).unwrap();
+    let plan: Value = serde_json::from_str(&text).unwrap();
+    let fence = &plan["geoFence"];
+    assert_eq!(fence["version"], 2);
+    // The stadium circle and the helipad square; the 60–120 m approach path does not hold 5 m.
+    assert_eq!(fence["circles"].as_array().map(Vec::len), Some(1));
+    assert_eq!(fence["polygons"].as_array().map(Vec::len), Some(1));
+    let circle = &fence["circles"][0];
+    assert_eq!(circle["inclusion"], false);
+    assert_eq!(circle["circle"]["radius"], 30.0);
+    assert_eq!(circle["circle"]["center"][0], 37.7947324); // [lat, lon]
+    assert_eq!(
+        fence["polygons"][0]["polygon"].as_array().map(Vec::len),
+        Some(4)
+    );
+    let geo = parse_no_fly(&std::fs::read_to_string(&zones_path).unwrap()).unwrap();
+    let back = parse_no_fly(&text).unwrap();
+    assert_eq!(back.zones[0].shape, geo.zones[1].shape);
+    assert_eq!(back.zones[1].shape, geo.zones[0].shape);
+    let from_plan = ok_json(dir.path(), "plan --json --no-fly route.plan");
+    assert_eq!(from_plan["waypoints"], from_geojson["waypoints"]);
+}
