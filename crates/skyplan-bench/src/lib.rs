@@ -177,7 +177,7 @@ pub fn run(
     progress: impl FnMut(usize),
 ) -> Run {
     let engine = match contender {
-        Contender::Skyplan(p) => CellSearch::new(grid, p, model).ok(),
+        Contender::Skyplan(p) => CellSearch::for_queries(grid, p, model, queries.len() as u64).ok(),
         Contender::PathfindingCrateAStar => None,
     };
     run_prepared(grid, model, contender, engine, queries, progress)

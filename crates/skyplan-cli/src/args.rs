@@ -228,7 +228,7 @@ pub struct ScenArgs {
     #[arg(long)]
     pub json: bool,
     /// Grid-search planner.
-    #[arg(long, value_name = "PLANNER", default_value = "jps-plus", value_parser = grid_search_planner())]
+    #[arg(long, value_name = "PLANNER", default_value = "auto", value_parser = grid_search_planner())]
     pub planner: PlannerId,
 }
 

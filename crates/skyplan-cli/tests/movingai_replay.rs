@@ -32,12 +32,14 @@ fn head(scen: &std::path::Path, n: usize, dir: &std::path::Path) -> PathBuf {
 fn scenarios_match_published_optimal_lengths() {
     let Some(data) = movingai_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
-    for (map, n) in [
-        ("den312d", usize::MAX),
-        ("Paris_1_256", 300),
-        ("Boston_0_512", 150),
-        ("maze512-32-9", 60),
-        ("random512-40-5", 150),
+    // The default planner is auto: what it picks for this many scenarios (the rule in
+    // skyplan_plan::auto::pick: JPS below 150 queries, else JPS+ on these maps' mean runs).
+    for (map, n, picked) in [
+        ("den312d", usize::MAX, "jps-plus"),
+        ("Paris_1_256", 300, "jps-plus"),
+        ("Boston_0_512", 150, "jps-plus"),
+        ("maze512-32-9", 60, "jps"),
+        ("random512-40-5", 150, "jps-plus"),
     ] {
         let map_path = data.join(format!("{map}.map"));
         let scen = head(&data.join(format!("{map}.map.scen")), n, tmp.path());
@@ -63,7 +65,41 @@ fn scenarios_match_published_optimal_lengths() {
             assert!(r["bucket"].is_u64() && r["time_us"].is_f64());
         }
         assert_eq!(summary[0]["matched"].as_u64(), Some(records.len() as u64));
+        assert_eq!(summary[0]["planner"], "auto", "{map}");
+        assert_eq!(
+            summary[0]["auto"]["planner"], picked,
+            "{map}: {}",
+            summary[0]
+        );
+        assert_eq!(
+            summary[0]["auto"]["queries"].as_u64(),
+            Some(records.len() as u64)
+        );
     }
+}
+
+#[test]
+fn the_table_says_what_auto_picked_and_why() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = ok(skyplan(tmp.path())
+        .arg("scen")
+        .arg(data.join("den312d.map"))
+        .arg(data.join("den312d.map.scen")));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .contains(", 290 scenarios, planner auto (JPS+ table built in ")
+    );
+    assert_eq!(
+        lines.next(),
+        Some(
+            "auto picked JPS+: open ground, rooms or wide corridors (mean free run 9.1 cells) and 290 queries ≥ 150: the JPS+ table pays for itself"
+        )
+    );
 }
 
 #[test]

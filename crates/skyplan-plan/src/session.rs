@@ -2,6 +2,7 @@
 //! (grids per altitude/margin/cell size, 3D box worlds, Voronoi and PRM roadmaps).
 
 use crate::algorithm::Workspace;
+use crate::auto::{AutoPick, MapStats};
 use crate::failure::{FailureKind, PlanFailure};
 use crate::plan::{
     Geometry, GridInfo, GridPathStats, Home, Place, Plan, TRAJECTORY_COLUMNS, Timings,
@@ -162,6 +163,8 @@ pub struct Session {
     ch: Vec<Arc<ContractionHierarchy>>,
     /// When long preprocessing (a contraction hierarchy) must give up, if ever.
     deadline: Option<Instant>,
+    /// `auto`'s statistics per grid and the `auto` queries on it so far.
+    auto: Vec<(Arc<Grid2>, MapStats, u64)>,
 }
 
 impl Session {
@@ -179,6 +182,7 @@ impl Session {
             jps_plus: Vec::new(),
             ch: Vec::new(),
             deadline: None,
+            auto: Vec::new(),
         }
     }
 
@@ -378,6 +382,58 @@ impl Session {
         }
         self.ch.push(Arc::clone(&ch));
         Ok((ch, Some(us)))
+    }
+
+    /// `auto`'s pick for one more query on `grid` under `model`: preprocessing the session
+    /// keeps for the grid (built or loaded) when the rule would use it, else
+    /// [`crate::auto::pick`] for the `auto` queries on the grid so far (the grid's statistics
+    /// are measured once).
+    pub(crate) fn auto_pick(&mut self, grid: &Arc<Grid2>, model: MoveModel) -> AutoPick {
+        let at = match self.auto.iter().position(|(g, ..)| Arc::ptr_eq(g, grid)) {
+            Some(at) => at,
+            None => {
+                if self.auto.len() >= CACHE_ENTRIES {
+                    self.auto.remove(0);
+                }
+                self.auto.push((Arc::clone(grid), MapStats::of(grid), 0));
+                self.auto.len() - 1
+            }
+        };
+        let (_, stats, queries) = &mut self.auto[at];
+        *queries += 1;
+        let (stats, queries) = (*stats, *queries);
+        let rule = crate::auto::pick(&stats, queries);
+        let kept = |planner: PlannerId, what: &str| AutoPick {
+            planner,
+            stats,
+            queries,
+            why: format!("{what} kept for this grid (built or loaded) answers fastest"),
+        };
+        // What the rule picks (kept preprocessing is reused by it), unless something faster is
+        // kept already: a contraction hierarchy on corridors, else a JPS+ table.
+        let corridors = stats.mean_run <= crate::auto::CH_MAX_RUN;
+        if rule.planner == PlannerId::Ch {
+            return rule;
+        }
+        if corridors && (self.ch.iter()).any(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid))
+        {
+            return kept(PlannerId::Ch, "the contraction hierarchy");
+        }
+        if rule.planner == PlannerId::JpsPlus {
+            return rule;
+        }
+        let table_model = if model == MoveModel::OctileCornerCutting {
+            model
+        } else {
+            MoveModel::Octile
+        };
+        if model.has_diagonals()
+            && (self.jps_plus.iter())
+                .any(|t| t.model() == table_model && Arc::ptr_eq(t.grid(), grid))
+        {
+            return kept(PlannerId::JpsPlus, "the JPS+ table");
+        }
+        rule
     }
 
     /// The 3D box world for a request: boxes grown by the margin, the ground, the altitude band,
