@@ -15,6 +15,7 @@ use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
 use skyplan_mission::Mission;
+use skyplan_search::ch_file::ChFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
 use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel};
 use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
@@ -382,6 +383,53 @@ impl Session {
         }
         self.ch.push(Arc::clone(&ch));
         Ok((ch, Some(us)))
+    }
+
+    /// Writes the contraction hierarchy for `request`'s grid and move model (built unless the
+    /// session has it, within the request's `time_limit_ms` and the session's deadline) to
+    /// `out` as a hierarchy file ([`skyplan_search::ch_file`]), for [`Session::load_ch`] in a
+    /// later run; the bytes written.
+    pub fn save_ch(&mut self, request: &PlanRequest, out: impl Write) -> Result<u64, PlanFailure> {
+        let r = Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::Ch),
+            ..request.clone()
+        })?;
+        self.check_request_memory(&r)?;
+        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        let (ch, _) = self.contraction_hierarchy(&grid, r.model, r.preprocess_limit)?;
+        ch.write_to(out).map_err(|e| {
+            PlanFailure::internal(format!("writing the contraction hierarchy: {e}"))
+        })?;
+        Ok(ch.file_bytes())
+    }
+
+    /// Loads a hierarchy file saved by [`Session::save_ch`] for `request`'s grid and move
+    /// model: later `ch` requests on that grid, and `auto` on maps where a hierarchy is the
+    /// fastest (ARCHITECTURE "How `auto` decides"), use it instead of building one. Refused
+    /// (bad request, naming what is wrong: not a hierarchy, another version, truncated,
+    /// damaged, another grid or move model) otherwise.
+    pub fn load_ch(&mut self, request: &PlanRequest, input: impl Read) -> Result<(), PlanFailure> {
+        let r = Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::Ch),
+            ..request.clone()
+        })?;
+        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        let ch = ContractionHierarchy::read_from(input, Arc::clone(&grid), r.model).map_err(
+            |e| match e {
+                ChFileError::Io(_) => PlanFailure::internal(e.to_string()),
+                _ => PlanFailure::bad_request(format!(
+                    "{e}; this session's map is {}",
+                    self.world.name()
+                )),
+            },
+        )?;
+        self.ch
+            .retain(|c| !(c.model() == r.model && Arc::ptr_eq(c.grid(), &grid)));
+        if self.ch.len() >= CACHE_ENTRIES {
+            self.ch.remove(0);
+        }
+        self.ch.push(Arc::new(ch));
+        Ok(())
     }
 
     /// `auto`'s pick for one more query on `grid` under `model`: preprocessing the session

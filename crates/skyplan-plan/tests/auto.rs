@@ -152,3 +152,63 @@ fn a_session_reuses_a_kept_table_for_a_single_query() {
         "the JPS+ table kept for this grid (built or loaded) answers fastest"
     );
 }
+
+#[test]
+fn a_saved_hierarchy_is_loaded_by_a_later_session_and_auto_uses_it_from_the_first_query() {
+    let (grid, start, goal) = maze();
+    let truth = dijkstra_exact(&grid, start, goal, MoveModel::Octile)
+        .unwrap()
+        .to_f64();
+    let (sn, se) = grid.center_ne(start);
+    let (gn, ge) = grid.center_ne(goal);
+    let request = PlanRequest {
+        planner: Some(PlannerId::Auto),
+        start_ne: Some([sn, se]),
+        goal_ne: Some([gn, ge]),
+        ..Default::default()
+    };
+    let mut bytes = Vec::new();
+    let written = Session::new(World::from_grid("maze", grid.clone()))
+        .save_ch(&request, &mut bytes)
+        .unwrap();
+    assert_eq!(written, bytes.len() as u64);
+    let mut later = Session::new(World::from_grid("maze", grid.clone()));
+    later.load_ch(&request, &bytes[..]).unwrap();
+    let plan = later.plan(&request).unwrap();
+    assert!((plan.cost_m - truth).abs() < 1e-9);
+    assert_eq!(plan.details["auto"]["planner"], "ch");
+    assert_eq!(plan.details["contraction_hierarchy"], "reused");
+    // Refused by name: damaged, cut short, another map, another move model.
+    let mut damaged = bytes.clone();
+    let last = damaged.len() - 1;
+    damaged[last] ^= 1;
+    let e = later.load_ch(&request, &damaged[..]).unwrap_err();
+    assert_eq!(e.kind, skyplan_plan::FailureKind::BadRequest);
+    assert!(
+        e.message.contains("checksum does not match"),
+        "{}",
+        e.message
+    );
+    let e = later.load_ch(&request, &bytes[..100]).unwrap_err();
+    assert!(e.message.contains("truncated or damaged"), "{}", e.message);
+    let mut other = grid.clone();
+    other.set_blocked(Cell::new(0, 0), true);
+    let e = Session::new(World::from_grid("other", other))
+        .load_ch(&request, &bytes[..])
+        .unwrap_err();
+    assert!(
+        e.message.contains("another map") && e.message.ends_with("this session's map is other"),
+        "{}",
+        e.message
+    );
+    let four = PlanRequest {
+        connectivity: Some(4),
+        ..request.clone()
+    };
+    let e = later.load_ch(&four, &bytes[..]).unwrap_err();
+    assert!(
+        e.message.contains("(octile); this grid is 24 × 24"),
+        "{}",
+        e.message
+    );
+}
