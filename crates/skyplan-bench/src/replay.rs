@@ -94,10 +94,20 @@ pub fn replay(
     grid: &Grid2,
     scenarios: &[Scenario],
     planner: PlannerId,
-    mut each: impl FnMut(&Outcome),
+    each: impl FnMut(&Outcome),
 ) -> Result<Replay, PlanFailure> {
-    let mut search =
-        CellSearch::for_queries(grid, planner, MoveModel::Octile, scenarios.len() as u64)?;
+    let search = CellSearch::for_queries(grid, planner, MoveModel::Octile, scenarios.len() as u64)?;
+    Ok(replay_prepared(grid, search, scenarios, each))
+}
+
+/// [`replay`] with the search already prepared (e.g. a contraction hierarchy loaded from a
+/// file: [`CellSearch::with_hierarchy`]).
+pub fn replay_prepared(
+    grid: &Grid2,
+    mut search: CellSearch<'_>,
+    scenarios: &[Scenario],
+    mut each: impl FnMut(&Outcome),
+) -> Replay {
     let table_ms = search.precompute_us() as f64 / 1e3;
     let mut buckets: BTreeMap<u32, Bucket> = BTreeMap::new();
     let mut failures = Vec::new();
@@ -148,10 +158,10 @@ pub fn replay(
             failures.push(outcome);
         }
     }
-    Ok(Replay {
+    Replay {
         buckets,
         failures,
         table_ms,
         auto: search.auto_pick().cloned(),
-    })
+    }
 }

@@ -122,3 +122,82 @@ fn a_wrong_optimal_length_is_caught() {
         .code(1)
         .stderr(predicates::str::contains("1 of 2 scenarios do not match"));
 }
+
+/// The summary line of `scen --json`'s output.
+fn summary(out: &std::process::Output) -> Value {
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    serde_json::from_str(text.lines().last().unwrap()).unwrap()
+}
+
+#[test]
+fn a_saved_hierarchy_is_reused_by_auto_and_damaged_or_foreign_files_are_refused() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    // 300 scenarios on the random map: auto picks the hierarchy (mean free run 2.7).
+    let scen = head(&data.join("random512-40-5.map.scen"), 300, tmp.path());
+    let map = data.join("random512-40-5.map");
+    let file = tmp.path().join("random.ch");
+    let run = |extra: &[&std::ffi::OsStr]| {
+        let mut c = skyplan(tmp.path());
+        c.arg("scen").arg(&map).arg(&scen).arg("--json").args(extra);
+        c
+    };
+    let saved = summary(&ok(&mut run(&[
+        "--save-preprocess".as_ref(),
+        file.as_os_str(),
+    ])));
+    assert_eq!(saved["auto"]["planner"], "ch");
+    assert_eq!(saved["matched"].as_u64(), Some(300));
+    let loaded = summary(&ok(&mut run(&["--preprocess".as_ref(), file.as_os_str()])));
+    assert_eq!(loaded["auto"]["planner"], "ch");
+    assert_eq!(loaded["matched"].as_u64(), Some(300));
+    assert!(
+        loaded["auto"]["why"]
+            .as_str()
+            .unwrap()
+            .ends_with("a contraction hierarchy at hand: the fastest queries, nothing to build")
+    );
+    // Damaged, cut short, another map: exit 2, the file and what is wrong named, no output.
+    let bytes = std::fs::read(&file).unwrap();
+    let mut damaged = bytes.clone();
+    damaged[bytes.len() / 2] ^= 0x10;
+    let cases: [(&str, Vec<u8>, &str); 2] = [
+        (
+            "damaged.ch",
+            damaged,
+            "contraction hierarchy is damaged (its checksum does not match its contents)",
+        ),
+        (
+            "short.ch",
+            bytes[..bytes.len() / 3].to_vec(),
+            "(truncated or damaged)",
+        ),
+    ];
+    for (name, content, why) in cases {
+        let path = tmp.path().join(name);
+        std::fs::write(&path, content).unwrap();
+        let out = run(&["--preprocess".as_ref(), path.as_os_str()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&format!("--preprocess {}: ", path.display())) && err.contains(why),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    let out = skyplan(tmp.path())
+        .args(["scen", "--planner", "ch", "--preprocess"])
+        .arg(&file)
+        .arg(data.join("den312d.map"))
+        .arg(data.join("den312d.map.scen"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("built for a 512 × 512 grid") && err.contains("this grid is 81 × 65"),
+        "{err}"
+    );
+}

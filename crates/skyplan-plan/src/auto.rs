@@ -159,6 +159,28 @@ pub fn pick(stats: &MapStats, queries: u64) -> AutoPick {
     }
 }
 
+/// The pick when a contraction hierarchy is at hand with no build to pay (loaded from a file):
+/// CH on maps whose mean free run is ≤ [`CH_MAX_RUN`], where its queries are the fastest;
+/// `None` elsewhere, where [`pick`]'s JPS or JPS+ answer faster.
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick_with_hierarchy}};
+/// let scattered = MapStats { cells: 262_144, free: 104_350, mean_run: 2.7 };
+/// assert_eq!(pick_with_hierarchy(&scattered, 1).map(|p| p.planner), Some(PlannerId::Ch));
+/// assert_eq!(pick_with_hierarchy(&MapStats { mean_run: 39.7, ..scattered }, 1), None);
+/// ```
+pub fn pick_with_hierarchy(stats: &MapStats, queries: u64) -> Option<AutoPick> {
+    (stats.mean_run <= CH_MAX_RUN).then(|| AutoPick {
+        planner: PlannerId::Ch,
+        stats: *stats,
+        queries,
+        why: format!(
+            "scattered obstacles or narrow corridors (mean free run {:.1} ≤ {CH_MAX_RUN} cells) and a contraction hierarchy at hand: the fastest queries, nothing to build",
+            stats.mean_run
+        ),
+    })
+}
+
 fn plural(n: u64) -> &'static str {
     if n == 1 { "query" } else { "queries" }
 }

@@ -6,7 +6,9 @@ use crate::auto::AutoPick;
 use crate::failure::PlanFailure;
 use crate::planner_id::PlannerId;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{BlockJps, GridPath, JpsPlusTable, MoveModel, SearchError};
+use skyplan_search::{
+    BlockJps, ContractionHierarchy, GridPath, JpsPlusTable, MoveModel, SearchError,
+};
 use std::sync::Arc;
 
 /// A grid planner prepared for many queries on one grid.
@@ -103,6 +105,40 @@ impl<'g> CellSearch<'g> {
             precompute_us,
             auto: None,
         })
+    }
+
+    /// The contraction hierarchy `ch` built or loaded before (e.g. from a file, see
+    /// [`skyplan_search::ch_file`]); refused unless it was built for exactly `grid`.
+    /// `precompute_us` is what preparing it cost; `auto` is the pick to report, if `auto` chose it
+    /// ([`crate::auto::pick_with_hierarchy`]).
+    pub fn with_hierarchy(
+        grid: &'g Grid2,
+        ch: Arc<ContractionHierarchy>,
+        precompute_us: u64,
+        auto: Option<AutoPick>,
+    ) -> Result<Self, PlanFailure> {
+        if !std::ptr::eq(&**ch.grid(), grid) && **ch.grid() != *grid {
+            return Err(PlanFailure::bad_request(
+                "the contraction hierarchy was built for another grid",
+            ));
+        }
+        Ok(Self {
+            grid,
+            model: ch.model(),
+            engine: Engine::Hierarchy(ch),
+            workspace: Box::default(),
+            block_jps: None,
+            precompute_us,
+            auto,
+        })
+    }
+
+    /// The contraction hierarchy it queries, if it does (`ch`, or `auto` picking it): to save.
+    pub fn hierarchy(&self) -> Option<&Arc<ContractionHierarchy>> {
+        match &self.engine {
+            Engine::Hierarchy(ch) => Some(ch),
+            _ => None,
+        }
     }
 
     /// One query.
