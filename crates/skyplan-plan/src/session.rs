@@ -450,7 +450,21 @@ impl Session {
         let (_, stats, queries) = &mut self.auto[at];
         *queries += 1;
         let (stats, queries) = (*stats, *queries);
-        let rule = crate::auto::pick(&stats, queries);
+        let mut rule = crate::auto::pick(&stats, queries);
+        // A hierarchy the memory limit would refuse: JPS+ (8 bytes per cell) instead.
+        let ch_bytes = stats.cells.saturating_mul(
+            PlannerId::Ch
+                .algorithm()
+                .cells()
+                .map_or(u64::MAX, |c| c.bytes_per_cell()),
+        );
+        if rule.planner == PlannerId::Ch && ch_bytes > self.limits.max_memory_bytes {
+            rule.planner = PlannerId::JpsPlus;
+            rule.why = format!(
+                "{}, but a hierarchy would need more memory than the limit: JPS+ instead",
+                rule.why
+            );
+        }
         let kept = |planner: PlannerId, what: &str| AutoPick {
             planner,
             stats,

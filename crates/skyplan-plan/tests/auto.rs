@@ -212,3 +212,33 @@ fn a_saved_hierarchy_is_loaded_by_a_later_session_and_auto_uses_it_from_the_firs
         e.message
     );
 }
+
+#[test]
+fn a_hierarchy_over_the_memory_limit_is_not_built_and_jps_plus_answers() {
+    let (grid, start, goal) = maze();
+    let (sn, se) = grid.center_ne(start);
+    let (gn, ge) = grid.center_ne(goal);
+    // 576 cells: JPS+ (68 bytes a cell) fits in 100 kB, a hierarchy (400 bytes a cell) does not.
+    let limits = skyplan_plan::Limits {
+        max_memory_bytes: 100_000,
+    };
+    let mut session = Session::new(World::from_grid("maze", grid)).with_limits(limits);
+    let request = PlanRequest {
+        planner: Some(PlannerId::Auto),
+        start_ne: Some([sn, se]),
+        goal_ne: Some([gn, ge]),
+        ..Default::default()
+    };
+    for _ in 1..CH_QUERIES {
+        session.plan(&request).unwrap();
+    }
+    let plan = session.plan(&request).unwrap();
+    assert_eq!(plan.details["auto"]["planner"], "jps-plus");
+    assert!(
+        plan.details["auto"]["why"]
+            .as_str()
+            .unwrap()
+            .ends_with("but a hierarchy would need more memory than the limit: JPS+ instead")
+    );
+    assert!(plan.details.get("contraction_hierarchy").is_none());
+}
