@@ -49,8 +49,11 @@ impl<'g> CellSearch<'g> {
     /// use skyplan_plan::{CellSearch, PlannerId};
     /// use skyplan_search::MoveModel;
     /// let grid = skyplan_cspace::Grid2::from_ascii("....\n.##.\n....")?;
-    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 1_000)?;
+    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 200)?;
     /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::JpsPlus));
+    /// // Free runs of 1.7 cells: from 250 queries a contraction hierarchy pays for itself.
+    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 1_000)?;
+    /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::Ch));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn for_queries(
