@@ -153,7 +153,9 @@ pub fn run_measured<'g, E>(
     let measured = reset_peak_rss();
     let engine = match (prepare()?, contender) {
         (Some(e), _) => Some(e),
-        (None, Contender::Skyplan(p)) => CellSearch::new(grid, p, model).ok(),
+        (None, Contender::Skyplan(p)) => {
+            CellSearch::for_queries(grid, p, model, queries.len() as u64).ok()
+        }
         (None, Contender::PathfindingCrateAStar) => None,
     };
     let mut r = run_prepared(grid, model, contender, engine, queries, progress);

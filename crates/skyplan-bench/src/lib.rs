@@ -69,20 +69,22 @@ impl Contender {
     }
 }
 
-/// The planners `skyplan bench` runs when none are named: JPS+, JPS and A\*, the contraction
-/// hierarchy (`ch`) first on MovingAI maps (where per-map preprocessing is the norm; on large
-/// open maps such as the city at 1 m its preprocessing takes minutes, so it is opt-in there),
-/// and the Rust `pathfinding` crate's A\* with `peers`.
+/// The planners `skyplan bench` runs when none are named: `auto` (its row named with its pick
+/// for the query count, `auto (jps-plus)`), JPS+, JPS and A\*, the contraction hierarchy
+/// (`ch`) on MovingAI maps (where per-map preprocessing is the norm; on large open maps such as
+/// the city at 1 m its preprocessing takes minutes, so it is opt-in there), and the Rust
+/// `pathfinding` crate's A\* with `peers`.
 ///
 /// ```
 /// use skyplan_bench::{default_contenders, Contender};
 /// use skyplan_plan::PlannerId;
-/// assert_eq!(default_contenders(true, false)[0], Contender::Skyplan(PlannerId::Ch));
+/// assert_eq!(default_contenders(true, false)[0], Contender::Skyplan(PlannerId::Auto));
+/// assert_eq!(default_contenders(true, false)[1], Contender::Skyplan(PlannerId::Ch));
 /// assert!(!default_contenders(false, false).contains(&Contender::Skyplan(PlannerId::Ch)));
 /// assert!(default_contenders(false, true).contains(&Contender::PathfindingCrateAStar));
 /// ```
 pub fn default_contenders(movingai_map: bool, peers: bool) -> Vec<Contender> {
-    let mut v = Vec::new();
+    let mut v = vec![Contender::Skyplan(PlannerId::Auto)];
     if movingai_map {
         v.push(Contender::Skyplan(PlannerId::Ch));
     }
@@ -178,7 +180,7 @@ pub fn run(
     progress: impl FnMut(usize),
 ) -> Run {
     let engine = match contender {
-        Contender::Skyplan(p) => CellSearch::new(grid, p, model).ok(),
+        Contender::Skyplan(p) => CellSearch::for_queries(grid, p, model, queries.len() as u64).ok(),
         Contender::PathfindingCrateAStar => None,
     };
     run_prepared(grid, model, contender, engine, queries, progress)
@@ -195,6 +197,11 @@ pub fn run_prepared(
     mut progress: impl FnMut(usize),
 ) -> Run {
     let precompute_us = engine.as_ref().map_or(0.0, |e| e.precompute_us() as f64);
+    // `auto` is reported with what it picked: `auto (jps-plus)`.
+    let name = match engine.as_ref().and_then(|e| e.auto_pick()) {
+        Some(p) => format!("{} ({})", contender.name(), p.planner),
+        None => contender.name().to_string(),
+    };
     let mut query_once = |start: Cell, goal: Cell| -> (Option<f64>, Option<u64>) {
         match engine.as_mut() {
             Some(e) => match e.search(start, goal) {
@@ -215,7 +222,7 @@ pub fn run_prepared(
         let (cost, expansions) = query_once(start, goal);
         let time_us = t.elapsed().as_secs_f64() * 1e6;
         records.push(Record {
-            planner: contender.name().to_string(),
+            planner: name.clone(),
             query,
             time_us,
             expansions,
@@ -224,7 +231,7 @@ pub fn run_prepared(
         progress(query);
     }
     Run {
-        planner: contender.name().to_string(),
+        planner: name,
         records,
         precompute_us,
         peak_rss_bytes: None,

@@ -3,6 +3,7 @@
 use serde::Serialize;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
 use skyplan_map::movingai::{MovingAiMap, Scenario};
+use skyplan_plan::auto::AutoPick;
 use skyplan_plan::{CellSearch, PlanFailure, PlannerId};
 use skyplan_search::MoveModel;
 use std::collections::BTreeMap;
@@ -51,8 +52,11 @@ pub struct Replay {
     pub buckets: BTreeMap<u32, Bucket>,
     /// The scenarios that did not match.
     pub failures: Vec<Outcome>,
-    /// One-off preparation (the JPS+ table), ms.
+    /// One-off preparation (the JPS+ table, the contraction hierarchy; for `auto` also the
+    /// map's statistics and the pick), ms.
     pub table_ms: f64,
+    /// What `auto` picked for this map and this many scenarios, and why.
+    pub auto: Option<AutoPick>,
 }
 
 /// A MovingAI map as a grid in file row order (row = y, column = x, as the scenarios count).
@@ -84,15 +88,26 @@ pub fn first_off_map(map: &MovingAiMap, scenarios: &[Scenario]) -> Option<String
     })
 }
 
-/// Replays every scenario with `planner` (JPS+ builds its table once: returned in ms), calling
-/// `each` after every scenario.
+/// Replays every scenario with `planner` (JPS+ builds its table once: returned in ms; `auto`
+/// picks for the number of scenarios), calling `each` after every scenario.
 pub fn replay(
     grid: &Grid2,
     scenarios: &[Scenario],
     planner: PlannerId,
-    mut each: impl FnMut(&Outcome),
+    each: impl FnMut(&Outcome),
 ) -> Result<Replay, PlanFailure> {
-    let mut search = CellSearch::new(grid, planner, MoveModel::Octile)?;
+    let search = CellSearch::for_queries(grid, planner, MoveModel::Octile, scenarios.len() as u64)?;
+    Ok(replay_prepared(grid, search, scenarios, each))
+}
+
+/// [`replay`] with the search already prepared (e.g. a contraction hierarchy loaded from a
+/// file: [`CellSearch::with_hierarchy`]).
+pub fn replay_prepared(
+    grid: &Grid2,
+    mut search: CellSearch<'_>,
+    scenarios: &[Scenario],
+    mut each: impl FnMut(&Outcome),
+) -> Replay {
     let table_ms = search.precompute_us() as f64 / 1e3;
     let mut buckets: BTreeMap<u32, Bucket> = BTreeMap::new();
     let mut failures = Vec::new();
@@ -143,9 +158,10 @@ pub fn replay(
             failures.push(outcome);
         }
     }
-    Ok(Replay {
+    Replay {
         buckets,
         failures,
         table_ms,
-    })
+        auto: search.auto_pick().cloned(),
+    }
 }

@@ -44,8 +44,12 @@ impl Replay {
     /// The summary object that follows the scenarios' objects in `--json` output.
     pub fn json_summary(&self, of: &ReplayOf) -> serde_json::Value {
         let t = self.totals();
-        json!({ "summary": true, "map": of.map, "scenarios": t.scenarios, "matched": t.matched,
-                "mean_time_us": t.mean_us, "planner": of.planner, "precompute_ms": self.table_ms })
+        let mut v = json!({ "summary": true, "map": of.map, "scenarios": t.scenarios, "matched": t.matched,
+                "mean_time_us": t.mean_us, "planner": of.planner, "precompute_ms": self.table_ms });
+        if let Some(pick) = &self.auto {
+            v["auto"] = json!(pick);
+        }
+        v
     }
 
     /// The table: what ran on what, then a row per bucket (scenarios, matched, mean time) and
@@ -57,7 +61,7 @@ impl Replay {
     /// use skyplan_plan::PlannerId;
     ///
     /// let bucket = Bucket { count: 2, matched: 2, total_us: 30.0 };
-    /// let replay = Replay { buckets: [(0, bucket)].into(), failures: vec![], table_ms: 0.0 };
+    /// let replay = Replay { buckets: [(0, bucket)].into(), failures: vec![], table_ms: 0.0, auto: None };
     /// let of = ReplayOf { map: "a.map", width: 8, height: 4, planner: PlannerId::Astar };
     /// let table = replay.table(&of);
     /// assert!(table.starts_with("a.map: 8 × 4 grid, 2 scenarios, planner astar\n"));
@@ -70,15 +74,19 @@ impl Replay {
             matched,
             mean_us,
         } = self.totals();
-        let table = if of.planner == PlannerId::JpsPlus {
-            format!(" (JPS+ table built in {:.1} ms)", self.table_ms)
-        } else {
-            String::new()
+        let ran = self.auto.as_ref().map_or(of.planner, |p| p.planner);
+        let table = match ran {
+            PlannerId::JpsPlus => format!(" (JPS+ table built in {:.1} ms)", self.table_ms),
+            PlannerId::Ch => format!(" (hierarchy built in {:.1} ms)", self.table_ms),
+            _ => String::new(),
         };
         let mut s = format!(
             "{}: {} × {} grid, {scenarios} scenarios, planner {}{table}\n",
             of.map, of.width, of.height, of.planner
         );
+        if let Some(pick) = &self.auto {
+            s += &format!("auto picked {}: {}\n", pick.planner.info().label, pick.why);
+        }
         s += &format!(
             "{:>6} {:>9} {:>9} {:>14}\n",
             "bucket", "scenarios", "matched", "mean time µs"
@@ -138,6 +146,7 @@ mod tests {
             buckets: [(0, bucket(2, 2, 10.0)), (1, bucket(2, 1, 30.0))].into(),
             failures: vec![failure],
             table_ms: 1.26,
+            auto: None,
         };
         let t = replay.totals();
         assert_eq!((t.scenarios, t.matched, t.mean_us), (4, 3, 10.0));

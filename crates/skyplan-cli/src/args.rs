@@ -234,8 +234,17 @@ pub struct ScenArgs {
     #[arg(long)]
     pub json: bool,
     /// Grid-search planner.
-    #[arg(long, value_name = "PLANNER", default_value = "jps-plus", value_parser = grid_search_planner())]
+    #[arg(long, value_name = "PLANNER", default_value = "auto", value_parser = grid_search_planner())]
     pub planner: PlannerId,
+    /// Use the contraction hierarchy saved in FILE (by --save-preprocess) instead of building
+    /// one: with --planner ch, or auto on maps where a hierarchy is the fastest; refused unless
+    /// FILE was built for this map.
+    #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
+    pub preprocess: Option<PathBuf>,
+    /// Save the contraction hierarchy this run builds (--planner ch, or auto when it picks ch)
+    /// to FILE, for --preprocess in later runs.
+    #[arg(long, value_name = "FILE")]
+    pub save_preprocess: Option<PathBuf>,
 }
 
 /// Where a colliders map is sliced into a grid (`bench`, `navigate`; `plan` and `fly` take

@@ -5,8 +5,15 @@ use crate::args::ScenArgs;
 use crate::exit::{Result, bad_input};
 use crate::files::read_text;
 use serde_json::json;
-use skyplan_bench::replay::{file_order_grid, first_off_map, replay};
+use skyplan_bench::replay::{file_order_grid, first_off_map, replay_prepared};
 use skyplan_bench::replay_report::ReplayOf;
+use skyplan_cspace::Grid2;
+use skyplan_plan::auto::{MapStats, pick, pick_with_hierarchy};
+use skyplan_plan::{CellSearch, PlannerId};
+use skyplan_search::{ContractionHierarchy, MoveModel};
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
 
 pub fn run(args: ScenArgs) -> Result<()> {
     let (map_name, scen_name) = (
@@ -26,12 +33,16 @@ pub fn run(args: ScenArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let replayed = replay(&grid, &scenarios, args.planner, |o| {
+    let search = prepare(&args, &grid, scenarios.len() as u64)?;
+    if let Some(path) = &args.save_preprocess {
+        save_hierarchy(path, &search, args.json)?;
+    }
+    let replayed = replay_prepared(&grid, search, &scenarios, |o| {
         if args.json {
             println!("{}", rounded(json!(o)));
         }
         progress.inc(1);
-    })?;
+    });
     progress.finish_and_clear();
     let of = ReplayOf {
         map: &map_name,
@@ -48,6 +59,74 @@ pub fn run(args: ScenArgs) -> Result<()> {
         Some(why) => Err(crate::exit::runtime(why)),
         None => Ok(()),
     }
+}
+
+/// The search for `queries` scenarios: the planner (auto picking for that many), or a saved
+/// contraction hierarchy (`--preprocess`).
+fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSearch<'g>> {
+    let planner_error = |e: skyplan_plan::PlanFailure| {
+        bad_input(format!("--planner {}: {}", args.planner, e.message))
+    };
+    let Some(path) = &args.preprocess else {
+        return CellSearch::for_queries(grid, args.planner, MoveModel::Octile, queries)
+            .map_err(planner_error);
+    };
+    let shown = path.display();
+    let auto = match args.planner {
+        PlannerId::Ch => None,
+        PlannerId::Auto => {
+            let stats = MapStats::of(grid);
+            let Some(p) = pick_with_hierarchy(&stats, queries) else {
+                return Err(bad_input(format!(
+                    "--preprocess {shown}: auto does not use a contraction hierarchy on this map ({}: it picks {})",
+                    pick(&stats, queries).why,
+                    pick(&stats, queries).planner
+                )));
+            };
+            Some(p)
+        }
+        other => {
+            return Err(bad_input(format!(
+                "--preprocess {shown}: a saved contraction hierarchy is for --planner ch or auto, not {other}"
+            )));
+        }
+    };
+    let t = Instant::now();
+    let file = std::fs::File::open(path)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
+    let ch = ContractionHierarchy::read_from(
+        std::io::BufReader::new(file),
+        Arc::new(grid.clone()),
+        MoveModel::Octile,
+    )
+    .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
+    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    CellSearch::with_hierarchy(grid, Arc::new(ch), us, auto).map_err(planner_error)
+}
+
+/// Writes the search's contraction hierarchy to `path` atomically (a failed save leaves no
+/// partial file); refused when the search has none.
+fn save_hierarchy(path: &Path, search: &CellSearch<'_>, json: bool) -> Result<()> {
+    let Some(ch) = search.hierarchy() else {
+        let what = match search.auto_pick() {
+            Some(p) => format!("auto picked {} ({})", p.planner, p.why),
+            None => "the planner builds none".to_string(),
+        };
+        return Err(bad_input(format!(
+            "--save-preprocess {}: no contraction hierarchy to save: {what}; use --planner ch",
+            path.display()
+        )));
+    };
+    crate::files::write_atomic_with(path, |out| ch.write_to(out).map_err(std::io::Error::other))?;
+    if !json {
+        eprintln!(
+            "saved    contraction hierarchy ({:.1} MB, built in {:.0} ms) to {}",
+            ch.file_bytes() as f64 / 1e6,
+            search.precompute_us() as f64 / 1e3,
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 /// The JSON lines without float noise (`5.3229999999999995`): times (`…_us`, `…_ms`) to the

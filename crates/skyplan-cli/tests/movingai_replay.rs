@@ -32,12 +32,14 @@ fn head(scen: &std::path::Path, n: usize, dir: &std::path::Path) -> PathBuf {
 fn scenarios_match_published_optimal_lengths() {
     let Some(data) = movingai_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
-    for (map, n) in [
-        ("den312d", usize::MAX),
-        ("Paris_1_256", 300),
-        ("Boston_0_512", 150),
-        ("maze512-32-9", 60),
-        ("random512-40-5", 150),
+    // The default planner is auto: what it picks for this many scenarios (the rule in
+    // skyplan_plan::auto::pick: JPS below 150 queries, else JPS+ on these maps' mean runs).
+    for (map, n, picked) in [
+        ("den312d", usize::MAX, "jps-plus"),
+        ("Paris_1_256", 300, "jps-plus"),
+        ("Boston_0_512", 150, "jps-plus"),
+        ("maze512-32-9", 60, "jps"),
+        ("random512-40-5", 150, "jps-plus"),
     ] {
         let map_path = data.join(format!("{map}.map"));
         let scen = head(&data.join(format!("{map}.map.scen")), n, tmp.path());
@@ -63,7 +65,41 @@ fn scenarios_match_published_optimal_lengths() {
             assert!(r["bucket"].is_u64() && r["time_us"].is_f64());
         }
         assert_eq!(summary[0]["matched"].as_u64(), Some(records.len() as u64));
+        assert_eq!(summary[0]["planner"], "auto", "{map}");
+        assert_eq!(
+            summary[0]["auto"]["planner"], picked,
+            "{map}: {}",
+            summary[0]
+        );
+        assert_eq!(
+            summary[0]["auto"]["queries"].as_u64(),
+            Some(records.len() as u64)
+        );
     }
+}
+
+#[test]
+fn the_table_says_what_auto_picked_and_why() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = ok(skyplan(tmp.path())
+        .arg("scen")
+        .arg(data.join("den312d.map"))
+        .arg(data.join("den312d.map.scen")));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .contains(", 290 scenarios, planner auto (JPS+ table built in ")
+    );
+    assert_eq!(
+        lines.next(),
+        Some(
+            "auto picked JPS+: open ground, rooms or wide corridors (mean free run 9.1 cells) and 290 queries ≥ 150: the JPS+ table pays for itself"
+        )
+    );
 }
 
 #[test]
@@ -85,4 +121,83 @@ fn a_wrong_optimal_length_is_caught() {
         .assert()
         .code(1)
         .stderr(predicates::str::contains("1 of 2 scenarios do not match"));
+}
+
+/// The summary line of `scen --json`'s output.
+fn summary(out: &std::process::Output) -> Value {
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    serde_json::from_str(text.lines().last().unwrap()).unwrap()
+}
+
+#[test]
+fn a_saved_hierarchy_is_reused_by_auto_and_damaged_or_foreign_files_are_refused() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    // 300 scenarios on the random map: auto picks the hierarchy (mean free run 2.7).
+    let scen = head(&data.join("random512-40-5.map.scen"), 300, tmp.path());
+    let map = data.join("random512-40-5.map");
+    let file = tmp.path().join("random.ch");
+    let run = |extra: &[&std::ffi::OsStr]| {
+        let mut c = skyplan(tmp.path());
+        c.arg("scen").arg(&map).arg(&scen).arg("--json").args(extra);
+        c
+    };
+    let saved = summary(&ok(&mut run(&[
+        "--save-preprocess".as_ref(),
+        file.as_os_str(),
+    ])));
+    assert_eq!(saved["auto"]["planner"], "ch");
+    assert_eq!(saved["matched"].as_u64(), Some(300));
+    let loaded = summary(&ok(&mut run(&["--preprocess".as_ref(), file.as_os_str()])));
+    assert_eq!(loaded["auto"]["planner"], "ch");
+    assert_eq!(loaded["matched"].as_u64(), Some(300));
+    assert!(
+        loaded["auto"]["why"]
+            .as_str()
+            .unwrap()
+            .ends_with("a contraction hierarchy at hand: the fastest queries, nothing to build")
+    );
+    // Damaged, cut short, another map: exit 2, the file and what is wrong named, no output.
+    let bytes = std::fs::read(&file).unwrap();
+    let mut damaged = bytes.clone();
+    damaged[bytes.len() / 2] ^= 0x10;
+    let cases: [(&str, Vec<u8>, &str); 2] = [
+        (
+            "damaged.ch",
+            damaged,
+            "contraction hierarchy is damaged (its checksum does not match its contents)",
+        ),
+        (
+            "short.ch",
+            bytes[..bytes.len() / 3].to_vec(),
+            "(truncated or damaged)",
+        ),
+    ];
+    for (name, content, why) in cases {
+        let path = tmp.path().join(name);
+        std::fs::write(&path, content).unwrap();
+        let out = run(&["--preprocess".as_ref(), path.as_os_str()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&format!("--preprocess {}: ", path.display())) && err.contains(why),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    let out = skyplan(tmp.path())
+        .args(["scen", "--planner", "ch", "--preprocess"])
+        .arg(&file)
+        .arg(data.join("den312d.map"))
+        .arg(data.join("den312d.map.scen"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("built for a 512 × 512 grid") && err.contains("this grid is 81 × 65"),
+        "{err}"
+    );
 }

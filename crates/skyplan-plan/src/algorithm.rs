@@ -5,7 +5,9 @@
 //!
 //! [`CellSearch`]: crate::CellSearch
 
+use crate::auto::AutoPick;
 use crate::failure::PlanFailure;
+use crate::planner_id::PlannerId;
 use crate::request::Resolved;
 use crate::session::{Query, Route, Session};
 use crate::world::World;
@@ -111,6 +113,8 @@ pub(crate) struct Prepared {
     pub engine: Engine,
     pub built_us: Option<u64>,
     pub detail: Option<&'static str>,
+    /// What `auto` picked and why (for the plan's details).
+    pub auto: Option<AutoPick>,
 }
 
 impl Prepared {
@@ -119,6 +123,7 @@ impl Prepared {
             engine,
             built_us: None,
             detail: None,
+            auto: None,
         }
     }
 }
@@ -209,10 +214,15 @@ impl CellPlanner for JpsPlusCells {
             engine: Engine::Plus(table),
             built_us,
             detail: Some("jps_plus_table"),
+            auto: None,
         })
     }
 
     fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
+        if !model.has_diagonals() {
+            // As in `prepare`: a table has no 4-connected rule (it would move diagonally).
+            return Ok(Engine::Online(Planner::JpsPlus));
+        }
         Ok(Engine::Plus(Arc::new(JpsPlusTable::build(
             Arc::new(grid.clone()),
             model,
@@ -240,6 +250,7 @@ impl CellPlanner for HierarchyCells {
             engine: Engine::Hierarchy(ch),
             built_us,
             detail: Some("contraction_hierarchy"),
+            auto: None,
         })
     }
 
@@ -247,6 +258,56 @@ impl CellPlanner for HierarchyCells {
         let ch = ContractionHierarchy::build(Arc::new(grid.clone()), model)
             .map_err(|e| PlanFailure::bad_request(format!("planner ch: {e}")))?;
         Ok(Engine::Hierarchy(Arc::new(ch)))
+    }
+}
+
+/// `auto`: JPS, JPS+ or CH, picked per grid from its statistics and the queries on it
+/// ([`crate::auto::pick`]); in a session the count is the session's `auto` queries on the grid
+/// so far, and kept preprocessing (built or loaded) is used when the rule would take it.
+pub(crate) struct AutoCells;
+
+impl AutoCells {
+    /// The picked planner's cell search.
+    fn cells(planner: PlannerId) -> &'static dyn CellPlanner {
+        match planner.algorithm().cells() {
+            Some(c) => c,
+            None => &OnlineCells(Planner::Jps),
+        }
+    }
+}
+
+impl CellPlanner for AutoCells {
+    /// What JPS+ needs: `auto` builds a contraction hierarchy only on corridor maps, where it
+    /// is small, and falls back to JPS+ when it cannot.
+    fn bytes_per_cell(&self) -> u64 {
+        JpsPlusCells.bytes_per_cell()
+    }
+
+    fn prepare(
+        &self,
+        session: &mut Session,
+        grid: &Arc<Grid2>,
+        r: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        let mut pick = session.auto_pick(grid, r.model);
+        let mut prepared = match Self::cells(pick.planner).prepare(session, grid, r) {
+            Ok(p) => p,
+            // A hierarchy past its time limit: JPS+ answers at once.
+            Err(e) if pick.planner == PlannerId::Ch => {
+                pick.planner = PlannerId::JpsPlus;
+                pick.why = format!("{}, but {}: JPS+ instead", pick.why, e.message);
+                JpsPlusCells.prepare(session, grid, r)?
+            }
+            Err(e) => return Err(e),
+        };
+        prepared.auto = Some(pick);
+        Ok(prepared)
+    }
+
+    /// Prepared for one query: JPS ([`crate::CellSearch::for_queries`] picks for a batch).
+    fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
+        let pick = crate::auto::pick(&crate::auto::MapStats::of(grid), 1);
+        Self::cells(pick.planner).prepare_alone(grid, model)
     }
 }
 

@@ -2,10 +2,13 @@
 //! replays and benchmarks need (JPS+ builds its table once, the others reuse their node arrays).
 
 use crate::algorithm::{Engine, Workspace};
+use crate::auto::AutoPick;
 use crate::failure::PlanFailure;
 use crate::planner_id::PlannerId;
 use skyplan_cspace::{Cell, Grid2};
-use skyplan_search::{BlockJps, GridPath, JpsPlusTable, MoveModel, SearchError};
+use skyplan_search::{
+    BlockJps, ContractionHierarchy, GridPath, JpsPlusTable, MoveModel, SearchError,
+};
 use std::sync::Arc;
 
 /// A grid planner prepared for many queries on one grid.
@@ -27,20 +30,48 @@ pub struct CellSearch<'g> {
     /// For JPS: the grid's bit rows and columns packed once (the grid is borrowed for as long).
     block_jps: Option<BlockJps<'g>>,
     precompute_us: u64,
+    auto: Option<AutoPick>,
 }
 
 impl<'g> CellSearch<'g> {
     /// Prepares `planner` (a grid-search planner: jps, jps-plus, astar, dijkstra, theta, or the
-    /// contraction hierarchy ch) on `grid`; other planners are refused with a message naming
-    /// the ones that work.
+    /// contraction hierarchy ch; auto picks for one query: see [`CellSearch::for_queries`]) on
+    /// `grid`; other planners are refused with a message naming the ones that work.
     pub fn new(grid: &'g Grid2, planner: PlannerId, model: MoveModel) -> Result<Self, PlanFailure> {
+        Self::for_queries(grid, planner, model, 1)
+    }
+
+    /// As [`CellSearch::new`], for a batch of `queries` queries: `auto` picks its planner for
+    /// that many ([`crate::auto::pick`]; [`CellSearch::auto_pick`] says what and why). The
+    /// statistics and the pick count in [`CellSearch::precompute_us`].
+    ///
+    /// ```
+    /// use skyplan_plan::{CellSearch, PlannerId};
+    /// use skyplan_search::MoveModel;
+    /// let grid = skyplan_cspace::Grid2::from_ascii("....\n.##.\n....")?;
+    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 200)?;
+    /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::JpsPlus));
+    /// // Free runs of 1.7 cells: from 250 queries a contraction hierarchy pays for itself.
+    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 1_000)?;
+    /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::Ch));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn for_queries(
+        grid: &'g Grid2,
+        planner: PlannerId,
+        model: MoveModel,
+        queries: u64,
+    ) -> Result<Self, PlanFailure> {
+        let t = std::time::Instant::now();
+        let auto = (planner == PlannerId::Auto)
+            .then(|| crate::auto::pick(&crate::auto::MapStats::of(grid), queries));
+        let planner = auto.as_ref().map_or(planner, |p| p.planner);
         let Some(cells) = planner.algorithm().cells() else {
             return Err(PlanFailure::bad_request(format!(
                 "planner {planner}: cell-to-cell queries take a grid-search planner: {}",
                 PlannerId::names_where(PlannerId::is_cell_search)
             )));
         };
-        let t = std::time::Instant::now();
         let engine = cells.prepare_alone(grid, model)?;
         let block_jps = (planner == PlannerId::Jps).then(|| BlockJps::new(grid, model));
         Ok(Self {
@@ -50,6 +81,7 @@ impl<'g> CellSearch<'g> {
             workspace: Box::default(),
             block_jps,
             precompute_us: crate::session::micros(t.elapsed()),
+            auto,
         })
     }
 
@@ -74,7 +106,42 @@ impl<'g> CellSearch<'g> {
             workspace: Box::default(),
             block_jps: None,
             precompute_us,
+            auto: None,
         })
+    }
+
+    /// The contraction hierarchy `ch` built or loaded before (e.g. from a file, see
+    /// [`skyplan_search::ch_file`]); refused unless it was built for exactly `grid`.
+    /// `precompute_us` is what preparing it cost; `auto` is the pick to report, if `auto` chose it
+    /// ([`crate::auto::pick_with_hierarchy`]).
+    pub fn with_hierarchy(
+        grid: &'g Grid2,
+        ch: Arc<ContractionHierarchy>,
+        precompute_us: u64,
+        auto: Option<AutoPick>,
+    ) -> Result<Self, PlanFailure> {
+        if !std::ptr::eq(&**ch.grid(), grid) && **ch.grid() != *grid {
+            return Err(PlanFailure::bad_request(
+                "the contraction hierarchy was built for another grid",
+            ));
+        }
+        Ok(Self {
+            grid,
+            model: ch.model(),
+            engine: Engine::Hierarchy(ch),
+            workspace: Box::default(),
+            block_jps: None,
+            precompute_us,
+            auto,
+        })
+    }
+
+    /// The contraction hierarchy it queries, if it does (`ch`, or `auto` picking it): to save.
+    pub fn hierarchy(&self) -> Option<&Arc<ContractionHierarchy>> {
+        match &self.engine {
+            Engine::Hierarchy(ch) => Some(ch),
+            _ => None,
+        }
     }
 
     /// One query.
@@ -84,6 +151,11 @@ impl<'g> CellSearch<'g> {
         }
         self.engine
             .search(&mut self.workspace, self.grid, (start, goal), self.model)
+    }
+
+    /// What `auto` picked and why (`None` for a named planner).
+    pub fn auto_pick(&self) -> Option<&AutoPick> {
+        self.auto.as_ref()
     }
 
     /// One-off preparation time (the JPS+ table, the contraction hierarchy), microseconds.

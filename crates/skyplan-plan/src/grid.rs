@@ -255,6 +255,9 @@ pub(crate) fn plan<P: CellPlanner + ?Sized>(
         };
         route.details.insert(what.into(), how.into());
     }
+    if let Some(pick) = &prepared.auto {
+        route.details.insert("auto".into(), serde_json::json!(pick));
+    }
     let moves = (path.cells.len(), path.straight_moves, path.diagonal_moves);
     route.record_grid_search((start, goal), path.expansions, moves, waypoints);
     route.timings.grid_build_us = grid_us + prepared.built_us.unwrap_or(0);

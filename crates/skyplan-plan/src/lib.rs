@@ -70,6 +70,7 @@
 
 mod algorithm;
 mod any_angle;
+pub mod auto;
 mod cell_search;
 pub mod cli;
 mod config;

@@ -153,6 +153,9 @@ planners! {
     /// Contraction hierarchy over the grid graph.
     Ch => "ch", "CH", 2, Exact, AnyGrid, [GridPath, TimeLimit], "the contraction hierarchy per grid and move model", &a::HierarchyCells,
         "contraction hierarchy: exact, shortcuts precomputed per grid; fastest on random obstacles and mazes";
+    /// The fastest exact grid planner for the map and the number of queries (JPS, JPS+ or CH).
+    Auto => "auto", "auto", 2, Exact, AnyGrid, [GridPath, TimeLimit], "what the planner it picks keeps (the JPS+ table, the contraction hierarchy), and the map's statistics", &a::AutoCells,
+        "the fastest exact grid planner for the map and the number of queries: JPS, JPS+ or CH, from measured map statistics";
     /// A\* with the octile (or Manhattan) heuristic.
     Astar => "astar", "A*", 2, Exact, AnyGrid, [GridPath], "", &OnlineCells(G::AStar),
         "A* with the octile (8-connected) or Manhattan (4-connected) heuristic";

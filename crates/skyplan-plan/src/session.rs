@@ -2,6 +2,7 @@
 //! (grids per altitude/margin/cell size, 3D box worlds, Voronoi and PRM roadmaps).
 
 use crate::algorithm::Workspace;
+use crate::auto::{AutoPick, MapStats};
 use crate::failure::{FailureKind, PlanFailure};
 use crate::plan::{
     Geometry, GridInfo, GridPathStats, Home, Place, Plan, TRAJECTORY_COLUMNS, Timings,
@@ -14,6 +15,7 @@ use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
 use skyplan_mission::Mission;
+use skyplan_search::ch_file::ChFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
 use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel};
 use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
@@ -164,6 +166,8 @@ pub struct Session {
     ch: Vec<Arc<ContractionHierarchy>>,
     /// When long preprocessing (a contraction hierarchy) must give up, if ever.
     deadline: Option<Instant>,
+    /// `auto`'s statistics per grid and the `auto` queries on it so far.
+    auto: Vec<(Arc<Grid2>, MapStats, u64)>,
 }
 
 impl Session {
@@ -181,6 +185,7 @@ impl Session {
             jps_plus: Vec::new(),
             ch: Vec::new(),
             deadline: None,
+            auto: Vec::new(),
         }
     }
 
@@ -380,6 +385,119 @@ impl Session {
         }
         self.ch.push(Arc::clone(&ch));
         Ok((ch, Some(us)))
+    }
+
+    /// Writes the contraction hierarchy for `request`'s grid and move model (built unless the
+    /// session has it, within the request's `time_limit_ms` and the session's deadline) to
+    /// `out` as a hierarchy file ([`skyplan_search::ch_file`]), for [`Session::load_ch`] in a
+    /// later run; the bytes written.
+    pub fn save_ch(&mut self, request: &PlanRequest, out: impl Write) -> Result<u64, PlanFailure> {
+        let r = Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::Ch),
+            ..request.clone()
+        })?;
+        self.check_request_memory(&r)?;
+        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        let (ch, _) = self.contraction_hierarchy(&grid, r.model, r.preprocess_limit)?;
+        ch.write_to(out).map_err(|e| {
+            PlanFailure::internal(format!("writing the contraction hierarchy: {e}"))
+        })?;
+        Ok(ch.file_bytes())
+    }
+
+    /// Loads a hierarchy file saved by [`Session::save_ch`] for `request`'s grid and move
+    /// model: later `ch` requests on that grid, and `auto` on maps where a hierarchy is the
+    /// fastest (ARCHITECTURE "How `auto` decides"), use it instead of building one. Refused
+    /// (bad request, naming what is wrong: not a hierarchy, another version, truncated,
+    /// damaged, another grid or move model) otherwise.
+    pub fn load_ch(&mut self, request: &PlanRequest, input: impl Read) -> Result<(), PlanFailure> {
+        let r = Resolved::new(&PlanRequest {
+            planner: Some(PlannerId::Ch),
+            ..request.clone()
+        })?;
+        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        let ch = ContractionHierarchy::read_from(input, Arc::clone(&grid), r.model).map_err(
+            |e| match e {
+                ChFileError::Io(_) => PlanFailure::internal(e.to_string()),
+                _ => PlanFailure::bad_request(format!(
+                    "{e}; this session's map is {}",
+                    self.world.name()
+                )),
+            },
+        )?;
+        self.ch
+            .retain(|c| !(c.model() == r.model && Arc::ptr_eq(c.grid(), &grid)));
+        if self.ch.len() >= CACHE_ENTRIES {
+            self.ch.remove(0);
+        }
+        self.ch.push(Arc::new(ch));
+        Ok(())
+    }
+
+    /// `auto`'s pick for one more query on `grid` under `model`: preprocessing the session
+    /// keeps for the grid (built or loaded) when the rule would use it, else
+    /// [`crate::auto::pick`] for the `auto` queries on the grid so far (the grid's statistics
+    /// are measured once).
+    pub(crate) fn auto_pick(&mut self, grid: &Arc<Grid2>, model: MoveModel) -> AutoPick {
+        let at = match self.auto.iter().position(|(g, ..)| Arc::ptr_eq(g, grid)) {
+            Some(at) => at,
+            None => {
+                if self.auto.len() >= CACHE_ENTRIES {
+                    self.auto.remove(0);
+                }
+                self.auto.push((Arc::clone(grid), MapStats::of(grid), 0));
+                self.auto.len() - 1
+            }
+        };
+        let (_, stats, queries) = &mut self.auto[at];
+        *queries += 1;
+        let (stats, queries) = (*stats, *queries);
+        let mut rule = crate::auto::pick(&stats, queries);
+        // A hierarchy the memory limit would refuse: JPS+ (8 bytes per cell) instead.
+        let ch_bytes = stats.cells.saturating_mul(
+            PlannerId::Ch
+                .algorithm()
+                .cells()
+                .map_or(u64::MAX, |c| c.bytes_per_cell()),
+        );
+        if rule.planner == PlannerId::Ch && ch_bytes > self.limits.max_memory_bytes {
+            rule.planner = PlannerId::JpsPlus;
+            rule.why = format!(
+                "{}, but a hierarchy would need more memory than the limit: JPS+ instead",
+                rule.why
+            );
+        }
+        let kept = |planner: PlannerId, what: &str| AutoPick {
+            planner,
+            stats,
+            queries,
+            why: format!("{what} kept for this grid (built or loaded) answers fastest"),
+        };
+        // What the rule picks (kept preprocessing is reused by it), unless something faster is
+        // kept already: a contraction hierarchy on corridors, else a JPS+ table.
+        let corridors = stats.mean_run <= crate::auto::CH_MAX_RUN;
+        if rule.planner == PlannerId::Ch {
+            return rule;
+        }
+        if corridors && (self.ch.iter()).any(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid))
+        {
+            return kept(PlannerId::Ch, "the contraction hierarchy");
+        }
+        if rule.planner == PlannerId::JpsPlus {
+            return rule;
+        }
+        let table_model = if model == MoveModel::OctileCornerCutting {
+            model
+        } else {
+            MoveModel::Octile
+        };
+        if model.has_diagonals()
+            && (self.jps_plus.iter())
+                .any(|t| t.model() == table_model && Arc::ptr_eq(t.grid(), grid))
+        {
+            return kept(PlannerId::JpsPlus, "the JPS+ table");
+        }
+        rule
     }
 
     /// The 3D box world for a request: boxes grown by the margin, the ground, the altitude band,

@@ -175,6 +175,16 @@ fn path_line(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
 
 fn details(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let d = &plan.details;
+    if let Some(a) = d.get("auto") {
+        let label = (a["planner"].as_str())
+            .and_then(|p| p.parse::<crate::PlannerId>().ok())
+            .map_or("?", |p| p.info().label);
+        writeln!(
+            f,
+            "auto       picked {label}: {}",
+            a["why"].as_str().unwrap_or("")
+        )?;
+    }
     if let Some(c) = d.get("costmap") {
         writeln!(
             f,

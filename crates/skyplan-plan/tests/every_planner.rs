@@ -376,7 +376,7 @@ fn ch_preprocessing_stops_at_its_time_limit_and_only_ch_and_3d_planners_take_one
         refused
             .message
             .starts_with("time_limit_ms is not used by planner jps")
-            && refused.message.contains("(ch, prm, "),
+            && refused.message.contains("(ch, auto, prm, "),
         "{}",
         refused.message
     );

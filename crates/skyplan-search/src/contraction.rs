@@ -32,7 +32,7 @@ pub const DIAGONAL: u64 = 768_398_401;
 /// Largest grid (in cells) a hierarchy is built for: keeps the integer costs exact (module docs).
 pub const MAX_CELLS: usize = 1 << 28;
 
-const NONE: u32 = u32::MAX;
+pub(crate) const NONE: u32 = u32::MAX;
 /// Nodes a witness search may settle before it gives up (and keeps the shortcut).
 const WITNESS_SETTLE_LIMIT: u32 = 120;
 /// Contraction stops when the cheapest node left has more neighbours than this: the rest stay
@@ -65,12 +65,12 @@ pub enum ContractionError {
 /// One edge ever created: an original move (`mid == NONE`) or a shortcut `a – mid – b` made of
 /// the edges `first` (`a – mid`) and `second` (`mid – b`).
 #[derive(Debug, Clone, Copy)]
-struct Edge {
-    a: u32,
-    b: u32,
-    mid: u32,
-    first: u32,
-    second: u32,
+pub(crate) struct Edge {
+    pub(crate) a: u32,
+    pub(crate) b: u32,
+    pub(crate) mid: u32,
+    pub(crate) first: u32,
+    pub(crate) second: u32,
 }
 
 /// The contraction hierarchy of one grid under one move model, owning its grid (`Arc`) so a
@@ -90,19 +90,19 @@ struct Edge {
 /// ```
 #[derive(Debug)]
 pub struct ContractionHierarchy {
-    grid: Arc<Grid2>,
-    model: MoveModel,
+    pub(crate) grid: Arc<Grid2>,
+    pub(crate) model: MoveModel,
     /// Rank (query node id) of every cell, `NONE` for blocked cells.
-    rank_of_cell: Vec<u32>,
+    pub(crate) rank_of_cell: Vec<u32>,
     /// Cell index of every rank.
-    cell_of_rank: Vec<u32>,
+    pub(crate) cell_of_rank: Vec<u32>,
     /// Upward edges in CSR form, by rank: `first_out[r]..first_out[r + 1]`.
-    first_out: Vec<u32>,
-    head: Vec<u32>,
-    cost: Vec<u64>,
-    edge_id: Vec<u32>,
+    pub(crate) first_out: Vec<u32>,
+    pub(crate) head: Vec<u32>,
+    pub(crate) cost: Vec<u64>,
+    pub(crate) edge_id: Vec<u32>,
     /// Every edge ever created (for unpacking), endpoints as ranks.
-    edges: Vec<Edge>,
+    pub(crate) edges: Vec<Edge>,
 }
 
 /// Reusable buffers of [`ContractionHierarchy::search`] (one per thread).
@@ -322,7 +322,7 @@ impl ContractionHierarchy {
             settled += 1;
             let o = 1 - d;
             if q.stamp[o][ui] == now {
-                let total = du + q.dist[o][ui];
+                let total = du.saturating_add(q.dist[o][ui]);
                 if total < best {
                     best = total;
                     meet = Some(u);
@@ -333,14 +333,14 @@ impl ContractionHierarchy {
             // upward path of this direction.
             let stalled = range.clone().any(|k| {
                 let v = self.head[k] as usize;
-                q.stamp[d][v] == now && q.dist[d][v] + self.cost[k] < du
+                q.stamp[d][v] == now && q.dist[d][v].saturating_add(self.cost[k]) < du
             });
             if stalled {
                 continue;
             }
             for k in range {
                 let v = self.head[k] as usize;
-                let dv = du + self.cost[k];
+                let dv = du.saturating_add(self.cost[k]);
                 if q.stamp[d][v] != now || dv < q.dist[d][v] {
                     q.stamp[d][v] = now;
                     q.dist[d][v] = dv;

@@ -29,6 +29,7 @@
 mod astar;
 mod bidirectional;
 mod bits;
+pub mod ch_file;
 mod components;
 mod contraction;
 mod jps;

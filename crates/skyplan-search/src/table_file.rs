@@ -160,19 +160,19 @@ pub fn grid_checksum(grid: &Grid2) -> u64 {
 }
 
 /// Word-at-a-time multiply–rotate mixing (a 64-bit FNV-style hash over words).
-struct Hasher(u64);
+pub(crate) struct Hasher(u64);
 
 impl Hasher {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self(0xcbf2_9ce4_8422_2325)
     }
     #[inline]
-    fn word(&mut self, w: u64) {
+    pub(crate) fn word(&mut self, w: u64) {
         self.0 = (self.0 ^ w)
             .wrapping_mul(0x0000_0100_0000_01b3)
             .rotate_left(29);
     }
-    fn finish(&self) -> u64 {
+    pub(crate) fn finish(&self) -> u64 {
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);

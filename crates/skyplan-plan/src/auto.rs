@@ -1,0 +1,240 @@
+//! `--planner auto`: the fastest exact grid planner (JPS, JPS+ or CH) for a grid and a number of
+//! queries, chosen from measured map statistics ([`MapStats`]) by [`pick`]; the rule follows
+//! `skyplan scen` on the bundled MovingAI maps (README "Speed", ARCHITECTURE "How auto decides").
+
+use crate::planner_id::PlannerId;
+use serde::Serialize;
+use skyplan_cspace::Grid2;
+
+/// Queries on one grid from which a JPS+ table pays for itself: building it costs ≈ 40 ns per
+/// cell and it saves ≈ 0.3–0.5 ns per cell on every query against JPS (`skyplan scen`, release:
+/// den312d 0.2 ms build / 2 µs saved, Paris 2.5 ms / 31 µs, Boston 12 ms / 70 µs, the 32-cell
+/// maze 9 ms / 60 µs), so it pays after ≈ 100–170 queries whatever the map's size.
+pub const JPS_PLUS_QUERIES: u64 = 150;
+
+/// The mean free run (cells) at or below which obstacles are scattered or corridors narrow
+/// (random512-40-5: 2.7) rather than open ground, rooms and wide corridors (den312d 9.1, Paris
+/// 19.6, Boston 39.7, the 32-cell maze 48.2): there, and only there, the contraction
+/// hierarchy's queries beat JPS+'s (random512-40-5: 27–32 µs against 2.3–2.5 ms) and it builds
+/// in half a second (elsewhere 48 ms on den312d to 35–42 s on the 512 × 512 maps, and its
+/// queries are 2–20× slower than JPS+'s).
+pub const CH_MAX_RUN: f64 = 5.0;
+
+/// Queries on one grid from which a contraction hierarchy pays for itself on such a map: on
+/// random512-40-5 it builds in 0.47–0.51 s and saves ≈ 2.3 ms per query against JPS+, so it
+/// pays after ≈ 220 queries.
+pub const CH_QUERIES: u64 = 250;
+
+/// What `auto` measures of a grid before it picks.
+///
+/// ```
+/// use skyplan_plan::auto::MapStats;
+/// let grid = skyplan_cspace::Grid2::from_ascii("....\n.##.\n....")?;
+/// let s = MapStats::of(&grid);
+/// assert_eq!((s.cells, s.free), (12, 10));
+/// // Rows: 10 free cells in 4 runs (4 | 1, 1 | 4); columns: in 6 runs (3 | 1, 1 | 1, 1 | 3).
+/// assert_eq!(s.mean_run, 10.0 / 6.0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MapStats {
+    /// Cells of the grid.
+    pub cells: u64,
+    /// Free cells.
+    pub free: u64,
+    /// The mean length of a maximal run of free cells, along rows or along columns (the
+    /// shorter of the two means): corridor width between obstacles.
+    pub mean_run: f64,
+}
+
+impl MapStats {
+    /// Counts the free cells and the free runs along rows and columns (one pass each).
+    pub fn of(grid: &Grid2) -> Self {
+        let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
+        let blocked = grid.blocked_cells();
+        let free = blocked.iter().filter(|&&b| !b).count() as u64;
+        let mut row_runs = 0u64;
+        for row in blocked.chunks(cols.max(1)) {
+            let mut prev = true;
+            for &b in row {
+                row_runs += u64::from(prev && !b);
+                prev = b;
+            }
+        }
+        let mut col_runs = 0u64;
+        let mut prev = vec![true; cols];
+        for row in blocked.chunks(cols.max(1)).take(rows) {
+            for (p, &b) in prev.iter_mut().zip(row) {
+                col_runs += u64::from(*p && !b);
+                *p = b;
+            }
+        }
+        let mean = |runs: u64| {
+            if runs == 0 {
+                0.0
+            } else {
+                free as f64 / runs as f64
+            }
+        };
+        Self {
+            cells: blocked.len() as u64,
+            free,
+            mean_run: mean(row_runs).min(mean(col_runs)),
+        }
+    }
+}
+
+/// What `auto` picked, for the report: the planner, the statistics and query count it went by,
+/// and why, in words.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AutoPick {
+    /// The planner that answers (jps, jps-plus or ch).
+    pub planner: PlannerId,
+    /// The grid's statistics.
+    pub stats: MapStats,
+    /// The queries on this grid it planned for (a batch's size, or a session's count so far).
+    pub queries: u64,
+    /// Why, in one line.
+    pub why: String,
+}
+
+/// The pick for `queries` queries on a grid with `stats`:
+///
+/// - fewer than [`JPS_PLUS_QUERIES`]: **JPS** — no preprocessing would pay for itself;
+/// - a mean free run ≤ [`CH_MAX_RUN`] (corridors, scattered obstacles) and at least
+///   [`CH_QUERIES`] queries: **CH**;
+/// - otherwise **JPS+**.
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick}};
+/// let scattered = MapStats { cells: 262_144, free: 104_350, mean_run: 2.7 };
+/// assert_eq!(pick(&scattered, 1).planner, PlannerId::Jps);
+/// assert_eq!(pick(&scattered, 200).planner, PlannerId::JpsPlus);
+/// assert_eq!(pick(&scattered, 5_240).planner, PlannerId::Ch);
+/// let city = MapStats { free: 196_725, mean_run: 39.7, ..scattered };
+/// assert_eq!(pick(&city, 5_240).planner, PlannerId::JpsPlus);
+/// ```
+pub fn pick(stats: &MapStats, queries: u64) -> AutoPick {
+    let corridors = stats.mean_run <= CH_MAX_RUN;
+    let shape = if corridors {
+        "scattered obstacles or narrow corridors"
+    } else {
+        "open ground, rooms or wide corridors"
+    };
+    let (planner, why) = if queries < JPS_PLUS_QUERIES {
+        (
+            PlannerId::Jps,
+            format!(
+                "{queries} {} < {JPS_PLUS_QUERIES}: no preprocessing pays for itself",
+                plural(queries)
+            ),
+        )
+    } else if corridors && queries >= CH_QUERIES {
+        (
+            PlannerId::Ch,
+            format!(
+                "{shape} (mean free run {:.1} ≤ {CH_MAX_RUN} cells) and {queries} queries ≥ {CH_QUERIES}: the contraction hierarchy pays for itself",
+                stats.mean_run
+            ),
+        )
+    } else {
+        let also = if corridors {
+            format!(", < {CH_QUERIES} for a contraction hierarchy")
+        } else {
+            String::new()
+        };
+        (
+            PlannerId::JpsPlus,
+            format!(
+                "{shape} (mean free run {:.1} cells) and {queries} queries ≥ {JPS_PLUS_QUERIES}{also}: the JPS+ table pays for itself",
+                stats.mean_run
+            ),
+        )
+    };
+    AutoPick {
+        planner,
+        stats: *stats,
+        queries,
+        why,
+    }
+}
+
+/// The pick when a contraction hierarchy is at hand with no build to pay (loaded from a file):
+/// CH on maps whose mean free run is ≤ [`CH_MAX_RUN`], where its queries are the fastest;
+/// `None` elsewhere, where [`pick`]'s JPS or JPS+ answer faster.
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick_with_hierarchy}};
+/// let scattered = MapStats { cells: 262_144, free: 104_350, mean_run: 2.7 };
+/// assert_eq!(pick_with_hierarchy(&scattered, 1).map(|p| p.planner), Some(PlannerId::Ch));
+/// assert_eq!(pick_with_hierarchy(&MapStats { mean_run: 39.7, ..scattered }, 1), None);
+/// ```
+pub fn pick_with_hierarchy(stats: &MapStats, queries: u64) -> Option<AutoPick> {
+    (stats.mean_run <= CH_MAX_RUN).then(|| AutoPick {
+        planner: PlannerId::Ch,
+        stats: *stats,
+        queries,
+        why: format!(
+            "scattered obstacles or narrow corridors (mean free run {:.1} ≤ {CH_MAX_RUN} cells) and a contraction hierarchy at hand: the fastest queries, nothing to build",
+            stats.mean_run
+        ),
+    })
+}
+
+fn plural(n: u64) -> &'static str {
+    if n == 1 { "query" } else { "queries" }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(rows: usize, cols: usize, blocked: impl Fn(usize, usize) -> bool) -> Grid2 {
+        let text: Vec<String> = (0..rows)
+            .map(|r| {
+                (0..cols)
+                    .map(|c| if blocked(r, c) { '#' } else { '.' })
+                    .collect()
+            })
+            .collect();
+        Grid2::from_ascii(&text.join("\n")).unwrap()
+    }
+
+    /// A switchback maze of 2-cell corridors: a wall every third row, its 2-cell gap at
+    /// alternate ends.
+    fn maze() -> Grid2 {
+        grid(128, 128, |r, c| {
+            let gap = if (r / 3) % 2 == 0 { c < 2 } else { c >= 126 };
+            r % 3 == 2 && !gap
+        })
+    }
+
+    /// Open ground with a few large blocks.
+    fn open() -> Grid2 {
+        grid(128, 128, |r, c| (r % 64) < 8 && (c % 64) < 8)
+    }
+
+    #[test]
+    fn a_maze_is_corridors_and_open_ground_is_not() {
+        let m = MapStats::of(&maze());
+        let o = MapStats::of(&open());
+        assert!(m.mean_run <= CH_MAX_RUN, "maze: {m:?}");
+        assert!(o.mean_run > CH_MAX_RUN, "open: {o:?}");
+        assert_eq!(o.cells, 128 * 128);
+        assert_eq!(o.free, 128 * 128 - 4 * 64);
+    }
+
+    #[test]
+    fn the_pick_follows_the_rule_on_a_maze_and_on_open_ground() {
+        let m = MapStats::of(&maze());
+        let o = MapStats::of(&open());
+        assert_eq!(pick(&m, 1).planner, PlannerId::Jps);
+        assert_eq!(pick(&o, 1).planner, PlannerId::Jps);
+        assert_eq!(pick(&m, JPS_PLUS_QUERIES).planner, PlannerId::JpsPlus);
+        assert_eq!(pick(&o, JPS_PLUS_QUERIES).planner, PlannerId::JpsPlus);
+        assert_eq!(pick(&m, CH_QUERIES).planner, PlannerId::Ch);
+        assert_eq!(pick(&o, CH_QUERIES).planner, PlannerId::JpsPlus);
+        assert!(pick(&m, CH_QUERIES).why.contains("contraction hierarchy"));
+        assert!(pick(&o, 1).why.starts_with("1 query < 150"));
+    }
+}
