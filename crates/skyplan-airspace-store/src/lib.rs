@@ -27,8 +27,10 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod reserve;
 mod sqlite;
 
+pub use reserve::{RESERVE_TRIES, Reservation, ReserveError, Reserved, reserve};
 pub use sqlite::SqliteStore;
 
 use skyplan_airspace::{Conflict, OperationalIntent, PriorityRule, Volume4D};

@@ -391,3 +391,53 @@ fn concurrent_processes_never_both_accept_conflicting_intents() {
     assert!(accepted > 5 && accepted < 120, "{accepted} of 120 accepted");
     assert_deconflicted(&stored);
 }
+
+#[test]
+fn a_reservation_leaves_at_the_earliest_free_departure_or_names_its_blockers() {
+    let store = SqliteStore::memory().expect("a store");
+    let flight = &flights()[0];
+    let window = DepartureWindow {
+        earliest: t0(),
+        latest: t0().plus_ms(1_800_000),
+    };
+    let reserve = |owner: &str, priority: u32, window: DepartureWindow| {
+        let r = skyplan_airspace_store::Reservation {
+            window,
+            priority,
+            owner: owner.into(),
+            id: new_id(),
+            rule: PriorityRule::EqualOrHigher,
+            step_ms: 1000,
+        };
+        skyplan_airspace_store::reserve(&store, flight, &r)
+    };
+    let first = reserve("a", 1, window).expect("free");
+    assert_eq!(
+        (first.departure, first.delay_ms, first.nearby, first.tries),
+        (t0(), 0, 0, 1)
+    );
+    // The same flight again: it leaves once the first is clear of it, on the second grid.
+    let second = reserve("b", 1, window).expect("later");
+    assert!(
+        second.delay_ms > 0 && second.delay_ms % 1000 == 0,
+        "{}",
+        second.delay_ms
+    );
+    assert_eq!(second.nearby, 1);
+    let moved: Vec<Volume4D> = flight.at(second.departure.plus_ms(-1000));
+    assert!(
+        first_conflict(&moved, &first.intent.volumes).is_some(),
+        "one second earlier conflicts"
+    );
+    assert_deconflicted(&store.list().expect("listed"));
+    // A window of one instant at t0: blocked by the first (and the second, if it meets it then).
+    let at_t0 = DepartureWindow::at(t0());
+    match reserve("c", 1, at_t0) {
+        Err(skyplan_airspace_store::ReserveError::Blocked(b)) => {
+            assert!(b.blocking.contains(&first.intent.reference()))
+        }
+        other => panic!("{other:?}"),
+    }
+    // More important: it leaves at once.
+    assert_eq!(reserve("d", 2, at_t0).expect("urgent").delay_ms, 0);
+}
