@@ -10,8 +10,12 @@ pub fn run(args: ServeArgs) -> Result<()> {
     let limits = crate::args::limits(None);
     let world =
         crate::world_load::load_world(args.map.as_deref(), &GridMapArgs::default(), 1, &limits)?;
+    // Opened once here so that a bad address or database fails the command, not each request.
+    skyplan_server::open_airspace(&args.airspace)
+        .map_err(|e| runtime(format!("--airspace {}: {e}", args.airspace)))?;
     let mut config = ServerConfig {
         timeout: Duration::from_millis(args.timeout_ms),
+        airspace: args.airspace.clone(),
         ..ServerConfig::default()
     };
     if let Some(n) = args.max_concurrent {
@@ -20,15 +24,16 @@ pub fn run(args: ServeArgs) -> Result<()> {
     if let Some(n) = args.queue_depth {
         config.queue_depth = Some(n as usize);
     }
-    let (name, workers, queue, budget_ms) = (
+    let (name, workers, queue, budget_ms, airspace) = (
         world.name().to_string(),
         config.max_concurrent,
         config.effective_queue_depth(),
         args.timeout_ms,
+        args.airspace.clone(),
     );
     skyplan_server::run(world, config, args.bind, |addr| {
         println!(
-            "skyplan serve: http://{addr}/ ({name}; {workers} concurrent plans, {queue} more queued, {budget_ms} ms per request; Ctrl-C stops)"
+            "skyplan serve: http://{addr}/ ({name}; {workers} concurrent plans, {queue} more queued, {budget_ms} ms per request; airspace {airspace}; Ctrl-C stops)"
         );
     })
     .map_err(|e| runtime(format!("serve on {}: {e}", args.bind)))

@@ -27,6 +27,11 @@ pub enum ErrorKind {
     NotFound,
     /// The path exists, the method does not (405).
     MethodNotAllowed,
+    /// No departure of the window is free of the stored intents of equal or higher priority
+    /// (409); the body names them (`conflicts`).
+    Conflict,
+    /// The airspace store could not be opened or failed (503).
+    StoreUnavailable,
 }
 
 impl ErrorKind {
@@ -41,6 +46,8 @@ impl ErrorKind {
             ErrorKind::QueueTimeout => "queue_timeout",
             ErrorKind::NotFound => "not_found",
             ErrorKind::MethodNotAllowed => "method_not_allowed",
+            ErrorKind::Conflict => "conflict",
+            ErrorKind::StoreUnavailable => "store_unavailable",
         }
     }
 
@@ -53,7 +60,8 @@ impl ErrorKind {
     /// | `internal` | 500 |
     /// | `too_large` | 413 |
     /// | `not_json` | 415 |
-    /// | `busy` | 503 |
+    /// | `conflict` | 409 |
+    /// | `busy`, `store_unavailable` | 503 |
     /// | `over_budget`, `queue_timeout` | 504 |
     pub fn status(self) -> StatusCode {
         match self {
@@ -68,7 +76,8 @@ impl ErrorKind {
             ErrorKind::Plan(FailureKind::Internal) => StatusCode::INTERNAL_SERVER_ERROR,
             ErrorKind::TooLarge => StatusCode::PAYLOAD_TOO_LARGE,
             ErrorKind::NotJson => StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            ErrorKind::Busy => StatusCode::SERVICE_UNAVAILABLE,
+            ErrorKind::Busy | ErrorKind::StoreUnavailable => StatusCode::SERVICE_UNAVAILABLE,
+            ErrorKind::Conflict => StatusCode::CONFLICT,
             ErrorKind::OverBudget | ErrorKind::QueueTimeout => StatusCode::GATEWAY_TIMEOUT,
             ErrorKind::NotFound => StatusCode::NOT_FOUND,
             ErrorKind::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
@@ -86,6 +95,8 @@ pub struct ApiError {
     pub message: String,
     /// Seconds after which a retry may succeed, sent as `Retry-After` with a 503 (1 if unset).
     pub retry_after_s: Option<u64>,
+    /// The intents in the way (`conflict`), sent as `conflicts`.
+    pub conflicts: Option<Vec<skyplan_airspace::IntentRef>>,
 }
 
 impl ApiError {
@@ -95,7 +106,14 @@ impl ApiError {
             kind,
             message: message.into(),
             retry_after_s: None,
+            conflicts: None,
         }
+    }
+
+    /// The same error naming the intents in the way.
+    pub fn with_conflicts(mut self, conflicts: Vec<skyplan_airspace::IntentRef>) -> Self {
+        self.conflicts = Some(conflicts);
+        self
     }
 
     /// The same error with a `Retry-After` of `seconds` (sent with a 503).
@@ -116,11 +134,15 @@ impl ApiError {
 
     /// The JSON body.
     pub fn body(&self) -> serde_json::Value {
-        serde_json::json!({
+        let mut body = serde_json::json!({
             "status": "error",
             "kind": self.kind.name(),
             "message": self.message,
-        })
+        });
+        if let Some(c) = &self.conflicts {
+            body["conflicts"] = serde_json::json!(c);
+        }
+        body
     }
 }
 

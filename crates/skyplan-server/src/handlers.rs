@@ -97,8 +97,8 @@ pub(crate) async fn map(
     Ok(Json(info))
 }
 
-/// The request parsed, with the field named on errors (`alt_m: invalid type: …`).
-fn parse_request(body: &[u8]) -> Result<PlanRequest, ApiError> {
+/// A JSON body parsed into `T`, with the field named on errors (`alt_m: invalid type: …`).
+pub(crate) fn parse_json<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, ApiError> {
     let de = &mut serde_json::Deserializer::from_slice(body);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
@@ -111,8 +111,49 @@ fn parse_request(body: &[u8]) -> Result<PlanRequest, ApiError> {
     })
 }
 
+/// The body of a request that must be JSON: 415 unless declared `application/json`, 413 over
+/// the size limit.
+pub(crate) fn json_body(
+    headers: &HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Bytes, ApiError> {
+    let json = headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.split(';').next())
+        .is_some_and(|v| v.trim().eq_ignore_ascii_case("application/json"));
+    if !json {
+        return Err(ApiError::new(
+            ErrorKind::NotJson,
+            "send the request as JSON with Content-Type: application/json",
+        ));
+    }
+    body.map_err(|e| {
+        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::new(
+                ErrorKind::TooLarge,
+                format!("request body over {} bytes (1 MiB)", crate::MAX_BODY_BYTES),
+            )
+        } else {
+            ApiError::bad_request(e.body_text())
+        }
+    })
+}
+
+/// A plan as `POST /api/plan` answers it: the plan's JSON with `wall_time_us` and `request_id`.
+pub(crate) fn plan_json(
+    plan: &skyplan_plan::Plan,
+    wall_time_us: u64,
+    request_id: u64,
+) -> Result<Value, ApiError> {
+    let mut v = serde_json::to_value(plan).map_err(|e| ApiError::internal(e.to_string()))?;
+    v["wall_time_us"] = json!(wall_time_us);
+    v["request_id"] = json!(request_id);
+    Ok(v)
+}
+
 /// Refuses requests that would run past the server's budget or build more than it allows.
-fn check_limits(s: &AppState, r: &PlanRequest) -> Result<(), ApiError> {
+pub(crate) fn check_limits(s: &AppState, r: &PlanRequest) -> Result<(), ApiError> {
     let budget_ms = s.config.timeout.as_millis();
     if let Some(ms) = r.time_limit_ms
         && u128::from(ms) > budget_ms
@@ -135,7 +176,7 @@ fn check_limits(s: &AppState, r: &PlanRequest) -> Result<(), ApiError> {
 }
 
 /// The shape of what a request makes the session cache.
-fn shape(r: &PlanRequest) -> [f64; 4] {
+pub(crate) fn shape(r: &PlanRequest) -> [f64; 4] {
     [
         r.alt_m.unwrap_or(f64::NAN),
         r.safety_m.unwrap_or(f64::NAN),
@@ -151,28 +192,8 @@ pub(crate) async fn plan(
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Json<Value>, ApiError> {
     let t0 = Instant::now();
-    let json = headers
-        .get(header::CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.split(';').next())
-        .is_some_and(|v| v.trim().eq_ignore_ascii_case("application/json"));
-    if !json {
-        return Err(ApiError::new(
-            ErrorKind::NotJson,
-            "send the plan request as JSON with Content-Type: application/json",
-        ));
-    }
-    let body = body.map_err(|e| {
-        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::new(
-                ErrorKind::TooLarge,
-                format!("request body over {} bytes (1 MiB)", crate::MAX_BODY_BYTES),
-            )
-        } else {
-            ApiError::bad_request(e.body_text())
-        }
-    })?;
-    let request = parse_request(&body)?;
+    let body = json_body(&headers, body)?;
+    let request: PlanRequest = parse_json(&body)?;
     check_limits(&s, &request)?;
     let request_id = s.next_request_id.fetch_add(1, Ordering::Relaxed);
     let planner = request.planner.unwrap_or_default();
@@ -192,11 +213,7 @@ pub(crate) async fn plan(
                 waypoints: plan.points_nea(),
                 wall_time_us,
             }));
-            let mut v =
-                serde_json::to_value(&plan).map_err(|e| ApiError::internal(e.to_string()))?;
-            v["wall_time_us"] = json!(wall_time_us);
-            v["request_id"] = json!(request_id);
-            Ok(Json(v))
+            Ok(Json(plan_json(&plan, wall_time_us, request_id)?))
         }
         Err(failure) => {
             s.events.publish(&ViewEvent::Plan(PlanEvent {

@@ -10,6 +10,8 @@
 //! | `POST /api/plan` | a `PlanRequest` (the CLI's long options with underscores) → the `Plan` as `skyplan plan --json` prints it |
 //! | `GET /api/planners` | the planner registry |
 //! | `GET /api/status` | workers, busy, queued, queue depth, served/rejected/timed-out counters |
+//! | `POST /api/intents` | a plan request, a `departure` (RFC 3339, or a window `{earliest, latest}`), a `priority` (0–100) and an `owner` → 201 with the operational intent reserved at the earliest free departure and its plan, or 409 naming the intents in the way (ids and versions) |
+//! | `GET /api/intents`, `GET`/`DELETE /api/intents/{id}` | the stored intents; one; one removed (404 when there is none) |
 //! | `GET /api/events` | server-sent events: plan results, flight states, routes ([`ViewEvent`]) |
 //! | `GET /api/openapi.json` | the OpenAPI 3 description of all of this |
 //!
@@ -39,6 +41,7 @@ mod error;
 mod events;
 mod handlers;
 mod host;
+mod intents;
 pub mod live;
 mod map;
 mod pool;
@@ -50,6 +53,7 @@ pub use events::{
     EventSink, FlightEvent, PlanEvent, RouteEvent, SensedEvent, TrajectoryEvent, ViewEvent,
 };
 pub use host::{host_allowed, with_host_check};
+pub use intents::{DEPARTURE_STEP_MS, HORIZON_MS, MAX_OWNER_CHARS, PAST_SLACK_MS};
 pub use map::MAX_GRID_CELLS;
 pub use record::{RecordError, Recorder};
 pub use view::{ViewError, ViewServer};
@@ -57,6 +61,7 @@ pub use view::{ViewError, ViewServer};
 use axum::Router;
 use axum::extract::DefaultBodyLimit;
 use axum::routing::{get, post};
+use skyplan_airspace_store::IntentStore;
 use skyplan_plan::World;
 use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
@@ -74,6 +79,18 @@ pub const OPENAPI_JSON: &str = include_str!("../openapi.json");
 /// The default queue depth per planning worker.
 pub const QUEUE_PER_WORKER: usize = 64;
 
+/// The default airspace store: SQLite in this server's memory.
+pub const DEFAULT_AIRSPACE: &str = "sqlite::memory:";
+
+/// Opens the airspace store at `url` (`sqlite:FILE` or `sqlite::memory:`).
+pub fn open_airspace(
+    url: &str,
+) -> Result<Arc<dyn IntentStore>, skyplan_airspace_store::StoreError> {
+    Ok(Arc::new(skyplan_airspace_store::SqliteStore::open_url(
+        url,
+    )?))
+}
+
 /// How the server runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
@@ -88,6 +105,10 @@ pub struct ServerConfig {
     pub timeout: Duration,
     /// Event-stream clients at once; more get 503. Default 64.
     pub max_event_clients: usize,
+    /// Where the shared airspace's intents are kept: `sqlite:FILE` (a file in WAL mode, shared
+    /// by every server on it) or `sqlite::memory:` (the default: this server's memory, gone
+    /// when it stops).
+    pub airspace: String,
 }
 
 impl ServerConfig {
@@ -105,6 +126,7 @@ impl Default for ServerConfig {
             queue_depth: None,
             timeout: Duration::from_secs(10),
             max_event_clients: 64,
+            airspace: DEFAULT_AIRSPACE.into(),
         }
     }
 }
@@ -118,6 +140,8 @@ pub(crate) struct Shared {
     pub map_info: serde_json::Value,
     pub planners: serde_json::Value,
     pub next_request_id: AtomicU64,
+    /// The airspace store, or why it could not be opened (the intents endpoints answer 503).
+    pub airspace: Result<Arc<dyn IntentStore>, String>,
 }
 
 /// The server's state: cheap to clone.
@@ -144,6 +168,7 @@ pub fn app(world: World, config: ServerConfig) -> App {
         map_info: map::map_info(&world),
         planners: handlers::planners_json(&world),
         event_slots: Arc::new(tokio::sync::Semaphore::new(config.max_event_clients)),
+        airspace: open_airspace(&config.airspace).map_err(|e| e.to_string()),
         config,
         events: events.clone(),
         next_request_id: AtomicU64::new(1),
@@ -154,6 +179,11 @@ pub fn app(world: World, config: ServerConfig) -> App {
         .route("/api/plan", post(handlers::plan))
         .route("/api/planners", get(handlers::planners))
         .route("/api/status", get(handlers::status))
+        .route("/api/intents", post(intents::create).get(intents::list))
+        .route(
+            "/api/intents/{id}",
+            get(intents::get).delete(intents::delete),
+        )
         .route("/api/events", get(handlers::events))
         .route("/api/openapi.json", get(handlers::openapi))
         .fallback(handlers::not_found)

@@ -604,6 +604,8 @@ fn every_error_kind_is_documented() {
         ErrorKind::QueueTimeout,
         ErrorKind::NotFound,
         ErrorKind::MethodNotAllowed,
+        ErrorKind::Conflict,
+        ErrorKind::StoreUnavailable,
     ] {
         assert!(
             listed.contains(&kind.name()),
@@ -634,6 +636,8 @@ async fn the_served_document_is_the_file_and_documents_every_endpoint_and_status
         "/api/status",
         "/api/events",
         "/api/openapi.json",
+        "/api/intents",
+        "/api/intents/{id}",
     ] {
         assert!(doc["paths"][p].is_object(), "{p} undocumented");
     }
@@ -644,4 +648,245 @@ async fn the_served_document_is_the_file_and_documents_every_endpoint_and_status
     for code in ["200", "400", "413", "415", "422", "503", "504"] {
         assert!(responses.contains_key(code), "{code} undocumented");
     }
+}
+
+// ---- operational intents ------------------------------------------------------------------
+
+/// A departure an hour from now, in whole seconds, and `s` seconds after it.
+fn departure(s: i64) -> String {
+    let now = skyplan_airspace::Timestamp::now().unix_ms();
+    skyplan_airspace::Timestamp::from_unix_ms((now / 1000 + 3600 + s) * 1000).to_string()
+}
+
+/// An intent request over the city's default route.
+fn intent_request(departure: Value, priority: u32, owner: &str) -> Value {
+    json!({ "plan": { "goal_ne": [60.0, 40.0] }, "departure": departure, "priority": priority, "owner": owner })
+}
+
+fn matches_schema(doc: &Value, path: &str, method: &str, status: StatusCode, v: &Value) {
+    let wrong = violations(
+        doc,
+        answer_schema(doc, path, method, status),
+        v,
+        &format!("{method} {path} {status}"),
+    );
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+#[tokio::test]
+async fn intents_answer_201_409_404_as_documented() {
+    let doc = document();
+    let app = router(World::fcnd_city(), ServerConfig::default());
+    let at = departure(0);
+    // 201: reserved at the departure asked for, nothing in the way.
+    let (status, first) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        intent_request(json!(at), 10, "op-a"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{first}");
+    matches_schema(&doc, "/api/intents", "post", status, &first);
+    assert_eq!(
+        (first["departure"].as_str(), first["delay_s"].as_f64()),
+        (Some(at.as_str()), Some(0.0))
+    );
+    assert_eq!(
+        (first["timing"].as_str(), first["intent"]["state"].as_str()),
+        (Some("constant_speed"), Some("Accepted"))
+    );
+    let id = first["intent"]["id"].as_str().expect("an id").to_string();
+    // 409: the same flight at the same instant, equal priority; the answer names the first.
+    let (status, refused) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        intent_request(json!(at), 10, "op-b"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CONFLICT, "{refused}");
+    matches_schema(&doc, "/api/intents", "post", status, &refused);
+    assert_eq!(refused["conflicts"], json!([{ "id": id, "version": 1 }]));
+    assert!(message(&refused).contains(&id), "{refused}");
+    // 201 with a window: the earliest free whole second, after the first's volumes.
+    let window = json!({ "earliest": at, "latest": departure(3600) });
+    let (status, later) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        intent_request(window, 10, "op-b"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{later}");
+    let delay = later["delay_s"].as_f64().expect("a delay");
+    assert!(
+        delay > 0.0 && delay.fract() == 0.0 && later["nearby_intents"] == 1,
+        "{later}"
+    );
+    // More important: not bound by the others.
+    let (status, urgent) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        intent_request(json!(at), 11, "op-c"),
+    )
+    .await;
+    assert_eq!(
+        (status, urgent["delay_s"].as_f64()),
+        (StatusCode::CREATED, Some(0.0)),
+        "{urgent}"
+    );
+    // The list, one, delete, then 404.
+    let (status, list) = send(app.clone(), "GET", "/api/intents", Value::Null).await;
+    matches_schema(&doc, "/api/intents", "get", status, &list);
+    assert_eq!(list["intents"].as_array().map(Vec::len), Some(3));
+    assert_eq!(list["intents"][0], first["intent"]);
+    let one = format!("/api/intents/{id}");
+    let (status, got) = send(app.clone(), "GET", &one, Value::Null).await;
+    matches_schema(&doc, "/api/intents/{id}", "get", status, &got);
+    assert_eq!(got, first["intent"]);
+    let (status, gone) = send(app.clone(), "DELETE", &one, Value::Null).await;
+    matches_schema(&doc, "/api/intents/{id}", "delete", status, &gone);
+    assert_eq!(gone, first["intent"]);
+    for method in ["GET", "DELETE"] {
+        let (status, missing) = send(app.clone(), method, &one, Value::Null).await;
+        assert_eq!(status, StatusCode::NOT_FOUND);
+        matches_schema(
+            &doc,
+            "/api/intents/{id}",
+            &method.to_lowercase(),
+            status,
+            &missing,
+        );
+    }
+    // With the first gone, only the more important one is in the way at that instant.
+    let (status, again) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        intent_request(json!(at), 10, "op-b"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CONFLICT, "{again}");
+    assert_eq!(
+        again["conflicts"],
+        json!([{ "id": urgent["intent"]["id"], "version": 1 }])
+    );
+}
+
+#[tokio::test]
+async fn bad_intent_requests_get_400_naming_the_field_and_store_nothing() {
+    let doc = document();
+    let app = router(World::fcnd_city(), ServerConfig::default());
+    let cases = [
+        (
+            intent_request(json!("2020-01-01T00:00:00Z"), 0, "o"),
+            "departure: 2020-01-01T00:00:00Z is in the past",
+        ),
+        (
+            intent_request(json!("2999-01-01T00:00:00Z"), 0, "o"),
+            "beyond the horizon",
+        ),
+        (
+            intent_request(json!("tomorrow"), 0, "o"),
+            "departure: \"tomorrow\" is not an RFC 3339 date-time",
+        ),
+        (
+            intent_request(
+                json!({ "earliest": departure(60), "latest": departure(0) }),
+                0,
+                "o",
+            ),
+            "the window ends",
+        ),
+        (
+            intent_request(json!({ "earliest": departure(0) }), 0, "o"),
+            "departure.latest",
+        ),
+        (
+            intent_request(json!(departure(0)), 101, "o"),
+            "priority: 101 is above 100",
+        ),
+        (intent_request(json!(departure(0)), 0, "  "), "owner:"),
+        (
+            json!({ "departure": departure(0), "priority": 0, "owner": "o" }),
+            "missing field `plan`",
+        ),
+        (
+            json!({ "plan": { "alt_m": "high" }, "departure": departure(0), "priority": 0, "owner": "o" }),
+            "plan.alt_m",
+        ),
+    ];
+    for (body, want) in cases {
+        let (status, v) = send(app.clone(), "POST", "/api/intents", body).await;
+        assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
+        matches_schema(&doc, "/api/intents", "post", status, &v);
+        assert!(message(&v).contains(want), "{want:?} not in {v}");
+    }
+    // No route: 422, as for /api/plan.
+    let no_route = json!({ "plan": { "goal_ne": [5000.0, 0.0] }, "departure": departure(0), "priority": 0, "owner": "o" });
+    let (status, _) = send(app.clone(), "POST", "/api/intents", no_route).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    let (_, list) = send(app.clone(), "GET", "/api/intents", Value::Null).await;
+    assert_eq!(list, json!({ "intents": [] }));
+    // A map without a geodetic home has no latitude and longitude for intents.
+    let grid = skyplan_cspace::Grid2::from_ascii("....\n....").expect("a grid");
+    let tiny = router(World::from_grid("tiny", grid), ServerConfig::default());
+    let body = json!({ "plan": { "start_ne": [0.5, 0.5], "goal_ne": [1.5, 3.5] }, "departure": departure(0), "priority": 0, "owner": "o" });
+    let (status, v) = send(tiny, "POST", "/api/intents", body).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
+    assert!(message(&v).contains("no geodetic home"), "{v}");
+}
+
+#[tokio::test]
+async fn two_servers_on_one_sqlite_file_share_the_airspace_and_a_bad_store_is_503() {
+    let doc = document();
+    let dir = tempfile::tempdir().expect("a folder");
+    let config = ServerConfig {
+        airspace: format!("sqlite:{}", dir.path().join("airspace.db").display()),
+        ..ServerConfig::default()
+    };
+    let one = router(World::fcnd_city(), config.clone());
+    let two = router(World::fcnd_city(), config);
+    let at = json!(departure(0));
+    let (status, first) = send(
+        one,
+        "POST",
+        "/api/intents",
+        intent_request(at.clone(), 5, "one"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{first}");
+    let (status, refused) = send(
+        two.clone(),
+        "POST",
+        "/api/intents",
+        intent_request(at, 5, "two"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CONFLICT, "{refused}");
+    assert_eq!(refused["conflicts"][0]["id"], first["intent"]["id"]);
+    let (_, list) = send(two, "GET", "/api/intents", Value::Null).await;
+    assert_eq!(list["intents"], json!([first["intent"]]));
+    // A store that cannot be opened: 503 store_unavailable, the rest of the API still serves.
+    let broken = ServerConfig {
+        airspace: "postgres://nowhere".into(),
+        ..ServerConfig::default()
+    };
+    let app = router(World::fcnd_city(), broken);
+    let (status, v) = send(app.clone(), "GET", "/api/intents", Value::Null).await;
+    assert_eq!(
+        (status, v["kind"].as_str()),
+        (StatusCode::SERVICE_UNAVAILABLE, Some("store_unavailable")),
+        "{v}"
+    );
+    matches_schema(&doc, "/api/intents", "get", status, &v);
+    let (status, _) = send(app, "GET", "/api/planners", Value::Null).await;
+    assert_eq!(status, StatusCode::OK);
+}
+
+/// An error answer's message ("" without one).
+fn message(v: &Value) -> &str {
+    v["message"].as_str().unwrap_or_default()
 }

@@ -1,0 +1,249 @@
+//! `/api/intents`: operational intents planned, reserved in the shared airspace, listed,
+//! read and deleted.
+
+use crate::AppState;
+use crate::error::{ApiError, ErrorKind};
+use crate::handlers::{json_body, parse_json, plan_json};
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, PathRejection};
+use axum::extract::{Path, State};
+use axum::http::{HeaderMap, StatusCode};
+use serde::Deserialize;
+use serde_json::{Value, json};
+use skyplan_airspace::{
+    DepartureWindow, MAX_PRIORITY, PriorityRule, Timestamp, VolumeOptions, volumes_from_plan,
+};
+use skyplan_airspace_store::{IntentStore, Reservation, ReserveError, StoreError, new_id, reserve};
+use skyplan_plan::PlanRequest;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Departures may be this far in the past (clocks differ), milliseconds.
+pub const PAST_SLACK_MS: i64 = 60_000;
+
+/// Departures may be at most this far ahead, milliseconds (30 days).
+pub const HORIZON_MS: i64 = 30 * 86_400_000;
+
+/// The departure grid's step, milliseconds.
+pub const DEPARTURE_STEP_MS: i64 = 1000;
+
+/// Longest owner name, characters.
+pub const MAX_OWNER_CHARS: usize = 200;
+
+/// `POST /api/intents`'s body.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IntentRequest {
+    /// The route to plan, as `POST /api/plan` takes it.
+    plan: PlanRequest,
+    /// An RFC 3339 instant, or `{"earliest": …, "latest": …}`.
+    departure: Value,
+    /// 0 to 100; higher is more important.
+    priority: u32,
+    /// Who flies it.
+    owner: String,
+}
+
+fn bad(message: String) -> ApiError {
+    ApiError::bad_request(message)
+}
+
+fn instant(v: &Value, field: &str) -> Result<Timestamp, ApiError> {
+    let text = v
+        .as_str()
+        .ok_or_else(|| bad(format!("{field}: expected an RFC 3339 date-time string")))?;
+    text.parse().map_err(|e| bad(format!("{field}: {e}")))
+}
+
+/// The request's departure window, checked against `now`: not in the past (more than a minute),
+/// not beyond the horizon, not ending before it starts.
+fn window(v: &Value, now: Timestamp) -> Result<DepartureWindow, ApiError> {
+    let window = match v {
+        Value::String(_) => DepartureWindow::at(instant(v, "departure")?),
+        Value::Object(o) => {
+            if let Some(k) = o.keys().find(|k| *k != "earliest" && *k != "latest") {
+                return Err(bad(format!(
+                    "departure.{k}: unknown field, expected earliest and latest"
+                )));
+            }
+            DepartureWindow {
+                earliest: instant(
+                    o.get("earliest").unwrap_or(&Value::Null),
+                    "departure.earliest",
+                )?,
+                latest: instant(o.get("latest").unwrap_or(&Value::Null), "departure.latest")?,
+            }
+        }
+        _ => {
+            return Err(bad(
+                "departure: expected an RFC 3339 date-time or {\"earliest\": …, \"latest\": …}"
+                    .into(),
+            ));
+        }
+    };
+    if window.latest < window.earliest {
+        return Err(bad(format!(
+            "departure: the window ends ({}) before it starts ({})",
+            window.latest, window.earliest
+        )));
+    }
+    if window.earliest < now.plus_ms(-PAST_SLACK_MS) {
+        return Err(bad(format!(
+            "departure: {} is in the past (now {now})",
+            window.earliest
+        )));
+    }
+    if window.latest > now.plus_ms(HORIZON_MS) {
+        return Err(bad(format!(
+            "departure: {} is beyond the horizon of 30 days (now {now})",
+            window.latest
+        )));
+    }
+    Ok(window)
+}
+
+/// The store, or 503 when it could not be opened.
+fn store(s: &AppState) -> Result<Arc<dyn IntentStore>, ApiError> {
+    s.airspace
+        .clone()
+        .map_err(|why| ApiError::new(ErrorKind::StoreUnavailable, why))
+}
+
+fn store_error(e: StoreError) -> ApiError {
+    match e {
+        StoreError::Invalid(e) => bad(e.to_string()),
+        e => ApiError::new(ErrorKind::StoreUnavailable, e.to_string()),
+    }
+}
+
+/// Runs a store call on a blocking thread.
+async fn blocking<T: Send + 'static>(
+    f: impl FnOnce() -> Result<T, ApiError> + Send + 'static,
+) -> Result<T, ApiError> {
+    tokio::task::spawn_blocking(f)
+        .await
+        .map_err(|e| ApiError::internal(format!("the store's thread: {e}")))?
+}
+
+/// `POST /api/intents`: plans the route, then reserves the earliest free departure of the
+/// window (201), or names the intents that block it (409).
+pub(crate) async fn create(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<(StatusCode, Json<Value>), ApiError> {
+    let t0 = Instant::now();
+    let body = json_body(&headers, body)?;
+    let request: IntentRequest = parse_json(&body)?;
+    let window = window(&request.departure, Timestamp::now())?;
+    if request.priority > MAX_PRIORITY {
+        return Err(bad(format!(
+            "priority: {} is above {MAX_PRIORITY}",
+            request.priority
+        )));
+    }
+    let owner = request.owner.trim().to_string();
+    if owner.is_empty() || owner.chars().count() > MAX_OWNER_CHARS {
+        return Err(bad(format!(
+            "owner: expected 1 to {MAX_OWNER_CHARS} characters"
+        )));
+    }
+    crate::handlers::check_limits(&s, &request.plan)?;
+    if s.pool.world().frame().is_none() {
+        return Err(bad(format!(
+            "plan: the map {} has no geodetic home, so its routes have no latitude and longitude for an operational intent",
+            s.pool.world().name()
+        )));
+    }
+    let store = store(&s)?;
+    let plan_request = request.plan;
+    let shape = crate::handlers::shape(&plan_request);
+    let planned = s
+        .pool
+        .run(shape, move |session| session.plan(&plan_request))
+        .await?;
+    let plan = planned.map_err(ApiError::from)?;
+    let options = VolumeOptions::default();
+    let flight = volumes_from_plan(&plan, &options).map_err(|e| bad(format!("plan: {e}")))?;
+    let reservation = Reservation {
+        window,
+        priority: request.priority,
+        owner,
+        id: new_id(),
+        rule: PriorityRule::EqualOrHigher,
+        step_ms: DEPARTURE_STEP_MS,
+    };
+    let (timing, duration_s) = (flight.timing, flight.duration_s);
+    let reserved = blocking(move || {
+        reserve(store.as_ref(), &flight, &reservation).map_err(|e| match e {
+            ReserveError::Blocked(b) => {
+                ApiError::new(ErrorKind::Conflict, b.to_string()).with_conflicts(b.blocking)
+            }
+            ReserveError::Invalid(e) => bad(e.to_string()),
+            ReserveError::Store(e) => store_error(e),
+        })
+    })
+    .await?;
+    let request_id = s
+        .next_request_id
+        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let wall_time_us = u64::try_from(t0.elapsed().as_micros()).unwrap_or(u64::MAX);
+    let answer = json!({
+        "status": "ok",
+        "intent": reserved.intent,
+        "departure": reserved.departure,
+        "delay_s": reserved.delay_ms as f64 / 1000.0,
+        "duration_s": duration_s,
+        "timing": timing,
+        "nearby_intents": reserved.nearby,
+        "plan": plan_json(&plan, wall_time_us, request_id)?,
+    });
+    Ok((StatusCode::CREATED, Json(answer)))
+}
+
+/// `GET /api/intents`.
+pub(crate) async fn list(State(s): State<AppState>) -> Result<Json<Value>, ApiError> {
+    let store = store(&s)?;
+    let intents = blocking(move || store.list().map_err(store_error)).await?;
+    Ok(Json(json!({ "intents": intents })))
+}
+
+fn id_of(path: Result<Path<String>, PathRejection>) -> Result<String, ApiError> {
+    path.map(|Path(id)| id)
+        .map_err(|e| bad(format!("id: {}", e.body_text())))
+}
+
+fn no_such(id: &str) -> ApiError {
+    ApiError::new(ErrorKind::NotFound, format!("no intent with id {id:?}"))
+}
+
+/// `GET /api/intents/{id}`.
+pub(crate) async fn get(
+    State(s): State<AppState>,
+    path: Result<Path<String>, PathRejection>,
+) -> Result<Json<Value>, ApiError> {
+    let id = id_of(path)?;
+    let store = store(&s)?;
+    let key = id.clone();
+    let found = blocking(move || store.get(&key).map_err(store_error)).await?;
+    let intent = found.ok_or_else(|| no_such(&id))?;
+    Ok(Json(
+        serde_json::to_value(intent).map_err(|e| ApiError::internal(e.to_string()))?,
+    ))
+}
+
+/// `DELETE /api/intents/{id}`: the intent removed.
+pub(crate) async fn delete(
+    State(s): State<AppState>,
+    path: Result<Path<String>, PathRejection>,
+) -> Result<Json<Value>, ApiError> {
+    let id = id_of(path)?;
+    let store = store(&s)?;
+    let key = id.clone();
+    let found = blocking(move || store.delete(&key).map_err(store_error)).await?;
+    let intent = found.ok_or_else(|| no_such(&id))?;
+    Ok(Json(
+        serde_json::to_value(intent).map_err(|e| ApiError::internal(e.to_string()))?,
+    ))
+}
