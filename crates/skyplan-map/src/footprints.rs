@@ -283,33 +283,8 @@ pub fn parse_geojson_bytes(
             format!("{default_height_m} m: expected a finite height ≥ 0"),
         ));
     }
-    let root: Value = serde_json::from_slice(bytes).map_err(|e| {
-        err(
-            None,
-            "JSON",
-            format!(
-                "line {}, column {}: {}",
-                e.line(),
-                e.column(),
-                json_reason(&e)
-            ),
-        )
-    })?;
-    let kind = root.get("type").and_then(Value::as_str);
-    if kind != Some("FeatureCollection") {
-        return Err(err(
-            None,
-            "type",
-            format!(
-                "expected \"FeatureCollection\", found {}",
-                kind.map_or_else(|| "none".to_string(), |k| format!("\"{}\"", shorten(k)))
-            ),
-        ));
-    }
-    let features = root
-        .get("features")
-        .and_then(Value::as_array)
-        .ok_or_else(|| err(None, "features", "expected an array of features"))?;
+    let root = json_root(bytes)?;
+    let features = feature_list(&root)?;
     let mut out = GeoFootprints {
         buildings: Vec::with_capacity(features.len()),
         default_heights: 0,
@@ -331,6 +306,40 @@ pub fn parse_geojson_bytes(
         ));
     }
     Ok(out)
+}
+
+/// A JSON document (UTF-8 bytes), or an error naming the line and column.
+pub(crate) fn json_root(bytes: &[u8]) -> Result<Value, FootprintError> {
+    serde_json::from_slice(bytes).map_err(|e| {
+        err(
+            None,
+            "JSON",
+            format!(
+                "line {}, column {}: {}",
+                e.line(),
+                e.column(),
+                json_reason(&e)
+            ),
+        )
+    })
+}
+
+/// The features of a GeoJSON FeatureCollection, or an error naming what the document is instead.
+pub(crate) fn feature_list(root: &Value) -> Result<&Vec<Value>, FootprintError> {
+    let kind = root.get("type").and_then(Value::as_str);
+    if kind != Some("FeatureCollection") {
+        return Err(err(
+            None,
+            "type",
+            format!(
+                "expected \"FeatureCollection\", found {}",
+                kind.map_or_else(|| "none".to_string(), |k| format!("\"{}\"", shorten(k)))
+            ),
+        ));
+    }
+    root.get("features")
+        .and_then(Value::as_array)
+        .ok_or_else(|| err(None, "features", "expected an array of features"))
 }
 
 pub(crate) fn json_reason(e: &serde_json::Error) -> String {

@@ -30,7 +30,7 @@
 
 use crate::colliders::GeodeticHome;
 use crate::footprints::{
-    FootprintError, err, json_reason, metres, parse_polygon, position, shorten, shown,
+    FootprintError, err, feature_list, json_root, metres, parse_polygon, position, shorten, shown,
 };
 use serde_json::Value;
 use skyplan_frames::{Lla, LocalFrame};
@@ -225,19 +225,7 @@ impl NoFlyZones {
 /// assert_eq!(e.to_string(), "feature 0, properties.radius_m: a Point zone is a circle: expected its radius in metres > 0");
 /// ```
 pub fn parse_no_fly(text: &str) -> Result<NoFlyZones, FootprintError> {
-    let root: Value = serde_json::from_str(text).map_err(|e| {
-        err(
-            None,
-            "JSON",
-            format!(
-                "line {}, column {}: {}",
-                e.line(),
-                e.column(),
-                json_reason(&e)
-            ),
-        )
-    })?;
-    parse_no_fly_value(&root)
+    parse_no_fly_value(&json_root(text.as_bytes())?)
 }
 
 /// [`parse_no_fly`] of an already parsed JSON document.
@@ -245,21 +233,7 @@ pub fn parse_no_fly_value(root: &Value) -> Result<NoFlyZones, FootprintError> {
     if root.get("fileType").and_then(Value::as_str) == Some("Plan") {
         return parse_qgc_geofence(root);
     }
-    let kind = root.get("type").and_then(Value::as_str);
-    if kind != Some("FeatureCollection") {
-        return Err(err(
-            None,
-            "type",
-            format!(
-                "expected \"FeatureCollection\", found {}",
-                kind.map_or_else(|| "none".to_string(), |k| format!("\"{}\"", shorten(k)))
-            ),
-        ));
-    }
-    let features = root
-        .get("features")
-        .and_then(Value::as_array)
-        .ok_or_else(|| err(None, "features", "expected an array of features"))?;
+    let features = feature_list(root)?;
     let mut vertices = 0;
     let zones = features
         .iter()
