@@ -12,6 +12,7 @@ use skyplan_search::oracle::dijkstra_exact;
 use std::path::{Path, PathBuf};
 mod common;
 use common::{fails_with, ok_json, rows};
+use skyplan_testkit::distance_to_segment;
 
 const SAMPLE: &str = include_str!("../../../data/footprints-sample.geojson");
 
@@ -33,17 +34,6 @@ fn cell(p: &Value) -> Cell {
     )
 }
 
-fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let len2 = d[0] * d[0] + d[1] * d[1];
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a[0] + t * d[0] - p[0]).hypot(a[1] + t * d[1] - p[1])
-}
-
 fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
@@ -53,10 +43,10 @@ fn segment_segment(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     if orient(a, b, c) * orient(a, b, d) <= 0.0 && orient(c, d, a) * orient(c, d, b) <= 0.0 {
         return 0.0;
     }
-    point_segment(a, c, d)
-        .min(point_segment(b, c, d))
-        .min(point_segment(c, a, b))
-        .min(point_segment(d, a, b))
+    distance_to_segment(a, c, d)
+        .min(distance_to_segment(b, c, d))
+        .min(distance_to_segment(c, a, b))
+        .min(distance_to_segment(d, a, b))
 }
 
 /// Even-odd inside test of a point in a polygon with holes.

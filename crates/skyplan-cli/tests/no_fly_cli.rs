@@ -10,22 +10,12 @@ use skyplan_map::nofly::{Zone, ZoneShape, parse_no_fly};
 use std::path::{Path, PathBuf};
 mod common;
 use common::{fails_with, ok_json, rows};
+use skyplan_testkit::distance_to_segment;
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../data")
         .join(name)
-}
-
-fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let len2 = d[0] * d[0] + d[1] * d[1];
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a[0] + t * d[0] - p[0]).hypot(a[1] + t * d[1] - p[1])
 }
 
 /// The route's smallest distance to a zone: circles by their centre; polygons by sampling
@@ -36,7 +26,7 @@ fn clearance(wps: &[[f64; 4]], z: &Zone) -> f64 {
         let (a, b) = ([w[0][0], w[0][1]], [w[1][0], w[1][1]]);
         match &z.shape {
             ZoneShape::Circle { centre, radius_m } => {
-                best = best.min(point_segment(*centre, a, b) - radius_m);
+                best = best.min(distance_to_segment(*centre, a, b) - radius_m);
             }
             ZoneShape::Polygon(rings) => {
                 let n = ((a[0] - b[0]).hypot(a[1] - b[1]) / 0.01).ceil().max(1.0) as usize;
@@ -48,7 +38,7 @@ fn clearance(wps: &[[f64; 4]], z: &Zone) -> f64 {
                     for ring in rings {
                         for i in 0..ring.len() {
                             let (c, e) = (ring[i], ring[(i + 1) % ring.len()]);
-                            d = d.min(point_segment(p, c, e));
+                            d = d.min(distance_to_segment(p, c, e));
                             if (c[0] > p[0]) != (e[0] > p[0])
                                 && p[1] < c[1] + (p[0] - c[0]) / (e[0] - c[0]) * (e[1] - c[1])
                             {

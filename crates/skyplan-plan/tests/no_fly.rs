@@ -6,23 +6,13 @@
 use skyplan_map::colliders::GeodeticHome;
 use skyplan_map::nofly::{Zone, ZoneShape, parse_no_fly};
 use skyplan_plan::{FailureKind, PlanRequest, PlannerId, Session, World};
+use skyplan_testkit::distance_to_segment;
 
 const ZONES: &str = include_str!("../../../data/no-fly-sample.geojson");
 const CITY_HOME: GeodeticHome = GeodeticHome {
     lat_deg: 37.792480,
     lon_deg: -122.397450,
 };
-
-fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let len2 = d[0] * d[0] + d[1] * d[1];
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a[0] + t * d[0] - p[0]).hypot(a[1] + t * d[1] - p[1])
-}
 
 fn segments_cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
     let o = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
@@ -48,7 +38,7 @@ fn inside(p: [f64; 2], ring: &[[f64; 2]]) -> bool {
 fn segment_zone_m(a: [f64; 2], b: [f64; 2], z: &Zone) -> f64 {
     match &z.shape {
         ZoneShape::Circle { centre, radius_m } => {
-            (point_segment_m(*centre, a, b) - radius_m).max(0.0)
+            (distance_to_segment(*centre, a, b) - radius_m).max(0.0)
         }
         ZoneShape::Polygon(rings) => {
             if inside(a, &rings[0]) && !rings[1..].iter().any(|h| inside(a, h)) {
@@ -62,10 +52,10 @@ fn segment_zone_m(a: [f64; 2], b: [f64; 2], z: &Zone) -> f64 {
                         return 0.0;
                     }
                     best = best
-                        .min(point_segment_m(a, c, d))
-                        .min(point_segment_m(b, c, d))
-                        .min(point_segment_m(c, a, b))
-                        .min(point_segment_m(d, a, b));
+                        .min(distance_to_segment(a, c, d))
+                        .min(distance_to_segment(b, c, d))
+                        .min(distance_to_segment(c, a, b))
+                        .min(distance_to_segment(d, a, b));
                 }
             }
             best
