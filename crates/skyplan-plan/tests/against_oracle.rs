@@ -2,7 +2,7 @@
 //! start and goal drawn among free cells (no case is skipped).
 
 use proptest::prelude::*;
-use skyplan_cspace::{Cell, Grid2, GridFrame};
+use skyplan_cspace::{Cell, Grid2};
 use skyplan_plan::{FailureKind, MapKinds, Optimality, PlanRequest, PlannerId, Session, World};
 use skyplan_search::{MoveModel, oracle::dijkstra_exact};
 
@@ -27,20 +27,7 @@ fn every_exact_planner_is_a_grid_planner_taking_the_move_model() {
 }
 
 fn grid_and_ends() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
-    (2u32..14, 2u32..14, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
-        let n = (rows * cols) as usize;
-        (
-            proptest::collection::vec(proptest::bool::weighted(density), n),
-            0..n,
-            0..n,
-        )
-            .prop_map(move |(mut blocked, a, b)| {
-                blocked[a] = false;
-                blocked[b] = false;
-                let grid = Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap();
-                (grid.clone(), grid.cell(a), grid.cell(b))
-            })
-    })
+    skyplan_testkit::arb_grid_and_ends(14)
 }
 
 proptest! {

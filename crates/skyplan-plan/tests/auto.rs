@@ -3,26 +3,13 @@
 //! to the JPS+ table it builds once and then reuses, told in the plan's details and summary.
 
 use proptest::prelude::*;
-use skyplan_cspace::{Cell, Grid2, GridFrame};
+use skyplan_cspace::{Cell, Grid2};
 use skyplan_plan::auto::{CH_QUERIES, JPS_PLUS_QUERIES, MapStats, pick};
 use skyplan_plan::{CellSearch, PlanRequest, PlannerId, Session, World};
 use skyplan_search::{MoveModel, oracle::dijkstra_exact};
 
 fn grid_and_ends() -> impl Strategy<Value = (Grid2, Cell, Cell)> {
-    (2u32..16, 2u32..16, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
-        let n = (rows * cols) as usize;
-        (
-            proptest::collection::vec(proptest::bool::weighted(density), n),
-            0..n,
-            0..n,
-        )
-            .prop_map(move |(mut blocked, a, b)| {
-                blocked[a] = false;
-                blocked[b] = false;
-                let grid = Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap();
-                (grid.clone(), grid.cell(a), grid.cell(b))
-            })
-    })
+    skyplan_testkit::arb_grid_and_ends(16)
 }
 
 proptest! {

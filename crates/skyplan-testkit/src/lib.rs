@@ -3,7 +3,7 @@
 //! the distance from a point to a route segment, and fixed far-apart grid queries.
 
 use proptest::prelude::*;
-use skyplan_cspace::{Cell, Grid2};
+use skyplan_cspace::{Cell, Grid2, GridFrame};
 use skyplan_map::colliders::ObstacleBox;
 use skyplan_world3::{BoxWorld3, Neu, WorldSpec};
 use std::ops::Range;
@@ -127,4 +127,31 @@ pub fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
         0.0
     };
     (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+}
+
+/// A random grid of 2..`max_side` rows and columns, up to 45 % blocked, with two free cells
+/// (start and goal, possibly the same): the usual case for checking a planner against an oracle.
+///
+/// ```
+/// use proptest::strategy::{Strategy, ValueTree};
+/// let mut runner = proptest::test_runner::TestRunner::deterministic();
+/// let (grid, start, goal) = skyplan_testkit::arb_grid_and_ends(8).new_tree(&mut runner).unwrap().current();
+/// assert!(!grid.is_blocked(start) && !grid.is_blocked(goal));
+/// ```
+pub fn arb_grid_and_ends(max_side: u32) -> impl Strategy<Value = (Grid2, Cell, Cell)> {
+    (2..max_side, 2..max_side, 0.0f64..0.45).prop_flat_map(|(rows, cols, density)| {
+        let n = (rows * cols) as usize;
+        (
+            proptest::collection::vec(proptest::bool::weighted(density), n),
+            0..n,
+            0..n,
+        )
+            .prop_map(move |(mut blocked, a, b)| {
+                blocked[a] = false;
+                blocked[b] = false;
+                let grid = Grid2::new(rows, cols, blocked, GridFrame::default())
+                    .expect("a valid random grid");
+                (grid.clone(), grid.cell(a), grid.cell(b))
+            })
+    })
 }
