@@ -12,7 +12,8 @@ use axum::http::{HeaderMap, StatusCode};
 use serde::Deserialize;
 use serde_json::{Value, json};
 use skyplan_airspace::{
-    DepartureWindow, MAX_PRIORITY, PriorityRule, Timestamp, VolumeOptions, volumes_from_plan,
+    DepartureWindow, MAX_PRIORITY, OperationalIntent, PriorityRule, Timestamp, VolumeOptions,
+    volumes_from_plan,
 };
 use skyplan_airspace_store::{IntentStore, Reservation, ReserveError, StoreError, new_id, reserve};
 use skyplan_plan::PlanRequest;
@@ -218,19 +219,28 @@ fn no_such(id: &str) -> ApiError {
     ApiError::new(ErrorKind::NotFound, format!("no intent with id {id:?}"))
 }
 
+/// The intent `path` names, after `op` (read or remove) on the store; 404 when there is none.
+async fn one_intent(
+    s: &AppState,
+    path: Result<Path<String>, PathRejection>,
+    op: fn(&dyn IntentStore, &str) -> Result<Option<OperationalIntent>, StoreError>,
+) -> Result<Json<Value>, ApiError> {
+    let id = id_of(path)?;
+    let store = store(s)?;
+    let key = id.clone();
+    let found = blocking(move || op(store.as_ref(), &key).map_err(store_error)).await?;
+    let intent = found.ok_or_else(|| no_such(&id))?;
+    Ok(Json(
+        serde_json::to_value(intent).map_err(|e| ApiError::internal(e.to_string()))?,
+    ))
+}
+
 /// `GET /api/intents/{id}`.
 pub(crate) async fn get(
     State(s): State<AppState>,
     path: Result<Path<String>, PathRejection>,
 ) -> Result<Json<Value>, ApiError> {
-    let id = id_of(path)?;
-    let store = store(&s)?;
-    let key = id.clone();
-    let found = blocking(move || store.get(&key).map_err(store_error)).await?;
-    let intent = found.ok_or_else(|| no_such(&id))?;
-    Ok(Json(
-        serde_json::to_value(intent).map_err(|e| ApiError::internal(e.to_string()))?,
-    ))
+    one_intent(&s, path, |store, id| store.get(id)).await
 }
 
 /// `DELETE /api/intents/{id}`: the intent removed.
@@ -238,12 +248,5 @@ pub(crate) async fn delete(
     State(s): State<AppState>,
     path: Result<Path<String>, PathRejection>,
 ) -> Result<Json<Value>, ApiError> {
-    let id = id_of(path)?;
-    let store = store(&s)?;
-    let key = id.clone();
-    let found = blocking(move || store.delete(&key).map_err(store_error)).await?;
-    let intent = found.ok_or_else(|| no_such(&id))?;
-    Ok(Json(
-        serde_json::to_value(intent).map_err(|e| ApiError::internal(e.to_string()))?,
-    ))
+    one_intent(&s, path, |store, id| store.delete(id)).await
 }
