@@ -45,6 +45,7 @@
 
 #![warn(missing_docs)]
 
+mod active_set;
 mod bezier;
 mod check;
 mod corridor;
