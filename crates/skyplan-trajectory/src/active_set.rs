@@ -41,16 +41,50 @@ pub(crate) struct AxisProblem<'a> {
     pub warm: Option<Vec<[f64; 3]>>,
 }
 
+/// Up to six `(state, coefficient)` terms, inline (a control point has at most three, a
+/// difference of two at most six): rows are read in every iteration, so no pointer to chase.
+#[derive(Clone, Copy, Default)]
+struct Terms {
+    items: [(usize, f64); 6],
+    len: usize,
+}
+
+impl Terms {
+    fn one(i: usize, v: f64) -> Self {
+        let mut t = Self::default();
+        t.push((i, v));
+        t
+    }
+
+    fn push(&mut self, term: (usize, f64)) {
+        self.items[self.len] = term;
+        self.len += 1;
+    }
+}
+
+impl std::ops::Deref for Terms {
+    type Target = [(usize, f64)];
+    fn deref(&self) -> &Self::Target {
+        &self.items[..self.len]
+    }
+}
+
+impl std::ops::DerefMut for Terms {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.items[..self.len]
+    }
+}
+
 /// A linear expression over the free states plus a constant.
-#[derive(Clone, Default)]
+#[derive(Clone, Copy, Default)]
 struct Expr {
-    terms: Vec<(usize, f64)>,
+    terms: Terms,
     constant: f64,
 }
 
 /// A constraint `g · y ≤ b` over the free states.
 struct Row {
-    g: Vec<(usize, f64)>,
+    g: Terms,
     b: f64,
     /// `|g|₁`.
     norm: f64,
@@ -173,18 +207,18 @@ impl AxisProblem<'_> {
             }
             if j == n {
                 return Expr {
-                    terms: vec![],
+                    terms: Terms::default(),
                     constant: if r == 0 { self.goal } else { 0.0 },
                 };
             }
             let s = 3 * (j - 1) + r;
             match fixed[s] {
                 Some(v) => Expr {
-                    terms: vec![],
+                    terms: Terms::default(),
                     constant: v,
                 },
                 None => Expr {
-                    terms: vec![(free_of[s], 1.0)],
+                    terms: Terms::one(free_of[s], 1.0),
                     constant: 0.0,
                 },
             }
@@ -205,7 +239,9 @@ impl AxisProblem<'_> {
                 }
                 let st = state(j, r);
                 e.constant += c * st.constant;
-                e.terms.extend(st.terms.iter().map(|&(i, v)| (i, c * v)));
+                for &(i, v) in st.terms.iter() {
+                    e.terms.push((i, c * v));
+                }
             }
             e
         };
@@ -221,8 +257,8 @@ impl AxisProblem<'_> {
                     if h == 0.0 {
                         continue;
                     }
-                    for &(i, vi) in &ca.terms {
-                        for &(j, vj) in &cb.terms {
+                    for &(i, vi) in ca.terms.iter() {
+                        for &(j, vj) in cb.terms.iter() {
                             // Entry (i, j) of the symmetric Q; the lower band holds i ≥ j.
                             if i >= j {
                                 q.add(i, j, h * vi * vj)?;
@@ -244,7 +280,8 @@ impl AxisProblem<'_> {
                 // A constant point (the start, the goal): it must already hold, to a hair.
                 return (sign * e.constant <= bound + 2.0 * self.hair + 1e-9).then_some(());
             }
-            let mut g: Vec<(usize, f64)> = e.terms.iter().map(|&(i, v)| (i, sign * v)).collect();
+            let mut g = e.terms;
+            g.iter_mut().for_each(|t| t.1 *= sign);
             g.sort_by_key(|t| t.0);
             rows.push(Row {
                 norm: g.iter().map(|t| t.1.abs()).sum(),
@@ -272,13 +309,13 @@ impl AxisProblem<'_> {
                 for k in 0..5 {
                     let (a, b) = (control(p, k + 1), control(p, k));
                     let mut d = Expr {
-                        terms: a.terms.clone(),
+                        terms: a.terms,
                         constant: c * (a.constant - b.constant),
                     };
-                    for t in &mut d.terms {
-                        t.1 *= c;
+                    d.terms.iter_mut().for_each(|t| t.1 *= c);
+                    for &(i, v) in b.terms.iter() {
+                        d.terms.push((i, -c * v));
                     }
-                    d.terms.extend(b.terms.iter().map(|&(i, v)| (i, -c * v)));
                     push(&d, 1.0, up)?;
                     push(&d, -1.0, down)?;
                 }
@@ -481,7 +518,7 @@ impl AxisProblem<'_> {
                     break (alpha, false);
                 };
                 let mut zi = vec![0.0; nfree];
-                for &(k, v) in &rows[i].g {
+                for &(k, v) in rows[i].g.iter() {
                     zi[k] = v;
                 }
                 q.solve(&mut zi);

@@ -487,8 +487,8 @@ fn shape(
             None => cells[..n - 1].iter().map(|c| shifted(c.to)).collect(),
         },
         active_set: true,
-        warm: warm.map(|pieces| {
-            pieces[1..]
+        warm: Some(match warm {
+            Some(pieces) => pieces[1..]
                 .iter()
                 .map(|p| {
                     let c = &p.control_points_neu;
@@ -499,7 +499,20 @@ fn shape(
                         [0, 1, 2].map(|d| 20.0 * (c[2][d] - 2.0 * c[1][d] + c[0][d]) / (t * t)),
                     ]
                 })
-                .collect()
+                .collect(),
+            // No solution yet: the route's joins, moving along the route at the pace the
+            // durations give (the chord over the two pieces around the join).
+            None => (0..n - 1)
+                .map(|p| {
+                    let (a, b) = (cells[p].from, cells[p + 1].to);
+                    let t = times[p] + times[p + 1];
+                    [
+                        shifted(cells[p].to),
+                        [0, 1, 2].map(|d| (b[d] - a[d]) / t),
+                        [0.0; 3],
+                    ]
+                })
+                .collect(),
         }),
         hair: HAIR_M,
     };
