@@ -222,6 +222,15 @@ pub struct PlanArgs {
     /// prm, lazy-prm: start from a saved roadmap (refused if built for another map, margin or volume).
     #[arg(long, value_name = "FILE")]
     pub load_roadmap: Option<PathBuf>,
+    /// jps-plus, ch: plan with the JPS+ table or contraction hierarchy saved in FILE (by
+    /// --save-preprocess) instead of building one; refused unless FILE was built for this map's
+    /// grid (altitude, margin, cell size) and corner rule.
+    #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
+    pub preprocess: Option<PathBuf>,
+    /// jps-plus, ch: save the JPS+ table or contraction hierarchy this plan used to FILE (for
+    /// --preprocess in later runs: a far query on a large map then needs no preprocessing).
+    #[arg(long, value_name = "FILE")]
+    pub save_preprocess: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]

@@ -254,6 +254,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     }
     prompt_missing(&world, &mut request)?;
     let mut session = Session::new(world).with_limits(limits);
+    let save_preprocess = preprocess_files(&args, planner, &mut session, &request)?;
     let working = spinner(planner);
     let planned = session.plan(&request);
     working.finish_and_clear();
@@ -266,6 +267,34 @@ fn run_inner(args: PlanArgs) -> Result<()> {
             return Err(f.into());
         }
     };
+    if let Some(path) = &args.preprocess {
+        // A table for another grid loads, but this plan's grid then builds its own.
+        let what = ["jps_plus_table", "contraction_hierarchy"];
+        if what
+            .iter()
+            .any(|k| plan.details.get(*k).and_then(|v| v.as_str()) == Some("built"))
+        {
+            return Err(bad_input(format!(
+                "--preprocess {}: built for another grid or corner rule than this plan's ({} m altitude, {} m margin, {} m cells); save one with --save-preprocess and these options",
+                path.display(),
+                plan.spec.alt_m,
+                plan.spec.safety_m,
+                plan.spec.cell_m
+            )));
+        }
+    }
+    if let Some(path) = &save_preprocess {
+        // The table or hierarchy the plan used (the session keeps it: nothing is built again),
+        // streamed from its memory into a file that appears only once complete.
+        crate::files::write_atomic_with(path, |out| {
+            match planner {
+                PlannerId::Ch => session.save_ch(&request, out),
+                _ => session.save_jps_plus(&request, out),
+            }
+            .map(|_| ())
+            .map_err(|f| std::io::Error::other(f.message))
+        })?;
+    }
     let fence = geo_fence(&request, plan.spec.alt_m, plan.spec.safety_m);
     let written = write_outputs(session.world(), &plan, &outputs, &fence)?;
     if args.show {
@@ -281,6 +310,46 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         human.print(&crate::report::summary(&plan, &written, wall_ms));
     }
     Ok(())
+}
+
+/// `--preprocess` (loaded into the session before planning) and `--save-preprocess` (its target,
+/// checked before planning so that a failing run writes nothing): for `jps-plus` a JPS+ table,
+/// for `ch` a contraction hierarchy; other planners build nothing to keep.
+fn preprocess_files(
+    args: &PlanArgs,
+    planner: PlannerId,
+    session: &mut Session,
+    request: &PlanRequest,
+) -> Result<Option<PathBuf>> {
+    let (option, path) = match (&args.preprocess, &args.save_preprocess) {
+        (Some(p), _) => ("--preprocess", p),
+        (None, Some(p)) => ("--save-preprocess", p),
+        (None, None) => return Ok(None),
+    };
+    if !matches!(planner, PlannerId::JpsPlus | PlannerId::Ch) {
+        return Err(bad_input(format!(
+            "{option} {}: only jps-plus (a JPS+ table) and ch (a contraction hierarchy) keep preprocessing; the planner is {planner}",
+            path.display()
+        )));
+    }
+    let Some(path) = &args.preprocess else {
+        if matches!(output_target("--save-preprocess", path)?, Target::Stdout) {
+            return Err(bad_input(
+                "--save-preprocess -: the table is binary and large; give a file name",
+            ));
+        }
+        return Ok(Some(path.clone()));
+    };
+    let shown = path.display();
+    let file = std::fs::File::open(path)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
+    let input = std::io::BufReader::new(file);
+    match planner {
+        PlannerId::Ch => session.load_ch(request, input),
+        _ => session.load_jps_plus(input),
+    }
+    .map_err(|f| bad_input(format!("--preprocess {shown}: {}", f.message)))?;
+    Ok(None)
 }
 
 /// A spinner with the elapsed time on a terminal's stderr while the planner works: a contraction

@@ -355,3 +355,94 @@ fn theta_star_is_shorter_than_the_octile_optimum_and_still_free() {
     let grid = city_grid(GridSpec::default());
     assert_segments_free(&grid, &rows(&v), Touch::Closed);
 }
+
+/// `plan --save-preprocess` keeps the JPS+ table the plan built; `--preprocess` plans with it
+/// (the same route, nothing built); a cut file, another planner and another grid are refused
+/// before anything is written.
+#[test]
+fn a_saved_jps_plus_table_plans_the_same_route_without_building() {
+    let dir = tempfile::tempdir().unwrap();
+    let saved = run_json(
+        dir.path(),
+        "--planner jps-plus --save-preprocess city.jpsplus",
+    );
+    assert_eq!(saved["jps_plus_table"], "built");
+    let bytes = std::fs::read(dir.path().join("city.jpsplus")).unwrap();
+    assert!(bytes.len() > 921 * 921, "{} bytes", bytes.len());
+    let loaded = run_json(dir.path(), "--planner jps-plus --preprocess city.jpsplus");
+    assert_eq!(loaded["jps_plus_table"], "reused");
+    assert_eq!(loaded["cost_m"], saved["cost_m"]);
+    assert_eq!(loaded["waypoints"], saved["waypoints"]);
+    let plain = run_json(dir.path(), "--planner jps");
+    assert_eq!(
+        loaded["cost_m"], plain["cost_m"],
+        "JPS+ and JPS are both exact"
+    );
+
+    std::fs::write(dir.path().join("cut.jpsplus"), &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::remove_file(dir.path().join("waypoints.json")).ok();
+    fails_with(
+        dir.path(),
+        "plan --planner jps-plus --preprocess cut.jpsplus",
+        2,
+        &["--preprocess cut.jpsplus", "truncated"],
+    );
+    fails_with(
+        dir.path(),
+        "plan --preprocess city.jpsplus",
+        2,
+        &["--preprocess city.jpsplus", "only jps-plus", "ch"],
+    );
+    fails_with(
+        dir.path(),
+        "plan --planner jps-plus --alt-m 20 --preprocess city.jpsplus",
+        2,
+        &["--preprocess city.jpsplus", "another grid", "20 m altitude"],
+    );
+    assert_no_waypoints(dir.path(), "a refused --preprocess writes no waypoints");
+    fails_with(
+        dir.path(),
+        "plan --planner jps-plus --save-preprocess -",
+        2,
+        &["--save-preprocess -", "file name"],
+    );
+}
+
+/// The same for a contraction hierarchy on a MovingAI map; a hierarchy of the octile grid is
+/// refused for the corner-cutting one.
+#[test]
+fn a_saved_contraction_hierarchy_plans_the_same_route_without_building() {
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/movingai/den312d.map"
+    );
+    let ends = "--start-ne 3.5,10.5 --goal-ne 70.5,40.5";
+    let dir = tempfile::tempdir().unwrap();
+    let saved = run_json(
+        dir.path(),
+        &format!("--map {map} {ends} --planner ch --save-preprocess den.ch"),
+    );
+    assert_eq!(saved["contraction_hierarchy"], "built");
+    let loaded = run_json(
+        dir.path(),
+        &format!("--map {map} {ends} --planner ch --preprocess den.ch"),
+    );
+    assert_eq!(loaded["contraction_hierarchy"], "reused");
+    assert_eq!(loaded["cost_m"], saved["cost_m"]);
+    // An independent oracle: Dijkstra over the same grid.
+    let jps = run_json(
+        dir.path(),
+        &format!("--map {map} {ends} --planner dijkstra"),
+    );
+    let (a, b) = (
+        loaded["cost_m"].as_f64().unwrap(),
+        jps["cost_m"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() < 1e-9, "ch {a} against dijkstra {b}");
+    fails_with(
+        dir.path(),
+        &format!("plan --map {map} {ends} --planner ch --corner-cutting --preprocess den.ch"),
+        2,
+        &["--preprocess den.ch", "corner cutting"],
+    );
+}
