@@ -224,7 +224,8 @@ fn conclude(
             flight.log.len()
         );
     }
-    finish_flight(report, outcome, runner::plan_margin_m(&flight.plan), t0)
+    let margin_m = runner::plan_margin_m(&flight.plan);
+    finish_flight(report, outcome, margin_m, flight.tracking.as_ref(), t0)
 }
 
 /// The obstacles of the simulated world that the map does not have: `--hidden FILE` and
@@ -328,18 +329,20 @@ fn fly_options(a: &FlyArgs) -> FlyOptions {
 
 /// The simulator's track report and the flight's exit: 0 only when landed and disarmed with
 /// every waypoint reached and, on the simulator, no collision and never within half the route's
-/// safety margin `margin_m` of an obstacle.
+/// safety margin `margin_m` of an obstacle; a flight by a trajectory, never further than that
+/// from its setpoints.
 fn finish_flight(
     report: Option<&SimReport>,
     outcome: Option<Outcome>,
     margin_m: Option<f64>,
+    tracking: Option<&skyplan_flight::executor::TrackingReport>,
     t0: Instant,
 ) -> Result<()> {
     if let Some(r) = report {
         println!("{}", flight::track_line(r, margin_m));
     }
     println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
-    runner::verdict(outcome, report, margin_m).map_err(|e| match e {
+    runner::verdict(outcome, report, margin_m, tracking).map_err(|e| match e {
         Unfinished::NoRoute(_) => Failure::new(Kind::NoPath, e),
         e => runtime(e),
     })

@@ -43,13 +43,15 @@ pub fn fly<E: FlightExecutor>(
     frame: &LocalFrame,
     observer: &mut dyn Observer,
 ) -> Result<Flown, GroundError> {
-    // Waypoints of the route being flown (a replan brings a new route).
+    // Waypoints of the route being flown (a replan, or the way home, brings a new route).
     let mut n = ex.targets().len();
     let mut summary = gcs.fly(ex, frame, |u| {
         match &u {
             Update::Notes(t, notes) => {
                 for note in notes {
-                    if let Note::Replanned { targets, .. } = note {
+                    if let Note::Replanned { targets, .. } | Note::ReturningHome { targets, .. } =
+                        note
+                    {
                         n = targets.len();
                     }
                     if let Some(line) = note_line(*t, n, note) {

@@ -10,7 +10,7 @@ use skyplan_flight::auto::{AutoExecutor, MissionLayout};
 use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{
     ExecutorConfig, FailsafeAction, FlightExecutor, FlightState, MissionExecutor, Note, Outcome,
-    ReferenceExecutor, Target, Telemetry,
+    ReferenceExecutor, Target, Telemetry, TrackingReport,
 };
 use skyplan_flight::reference::Reference;
 use skyplan_flight::sim::DEFAULT_RTL_ALT_M;
@@ -196,6 +196,8 @@ pub struct Flight {
     pub watcher: Option<SharedReplanner>,
     /// Every replanned route as (north, east) points.
     pub replanned: Vec<Vec<(f64, f64)>>,
+    /// How a flight by a reference (`fly --trajectory`) followed it.
+    pub tracking: Option<TrackingReport>,
 }
 
 impl Flight {
@@ -348,6 +350,7 @@ pub fn fly_mission_with<O: RunObserver>(
             plan,
             watcher: None,
             replanned: Vec::new(),
+            tracking: ex.tracking(),
         });
     }
     let Mode::Upload { fly } = o.mode else {
@@ -359,6 +362,7 @@ pub fn fly_mission_with<O: RunObserver>(
             plan,
             watcher,
             replanned,
+            tracking: None,
         });
     };
     // `--upload`: the plan as a mission (ArduPilot's item 0 is its home; PX4 has none), uploaded,
@@ -391,6 +395,7 @@ pub fn fly_mission_with<O: RunObserver>(
         plan,
         watcher: None,
         replanned: Vec::new(),
+        tracking: None,
     })
 }
 
@@ -707,6 +712,18 @@ pub enum Unfinished {
     /// The flight was aborted and the vehicle did not land in time.
     #[error("flight aborted and the vehicle did not land in time: check it")]
     NotLanded,
+    /// The vehicle landed at the end of its reference, but strayed from it by more than half
+    /// the route's safety margin: the trajectory is proven free with the margin, the vehicle
+    /// flying that far off it is not.
+    #[error(
+        "the flight completed but the vehicle strayed up to {max_error_m:.2} m from its trajectory, more than half ({half_m} m) the route's {margin_m} m safety margin: not done (fly slower: lower --max-speed-m-s and --max-accel-m-s2, or check the vehicle's tuning)", half_m = margin_m / 2.0
+    )]
+    OffTrack {
+        /// The largest distance between the vehicle and its setpoint, metres.
+        max_error_m: f64,
+        /// The safety margin the route was planned with, metres.
+        margin_m: f64,
+    },
 }
 
 /// The safety margin a plan was made with, metres (its resolved spec; every planner has one).
@@ -723,17 +740,26 @@ pub fn plan_margin_m(plan: &Plan) -> Option<f64> {
 /// use skyplan_flight::executor::Outcome;
 /// use skyplan_flyer::runner::{Unfinished, verdict};
 ///
-/// assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0)), Ok(()));
-/// assert_eq!(verdict(None, None, Some(5.0)), Err(Unfinished::NotLanded));
+/// assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0), None), Ok(()));
+/// assert_eq!(verdict(None, None, Some(5.0), None), Err(Unfinished::NotLanded));
 /// ```
 pub fn verdict(
     outcome: Option<Outcome>,
     report: Option<&skyplan_link::vehicle::SimReport>,
     margin_m: Option<f64>,
+    tracking: Option<&TrackingReport>,
 ) -> Result<(), Unfinished> {
     use skyplan_flight::executor::Failure;
     match outcome {
         Some(Outcome::Completed) => {
+            if let (Some(t), Some(margin_m)) = (tracking, margin_m)
+                && t.max_tracking_error_m > 0.5 * margin_m
+            {
+                return Err(Unfinished::OffTrack {
+                    max_error_m: t.max_tracking_error_m,
+                    margin_m,
+                });
+            }
             let track = report.map(|r| &r.track);
             if let Some(c) = track.and_then(|t| t.collision()) {
                 return Err(Unfinished::Collided {
@@ -855,20 +881,60 @@ mod tests {
         let no_route = Failure::NoRoute {
             reason: "the goal is walled in".into(),
         };
-        let got = verdict(Some(Outcome::Failed(no_route.clone())), None, Some(5.0));
+        let got = verdict(
+            Some(Outcome::Failed(no_route.clone())),
+            None,
+            Some(5.0),
+            None,
+        );
         assert_eq!(got, Err(Unfinished::NoRoute(no_route)));
         let lost = Failure::LinkLost {
             state: FlightState::Waypoint,
             silent_s: 6.0,
         };
-        let got = verdict(Some(Outcome::Failed(lost.clone())), None, Some(5.0)).unwrap_err();
+        let got = verdict(Some(Outcome::Failed(lost.clone())), None, Some(5.0), None).unwrap_err();
         assert_eq!(got.to_string(), format!("flight failed: {lost}"));
-        assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0)), Ok(()));
+        assert_eq!(
+            verdict(Some(Outcome::Completed), None, Some(5.0), None),
+            Ok(())
+        );
         assert!(
-            verdict(None, None, Some(5.0))
+            verdict(None, None, Some(5.0), None)
                 .unwrap_err()
                 .to_string()
                 .contains("did not land in time")
+        );
+    }
+
+    /// A trajectory flight that landed fails once the vehicle strayed from its setpoints by
+    /// more than half the margin (51 m seen against ArduCopter SITL at 10 m/s), not before.
+    #[test]
+    fn a_reference_flight_far_off_its_trajectory_is_not_done() {
+        let tracking = |max_tracking_error_m| TrackingReport {
+            duration_s: 113.2,
+            started_s: Some(0.0),
+            flown_s: Some(114.4),
+            max_tracking_error_m,
+            samples: 500,
+            setpoints_sent: 1200,
+        };
+        let done = Some(Outcome::Completed);
+        assert_eq!(
+            verdict(done.clone(), None, Some(5.0), Some(&tracking(2.4))),
+            Ok(())
+        );
+        let got = verdict(done, None, Some(5.0), Some(&tracking(51.05))).unwrap_err();
+        assert_eq!(
+            got,
+            Unfinished::OffTrack {
+                max_error_m: 51.05,
+                margin_m: 5.0
+            }
+        );
+        let text = got.to_string();
+        assert!(
+            text.contains("51.05 m") && text.contains("2.5 m") && text.contains("--max-speed-m-s"),
+            "{text}"
         );
     }
 
@@ -906,7 +972,7 @@ mod tests {
     fn a_completed_flight_closer_than_half_the_margin_is_not_done() {
         // The tower's face is 2 m from the track: inside half of a 5 m margin, outside half of 3 m.
         let report = report_past_tower(3.0);
-        let got = verdict(Some(Outcome::Completed), Some(&report), Some(5.0));
+        let got = verdict(Some(Outcome::Completed), Some(&report), Some(5.0), None);
         let Err(Unfinished::TooClose {
             clearance_m,
             margin_m,
@@ -928,18 +994,18 @@ mod tests {
             "{text}"
         );
         assert_eq!(
-            verdict(Some(Outcome::Completed), Some(&report), Some(3.0)),
+            verdict(Some(Outcome::Completed), Some(&report), Some(3.0), None),
             Ok(())
         );
         // Without a margin to judge by, only collisions count.
         assert_eq!(
-            verdict(Some(Outcome::Completed), Some(&report), None),
+            verdict(Some(Outcome::Completed), Some(&report), None, None),
             Ok(())
         );
         // A collision is told as one, whatever the margin.
         let hit = report_past_tower(0.5);
         assert!(matches!(
-            verdict(Some(Outcome::Completed), Some(&hit), Some(5.0)),
+            verdict(Some(Outcome::Completed), Some(&hit), Some(5.0), None),
             Err(Unfinished::Collided { box_index: 0, .. })
         ));
     }

@@ -88,7 +88,12 @@ fn a_run_flies_the_reference_made_from_its_plan_and_tells_the_tracking() {
         "{text}"
     );
     assert_eq!(
-        runner::verdict(Some(Outcome::Completed), report.as_ref(), None),
+        runner::verdict(
+            Some(Outcome::Completed),
+            report.as_ref(),
+            runner::plan_margin_m(&flight.plan),
+            flight.tracking.as_ref()
+        ),
         Ok(())
     );
     let r = made.lock().unwrap().clone().unwrap();

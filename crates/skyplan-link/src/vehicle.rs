@@ -817,8 +817,10 @@ fn position_target_global(
         } else {
             f64::from(t.alt) - side.home_alt_m
         };
+        // ArduCopter takes position and velocity from a GLOBAL_INT target and drops its
+        // acceleration (`set_destination_posvel`); only LOCAL_NED keeps it: so does the simulator.
         let target = sim_target(
-            mask,
+            mask | MASK_ACCELERATION,
             [north_m, east_m, -alt_m],
             [t.vx, t.vy, t.vz],
             [t.afx, t.afy, t.afz],

@@ -169,3 +169,101 @@ fn flies_a_min_jerk_reference_over_tcp_within_half_a_metre() {
         tracking.setpoints_sent
     );
 }
+
+/// What the ground station has heard from an ArduPilot vehicle: its heartbeat, its EKF origin
+/// (10 m above mean sea level) and a position (home 12 m above mean sea level).
+fn ardupilot_heard(
+    autopilot: skyplan_link::mavlink::dialects::common::MavAutopilot,
+) -> GroundProtocol {
+    use skyplan_link::Received;
+    use skyplan_link::mavlink::MavHeader;
+    use skyplan_link::mavlink::dialects::common::*;
+    let mut p = GroundProtocol::new();
+    let header = MavHeader {
+        system_id: 1,
+        component_id: 1,
+        sequence: 0,
+    };
+    let (lat, lon) = ((HOME.lat_deg * 1e7) as i32, (HOME.lon_deg * 1e7) as i32);
+    for message in [
+        MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            mavtype: MavType::MAV_TYPE_QUADROTOR,
+            autopilot,
+            ..Default::default()
+        }),
+        MavMessage::GPS_GLOBAL_ORIGIN(GPS_GLOBAL_ORIGIN_DATA {
+            latitude: lat,
+            longitude: lon,
+            altitude: 10_000,
+            ..Default::default()
+        }),
+        MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+            lat,
+            lon,
+            alt: 12_500,
+            relative_alt: 500,
+            ..Default::default()
+        }),
+    ] {
+        p.absorb(0.0, &Received { header, message });
+    }
+    p
+}
+
+/// ArduPilot keeps a target's acceleration only from SET_POSITION_TARGET_LOCAL_NED: once its
+/// EKF origin is known, a setpoint goes out in its frame (north and east of the origin by the
+/// spherical flat-earth formulas, down from the origin's altitude), velocity and acceleration
+/// turned to true north as before; PX4 keeps GLOBAL_INT.
+#[test]
+fn an_ardupilot_setpoint_goes_out_in_its_local_frame_with_the_acceleration() {
+    use skyplan_link::mavlink::dialects::common::MavAutopilot;
+    let frame = LocalFrame::new(HOME).unwrap();
+    let gamma = grid_convergence_rad(&frame, HOME).unwrap();
+    let setpoint = Setpoint {
+        point_ned: [300.0, -200.0, -12.0],
+        vel_ned_m_s: [6.0, -2.0, 0.5],
+        accel_ned_m_s2: [-1.0, 0.25, 0.1],
+        yaw_rad: 0.5,
+    };
+    let p = ardupilot_heard(MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA);
+    let m = p.track_target(&frame, &setpoint, gamma, 7).unwrap();
+    let MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) = &m else {
+        panic!("{m:?}");
+    };
+    assert_eq!(t.type_mask.bits(), POSITION_VELOCITY_ACCELERATION_AND_YAW);
+    assert_eq!(t.time_boot_ms, 7);
+    // Independently: the target's latitude and longitude on a sphere of ArduPilot's radius,
+    // metres of latitude and of longitude at the origin's latitude.
+    let lla = frame
+        .lla_from_ned(skyplan_frames::Ned {
+            north_m: 300.0,
+            east_m: -200.0,
+            down_m: 0.0,
+        })
+        .unwrap();
+    let r = 6_378_100.0_f64;
+    let origin_lat = f64::from((HOME.lat_deg * 1e7) as i32) * 1e-7;
+    let origin_lon = f64::from((HOME.lon_deg * 1e7) as i32) * 1e-7;
+    let north = (lla.lat_deg - origin_lat).to_radians() * r;
+    let east = (lla.lon_deg - origin_lon).to_radians() * r * origin_lat.to_radians().cos();
+    assert!((f64::from(t.x) - north).abs() < 0.01, "{} vs {north}", t.x);
+    assert!((f64::from(t.y) - east).abs() < 0.01, "{} vs {east}", t.y);
+    // 12 m above home, home 2 m above the origin.
+    assert!((f64::from(t.z) + 14.0).abs() < 1e-4, "{}", t.z);
+    let (c, s) = (gamma.cos(), gamma.sin());
+    let turned = |[n, e, d]: [f64; 3]| [n * c - e * s, n * s + e * c, d];
+    let close = |a: [f32; 3], b: [f64; 3]| (0..3).all(|i| (f64::from(a[i]) - b[i]).abs() < 1e-5);
+    assert!(close([t.vx, t.vy, t.vz], turned(setpoint.vel_ned_m_s)));
+    assert!(close(
+        [t.afx, t.afy, t.afz],
+        turned(setpoint.accel_ned_m_s2)
+    ));
+    assert!((f64::from(t.yaw) - (0.5 + gamma)).abs() < 1e-6);
+    // PX4 takes GLOBAL_INT targets whole.
+    let p = ardupilot_heard(MavAutopilot::MAV_AUTOPILOT_PX4);
+    let m = p.track_target(&frame, &setpoint, gamma, 7).unwrap();
+    assert!(
+        matches!(m, MavMessage::SET_POSITION_TARGET_GLOBAL_INT(_)),
+        "{m:?}"
+    );
+}

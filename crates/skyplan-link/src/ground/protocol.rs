@@ -25,6 +25,7 @@ use skyplan_flight::executor::{
     Command, CommandKind, Event, FailsafeAction, FlightExecutor, Output, Telemetry, VehicleMode,
     wrap_angle_rad,
 };
+use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::modes::{arducopter, px4};
 use skyplan_flight::reference::Setpoint;
 use skyplan_flight::sensing::{
@@ -325,6 +326,13 @@ impl GroundProtocol {
     /// [`POSITION_VELOCITY_ACCELERATION_AND_YAW`] (only the yaw rate ignored). `time_boot_ms` is
     /// the vehicle's time at which the setpoint holds (0: unknown), for the vehicle to make up
     /// the transport delay as MAVLink describes the field.
+    ///
+    /// ArduPilot, though, keeps the acceleration of such a target only from
+    /// SET_POSITION_TARGET_LOCAL_NED (its GLOBAL_INT handler takes position and velocity,
+    /// `set_destination_posvel`, seen against ArduCopter SITL: the guided target's acceleration
+    /// logged 0 throughout): once the vehicle's EKF origin (GPS_GLOBAL_ORIGIN) and position are
+    /// known, an ArduPilot vehicle gets the same target in its own frame instead
+    /// ([`GroundProtocol::in_vehicle_frame`]).
     pub fn track_target(
         &self,
         frame: &LocalFrame,
@@ -343,8 +351,64 @@ impl GroundProtocol {
             t.type_mask =
                 PositionTargetTypemask::from_bits_truncate(POSITION_VELOCITY_ACCELERATION_AND_YAW);
             t.time_boot_ms = time_boot_ms;
+            if self.autopilot != Autopilot::Px4 {
+                let [n, e, d] = setpoint.point_ned;
+                let lla = frame
+                    .lla_from_ned(Ned {
+                        north_m: n,
+                        east_m: e,
+                        down_m: 0.0,
+                    })
+                    .map_err(|e| format!("the target has no latitude/longitude: {e}"))?;
+                if let Some(local) = self.in_vehicle_frame(t, [lla.lat_deg, lla.lon_deg], -d) {
+                    return Ok(local);
+                }
+            }
         }
         Ok(m)
+    }
+
+    /// A GLOBAL_INT target (at `lat_lon_deg`, `alt_m` above home) as SET_POSITION_TARGET_LOCAL_NED
+    /// in ArduPilot's frame: north and east of the EKF origin by ArduPilot's own flat-earth
+    /// formulas ([`FlatEarth`]), down from the origin's altitude (home's altitude above mean sea
+    /// level is GLOBAL_POSITION_INT's `alt − relative_alt`); velocity, acceleration, yaw, mask and
+    /// stamp unchanged (already true north). `None` until the origin and a position are known.
+    pub fn in_vehicle_frame(
+        &self,
+        t: &SET_POSITION_TARGET_GLOBAL_INT_DATA,
+        [lat_deg, lon_deg]: [f64; 2],
+        alt_m: f64,
+    ) -> Option<MavMessage> {
+        let origin = self.origin.as_ref()?;
+        let global = self.global.as_ref()?;
+        let earth = FlatEarth::new(
+            f64::from(origin.latitude) * 1e-7,
+            f64::from(origin.longitude) * 1e-7,
+        );
+        let [x, y] = earth.ne_from_lat_lon(lat_deg, lon_deg);
+        let home_amsl_m = f64::from(global.alt - global.relative_alt) * 1e-3;
+        let origin_amsl_m = f64::from(origin.altitude) * 1e-3;
+        let z = -(alt_m + home_amsl_m - origin_amsl_m);
+        Some(MavMessage::SET_POSITION_TARGET_LOCAL_NED(
+            SET_POSITION_TARGET_LOCAL_NED_DATA {
+                time_boot_ms: t.time_boot_ms,
+                x: x as f32,
+                y: y as f32,
+                z: z as f32,
+                vx: t.vx,
+                vy: t.vy,
+                vz: t.vz,
+                afx: t.afx,
+                afy: t.afy,
+                afz: t.afz,
+                yaw: t.yaw,
+                yaw_rate: t.yaw_rate,
+                type_mask: t.type_mask,
+                target_system: t.target_system,
+                target_component: t.target_component,
+                coordinate_frame: MavFrame::MAV_FRAME_LOCAL_NED,
+            },
+        ))
     }
 
     /// SET_POSITION_TARGET_GLOBAL_INT of a point of the mission's frame (position and yaw,
