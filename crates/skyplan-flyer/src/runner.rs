@@ -712,11 +712,11 @@ pub enum Unfinished {
     /// The flight was aborted and the vehicle did not land in time.
     #[error("flight aborted and the vehicle did not land in time: check it")]
     NotLanded,
-    /// The vehicle landed at the end of its reference, but strayed from it by more than half
-    /// the route's safety margin: the trajectory is proven free with the margin, the vehicle
-    /// flying that far off it is not.
+    /// The vehicle landed at the end of its reference, but strayed from its path by more than
+    /// half the route's safety margin: the trajectory is proven free with the margin, the
+    /// vehicle flying that far off it is not (early or late along it does not count here).
     #[error(
-        "the flight completed but the vehicle strayed up to {max_error_m:.2} m from its trajectory, more than half ({half_m} m) the route's {margin_m} m safety margin: not done (fly slower: lower --max-speed-m-s and --max-accel-m-s2, or check the vehicle's tuning)", half_m = margin_m / 2.0
+        "the flight completed but the vehicle strayed up to {max_error_m:.2} m from its trajectory's path, more than half ({half_m} m) the route's {margin_m} m safety margin: not done (fly slower: lower --max-speed-m-s and --max-accel-m-s2, or check the vehicle's tuning)", half_m = margin_m / 2.0
     )]
     OffTrack {
         /// The largest distance between the vehicle and its setpoint, metres.
@@ -753,10 +753,10 @@ pub fn verdict(
     match outcome {
         Some(Outcome::Completed) => {
             if let (Some(t), Some(margin_m)) = (tracking, margin_m)
-                && t.max_tracking_error_m > 0.5 * margin_m
+                && t.max_path_error_m > 0.5 * margin_m
             {
                 return Err(Unfinished::OffTrack {
-                    max_error_m: t.max_tracking_error_m,
+                    max_error_m: t.max_path_error_m,
                     margin_m,
                 });
             }
@@ -906,15 +906,17 @@ mod tests {
         );
     }
 
-    /// A trajectory flight that landed fails once the vehicle strayed from its setpoints by
-    /// more than half the margin (51 m seen against ArduCopter SITL at 10 m/s), not before.
+    /// A trajectory flight that landed fails once the vehicle strayed from its path by more
+    /// than half the margin (51 m seen against ArduCopter SITL at 10 m/s), not before, however
+    /// early or late it was along it.
     #[test]
     fn a_reference_flight_far_off_its_trajectory_is_not_done() {
-        let tracking = |max_tracking_error_m| TrackingReport {
+        let tracking = |max_path_error_m| TrackingReport {
             duration_s: 113.2,
             started_s: Some(0.0),
             flown_s: Some(114.4),
-            max_tracking_error_m,
+            max_tracking_error_m: 55.61,
+            max_path_error_m,
             samples: 500,
             setpoints_sent: 1200,
         };

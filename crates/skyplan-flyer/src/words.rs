@@ -97,12 +97,13 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
 ///     started_s: Some(8.0),
 ///     flown_s: Some(50.5),
 ///     max_tracking_error_m: 0.031,
+///     max_path_error_m: 0.02,
 ///     samples: 480,
 ///     setpoints_sent: 790,
 /// };
 /// assert_eq!(
 ///     skyplan_flyer::words::tracking_line(&r),
-///     "reference  max tracking error 0.03 m over 480 samples; reference duration 50.0 s, flown 50.5 s on it (1.010 of its duration); 790 setpoints sent"
+///     "reference  max tracking error 0.03 m over 480 samples (0.02 m from its path); reference duration 50.0 s, flown 50.5 s on it (1.010 of its duration); 790 setpoints sent"
 /// );
 /// ```
 pub fn tracking_line(r: &TrackingReport) -> String {
@@ -113,8 +114,8 @@ pub fn tracking_line(r: &TrackingReport) -> String {
         (None, None, _) => "its clock never started (the start was not reached)".to_string(),
     };
     format!(
-        "reference  max tracking error {:.2} m over {} samples; reference duration {:.1} s, {flown}; {} setpoints sent",
-        r.max_tracking_error_m, r.samples, r.duration_s, r.setpoints_sent
+        "reference  max tracking error {:.2} m over {} samples ({:.2} m from its path); reference duration {:.1} s, {flown}; {} setpoints sent",
+        r.max_tracking_error_m, r.samples, r.max_path_error_m, r.duration_s, r.setpoints_sent
     )
 }
 

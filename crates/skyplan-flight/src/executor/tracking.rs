@@ -48,6 +48,7 @@ pub struct ReferenceTracking {
     clock_start_s: Option<f64>,
     arrival_s: Option<f64>,
     max_error_m: f64,
+    max_path_error_m: f64,
     samples: usize,
     last_sample_s: Option<f64>,
     setpoints_sent: usize,
@@ -61,6 +62,7 @@ impl fmt::Debug for ReferenceTracking {
             .field("clock_start_s", &self.clock_start_s)
             .field("arrival_s", &self.arrival_s)
             .field("max_error_m", &self.max_error_m)
+            .field("max_path_error_m", &self.max_path_error_m)
             .finish_non_exhaustive()
     }
 }
@@ -108,6 +110,7 @@ impl Executor<ReferenceTracking> {
             clock_start_s: None,
             arrival_s: None,
             max_error_m: 0.0,
+            max_path_error_m: 0.0,
             samples: 0,
             last_sample_s: None,
             setpoints_sent: 0,
@@ -121,7 +124,31 @@ impl Executor<ReferenceTracking> {
     }
 }
 
+/// How far in reference time, either side of a sample's own, the path error looks for the
+/// closest setpoint, seconds: a vehicle early or late by up to this much is measured by how
+/// far it is from the path, not from where it should be at that instant.
+pub const PATH_WINDOW_S: f64 = 3.0;
+
 impl ReferenceTracking {
+    /// The distance from `point_ned` to the reference's path within [`PATH_WINDOW_S`] of
+    /// `t_ref`: the closest setpoint on a 0.01 s grid, less the most the path can move between
+    /// two grid points (half a step at the fastest setpoint seen), so never more than the true
+    /// distance; at most `at_instant_m`.
+    fn path_error_m(&self, point_ned: [f64; 3], t_ref: f64, at_instant_m: f64) -> f64 {
+        const STEP_S: f64 = 0.01;
+        let from = (t_ref - PATH_WINDOW_S).max(0.0);
+        let to = (t_ref + PATH_WINDOW_S).min(self.duration_s);
+        let steps = ((to - from) / STEP_S).ceil() as usize;
+        let (mut best, mut fastest) = (at_instant_m, 0.0_f64);
+        for k in 0..=steps {
+            let s = self.reference.setpoint((from + k as f64 * STEP_S).min(to));
+            best = best.min(s.distance_m(point_ned));
+            let v = s.vel_ned_m_s;
+            fastest = fastest.max((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt());
+        }
+        (best - 0.5 * STEP_S * fastest).max(0.0)
+    }
+
     /// Compares a new telemetry sample with the reference at its reference time.
     fn measure(&mut self, t: &Telemetry, now_s: f64) {
         let Some(start_s) = self.clock_start_s else {
@@ -139,6 +166,8 @@ impl ReferenceTracking {
                 .setpoint(t_ref)
                 .distance_m([t.north_m, t.east_m, t.down_m]);
             self.max_error_m = self.max_error_m.max(error_m);
+            let path_m = self.path_error_m([t.north_m, t.east_m, t.down_m], t_ref, error_m);
+            self.max_path_error_m = self.max_path_error_m.max(path_m);
             self.samples += 1;
         }
     }
@@ -264,6 +293,7 @@ impl Strategy for ReferenceTracking {
             started_s: self.clock_start_s,
             flown_s: (self.arrival_s.zip(self.clock_start_s)).map(|(a, s)| a - s),
             max_tracking_error_m: self.max_error_m,
+            max_path_error_m: self.max_path_error_m,
             samples: self.samples,
             setpoints_sent: self.setpoints_sent,
         })
@@ -404,4 +434,36 @@ mod tests {
         }
         assert!(ReferenceExecutor::new(Arc::new(Bad), ExecutorConfig::default()).is_err());
     }
+
+    /// A vehicle on the reference's path but a second late is far from where it should be at
+    /// that instant and nowhere off the path; one beside the path is off it by that distance.
+    #[test]
+    fn the_path_error_forgives_being_late_not_being_beside() {
+        let r: Arc<dyn Reference> = Arc::new(
+            MinJerkLine::new(vec![[0.0, 0.0, -5.0], [100.0, 0.0, -5.0]], vec![20.0]).unwrap(),
+        );
+        let strategy = |r: &Arc<dyn Reference>| ReferenceTracking {
+            reference: Arc::clone(r),
+            phase: Phase::Streaming,
+            duration_s: r.duration_s(),
+            clock_start_s: Some(0.0),
+            arrival_s: None,
+            max_error_m: 0.0,
+            max_path_error_m: 0.0,
+            samples: 0,
+            last_sample_s: None,
+            setpoints_sent: 0,
+        };
+        let tracking = strategy(&r);
+        let late = r.setpoint(9.0).point_ned;
+        let instant = r.setpoint(10.0).distance_m(late);
+        assert!(instant > 5.0, "{instant}");
+        let path = tracking.path_error_m(late, 10.0, instant);
+        assert!(path < 0.05, "{path}");
+        let mut beside = r.setpoint(10.0).point_ned;
+        beside[1] += 2.0;
+        let path = tracking.path_error_m(beside, 10.0, 2.0);
+        assert!((1.9..=2.0).contains(&path), "{path}");
+    }
 }
+
