@@ -84,6 +84,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
             "--trajectory is not replanned in flight yet: with --hidden or --hidden-random the vehicle would fly into what the map lacks; drop one of them (without --trajectory the replanner flies around them)",
         ));
     }
+    if args.fence && request.no_fly.is_none() {
+        return Err(bad_input(
+            "--fence uploads the no-fly zones as the vehicle's fence: give them with --no-fly FILE (or no_fly in --config)",
+        ));
+    }
     let format = args.format.as_deref().or(config.text.format.as_deref());
     let out = (args.out.clone().or(config.path(&config.text.out)))
         .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))
@@ -323,6 +328,7 @@ fn fly_options(a: &FlyArgs) -> FlyOptions {
         wait_s: a.wait_s,
         mode,
         user_start,
+        fence: a.fence,
     }
 }
 

@@ -297,8 +297,13 @@ pub fn fence_from_zones(
             // mean sea level the home's altitude is not known here: kept (the safe side).
             let meets = amsl || (z.floor_m - m < hi && lo < z.ceiling_m + m);
             if !meets {
+                let at = if (hi - lo).abs() < 0.5 {
+                    format!("{lo:.0} m")
+                } else {
+                    format!("{lo:.0}–{hi:.0} m")
+                };
                 plan.notes.push(format!(
-                    "zone {i} ({kind}, band {band_text}): left out: a fence holds at every altitude, and the route flies at {lo:.0}–{hi:.0} m, clear of the band by the margin"
+                    "zone {i} ({kind}, band {band_text}): left out: a fence holds at every altitude, and the route flies at {at}, clear of the band by the margin"
                 ));
                 continue;
             }
