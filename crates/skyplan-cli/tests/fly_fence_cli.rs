@@ -88,6 +88,39 @@ fn fence_without_zones_is_refused() {
     );
 }
 
+#[test]
+fn a_zone_hole_the_route_flies_in_is_refused_before_arming() {
+    // A square ring about the home: the route from the home to 30 m north stays in its hole,
+    // which a fence cannot carry (its outer ring would forbid the route).
+    let ring = |h: f64| {
+        let (lat, lon) = (37.792480, -122.397450);
+        format!(
+            "[[{a},{b}],[{c},{b}],[{c},{d}],[{a},{d}],[{a},{b}]]",
+            a = lon - h,
+            b = lat - h,
+            c = lon + h,
+            d = lat + h
+        )
+    };
+    let zones = format!(
+        r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{"floor_m": 0, "ceiling_m": 100}}, "geometry": {{"type": "Polygon", "coordinates": [{}, {}]}}}}]}}"#,
+        ring(0.002),
+        ring(0.001)
+    );
+    let dir = common::dir_with(&[("holes.geojson", &zones)]);
+    let r = run(
+        dir.path(),
+        "fly --sim --speedup 50 --timeout-s 60 --goal-ne 30,0 --fence --no-fly holes.geojson",
+    );
+    r.expect_code(2);
+    assert!(
+        r.stderr.contains("zone 0 is an exclusion polygon with holes, which a fence cannot carry, and the route flies through its hole 1"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("ARMING"), "{}", r.stdout);
+}
+
 /// `fly --fence` (plus `extra`) against the pymavlink vehicle in `mode` (accept or refuse):
 /// skyplan's run and the peer's lines.
 fn fly_to_pymavlink(mode: &str, extra: &str) -> (Run, Vec<String>, bool) {
