@@ -119,7 +119,8 @@ pub fn run(args: FlyArgs) -> Result<()> {
     );
 
     let (address, sim) = vehicle(&args, &map, &frame, &request, &hidden)?;
-    let drawing = plot.map(|plot| (world.clone(), plot));
+    let zones = crate::picture::zones_of(&world, &request);
+    let drawing = plot.map(|plot| (world.clone(), plot, zones));
     let bar = progress_bar(0);
     bar.set_prefix("WAITING");
     let mut terminal = Terminal {
@@ -193,7 +194,11 @@ fn check_ends(
 fn conclude(
     args: &FlyArgs,
     flight: &runner::Flight,
-    drawing: Option<(skyplan_plan::World, (Target, PictureKind))>,
+    drawing: Option<(
+        skyplan_plan::World,
+        (Target, PictureKind),
+        Vec<skyplan_map::nofly::Zone>,
+    )>,
     hidden: &[ObstacleBox],
     report: Option<&SimReport>,
     t0: Instant,
@@ -207,8 +212,8 @@ fn conclude(
             runner::summary_line(name, r.stats(), r.learned_count())
         );
     }
-    if let (Some((world, (target, kind))), Some(path)) = (&drawing, &args.plot) {
-        write_target(target, &flight_picture(world, kind, flight, hidden)?)?;
+    if let (Some((world, (target, kind), zones)), Some(path)) = (&drawing, &args.plot) {
+        write_target(target, &flight_picture(world, kind, flight, hidden, zones)?)?;
         println!("wrote      {}", path.display());
     }
     let outcome = match &flight.ended {
