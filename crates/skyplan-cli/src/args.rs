@@ -406,6 +406,17 @@ pub struct FlyArgs {
     /// Upload the plan as a mission (take-off, waypoints with headings, land) and fly it in AUTO. With --trajectory, each leg's speed (DO_CHANGE_SPEED) and each waypoint's acceptance radius come from the trajectory.
     #[arg(long)]
     pub upload: bool,
+    /// Before take-off, upload the --no-fly zones as the vehicle's fence (MAVLink mission
+    /// protocol, mission_type FENCE: polygon vertices and circles, inclusion or exclusion), read
+    /// it back and check it item by item; a refusal or a difference stops before arming. Zones
+    /// go as the file gives them, not grown by the margin (the autopilot applies its own
+    /// FENCE_MARGIN). A fence is 2D and has no holes: exclusion zones whose band the route flies
+    /// clear of are left out, bands and time windows are lost, an inclusion polygon's holes go as
+    /// exclusion polygons, an exclusion polygon's holes are refused if the route uses them —
+    /// each told. FENCE_ENABLE and FENCE_TYPE are not set (with the fence enabled, the
+    /// autopilot's FENCE_ACTION acts on a breach). Works in GUIDED and with --upload.
+    #[arg(long)]
+    pub fence: bool,
     /// Upload the mission and exit without flying (interop tests).
     #[arg(long, hide = true)]
     pub upload_only: bool,

@@ -84,6 +84,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
             "--trajectory is not replanned in flight yet: with --hidden or --hidden-random the vehicle would fly into what the map lacks; drop one of them (without --trajectory the replanner flies around them)",
         ));
     }
+    if args.fence && request.no_fly.is_none() {
+        return Err(bad_input(
+            "--fence uploads the no-fly zones as the vehicle's fence: give them with --no-fly FILE (or no_fly in --config)",
+        ));
+    }
     let format = args.format.as_deref().or(config.text.format.as_deref());
     let out = (args.out.clone().or(config.path(&config.text.out)))
         .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))
@@ -114,7 +119,8 @@ pub fn run(args: FlyArgs) -> Result<()> {
     );
 
     let (address, sim) = vehicle(&args, &map, &frame, &request, &hidden)?;
-    let drawing = plot.map(|plot| (world.clone(), plot));
+    let zones = crate::picture::zones_of(&world, &request);
+    let drawing = plot.map(|plot| (world.clone(), plot, zones));
     let bar = progress_bar(0);
     bar.set_prefix("WAITING");
     let mut terminal = Terminal {
@@ -188,7 +194,11 @@ fn check_ends(
 fn conclude(
     args: &FlyArgs,
     flight: &runner::Flight,
-    drawing: Option<(skyplan_plan::World, (Target, PictureKind))>,
+    drawing: Option<(
+        skyplan_plan::World,
+        (Target, PictureKind),
+        Vec<skyplan_map::nofly::Zone>,
+    )>,
     hidden: &[ObstacleBox],
     report: Option<&SimReport>,
     t0: Instant,
@@ -202,8 +212,8 @@ fn conclude(
             runner::summary_line(name, r.stats(), r.learned_count())
         );
     }
-    if let (Some((world, (target, kind))), Some(path)) = (&drawing, &args.plot) {
-        write_target(target, &flight_picture(world, kind, flight, hidden)?)?;
+    if let (Some((world, (target, kind), zones)), Some(path)) = (&drawing, &args.plot) {
+        write_target(target, &flight_picture(world, kind, flight, hidden, zones)?)?;
         println!("wrote      {}", path.display());
     }
     let outcome = match &flight.ended {
@@ -324,6 +334,7 @@ fn fly_options(a: &FlyArgs) -> FlyOptions {
         wait_s: a.wait_s,
         mode,
         user_start,
+        fence: a.fence,
     }
 }
 

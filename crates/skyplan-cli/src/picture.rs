@@ -2,6 +2,7 @@
 //! view and side profile, or a heat map of a navigation function's field.
 
 use crate::exit::{Classify, Kind, Result, bad_input};
+use skyplan_map::nofly::Zone;
 use skyplan_plan::{Plan, PlannerId, World};
 use std::path::Path;
 
@@ -13,15 +14,32 @@ pub fn kind_for(path: &Path, planner: PlannerId) -> Result<PictureKind> {
         .map_err(|why| bad_input(format!("--plot {}: {why}", path.display())))
 }
 
-/// Renders the picture of `plan`.
+/// The request's no-fly zones in the map's frame, to draw (none without zones or a geodetic
+/// home; the plan has already refused zones it cannot place).
+pub fn zones_of(world: &World, request: &skyplan_plan::PlanRequest) -> Vec<Zone> {
+    let (Some(text), Some(frame)) = (request.no_fly.as_deref(), world.frame()) else {
+        return Vec::new();
+    };
+    let home = skyplan_map::colliders::GeodeticHome {
+        lat_deg: frame.home().lat_deg,
+        lon_deg: frame.home().lon_deg,
+    };
+    skyplan_map::nofly::parse_no_fly(text)
+        .and_then(|z| z.project(home, None))
+        .unwrap_or_default()
+}
+
+/// Renders the picture of `plan`, with the no-fly `zones` on a 2D map.
 pub fn render(
     world: &World,
     plan: &Plan,
     kind: &PictureKind,
     flight: Option<&skyplan_plot::FlightLayers>,
+    zones: &[Zone],
 ) -> Result<Vec<u8>> {
     if matches!(kind, PictureKind::Heatmap) && plan.grid_used.is_none() {
         return Err(bad_input("--plot: a heat map needs a grid planner"));
     }
-    skyplan_plot::plan_picture::plan_picture(world, plan, kind, flight).or_exit(Kind::Runtime)
+    skyplan_plot::plan_picture::plan_picture_with_zones(world, plan, kind, flight, zones)
+        .or_exit(Kind::Runtime)
 }

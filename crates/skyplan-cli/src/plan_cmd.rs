@@ -296,7 +296,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         })?;
     }
     let fence = geo_fence(&request, plan.spec.alt_m, plan.spec.safety_m);
-    let written = write_outputs(session.world(), &plan, &outputs, &fence)?;
+    let zones = crate::picture::zones_of(session.world(), &request);
+    let written = write_outputs(session.world(), &plan, &outputs, (&fence, &zones))?;
     if args.show {
         show_plan(human, &plan, &request);
     }
@@ -369,7 +370,7 @@ fn write_outputs(
     world: &World,
     plan: &Plan,
     outputs: &Outputs,
-    fence: &skyplan_export::GeoFence,
+    (fence, zones): (&skyplan_export::GeoFence, &[skyplan_map::nofly::Zone]),
 ) -> Result<Written> {
     let mut written = Written {
         waypoints: None,
@@ -388,7 +389,10 @@ fn write_outputs(
         written.waypoints = Some((path.display().to_string(), format.name()));
     }
     if let Some((path, target, kind)) = &outputs.plot {
-        write_target(target, &crate::picture::render(world, plan, kind, None)?)?;
+        write_target(
+            target,
+            &crate::picture::render(world, plan, kind, None, zones)?,
+        )?;
         written.plot = Some(path.display().to_string());
     }
     if let (Some((path, target, hdf5)), Some(t)) = (&outputs.samples, &plan.trajectory) {

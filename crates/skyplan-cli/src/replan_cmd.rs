@@ -56,6 +56,7 @@ pub fn flight_picture(
     kind: &crate::picture::PictureKind,
     flight: &Flight,
     hidden: &[ObstacleBox],
+    zones: &[skyplan_map::nofly::Zone],
 ) -> Result<Vec<u8>> {
     let (learned, track) = (flight.learned_ne(), flight.track_ne());
     let layers = skyplan_plot::FlightLayers {
@@ -64,5 +65,5 @@ pub fn flight_picture(
         replanned_ne: &flight.replanned,
         track_ne: &track,
     };
-    crate::picture::render(world, &flight.plan, kind, Some(&layers))
+    crate::picture::render(world, &flight.plan, kind, Some(&layers), zones)
 }

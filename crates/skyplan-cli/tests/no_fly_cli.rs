@@ -187,3 +187,19 @@ fn a_plan_files_geofence_round_trips() {
     let from_plan = ok_json(dir.path(), "plan --json --no-fly route.plan");
     assert_eq!(from_plan["waypoints"], from_geojson["waypoints"]);
 }
+
+#[test]
+fn the_plot_draws_and_labels_every_zone_with_its_band() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    common::succeed(
+        dir.path(),
+        &format!("plan --no-fly {} --plot zones.svg", zones_path.display()),
+    );
+    let svg = std::fs::read_to_string(dir.path().join("zones.svg")).unwrap();
+    // Each zone's label, the one the route flies below included; the hatching in the zones' red.
+    for label in ["zone 0, 0–120 m", "zone 1, 0–120 m", "zone 2, 60–120 m"] {
+        assert!(svg.contains(label), "{label:?} not in the picture");
+    }
+    assert!(svg.contains("#D62828"), "no zone red in the picture");
+}

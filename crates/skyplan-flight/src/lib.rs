@@ -6,6 +6,8 @@
 //!   yaw-rate limits, ArduCopter-like modes, take-off, landing, position targets, missions).
 //! - [`collision`]: the flown track checked against the map's obstacle boxes.
 //! - [`upload`]: the mission as MAVLink items, and the ground side of the upload protocol.
+//! - [`fence`]: no-fly zones as the vehicle's fence (what a fence can carry, the items, the
+//!   read-back and its check).
 //! - [`sensing`]: range-sensor readings and the [`sensing::RouteWatcher`] hook that replans in flight.
 //! - [`sensor`]: the simulated range sensor (rays against the true world's boxes).
 //! - [`reference`](mod@reference): a time-parametrised reference ([`Setpoint`], [`Reference`]) and a simple
@@ -22,6 +24,7 @@
 pub mod auto;
 pub mod collision;
 pub mod executor;
+pub mod fence;
 pub mod flat_earth;
 pub mod modes;
 pub mod reference;

@@ -12,6 +12,7 @@ use skyplan_flight::executor::{
     ExecutorConfig, FailsafeAction, FlightExecutor, FlightState, MissionExecutor, Note, Outcome,
     ReferenceExecutor, Target, Telemetry, TrackingReport,
 };
+use skyplan_flight::fence::{RouteForFence, fence_from_zones, fence_items};
 use skyplan_flight::reference::Reference;
 use skyplan_flight::sim::DEFAULT_RTL_ALT_M;
 use skyplan_flight::upload::{LegPace, MissionPlan, UploadConfig};
@@ -23,6 +24,7 @@ use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::SimServerConfig;
 use skyplan_link::{Address, LinkError};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
+use skyplan_map::nofly::parse_no_fly;
 use skyplan_plan::{Limits, Plan, PlanFailure, PlanRequest, Session, World};
 use skyplan_replan::bench::{FlightResult, Scenario, ScenarioSpec, SharedReplanner};
 use skyplan_replan::hidden::{HiddenSpec, place_hidden};
@@ -135,6 +137,9 @@ pub struct FlyOptions {
     pub mode: Mode,
     /// The request gives the start; otherwise the plan starts where the vehicle is.
     pub user_start: bool,
+    /// Before take-off, upload the request's no-fly zones as the vehicle's fence and read it
+    /// back ([`upload_fence`]); a refusal or a difference stops the run before arming.
+    pub fence: bool,
 }
 
 /// A plan turned into the reference to fly (a time-parametrised trajectory through its
@@ -311,6 +316,9 @@ pub fn fly_mission_with<O: RunObserver>(
         t_plan.elapsed().as_secs_f64() * 1000.0
     ));
     observer.planned(&plan)?;
+    if o.fence {
+        upload_fence(&mut gcs, &request, mission, plan.spec.safety_m, observer)?;
+    }
     let mut config = o.executor;
     if let Some(boxes) = &map_boxes {
         let clearance = mission_rtl_clearance(boxes, mission, plan.spec.safety_m);
@@ -448,6 +456,61 @@ fn upload<O: RunObserver>(
         report.items, report.wall_time_s, report.requests, report.resends
     ));
     Ok(items)
+}
+
+/// Uploads the request's no-fly zones as the vehicle's fence (`mission_type` FENCE), reads it
+/// back and checks it item by item, telling what is uploaded and what a fence cannot carry
+/// ([`fence_from_zones`]). Zones go as the file gives them, not grown by the planning margin:
+/// the autopilot applies its own `FENCE_MARGIN`. `FENCE_ENABLE` and `FENCE_TYPE` are not set.
+/// Any failure is an error: the caller stops before arming.
+fn upload_fence<O: RunObserver>(
+    gcs: &mut GroundStation,
+    request: &PlanRequest,
+    mission: &skyplan_mission::Mission,
+    margin_m: f64,
+    observer: &mut O,
+) -> Result<(), RunError> {
+    let text = (request.no_fly.as_deref()).ok_or_else(|| {
+        bad("--fence uploads the no-fly zones as the vehicle's fence: give them with --no-fly FILE")
+    })?;
+    let zones = parse_no_fly(text).map_err(|e| bad(format!("no_fly: {e}")))?;
+    let alts = mission.waypoints.iter().map(|w| w.alt_m);
+    let route = RouteForFence {
+        points_lat_lon_deg: (mission.waypoints.iter())
+            .map(|w| [w.lat_deg, w.lon_deg])
+            .collect(),
+        alt_range_m: [
+            alts.clone().fold(f64::INFINITY, f64::min),
+            alts.fold(f64::NEG_INFINITY, f64::max),
+        ],
+        margin_m,
+    };
+    let stop = |e: String| {
+        RunError::Ground(GroundError::Fence(format!(
+            "{e}; the flight stops before arming"
+        )))
+    };
+    let fence = fence_from_zones(&zones, &route).map_err(|e| bad(format!("--fence: {}", e.0)))?;
+    for n in &fence.notes {
+        observer.say(&format!("fence      {n}"));
+    }
+    let items = fence_items(&fence.shapes).map_err(|e| bad(format!("--fence: {}", e.0)))?;
+    observer.say(&format!(
+        "fence      {} shapes as {} items (mission_type FENCE, MAV_FRAME_GLOBAL_INT), as the file gives them: the autopilot applies its own FENCE_MARGIN; FENCE_ENABLE and FENCE_TYPE are left as they are",
+        fence.shapes.len(),
+        items.len()
+    ));
+    let report = gcs
+        .upload_fence(&items, UploadConfig::default())
+        .map_err(|e| match e {
+            GroundError::Fence(why) => stop(why),
+            other => stop(other.to_string()),
+        })?;
+    observer.say(&format!(
+        "fence      accepted and read back: {} items match the items sent, item by item ({:.3} s wall, {} resends)",
+        report.items, report.wall_time_s, report.resends
+    ));
+    Ok(())
 }
 
 /// Waits for the vehicle (`o.wait_s` vehicle seconds), telling what is awaited, then who it is.

@@ -131,6 +131,9 @@ pub fn sim_note_line(n: &SimNote) -> Option<String> {
         SimNote::Takeoff(alt) => format!("taking off to {alt:.1} m"),
         SimNote::Landed => "touched down".into(),
         SimNote::MissionUploaded(n) => format!("mission of {n} items received"),
+        SimNote::FenceUploaded(n) => {
+            format!("fence of {n} items received and stored (not enabled)")
+        }
         SimNote::MissionItemReached(s) => format!("mission item {s} reached"),
         SimNote::Collision(c) => format!(
             "COLLISION at {:.1} s: N {:.2} E {:.2} alt {:.2} m inside obstacle #{}",

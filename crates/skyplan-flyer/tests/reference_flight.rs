@@ -57,6 +57,7 @@ fn a_run_flies_the_reference_made_from_its_plan_and_tells_the_tracking() {
         executor: ExecutorConfig::default(),
         wait_s: 60.0,
         mode: Mode::Guided(None),
+        fence: false,
         user_start: false,
     };
     // The plan's waypoints at 7 m/s at most, rest to rest; kept to check against.
@@ -144,6 +145,7 @@ fn a_reference_is_not_uploaded() {
         executor: ExecutorConfig::default(),
         wait_s: 1.0,
         mode: Mode::Upload { fly: true },
+        fence: false,
         user_start: false,
     };
     let r = MinJerkLine::new(vec![[0.0, 0.0, -5.0], [10.0, 0.0, -5.0]], vec![5.0]).unwrap();

@@ -37,6 +37,7 @@ use skyplan_flight::executor::{
     FailsafeAction, FlightExecutor, FlightState, Note, Target, Telemetry, TrackingReport,
     VehicleMode,
 };
+use skyplan_flight::fence::FenceItem;
 use skyplan_flight::sensing::{HomeRouter, ObstacleReading, ReplanEvent, RouteWatcher};
 use skyplan_flight::upload::{ItemCommand, MissionItem, MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
@@ -48,7 +49,10 @@ use std::time::{Duration, Instant};
 pub mod fuzzing;
 pub mod protocol;
 
-pub use protocol::{FlightLoop, GroundProtocol, UploadDriver, VehicleWait, WaitStep};
+pub use protocol::{
+    FenceDownload, FlightLoop, GroundProtocol, UploadDriver, VehicleWait, WaitStep,
+    mission_result_name,
+};
 
 /// Wall seconds to wait for GPS_GLOBAL_ORIGIN once the vehicle has a position.
 pub const ORIGIN_GRACE_S: f64 = 2.0;
@@ -108,6 +112,9 @@ pub enum GroundError {
     /// A route watcher was given for a flight that cannot change its route.
     #[error("replanning in flight: {0}")]
     Replan(String),
+    /// The fence upload or its read-back failed, or what was read back differs.
+    #[error("fence {0}")]
+    Fence(String),
     /// The vehicle did not confirm a parameter.
     #[error("parameter {name}: {why}")]
     Param {
@@ -360,6 +367,61 @@ impl GroundStation {
         }
     }
 
+    /// Uploads a fence (`mission_type` FENCE, [`UploadDriver::start_fence`]), then reads it
+    /// back ([`FenceDownload`]) and checks it item by item
+    /// ([`skyplan_flight::fence::verify_fence`]). Call after
+    /// [`GroundStation::wait_for_vehicle`]; an error ([`GroundError::Fence`]) says which step
+    /// failed and how.
+    pub fn upload_fence(
+        &mut self,
+        fence: &[FenceItem],
+        config: UploadConfig,
+    ) -> Result<UploadReport, GroundError> {
+        let (mut driver, sends) =
+            UploadDriver::start_fence(&self.protocol, fence, config, self.now_s())?;
+        self.send_all(&sends)?;
+        let report = loop {
+            if let Some(done) = driver.done(self.now_s()) {
+                break done?;
+            }
+            if let Some(why) = self.link.closed() {
+                return Err(GroundError::Fence(format!(
+                    "upload: the connection closed: {why}"
+                )));
+            }
+            let r = self.link.recv_timeout(Duration::from_millis(10));
+            let now_s = self.now_s();
+            let sends = driver.step(&mut self.protocol, now_s, r.as_ref());
+            self.send_all(&sends)?;
+        };
+        let read = self.read_fence(config)?;
+        skyplan_flight::fence::verify_fence(fence, &read).map_err(|e| {
+            GroundError::Fence(format!("read-back differs from what was sent: {e}"))
+        })?;
+        Ok(report)
+    }
+
+    /// Reads the vehicle's fence back ([`FenceDownload`]).
+    pub fn read_fence(&mut self, config: UploadConfig) -> Result<Vec<FenceItem>, GroundError> {
+        let (mut down, sends) = FenceDownload::start(&self.protocol, config, self.now_s());
+        self.send_all(&sends)?;
+        loop {
+            if let Some(done) = down.done() {
+                // The closing MISSION_ACK went out with the last step.
+                return done;
+            }
+            if let Some(why) = self.link.closed() {
+                return Err(GroundError::Fence(format!(
+                    "read-back: the connection closed: {why}"
+                )));
+            }
+            let r = self.link.recv_timeout(Duration::from_millis(10));
+            let now_s = self.now_s();
+            let sends = down.step(&mut self.protocol, now_s, r.as_ref());
+            self.send_all(&sends)?;
+        }
+    }
+
     /// Sets the vehicle's parameter `name` to `value` (PARAM_SET) and returns the value it then
     /// holds, from its PARAM_VALUE; sent up to 3 times, 1 s apart. Call after
     /// [`GroundStation::wait_for_vehicle`]. A vehicle without the parameter (or that refuses the
@@ -550,6 +612,36 @@ pub fn mission_item_int(item: &MissionItem, target_system: u8, target_component:
         frame,
         current: 0,
         autocontinue: 1,
+        ..Default::default()
+    })
+}
+
+/// A fence item as MISSION_ITEM_INT: `mission_type` FENCE, `MAV_FRAME_GLOBAL_INT`, the command
+/// (5001–5004), `param1` (a vertex count or a radius), latitude and longitude × 10⁷.
+#[allow(deprecated)] // MAV_FRAME_GLOBAL_INT: what ArduPilot was seen taking for fence items.
+pub fn fence_item_int(item: &FenceItem, target_system: u8, target_component: u8) -> MavMessage {
+    use skyplan_flight::fence::{
+        CIRCLE_EXCLUSION, CIRCLE_INCLUSION, POLYGON_VERTEX_EXCLUSION, POLYGON_VERTEX_INCLUSION,
+    };
+    let command = match item.command {
+        POLYGON_VERTEX_INCLUSION => MavCmd::MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+        POLYGON_VERTEX_EXCLUSION => MavCmd::MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION,
+        CIRCLE_INCLUSION => MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION,
+        CIRCLE_EXCLUSION => MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
+        // `fence_items` makes no other command.
+        _ => MavCmd::MAV_CMD_NAV_FENCE_RETURN_POINT,
+    };
+    MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
+        param1: item.param1,
+        x: item.lat_e7,
+        y: item.lon_e7,
+        seq: item.seq,
+        command,
+        target_system,
+        target_component,
+        frame: MavFrame::MAV_FRAME_GLOBAL_INT,
+        autocontinue: 1,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,
         ..Default::default()
     })
 }

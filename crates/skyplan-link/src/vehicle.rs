@@ -5,7 +5,12 @@
 //! (ARM_DISARM, NAV_TAKEOFF, NAV_LAND, DO_SET_MODE, MISSION_START, SET_MESSAGE_INTERVAL), SET_MODE,
 //! SET_POSITION_TARGET_LOCAL_NED and _GLOBAL_INT (position, optional yaw), the mission upload
 //! (MISSION_COUNT → MISSION_REQUEST_INT → MISSION_ITEM_INT / MISSION_ITEM → MISSION_ACK; item 0
-//! is the home, as on ArduPilot) and MISSION_CLEAR_ALL. Position targets may carry a velocity and
+//! is the home, as on ArduPilot) and MISSION_CLEAR_ALL; the fence (`mission_type` FENCE: the
+//! same upload, each item a fence vertex or circle, the whole checked as ArduPilot's fence
+//! loader does — MAV_MISSION_UNSUPPORTED for another command, MAV_MISSION_ERROR for a polygon
+//! whose vertices do not add up — then stored, not enforced, and read back with
+//! MISSION_REQUEST_LIST → MISSION_COUNT → MISSION_REQUEST_INT → MISSION_ITEM_INT in
+//! `MAV_FRAME_GLOBAL_INT`). Position targets may carry a velocity and
 //! an acceleration (their `type_mask` bits clear), followed as feed-forward
 //! ([`skyplan_flight::sim::SimVehicle::set_target`]); unlike ArduCopter, a stamped target
 //! (`time_boot_ms`) is brought to the vehicle's time first ([`stamped`]).
@@ -39,6 +44,7 @@ use crate::{Address, Link, LinkError};
 use mavlink::MessageData;
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, Collision, TrackCheck};
+use skyplan_flight::fence::FenceItem;
 use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimTarget, SimVehicle};
 use skyplan_frames::{Lla, LocalFrame};
@@ -155,6 +161,8 @@ pub enum SimNote {
     Landed,
     /// A mission of this many items was uploaded.
     MissionUploaded(usize),
+    /// A fence of this many items was uploaded (`mission_type` FENCE).
+    FenceUploaded(usize),
     /// A mission item was reached.
     MissionItemReached(u16),
     /// The flown track hit an obstacle.
@@ -259,7 +267,10 @@ impl Streams {
 
 struct Upload {
     count: u16,
+    /// MISSION (`items`) or FENCE (`fence`).
+    mission_type: MavMissionType,
     items: Vec<SimMissionItem>,
+    fence: Vec<FenceItem>,
     /// Wall seconds of the last request.
     last_request_s: f64,
     retries: u32,
@@ -448,13 +459,34 @@ fn send_all(link: Option<&Link>, messages: &[MavMessage]) {
     }
 }
 
-fn request_int(seq: u16) -> MavMessage {
+fn request_int(seq: u16, mission_type: MavMissionType) -> MavMessage {
     MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
         seq,
         target_system: 255,
         target_component: 0,
-        ..Default::default()
+        mission_type,
     })
+}
+
+impl Upload {
+    fn new(count: u16, mission_type: MavMissionType, now_s: f64) -> Self {
+        Self {
+            count,
+            mission_type,
+            items: Vec::new(),
+            fence: Vec::new(),
+            last_request_s: now_s,
+            retries: 0,
+        }
+    }
+
+    /// Items received so far.
+    fn received(&self) -> usize {
+        match self.mission_type {
+            MavMissionType::MAV_MISSION_TYPE_FENCE => self.fence.len(),
+            _ => self.items.len(),
+        }
+    }
 }
 
 /// The vehicle side's frame, EKF and streams.
@@ -466,6 +498,9 @@ struct Side {
     /// The last mission item reached (65535: none yet), which a requested MISSION_ITEM_REACHED
     /// stream repeats, as ArduPilot's does.
     last_reached: u16,
+    /// The stored fence (`mission_type` FENCE), read back as uploaded. Stored only: like
+    /// ArduCopter with `FENCE_ENABLE` 0, the vehicle does not act on it.
+    fence: Vec<FenceItem>,
 }
 
 impl Side {
@@ -668,18 +703,67 @@ fn handle_message(
             }
         }
         MavMessage::MISSION_COUNT(c) => {
-            if c.count == 0 {
-                v.set_mission(Vec::new());
-                out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED));
+            let kind = c.mission_type;
+            let supported = matches!(
+                kind,
+                MavMissionType::MAV_MISSION_TYPE_MISSION | MavMissionType::MAV_MISSION_TYPE_FENCE
+            );
+            if !supported {
+                out.push(mission_ack(MavMissionResult::MAV_MISSION_UNSUPPORTED, kind));
+            } else if c.count == 0 {
+                if kind == MavMissionType::MAV_MISSION_TYPE_FENCE {
+                    side.fence.clear();
+                } else {
+                    v.set_mission(Vec::new());
+                }
+                out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, kind));
             } else {
-                *upload = Some(Upload {
-                    count: c.count,
-                    items: Vec::new(),
-                    last_request_s: now_s,
-                    retries: 0,
-                });
-                out.push(request_int(0));
+                *upload = Some(Upload::new(c.count, kind, now_s));
+                out.push(request_int(0, kind));
             }
+        }
+        MavMessage::MISSION_ITEM_INT(i)
+            if i.mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE =>
+        {
+            let item = FenceItem {
+                seq: i.seq,
+                command: i.command as u16,
+                param1: i.param1,
+                lat_e7: i.x,
+                lon_e7: i.y,
+            };
+            accept_fence_item(side, (upload, now_s), item, &mut out, note);
+        }
+        MavMessage::MISSION_ITEM(i) if i.mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE => {
+            let item = FenceItem {
+                seq: i.seq,
+                command: i.command as u16,
+                param1: i.param1,
+                lat_e7: (f64::from(i.x) * 1e7).round() as i32,
+                lon_e7: (f64::from(i.y) * 1e7).round() as i32,
+            };
+            accept_fence_item(side, (upload, now_s), item, &mut out, note);
+        }
+        MavMessage::MISSION_REQUEST_LIST(r)
+            if r.mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE =>
+        {
+            out.push(MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+                count: side.fence.len() as u16,
+                target_system: 255,
+                target_component: 0,
+                mission_type: r.mission_type,
+                ..Default::default()
+            }));
+        }
+        MavMessage::MISSION_REQUEST_INT(r)
+            if r.mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE =>
+        {
+            out.push(fence_item_out(side, r.seq));
+        }
+        MavMessage::MISSION_REQUEST(r)
+            if r.mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE =>
+        {
+            out.push(fence_item_out(side, r.seq));
         }
         MavMessage::MISSION_ITEM_INT(i) => {
             let p = [
@@ -703,9 +787,20 @@ fn handle_message(
             let item = item_to_sim(side, i.command, i.frame, p);
             accept_item(v, (upload, now_s), i.seq, item, &mut out, note);
         }
-        MavMessage::MISSION_CLEAR_ALL(_) => {
-            v.set_mission(Vec::new());
-            out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED));
+        MavMessage::MISSION_CLEAR_ALL(c) => {
+            match c.mission_type {
+                MavMissionType::MAV_MISSION_TYPE_FENCE => side.fence.clear(),
+                MavMissionType::MAV_MISSION_TYPE_MISSION => v.set_mission(Vec::new()),
+                MavMissionType::MAV_MISSION_TYPE_ALL => {
+                    side.fence.clear();
+                    v.set_mission(Vec::new());
+                }
+                _ => {}
+            }
+            out.push(mission_ack(
+                MavMissionResult::MAV_MISSION_ACCEPTED,
+                c.mission_type,
+            ));
         }
         _ => {}
     }
@@ -876,13 +971,116 @@ pub fn stamped(target: SimTarget, time_boot_ms: u32, now_s: f64) -> SimTarget {
     }
 }
 
-fn mission_ack(result: MavMissionResult) -> MavMessage {
+fn mission_ack(result: MavMissionResult, mission_type: MavMissionType) -> MavMessage {
     MavMessage::MISSION_ACK(MISSION_ACK_DATA {
         target_system: 255,
         target_component: 0,
         mavtype: result,
+        mission_type,
         ..Default::default()
     })
+}
+
+/// The stored fence's item `seq` as MISSION_ITEM_INT, as ArduPilot reads it back
+/// (`MAV_FRAME_GLOBAL_INT`), or MAV_MISSION_INVALID_SEQUENCE.
+fn fence_item_out(side: &Side, seq: u16) -> MavMessage {
+    match side.fence.get(usize::from(seq)) {
+        Some(item) => crate::ground::fence_item_int(item, 255, 0),
+        None => mission_ack(
+            MavMissionResult::MAV_MISSION_INVALID_SEQUENCE,
+            MavMissionType::MAV_MISSION_TYPE_FENCE,
+        ),
+    }
+}
+
+/// Why a whole fence cannot be stored, as ArduPilot's fence loader checks it: each polygon's
+/// vertices in a row, as many as their `param1` says, at least 3; circles of positive radius.
+fn fence_fault(items: &[FenceItem]) -> Option<String> {
+    use skyplan_flight::fence::{
+        CIRCLE_EXCLUSION, CIRCLE_INCLUSION, POLYGON_VERTEX_EXCLUSION, POLYGON_VERTEX_INCLUSION,
+    };
+    let mut k = 0;
+    while let Some(item) = items.get(k) {
+        match item.command {
+            POLYGON_VERTEX_INCLUSION | POLYGON_VERTEX_EXCLUSION => {
+                let n = item.param1;
+                if !(n >= 3.0 && n.fract() == 0.0) {
+                    return Some(format!("Fence: item {k}: bad vertex count {n}"));
+                }
+                let n = n as usize;
+                let run = items[k..]
+                    .iter()
+                    .take(n)
+                    .take_while(|i| i.command == item.command && i.param1 == item.param1)
+                    .count();
+                if run != n {
+                    return Some(format!(
+                        "Fence: item {k}: polygon of {n} has {run} vertices"
+                    ));
+                }
+                k += n;
+            }
+            CIRCLE_INCLUSION | CIRCLE_EXCLUSION if item.param1 > 0.0 => k += 1,
+            CIRCLE_INCLUSION | CIRCLE_EXCLUSION => {
+                return Some(format!("Fence: item {k}: bad radius {}", item.param1));
+            }
+            other => return Some(format!("Fence: item {k}: command {other} unsupported")),
+        }
+    }
+    None
+}
+
+/// A fence item of an upload in progress; the whole fence is checked and stored when the last
+/// arrives. An unsupported command is refused at once with MAV_MISSION_UNSUPPORTED, a fence
+/// that does not hold together with MAV_MISSION_ERROR (the reason in a STATUSTEXT), as
+/// ArduPilot does.
+fn accept_fence_item(
+    side: &mut Side,
+    (upload, now_s): (&mut Option<Upload>, f64),
+    item: FenceItem,
+    out: &mut Vec<MavMessage>,
+    note: &mut impl FnMut(SimNote),
+) {
+    let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
+    let Some(u) = upload.as_mut().filter(|u| u.mission_type == fence) else {
+        out.push(mission_ack(MavMissionResult::MAV_MISSION_DENIED, fence));
+        return;
+    };
+    let expected = u.fence.len() as u16;
+    if item.seq != expected {
+        out.push(request_int(expected, fence));
+        return;
+    }
+    if !(5001..=5004).contains(&item.command) {
+        *upload = None;
+        out.push(status_text(
+            MavSeverity::MAV_SEVERITY_WARNING,
+            &format!("Fence: command {} unsupported", item.command),
+        ));
+        out.push(mission_ack(
+            MavMissionResult::MAV_MISSION_UNSUPPORTED,
+            fence,
+        ));
+        return;
+    }
+    u.fence.push(item);
+    u.retries = 0;
+    u.last_request_s = now_s;
+    if u.fence.len() < usize::from(u.count) {
+        out.push(request_int(expected + 1, fence));
+        return;
+    }
+    let items = std::mem::take(&mut u.fence);
+    *upload = None;
+    if let Some(why) = fence_fault(&items) {
+        out.push(status_text(MavSeverity::MAV_SEVERITY_WARNING, &why));
+        note(SimNote::Refused(why));
+        out.push(mission_ack(MavMissionResult::MAV_MISSION_ERROR, fence));
+        return;
+    }
+    note(SimNote::FenceUploaded(items.len()));
+    side.fence = items;
+    out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, fence));
 }
 
 fn accept_item(
@@ -893,13 +1091,14 @@ fn accept_item(
     out: &mut Vec<MavMessage>,
     note: &mut impl FnMut(SimNote),
 ) {
-    let Some(u) = upload else {
-        out.push(mission_ack(MavMissionResult::MAV_MISSION_DENIED));
+    let mission = MavMissionType::MAV_MISSION_TYPE_MISSION;
+    let Some(u) = upload.as_mut().filter(|u| u.mission_type == mission) else {
+        out.push(mission_ack(MavMissionResult::MAV_MISSION_DENIED, mission));
         return;
     };
     let expected = u.items.len() as u16;
     if seq != expected {
-        out.push(request_int(expected));
+        out.push(request_int(expected, mission));
         return;
     }
     // Item 0 is the home on ArduPilot: kept in the list, never flown.
@@ -915,8 +1114,8 @@ fn accept_item(
         note(SimNote::MissionUploaded(items.len()));
         v.set_mission(items);
         *upload = None;
-        out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED));
+        out.push(mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission));
     } else {
-        out.push(request_int(expected + 1));
+        out.push(request_int(expected + 1, mission));
     }
 }

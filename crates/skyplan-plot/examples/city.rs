@@ -73,6 +73,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         graph_ne: &[],
         connectors_ne: &[],
         flight: None,
+        zones: &[],
     };
 
     let t = Instant::now();

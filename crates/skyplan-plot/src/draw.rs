@@ -27,6 +27,12 @@ const HIDDEN_COLOR: RGBColor = RGBColor(150, 30, 40);
 const LEARNED_COLOR: RGBColor = RGBColor(230, 60, 150);
 const REPLANNED_COLOR: RGBColor = RGBColor(140, 70, 200);
 const TRACK_COLOR: RGBColor = RGBColor(20, 20, 20);
+/// An exclusion zone: outline and hatching.
+pub(crate) const ZONE_COLOR: RGBColor = RGBColor(214, 40, 40);
+/// An inclusion boundary's outline.
+pub(crate) const INCLUSION_COLOR: RGBColor = RGBColor(0, 150, 80);
+/// Pixels between two hatching lines.
+const HATCH_PX: f64 = 7.0;
 const HEAT_BLOCKED_COLOR: RGBColor = RGBColor(0, 0, 0);
 const NO_VALUE_COLOR: RGBColor = RGBColor(200, 200, 200);
 
@@ -98,6 +104,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
         draw_heat(root, scene, l, levels)?;
     }
     draw_obstacles(&mut chart, scene, heat.is_none())?;
+    draw_zones(root, &mut chart, scene, l, mode)?;
     draw_roadmap(&mut chart, scene, &styles)?;
     draw_routes(&mut chart, scene, &styles, trace)?;
     draw_axes(root, l, mode)?;
@@ -149,6 +156,129 @@ fn draw_obstacles<DB: DrawingBackend>(
     chart
         .draw_series(scene.obstacles.iter().map(|o| footprint(o, OBSTACLE_COLOR)))
         .map_err(err)?;
+    Ok(())
+}
+
+/// The rings of a zone as `(east, north)` points (a circle as a 96-gon).
+fn zone_rings(z: &skyplan_map::nofly::Zone) -> Vec<Vec<(f64, f64)>> {
+    use skyplan_map::nofly::ZoneShape;
+    match &z.shape {
+        ZoneShape::Polygon(rings) => rings
+            .iter()
+            .map(|r| r.iter().map(|p| (p[1], p[0])).collect())
+            .collect(),
+        ZoneShape::Circle { centre, radius_m } => {
+            let ring = (0..96)
+                .map(|k| {
+                    let a = std::f64::consts::TAU * f64::from(k) / 96.0;
+                    (
+                        centre[1] + radius_m * a.sin(),
+                        centre[0] + radius_m * a.cos(),
+                    )
+                })
+                .collect();
+            vec![ring]
+        }
+    }
+}
+
+/// The hatching of rings `(east, north)`: segments of the lines east − north = c, every
+/// `step_m`, inside the rings (even-odd: holes stay clear).
+pub(crate) fn hatch_segments(
+    rings: &[Vec<(f64, f64)>],
+    step_m: f64,
+) -> Vec<((f64, f64), (f64, f64))> {
+    let pts = rings.iter().flatten();
+    let (lo, hi) = pts.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(e, n)| {
+        (lo.min(e - n), hi.max(e - n))
+    });
+    let mut out = Vec::new();
+    if !(step_m > 0.0 && lo.is_finite() && hi.is_finite()) {
+        return out;
+    }
+    let mut c = (lo / step_m).ceil() * step_m;
+    while c <= hi && out.len() < 100_000 {
+        // Along the line (e, n) = (c + t, t): where each edge crosses it, by t.
+        let mut ts = Vec::new();
+        for ring in rings {
+            for k in 0..ring.len() {
+                let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+                let (fa, fb) = (a.0 - a.1 - c, b.0 - b.1 - c);
+                if (fa > 0.0) != (fb > 0.0) {
+                    let s = fa / (fa - fb);
+                    ts.push(a.1 + s * (b.1 - a.1));
+                }
+            }
+        }
+        ts.sort_by(f64::total_cmp);
+        for pair in ts.chunks_exact(2) {
+            out.push(((c + pair[0], pair[0]), (c + pair[1], pair[1])));
+        }
+        c += step_m;
+    }
+    out
+}
+
+/// The no-fly zones: exclusion zones outlined and hatched in red, inclusion boundaries outlined
+/// in green, each labelled "zone N, F–C m" (an inclusion "zone N inside, …") at its northern
+/// edge.
+fn draw_zones<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    chart: &mut Chart<'_, DB>,
+    scene: &Scene,
+    l: &PlotLayout,
+    mode: TextMode,
+) -> Result<(), PlotError> {
+    let width = (1.5 * l.fonts.k).round().max(1.0) as u32;
+    for z in scene.zones {
+        let rings = zone_rings(z);
+        let color = if z.inclusion {
+            INCLUSION_COLOR
+        } else {
+            ZONE_COLOR
+        };
+        if !z.inclusion {
+            let step_m = HATCH_PX * l.metres_per_px();
+            chart
+                .draw_series(
+                    hatch_segments(&rings, step_m)
+                        .into_iter()
+                        .map(|(a, b)| PathElement::new(vec![a, b], color.stroke_width(1))),
+                )
+                .map_err(err)?;
+        }
+        for ring in &rings {
+            let mut closed = ring.clone();
+            closed.extend(ring.first().copied());
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed,
+                    color.stroke_width(width),
+                )))
+                .map_err(err)?;
+        }
+        let band = if z.ceiling_m.is_finite() {
+            format!("{:.0}–{:.0} m", z.floor_m, z.ceiling_m)
+        } else {
+            format!("from {:.0} m", z.floor_m)
+        };
+        let text = if z.inclusion {
+            format!("zone {} inside, {band}", z.feature)
+        } else {
+            format!("zone {}, {band}", z.feature)
+        };
+        let (lo, hi) = z.bbox_ne();
+        let at = l.pixel_of_ne(hi[0], 0.5 * (lo[1] + hi[1]));
+        let label = Label {
+            text: &text,
+            size: l.fonts.legend,
+            at: (at.0, at.1 - 3),
+            h: HPos::Center,
+            v: VAlign::Baseline,
+            vertical: false,
+        };
+        draw_label(root, mode, &label)?;
+    }
     Ok(())
 }
 

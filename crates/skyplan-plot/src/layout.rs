@@ -129,7 +129,7 @@ impl PlotLayout {
     /// let grid = Grid2::from_ascii("....\n....")?;
     /// let scene = Scene {
     ///     title: String::new(), grid: &grid, obstacles: &[], raw_path_ne: &[],
-    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[], flight: None,
+    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[], flight: None, zones: &[],
     /// };
     /// let l = layout(&scene, 800, 600)?;
     /// let (x0, y0, _w, h) = l.plot_area();

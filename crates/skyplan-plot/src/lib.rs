@@ -34,6 +34,7 @@
 //!     graph_ne: &[],
 //!     connectors_ne: &[],
 //!     flight: None,
+//!     zones: &[],
 //! };
 //! let png = render_png(&scene, 640, 480)?;
 //! assert_eq!(&png[1..4], b"PNG");
@@ -99,6 +100,10 @@ pub struct Scene<'a> {
     /// What a flight added (hidden obstacles, learned cells, replanned routes, the flown
     /// track), for `skyplan fly --plot`; `None` for a plan.
     pub flight: Option<&'a FlightLayers<'a>>,
+    /// No-fly zones (local metres), drawn over the map: exclusion zones outlined red and
+    /// hatched, inclusion boundaries outlined green without hatching, each labelled with its
+    /// number and band; empty for none.
+    pub zones: &'a [skyplan_map::nofly::Zone],
 }
 
 /// A flight drawn over its plan: what the map did not show and what the vehicle did about it.
@@ -131,6 +136,7 @@ impl<'a> Scene<'a> {
             graph_ne: &[],
             connectors_ne: &[],
             flight: None,
+            zones: &[],
         }
     }
 

@@ -67,6 +67,19 @@ pub fn plan_picture(
     kind: &PictureKind,
     flight: Option<&FlightLayers>,
 ) -> Result<Vec<u8>, PlotError> {
+    plan_picture_with_zones(world, plan, kind, flight, &[])
+}
+
+/// As [`plan_picture`], with the no-fly `zones` (local metres about the map's home) drawn on
+/// the 2D map: exclusion zones hatched, inclusion boundaries outlined, each labelled with its
+/// band (other pictures do not show them).
+pub fn plan_picture_with_zones(
+    world: &World,
+    plan: &Plan,
+    kind: &PictureKind,
+    flight: Option<&FlightLayers>,
+    zones: &[skyplan_map::nofly::Zone],
+) -> Result<Vec<u8>, PlotError> {
     let geometry = plan.geometry.clone().unwrap_or_default();
     let map = short_name(world.name());
     match (kind, plan.grid_used.as_deref()) {
@@ -78,6 +91,7 @@ pub fn plan_picture(
                 grid,
                 map,
                 flight,
+                zones,
             };
             picture.render(*format)
         }
@@ -137,6 +151,7 @@ struct MapPicture<'a> {
     /// The map's short name, for the title.
     map: &'a str,
     flight: Option<&'a FlightLayers<'a>>,
+    zones: &'a [skyplan_map::nofly::Zone],
 }
 
 impl MapPicture<'_> {
@@ -196,6 +211,7 @@ impl MapPicture<'_> {
             graph_ne: &graph,
             connectors_ne: &connectors,
             flight: self.flight,
+            zones: self.zones,
         };
         match &trace {
             None => crate::render(&scene, format, 1000, 1000),

@@ -78,6 +78,7 @@ fn scene(f: &Fixture) -> Scene<'_> {
         graph_ne: &[],
         connectors_ne: &[],
         flight: None,
+        zones: &[],
     }
 }
 
@@ -460,4 +461,102 @@ fn flight_layers_are_drawn_where_they_are_and_named_in_the_legend() {
     ] {
         assert!(svg.contains(label), "legend lacks {label}");
     }
+}
+
+/// An exclusion square (with a hole) and an inclusion circle in free space, away from the
+/// fixture's blocks and route.
+fn zones() -> Vec<skyplan_map::nofly::Zone> {
+    use skyplan_map::nofly::{Zone, ZoneShape};
+    let square = |n0: f64, n1: f64, e0: f64, e1: f64| vec![[n0, e0], [n0, e1], [n1, e1], [n1, e0]];
+    vec![
+        Zone {
+            feature: 0,
+            shape: ZoneShape::Polygon(vec![
+                square(-4.0, 2.0, 5.0, 20.0),
+                square(-2.0, 0.0, 10.0, 14.0),
+            ]),
+            floor_m: 0.0,
+            ceiling_m: 120.0,
+            inclusion: false,
+            start_unix_s: None,
+            end_unix_s: None,
+        },
+        Zone {
+            feature: 1,
+            shape: ZoneShape::Circle {
+                centre: [-12.0, -5.0],
+                radius_m: 4.0,
+            },
+            floor_m: 0.0,
+            ceiling_m: f64::INFINITY,
+            inclusion: true,
+            start_unix_s: None,
+            end_unix_s: None,
+        },
+    ]
+}
+
+#[test]
+fn zones_are_hatched_outlined_and_labelled_with_their_bands() {
+    let f = fixture();
+    let z = zones();
+    let scene = Scene {
+        zones: &z,
+        ..scene(&f)
+    };
+    let (w, h) = (900, 600);
+    let img = Image::decode(&render_png(&scene, w, h).unwrap());
+    let l = layout(&scene, w, h).unwrap();
+    let px = |n: f64, e: f64| l.pixel_of_ne(n, e);
+    // The red pixels among those of a region (north, east ranges), sampled every pixel.
+    let red_share = |(n0, n1): (f64, f64), (e0, e1): (f64, f64)| {
+        let ((x0, y1), (x1, y0)) = (px(n0, e0), px(n1, e1));
+        let (mut red, mut all) = (0, 0);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                all += 1;
+                red += usize::from(is_red(img.at((x, y))));
+            }
+        }
+        red as f64 / all as f64
+    };
+    // Inside the exclusion square, off its hole and edges: hatched (diagonal lines every 7 px:
+    // some red, mostly not).
+    let hatched = red_share((-3.5, -2.5), (6.0, 9.0));
+    assert!((0.05..0.6).contains(&hatched), "{hatched}");
+    let hatched = red_share((0.5, 1.5), (15.0, 19.0));
+    assert!((0.05..0.6).contains(&hatched), "{hatched}");
+    // Its hole and the free space east of it: no hatching.
+    assert_eq!(red_share((-1.6, -0.4), (10.4, 13.6)), 0.0);
+    assert_eq!(red_share((-3.0, 1.0), (21.0, 24.0)), 0.0);
+    // Its outline (the western edge) is red.
+    assert!(is_red(img.at(px(-1.0, 5.0))), "{:?}", img.at(px(-1.0, 5.0)));
+    // The inclusion circle: a green outline, not hatched inside.
+    assert!(
+        is_green(img.at(px(-12.0, -1.0))),
+        "{:?}",
+        img.at(px(-12.0, -1.0))
+    );
+    assert!(is_green(img.at(px(-8.0, -5.0))));
+    assert_eq!(red_share((-14.0, -10.0), (-7.0, -3.0)), 0.0);
+    assert!(is_white(img.at(px(-12.0, -5.0))));
+    // The labels give each zone's number and band; the inclusion says so.
+    let svg = render_svg(&scene, w, h).unwrap();
+    let texts = svg_texts(&svg);
+    assert!(
+        texts.iter().any(|t| t.contains("zone 0, 0–120 m")),
+        "{texts:?}"
+    );
+    assert!(
+        texts.iter().any(|t| t.contains("zone 1 inside, from 0 m")),
+        "{texts:?}"
+    );
+    // Without zones, the same region is not red at all.
+    let plain_scene = Scene {
+        zones: &[],
+        ..scene
+    };
+    let plain = Image::decode(&render_png(&plain_scene, w, h).unwrap());
+    let ((x0, y1), (x1, y0)) = (px(-3.5, 6.0), px(-2.5, 9.0));
+    assert!((y0..=y1).all(|y| (x0..=x1).all(|x| !is_red(plain.at((x, y))))));
 }

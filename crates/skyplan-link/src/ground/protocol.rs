@@ -6,7 +6,8 @@
 //! - [`GroundProtocol`]: what the station knows of the vehicle (absorbing every message) and the
 //!   messages of executor commands and stream requests.
 //! - [`VehicleWait`]: waiting for the vehicle's heartbeat, EKF origin and position.
-//! - [`UploadDriver`]: a mission upload ([`MissionUpload`]) in MAVLink messages.
+//! - [`UploadDriver`]: a mission or fence upload ([`MissionUpload`]) in MAVLink messages.
+//! - [`FenceDownload`]: the fence read back ([`MissionDownload`]) in MAVLink messages.
 //! - [`FlightLoop`]: the flight loop's decisions: executor events from messages and time, commands
 //!   out, lost link, timeout, interrupt, progress, the route watcher.
 //!
@@ -15,7 +16,7 @@
 use super::{
     Autopilot, FlightSummary, GroundConfig, GroundError, LogRow, ORIGIN_GRACE_S, POSITION_AND_YAW,
     POSITION_VELOCITY_ACCELERATION_AND_YAW, Progress, SYSTEM_ID, Update, UploadReport, VehicleInfo,
-    Waiting, global_lla, grid_convergence_rad, mission_item_int,
+    Waiting, fence_item_int, global_lla, grid_convergence_rad, mission_item_int,
 };
 use crate::Received;
 use crate::obstacle::reading_from_obstacle_distance;
@@ -24,6 +25,9 @@ use mavlink::dialects::common::*;
 use skyplan_flight::executor::{
     Command, CommandKind, Event, FailsafeAction, FlightExecutor, Output, Telemetry, VehicleMode,
     wrap_angle_rad,
+};
+use skyplan_flight::fence::{
+    DownloadEvent, DownloadSend, DownloadStatus, FenceItem, MissionDownload,
 };
 use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::modes::{arducopter, px4};
@@ -660,9 +664,41 @@ impl VehicleWait {
 /// (MISSION_REQUEST_INT and MISSION_REQUEST answered alike), until the vehicle's MISSION_ACK.
 #[derive(Debug)]
 pub struct UploadDriver<'a> {
-    plan: &'a MissionPlan,
+    payload: Payload<'a>,
     up: MissionUpload,
     start_s: f64,
+}
+
+/// What an [`UploadDriver`] uploads.
+#[derive(Debug, Clone, Copy)]
+enum Payload<'a> {
+    /// A mission (`mission_type` MISSION).
+    Mission(&'a MissionPlan),
+    /// A fence (`mission_type` FENCE).
+    Fence(&'a [FenceItem]),
+}
+
+impl Payload<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Payload::Mission(p) => p.items.len(),
+            Payload::Fence(f) => f.len(),
+        }
+    }
+
+    fn mission_type(&self) -> MavMissionType {
+        match self {
+            Payload::Mission(_) => MavMissionType::MAV_MISSION_TYPE_MISSION,
+            Payload::Fence(_) => MavMissionType::MAV_MISSION_TYPE_FENCE,
+        }
+    }
+}
+
+/// The name of a MISSION_ACK's result without its `MAV_MISSION_` prefix (`UNSUPPORTED`).
+pub fn mission_result_name(result: MavMissionResult) -> String {
+    format!("{result:?}")
+        .trim_start_matches("MAV_MISSION_")
+        .to_string()
 }
 
 impl<'a> UploadDriver<'a> {
@@ -673,16 +709,36 @@ impl<'a> UploadDriver<'a> {
         config: UploadConfig,
         now_s: f64,
     ) -> Result<(Self, Vec<MavMessage>), GroundError> {
-        let Ok(count) = u16::try_from(plan.items.len()) else {
+        Self::start_payload(p, Payload::Mission(plan), config, now_s)
+    }
+
+    /// Starts uploading a fence at `now_s`: every message of the exchange carries
+    /// `mission_type` FENCE, and only the vehicle's messages of that type are heeded.
+    pub fn start_fence(
+        p: &GroundProtocol,
+        fence: &'a [FenceItem],
+        config: UploadConfig,
+        now_s: f64,
+    ) -> Result<(Self, Vec<MavMessage>), GroundError> {
+        Self::start_payload(p, Payload::Fence(fence), config, now_s)
+    }
+
+    fn start_payload(
+        p: &GroundProtocol,
+        payload: Payload<'a>,
+        config: UploadConfig,
+        now_s: f64,
+    ) -> Result<(Self, Vec<MavMessage>), GroundError> {
+        let Ok(count) = u16::try_from(payload.len()) else {
             return Err(GroundError::Upload(format!(
                 "{} items do not fit in a mission",
-                plan.items.len()
+                payload.len()
             )));
         };
         let mut up = MissionUpload::new(count, config);
         let sends = up.start(0.0);
         let driver = Self {
-            plan,
+            payload,
             up,
             start_s: now_s,
         };
@@ -697,24 +753,29 @@ impl<'a> UploadDriver<'a> {
         now_s: f64,
         received: Option<&Received>,
     ) -> Vec<MavMessage> {
+        let kind = self.payload.mission_type();
         let event = received.map_or(UploadEvent::Tick, |r| {
             let to_us = |target: u8| target == 0 || target == SYSTEM_ID;
             let from_vehicle = p.is_from_vehicle(r);
             let _ = p.absorb(now_s, r);
             match &r.message {
-                MavMessage::MISSION_REQUEST_INT(q) if from_vehicle && to_us(q.target_system) => {
+                MavMessage::MISSION_REQUEST_INT(q)
+                    if from_vehicle && to_us(q.target_system) && q.mission_type == kind =>
+                {
                     UploadEvent::Request { seq: q.seq }
                 }
                 #[allow(deprecated)]
-                MavMessage::MISSION_REQUEST(q) if from_vehicle && to_us(q.target_system) => {
+                MavMessage::MISSION_REQUEST(q)
+                    if from_vehicle && to_us(q.target_system) && q.mission_type == kind =>
+                {
                     UploadEvent::Request { seq: q.seq }
                 }
-                MavMessage::MISSION_ACK(a) if from_vehicle && to_us(a.target_system) => {
+                MavMessage::MISSION_ACK(a)
+                    if from_vehicle && to_us(a.target_system) && a.mission_type == kind =>
+                {
                     UploadEvent::Ack(match a.mavtype {
                         MavMissionResult::MAV_MISSION_ACCEPTED => Ok(()),
-                        other => Err(format!("{other:?}")
-                            .trim_start_matches("MAV_MISSION_")
-                            .to_string()),
+                        other => Err(mission_result_name(other)),
                     })
                 }
                 _ => UploadEvent::Tick,
@@ -728,18 +789,25 @@ impl<'a> UploadDriver<'a> {
     pub fn done(&self, now_s: f64) -> Option<Result<UploadReport, GroundError>> {
         match self.up.status() {
             UploadStatus::Done => Some(Ok(UploadReport {
-                items: self.plan.items.len(),
+                items: self.payload.len(),
                 requests: self.up.requests(),
                 resends: self.up.resends(),
                 wall_time_s: now_s - self.start_s,
             })),
-            UploadStatus::Failed(why) => Some(Err(GroundError::Upload(why.clone()))),
+            UploadStatus::Failed(why) => Some(Err(match self.payload {
+                Payload::Mission(_) => GroundError::Upload(why.clone()),
+                Payload::Fence(_) => GroundError::Fence(format!(
+                    "upload: {}",
+                    why.replace("the mission", "the fence")
+                )),
+            })),
             UploadStatus::InProgress => None,
         }
     }
 
     fn messages(&self, p: &GroundProtocol, sends: &[UploadSend]) -> Vec<MavMessage> {
         let (sys, comp) = p.target();
+        let mission_type = self.payload.mission_type();
         sends
             .iter()
             .filter_map(|s| match *s {
@@ -747,10 +815,129 @@ impl<'a> UploadDriver<'a> {
                     count,
                     target_system: sys,
                     target_component: comp,
+                    mission_type,
                     ..Default::default()
                 })),
-                UploadSend::Item(seq) => (self.plan.items.get(usize::from(seq)))
-                    .map(|item| mission_item_int(item, sys, comp)),
+                UploadSend::Item(seq) => match self.payload {
+                    Payload::Mission(plan) => (plan.items.get(usize::from(seq)))
+                        .map(|item| mission_item_int(item, sys, comp)),
+                    Payload::Fence(fence) => {
+                        (fence.get(usize::from(seq))).map(|item| fence_item_int(item, sys, comp))
+                    }
+                },
+            })
+            .collect()
+    }
+}
+
+/// A fence read-back (`mission_type` FENCE) in MAVLink messages: MISSION_REQUEST_LIST →
+/// MISSION_COUNT → MISSION_REQUEST_INT per item → MISSION_ITEM_INT → MISSION_ACK
+/// ([`MissionDownload`]).
+#[derive(Debug)]
+pub struct FenceDownload {
+    down: MissionDownload<FenceItem>,
+    start_s: f64,
+}
+
+impl FenceDownload {
+    /// Starts at `now_s`: the driver and the MISSION_REQUEST_LIST.
+    pub fn start(p: &GroundProtocol, config: UploadConfig, now_s: f64) -> (Self, Vec<MavMessage>) {
+        let mut down = MissionDownload::new(config);
+        let sends = down.start(0.0);
+        let d = Self {
+            down,
+            start_s: now_s,
+        };
+        let out = d.messages(p, &sends);
+        (d, out)
+    }
+
+    /// One step at `now_s` with the message received, if any: the messages to send.
+    pub fn step(
+        &mut self,
+        p: &mut GroundProtocol,
+        now_s: f64,
+        received: Option<&Received>,
+    ) -> Vec<MavMessage> {
+        let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
+        let event = received.map_or(DownloadEvent::Tick, |r| {
+            let to_us = |target: u8| target == 0 || target == SYSTEM_ID;
+            let from_vehicle = p.is_from_vehicle(r);
+            let _ = p.absorb(now_s, r);
+            match &r.message {
+                MavMessage::MISSION_COUNT(c)
+                    if from_vehicle && to_us(c.target_system) && c.mission_type == fence =>
+                {
+                    DownloadEvent::Count(c.count)
+                }
+                MavMessage::MISSION_ITEM_INT(i)
+                    if from_vehicle && to_us(i.target_system) && i.mission_type == fence =>
+                {
+                    DownloadEvent::Item {
+                        seq: i.seq,
+                        item: FenceItem {
+                            seq: i.seq,
+                            command: i.command as u16,
+                            param1: i.param1,
+                            lat_e7: i.x,
+                            lon_e7: i.y,
+                        },
+                    }
+                }
+                MavMessage::MISSION_ACK(a)
+                    if from_vehicle
+                        && to_us(a.target_system)
+                        && a.mission_type == fence
+                        && a.mavtype != MavMissionResult::MAV_MISSION_ACCEPTED =>
+                {
+                    DownloadEvent::Refused(mission_result_name(a.mavtype))
+                }
+                _ => DownloadEvent::Tick,
+            }
+        });
+        let sends = self.down.handle(now_s - self.start_s, event);
+        self.messages(p, &sends)
+    }
+
+    /// `None` while in progress; then the items read back, or why it failed.
+    pub fn done(&self) -> Option<Result<Vec<FenceItem>, GroundError>> {
+        match self.down.status() {
+            DownloadStatus::Done(items) => Some(Ok(items.clone())),
+            DownloadStatus::Failed(why) => {
+                Some(Err(GroundError::Fence(format!("read-back: {why}"))))
+            }
+            DownloadStatus::InProgress => None,
+        }
+    }
+
+    fn messages(&self, p: &GroundProtocol, sends: &[DownloadSend]) -> Vec<MavMessage> {
+        let (target_system, target_component) = p.target();
+        let mission_type = MavMissionType::MAV_MISSION_TYPE_FENCE;
+        sends
+            .iter()
+            .map(|s| match *s {
+                DownloadSend::RequestList => {
+                    MavMessage::MISSION_REQUEST_LIST(MISSION_REQUEST_LIST_DATA {
+                        target_system,
+                        target_component,
+                        mission_type,
+                    })
+                }
+                DownloadSend::Request(seq) => {
+                    MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
+                        seq,
+                        target_system,
+                        target_component,
+                        mission_type,
+                    })
+                }
+                DownloadSend::Ack => MavMessage::MISSION_ACK(MISSION_ACK_DATA {
+                    target_system,
+                    target_component,
+                    mavtype: MavMissionResult::MAV_MISSION_ACCEPTED,
+                    mission_type,
+                    ..Default::default()
+                }),
             })
             .collect()
     }

@@ -74,6 +74,7 @@ impl SimProtocol {
             ekf_delay_s: cfg.ekf_delay_s.max(0.0),
             streams: Streams::default(),
             last_reached: u16::MAX,
+            fence: Vec::new(),
         };
         let last_mode = vehicle.state().mode;
         Self {
@@ -314,13 +315,14 @@ impl SimProtocol {
                     target_system: 0,
                     target_component: 0,
                     mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
+                    mission_type: u.mission_type,
                     ..Default::default()
                 }));
                 self.upload = None;
             } else {
                 u.retries += 1;
                 u.last_request_s = now_s;
-                out.push(request_int(u.items.len() as u16));
+                out.push(request_int(u.received() as u16, u.mission_type));
             }
         }
         let s = self.vehicle.state();
