@@ -144,3 +144,46 @@ fn an_unreachable_server_is_a_clear_error() {
     postgres_url();
     fresh_store("reach");
 }
+
+#[test]
+#[ignore = "needs PostgreSQL (.ci/run starts one)"]
+fn a_store_whose_database_goes_away_says_it_is_down_then_reconnects() {
+    let (url, store) = fresh_store("away");
+    let name = url.rsplit('/').next().expect("a database name");
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let a = random_intent(&mut rng, 1, 1, "a");
+    assert!(matches!(
+        store.insert_if_clear(&a, PriorityRule::Every),
+        Ok(Insert::Accepted { .. })
+    ));
+    // The database refuses connections and its sessions are ended (PostgreSQL's own SQL, run
+    // through psql on the server's default database).
+    let admin = postgres_url();
+    psql(
+        &admin,
+        &format!(
+            "ALTER DATABASE {name} ALLOW_CONNECTIONS false; \
+             SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = '{name}'"
+        ),
+    );
+    let b = random_intent(&mut rng, 1, 1, "b");
+    for e in [
+        store.list().expect_err("down"),
+        store
+            .insert_if_clear(&b, PriorityRule::Every)
+            .expect_err("down"),
+    ] {
+        assert!(matches!(e, StoreError::Down { .. }), "{e}");
+        assert!(e.to_string().contains("is down"), "{e}");
+    }
+    psql(
+        &admin,
+        &format!("ALTER DATABASE {name} ALLOW_CONNECTIONS true"),
+    );
+    // Back: the store connects again; nothing of the refused insert was stored.
+    assert_eq!(store.list().expect("listed"), [a]);
+    assert!(matches!(
+        store.insert_if_clear(&b, PriorityRule::Every),
+        Ok(Insert::Accepted { .. })
+    ));
+}
