@@ -55,7 +55,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 fn measure(name: &str, store: &dyn IntentStore, flights: &[FlightVolumes]) {
     let t0: Timestamp = "2026-03-01T00:00:00Z".parse().expect("a time");
     let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let mut intent = |rng: &mut ChaCha8Rng| OperationalIntent {
+    let intent = |rng: &mut ChaCha8Rng| OperationalIntent {
         id: new_id(),
         version: 1,
         state: IntentState::Accepted,

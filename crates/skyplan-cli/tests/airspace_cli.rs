@@ -406,3 +406,61 @@ fn serve_on_an_unreachable_or_wrong_database_fails_at_start_up_with_a_clear_erro
         "{err}"
     );
 }
+
+#[test]
+#[ignore = "needs PostgreSQL (.ci/run starts one)"]
+fn a_server_whose_database_goes_away_answers_503_saying_the_store_is_down() {
+    let url = fresh_database("away");
+    let name = url.rsplit('/').next().expect("a database name").to_string();
+    let server = Server::start(&url);
+    let earliest = Timestamp::now().plus_ms(3_600_000);
+    let (status, answer) = http(
+        server.addr,
+        "POST",
+        "/api/intents",
+        Some(&intent_request(0, earliest, 0)),
+    )
+    .expect("an answer");
+    assert_eq!(status, 201, "{answer}");
+    let first = intent_of(&answer);
+    // The database refuses connections and the server's sessions are ended (PostgreSQL's own
+    // SQL through psql, on the server's default database).
+    let psql = |sql: &str| {
+        let out = Command::new("psql")
+            .args([&postgres_url(), "-v", "ON_ERROR_STOP=1", "-c", sql])
+            .output()
+            .expect("psql runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    psql(&format!(
+        "ALTER DATABASE {name} ALLOW_CONNECTIONS false; \
+         SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = '{name}'"
+    ));
+    let (status, answer) = http(
+        server.addr,
+        "POST",
+        "/api/intents",
+        Some(&intent_request(2, earliest, 0)),
+    )
+    .expect("an answer");
+    assert_eq!(status, 503, "{answer}");
+    assert_eq!(answer["kind"], "store_unavailable", "{answer}");
+    assert!(answer.to_string().contains("is down"), "{answer}");
+    let (status, answer) = http(server.addr, "GET", "/api/intents", None).expect("an answer");
+    assert_eq!(
+        (status, answer["kind"].as_str()),
+        (503, Some("store_unavailable")),
+        "{answer}"
+    );
+    // Back: the same server answers again, and the refused request left nothing behind.
+    psql(&format!("ALTER DATABASE {name} ALLOW_CONNECTIONS true"));
+    let (status, answer) = http(server.addr, "GET", "/api/intents", None).expect("an answer");
+    assert_eq!(status, 200, "{answer}");
+    let stored: Vec<OperationalIntent> =
+        serde_json::from_value(answer["intents"].clone()).expect("intents");
+    assert_eq!(stored, [first]);
+}
