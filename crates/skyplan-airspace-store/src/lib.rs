@@ -1,16 +1,20 @@
 //! # The store of the shared airspace
 //!
 //! Operational intents ([`skyplan_airspace::OperationalIntent`]) kept in a database behind the
-//! [`IntentStore`] trait, so that PostgreSQL (and CockroachDB, which speaks its protocol) can
-//! follow the one implementation here: [`SqliteStore`] — SQLite through `rusqlite` (compiled
-//! in: a fresh machine needs nothing), a file in WAL mode, or memory.
+//! [`IntentStore`] trait: [`SqliteStore`] — SQLite through `rusqlite` (compiled in: a fresh
+//! machine needs nothing), a file in WAL mode, or memory — for one machine, and
+//! [`PostgresStore`] — PostgreSQL through the `postgres` client, written so that CockroachDB
+//! (which speaks its protocol) can serve it too — for several servers sharing one airspace.
+//! [`open_url`] picks one by its address.
 //!
-//! **Atomic check-and-insert.** [`IntentStore::insert_if_clear`] runs in one `BEGIN
+//! **Atomic check-and-insert.** On SQLite, [`IntentStore::insert_if_clear`] runs in one `BEGIN
 //! IMMEDIATE` transaction: it takes SQLite's write lock first (other writers, in this process
 //! or another, wait for it: a busy timeout of 30 s), reads the candidate intents through the
 //! index, checks them exactly ([`skyplan_airspace::conflicts`]), inserts and commits. So two
 //! writers never both accept intersecting intents, and what was acknowledged is on disk
-//! (`synchronous = FULL`).
+//! (`synchronous = FULL`). On PostgreSQL it runs in one `SERIALIZABLE` transaction, retried
+//! when the database aborts it for a serialization failure (SQLSTATE 40001): of two
+//! transactions that each read the index keys the other writes, at most one commits.
 //!
 //! **The index** is a table of `(cell, time bucket)` keys per intent (as the DSS keys intents
 //! by S2 cells): the footprint's latitude/longitude box in cells of [`CELL_DEG`] degrees ×
@@ -27,9 +31,11 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod pg;
 mod reserve;
 mod sqlite;
 
+pub use pg::{MAX_CONNECTIONS, PostgresStore, SERIALIZABLE_TRIES};
 pub use reserve::{RESERVE_TRIES, Reservation, ReserveError, Reserved, reserve};
 pub use sqlite::SqliteStore;
 
@@ -94,8 +100,36 @@ pub enum StoreError {
     )]
     TooLarge(usize),
     /// An address the store does not know.
-    #[error("airspace {0:?}: expected sqlite:FILE or sqlite::memory:")]
+    #[error(
+        "airspace {0}: expected sqlite:FILE, sqlite::memory: or postgres://USER@HOST:PORT/DATABASE"
+    )]
     Address(String),
+    /// The database server cannot be reached, or the connection to it broke.
+    #[error("the airspace store at {place} is down: {why}")]
+    Down {
+        /// Where (no password).
+        place: String,
+        /// The client's error.
+        why: String,
+    },
+    /// PostgreSQL (or CockroachDB) answered with an error.
+    #[error("the airspace store (PostgreSQL): {0}")]
+    Postgres(String),
+    /// A serializable transaction was aborted by other writers this many times in a row.
+    #[error(
+        "the airspace store is busy: the transaction met other writers {0} times in a row; try again"
+    )]
+    Contended(usize),
+}
+
+/// Opens the store at `url`: `sqlite:FILE`, `sqlite::memory:` ([`SqliteStore`]) or
+/// `postgres://…` / `postgresql://…` ([`PostgresStore`]).
+pub fn open_url(url: &str) -> Result<Box<dyn IntentStore>, StoreError> {
+    if url.starts_with("postgres://") || url.starts_with("postgresql://") {
+        Ok(Box::new(PostgresStore::open_url(url)?))
+    } else {
+        Ok(Box::new(SqliteStore::open_url(url)?))
+    }
 }
 
 /// A store of operational intents. Implementations make [`IntentStore::insert_if_clear`]

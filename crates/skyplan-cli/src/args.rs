@@ -511,7 +511,7 @@ pub struct ServeArgs {
     /// Time budget of one request from its arrival, queue included, milliseconds; past it the answer is 504.
     #[arg(long, value_name = "MS", default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
     pub timeout_ms: u64,
-    /// Where the shared airspace's operational intents are kept: sqlite:FILE (a SQLite file in WAL mode; servers on the same file share one airspace) or sqlite::memory: (this server's memory, gone when it stops).
+    /// Where the shared airspace's operational intents are kept: sqlite:FILE (a SQLite file in WAL mode; servers on the same file share one airspace), postgres://USER@HOST:PORT/DATABASE (PostgreSQL; servers on the same database, on any machines, share one airspace) or sqlite::memory: (this server's memory, gone when it stops).
     #[arg(long, value_name = "URL", default_value = skyplan_server::DEFAULT_AIRSPACE)]
     pub airspace: String,
 }

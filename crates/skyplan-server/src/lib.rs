@@ -82,13 +82,12 @@ pub const QUEUE_PER_WORKER: usize = 64;
 /// The default airspace store: SQLite in this server's memory.
 pub const DEFAULT_AIRSPACE: &str = "sqlite::memory:";
 
-/// Opens the airspace store at `url` (`sqlite:FILE` or `sqlite::memory:`).
+/// Opens the airspace store at `url` (`sqlite:FILE`, `sqlite::memory:` or
+/// `postgres://USER@HOST:PORT/DATABASE`; `postgresql://` too).
 pub fn open_airspace(
     url: &str,
 ) -> Result<Arc<dyn IntentStore>, skyplan_airspace_store::StoreError> {
-    Ok(Arc::new(skyplan_airspace_store::SqliteStore::open_url(
-        url,
-    )?))
+    Ok(Arc::from(skyplan_airspace_store::open_url(url)?))
 }
 
 /// How the server runs.
@@ -106,8 +105,9 @@ pub struct ServerConfig {
     /// Event-stream clients at once; more get 503. Default 64.
     pub max_event_clients: usize,
     /// Where the shared airspace's intents are kept: `sqlite:FILE` (a file in WAL mode, shared
-    /// by every server on it) or `sqlite::memory:` (the default: this server's memory, gone
-    /// when it stops).
+    /// by every server on it), `postgres://USER@HOST:PORT/DATABASE` (PostgreSQL, shared by
+    /// every server on the database, on any machine) or `sqlite::memory:` (the default: this
+    /// server's memory, gone when it stops).
     pub airspace: String,
 }
 
