@@ -466,4 +466,3 @@ mod tests {
         assert!((1.9..=2.0).contains(&path), "{path}");
     }
 }
-
