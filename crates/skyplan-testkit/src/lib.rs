@@ -155,3 +155,29 @@ pub fn arb_grid_and_ends(max_side: u32) -> impl Strategy<Value = (Grid2, Cell, C
             })
     })
 }
+
+/// A tiny deterministic generator for tests that need plain random numbers without proptest's
+/// shrinking (xorshift64; a zero seed is made odd).
+///
+/// ```
+/// let mut rng = skyplan_testkit::XorShift::new(7);
+/// let u = rng.unit();
+/// assert!((0.0..1.0).contains(&u));
+/// assert_eq!(skyplan_testkit::XorShift::new(7).unit(), u);
+/// ```
+pub struct XorShift(u64);
+
+impl XorShift {
+    /// A generator seeded with `seed` (scrambled, so that nearby seeds give unrelated streams).
+    pub fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+
+    /// A number in `[0, 1)`.
+    pub fn unit(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

@@ -193,13 +193,8 @@ mod tests {
 
     #[test]
     fn pruned_hull_bounds_equal_the_full_split() {
-        let mut seed = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
-        };
+        let mut rng = skyplan_testkit::XorShift::new(3);
+        let mut next = || rng.unit() * 20.0 - 10.0;
         for n in 2..=7 {
             for _ in 0..200 {
                 let c: Vec<Neu> = (0..n).map(|_| [next(), next(), next()]).collect();

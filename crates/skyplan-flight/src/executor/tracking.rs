@@ -103,18 +103,7 @@ impl Executor<ReferenceTracking> {
             alt_m: -s.point_ned[2],
             heading_rad: s.yaw_rad,
         };
-        let strategy = ReferenceTracking {
-            reference,
-            phase: Phase::Approach,
-            duration_s,
-            clock_start_s: None,
-            arrival_s: None,
-            max_error_m: 0.0,
-            max_path_error_m: 0.0,
-            samples: 0,
-            last_sample_s: None,
-            setpoints_sent: 0,
-        };
+        let strategy = ReferenceTracking::approaching(reference);
         Self::with_strategy(&[target(start), target(end)], config, strategy)
     }
 
@@ -130,6 +119,22 @@ impl Executor<ReferenceTracking> {
 pub const PATH_WINDOW_S: f64 = 3.0;
 
 impl ReferenceTracking {
+    /// Flying to the start of `reference`, its clock not started, nothing measured yet.
+    fn approaching(reference: Arc<dyn Reference>) -> Self {
+        Self {
+            duration_s: reference.duration_s(),
+            reference,
+            phase: Phase::Approach,
+            clock_start_s: None,
+            arrival_s: None,
+            max_error_m: 0.0,
+            max_path_error_m: 0.0,
+            samples: 0,
+            last_sample_s: None,
+            setpoints_sent: 0,
+        }
+    }
+
     /// The distance from `point_ned` to the reference's path within [`PATH_WINDOW_S`] of
     /// `t_ref`: the closest setpoint on a 0.01 s grid, less the most the path can move between
     /// two grid points (half a step at the fastest setpoint seen), so never more than the true
@@ -442,19 +447,7 @@ mod tests {
         let r: Arc<dyn Reference> = Arc::new(
             MinJerkLine::new(vec![[0.0, 0.0, -5.0], [100.0, 0.0, -5.0]], vec![20.0]).unwrap(),
         );
-        let strategy = |r: &Arc<dyn Reference>| ReferenceTracking {
-            reference: Arc::clone(r),
-            phase: Phase::Streaming,
-            duration_s: r.duration_s(),
-            clock_start_s: Some(0.0),
-            arrival_s: None,
-            max_error_m: 0.0,
-            max_path_error_m: 0.0,
-            samples: 0,
-            last_sample_s: None,
-            setpoints_sent: 0,
-        };
-        let tracking = strategy(&r);
+        let tracking = ReferenceTracking::approaching(Arc::clone(&r));
         let late = r.setpoint(9.0).point_ned;
         let instant = r.setpoint(10.0).distance_m(late);
         assert!(instant > 5.0, "{instant}");
