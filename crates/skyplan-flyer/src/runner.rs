@@ -286,6 +286,9 @@ pub fn fly_mission_with<O: RunObserver>(
         request.start_lla = Some([info.position.lat_deg, info.position.lon_deg]);
         request.start_ne = None;
     }
+    if reference.is_some() && info.autopilot != Autopilot::Px4 {
+        cap_to_vehicle(&mut gcs, &mut request, observer);
+    }
     let t_plan = Instant::now();
     let home_world = returns.then(|| world.clone());
     let map_boxes = world.colliders().map(|m| m.boxes.clone());
@@ -787,6 +790,87 @@ pub enum Unfinished {
         /// The safety margin the route was planned with, metres.
         margin_m: f64,
     },
+}
+
+/// The share of ArduCopter's own GUIDED limits (`WPNAV_SPEED`, `WPNAV_ACCEL`) a trajectory
+/// may use. ArduCopter shapes every GUIDED target through its position controller's limits: a
+/// trajectory at its speed limit or above its acceleration limit is smoothed away from its
+/// path in every turn (against ArduCopter SITL at 10 m/s and 4 m/s², its defaults being
+/// 10 m/s and 2.5 m/s²: 58 m off the path; at 8 m/s and 2 m/s²: 0.77 m).
+pub const VEHICLE_LIMIT_SHARE: f64 = 0.8;
+
+/// A trajectory's speed and acceleration limits within [`VEHICLE_LIMIT_SHARE`] of the
+/// vehicle's `WPNAV_SPEED` (cm/s) and `WPNAV_ACCEL` (cm/s²), where known, and the line that
+/// says what was lowered (`None` when nothing was).
+///
+/// ```
+/// use skyplan_flyer::runner::vehicle_caps;
+/// let (speed, accel, line) = vehicle_caps(10.0, 4.0, Some(1000.0), Some(250.0));
+/// assert_eq!((speed, accel), (8.0, 2.0));
+/// assert!(line.unwrap().contains("WPNAV_SPEED 10 m/s"));
+/// assert_eq!(vehicle_caps(6.0, 1.5, Some(1000.0), Some(250.0)), (6.0, 1.5, None));
+/// ```
+pub fn vehicle_caps(
+    speed_m_s: f64,
+    accel_m_s2: f64,
+    wpnav_speed_cm_s: Option<f32>,
+    wpnav_accel_cm_s2: Option<f32>,
+) -> (f64, f64, Option<String>) {
+    let cap = |v: Option<f32>| {
+        v.map(f64::from)
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .map(|v| v / 100.0)
+    };
+    let mut said = Vec::new();
+    let mut speed = speed_m_s;
+    let mut accel = accel_m_s2;
+    if let Some(w) = cap(wpnav_speed_cm_s)
+        && speed > VEHICLE_LIMIT_SHARE * w
+    {
+        speed = VEHICLE_LIMIT_SHARE * w;
+        said.push(format!(
+            "max speed {speed_m_s} → {speed:.2} m/s ({:.0} % of its WPNAV_SPEED {w} m/s)",
+            VEHICLE_LIMIT_SHARE * 100.0
+        ));
+    }
+    if let Some(w) = cap(wpnav_accel_cm_s2)
+        && accel > VEHICLE_LIMIT_SHARE * w
+    {
+        accel = VEHICLE_LIMIT_SHARE * w;
+        said.push(format!(
+            "max acceleration {accel_m_s2} → {accel:.2} m/s² ({:.0} % of its WPNAV_ACCEL {w} m/s²)",
+            VEHICLE_LIMIT_SHARE * 100.0
+        ));
+    }
+    let line = (!said.is_empty()).then(|| {
+        format!(
+            "limits     the trajectory within the vehicle's own GUIDED limits (it smooths faster targets off their path): {}",
+            said.join(", ")
+        )
+    });
+    (speed, accel, line)
+}
+
+/// Reads ArduPilot's `WPNAV_SPEED` and `WPNAV_ACCEL` and lowers the request's trajectory limits
+/// to [`vehicle_caps`], saying so; a vehicle that does not answer keeps them, with a line.
+fn cap_to_vehicle<O: RunObserver>(
+    gcs: &mut GroundStation,
+    request: &mut PlanRequest,
+    observer: &mut O,
+) {
+    let limits = request.trajectory_limits();
+    let speed = gcs.get_param("WPNAV_SPEED", 2, 0.5).ok();
+    let accel = gcs.get_param("WPNAV_ACCEL", 2, 0.5).ok();
+    if speed.is_none() && accel.is_none() {
+        observer.say("limits     the vehicle did not tell its WPNAV_SPEED and WPNAV_ACCEL: the trajectory keeps its limits (fly within about 80 % of the vehicle's own)");
+        return;
+    }
+    let (s, a, line) = vehicle_caps(limits.max_speed_m_s, limits.max_accel_m_s2, speed, accel);
+    if let Some(line) = line {
+        request.max_speed_m_s = Some(s);
+        request.max_accel_m_s2 = Some(a);
+        observer.say(&line);
+    }
 }
 
 /// The safety margin a plan was made with, metres (its resolved spec; every planner has one).

@@ -427,10 +427,47 @@ impl GroundStation {
     /// [`GroundStation::wait_for_vehicle`]. A vehicle without the parameter (or that refuses the
     /// value) does not answer: an error saying so.
     pub fn set_param(&mut self, name: &str, value: f32) -> Result<f32, GroundError> {
-        for _ in 0..3 {
-            self.link.send(&self.protocol.param_set(name, value))?;
+        let message = self.protocol.param_set(name, value);
+        self.param_exchange(name, &message, 3, 1.0)
+            .map_err(|e| match e {
+                GroundError::Param { name, why } if why.is_empty() => GroundError::Param {
+                    name,
+                    why: "the vehicle did not confirm it after 3 tries (no such parameter, or a value it refuses)".into(),
+                },
+                e => e,
+            })
+    }
+
+    /// Reads the vehicle's parameter `name` (PARAM_REQUEST_READ → PARAM_VALUE), asked up to
+    /// `tries` times, `wait_s` wall seconds apart. A vehicle without the parameter does not
+    /// answer (ArduPilot's way): an error saying so.
+    pub fn get_param(&mut self, name: &str, tries: usize, wait_s: f64) -> Result<f32, GroundError> {
+        let message = self.protocol.param_request_read(name);
+        self.param_exchange(name, &message, tries, wait_s)
+            .map_err(|e| match e {
+                GroundError::Param { name, why } if why.is_empty() => GroundError::Param {
+                    name,
+                    why: format!(
+                        "the vehicle did not answer after {tries} tries (no such parameter)"
+                    ),
+                },
+                e => e,
+            })
+    }
+
+    /// Sends `message` until a PARAM_VALUE of `name` comes back (its value), absorbing what
+    /// else arrives; an empty `why` when no answer came.
+    fn param_exchange(
+        &mut self,
+        name: &str,
+        message: &MavMessage,
+        tries: usize,
+        wait_s: f64,
+    ) -> Result<f32, GroundError> {
+        for _ in 0..tries {
+            self.link.send(message)?;
             let sent_s = self.now_s();
-            while self.now_s() - sent_s < 1.0 {
+            while self.now_s() - sent_s < wait_s {
                 if let Some(why) = self.link.closed() {
                     return Err(GroundError::Param {
                         name: name.into(),
@@ -449,7 +486,7 @@ impl GroundStation {
         }
         Err(GroundError::Param {
             name: name.into(),
-            why: "the vehicle did not confirm it after 3 tries (no such parameter, or a value it refuses)".into(),
+            why: String::new(),
         })
     }
 

@@ -676,6 +676,19 @@ fn handle_message(
                 }));
             }
         }
+        MavMessage::PARAM_REQUEST_READ(p) => {
+            // As ArduPilot: the value held, by name; an unknown name gets no answer.
+            let name = p.param_id.to_str().unwrap_or("").trim_end_matches('\0');
+            if let Some(value) = v.param(name) {
+                out.push(MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
+                    param_value: value,
+                    param_count: SIM_PARAMS.len() as u16,
+                    param_index: SIM_PARAMS.iter().position(|n| *n == name).unwrap_or(0) as u16,
+                    param_id: p.param_id,
+                    param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+                }));
+            }
+        }
         MavMessage::SET_MODE(m) => {
             if let Some(mode) = SimMode::from_arducopter_custom_mode(m.custom_mode) {
                 v.set_mode(mode);

@@ -267,3 +267,29 @@ fn an_ardupilot_setpoint_goes_out_in_its_local_frame_with_the_acceleration() {
         "{m:?}"
     );
 }
+
+/// PARAM_REQUEST_READ by name over TCP: the simulator answers what it holds (after a
+/// PARAM_SET, the new value) and, as ArduPilot, nothing for a name it has not.
+#[test]
+fn parameters_are_read_by_name_and_an_unknown_one_is_said_so() {
+    let sim = InProcessSim::start(SimServerConfig::at(HOME), None).unwrap();
+    let mut gcs = GroundStation::connect(&sim.address(), GroundConfig::default()).unwrap();
+    gcs.wait_for_vehicle(Duration::from_secs(10), |_, _| {})
+        .unwrap();
+    let before = gcs.get_param("RTL_ALT", 2, 0.5).unwrap();
+    assert_eq!(
+        gcs.set_param("RTL_ALT", before + 700.0).unwrap(),
+        before + 700.0
+    );
+    assert_eq!(gcs.get_param("RTL_ALT", 2, 0.5).unwrap(), before + 700.0);
+    let e = gcs
+        .get_param("WPNAV_SPEED", 2, 0.2)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("WPNAV_SPEED") && e.contains("did not answer after 2 tries"),
+        "{e}"
+    );
+    drop(gcs);
+    sim.finish();
+}

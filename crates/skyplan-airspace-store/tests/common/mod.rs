@@ -434,8 +434,9 @@ pub fn a_killed_writer_loses_nothing_it_acknowledged(url: &str) -> Vec<String> {
         .spawn()
         .expect("a child");
     let stdout = child.stdout.take().expect("its stdout");
+    let mut lines = std::io::BufReader::new(stdout).lines();
     let mut acked = Vec::new();
-    for line in std::io::BufReader::new(stdout).lines() {
+    for line in lines.by_ref() {
         let line = line.expect("a line");
         if let Some(id) = line.strip_prefix("acked ") {
             acked.push(id.to_string());
@@ -446,6 +447,11 @@ pub fn a_killed_writer_loses_nothing_it_acknowledged(url: &str) -> Vec<String> {
             }
         }
     }
+    // What it acknowledged after the 60th but before the kill landed, still in the pipe.
+    let late: Vec<String> = lines
+        .map_while(Result::ok)
+        .filter_map(|l| l.strip_prefix("acked ").map(str::to_string))
+        .collect();
     let status = child.wait().expect("its end");
     assert!(!status.success(), "the writer was killed, not finished");
     assert_eq!(acked.len(), 60, "the writer acknowledged 60 intents first");
@@ -457,8 +463,18 @@ pub fn a_killed_writer_loses_nothing_it_acknowledged(url: &str) -> Vec<String> {
         let back = store.get(id).expect("read").expect("stored");
         back.validate().expect("a whole intent");
     }
-    // At most the one in flight when it was killed was stored without being acknowledged.
-    assert!(stored.len() <= acked.len() + 1, "{} stored", stored.len());
+    // At most the one in flight when it was killed was stored without being acknowledged (the
+    // writer may have run a few intents ahead of the reader of its pipe: those count as
+    // acknowledged too).
+    for id in &late {
+        assert!(ids.contains(id.as_str()), "acknowledged intent {id} lost");
+    }
+    let all_acked = acked.len() + late.len();
+    assert!(
+        stored.len() <= all_acked + 1,
+        "{} stored, {all_acked} acknowledged",
+        stored.len()
+    );
     acked
 }
 

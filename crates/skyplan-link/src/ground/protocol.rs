@@ -127,6 +127,18 @@ impl GroundProtocol {
         })
     }
 
+    /// PARAM_REQUEST_READ of `name` (by name: `param_index` −1); the vehicle answers with
+    /// PARAM_VALUE, or not at all when it has no such parameter.
+    pub fn param_request_read(&self, name: &str) -> MavMessage {
+        let (target_system, target_component) = self.target();
+        MavMessage::PARAM_REQUEST_READ(PARAM_REQUEST_READ_DATA {
+            param_index: -1,
+            target_system,
+            target_component,
+            param_id: name.into(),
+        })
+    }
+
     /// The value of parameter `name` that a PARAM_VALUE from the vehicle carries, if `r` is one.
     pub fn param_value(&self, r: &Received, name: &str) -> Option<f32> {
         match &r.message {
