@@ -44,6 +44,9 @@ CREATE TABLE IF NOT EXISTS intent_keys (
 CREATE INDEX IF NOT EXISTS intent_keys_seq ON intent_keys(seq);
 ";
 
+/// How long a connection waits for another's lock before answering busy, seconds.
+const BUSY_TIMEOUT_S: u64 = 30;
+
 impl SqliteStore {
     /// Opens (creating if needed) the database file at `path`, in WAL mode.
     pub fn open(path: &Path) -> Result<Self, StoreError> {
@@ -77,9 +80,22 @@ impl SqliteStore {
     }
 
     fn setup(conn: Connection, place: String) -> Result<Self, StoreError> {
-        conn.busy_timeout(Duration::from_secs(30))?;
+        conn.busy_timeout(Duration::from_secs(BUSY_TIMEOUT_S))?;
         // WAL: readers never wait for the writer; FULL: a commit is on disk when it returns.
-        conn.pragma_update(None, "journal_mode", "WAL")?;
+        // Switching a new file to WAL needs it to itself, and SQLite answers "database is
+        // locked" at once (no busy handler) while another connection opens it too: retried.
+        let started = std::time::Instant::now();
+        loop {
+            match conn.pragma_update(None, "journal_mode", "WAL") {
+                Err(rusqlite::Error::SqliteFailure(e, _))
+                    if e.code == rusqlite::ErrorCode::DatabaseBusy
+                        && started.elapsed() < Duration::from_secs(BUSY_TIMEOUT_S) =>
+                {
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                other => break other?,
+            }
+        }
         conn.pragma_update(None, "synchronous", "FULL")?;
         conn.pragma_update(None, "foreign_keys", "ON")?;
         let mut conn = conn;

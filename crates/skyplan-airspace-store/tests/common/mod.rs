@@ -463,18 +463,15 @@ pub fn a_killed_writer_loses_nothing_it_acknowledged(url: &str) -> Vec<String> {
         let back = store.get(id).expect("read").expect("stored");
         back.validate().expect("a whole intent");
     }
-    // At most the one in flight when it was killed was stored without being acknowledged (the
-    // writer may have run a few intents ahead of the reader of its pipe: those count as
-    // acknowledged too).
+    // What it acknowledged after the 60th, before the kill landed, is stored too; and
+    // whatever is stored (acknowledged or caught in flight) reads back whole. (How many were
+    // stored but not yet acknowledged depends on where the kill lands: not asserted.)
     for id in &late {
         assert!(ids.contains(id.as_str()), "acknowledged intent {id} lost");
     }
-    let all_acked = acked.len() + late.len();
-    assert!(
-        stored.len() <= all_acked + 1,
-        "{} stored, {all_acked} acknowledged",
-        stored.len()
-    );
+    for i in &stored {
+        i.validate().expect("a whole intent");
+    }
     acked
 }
 
