@@ -253,7 +253,8 @@ pub struct State {
 pub struct Trajectory {
     /// Which method made it.
     pub method: Method,
-    /// Why the fallback was used (`None` for the optimised trajectory).
+    /// Why the fallback was used: the optimiser failed, or stopping at each waypoint was faster
+    /// (`None` for the optimised trajectory).
     pub fallback_reason: Option<String>,
     /// The limits it respects.
     pub limits: Limits,
@@ -472,7 +473,9 @@ fn split_legs(route: &[Neu], limits: &Limits) -> Vec<Neu> {
 
 /// Makes a trajectory through `route` (`[north_m, east_m, alt_m]` points, start to goal) in
 /// `free`, within `limits`: minimum jerk in a corridor, or the stop-at-each-waypoint fallback
-/// with the reason. Every trajectory returned has passed [`verify`].
+/// with the reason (the optimiser failed, or stopping is faster, as on one straight leg).
+/// Every trajectory returned has passed [`verify`], and none is slower than stopping at each
+/// waypoint.
 pub fn plan(
     route: &[Neu],
     free: &dyn FreeSpace,
@@ -489,10 +492,18 @@ pub fn plan(
     });
     let cells = build_corridor(&split_legs(&route, limits), free, planar, &corridor_opts)?;
     let deadline = t0 + opts.budget;
+    let stop = stop_at_waypoints(&route, limits)?;
     let why = match optimize::minimum_jerk(&cells, planar, limits, deadline, opts.refine_rounds) {
         Ok(pieces) => {
             let mut traj = assemble(Method::MinimumJerk, None, limits, pieces);
             match verify(&traj, free) {
+                // A straight leg is where stopping is time-optimal (the jerk-limited profile is
+                // bang-bang; smooth pieces cannot match it), so the faster of the two is kept.
+                Ok(_) if stop.duration_s() < traj.duration_s() => format!(
+                    "stopping at each waypoint ({:.2} s) is faster than the optimised curve ({:.2} s)",
+                    stop.duration_s(),
+                    traj.duration_s()
+                ),
                 Ok(b) => {
                     traj.bounds = b;
                     traj.compute_us = t0.elapsed().as_micros() as u64;
@@ -503,7 +514,7 @@ pub fn plan(
         }
         Err(e) => e,
     };
-    let mut traj = stop_at_waypoints(&route, limits)?;
+    let mut traj = stop;
     traj.fallback_reason = Some(why);
     traj.bounds = verify(&traj, free).map_err(TrajectoryError::Unproven)?;
     traj.compute_us = t0.elapsed().as_micros() as u64;
