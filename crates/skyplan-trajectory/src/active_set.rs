@@ -459,11 +459,12 @@ impl AxisProblem<'_> {
         for _ in 0..cap {
             // u = Q⁻¹ (Q y + lin) = y + Q⁻¹ lin.
             let u: Vec<f64> = y.iter().zip(&q_lin).map(|(a, b)| a + b).collect();
-            // S μ = −G_W u, then p = −u − Σ μ_j Q⁻¹ g_j.
+            // S μ = −G_W u + (G_W y − b_W), then p = −u − Σ μ_j Q⁻¹ g_j: the step keeps the
+            // working rows at their bounds and takes back what rounding let them drift.
             let rhs: Vec<f64> = work
                 .rows
                 .iter()
-                .map(|&i| -dot_sparse(&rows[i].g, &u))
+                .map(|&i| -dot_sparse(&rows[i].g, &u) + rows[i].dot(&y) - rows[i].b)
                 .collect();
             let mu = work.solve(rhs);
             let mut p: Vec<f64> = u.iter().map(|v| -v).collect();
@@ -484,9 +485,26 @@ impl AxisProblem<'_> {
                     .filter(|(_, m)| **m < -1e-10 * mscale);
                 match worst {
                     None => {
-                        // Rounding may have let a row slip by a hair: never past the box.
+                        // Rounding may have let a row slip by a hair: never past the box. A
+                        // row that slipped further joins the working set, and the next step
+                        // takes it back to its bound.
                         let slack = 0.5 * self.hair;
-                        return rows.iter().all(|r| r.dot(&y) <= r.b + slack).then_some(y);
+                        let slipped = rows
+                            .iter()
+                            .enumerate()
+                            .filter(|(i, r)| !work.has[*i] && r.dot(&y) > r.b + slack)
+                            .max_by(|a, b| (a.1.dot(&y) - a.1.b).total_cmp(&(b.1.dot(&y) - b.1.b)));
+                        let Some((i, _)) = slipped else {
+                            return rows.iter().all(|r| r.dot(&y) <= r.b + slack).then_some(y);
+                        };
+                        let mut zi = vec![0.0; nfree];
+                        for &(k, v) in rows[i].g.iter() {
+                            zi[k] = v;
+                        }
+                        q.solve(&mut zi);
+                        if !work.add(i, zi, rows) {
+                            return None;
+                        }
                     }
                     Some((k, _)) => {
                         work.remove(k, rows)?;
