@@ -181,7 +181,7 @@ fn the_recording_carries_the_trajectory_as_python_mcap_reads_it() {
     let dir = tempfile::tempdir().unwrap();
     ok(&mut cmd(
         dir.path(),
-        "fly --sim --speedup 20 --trajectory --goal-ne 60,40 --record flight.mcap",
+        "fly --sim --speedup 20 --trajectory --goal-ne 120,-61 --record flight.mcap",
     ));
     let path = dir.path().join("flight.mcap");
     let script = r#"
@@ -225,7 +225,7 @@ for schema, channel, msg in make_reader(open(sys.argv[1], 'rb')).iter_messages(t
     );
     assert_eq!(
         (words[6], words[7], words[8]),
-        ("60.0", "40.0", "yaw_deg"),
+        ("120.0", "-61.0", "yaw_deg"),
         "{text}"
     );
 }

@@ -74,10 +74,11 @@ def test_trajectory_samples_are_the_clis_csv(city, cli, tmp_path):
     """trajectory=True gives the samples as an (n, 11) array, equal to the CLI's --samples CSV."""
     assert city.plan().trajectory is None
     out = tmp_path / "traj.csv"
-    run_cli(cli, "plan", "--trajectory", "--goal-ne", "60,40", "--samples", str(out),
+    # A route that turns (on one straight leg, stopping at its ends is the faster trajectory).
+    run_cli(cli, "plan", "--trajectory", "--goal-ne=120,-61", "--samples", str(out),
             "--out", str(tmp_path / "w.json"), cwd=tmp_path)
     want = np.loadtxt(out, delimiter=",", skiprows=1)
-    plan = city.plan(goal_ne=(60, 40), trajectory=True, max_speed_m_s=10.0)
+    plan = city.plan(goal_ne=(120, -61), trajectory=True, max_speed_m_s=10.0)
     got = plan.trajectory
     assert got.dtype == np.float64 and got.shape == want.shape and got.shape[1] == 11
     np.testing.assert_allclose(got[:, 1:10], want[:, 1:10], rtol=0, atol=1e-9)
