@@ -55,7 +55,7 @@ fn load_file(path: &Path, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     };
     World::load_file(path, &options, read_bytes).map_err(|e| match e {
         MapFileError::UnknownType => bad_input(format!(
-            "{name}: unknown map type; expected .csv (colliders), .yaml (map_server), .png/.pgm (with --resolution), .map (MovingAI) or .geojson (building footprints)"
+            "{name}: unknown map type; expected .csv (colliders), .yaml (map_server), .png/.pgm (with --resolution), .map (MovingAI), .geojson (building footprints) or .osm/.osm.pbf (OpenStreetMap buildings)"
         )),
         MapFileError::NeedsResolution => bad_input(format!(
             "{name}: a bare image needs --resolution M (metres per pixel), or use a map_server .yaml"

@@ -7,8 +7,8 @@
 //!
 //! Heights, metres above home: the property `height` (a number, or a numeric string with an
 //! optional `m` suffix), else `building:levels` × [`METRES_PER_LEVEL`], else the default height
-//! (counted in [`GeoFootprints::default_heights`]); `min_height` (same forms, default 0) is the
-//! prism's floor.
+//! (counted in [`GeoFootprints::default_heights`]; above `min_height` when one is given);
+//! `min_height` (same forms, default 0) is the prism's floor.
 //!
 //! ```
 //! use skyplan_map::footprints::{parse_geojson, DEFAULT_HEIGHT_M};
@@ -371,7 +371,7 @@ fn kind_of(v: &Value) -> &'static str {
     }
 }
 
-fn parse_feature(
+pub(crate) fn parse_feature(
     i: usize,
     f: &Value,
     default_height_m: f64,
@@ -430,6 +430,10 @@ fn parse_feature(
     };
     let props = f.get("properties").filter(|p| !p.is_null());
     let prop = |name: &str| props.and_then(|p| p.get(name)).filter(|v| !v.is_null());
+    let min_height_m = match prop("min_height") {
+        Some(v) => metres(i, "properties.min_height", v)?,
+        None => 0.0,
+    };
     let (height_m, height_source) = if let Some(v) = prop("height") {
         (metres(i, "properties.height", v)?, HeightSource::Height)
     } else if let Some(v) = prop("building:levels") {
@@ -438,11 +442,8 @@ fn parse_feature(
             HeightSource::Levels,
         )
     } else {
-        (default_height_m, HeightSource::Default)
-    };
-    let min_height_m = match prop("min_height") {
-        Some(v) => metres(i, "properties.min_height", v)?,
-        None => 0.0,
+        // A raised part without a height (OpenStreetMap has them): the default above its floor.
+        (min_height_m + default_height_m, HeightSource::Default)
     };
     if min_height_m >= height_m {
         return Err(err(

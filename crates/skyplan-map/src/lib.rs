@@ -27,6 +27,7 @@ pub mod colliders;
 pub mod footprints;
 pub mod movingai;
 pub mod nofly;
+pub mod osm;
 mod tile;
 
 pub use tile::{tile, to_colliders_csv};

@@ -21,7 +21,8 @@ pub struct MapFileOptions {
 /// option its own way (`--resolution`, `resolution_m=`).
 #[derive(Debug)]
 pub enum MapFileError<E> {
-    /// The extension is none of `.csv`, `.yaml`/`.yml`, `.png`/`.pgm`, `.map`, `.geojson`.
+    /// The extension is none of `.csv`, `.yaml`/`.yml`, `.png`/`.pgm`, `.map`, `.geojson`,
+    /// `.osm`, `.pbf`.
     UnknownType,
     /// A bare image without a resolution.
     NeedsResolution,
@@ -44,8 +45,8 @@ pub enum MapFileError<E> {
 impl World {
     /// The map in `path`, by its extension: `.csv` FCND colliders, `.yaml`/`.yml` ROS
     /// map_server (its image read next to it), `.png`/`.pgm` with `options.resolution_m`, `.map`
-    /// MovingAI, `.geojson` building footprints (home at the data's centre; move it with
-    /// [`World::with_home`]). `read` reads a file's bytes (the caller's I/O).
+    /// MovingAI, `.geojson` building footprints, `.osm`/`.osm.pbf` OpenStreetMap buildings (home
+    /// at the data's centre; move it with [`World::with_home`]). `read` reads a file's bytes (the caller's I/O).
     ///
     /// ```
     /// use skyplan_plan::{MapFileError, MapFileOptions, World};
@@ -91,6 +92,10 @@ impl World {
             }
             MapFormat::GeoJson => {
                 World::from_geojson(&name, &bytes(path, false)?, None).map_err(Map)
+            }
+            MapFormat::Osm | MapFormat::OsmPbf => {
+                let pbf = format == MapFormat::OsmPbf;
+                World::from_osm(&name, &bytes(path, false)?, None, pbf).map_err(Map)
             }
             MapFormat::MovingAi => {
                 World::from_movingai(&name, &text(bytes(path, false)?)?).map_err(Map)

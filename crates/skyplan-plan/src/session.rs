@@ -829,6 +829,12 @@ fn assemble(
                 .collect();
         }
     }
+    let notes = world.notes();
+    if !notes.is_empty() {
+        route
+            .details
+            .insert("map_notes".into(), serde_json::Value::from(notes));
+    }
     Ok(Plan {
         status: "ok",
         map: world.name().to_string(),

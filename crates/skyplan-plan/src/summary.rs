@@ -24,6 +24,16 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         ),
         _ => writeln!(f, "map        {}", plan.map),
     }?;
+    for note in plan
+        .details
+        .get("map_notes")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .filter_map(Value::as_str)
+    {
+        writeln!(f, "           {note}")?;
+    }
     if let Some(g) = &plan.grid {
         let at = match plan.obstacles {
             Some(_) => format!(" at {} m altitude, {} m margin", g.alt_m, g.safety_m),

@@ -92,6 +92,10 @@ pub enum MapFormat {
     MovingAi,
     /// `.geojson`: building footprints ([`World::from_geojson`]).
     GeoJson,
+    /// `.osm`: OpenStreetMap XML, its buildings ([`World::from_osm`]).
+    Osm,
+    /// `.osm.pbf` (any `.pbf`): OpenStreetMap PBF, its buildings ([`World::from_osm`]).
+    OsmPbf,
 }
 
 impl MapFormat {
@@ -104,6 +108,8 @@ impl MapFormat {
             "png" | "pgm" => Self::Image,
             "map" => Self::MovingAi,
             "geojson" => Self::GeoJson,
+            "osm" => Self::Osm,
+            "pbf" => Self::OsmPbf,
             _ => return None,
         })
     }
@@ -122,6 +128,8 @@ pub(crate) enum Source {
 pub(crate) struct Footprints {
     pub(crate) geo: Arc<GeoFootprints>,
     pub(crate) local: FootprintMap,
+    /// Buildings of an OpenStreetMap file that could not be made, each `"way 12: why"`.
+    pub(crate) skipped: Arc<Vec<String>>,
 }
 
 /// Horizontal extent shared by every planner family, metres north/east of the map's origin.
@@ -308,6 +316,63 @@ impl World {
     ) -> Result<Self, PlanFailure> {
         let geo = skyplan_map::footprints::parse_geojson_bytes(bytes, DEFAULT_HEIGHT_M)
             .map_err(|e| parse_failure(name, e))?;
+        Self::from_geo(name, geo, Vec::new(), home_lat_lon)
+    }
+
+    /// The buildings of an OpenStreetMap file ([`skyplan_map::osm`]: closed ways and
+    /// multipolygon relations tagged `building`), XML (`pbf` false) or PBF bytes, as
+    /// [`World::from_geojson`] makes a map of GeoJSON footprints: the same buildings give the
+    /// same map. Buildings that cannot be made (an extract cut through them, a broken outline)
+    /// are left out and named in [`World::notes`].
+    ///
+    /// ```
+    /// use skyplan_plan::{MapKind, World};
+    /// let text = br#"<osm version="0.6">
+    ///   <node id="1" lat="60.1700" lon="24.9400"/> <node id="2" lat="60.1700" lon="24.9402"/>
+    ///   <node id="3" lat="60.1701" lon="24.9402"/>
+    ///   <way id="10"><nd ref="1"/><nd ref="2"/><nd ref="3"/><nd ref="1"/><tag k="building" v="yes"/></way>
+    ///   <way id="11"><nd ref="1"/><nd ref="2"/><tag k="building" v="yes"/></way>
+    /// </osm>"#;
+    /// let world = World::from_osm("two.osm", text, None, false)?;
+    /// assert_eq!(world.kind(), MapKind::Footprints);
+    /// assert_eq!(world.obstacle_count(), Some(1));
+    /// assert_eq!(world.notes(), [
+    ///     "1 of 1 buildings at the default height 10 m (no height or building:levels)",
+    ///     "1 building skipped: way 11: the way is not closed (its last node is not its first)",
+    /// ]);
+    /// # Ok::<(), skyplan_plan::PlanFailure>(())
+    /// ```
+    pub fn from_osm(
+        name: &str,
+        bytes: &[u8],
+        home_lat_lon: Option<[f64; 2]>,
+        pbf: bool,
+    ) -> Result<Self, PlanFailure> {
+        let parsed = if pbf {
+            skyplan_map::osm::parse_osm_pbf(bytes, DEFAULT_HEIGHT_M)
+        } else {
+            let text = std::str::from_utf8(bytes).map_err(|e| {
+                PlanFailure::bad_request(format!(
+                    "{name}: expected XML text, found bytes that are not UTF-8 ({e})"
+                ))
+            })?;
+            skyplan_map::osm::parse_osm_xml(text, DEFAULT_HEIGHT_M)
+        }
+        .map_err(|e| parse_failure(name, e))?;
+        let skipped = parsed
+            .skipped
+            .iter()
+            .map(|(id, why)| format!("{id}: {why}"))
+            .collect();
+        Self::from_geo(name, parsed.geo, skipped, home_lat_lon)
+    }
+
+    fn from_geo(
+        name: &str,
+        geo: GeoFootprints,
+        skipped: Vec<String>,
+        home_lat_lon: Option<[f64; 2]>,
+    ) -> Result<Self, PlanFailure> {
         let home = home_lat_lon.map(|[lat_deg, lon_deg]| GeodeticHome { lat_deg, lon_deg });
         let local = geo.project(home).map_err(|e| parse_failure(name, e))?;
         let frame = frame_at(
@@ -321,6 +386,7 @@ impl World {
             source: Source::Footprints(Arc::new(Footprints {
                 geo: Arc::new(geo),
                 local,
+                skipped: Arc::new(skipped),
             })),
             frame: Some(frame),
             default_start_ne: Some([0.0, 0.0]),
@@ -443,6 +509,7 @@ impl World {
             self.source = Source::Footprints(Arc::new(Footprints {
                 geo: Arc::clone(&f.geo),
                 local,
+                skipped: Arc::clone(&f.skipped),
             }));
         }
         self.frame = Some(frame);
@@ -480,6 +547,43 @@ impl World {
             Source::Footprints(f) => Some(&f.local),
             Source::Grid(_) | Source::Colliders(_) => None,
         }
+    }
+
+    /// What a user should know about how the map was read, one sentence each: footprints at the
+    /// default height, OpenStreetMap buildings left out (the first three named). Empty for
+    /// other maps.
+    pub fn notes(&self) -> Vec<String> {
+        let Source::Footprints(f) = &self.source else {
+            return Vec::new();
+        };
+        let mut notes = Vec::new();
+        if f.geo.default_heights > 0 {
+            notes.push(format!(
+                "{} of {} buildings at the default height {} m (no height or building:levels)",
+                f.geo.default_heights,
+                f.geo.buildings.len(),
+                f.geo.default_height_m
+            ));
+        }
+        if let Some(first) = f.skipped.first() {
+            let n = f.skipped.len();
+            let shown: Vec<&str> = f.skipped.iter().take(3).map(String::as_str).collect();
+            let more = if n > 3 {
+                format!("; {} more", n - 3)
+            } else {
+                String::new()
+            };
+            notes.push(format!(
+                "{n} building{} skipped: {}{more}",
+                if n == 1 { "" } else { "s" },
+                if n == 1 {
+                    first.clone()
+                } else {
+                    shown.join("; ")
+                }
+            ));
+        }
+        notes
     }
 
     /// The number of obstacles of a map made of them: boxes of a colliders map, footprints
