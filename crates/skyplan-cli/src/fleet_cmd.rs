@@ -84,6 +84,11 @@ fn fly(
         mode,
         ..RunOptions::default()
     };
+    // One untimed plan first: the grid and the planner's tables are built once per session,
+    // not in the first flight's latency.
+    if let Some(first) = missions.first() {
+        let _ = session.plan(&first.request(base));
+    }
     let bar = progress(missions.len(), label);
     let records = fly_fleet(&mut session, store, base, missions, &options, |_, _| {
         bar.inc(1)
