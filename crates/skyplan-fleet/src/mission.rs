@@ -425,3 +425,110 @@ pub fn random_missions(grid: &Grid2, model: MoveModel, r: &RandomMissions) -> Ve
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn clock() -> Clock {
+        let t: Timestamp = "2026-03-01T12:00:00Z"
+            .parse()
+            .unwrap_or_else(|e| panic!("{e}"));
+        Clock { start: t, now: t }
+    }
+
+    fn one(fields: &str) -> Result<Mission, MissionsError> {
+        let text = format!(r#"[{{"start_ne": [0, 0], "goal_lla": [37.79, -122.39]{fields}}}]"#);
+        parse_missions("m.json", &text, Format::Json, clock()).map(|mut m| m.remove(0))
+    }
+
+    #[test]
+    fn each_departure_form_gives_its_window() {
+        let t = clock().start;
+        let m = one("").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.window.earliest, t);
+        assert_eq!(m.window.latest.ms_since(t), 900_000);
+        assert_eq!(m.goal, Place::Lla([37.79, -122.39]));
+        let m = one(r#", "departure": 90.5, "window_s": 0"#).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (m.window.earliest.ms_since(t), m.window.latest.ms_since(t)),
+            (90_500, 90_500)
+        );
+        let m = one(r#", "departure": "2026-03-01T13:00:00Z", "window_s": 60"#)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.window.earliest.ms_since(t), 3_600_000);
+        assert_eq!(m.window.latest.ms_since(t), 3_660_000);
+        let m = one(
+            r#", "departure": {"earliest": "2026-03-01T12:10:00Z", "latest": "2026-03-01T12:20:00Z"}"#,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.window.latest.ms_since(m.window.earliest), 600_000);
+    }
+
+    #[test]
+    fn contradictions_and_ranges_are_refused_naming_the_field() {
+        let cases = [
+            (
+                r#", "departure": {"earliest": "2026-03-01T12:10:00Z", "latest": "2026-03-01T12:20:00Z"}, "window_s": 5"#,
+                "window_s: not with a departure window",
+            ),
+            (
+                r#", "departure": {"earliest": "2026-03-01T12:20:00Z", "latest": "2026-03-01T12:10:00Z"}"#,
+                "departure: the window ends (2026-03-01T12:10:00Z) before it starts",
+            ),
+            (
+                r#", "departure": -1"#,
+                "departure: expected a number from 0",
+            ),
+            (
+                r#", "departure": 3000000"#,
+                "departure: expected a number from 0",
+            ),
+            (
+                r#", "window_s": 90000"#,
+                "window_s: expected a number from 0 to 86400",
+            ),
+            (
+                r#", "start_lla": [1, 2]"#,
+                "start_ne: give start_ne or start_lla, not both",
+            ),
+            (r#", "priority": 1.5"#, "priority: expected a whole number"),
+            (r#", "owner": "  ""#, "owner: expected 1 to 200 characters"),
+            (r#", "alt_m": "high""#, "alt_m: expected a number"),
+        ];
+        for (fields, want) in cases {
+            let e = one(fields).err().map(|e| e.to_string()).unwrap_or_default();
+            let want = format!("m.json: missions[0] (id \"m1\").{want}");
+            assert!(
+                e.starts_with(&want),
+                "{fields}: {e:?} does not start with {want:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn random_missions_are_reproducible_and_far_apart() {
+        let grid = Grid2::from_ascii(&format!("{}\n", ".".repeat(400)).repeat(3))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let r = RandomMissions {
+            count: 20,
+            seed: 3,
+            min_distance_m: 200.0,
+            spread_s: 600.0,
+            window_s: 60.0,
+            start: clock().start,
+        };
+        let a = random_missions(&grid, MoveModel::default(), &r);
+        assert_eq!(a, random_missions(&grid, MoveModel::default(), &r));
+        assert_eq!(a.len(), 20);
+        for m in &a {
+            let (Place::Ne(s), Place::Ne(g)) = (m.start, m.goal) else {
+                panic!("random missions are in metres")
+            };
+            assert!((s[0] - g[0]).hypot(s[1] - g[1]) >= 200.0);
+            let after = m.window.earliest.ms_since(r.start);
+            assert!((0..=600_000).contains(&after) && after % 1000 == 0);
+            assert_eq!(m.window.latest.ms_since(m.window.earliest), 60_000);
+        }
+    }
+}

@@ -389,3 +389,118 @@ pub fn binding_conflicts(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use skyplan_airspace::{Altitude, IntentState, LatLng, Polygon, Volume3D, Volume4D};
+
+    fn intent(id: &str, priority: u32, lat: f64, start_ms: i64) -> OperationalIntent {
+        let d = 0.001;
+        let vertices = vec![
+            LatLng { lat, lng: -122.4 },
+            LatLng {
+                lat,
+                lng: -122.4 + d,
+            },
+            LatLng {
+                lat: lat + d,
+                lng: -122.4 + d,
+            },
+            LatLng {
+                lat: lat + d,
+                lng: -122.4,
+            },
+        ];
+        OperationalIntent {
+            id: id.into(),
+            version: 1,
+            state: IntentState::Accepted,
+            priority,
+            owner: "t".into(),
+            volumes: vec![Volume4D {
+                volume: Volume3D {
+                    outline_polygon: Polygon { vertices },
+                    altitude_lower: Altitude::w84_m(0.0),
+                    altitude_upper: Altitude::w84_m(50.0),
+                },
+                time_start: Timestamp::from_unix_ms(start_ms).into(),
+                time_end: Timestamp::from_unix_ms(start_ms + 60_000).into(),
+            }],
+        }
+    }
+
+    #[test]
+    fn the_oracle_finds_what_binds_and_only_that() {
+        let rule = PriorityRule::EqualOrHigher;
+        let a = intent("a", 5, 37.79, 0);
+        // The same place, overlapping in time (touching at the end counts), equal priority.
+        let b = intent("b", 5, 37.7905, 60_000);
+        let found = binding_conflicts(&[a.clone(), b.clone()], rule);
+        assert_eq!(found, vec![(a.reference(), b.reference())]);
+        // A more important later one is not bound; every rule still sees it.
+        let urgent = intent("u", 9, 37.7905, 30_000);
+        assert!(binding_conflicts(&[a.clone(), urgent.clone()], rule).is_empty());
+        assert_eq!(
+            binding_conflicts(&[a.clone(), urgent], PriorityRule::Every).len(),
+            1
+        );
+        // A millisecond later, or beside it: clear.
+        let later = intent("l", 5, 37.7905, 60_001);
+        let beside = intent("s", 5, 37.7915, 0);
+        assert!(binding_conflicts(&[a, later, beside], rule).is_empty());
+    }
+
+    #[test]
+    fn summary_counts_and_deciles() {
+        let record = |k: usize, status: Status| FlightRecord {
+            mission: format!("m{k}"),
+            status,
+            intent_id: None,
+            departure: None,
+            delay_s: (status == Status::Accepted).then_some(k as f64),
+            duration_s: None,
+            blocking: Vec::new(),
+            message: None,
+            plan_ms: 0.0,
+            reserve_ms: 0.0,
+            latency_ms: k as f64,
+            checked: k,
+            stored_before: k / 2,
+            route_ne: Vec::new(),
+            intent: None,
+        };
+        let records: Vec<_> = (1..=20)
+            .map(|k| {
+                record(
+                    k,
+                    if k % 2 == 0 {
+                        Status::Accepted
+                    } else {
+                        Status::Refused
+                    },
+                )
+            })
+            .collect();
+        let s = Summary::of(&records);
+        assert_eq!(
+            (s.missions, s.accepted, s.refused, s.no_route),
+            (20, 10, 10, 0)
+        );
+        assert_eq!(s.share_planned, 0.5);
+        // Delays 2, 4, …, 20.
+        assert_eq!((s.delay_mean_s, s.delay_p95_s), (11.0, 20.0));
+        assert_eq!((s.latency_p50_ms, s.latency_p99_ms), (10.0, 20.0));
+        assert_eq!((s.checked_mean, s.checked_max), (10.5, 20));
+        assert_eq!(s.deciles.len(), 10);
+        assert_eq!(
+            (
+                s.deciles[9].from,
+                s.deciles[9].to,
+                s.deciles[9].stored_at_start
+            ),
+            (18, 20, 9)
+        );
+        assert_eq!((s.deciles[9].p50_ms, s.deciles[9].p99_ms), (19.0, 20.0));
+    }
+}
