@@ -7,7 +7,7 @@ use crate::exit::{Result, bad_input, runtime};
 use crate::files::{read_text, write_atomic};
 use serde_json::json;
 use skyplan_airspace::{PriorityRule, Timestamp};
-use skyplan_airspace_store::{IntentStore, PostgresStore, open_url};
+use skyplan_airspace_store::{IntentStore, PostgresStore, StoreError, open_url};
 use skyplan_fleet::{
     Clock, FlightRecord, Format, Mission, Mode, RandomMissions, RunOptions, Status, Summary,
     binding_conflicts, fly_fleet, parse_missions, random_missions,
@@ -29,7 +29,7 @@ fn world_of(map: Option<&Path>) -> Result<World> {
     if world.frame().is_none() {
         return Err(bad_input(format!(
             "--map {}: the map has no geodetic home, so its routes have no latitude and longitude for an operational intent",
-            world.name()
+            map.map_or_else(|| world.name().to_string(), |p| p.display().to_string())
         )));
     }
     Ok(world)
@@ -55,8 +55,12 @@ fn remove_sqlite(path: &Path) {
     }
 }
 
+/// Opens the store; an address it does not know is bad input, a store that fails a runtime error.
 fn open_store(url: &str) -> Result<Box<dyn IntentStore>> {
-    open_url(url).map_err(|e| runtime(format!("--airspace {url}: {e}")))
+    open_url(url).map_err(|e| match e {
+        StoreError::Address(_) => bad_input(format!("--airspace {url}: {e}")),
+        e => runtime(format!("--airspace {url}: {e}")),
+    })
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).

@@ -269,3 +269,43 @@ fn bad_mission_files_name_the_file_the_entry_and_the_field() {
         assert!(!db.exists(), "{name}: the store was created");
     }
 }
+
+#[test]
+fn bad_options_fail_with_exit_2_naming_the_option() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--airspace", "mysql://x"],
+            "error: --airspace mysql://x: airspace mysql://x: expected sqlite:FILE",
+        ),
+        (
+            &[
+                "--map",
+                "examples/floor.yaml",
+                "--airspace",
+                "sqlite::memory:",
+            ],
+            "error: --map examples/floor.yaml: the map has no geodetic home",
+        ),
+        (
+            &["--start", "tomorrow", "--airspace", "sqlite::memory:"],
+            "error: --start tomorrow:",
+        ),
+        (
+            &["--plot", "fleet.jpg", "--airspace", "sqlite::memory:"],
+            "error: --plot fleet.jpg: expected a .png or .svg file name",
+        ),
+    ];
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    for (args, want) in cases {
+        let out = skyplan()
+            .current_dir(&root)
+            .args(["fleet", "--random", "3"])
+            .args(*args)
+            .assert()
+            .code(2)
+            .get_output()
+            .clone();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{args:?}: expected {want:?} in\n{err}");
+    }
+}

@@ -166,7 +166,7 @@ pub fn parse_missions(
         Value::Object(o) => match (o.get("missions"), o.keys().find(|k| *k != "missions")) {
             (_, Some(k)) => {
                 return Err(whole(format!(
-                    "unknown top-level field {k:?}: expected only missions"
+                    "unknown top-level field \"{k}\": expected only missions"
                 )));
             }
             (Some(Value::Array(list)), None) => list,
