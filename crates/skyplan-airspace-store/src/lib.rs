@@ -36,7 +36,9 @@ mod reserve;
 mod sqlite;
 
 pub use pg::{MAX_CONNECTIONS, PostgresStore, SERIALIZABLE_TRIES};
-pub use reserve::{RESERVE_TRIES, Reservation, ReserveError, Reserved, reserve};
+pub use reserve::{
+    RESERVE_TRIES, Reservation, ReserveCounts, ReserveError, Reserved, reserve, reserve_counted,
+};
 pub use sqlite::SqliteStore;
 
 use skyplan_airspace::{Conflict, OperationalIntent, PriorityRule, Volume4D};

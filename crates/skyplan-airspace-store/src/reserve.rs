@@ -75,11 +75,42 @@ pub fn reserve(
     flight: &FlightVolumes,
     r: &Reservation,
 ) -> Result<Reserved, ReserveError> {
+    reserve_counted(store, flight, r).0
+}
+
+/// What a [`reserve`] call read, whatever its outcome.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ReserveCounts {
+    /// Stored intents read near the flight through the index (the last search's).
+    pub nearby: usize,
+    /// Searches run.
+    pub tries: usize,
+}
+
+/// [`reserve`], with what it read counted also when the flight is refused.
+pub fn reserve_counted(
+    store: &dyn IntentStore,
+    flight: &FlightVolumes,
+    r: &Reservation,
+) -> (Result<Reserved, ReserveError>, ReserveCounts) {
+    let mut counts = ReserveCounts::default();
+    let result = reserve_inner(store, flight, r, &mut counts);
+    (result, counts)
+}
+
+fn reserve_inner(
+    store: &dyn IntentStore,
+    flight: &FlightVolumes,
+    r: &Reservation,
+    counts: &mut ReserveCounts,
+) -> Result<Reserved, ReserveError> {
     let (window, priority, rule) = (r.window, r.priority, r.rule);
     let span = window.latest.ms_since(window.earliest).max(0);
     let mut last_conflicts = Vec::new();
     for tries in 1..=RESERVE_TRIES {
+        counts.tries = tries;
         let nearby = store.nearby(&flight.at(window.earliest), span)?;
+        counts.nearby = nearby.len();
         let found = earliest_departure(flight, window, priority, &nearby, rule, r.step_ms)
             .map_err(|e| match e {
                 DepartureError::Blocked(b) => ReserveError::Blocked(b),

@@ -39,6 +39,63 @@ pub enum Command {
     Map(MapCommand),
     /// Serve the planning API over HTTP (JSON, server-sent events, OpenAPI) and the live-view page.
     Serve(ServeArgs),
+    /// Plan many missions against a shared airspace store, in order, reserving each accepted
+    /// flight's operational intent (its departure shifted within its window around the others);
+    /// a report per flight and totals, and a picture.
+    Fleet(Box<FleetArgs>),
+}
+
+#[derive(Debug, Args)]
+pub struct FleetArgs {
+    /// Mission file, .json or .toml: a list of missions (JSON `[{…}]` or `{"missions": […]}`;
+    /// TOML `[[missions]]`), each with id, start_ne [N, E] or start_lla [LAT, LON], goal_ne or
+    /// goal_lla, alt_m, departure (seconds after --start, an RFC 3339 time, or {earliest,
+    /// latest}), window_s (default 900), priority (0 to 100, default 0), owner; see docs/FLEET.md.
+    #[arg(
+        value_name = "FILE",
+        required_unless_present = "random",
+        conflicts_with = "random"
+    )]
+    pub file: Option<PathBuf>,
+    /// Instead of a file: N random missions between far-apart free places of the map (priority 0).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub random: Option<u32>,
+    /// Seed of the random missions.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// With --random: departures spread uniformly over this many seconds after --start.
+    #[arg(long, value_name = "S", default_value_t = 3600.0, value_parser = within(0.0, 86_400.0))]
+    pub spread_s: f64,
+    /// With --random: how much later than its departure each mission may leave, seconds.
+    #[arg(long, value_name = "S", default_value_t = 900.0, value_parser = within(0.0, 86_400.0))]
+    pub window_s: f64,
+    /// With --random: least start–goal distance, metres.
+    #[arg(long, value_name = "M", default_value_t = 300.0, value_parser = within(0.0, 1e6))]
+    pub min_distance_m: f64,
+    /// What departures given in seconds count from (RFC 3339) [default: now, rounded up to the next minute].
+    #[arg(long, value_name = "TIME")]
+    pub start: Option<String>,
+    /// The airspace store: sqlite:FILE, postgres://USER@HOST:PORT/DATABASE or sqlite::memory:
+    /// [default: a fresh SQLite file in the temporary directory, named on stderr].
+    #[arg(long, value_name = "URL")]
+    pub airspace: Option<String>,
+    /// The baseline: refuse a flight whose earliest departure conflicts instead of shifting it.
+    #[arg(long)]
+    pub reject_on_conflict: bool,
+    /// Map: FCND colliders .csv (as `plan`; a map with a geodetic home) [default: the bundled city].
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// Planner of every route [default: auto].
+    #[arg(long, value_name = "PLANNER")]
+    pub planner: Option<PlannerId>,
+    #[command(flatten)]
+    pub slice: SliceArgs,
+    /// Write the report (every flight and the totals) as JSON to FILE instead of the table on stdout.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Draw the map and the routes, one colour per accepted flight, refused ones grey (.png or .svg).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -365,6 +422,16 @@ pub struct BenchArgs {
     /// Replanning mode: fly N seeded flights per replanner (dstar-lite, scratch) on the in-process simulator into hidden buildings, one row each: success, collisions, replans, latency, expansions, flown length over the full-knowledge optimum.
     #[arg(long, value_name = "N", conflicts_with_all = ["three_d", "scen", "peers", "preprocess", "save_preprocess"])]
     pub replan: Option<usize>,
+    /// Fleet mode: N random missions over the map (bundled city, or --map such as `skyplan map
+    /// tile`'s) planned and reserved in order with departures shifted and with the
+    /// reject-on-conflict baseline, each on a fresh store: share planned, delays, plan-and-reserve
+    /// latency as the store fills, intents checked, conflicts (all pairs) — on SQLite, and on
+    /// PostgreSQL with --airspace postgres://… or SKYPLAN_TEST_POSTGRES.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000), conflicts_with_all = ["three_d", "scen", "peers", "preprocess", "save_preprocess", "replan", "trajectory"])]
+    pub fleet: Option<u32>,
+    /// With --fleet: also run on this PostgreSQL server (postgres://USER@HOST:PORT/DATABASE; a fresh database is made per run).
+    #[arg(long, value_name = "URL", requires = "fleet")]
+    pub airspace: Option<String>,
     /// With --replan: hidden buildings per flight.
     #[arg(long, value_name = "K", default_value_t = 3, requires = "replan")]
     pub hidden_random: usize,

@@ -33,6 +33,9 @@ fn table_spec(args: &BenchArgs) -> Result<[f64; 3]> {
 }
 
 pub fn run_bench(args: BenchArgs) -> Result<()> {
+    if let Some(flights) = args.fleet {
+        return crate::fleet_cmd::bench(&args, flights as usize);
+    }
     if let Some(flights) = args.replan {
         return replan_bench(&args, flights);
     }

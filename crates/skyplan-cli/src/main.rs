@@ -8,6 +8,7 @@ mod bench_traj_cmd;
 mod config;
 mod exit;
 mod files;
+mod fleet_cmd;
 mod fly_cmd;
 mod grid_args;
 mod live;
@@ -81,6 +82,7 @@ fn main() -> ExitCode {
         args::Command::Sim(a) => sim_cmd::run(a),
         args::Command::Map(args::MapCommand::Tile(a)) => map_cmd::tile(a),
         args::Command::Serve(a) => serve_cmd::run(a),
+        args::Command::Fleet(a) => fleet_cmd::run(*a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -43,3 +43,42 @@ pub fn render(
     skyplan_plot::plan_picture::plan_picture_with_zones(world, plan, kind, flight, zones)
         .or_exit(Kind::Runtime)
 }
+
+/// `fleet --plot`: the map's configuration-space grid at the run's slice and every flight's
+/// route, accepted ones a colour each, refused ones grey.
+pub fn fleet_picture(
+    world: &World,
+    base: &skyplan_plan::PlanRequest,
+    records: &[skyplan_fleet::FlightRecord],
+    path: &Path,
+) -> Result<Vec<u8>> {
+    let format = skyplan_plot::PlotFormat::from_path(path).ok_or_else(|| {
+        bad_input(format!(
+            "--plot {}: expected a .png or .svg file name",
+            path.display()
+        ))
+    })?;
+    let spec = base.spec()?;
+    let grid =
+        skyplan_plan::Session::new(world.clone()).grid(spec.alt_m, spec.safety_m, spec.cell_m)?;
+    let fleet: Vec<skyplan_plot::FleetRoute> = records
+        .iter()
+        .filter(|r| r.route_ne.len() > 1)
+        .map(|r| skyplan_plot::FleetRoute {
+            route_ne: r.route_ne.clone(),
+            accepted: r.status == skyplan_fleet::Status::Accepted,
+        })
+        .collect();
+    let accepted = fleet.iter().filter(|f| f.accepted).count();
+    let scene = skyplan_plot::Scene {
+        title: format!(
+            "{}, fleet at {} m: {accepted} of {} flights accepted",
+            world.name(),
+            spec.alt_m,
+            records.len()
+        ),
+        fleet: &fleet,
+        ..skyplan_plot::Scene::of_grid(&grid)
+    };
+    skyplan_plot::render(&scene, format, 1000, 1000).or_exit(Kind::Runtime)
+}

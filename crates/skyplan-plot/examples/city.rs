@@ -74,6 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         connectors_ne: &[],
         flight: None,
         zones: &[],
+        fleet: &[],
     };
 
     let t = Instant::now();

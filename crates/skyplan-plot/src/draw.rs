@@ -27,6 +27,12 @@ const HIDDEN_COLOR: RGBColor = RGBColor(150, 30, 40);
 const LEARNED_COLOR: RGBColor = RGBColor(230, 60, 150);
 const REPLANNED_COLOR: RGBColor = RGBColor(140, 70, 200);
 const TRACK_COLOR: RGBColor = RGBColor(20, 20, 20);
+const REFUSED_COLOR: RGBColor = RGBColor(150, 150, 150);
+
+/// The colour of a fleet's k-th accepted flight: hues a golden angle apart.
+fn fleet_color(k: usize) -> HSLColor {
+    HSLColor((k as f64 * 0.618_034).fract(), 0.8, 0.42)
+}
 /// An exclusion zone: outline and hatching.
 pub(crate) const ZONE_COLOR: RGBColor = RGBColor(214, 40, 40);
 /// An inclusion boundary's outline.
@@ -55,6 +61,8 @@ struct Styles {
     pruned: ShapeStyle,
     replanned: ShapeStyle,
     track: ShapeStyle,
+    /// Width of a fleet's routes, pixels.
+    fleet_w: u32,
     /// Width of a trajectory's curve, pixels.
     trajectory: u32,
     /// Radii of a waypoint, of the start and goal markers, of a learned cell's dot.
@@ -73,6 +81,7 @@ impl Styles {
             replanned: REPLANNED_COLOR.stroke_width(px(2.4 * k)),
             track: TRACK_COLOR.stroke_width(px(1.4 * k)),
             trajectory: px(3.0 * k),
+            fleet_w: px(1.8 * k),
             r_wp: px(4.5 * k),
             r_end: px(8.0 * k),
             r_learned: px(2.5 * k),
@@ -328,6 +337,22 @@ fn draw_routes<DB: DrawingBackend>(
             .draw_series(f.hidden.iter().map(|o| footprint(o, HIDDEN_COLOR)))
             .map_err(err)?;
     }
+    for f in scene.fleet.iter().filter(|f| !f.accepted) {
+        chart
+            .draw_series(LineSeries::new(
+                f.route_ne.iter().map(en),
+                REFUSED_COLOR.stroke_width(styles.fleet_w.div_ceil(2)),
+            ))
+            .map_err(err)?;
+    }
+    for (k, f) in scene.fleet.iter().filter(|f| f.accepted).enumerate() {
+        chart
+            .draw_series(LineSeries::new(
+                f.route_ne.iter().map(en),
+                fleet_color(k).stroke_width(styles.fleet_w),
+            ))
+            .map_err(err)?;
+    }
     if scene.raw_path_ne.len() > 1 {
         chart
             .draw_series(LineSeries::new(
@@ -542,6 +567,17 @@ fn draw_legend<DB: DrawingBackend>(
             )),
             LegendKind::Replanned => root.draw(&line(styles.replanned)),
             LegendKind::Track => root.draw(&line(styles.track)),
+            LegendKind::Fleet => (0..3).try_for_each(|k| {
+                let third = sw / 3;
+                let (a, b) = (x + k * third, x + (k + 1) * third);
+                root.draw(&PathElement::new(
+                    vec![(a, cy), (b, cy)],
+                    fleet_color(k as usize).stroke_width(styles.fleet_w),
+                ))
+            }),
+            LegendKind::FleetRefused => root.draw(&line(
+                REFUSED_COLOR.stroke_width(styles.fleet_w.div_ceil(2)),
+            )),
             LegendKind::HeatBlocked => root.draw(&swatch(HEAT_BLOCKED_COLOR)),
             LegendKind::Heat(level) => root.draw(&swatch(heat_color(level))),
             LegendKind::NoValue => root.draw(&swatch(NO_VALUE_COLOR)),

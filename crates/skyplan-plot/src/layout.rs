@@ -75,6 +75,9 @@ pub(crate) enum LegendKind {
     Learned,
     Replanned,
     Track,
+    /// A fleet's accepted routes (a colour each) and refused ones (grey).
+    Fleet,
+    FleetRefused,
     /// Heat maps: blocked cells (drawn black), a colour of the scale, cells without a value,
     /// and the scale's caption (no sample).
     HeatBlocked,
@@ -129,7 +132,7 @@ impl PlotLayout {
     /// let grid = Grid2::from_ascii("....\n....")?;
     /// let scene = Scene {
     ///     title: String::new(), grid: &grid, obstacles: &[], raw_path_ne: &[],
-    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[], flight: None, zones: &[],
+    ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[], flight: None, zones: &[], fleet: &[],
     /// };
     /// let l = layout(&scene, 800, 600)?;
     /// let (x0, y0, _w, h) = l.plot_area();
@@ -319,6 +322,12 @@ fn legend_entries(scene: &Scene) -> Vec<LegendEntry> {
         let track = !f.track_ne.is_empty();
         push(track, LegendKind::Track, "flown track".into());
     }
+    let accepted = scene.fleet.iter().filter(|f| f.accepted).count();
+    let refused = scene.fleet.len() - accepted;
+    let text = format!("accepted flights ({accepted}, a colour each)");
+    push(accepted > 0, LegendKind::Fleet, text);
+    let text = format!("refused flights ({refused})");
+    push(refused > 0, LegendKind::FleetRefused, text);
     push(scene.start_ne.is_some(), LegendKind::Start, "start".into());
     push(scene.goal_ne.is_some(), LegendKind::Goal, "goal".into());
     v

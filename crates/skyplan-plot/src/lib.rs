@@ -35,6 +35,7 @@
 //!     connectors_ne: &[],
 //!     flight: None,
 //!     zones: &[],
+//!     fleet: &[],
 //! };
 //! let png = render_png(&scene, 640, 480)?;
 //! assert_eq!(&png[1..4], b"PNG");
@@ -104,6 +105,18 @@ pub struct Scene<'a> {
     /// hatched, inclusion boundaries outlined green without hatching, each labelled with its
     /// number and band; empty for none.
     pub zones: &'a [skyplan_map::nofly::Zone],
+    /// The routes of a fleet of flights (`skyplan fleet --plot`): each accepted one in a
+    /// colour of its own, refused ones thin grey; empty for none.
+    pub fleet: &'a [FleetRoute],
+}
+
+/// One flight of a fleet in a picture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FleetRoute {
+    /// Its route, (north, east) metres.
+    pub route_ne: Vec<(f64, f64)>,
+    /// Whether its intent was accepted.
+    pub accepted: bool,
 }
 
 /// A flight drawn over its plan: what the map did not show and what the vehicle did about it.
@@ -137,6 +150,7 @@ impl<'a> Scene<'a> {
             connectors_ne: &[],
             flight: None,
             zones: &[],
+            fleet: &[],
         }
     }
 
@@ -160,6 +174,7 @@ impl<'a> Scene<'a> {
                     .chain(f.replanned_ne.iter().flatten())
                     .copied()
             }))
+            .chain(self.fleet.iter().flat_map(|f| f.route_ne.iter().copied()))
     }
 }
 

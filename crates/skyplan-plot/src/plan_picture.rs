@@ -212,6 +212,7 @@ impl MapPicture<'_> {
             connectors_ne: &connectors,
             flight: self.flight,
             zones: self.zones,
+            fleet: &[],
         };
         match &trace {
             None => crate::render(&scene, format, 1000, 1000),

@@ -79,6 +79,7 @@ fn scene(f: &Fixture) -> Scene<'_> {
         connectors_ne: &[],
         flight: None,
         zones: &[],
+        fleet: &[],
     }
 }
 

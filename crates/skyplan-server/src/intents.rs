@@ -11,23 +11,14 @@ use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};
 use serde::Deserialize;
 use serde_json::{Value, json};
-use skyplan_airspace::{
-    DepartureWindow, MAX_PRIORITY, OperationalIntent, PriorityRule, Timestamp, VolumeOptions,
-    volumes_from_plan,
-};
-use skyplan_airspace_store::{IntentStore, Reservation, ReserveError, StoreError, new_id, reserve};
+use skyplan_airspace::{DepartureWindow, MAX_PRIORITY, OperationalIntent, Timestamp};
+use skyplan_airspace_store::{IntentStore, ReserveError, StoreError};
+use skyplan_fleet::FlightRequest;
 use skyplan_plan::PlanRequest;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Departures may be this far in the past (clocks differ), milliseconds.
-pub const PAST_SLACK_MS: i64 = 60_000;
-
-/// Departures may be at most this far ahead, milliseconds (30 days).
-pub const HORIZON_MS: i64 = 30 * 86_400_000;
-
-/// The departure grid's step, milliseconds.
-pub const DEPARTURE_STEP_MS: i64 = 1000;
+pub use skyplan_fleet::{DEPARTURE_STEP_MS, HORIZON_MS, PAST_SLACK_MS};
 
 /// Longest owner name, characters.
 pub const MAX_OWNER_CHARS: usize = 200;
@@ -50,58 +41,10 @@ fn bad(message: String) -> ApiError {
     ApiError::bad_request(message)
 }
 
-fn instant(v: &Value, field: &str) -> Result<Timestamp, ApiError> {
-    let text = v
-        .as_str()
-        .ok_or_else(|| bad(format!("{field}: expected an RFC 3339 date-time string")))?;
-    text.parse().map_err(|e| bad(format!("{field}: {e}")))
-}
-
 /// The request's departure window, checked against `now`: not in the past (more than a minute),
 /// not beyond the horizon, not ending before it starts.
 fn window(v: &Value, now: Timestamp) -> Result<DepartureWindow, ApiError> {
-    let window = match v {
-        Value::String(_) => DepartureWindow::at(instant(v, "departure")?),
-        Value::Object(o) => {
-            if let Some(k) = o.keys().find(|k| *k != "earliest" && *k != "latest") {
-                return Err(bad(format!(
-                    "departure.{k}: unknown field, expected earliest and latest"
-                )));
-            }
-            DepartureWindow {
-                earliest: instant(
-                    o.get("earliest").unwrap_or(&Value::Null),
-                    "departure.earliest",
-                )?,
-                latest: instant(o.get("latest").unwrap_or(&Value::Null), "departure.latest")?,
-            }
-        }
-        _ => {
-            return Err(bad(
-                "departure: expected an RFC 3339 date-time or {\"earliest\": …, \"latest\": …}"
-                    .into(),
-            ));
-        }
-    };
-    if window.latest < window.earliest {
-        return Err(bad(format!(
-            "departure: the window ends ({}) before it starts ({})",
-            window.latest, window.earliest
-        )));
-    }
-    if window.earliest < now.plus_ms(-PAST_SLACK_MS) {
-        return Err(bad(format!(
-            "departure: {} is in the past (now {now})",
-            window.earliest
-        )));
-    }
-    if window.latest > now.plus_ms(HORIZON_MS) {
-        return Err(bad(format!(
-            "departure: {} is beyond the horizon of 30 days (now {now})",
-            window.latest
-        )));
-    }
-    Ok(window)
+    skyplan_fleet::departure_window(v, "departure", now).map_err(|e| bad(e.to_string()))
 }
 
 /// The store, or 503 when it could not be opened.
@@ -165,25 +108,20 @@ pub(crate) async fn create(
         .run(shape, move |session| session.plan(&plan_request))
         .await?;
     let plan = planned.map_err(ApiError::from)?;
-    let options = VolumeOptions::default();
-    let flight = volumes_from_plan(&plan, &options).map_err(|e| bad(format!("plan: {e}")))?;
-    let reservation = Reservation {
-        window,
-        priority: request.priority,
-        owner,
-        id: new_id(),
-        rule: PriorityRule::EqualOrHigher,
-        step_ms: DEPARTURE_STEP_MS,
-    };
+    let flight_request = FlightRequest::new(window, request.priority, owner);
+    let flight =
+        skyplan_fleet::flight_volumes(&plan, &flight_request).map_err(|e| bad(e.to_string()))?;
     let (timing, duration_s) = (flight.timing, flight.duration_s);
     let reserved = blocking(move || {
-        reserve(store.as_ref(), &flight, &reservation).map_err(|e| match e {
-            ReserveError::Blocked(b) => {
-                ApiError::new(ErrorKind::Conflict, b.to_string()).with_conflicts(b.blocking)
-            }
-            ReserveError::Invalid(e) => bad(e.to_string()),
-            ReserveError::Store(e) => store_error(e),
-        })
+        skyplan_fleet::reserve_flight(store.as_ref(), &flight, &flight_request)
+            .0
+            .map_err(|e| match e {
+                ReserveError::Blocked(b) => {
+                    ApiError::new(ErrorKind::Conflict, b.to_string()).with_conflicts(b.blocking)
+                }
+                ReserveError::Invalid(e) => bad(e.to_string()),
+                ReserveError::Store(e) => store_error(e),
+            })
     })
     .await?;
     let request_id = s
