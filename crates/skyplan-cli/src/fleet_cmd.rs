@@ -321,28 +321,31 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
             "--airspace {url}: expected postgres://USER@HOST:PORT/DATABASE (SQLite always runs)"
         )));
     }
+    // One fleet on one fresh store: its summary and the intersecting pairs it holds.
+    let run_on = |url: &str, store: &'static str, mode: Mode| {
+        let opened = open_store(url)?;
+        let label = format!("{store}, {}", mode.name());
+        let records = fly(
+            world.clone(),
+            opened.as_ref(),
+            &base,
+            &missions,
+            mode,
+            &label,
+        )?;
+        let conflicts = conflicts_in(opened.as_ref())?;
+        Ok::<_, crate::exit::Failure>(BenchRun {
+            store,
+            mode,
+            summary: Summary::of(&records),
+            conflicts,
+        })
+    };
     let mut runs = Vec::new();
     for mode in [Mode::Shift, Mode::RejectOnConflict] {
         let path = temp_sqlite("bench-fleet");
         let url = format!("sqlite:{}", path.display());
-        let result = (|| {
-            let store = open_store(&url)?;
-            let records = fly(
-                world.clone(),
-                store.as_ref(),
-                &base,
-                &missions,
-                mode,
-                &format!("sqlite, {}", mode.name()),
-            )?;
-            let conflicts = conflicts_in(store.as_ref())?;
-            Ok::<_, crate::exit::Failure>(BenchRun {
-                store: "sqlite",
-                mode,
-                summary: Summary::of(&records),
-                conflicts,
-            })
-        })();
+        let result = run_on(&url, "sqlite", mode);
         remove_sqlite(&path);
         runs.push(result?);
         if let Some(pg) = &postgres {
@@ -352,22 +355,7 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
             let name = format!("skyplan_bench_fleet_{}_{nanos}", std::process::id());
             let url = PostgresStore::create_database(pg, &name)
                 .map_err(|e| runtime(format!("--airspace: {e}")))?;
-            let store = open_store(&url)?;
-            let records = fly(
-                world.clone(),
-                store.as_ref(),
-                &base,
-                &missions,
-                mode,
-                &format!("postgres, {}", mode.name()),
-            )?;
-            let conflicts = conflicts_in(store.as_ref())?;
-            runs.push(BenchRun {
-                store: "postgres",
-                mode,
-                summary: Summary::of(&records),
-                conflicts,
-            });
+            runs.push(run_on(&url, "postgres", mode)?);
         }
     }
     if args.json {

@@ -32,7 +32,8 @@ fn osm_and_osmium_geojson_give_the_same_routes() {
     assert_eq!(notes[0], oracle_notes[0], "the same heights");
     assert_eq!(oracle_notes.len(), 1);
     assert!(
-        notes[1].starts_with("54 buildings skipped: way 17361610: node 179789037 is not in the file; "),
+        notes[1]
+            .starts_with("54 buildings skipped: way 17361610: node 179789037 is not in the file; "),
         "{}",
         notes[1]
     );

@@ -93,6 +93,19 @@ fn time_optimal(len: f64, v: f64, a: f64, j: f64) -> [f64; 3] {
     [tj, ta, 0.0]
 }
 
+/// The seven phases of an S-curve as (duration, jerk): up, hold, down, cruise, down, hold, up.
+fn phases([tj, ta, tc]: [f64; 3], j: f64) -> [(f64, f64); 7] {
+    [
+        (tj, j),
+        (ta, 0.0),
+        (tj, -j),
+        (tc, 0.0),
+        (tj, -j),
+        (ta, 0.0),
+        (tj, j),
+    ]
+}
+
 /// A cubic piece of the line `from + dir · s(t)` with `s(t) = s0 + v0 t + a0 t²/2 + j t³/6`.
 fn cubic(from: Neu, to: Neu, dir: Neu, s: [f64; 4], duration_s: f64) -> Piece {
     let [s0, v0, a0, j] = s;
@@ -137,19 +150,9 @@ pub fn stop_at_waypoints(route: &[Neu], limits: &Limits) -> Result<Trajectory, T
         let dir = [0, 1, 2].map(|k| (to[k] - from[k]) / len);
         let v = crate::leg_speed_m_s(from, to, limits);
         let ([tj, ta, tc], j) = s_curve(len, v, a, j);
-        // Jerk per phase: up, hold, down, cruise, down, hold, up.
-        let phases = [
-            (tj, j),
-            (ta, 0.0),
-            (tj, -j),
-            (tc, 0.0),
-            (tj, -j),
-            (ta, 0.0),
-            (tj, j),
-        ];
         let (mut s, mut vel, mut acc) = (0.0, 0.0, 0.0);
         let start = pieces.len();
-        for (d, jk) in phases {
+        for (d, jk) in phases([tj, ta, tc], j) {
             if d <= 1e-12 {
                 continue;
             }
@@ -177,19 +180,9 @@ mod tests {
     /// Integrates the seven phases exactly (in steps): distance, and the peaks of speed,
     /// acceleration and jerk.
     fn integrate(p: [f64; 3], j: f64) -> (f64, f64, f64) {
-        let [tj, ta, tc] = p;
-        let phases = [
-            (tj, j),
-            (ta, 0.0),
-            (tj, -j),
-            (tc, 0.0),
-            (tj, -j),
-            (ta, 0.0),
-            (tj, j),
-        ];
         let (mut s, mut v, mut acc, mut v_max, mut a_max) =
             (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
-        for (d, jk) in phases {
+        for (d, jk) in phases(p, j) {
             s += v * d + acc * d * d / 2.0 + jk * d * d * d / 6.0;
             v += acc * d + jk * d * d / 2.0;
             acc += jk * d;
