@@ -34,7 +34,8 @@ pub enum Command {
     Fly(Box<FlyArgs>),
     /// Run the built-in simulated multicopter as a MAVLink vehicle (for `fly`, pymavlink, QGroundControl).
     Sim(SimArgs),
-    /// Make maps: `skyplan map tile` copies a colliders map K × K times (big test worlds).
+    /// Make maps: `skyplan map tile` copies a colliders map K × K times (big test worlds);
+    /// `skyplan map maze` makes a MovingAI maze and scenarios with exact lengths.
     #[command(subcommand)]
     Map(MapCommand),
     /// Serve the planning API over HTTP (JSON, server-sent events, OpenAPI) and the live-view page.
@@ -102,6 +103,9 @@ pub struct FleetArgs {
 pub enum MapCommand {
     /// The map copied K × K times at a pitch (north and east), same home: a city of cities.
     Tile(TileArgs),
+    /// A seeded perfect maze in MovingAI's format (corridors C cells wide, walls 1 cell, as in
+    /// maze512-C-k), and optionally scenarios with exact optimal lengths.
+    Maze(crate::map_cmd::MazeArgs),
 }
 
 #[derive(Debug, Args)]

@@ -81,6 +81,7 @@ fn main() -> ExitCode {
         args::Command::Fly(a) => fly_cmd::run(*a),
         args::Command::Sim(a) => sim_cmd::run(a),
         args::Command::Map(args::MapCommand::Tile(a)) => map_cmd::tile(a),
+        args::Command::Map(args::MapCommand::Maze(a)) => map_cmd::maze(a),
         args::Command::Serve(a) => serve_cmd::run(a),
         args::Command::Fleet(a) => fleet_cmd::run(*a),
     };

@@ -1,4 +1,5 @@
-//! `skyplan map tile`: big test worlds from a colliders map.
+//! `skyplan map tile`: big test worlds from a colliders map; `skyplan map maze`: MovingAI mazes
+//! with scenarios of exact lengths.
 
 use crate::args::TileArgs;
 use crate::exit::{Result, bad_input};
@@ -22,5 +23,94 @@ pub fn tile(args: TileArgs) -> Result<()> {
         big.boxes.len(),
         k = args.times
     );
+    Ok(())
+}
+
+/// `skyplan map maze`: a seeded perfect maze shaped like MovingAI's `maze512-C-k` maps.
+#[derive(Debug, clap::Args)]
+pub struct MazeArgs {
+    /// Columns and rows of the map.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], required = true,
+          value_parser = clap::value_parser!(u32).range(2..=32768))]
+    pub size: Vec<u32>,
+    /// Corridor width, cells (walls are one cell thick, as in MovingAI's mazes).
+    #[arg(long, value_name = "C", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub corridor_cells: u32,
+    /// Seed: the same options make the same maze and scenarios on every machine.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// The maze (.map, MovingAI octile format).
+    #[arg(long, value_name = "FILE")]
+    pub out: std::path::PathBuf,
+    /// Also write scenarios (.scen, MovingAI version 1) whose optimal lengths are exact
+    /// (Dijkstra, 8-connected, no corner cutting: what `skyplan scen` checks).
+    #[arg(long, value_name = "FILE")]
+    pub scen: Option<std::path::PathBuf>,
+    /// Scenarios to write with --scen.
+    #[arg(long, value_name = "N", default_value_t = 1000, requires = "scen",
+          value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub queries: u64,
+}
+
+pub fn maze(args: MazeArgs) -> Result<()> {
+    use skyplan_map::{maze, movingai};
+    let has_ext = |p: &std::path::Path, ext: &str| p.extension().is_some_and(|e| e == ext);
+    if !has_ext(&args.out, "map") {
+        return Err(bad_input(format!(
+            "--out {}: expected a .map file name",
+            args.out.display()
+        )));
+    }
+    let map_target = output_target("--out", &args.out)?;
+    let scen_target = match &args.scen {
+        Some(path) if !has_ext(path, "scen") => {
+            return Err(bad_input(format!(
+                "--scen {}: expected a .scen file name",
+                path.display()
+            )));
+        }
+        Some(path) => Some(output_target("--scen", path)?),
+        None => None,
+    };
+    let spec = maze::MazeSpec {
+        width: args.size[0] as usize,
+        height: args.size[1] as usize,
+        corridor_cells: args.corridor_cells as usize,
+        seed: args.seed,
+    };
+    let map =
+        maze::generate(&spec).map_err(|e| bad_input(format!("--size/--corridor-cells: {e}")))?;
+    // Everything is computed before anything is written: a refused run leaves no file.
+    let scen = match &args.scen {
+        Some(_) => {
+            let name = args.out.file_name().map_or_else(
+                || args.out.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let count = usize::try_from(args.queries).unwrap_or(usize::MAX);
+            let list = maze::scenarios(&map, &name, count, args.seed)
+                .map_err(|e| bad_input(format!("--scen: {e}")))?;
+            Some(movingai::to_scen_text(&list, map.width, map.height))
+        }
+        None => None,
+    };
+    write_target(&map_target, movingai::to_map_text(&map).as_bytes())?;
+    let free = map.passable.iter().filter(|&&p| p).count();
+    println!(
+        "wrote      {}: {} × {} maze, corridor width {} cells, seed {} ({free} free cells)",
+        args.out.display(),
+        map.width,
+        map.height,
+        spec.corridor_cells,
+        spec.seed
+    );
+    if let (Some(target), Some(text), Some(path)) = (scen_target, scen, &args.scen) {
+        write_target(&target, text.as_bytes())?;
+        println!(
+            "wrote      {}: {} scenarios with exact optimal lengths",
+            path.display(),
+            args.queries
+        );
+    }
     Ok(())
 }

@@ -31,3 +31,99 @@ fn tiled_city_has_k_squared_copies_and_plans_across_them() {
         Some(2)
     );
 }
+
+/// The summary object of `scen --json` (its last line) and how many scenario lines came before.
+fn scen_summary(out: &std::process::Output) -> (serde_json::Value, usize) {
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let last = serde_json::from_str(lines[lines.len() - 1]).unwrap();
+    (last, lines.len() - 1)
+}
+
+#[test]
+fn a_generated_maze_replays_with_every_scenario_optimal_under_every_exact_planner() {
+    let dir = tempfile::tempdir().unwrap();
+    // 65 = 1 + 13 · (4 + 1): whole corridors; 50 rows cut the last corridor short.
+    let out = succeed(
+        dir.path(),
+        "map maze --size 65 50 --corridor-cells 4 --seed 3 --out m.map --scen m.map.scen --queries 300",
+    );
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("65 × 50 maze, corridor width 4 cells, seed 3"),
+        "{said}"
+    );
+    let map_text = std::fs::read_to_string(dir.path().join("m.map")).unwrap();
+    let map = skyplan_map::movingai::parse_map(&map_text).unwrap();
+    assert_eq!((map.width, map.height), (65, 50));
+    let scen_text = std::fs::read_to_string(dir.path().join("m.map.scen")).unwrap();
+    let scen = skyplan_map::movingai::parse_scen(&scen_text).unwrap();
+    assert_eq!(scen.len(), 300);
+    assert!(scen.iter().all(|s| s.map == "m.map"));
+    // The same options write the same files.
+    succeed(
+        dir.path(),
+        "map maze --size 65 50 --corridor-cells 4 --seed 3 --out n.map --scen n.map.scen --queries 300",
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("n.map")).unwrap(),
+        map_text
+    );
+    // Lengths found by skyplan's planners (A*, JPS, JPS+, CH and auto, none of them the
+    // generator's Dijkstra) equal the written ones on every scenario.
+    for planner in ["auto", "astar", "jps", "jps-plus", "ch"] {
+        let out = succeed(
+            dir.path(),
+            &format!("scen m.map m.map.scen --json --planner {planner}"),
+        );
+        let (summary, records) = scen_summary(&out);
+        assert_eq!(records, 300, "{planner}");
+        assert_eq!(
+            summary["matched"].as_u64(),
+            Some(300),
+            "{planner}: {summary}"
+        );
+    }
+}
+
+#[test]
+fn bad_maze_options_are_refused_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    for (line, needle) in [
+        (
+            "map maze --size 4 64 --corridor-cells 4 --out m.map",
+            "width 4: expected 5 to 32768 cells",
+        ),
+        (
+            "map maze --size 64 64 --corridor-cells 0 --out m.map",
+            "0 is not in 1..=64",
+        ),
+        (
+            "map maze --size 64 --corridor-cells 2 --out m.map",
+            "--size",
+        ),
+        (
+            "map maze --size 64 64 --corridor-cells 2 --out m.txt",
+            "expected a .map file name",
+        ),
+        (
+            "map maze --size 64 64 --corridor-cells 2 --out m.map --scen m.txt",
+            "--scen m.txt: expected a .scen file name",
+        ),
+        (
+            "map maze --size 64 64 --corridor-cells 2 --out m.map --queries 5",
+            "--scen",
+        ),
+        (
+            "map maze --size 64 64 --corridor-cells 2 --out m.map --scen m.scen --queries 0",
+            "0 is not in 1..=1000000",
+        ),
+        (
+            "map maze --size 64 64 --corridor-cells 2 --out nowhere/m.map",
+            "does not exist",
+        ),
+    ] {
+        common::fails_with(dir.path(), line, 2, &[needle]);
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

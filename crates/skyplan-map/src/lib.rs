@@ -4,6 +4,8 @@
 //!   axis-aligned boxes `posX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ` in metres
 //!   (north, east, up; centre and half sizes).
 //! * [`movingai`]: MovingAI / GPPC benchmark grids (`.map`) and scenarios (`.scen`).
+//! * [`maze`]: seeded perfect mazes shaped like MovingAI's, and scenarios for them with exact
+//!   Dijkstra lengths.
 //! * [`footprints`]: building footprints from GeoJSON (polygons with holes and heights, in
 //!   longitude/latitude), projected to local metres about a home.
 //!
@@ -25,6 +27,7 @@
 
 pub mod colliders;
 pub mod footprints;
+pub mod maze;
 pub mod movingai;
 pub mod nofly;
 pub mod osm;

@@ -240,6 +240,48 @@ pub fn parse_scen(text: &str) -> Result<Vec<Scenario>, ParseError> {
     Ok(out)
 }
 
+/// A map as the text of a MovingAI `.map` file (`type octile`; `.` free, `@` blocked), which
+/// [`parse_map`] reads back to the same map.
+///
+/// ```
+/// use skyplan_map::movingai::{parse_map, to_map_text};
+/// let text = "type octile\nheight 2\nwidth 3\nmap\n.@.\n..@\n";
+/// assert_eq!(to_map_text(&parse_map(text)?), text);
+/// # Ok::<(), skyplan_map::ParseError>(())
+/// ```
+pub fn to_map_text(map: &MovingAiMap) -> String {
+    let mut out = format!(
+        "type octile\nheight {}\nwidth {}\nmap\n",
+        map.height, map.width
+    );
+    out.reserve(map.passable.len() + map.height);
+    for row in map.passable.chunks(map.width.max(1)) {
+        out.extend(row.iter().map(|&p| if p { '.' } else { '@' }));
+        out.push('\n');
+    }
+    out
+}
+
+/// Scenarios as the text of a MovingAI `.scen` file (`version 1`, tab-separated rows, lengths
+/// with 8 decimals as published), for a map of `width` × `height`; [`parse_scen`] reads it back.
+///
+/// ```
+/// use skyplan_map::movingai::{parse_scen, to_scen_text};
+/// let text = "version 1\n0\tm.map\t3\t2\t0\t0\t2\t1\t2.41421356\n";
+/// assert_eq!(to_scen_text(&parse_scen(text)?, 3, 2), text);
+/// # Ok::<(), skyplan_map::ParseError>(())
+/// ```
+pub fn to_scen_text(scenarios: &[Scenario], width: usize, height: usize) -> String {
+    let mut out = String::from("version 1\n");
+    for s in scenarios {
+        out.push_str(&format!(
+            "{}\t{}\t{width}\t{height}\t{}\t{}\t{}\t{}\t{:.8}\n",
+            s.bucket, s.map, s.start_x, s.start_y, s.goal_x, s.goal_y, s.optimal_length
+        ));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

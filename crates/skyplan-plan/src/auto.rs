@@ -237,4 +237,35 @@ mod tests {
         assert!(pick(&m, CH_QUERIES).why.contains("contraction hierarchy"));
         assert!(pick(&o, 1).why.starts_with("1 query < 150"));
     }
+
+    /// The generated MovingAI-shaped mazes (`skyplan map maze`, 512 × 512, seed 1) and what
+    /// `auto` picks for 1,000 queries there: measured fastest including preprocessing
+    /// (docs/BENCHMARKS.md, "Generated mazes"): CH on 1- and 2-cell corridors, JPS+ on 4 and 8
+    /// (where CH's 4–12 s build pays only after ≈ 13,000 queries or never).
+    #[test]
+    fn on_generated_mazes_auto_picks_what_was_measured_fastest_for_1000_queries() {
+        use skyplan_map::maze::{MazeSpec, generate};
+        for (corridor_cells, expected) in [
+            (1, PlannerId::Ch),
+            (2, PlannerId::Ch),
+            (4, PlannerId::JpsPlus),
+            (8, PlannerId::JpsPlus),
+        ] {
+            let spec = MazeSpec {
+                width: 512,
+                height: 512,
+                corridor_cells,
+                seed: 1,
+            };
+            let map = generate(&spec).unwrap();
+            let blocked: Vec<bool> = map.passable.iter().map(|&p| !p).collect();
+            let grid = Grid2::new(512, 512, blocked, Default::default()).unwrap();
+            let stats = MapStats::of(&grid);
+            assert_eq!(
+                pick(&stats, 1_000).planner,
+                expected,
+                "{corridor_cells}: {stats:?}"
+            );
+        }
+    }
 }
