@@ -442,8 +442,11 @@ impl RunObserver for Terminal {
         self.live.events.route(plan, "plan");
         if let (Some(file @ (path, _, format)), Some(mission)) = (&self.out, &plan.mission) {
             let summary = serde_json::json!({ "map_home": plan.home, "planner": plan.planner });
-            let fence =
-                crate::plan_cmd::geo_fence(&self.request, plan.spec.alt_m, plan.spec.safety_m);
+            let (fence, _) = if *format == skyplan_export::Format::QgcPlan {
+                crate::plan_cmd::geo_fence(&self.request, plan)?
+            } else {
+                Default::default()
+            };
             crate::plan_cmd::write_waypoints(file, mission, &summary, &fence)?;
             println!("wrote      {} ({})", path.display(), format.name());
         }

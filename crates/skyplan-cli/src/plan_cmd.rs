@@ -51,53 +51,64 @@ pub(crate) fn write_waypoints(
     write_target(target, &bytes)
 }
 
-/// The `geoFence` of a plan's no-fly zones (`request.no_fly`, already checked by the plan): the
-/// inclusion boundaries, and the exclusion zones whose band grown by the margin holds the
-/// flight altitude (the ones the route was planned around; an autopilot's fence has no band).
-/// An inclusion polygon's holes become exclusion polygons; an exclusion polygon's holes are
-/// dropped (the vehicle then keeps out of them too: the safe side).
+/// The `geoFence` of a plan's no-fly zones (`request.no_fly`, already checked by the plan) and
+/// what it says, one line per zone: decided by the same rules as the vehicle's fence
+/// (`skyplan_flight::fence::fence_shapes`) — the inclusion boundaries, and the exclusion
+/// zones whose band grown by the margin meets the route's altitudes; an inclusion polygon's
+/// holes become exclusion polygons; an exclusion polygon's holes, which a fence cannot carry,
+/// are dropped (the vehicle keeps out of them too), and refused when the route flies in one.
+/// No zones, or no mission in lat/lon: an empty fence.
 pub(crate) fn geo_fence(
     request: &PlanRequest,
-    alt_m: f64,
-    margin_m: f64,
-) -> skyplan_export::GeoFence {
-    use skyplan_map::nofly::ZoneShape;
+    plan: &Plan,
+) -> Result<(skyplan_export::GeoFence, Vec<String>)> {
+    use skyplan_flight::fence::{FenceShape, RouteForFence, fence_shapes};
     let mut fence = skyplan_export::GeoFence::default();
-    let Some(Ok(zones)) = request
-        .no_fly
-        .as_deref()
-        .map(skyplan_map::nofly::parse_no_fly)
-    else {
-        return fence;
+    let (Some(Ok(zones)), Some(mission)) = (
+        request
+            .no_fly
+            .as_deref()
+            .map(skyplan_map::nofly::parse_no_fly),
+        &plan.mission,
+    ) else {
+        return Ok((fence, Vec::new()));
     };
-    let lat_lon = |ring: &[[f64; 2]]| ring.iter().map(|&[lon, lat]| [lat, lon]).collect();
-    for z in &zones.zones {
-        let holds = z.floor_m - margin_m < alt_m && alt_m < z.ceiling_m + margin_m;
-        if !(z.inclusion || holds) {
-            continue;
-        }
-        match &z.shape {
-            ZoneShape::Circle { centre, radius_m } => {
-                fence.circles.push(skyplan_export::FenceCircle {
-                    inclusion: z.inclusion,
-                    centre_lat_lon_deg: [centre[1], centre[0]],
-                    radius_m: *radius_m,
-                })
-            }
-            ZoneShape::Polygon(rings) => {
-                for (k, ring) in rings.iter().enumerate() {
-                    if k > 0 && !z.inclusion {
-                        break;
-                    }
-                    fence.polygons.push(skyplan_export::FencePolygon {
-                        inclusion: z.inclusion && k == 0,
-                        vertices_lat_lon_deg: lat_lon(ring),
-                    });
-                }
-            }
+    let alts = mission.waypoints.iter().map(|w| w.alt_m);
+    let route = RouteForFence {
+        points_lat_lon_deg: mission
+            .waypoints
+            .iter()
+            .map(|w| [w.lat_deg, w.lon_deg])
+            .collect(),
+        alt_range_m: [
+            alts.clone().fold(f64::INFINITY, f64::min),
+            alts.fold(f64::NEG_INFINITY, f64::max),
+        ],
+        margin_m: plan.spec.safety_m,
+    };
+    let decided = fence_shapes(&zones, &route)
+        .map_err(|e| bad_input(format!("the .plan file's geoFence: {}", e.0)))?;
+    for shape in decided.shapes {
+        match shape {
+            FenceShape::Polygon {
+                inclusion,
+                vertices_lat_lon_deg,
+            } => fence.polygons.push(skyplan_export::FencePolygon {
+                inclusion,
+                vertices_lat_lon_deg,
+            }),
+            FenceShape::Circle {
+                inclusion,
+                centre_lat_lon_deg,
+                radius_m,
+            } => fence.circles.push(skyplan_export::FenceCircle {
+                inclusion,
+                centre_lat_lon_deg,
+                radius_m,
+            }),
         }
     }
-    fence
+    Ok((fence, decided.notes))
 }
 
 /// Every output of a run, checked before planning so that a failing run writes nothing.
@@ -295,7 +306,14 @@ fn run_inner(args: PlanArgs) -> Result<()> {
             .map_err(|f| std::io::Error::other(f.message))
         })?;
     }
-    let fence = geo_fence(&request, plan.spec.alt_m, plan.spec.safety_m);
+    // A .plan file carries the zones as its geoFence: decided (and possibly refused) before
+    // anything is written.
+    let writes_plan = matches!(&outputs.waypoints, Some((_, _, Format::QgcPlan)));
+    let (fence, fence_notes) = if writes_plan {
+        geo_fence(&request, &plan)?
+    } else {
+        Default::default()
+    };
     let zones = crate::picture::zones_of(session.world(), &request);
     let written = write_outputs(session.world(), &plan, &outputs, (&fence, &zones))?;
     if args.show {
@@ -309,6 +327,9 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     } else {
         let wall_ms = t0.elapsed().as_secs_f64() * 1000.0;
         human.print(&crate::report::summary(&plan, &written, wall_ms));
+        for note in &fence_notes {
+            human.print(&format!("geofence   {note}\n"));
+        }
     }
     Ok(())
 }

@@ -203,3 +203,70 @@ fn the_plot_draws_and_labels_every_zone_with_its_band() {
     }
     assert!(svg.contains("#D62828"), "no zone red in the picture");
 }
+
+/// An exclusion polygon with a hole, around home (the hole holds the route) and away from it:
+/// a `.plan` fence cannot carry holes, so the first is refused before anything is written (the
+/// vehicle's fence would forbid the route) and the second exports the outer ring and says so.
+#[test]
+fn a_plan_file_refuses_a_fence_whose_dropped_hole_holds_the_route() {
+    let ring = |lat0: f64, lon0: f64, half_deg: f64| {
+        let c = [
+            [lon0 - half_deg, lat0 - half_deg],
+            [lon0 + half_deg, lat0 - half_deg],
+            [lon0 + half_deg, lat0 + half_deg],
+            [lon0 - half_deg, lat0 + half_deg],
+            [lon0 - half_deg, lat0 - half_deg],
+        ];
+        serde_json::to_string(&c).unwrap()
+    };
+    let zone = |lat0: f64, lon0: f64| {
+        format!(
+            r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{"floor_m": 0, "ceiling_m": 50}},
+            "geometry": {{"type": "Polygon", "coordinates": [{}, {}]}}}}]}}"#,
+            ring(lat0, lon0, 0.003),
+            ring(lat0, lon0, 0.001)
+        )
+    };
+    // Around home (37.792480, -122.397450): the route stays in the hole.
+    let dir = common::dir_with(&[
+        ("around.geojson", &zone(37.79248, -122.39745)),
+        ("away.geojson", &zone(37.80248, -122.39745)),
+    ]);
+    let line = "plan --no-fly around.geojson --goal-ne 20,-20 --out route.plan";
+    fails_with(
+        dir.path(),
+        line,
+        2,
+        &[
+            "the .plan file's geoFence: zone 0 is an exclusion polygon with holes, which a fence cannot carry, and the route flies through its hole 1",
+        ],
+    );
+    assert!(!dir.path().join("route.plan").exists(), "nothing written");
+    // The same zones with a JSON waypoint file: no fence, no refusal.
+    ok_json(
+        dir.path(),
+        "plan --json --no-fly around.geojson --goal-ne 20,-20 --out route.json",
+    );
+    // A holed zone the route keeps out of: its outer ring goes in the fence, and the summary
+    // says what is lost.
+    let out = common::succeed(
+        dir.path(),
+        "plan --no-fly away.geojson --goal-ne 20,-20 --out away.plan",
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("geofence   zone 0: exclusion polygon of 4 vertices")
+            && text.contains("its 1 hole(s)"),
+        "{text}"
+    );
+    let plan: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("away.plan")).unwrap())
+            .unwrap();
+    let polygons = plan["geoFence"]["polygons"].as_array().unwrap();
+    assert_eq!(polygons.len(), 1);
+    assert_eq!(polygons[0]["inclusion"], false);
+    assert_eq!(
+        polygons[0]["polygon"][0],
+        serde_json::json!([37.79948, -122.40045])
+    );
+}

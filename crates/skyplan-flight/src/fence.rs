@@ -264,6 +264,18 @@ pub fn fence_from_zones(
     zones: &NoFlyZones,
     route: &RouteForFence,
 ) -> Result<FencePlan, ConfigError> {
+    let plan = fence_shapes(zones, route)?;
+    if plan.shapes.is_empty() {
+        return Err(ConfigError(
+            "no zone is left to upload as the fence (every zone's band is clear of the route's altitudes)".into(),
+        ));
+    }
+    Ok(plan)
+}
+
+/// [`fence_from_zones`] without its last check: an empty fence is an answer here (a file's
+/// fence, such as a `.plan`'s `geoFence`, may be empty; a vehicle's upload may not).
+pub fn fence_shapes(zones: &NoFlyZones, route: &RouteForFence) -> Result<FencePlan, ConfigError> {
     let mut plan = FencePlan {
         shapes: Vec::new(),
         zone_of: Vec::new(),
@@ -372,11 +384,6 @@ pub fn fence_from_zones(
             format!("lost: {}", lost.join("; "))
         };
         plan.notes.push(format!("zone {i}: {what}; {lost}"));
-    }
-    if plan.shapes.is_empty() {
-        return Err(ConfigError(
-            "no zone is left to upload as the fence (every zone's band is clear of the route's altitudes)".into(),
-        ));
     }
     Ok(plan)
 }
