@@ -13,7 +13,7 @@ cd "$(dirname "$0")"
 seconds=${1:-30}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(colliders movingai imagemap plan_request mavlink_sim mavlink_ground)
+[ ${#targets[@]} -gt 0 ] || targets=(colliders movingai imagemap plan_request mavlink_sim mavlink_ground dem)
 nice -n 19 cargo +nightly fuzz build --sanitizer none >/dev/null
 failed=0
 for t in "${targets[@]}"; do

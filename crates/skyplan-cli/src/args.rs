@@ -167,6 +167,11 @@ pub struct RouteArgs {
     /// go around the zones whose band holds the flight altitude.
     #[arg(long = "no-fly", value_name = "FILE")]
     pub no_fly: Option<PathBuf>,
+    /// The ground under the map: a DEM as GeoTIFF (WGS84 lon/lat or UTM) or SRTM .hgt, covering
+    /// the map's home and the route. The route then keeps --alt-agl-m (else --alt-m) above the
+    /// ground everywhere along it; altitudes stay above home, whose ground is the DEM's there.
+    #[arg(long, value_name = "FILE")]
+    pub terrain: Option<PathBuf>,
     #[command(flatten)]
     pub request: PlanRequest,
     #[command(flatten)]

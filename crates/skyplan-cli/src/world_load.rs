@@ -96,7 +96,28 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
             .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
         request.no_fly = Some(text);
     }
-    let world = load_world(map.as_deref(), &a.grid, request.seed_or_default(), &limits)?;
+    let mut world = load_world(map.as_deref(), &a.grid, request.seed_or_default(), &limits)?;
+    if let Some(path) = a.terrain.clone().or(config.path(&config.text.terrain)) {
+        let name = path.display().to_string();
+        // Bounded before reading: a DEM is at most 100 M samples of up to 8 bytes.
+        if let Ok(meta) = std::fs::metadata(&path)
+            && meta.len() > skyplan_map::terrain::MAX_DEM_SAMPLES * 8
+        {
+            return Err(bad_input(format!(
+                "{name}: {} bytes is more than a DEM of {} samples can hold; crop it (gdal_translate -projwin)",
+                meta.len(),
+                skyplan_map::terrain::MAX_DEM_SAMPLES
+            )));
+        }
+        let bytes = crate::files::read_bytes(&path)?;
+        let dem = skyplan_map::terrain::parse_dem(&name, &bytes)
+            .map_err(|e| bad_input(format!("{name}: {e}")))?;
+        world = world.with_terrain(&name, dem)?;
+    } else if request.alt_agl_m.is_some() {
+        return Err(bad_input(
+            "--alt-agl-m keeps a height above the ground: give the ground with --terrain FILE (a GeoTIFF or SRTM .hgt DEM)",
+        ));
+    }
     Ok(Resolved {
         world,
         limits,

@@ -128,6 +128,27 @@ pub fn utm_from_lla(lat_deg: f64, lon_deg: f64) -> Result<Utm, FrameError> {
     Ok(utm_in_zone(lat_deg, lon_deg, zone))
 }
 
+/// Projects a position to UTM in a given zone (1..=60), as rasters in a fixed zone need
+/// (a GeoTIFF in EPSG:326xx/327xx). The hemisphere is the position's own.
+///
+/// ```
+/// // The same point as in `utm_from_lla`, in its own zone 10 and one zone east.
+/// let own = skyplan_frames::utm_from_lla(37.792480, -122.397450)?;
+/// let same = skyplan_frames::utm_from_lla_in_zone(37.792480, -122.397450, 10)?;
+/// assert_eq!(own, same);
+/// let east = skyplan_frames::utm_from_lla_in_zone(37.792480, -122.397450, 11)?;
+/// assert!(east.easting_m < 100_000.0 && east.zone == 11); // 5.4° west of its meridian
+/// assert!(skyplan_frames::utm_from_lla_in_zone(37.8, -122.4, 61).is_err());
+/// # Ok::<(), skyplan_frames::FrameError>(())
+/// ```
+pub fn utm_from_lla_in_zone(lat_deg: f64, lon_deg: f64, zone: u8) -> Result<Utm, FrameError> {
+    check_lla(lat_deg, lon_deg)?;
+    if !(1..=60).contains(&zone) {
+        return Err(FrameError::InvalidPosition { lat_deg, lon_deg });
+    }
+    Ok(utm_in_zone(lat_deg, lon_deg, zone))
+}
+
 fn utm_in_zone(lat_deg: f64, lon_deg: f64, zone: u8) -> Utm {
     let (northing_m, easting_m, _convergence) = utm::to_utm_wgs84(lat_deg, lon_deg, zone);
     Utm {

@@ -8,6 +8,8 @@
 //!   Dijkstra lengths.
 //! * [`footprints`]: building footprints from GeoJSON (polygons with holes and heights, in
 //!   longitude/latitude), projected to local metres about a home.
+//! * [`terrain`]: digital elevation models (GeoTIFF, SRTM `.hgt`) and routes that keep a height
+//!   above the ground.
 //!
 //! Every parser returns a [`ParseError`] that names the line, the column and what was expected;
 //! the caller adds the file name. No parser panics on any input.
@@ -31,6 +33,7 @@ pub mod maze;
 pub mod movingai;
 pub mod nofly;
 pub mod osm;
+pub mod terrain;
 mod tile;
 
 pub use tile::{tile, to_colliders_csv};

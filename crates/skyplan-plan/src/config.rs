@@ -20,6 +20,9 @@ pub struct ConfigText {
     /// `no_fly`: the no-fly zone file (GeoJSON or QGroundControl `.plan`), relative to the
     /// config file (the CLI reads it into [`PlanRequest::no_fly`]).
     pub no_fly: Option<String>,
+    /// `terrain`: the DEM file (GeoTIFF or SRTM `.hgt`), relative to the config file (the CLI
+    /// puts the map on it, [`crate::World::with_terrain`]).
+    pub terrain: Option<String>,
 }
 
 /// Why a config text was refused (the caller prefixes the file's name).
@@ -58,6 +61,7 @@ pub fn parse_config_toml(text: &str) -> Result<ConfigText, ConfigError> {
     let plot = take("plot")?;
     let format = take("format")?;
     let no_fly = take("no_fly")?;
+    let terrain = take("terrain")?;
     let request: PlanRequest = table
         .try_into()
         .map_err(|e: toml::de::Error| ConfigError::Invalid(e.to_string()))?;
@@ -71,6 +75,7 @@ pub fn parse_config_toml(text: &str) -> Result<ConfigText, ConfigError> {
         format,
         plot,
         no_fly,
+        terrain,
     })
 }
 

@@ -250,8 +250,9 @@ pub struct Plan {
     pub timings_us: Timings,
     /// Waypoints `[north_m, east_m, alt_m, heading_rad]` (FCND's layout).
     pub waypoints: Vec<[f64; 4]>,
-    /// Waypoints' `[lat_deg, lon_deg]` (maps with a geodetic home).
-    pub waypoints_lla: Option<Vec<[f64; 2]>>,
+    /// Waypoints' `[lat_deg, lon_deg]` (maps with a geodetic home); over terrain
+    /// `[lat_deg, lon_deg, alt_amsl_m]`, the height above mean sea level.
+    pub waypoints_lla: Option<Vec<Vec<f64>>>,
     /// Planner-specific details (`roadmap`, `voxel`, `costmap`, `fallback`, …), flattened into
     /// the JSON object.
     #[serde(flatten)]

@@ -69,6 +69,12 @@ pub struct PlanRequest {
     #[serde(alias = "target_altitude")]
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
     pub alt_m: Option<f64>,
+    /// Over terrain (a map given a DEM, `--terrain FILE`): keep the route this many metres above
+    /// the ground everywhere along it, climbing and descending within `max_climb_m_s` and
+    /// `max_descent_m_s` at `max_speed_m_s`; buildings' heights count from the ground under
+    /// them [default: alt_m].
+    #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
+    pub alt_agl_m: Option<f64>,
     /// Safety margin around obstacles, metres [default: 5].
     #[serde(alias = "safety_distance")]
     #[cfg_attr(feature = "clap", arg(long, value_name = "M", value_parser = cli::finite, allow_hyphen_values = true))]
@@ -216,7 +222,7 @@ impl PlanRequest {
             (fallback.goal_ne, fallback.goal_lla) = (None, None);
         }
         let (a, b) = (self, fallback);
-        merge_fields!(a, b; planner, alt_m, safety_m, cell_m, start_ne, start_lla, goal_ne,
+        merge_fields!(a, b; planner, alt_m, alt_agl_m, safety_m, cell_m, start_ne, start_lla, goal_ne,
             goal_lla, start_alt_m, goal_alt_m, start_heading_deg, connectivity, corner_cutting,
             prune, epsilon, shortcut, time_limit_ms, seed, min_alt_m, max_alt_m, climb_weight,
             voxel_m, layer_m, field, inscribed_radius_m, inflation_radius_m, cost_scaling,
@@ -343,9 +349,19 @@ fn trajectory(r: &PlanRequest) -> Result<Option<TrajectorySpec>, PlanFailure> {
     .iter()
     .filter(|f| f.1.is_some())
     .map(|f| f.0)
+    // Over terrain the speed and the vertical rates set the steepest climb and descent.
+    .filter(|name| {
+        r.alt_agl_m.is_none()
+            || !matches!(*name, "max_speed_m_s" | "max_climb_m_s" | "max_descent_m_s")
+    })
     .collect();
     if r.trajectory != Some(true) {
         if given.is_empty() {
+            if r.alt_agl_m.is_some() {
+                r.trajectory_limits()
+                    .check()
+                    .map_err(|e| bad(e.to_string()))?;
+            }
             return Ok(None);
         }
         let one = given.len() == 1;
@@ -390,6 +406,10 @@ pub(crate) struct Resolved {
     pub trajectory: Option<TrajectorySpec>,
     /// The request's no-fly zones, parsed (longitude/latitude).
     pub no_fly: Option<skyplan_map::nofly::NoFlyZones>,
+    /// `alt_agl_m` when given (the flight altitude `alt_m` is then this height).
+    pub alt_agl_m: Option<f64>,
+    /// Steepest climb and descent over terrain, metres per metre flown horizontally.
+    pub terrain_slopes: [f64; 2],
 }
 
 /// Collinearity pruning, resolved.
@@ -579,13 +599,25 @@ impl Resolved {
     pub(crate) fn new(r: &PlanRequest) -> Result<Self, PlanFailure> {
         let planner = r.planner.unwrap_or_default();
         check_applicable(r, planner)?;
+        let alt_agl_m = r
+            .alt_agl_m
+            .map(|h| in_range("alt_agl_m", h, 0.0, MAX_ALT_M, " m"))
+            .transpose()?;
+        if let (Some(h), Some(a)) = (alt_agl_m, r.alt_m)
+            && h != a
+        {
+            return Err(bad(format!(
+                "alt_agl_m {h} and alt_m {a}: over terrain the flight altitude is the height above the ground; give one of them"
+            )));
+        }
         let alt_m = in_range(
             "alt_m",
-            r.alt_m.unwrap_or(DEFAULT_ALT_M),
+            alt_agl_m.or(r.alt_m).unwrap_or(DEFAULT_ALT_M),
             0.0,
             MAX_ALT_M,
             " m",
         )?;
+        let limits = r.trajectory_limits();
         let safety_m = in_range(
             "safety_m",
             r.safety_m.unwrap_or(DEFAULT_SAFETY_M),
@@ -648,6 +680,11 @@ impl Resolved {
                 .map(skyplan_map::nofly::parse_no_fly)
                 .transpose()
                 .map_err(|e| bad(format!("no_fly: {e}")))?,
+            alt_agl_m,
+            terrain_slopes: [
+                limits.max_climb_m_s / limits.max_speed_m_s,
+                limits.max_descent_m_s / limits.max_speed_m_s,
+            ],
         })
     }
 }

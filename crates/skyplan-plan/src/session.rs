@@ -570,6 +570,14 @@ impl Session {
                     .join(", ")
             )));
         }
+        if self.world.terrain().is_some() {
+            check_terrain_request(&r)?;
+        } else if r.alt_agl_m.is_some() {
+            return Err(PlanFailure::bad_request(format!(
+                "alt_agl_m keeps a height above the ground, and {} has no terrain (a DEM: World::with_terrain, the CLI's --terrain FILE)",
+                self.world.name()
+            )));
+        }
         let zones = self.zones(&r)?;
         let (start_ne, start_lla) =
             self.endpoint(r.start.at, self.world.default_start_ne, "start")?;
@@ -583,9 +591,17 @@ impl Session {
             roadmap: &request.roadmap,
             zones: &zones,
         };
-        let route = r.planner.algorithm().plan(self, &q)?;
+        let mut route = r.planner.algorithm().plan(self, &q)?;
         recheck(&route)?;
+        if let Some(terrain) = world.terrain() {
+            follow_terrain(terrain, &r, &mut route)?;
+        }
         let mut plan = assemble(&world, &r, route, [start_lla, goal_lla], t0)?;
+        if let (Some(terrain), Some(rows)) = (world.terrain(), plan.waypoints_lla.as_mut()) {
+            for (row, w) in rows.iter_mut().zip(&plan.waypoints) {
+                row.push(terrain.amsl_m(w[2]));
+            }
+        }
         if let Some(spec) = r.trajectory {
             plan.trajectory = Some(self.trajectory(&r, &plan, spec)?);
             plan.timings_us.total_us = micros(t0.elapsed());
@@ -765,7 +781,7 @@ fn place_of(
 
 /// The mission of a route's points (maps with a geodetic home), its rows
 /// `[north, east, alt, heading]` and their lat/lon.
-type MissionRows = (Option<Mission>, Vec<[f64; 4]>, Option<Vec<[f64; 2]>>);
+type MissionRows = (Option<Mission>, Vec<[f64; 4]>, Option<Vec<Vec<f64>>>);
 
 fn mission_rows(
     world: &World,
@@ -777,7 +793,11 @@ fn mission_rows(
             let m = Mission::from_points_nea(frame, points, start_heading_rad)
                 .map_err(|e| PlanFailure::bad_request(format!("waypoints: {e}")))?;
             let rows = m.rows();
-            let lla = m.waypoints.iter().map(|w| [w.lat_deg, w.lon_deg]).collect();
+            let lla = m
+                .waypoints
+                .iter()
+                .map(|w| vec![w.lat_deg, w.lon_deg])
+                .collect();
             (Some(m), rows, Some(lla))
         }
         None => (None, rows_without_frame(points, start_heading_rad), None),
@@ -920,6 +940,86 @@ pub fn recheck_grid_route(
 fn first_blocked_grid_segment(grid: &Grid2, p: &[[f64; 3]], touch: Touch) -> Option<usize> {
     p.windows(2)
         .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch))
+}
+
+/// Whether a request can be planned over terrain (before planning it).
+fn check_terrain_request(r: &Resolved) -> Result<(), PlanFailure> {
+    let info = r.planner.info();
+    if info.dims != 2 {
+        return Err(PlanFailure::bad_request(format!(
+            "terrain: planner {} plans in 3D and does not follow terrain yet; use a 2D planner ({})",
+            r.planner,
+            PlannerId::for_maps(true)
+                .filter(|p| p.info().dims == 2)
+                .map(|p| p.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    if r.trajectory.is_some() {
+        return Err(PlanFailure::bad_request(
+            "trajectory: over terrain not yet (the corridor does not know the ground); plan the route without --trajectory",
+        ));
+    }
+    if r.no_fly.is_some() {
+        return Err(PlanFailure::bad_request(
+            "no_fly: zones over terrain not yet (their bands are above home, the route's height follows the ground); drop --no-fly or --terrain",
+        ));
+    }
+    let slopes = r.terrain_slopes;
+    if !slopes.iter().all(|s| s.is_finite() && *s > 0.0) {
+        return Err(PlanFailure::bad_request(format!(
+            "max_climb_m_s, max_descent_m_s, max_speed_m_s: over terrain the climb and descent rates over the speed must be positive (they are {:.3} and {:.3})",
+            slopes[0], slopes[1]
+        )));
+    }
+    Ok(())
+}
+
+/// Lifts a 2D route over the terrain: `alt_m` above the ground everywhere along it, within the
+/// climb and descent slopes; re-checks the lifted route and says what it did in the plan's
+/// `terrain` detail.
+fn follow_terrain(
+    terrain: &skyplan_map::terrain::Terrain,
+    r: &Resolved,
+    route: &mut Route,
+) -> Result<(), PlanFailure> {
+    let slopes = r.terrain_slopes;
+    let agl_m = r.alt_m;
+    let ne: Vec<[f64; 2]> = route.points.iter().map(|p| [p[0], p[1]]).collect();
+    let lifted = terrain
+        .follow(&ne, agl_m, slopes)
+        .map_err(|e| PlanFailure::bad_request(format!("terrain: {e}")))?;
+    terrain.check_clearance(&lifted, agl_m).map_err(|e| {
+        PlanFailure::internal(format!(
+            "internal check failed: {e}; please report this with the request"
+        ))
+    })?;
+    let highest = lifted
+        .iter()
+        .map(|p| p[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let lowest = lifted.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+    let climb: f64 = lifted
+        .windows(2)
+        .map(|w| (w[1][2] - w[0][2]).max(0.0))
+        .sum();
+    let (n, e) = terrain.dem().size();
+    route.details.insert(
+        "terrain".into(),
+        serde_json::json!({
+            "alt_agl_m": agl_m,
+            "home_ground_amsl_m": terrain.home_ground_amsl_m(),
+            "lowest_alt_m": lowest,
+            "highest_alt_m": highest,
+            "climb_m": climb,
+            "max_climb_slope": slopes[0],
+            "max_descent_slope": slopes[1],
+            "dem_samples": [n, e],
+        }),
+    );
+    route.points = lifted;
+    Ok(())
 }
 
 /// The final, independent re-check of every segment: no caller can skip it.

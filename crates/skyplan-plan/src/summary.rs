@@ -65,6 +65,18 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             plan.spec.safety_m
         )?;
     }
+    if let Some(t) = plan.details.get("terrain") {
+        let num = |k: &str| t[k].as_f64().unwrap_or(f64::NAN);
+        writeln!(
+            f,
+            "terrain    {} m above the ground everywhere along the route (ground under home {:.1} m above sea level): altitude {:.1} to {:.1} m above home, {:.0} m of climbing",
+            num("alt_agl_m"),
+            num("home_ground_amsl_m"),
+            num("lowest_alt_m"),
+            num("highest_alt_m"),
+            num("climb_m")
+        )?;
+    }
     writeln!(
         f,
         "start      {}{}",

@@ -7,6 +7,7 @@ use skyplan_frames::{Lla, LocalFrame};
 use skyplan_imagemap::MapYaml;
 use skyplan_map::colliders::{CollidersMap, GeodeticHome};
 use skyplan_map::footprints::{DEFAULT_HEIGHT_M, FootprintMap, GeoFootprints};
+use skyplan_map::terrain::{Dem, Terrain};
 use std::sync::Arc;
 
 /// The FCND city map (Udacity FCND-Motion-Planning `colliders.csv`), compiled in.
@@ -182,6 +183,8 @@ pub struct World {
     frame: Option<LocalFrame>,
     pub(crate) default_start_ne: Option<[f64; 2]>,
     pub(crate) default_goal_ne: Option<[f64; 2]>,
+    /// The ground under the map, placed about its home (`with_terrain`).
+    terrain: Option<Arc<Terrain>>,
 }
 
 fn parse_failure(name: &str, e: impl std::fmt::Display) -> PlanFailure {
@@ -248,6 +251,7 @@ impl World {
             frame: None,
             default_start_ne: None,
             default_goal_ne: None,
+            terrain: None,
         }
     }
 
@@ -283,6 +287,7 @@ impl World {
             frame: Some(frame),
             default_start_ne: Some([0.0, 0.0]),
             default_goal_ne: None,
+            terrain: None,
         })
     }
 
@@ -391,6 +396,7 @@ impl World {
             frame: Some(frame),
             default_start_ne: Some([0.0, 0.0]),
             default_goal_ne: None,
+            terrain: None,
         })
     }
 
@@ -512,8 +518,45 @@ impl World {
                 skipped: Arc::clone(&f.skipped),
             }));
         }
+        if let Some(t) = &self.terrain {
+            self.terrain = Some(Arc::new(
+                Terrain::new(t.dem().clone(), frame)
+                    .map_err(|e| PlanFailure::bad_request(format!("terrain: {e}")))?,
+            ));
+        }
         self.frame = Some(frame);
         Ok(self)
+    }
+
+    /// Puts the map on the ground `dem` describes (named `name` in messages): its home must
+    /// lie on the DEM. Plans then keep `alt_agl_m` above the ground (buildings' heights count
+    /// from the ground under them), and altitudes stay above home, whose ground is the DEM's
+    /// height there. Needs a map with a geodetic home (colliders, footprints, or `with_home`).
+    ///
+    /// ```
+    /// use skyplan_map::terrain::Dem;
+    /// // Flat ground 100 m above sea level around the FCND map's home.
+    /// let dem = Dem::geographic(3, 3, vec![100.0; 9], [-122.41, 37.80], [0.01, 0.01])?;
+    /// let world = skyplan_plan::World::fcnd_city().with_terrain("flat.tif", dem)?;
+    /// assert_eq!(world.terrain().map(|t| t.home_ground_amsl_m()), Some(100.0));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_terrain(mut self, name: &str, dem: Dem) -> Result<Self, PlanFailure> {
+        let frame = self.frame.ok_or_else(|| {
+            PlanFailure::bad_request(format!(
+                "terrain: {} has no geodetic home to place {name} about; give the map a home (--home LAT,LON)",
+                self.name
+            ))
+        })?;
+        let t = Terrain::new(dem, frame)
+            .map_err(|e| PlanFailure::bad_request(format!("terrain: {name}: {e}")))?;
+        self.terrain = Some(Arc::new(t));
+        Ok(self)
+    }
+
+    /// The ground under the map, when it was given one.
+    pub fn terrain(&self) -> Option<&Terrain> {
+        self.terrain.as_deref()
     }
 
     /// Replaces the default start and goal (metres north,east of the map's origin).

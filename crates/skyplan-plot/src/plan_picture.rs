@@ -84,7 +84,9 @@ pub fn plan_picture_with_zones(
     let map = short_name(world.name());
     match (kind, plan.grid_used.as_deref()) {
         (PictureKind::Heatmap, Some(grid)) => field_picture(plan, &geometry, grid, map),
-        (PictureKind::Scene(format), Some(grid)) if plan.planner.info().dims == 2 => {
+        (PictureKind::Scene(format), Some(grid))
+            if plan.planner.info().dims == 2 && world.terrain().is_none() =>
+        {
             let picture = MapPicture {
                 plan,
                 geometry: &geometry,
@@ -237,6 +239,10 @@ fn picture3d(
     let edges: Vec<_> = geometry.edges.iter().map(|s| (s[0], s[1])).collect();
     let safety_m = plan.spec.safety_m;
     let trace = plan.trajectory.as_ref().map(SpeedTrace::of).transpose()?;
+    let ground = world
+        .terrain()
+        .map(|t| ground_profile(t, &points))
+        .unwrap_or_default();
     let scene = crate::Scene3d {
         title: format!(
             "{map}: {}, {:.0} m, margin {safety_m} m{}",
@@ -255,8 +261,37 @@ fn picture3d(
         },
         edges: &edges,
         edges_label: &geometry.edges_label,
+        ground: &ground,
     };
     crate::profile::render_plan3d_traced(&scene, trace.as_ref(), format, 1500, 900)
+}
+
+/// The ground under a route every ~1/600 of its horizontal length: `[distance, altitude above
+/// home]` (points the terrain cannot place are left out).
+fn ground_profile(terrain: &skyplan_map::terrain::Terrain, points: &[[f64; 3]]) -> Vec<[f64; 2]> {
+    let total: f64 = points
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum();
+    let step = (total / 600.0).max(0.5);
+    let mut out = Vec::new();
+    let mut d0 = 0.0;
+    for w in points.windows(2) {
+        let len = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        let n = (len / step).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let (north, east) = (
+                w[0][0] + (w[1][0] - w[0][0]) * t,
+                w[0][1] + (w[1][1] - w[0][1]) * t,
+            );
+            if let Ok(g) = terrain.ground_m(north, east) {
+                out.push([d0 + len * t, g]);
+            }
+        }
+        d0 += len;
+    }
+    out
 }
 
 /// The title's words for a trajectory (nothing without one).

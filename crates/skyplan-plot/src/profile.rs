@@ -19,6 +19,8 @@ const START_COLOR: RGBColor = RGBColor(0, 170, 60);
 const GOAL_COLOR: RGBColor = RGBColor(222, 30, 30);
 const FRAME_COLOR: RGBColor = RGBColor(40, 40, 40);
 const GRID_COLOR: RGBColor = RGBColor(232, 232, 232);
+const GROUND_COLOR: RGBColor = RGBColor(214, 196, 160);
+const GROUND_LINE: RGBColor = RGBColor(140, 110, 60);
 
 /// What a 3D route picture shows. Points are `[north_m, east_m, alt_m]`.
 #[derive(Debug, Clone)]
@@ -39,6 +41,21 @@ pub struct Scene3d<'a> {
     pub edges: &'a [([f64; 3], [f64; 3])],
     /// Legend text of `edges` (for example `"PRM roadmap"`).
     pub edges_label: &'a str,
+    /// The ground under the route, `[distance along the route (horizontal), altitude]` in
+    /// metres, in order (over terrain; empty: flat ground at altitude 0). Drawn filled under
+    /// the profile; buildings stand on it.
+    pub ground: &'a [[f64; 2]],
+}
+
+/// The ground's altitude at distance `d_m` along the route (0 without a ground profile).
+fn ground_at(ground: &[[f64; 2]], d_m: f64) -> f64 {
+    let k = ground.partition_point(|g| g[0] <= d_m);
+    match (k.checked_sub(1).and_then(|i| ground.get(i)), ground.get(k)) {
+        (Some(a), Some(b)) if b[0] > a[0] => a[1] + (b[1] - a[1]) * (d_m - a[0]) / (b[0] - a[0]),
+        (Some(a), _) => a[1],
+        (None, Some(b)) => b[1],
+        (None, None) => 0.0,
+    }
 }
 
 /// One column of the side profile: over horizontal distances `from_m..to_m` along the route the
@@ -150,7 +167,7 @@ pub fn profile_columns(
 /// let b = ObstacleBox { north_m: 50.0, east_m: 0.0, up_m: 10.0, half_north_m: 5.0, half_east_m: 5.0, half_up_m: 10.0 };
 /// let path = [[0.0, 0.0, 5.0], [40.0, 0.0, 25.0], [60.0, 0.0, 25.0], [100.0, 0.0, 5.0]];
 /// let scene = Scene3d { title: "over the roof".into(), obstacles: &[b], safety_m: 2.0, path: &path,
-///                       raw_path: &[], raw_label: "", edges: &[], edges_label: "" };
+///                       raw_path: &[], raw_label: "", edges: &[], edges_label: "", ground: &[] };
 /// let png = render_plan3d(&scene, PlotFormat::Png, 1000, 600)?;
 /// assert_eq!(&png[1..4], b"PNG");
 /// let svg = String::from_utf8(render_plan3d(&scene, PlotFormat::Svg, 1000, 600)?)?;
@@ -550,12 +567,16 @@ fn draw_side_profile<DB: DrawingBackend>(
         scene.path,
         (horizontal_m / 1500.0).max(0.05),
     );
+    let base = |c: &ProfileColumn| ground_at(scene.ground, (c.from_m + c.to_m) / 2.0);
     let max_alt = scene
         .path
         .iter()
         .map(|p| p[2])
-        .chain(cols.iter().map(|c| c.margin_top_m))
+        .chain(cols.iter().map(|c| c.margin_top_m + base(c)))
+        .chain(scene.ground.iter().map(|g| g[1]))
         .fold(10.0, f64::max);
+    let min_alt = scene.ground.iter().map(|g| g[1]).fold(0.0, f64::min);
+    let pad = 0.08 * (max_alt - min_alt);
     let px0 = top.x0 + top.w + (6.0 * font) as i32;
     let prof = Panel {
         x0: px0,
@@ -563,10 +584,15 @@ fn draw_side_profile<DB: DrawingBackend>(
         w: width_px - px0 - (1.4 * font) as i32,
         h: top.w * 11 / 20,
         xr: (-0.02 * total_m.max(1.0), 1.02 * total_m.max(1.0)),
-        yr: (0.0, max_alt * 1.15),
+        yr: if scene.ground.is_empty() {
+            (0.0, max_alt * 1.15)
+        } else {
+            (min_alt - pad, max_alt + pad)
+        },
     };
     prof.grid(root, font)?;
-    draw_columns(root, &prof, &cols, tallest)?;
+    draw_ground(root, &prof, scene.ground)?;
+    draw_columns(root, &prof, &cols, tallest, scene.ground)?;
     draw_profile_route(root, &prof, scene.path, look)?;
     prof.axes(
         root,
@@ -577,12 +603,35 @@ fn draw_side_profile<DB: DrawingBackend>(
     Ok(prof)
 }
 
-/// The profile's columns: every margin first, then every building over it.
+/// The ground under the route, filled down to the panel's floor.
+fn draw_ground<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    prof: &Panel,
+    ground: &[[f64; 2]],
+) -> Result<(), PlotError> {
+    let (Some(first), Some(last)) = (ground.first(), ground.last()) else {
+        return Ok(());
+    };
+    let floor = prof.yr.0;
+    let mut pts: Vec<(i32, i32)> = vec![prof.px(first[0], floor)];
+    pts.extend(ground.iter().map(|g| prof.px(g[0], g[1])));
+    pts.push(prof.px(last[0], floor));
+    root.draw(&Polygon::new(pts, GROUND_COLOR.filled()))
+        .map_err(err)?;
+    let line: Vec<(i32, i32)> = ground.iter().map(|g| prof.px(g[0], g[1])).collect();
+    root.draw(&PathElement::new(line, GROUND_LINE.stroke_width(2)))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The profile's columns: every margin first, then every building over it (standing on the
+/// ground where there is one).
 fn draw_columns<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     prof: &Panel,
     cols: &[ProfileColumn],
     tallest: f64,
+    ground: &[[f64; 2]],
 ) -> Result<(), PlotError> {
     for (color, top_of) in [
         (
@@ -601,8 +650,9 @@ fn draw_columns<DB: DrawingBackend>(
             } else {
                 building_color(t, tallest)
             };
-            let a = prof.px(c.from_m, 0.0);
-            let b = prof.px(c.to_m, t.min(prof.yr.1));
+            let g = ground_at(ground, (c.from_m + c.to_m) / 2.0);
+            let a = prof.px(c.from_m, g);
+            let b = prof.px(c.to_m, (g + t).min(prof.yr.1));
             root.draw(&Rectangle::new(
                 [(a.0, b.1), (b.0.max(a.0 + 1), a.1)],
                 fill.filled(),
@@ -670,10 +720,15 @@ fn draw_legend3d<DB: DrawingBackend>(
             (format!("building {t:.0} m tall"), t)
         })
         .collect();
-    for (text, t) in &heights {
-        entries.push((text, Swatch::Fill(building_color(*t, tallest))));
+    if !scene.obstacles.is_empty() {
+        for (text, t) in &heights {
+            entries.push((text, Swatch::Fill(building_color(*t, tallest))));
+        }
+        entries.push(("safety margin (profile)", Swatch::Fill(MARGIN_COLOR)));
     }
-    entries.push(("safety margin (profile)", Swatch::Fill(MARGIN_COLOR)));
+    if !scene.ground.is_empty() {
+        entries.push(("ground (DEM)", Swatch::Fill(GROUND_COLOR)));
+    }
     if scene.raw_path.len() > 1 && !scene.raw_label.is_empty() {
         entries.insert(1, (scene.raw_label, Swatch::Line(RAW_COLOR, 2.0)));
     }

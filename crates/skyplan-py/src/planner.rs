@@ -329,14 +329,16 @@ impl Plan {
         Ok(numpy::IntoPyArray::into_pyarray(a, py))
     }
 
-    /// (n, 2) float64 array of `[lat_deg, lon_deg]`, or None (map without a geodetic home).
+    /// (n, 2) float64 array of `[lat_deg, lon_deg]` (over terrain (n, 3), with `alt_amsl_m`), or
+    /// None (map without a geodetic home).
     #[getter]
     fn lla<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
         let Some(ll) = &self.inner.waypoints_lla else {
             return Ok(None);
         };
+        let width = ll.first().map_or(2, Vec::len);
         let flat: Vec<f64> = ll.iter().flatten().copied().collect();
-        let a = Array2::from_shape_vec((ll.len(), 2), flat)
+        let a = Array2::from_shape_vec((ll.len(), width), flat)
             .map_err(|e| to_py(PlanFailure::internal(format!("lla: {e}"))))?;
         Ok(Some(numpy::IntoPyArray::into_pyarray(a, py)))
     }

@@ -1,0 +1,249 @@
+//! `skyplan plan --terrain DEM --alt-agl-m H`: over a real DEM (the bundled Jacksboro Fault
+//! GeoTIFFs), every point of the route, sampled each metre between waypoints, is at least H above
+//! the ground as rasterio (GDAL, PROJ) interpolates it from the same file — the issue asks for
+//! H − 1.5 m; the climbs and descents stay within the vehicle's rates; `waypoints_lla` carries
+//! heights above mean sea level. Bad requests are refused naming what is wrong.
+
+use serde_json::Value;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+mod common;
+use common::{assert_no_waypoints, fails_with, ok_json, python, rows};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data")
+        .join(name)
+}
+
+/// rasterio's ground (bilinear over its own reading of the DEM) under the route, sampled each
+/// metre; prints the smallest and largest clearance.
+const CLEARANCE: &str = r#"
+import json, sys
+import numpy as np
+import rasterio
+from rasterio.warp import transform
+path = sys.argv[1]
+lla = np.array(json.load(sys.stdin))
+with rasterio.open(path) as d:
+    a = d.read(1).astype(float)
+    T = d.transform
+    h, w = a.shape
+    out = []
+    for p, q in zip(lla[:-1], lla[1:]):
+        # Metres between the two waypoints (equirectangular is plenty for a step count).
+        dn = (q[0] - p[0]) * 111_000.0
+        de = (q[1] - p[1]) * 111_000.0 * np.cos(np.radians(p[0]))
+        n = max(1, int(np.ceil(np.hypot(dn, de))))
+        t = np.linspace(0.0, 1.0, n + 1)
+        lat, lon, amsl = (p[None, :] + t[:, None] * (q - p)[None, :]).T
+        if d.crs.to_epsg() == 4326:
+            x, y = lon, lat
+        else:
+            x, y = transform("EPSG:4326", d.crs, list(lon), list(lat))
+        col, row = ~T * (np.asarray(x), np.asarray(y))
+        cx, ry = col - 0.5, row - 0.5
+        c0 = np.clip(np.floor(cx).astype(int), 0, w - 2)
+        r0 = np.clip(np.floor(ry).astype(int), 0, h - 2)
+        fx, fy = cx - c0, ry - r0
+        g = (a[r0, c0] * (1 - fx) + a[r0, c0 + 1] * fx) * (1 - fy) + \
+            (a[r0 + 1, c0] * (1 - fx) + a[r0 + 1, c0 + 1] * fx) * fy
+        out.append(amsl - g)
+    c = np.concatenate(out)
+    print(json.dumps([float(c.min()), float(np.median(c)), float(c.max())]))
+"#;
+
+fn clearance_by_rasterio(dem: &Path, lla: &Value) -> [f64; 3] {
+    let mut child = Command::new(python())
+        .args(["-c", CLEARANCE, dem.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(lla.to_string().as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Slopes of the route: each leg's altitude change over its horizontal length.
+fn slopes(wps: &[[f64; 4]]) -> Vec<f64> {
+    wps.windows(2)
+        .filter_map(|w| {
+            let len = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+            (len > 1e-6).then(|| (w[1][2] - w[0][2]) / len)
+        })
+        .collect()
+}
+
+fn over(dem: &str, home: &str, goal: &str, agl: f64) -> (PathBuf, Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = data(dem);
+    let v = ok_json(
+        dir.path(),
+        &format!(
+            "plan --json --random 3000x3000 --density 0.0002 --home {home} --terrain {} --alt-agl-m {agl} --start-ne 100,100 --goal-ne {goal}",
+            path.display()
+        ),
+    );
+    (path, v)
+}
+
+#[test]
+#[ignore = "needs rasterio (pip)"]
+fn routes_keep_the_height_above_the_ground_by_rasterio() {
+    for (dem, home, goal, agl) in [
+        ("terrain/jacksboro.tif", "36.56,-84.28", "2900,2800", 30.0),
+        ("terrain/jacksboro.tif", "36.62,-84.20", "2600,150", 12.0),
+        (
+            "terrain/jacksboro-utm.tif",
+            "36.55,-84.25",
+            "2900,2600",
+            50.0,
+        ),
+    ] {
+        let (path, v) = over(dem, home, goal, agl);
+        let lla = &v["waypoints_lla"];
+        assert_eq!(
+            lla[0].as_array().unwrap().len(),
+            3,
+            "[lat, lon, alt_amsl_m]"
+        );
+        let [lo, median, hi] = clearance_by_rasterio(&path, lla);
+        eprintln!(
+            "{dem} {home}: clearance {lo:.2} / {median:.1} / {hi:.1} m (lowest, median, highest)"
+        );
+        assert!(lo >= agl - 1.5, "{dem} {home}: lowest clearance {lo} m");
+        // Tight where the ground is highest under the route (it is not flying needlessly
+        // high; over valleys the descent rate keeps it higher).
+        assert!(lo <= agl + 2.0, "{dem} {home}: lowest clearance {lo} m");
+        // Within the climb (3 m/s) and descent (1.5 m/s) rates at 10 m/s.
+        for s in slopes(&rows(&v)) {
+            assert!((-0.15 - 1e-9..=0.3 + 1e-9).contains(&s), "{dem}: slope {s}");
+        }
+        // Heights above sea level are the altitudes above home plus the ground under home.
+        let ground = v["terrain"]["home_ground_amsl_m"].as_f64().unwrap();
+        for (row, w) in lla.as_array().unwrap().iter().zip(rows(&v)) {
+            assert!((row[2].as_f64().unwrap() - (w[2] + ground)).abs() < 1e-6);
+        }
+    }
+}
+
+#[test]
+fn slower_climbs_start_earlier() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = data("terrain/jacksboro.tif");
+    let line = |extra: &str| {
+        format!(
+            "plan --json --random 3000x3000 --density 0.0002 --home 36.56,-84.28 --terrain {} --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800{extra}",
+            path.display()
+        )
+    };
+    let fast = ok_json(dir.path(), &line(""));
+    let slow = ok_json(dir.path(), &line(" --max-climb-m-s 1"));
+    let steepest = |v: &Value| slopes(&rows(v)).into_iter().fold(f64::MIN, f64::max);
+    assert!(steepest(&fast) > 0.2, "{}", steepest(&fast));
+    assert!(steepest(&slow) <= 0.1 + 1e-9, "{}", steepest(&slow));
+    // Climbing slower means flying higher on the whole.
+    // Mean altitude over the distance flown (each leg's length × its mean altitude).
+    let mean_alt = |v: &Value| {
+        let w = rows(v);
+        let (mut area, mut total) = (0.0, 0.0);
+        for l in w.windows(2) {
+            let len = (l[1][0] - l[0][0]).hypot(l[1][1] - l[0][1]);
+            area += len * (l[0][2] + l[1][2]) / 2.0;
+            total += len;
+        }
+        area / total
+    };
+    assert!(mean_alt(&slow) > mean_alt(&fast));
+}
+
+#[test]
+fn bad_terrain_requests_are_refused_naming_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let tif = data("terrain/jacksboro.tif");
+    let t = tif.display();
+    // The bundled city is in San Francisco; the DEM in Tennessee.
+    fails_with(
+        dir.path(),
+        &format!("plan --terrain {t}"),
+        2,
+        &["jacksboro.tif", "does not cover", "the map's home"],
+    );
+    fails_with(
+        dir.path(),
+        "plan --alt-agl-m 30",
+        2,
+        &["--alt-agl-m", "--terrain FILE"],
+    );
+    let random = "plan --random 300x300 --density 0.01";
+    fails_with(
+        dir.path(),
+        &format!("{random} --terrain {t}"),
+        2,
+        &["no geodetic home", "--home"],
+    );
+    let here = format!("{random} --home 36.56,-84.28 --terrain {t}");
+    // A colliders map on the hills: the 3D planners do not follow terrain yet.
+    std::fs::write(
+        dir.path().join("hills.csv"),
+        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n50,50,10,5,5,10\n",
+    )
+    .unwrap();
+    fails_with(
+        dir.path(),
+        &format!("plan --map hills.csv --terrain {t} --planner rrt-connect --goal-ne 200,200"),
+        2,
+        &["rrt-connect", "3D", "terrain"],
+    );
+    fails_with(
+        dir.path(),
+        &format!("{here} --trajectory"),
+        2,
+        &["trajectory", "terrain"],
+    );
+    fails_with(
+        dir.path(),
+        &format!("{here} --alt-agl-m 30 --alt-m 20"),
+        2,
+        &["--alt-agl-m 30", "--alt-m 20"],
+    );
+    // A route off the DEM's edge names where.
+    fails_with(
+        dir.path(),
+        &format!(
+            "plan --random 300x300 --density 0.01 --home 36.7305,-84.30 --terrain {t} --start-ne 10,10 --goal-ne 290,10"
+        ),
+        2,
+        &["does not cover", "on the route at N"],
+    );
+    // Not a DEM: the file is named.
+    std::fs::write(dir.path().join("junk.tif"), b"II*\0 not a tiff").unwrap();
+    std::fs::remove_file(dir.path().join("hills.csv")).unwrap();
+    fails_with(
+        dir.path(),
+        &format!("{random} --home 36.56,-84.28 --terrain junk.tif"),
+        2,
+        &["junk.tif"],
+    );
+    std::fs::write(dir.path().join("N36W085.hgt"), vec![0u8; 1000]).unwrap();
+    fails_with(
+        dir.path(),
+        &format!("{random} --home 36.56,-84.28 --terrain N36W085.hgt"),
+        2,
+        &["N36W085.hgt", "1000 bytes"],
+    );
+    assert_no_waypoints(dir.path(), "nothing is written on a refusal");
+}
