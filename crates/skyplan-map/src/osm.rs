@@ -29,9 +29,16 @@
 //! # Ok::<(), skyplan_map::footprints::FootprintError>(())
 //! ```
 
-use crate::footprints::{FootprintError, GeoFootprints, HeightSource, MAX_VERTICES, err};
+use crate::footprints::{FootprintError, GeoFootprints, HeightSource, err};
+
+/// Most building positions (way node references) an extract may hold: a city of a few hundred
+/// thousand buildings. Its nodes are held in a map while the buildings are assembled, about
+/// 50 bytes each.
+pub const MAX_VERTICES: usize = 5_000_000;
 use serde_json::{Map, Value, json};
-use std::collections::{HashMap, HashSet};
+// foldhash: ids are looked up once per node of the extract; SipHash made that a sixth of the
+// read time. Seeded per process, so crafted ids cannot aim at collisions.
+use foldhash::{HashMap, HashMapExt, HashSet, HashSetExt};
 use std::fmt;
 
 /// Largest XML file read, bytes (its tree takes several times this in memory).
@@ -344,13 +351,12 @@ fn buildings(src: &dyn Source, default_height_m: f64) -> Result<OsmBuildings, Fo
             "geometry": {"type": "MultiPolygon", "coordinates": polygons},
         });
         let index = out.geo.buildings.len();
-        match crate::footprints::parse_feature(
-            index,
-            &feature,
-            default_height_m,
-            &mut out.geo.vertices,
-        ) {
+        // The extract's positions are bounded above (MAX_VERTICES); a building on its own
+        // against the footprint reader's bound.
+        let mut vertices = 0;
+        match crate::footprints::parse_feature(index, &feature, default_height_m, &mut vertices) {
             Ok(b) => {
+                out.geo.vertices += vertices;
                 out.geo.default_heights += usize::from(b.height_source == HeightSource::Default);
                 out.geo.buildings.push(b);
                 out.ids.push(id);
