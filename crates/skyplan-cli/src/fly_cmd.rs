@@ -84,6 +84,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
             "--trajectory is not replanned in flight yet: with --hidden or --hidden-random the vehicle would fly into what the map lacks; drop one of them (without --trajectory the replanner flies around them)",
         ));
     }
+    if world.terrain().is_some() {
+        return Err(bad_input(
+            "fly --terrain: not yet. Over terrain the altitudes are above the map's home, while the vehicle's relative altitudes are above where it armed; flying needs missions in the AMSL frame first. Plan with `skyplan plan --terrain` instead",
+        ));
+    }
     if args.fence && request.no_fly.is_none() {
         return Err(bad_input(
             "--fence uploads the no-fly zones as the vehicle's fence: give them with --no-fly FILE (or no_fly in --config)",

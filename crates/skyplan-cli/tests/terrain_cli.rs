@@ -245,5 +245,18 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
         2,
         &["N36W085.hgt", "1000 bytes"],
     );
+    // Flying over terrain waits for missions in the AMSL frame.
+    std::fs::write(
+        dir.path().join("hills.csv"),
+        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n50,50,10,5,5,10\n",
+    )
+    .unwrap();
+    fails_with(
+        dir.path(),
+        &format!("fly --sim --map hills.csv --terrain {t} --goal-ne 200,200"),
+        2,
+        &["fly --terrain", "AMSL"],
+    );
+    std::fs::remove_file(dir.path().join("hills.csv")).unwrap();
     assert_no_waypoints(dir.path(), "nothing is written on a refusal");
 }

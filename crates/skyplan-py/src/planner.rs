@@ -141,7 +141,9 @@ pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 ///
 /// `home=(lat_deg, lon_deg)` gives a map without a geodetic home one (colliders maps carry
 /// their own): waypoints then get lat/lon and `to_file` works. `unknown_free=True` reads an
-/// image's unknown pixels as free.
+/// image's unknown pixels as free. `terrain=` a DEM (GeoTIFF or SRTM `.hgt`) under a map with a
+/// home: `plan(..., alt_agl_m=H)` then keeps H metres above the ground all along the route, and
+/// `lla` gains a third column, the height above mean sea level.
 ///
 /// A `Planner` may be shared between threads: each concurrent `plan` gets its own session of
 /// the planning API (grids, roadmaps and sessions are kept for the next calls), and the GIL is
@@ -168,7 +170,7 @@ impl Planner {
 #[pymethods]
 impl Planner {
     #[new]
-    #[pyo3(signature = (map = None, *, home = None, resolution_m = None, unknown_free = false, origin_ne = None, cell_m = None))]
+    #[pyo3(signature = (map = None, *, home = None, resolution_m = None, unknown_free = false, origin_ne = None, cell_m = None, terrain = None))]
     fn new(
         map: Option<&Bound<'_, PyAny>>,
         home: Option<&Bound<'_, PyAny>>,
@@ -176,6 +178,7 @@ impl Planner {
         unknown_free: bool,
         origin_ne: Option<&Bound<'_, PyAny>>,
         cell_m: Option<f64>,
+        terrain: Option<PathBuf>,
     ) -> PyResult<Self> {
         let is_path = map.is_some_and(|m| {
             m.is_instance_of::<PyString>() || m.hasattr("__fspath__").unwrap_or(false)
@@ -208,6 +211,16 @@ impl Planner {
             Some(h) => {
                 let [lat, lon] = float_pair(h, "home")?;
                 world.with_home(lat, lon).map_err(to_py)?
+            }
+            None => world,
+        };
+        let world = match terrain {
+            Some(path) => {
+                let name = path.display().to_string();
+                let bytes = std::fs::read(&path).map_err(|e| io_error(&path, e))?;
+                let dem = skyplan_map::terrain::parse_dem(&name, &bytes)
+                    .map_err(|e| bad_input(format!("{name}: {e}")))?;
+                world.with_terrain(&name, dem).map_err(to_py)?
             }
             None => world,
         };

@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 import pytest
-from conftest import COLLIDERS, MOVINGAI, dijkstra_cost, run_cli
+from conftest import COLLIDERS, MOVINGAI, REPO, dijkstra_cost, run_cli
 
 import skyplan
 
@@ -299,3 +299,33 @@ def test_jps_plus_table_is_kept_between_calls(city):
     assert first.stats["jps_plus_table"] in ("built", "reused")
     assert second.stats["jps_plus_table"] == "reused"
     assert second.cost_m == jps.cost_m
+
+
+def test_terrain_equals_the_cli(cli, tmp_path):
+    """A numpy grid on the bundled DEM: the route keeps 30 m above the ground like the CLI's
+    (the CLI's own test checks the clearance against rasterio), lla gains heights above sea
+    level, and alt_agl_m without terrain is refused."""
+    dem = REPO / "data" / "terrain" / "jacksboro.tif"
+    grid = np.zeros((300, 300), dtype=np.uint8)
+    grid[100:200, 140:160] = 1
+    planner = skyplan.Planner(grid, home=(36.56, -84.28), terrain=dem)
+    plan = planner.plan((10.5, 10.5), (290.5, 280.5), alt_agl_m=30)
+    assert plan.lla.shape == (len(plan), 3)
+    np.save(tmp_path / "grid.npy", grid)
+    img = tmp_path / "grid.pgm"
+    # The same grid as an image for the CLI: row 0 of an image is its northern edge.
+    pixels = np.where(grid[::-1] > 0, 0, 254).astype(np.uint8)
+    img.write_bytes(b"P5\n300 300\n255\n" + pixels.tobytes())
+    text = run_cli(
+        cli, "plan", "--map", str(img), "--resolution", "1", "--home", "36.56,-84.28",
+        "--terrain", str(dem), "--alt-agl-m", "30", "--start-ne", "10.5,10.5",
+        "--goal-ne", "290.5,280.5", "--json", cwd=tmp_path,
+    )
+    want = json.loads(text)
+    assert np.allclose(plan.waypoints, np.array(want["waypoints"]), atol=1e-9)
+    assert np.allclose(plan.lla, np.array(want["waypoints_lla"]), atol=1e-9)
+    assert want["terrain"]["alt_agl_m"] == 30
+    with pytest.raises(skyplan.BadInput, match="alt_agl_m"):
+        skyplan.Planner(grid, home=(36.56, -84.28)).plan((10.5, 10.5), (290.5, 280.5), alt_agl_m=30)
+    with pytest.raises(skyplan.BadInput, match="does not cover"):
+        skyplan.Planner(grid, home=(37.79, -122.39), terrain=dem)

@@ -171,6 +171,7 @@ class Planner:
         unknown_free: bool = False,
         origin_ne: Optional[Tuple[float, float]] = None,
         cell_m: Optional[float] = None,
+        terrain: Optional[_PathLike] = None,
     ) -> "Planner": ...
     @property
     def name(self) -> str: ...
@@ -186,6 +187,7 @@ class Planner:
         *,
         planner: Optional[str] = None,
         alt_m: Optional[float] = None,
+        alt_agl_m: Optional[float] = None,
         safety_m: Optional[float] = None,
         cell_m: Optional[float] = None,
         start_ne: Optional[Tuple[float, float]] = None,
