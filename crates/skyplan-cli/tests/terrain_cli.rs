@@ -87,6 +87,15 @@ fn slopes(wps: &[[f64; 4]]) -> Vec<f64> {
         .collect()
 }
 
+/// A one-box colliders map on the DEM's hills, `hills.csv` in `dir`.
+fn write_hills(dir: &Path) {
+    std::fs::write(
+        dir.join("hills.csv"),
+        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n50,50,10,5,5,10\n",
+    )
+    .unwrap();
+}
+
 fn over(dem: &str, home: &str, goal: &str, agl: f64) -> (PathBuf, Value) {
     let dir = tempfile::tempdir().unwrap();
     let path = data(dem);
@@ -197,11 +206,7 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
     );
     let here = format!("{random} --home 36.56,-84.28 --terrain {t}");
     // A colliders map on the hills: the 3D planners do not follow terrain yet.
-    std::fs::write(
-        dir.path().join("hills.csv"),
-        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n50,50,10,5,5,10\n",
-    )
-    .unwrap();
+    write_hills(dir.path());
     fails_with(
         dir.path(),
         &format!("plan --map hills.csv --terrain {t} --planner rrt-connect --goal-ne 200,200"),
@@ -246,11 +251,7 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
         &["N36W085.hgt", "1000 bytes"],
     );
     // Flying over terrain waits for missions in the AMSL frame.
-    std::fs::write(
-        dir.path().join("hills.csv"),
-        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n50,50,10,5,5,10\n",
-    )
-    .unwrap();
+    write_hills(dir.path());
     fails_with(
         dir.path(),
         &format!("fly --sim --map hills.csv --terrain {t} --goal-ne 200,200"),

@@ -533,40 +533,39 @@ pub fn parse_geotiff(bytes: &[u8]) -> Result<Dem, TerrainError> {
             "rotated or sheared rasters are not supported; warp it north-up (gdalwarp)",
         ));
     }
-    let scale = dec
-        .find_tag(Tag::ModelPixelScaleTag)
-        .map_err(tiff_err("ModelPixelScale"))?
-        .ok_or_else(|| {
-            format_err(
-                "ModelPixelScale",
-                "missing: the image is not georeferenced (a plain TIFF, or a world file beside it, which is not read)",
-            )
-        })?
-        .into_f64_vec()
-        .map_err(tiff_err("ModelPixelScale"))?;
-    let tie = dec
-        .find_tag(Tag::ModelTiepointTag)
-        .map_err(tiff_err("ModelTiepoint"))?
-        .ok_or_else(|| format_err("ModelTiepoint", "missing: the image is not georeferenced"))?
-        .into_f64_vec()
-        .map_err(tiff_err("ModelTiepoint"))?;
+    // A tag the file must have, or an error naming it.
+    let mut required = |tag: Tag, field: &str, missing: &str| {
+        dec.find_tag(tag)
+            .map_err(tiff_err(field))?
+            .ok_or_else(|| format_err(field, missing))
+    };
+    let scale = required(
+        Tag::ModelPixelScaleTag,
+        "ModelPixelScale",
+        "missing: the image is not georeferenced (a plain TIFF, or a world file beside it, which is not read)",
+    )?
+    .into_f64_vec()
+    .map_err(tiff_err("ModelPixelScale"))?;
+    let tie = required(
+        Tag::ModelTiepointTag,
+        "ModelTiepoint",
+        "missing: the image is not georeferenced",
+    )?
+    .into_f64_vec()
+    .map_err(tiff_err("ModelTiepoint"))?;
     if scale.len() < 2 || tie.len() < 6 {
         return Err(format_err(
             "ModelTiepoint",
             "expected a pixel scale of 3 values and a tie point of 6",
         ));
     }
-    let keys = dec
-        .find_tag(Tag::GeoKeyDirectoryTag)
-        .map_err(tiff_err("GeoKeyDirectory"))?
-        .ok_or_else(|| {
-            format_err(
-                "GeoKeyDirectory",
-                "missing: the coordinate system is not given",
-            )
-        })?
-        .into_u16_vec()
-        .map_err(tiff_err("GeoKeyDirectory"))?;
+    let keys = required(
+        Tag::GeoKeyDirectoryTag,
+        "GeoKeyDirectory",
+        "missing: the coordinate system is not given",
+    )?
+    .into_u16_vec()
+    .map_err(tiff_err("GeoKeyDirectory"))?;
     let key = |id: u16| -> Option<u16> {
         keys.get(4..)?
             .chunks_exact(4)
