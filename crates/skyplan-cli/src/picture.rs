@@ -25,7 +25,7 @@ pub fn zones_of(world: &World, request: &skyplan_plan::PlanRequest) -> Vec<Zone>
         lon_deg: frame.home().lon_deg,
     };
     skyplan_map::nofly::parse_no_fly(text)
-        .and_then(|z| z.project(home, None))
+        .and_then(|z| z.project(home, world.terrain().map(|t| t.home_ground_amsl_m())))
         .unwrap_or_default()
 }
 

@@ -96,6 +96,84 @@ fn write_hills(dir: &Path) {
     .unwrap();
 }
 
+/// Smallest horizontal distance from `c` to the route (metres).
+fn distance_to_route(rows: &[[f64; 4]], c: [f64; 2]) -> f64 {
+    rows.windows(2)
+        .map(|w| skyplan_testkit::distance_to_segment(c, [w[0][0], w[0][1]], [w[1][0], w[1][1]]))
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn zones_over_terrain_apply_by_their_bands_above_sea_level() {
+    use skyplan_frames::{Lla, LocalFrame};
+    let dir = tempfile::tempdir().unwrap();
+    let tif = data("terrain/jacksboro.tif");
+    // Zones need a map at an altitude: a colliders map on the hills, two posts marking its corners.
+    std::fs::write(
+        dir.path().join("posts.csv"),
+        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n-20,-20,5,1,1,5\n3020,3020,5,1,1,5\n",
+    )
+    .unwrap();
+    let base = format!(
+        "plan --json --map posts.csv --terrain {} --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800",
+        tif.display()
+    );
+    let plain = ok_json(dir.path(), &base);
+    // A circle of 80 m on the plain route's middle, and the lowest ground around it (AMSL).
+    let frame = LocalFrame::new(Lla {
+        lat_deg: 36.56,
+        lon_deg: -84.28,
+        alt_m: 0.0,
+    })
+    .unwrap();
+    let dem =
+        skyplan_map::terrain::parse_dem("jacksboro.tif", &std::fs::read(&tif).unwrap()).unwrap();
+    let terrain = skyplan_map::terrain::Terrain::new(dem, frame).unwrap();
+    let w = rows(&plain);
+    let mid = w[w.len() / 2];
+    let c = [mid[0], mid[1]];
+    let (r, margin) = (80.0, 5.0);
+    let ground_amsl = terrain
+        .min_ground_m_in(
+            [c[0] - r - margin, c[0] + r + margin],
+            [c[1] - r - margin, c[1] + r + margin],
+        )
+        .unwrap()
+        + terrain.home_ground_amsl_m();
+    let centre = frame
+        .lla_from_ned(skyplan_frames::Ned {
+            north_m: c[0],
+            east_m: c[1],
+            down_m: 0.0,
+        })
+        .unwrap();
+    let zone = |ceiling_amsl: f64| {
+        format!(
+            r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{"radius_m": {r}, "floor_m": 0, "ceiling_m": {ceiling_amsl}, "reference": "amsl"}}, "geometry": {{"type": "Point", "coordinates": [{}, {}]}}}}]}}"#,
+            centre.lon_deg, centre.lat_deg
+        )
+    };
+    assert!(distance_to_route(&w, c) < 1.0);
+    // Below the route wherever it can be (ceiling + margin under ground + 30 m): flown over.
+    std::fs::write(
+        dir.path().join("low.geojson"),
+        zone(ground_amsl + 30.0 - margin - 10.0),
+    )
+    .unwrap();
+    let low = ok_json(dir.path(), &format!("{base} --no-fly low.geojson"));
+    assert_eq!(rows(&low), w);
+    // Reaching above the lowest the route can be there: gone around, by the margin.
+    std::fs::write(
+        dir.path().join("high.geojson"),
+        zone(ground_amsl + 30.0 + 20.0),
+    )
+    .unwrap();
+    let high = ok_json(dir.path(), &format!("{base} --no-fly high.geojson"));
+    let d = distance_to_route(&rows(&high), c);
+    assert!(d >= r + margin - 1e-6, "{d}");
+    high["terrain"]["alt_agl_m"].as_f64().unwrap();
+}
+
 fn over(dem: &str, home: &str, goal: &str, agl: f64) -> (PathBuf, Value) {
     let dir = tempfile::tempdir().unwrap();
     let path = data(dem);

@@ -191,7 +191,7 @@ impl NoFlyZones {
                     err(
                         Some(i),
                         "properties.reference",
-                        "\"amsl\" needs the home's altitude above mean sea level, which this map does not give; give floor_m and ceiling_m above home instead",
+                        "\"amsl\" needs the home's altitude above mean sea level, which this map does not give (a terrain does: --terrain FILE); give floor_m and ceiling_m above home instead",
                     )
                 })?,
             };

@@ -747,6 +747,48 @@ impl Terrain {
         Ok(self.dem.elevation_amsl_m(lla.lat_deg, lla.lon_deg)? - self.home_ground_amsl_m)
     }
 
+    /// A lower bound of the ground (above home) over the local rectangle `north` × `east`
+    /// (metres): the lowest sample of every DEM cell the rectangle's pixel box touches, with a
+    /// pixel of slack (bilinear interpolation never goes below its corners). `None` if the DEM
+    /// has no sample there.
+    pub fn min_ground_m_in(&self, north: [f64; 2], east: [f64; 2]) -> Option<f64> {
+        let corners = [
+            [north[0], east[0]],
+            [north[0], east[1]],
+            [north[1], east[0]],
+            [north[1], east[1]],
+        ];
+        let px: Vec<(f64, f64)> = corners
+            .iter()
+            .filter_map(|&c| {
+                let l = self.lla(c).ok()?;
+                self.dem.pixel(l.lat_deg, l.lon_deg).ok()
+            })
+            .collect();
+        if px.len() < 4 {
+            return None;
+        }
+        let (cols, rows) = (self.dem.cols as f64, self.dem.rows as f64);
+        let lo = |v: f64, n: f64| (v.floor() - 1.0).clamp(0.0, n - 1.0) as usize;
+        let hi = |v: f64, n: f64| (v.ceil() + 1.0).clamp(0.0, n - 1.0) as usize;
+        let x0 = px.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let x1 = px.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        let y0 = px.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        let y1 = px.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        if x1 < -1.0 || y1 < -1.0 || x0 > cols || y0 > rows {
+            return None;
+        }
+        let mut best = f64::INFINITY;
+        for r in lo(y0, rows)..=hi(y1, rows) {
+            for c in lo(x0, cols)..=hi(x1, cols) {
+                if let Some(v) = self.dem.sample(r, c) {
+                    best = best.min(v);
+                }
+            }
+        }
+        best.is_finite().then_some(best - self.home_ground_amsl_m)
+    }
+
     /// Height above mean sea level of a point `alt_m` above home, metres.
     pub fn amsl_m(&self, alt_m: f64) -> f64 {
         alt_m + self.home_ground_amsl_m

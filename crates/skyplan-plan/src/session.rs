@@ -640,14 +640,20 @@ impl Session {
                 "no_fly: {name} has no geodetic home to place the zones at"
             ))
         })?;
-        geo.project(
-            skyplan_map::colliders::GeodeticHome {
-                lat_deg: home.lat_deg,
-                lon_deg: home.lon_deg,
-            },
-            None,
-        )
-        .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))
+        let terrain = self.world.terrain();
+        let zones = geo
+            .project(
+                skyplan_map::colliders::GeodeticHome {
+                    lat_deg: home.lat_deg,
+                    lon_deg: home.lon_deg,
+                },
+                terrain.map(|t| t.home_ground_amsl_m()),
+            )
+            .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))?;
+        match terrain {
+            None => Ok(zones),
+            Some(t) => zones_over_terrain(t, zones, r.alt_m, r.safety_m),
+        }
     }
 
     /// The trajectory of a plan's waypoints, in the free space the plan was checked in: the 3D
@@ -942,6 +948,64 @@ fn first_blocked_grid_segment(grid: &Grid2, p: &[[f64; 3]], touch: Touch) -> Opt
         .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch))
 }
 
+/// No-fly zones for a route that keeps `agl_m` above the ground: the route over a zone is never
+/// lower than the lowest ground under it plus `agl_m`, so a zone whose ceiling (grown by the
+/// margin) is below that is left out; every other zone blocks at every altitude (the route's
+/// height over it is only known after planning: the safe side). Inclusion boundaries are
+/// refused over terrain for now.
+fn zones_over_terrain(
+    terrain: &skyplan_map::terrain::Terrain,
+    zones: Vec<skyplan_map::nofly::Zone>,
+    agl_m: f64,
+    margin_m: f64,
+) -> Result<Vec<skyplan_map::nofly::Zone>, PlanFailure> {
+    use skyplan_map::nofly::ZoneShape;
+    let mut out = Vec::with_capacity(zones.len());
+    for mut z in zones {
+        if z.inclusion {
+            return Err(PlanFailure::bad_request(format!(
+                "no_fly: feature {}: inclusion boundaries over terrain not yet; drop it or --terrain",
+                z.feature
+            )));
+        }
+        let (north, east) = match &z.shape {
+            ZoneShape::Circle { centre, radius_m } => {
+                let r = radius_m + margin_m;
+                (
+                    [centre[0] - r, centre[0] + r],
+                    [centre[1] - r, centre[1] + r],
+                )
+            }
+            ZoneShape::Polygon(rings) => {
+                let pts = rings.iter().flatten();
+                let f = |i: usize, min: bool| {
+                    pts.clone().map(|p| p[i]).fold(
+                        if min {
+                            f64::INFINITY
+                        } else {
+                            f64::NEG_INFINITY
+                        },
+                        |a, b| if min { a.min(b) } else { a.max(b) },
+                    )
+                };
+                (
+                    [f(0, true) - margin_m, f(0, false) + margin_m],
+                    [f(1, true) - margin_m, f(1, false) + margin_m],
+                )
+            }
+        };
+        let lowest_route_m = terrain
+            .min_ground_m_in(north, east)
+            .map_or(f64::NEG_INFINITY, |g| g + agl_m);
+        if z.ceiling_m + margin_m <= lowest_route_m {
+            continue; // under the route wherever the route can be
+        }
+        (z.floor_m, z.ceiling_m) = (f64::NEG_INFINITY, f64::INFINITY);
+        out.push(z);
+    }
+    Ok(out)
+}
+
 /// Whether a request can be planned over terrain (before planning it).
 fn check_terrain_request(r: &Resolved) -> Result<(), PlanFailure> {
     let info = r.planner.info();
@@ -959,11 +1023,6 @@ fn check_terrain_request(r: &Resolved) -> Result<(), PlanFailure> {
     if r.trajectory.is_some() {
         return Err(PlanFailure::bad_request(
             "trajectory: over terrain not yet (the corridor does not know the ground); plan the route without --trajectory",
-        ));
-    }
-    if r.no_fly.is_some() {
-        return Err(PlanFailure::bad_request(
-            "no_fly: zones over terrain not yet (their bands are above home, the route's height follows the ground); drop --no-fly or --terrain",
         ));
     }
     let slopes = r.terrain_slopes;
