@@ -14,6 +14,25 @@ import sys
 import tempfile
 import xml.etree.ElementTree as ET
 
+
+def attr(v):
+    return v.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
+
+
+def write_element(f, kind, e, off):
+    """A way or relation with its ids (and its nodes' or members' ids) offset by `off`."""
+    f.write(f'<{kind} id="{int(e.get("id")) + off}" version="1">')
+    for ch in e:
+        if ch.tag == "nd":
+            f.write(f'<nd ref="{int(ch.get("ref")) + off}"/>')
+        elif ch.tag == "member":
+            f.write(f'<member type="{ch.get("type")}" ref="{int(ch.get("ref")) + off}" '
+                    f'role="{attr(ch.get("role"))}"/>')
+        elif ch.tag == "tag":
+            f.write(f'<tag k="{attr(ch.get("k"))}" v="{attr(ch.get("v"))}"/>')
+    f.write(f"</{kind}>\n")
+
+
 k = int(sys.argv[1])
 out = sys.argv[2]
 here = os.path.dirname(os.path.abspath(__file__))
@@ -39,26 +58,10 @@ with tempfile.TemporaryDirectory() as tmp:
                 lat = float(n.get("lat")) + i * dlat
                 lon = float(n.get("lon")) + j * dlon
                 f.write(f'<node id="{int(n.get("id")) + off}" version="1" lat="{lat:.7f}" lon="{lon:.7f}"/>\n')
-        for c, _ in enumerate(copies):
-            off = c * step
-            for w in ways:
-                f.write(f'<way id="{int(w.get("id")) + off}" version="1">')
-                for ch in w:
-                    if ch.tag == "nd":
-                        f.write(f'<nd ref="{int(ch.get("ref")) + off}"/>')
-                    elif ch.tag == "tag":
-                        f.write(f'<tag k="{ch.get("k")}" v="{ch.get("v").replace("&", "&amp;").replace(chr(34), "&quot;").replace("<", "&lt;")}"/>')
-                f.write("</way>\n")
-        for c, _ in enumerate(copies):
-            off = c * step
-            for r in rels:
-                f.write(f'<relation id="{int(r.get("id")) + off}" version="1">')
-                for ch in r:
-                    if ch.tag == "member":
-                        f.write(f'<member type="{ch.get("type")}" ref="{int(ch.get("ref")) + off}" role="{ch.get("role")}"/>')
-                    elif ch.tag == "tag":
-                        f.write(f'<tag k="{ch.get("k")}" v="{ch.get("v").replace("&", "&amp;").replace(chr(34), "&quot;").replace("<", "&lt;")}"/>')
-                f.write("</relation>\n")
+        for kind, elements in (("way", ways), ("relation", rels)):
+            for c, _ in enumerate(copies):
+                for e in elements:
+                    write_element(f, kind, e, c * step)
         f.write("</osm>\n")
     subprocess.run(["osmium", "sort", "--overwrite", "-o", out, xml_out], check=True)
 print(f"{out}: {k} x {k} copies of {len(ways)} ways and {len(rels)} relations, "

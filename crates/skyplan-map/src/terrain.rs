@@ -539,20 +539,14 @@ pub fn parse_geotiff(bytes: &[u8]) -> Result<Dem, TerrainError> {
             .map_err(tiff_err(field))?
             .ok_or_else(|| format_err(field, missing))
     };
-    let scale = required(
-        Tag::ModelPixelScaleTag,
-        "ModelPixelScale",
-        "missing: the image is not georeferenced (a plain TIFF, or a world file beside it, which is not read)",
-    )?
-    .into_f64_vec()
-    .map_err(tiff_err("ModelPixelScale"))?;
-    let tie = required(
-        Tag::ModelTiepointTag,
-        "ModelTiepoint",
-        "missing: the image is not georeferenced",
-    )?
-    .into_f64_vec()
-    .map_err(tiff_err("ModelTiepoint"))?;
+    let not_georeferenced = "missing: the image is not georeferenced (a plain TIFF, or a world file beside it, which is not read)";
+    let mut numbers = |tag: Tag, field: &str| {
+        required(tag, field, not_georeferenced)?
+            .into_f64_vec()
+            .map_err(tiff_err(field))
+    };
+    let scale = numbers(Tag::ModelPixelScaleTag, "ModelPixelScale")?;
+    let tie = numbers(Tag::ModelTiepointTag, "ModelTiepoint")?;
     if scale.len() < 2 || tie.len() < 6 {
         return Err(format_err(
             "ModelTiepoint",
