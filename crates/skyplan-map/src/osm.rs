@@ -85,7 +85,23 @@ enum Element<'a> {
 /// Reads the same file several times, element by element (three passes, so that only the
 /// buildings' ways and nodes are kept).
 trait Source {
-    fn scan(&self, f: &mut dyn FnMut(Element<'_>)) -> Result<(), FootprintError>;
+    /// Every way and relation (and, with `with_nodes`, every node), in file order.
+    fn scan(&self, with_nodes: bool, f: &mut dyn FnMut(Element<'_>)) -> Result<(), FootprintError>;
+
+    /// The positions of the `wanted` nodes, into `out`.
+    fn nodes(
+        &self,
+        wanted: &HashSet<i64>,
+        out: &mut HashMap<i64, [f64; 2]>,
+    ) -> Result<(), FootprintError> {
+        self.scan(true, &mut |e| {
+            if let Element::Node(id, p) = e
+                && wanted.contains(&id)
+            {
+                out.insert(id, p);
+            }
+        })
+    }
 }
 
 /// Buildings from OSM XML text.
@@ -156,10 +172,10 @@ fn tags_of<'a>(n: roxmltree::Node<'a, '_>) -> Vec<(&'a str, &'a str)> {
 }
 
 impl Source for XmlSource<'_, '_> {
-    fn scan(&self, f: &mut dyn FnMut(Element<'_>)) -> Result<(), FootprintError> {
+    fn scan(&self, with_nodes: bool, f: &mut dyn FnMut(Element<'_>)) -> Result<(), FootprintError> {
         for n in self.0.children().filter(roxmltree::Node::is_element) {
             match n.tag_name().name() {
-                "node" => {
+                "node" if with_nodes => {
                     let id = attr_i64(n, "id", "node")?;
                     let coord = |name: &str, range: f64| {
                         n.attribute(name)
@@ -215,27 +231,40 @@ pub fn parse_osm_pbf(bytes: &[u8], default_height_m: f64) -> Result<OsmBuildings
 
 struct PbfSource<'a>(&'a [u8]);
 
+fn pbf_error(e: osmpbf::Error) -> FootprintError {
+    err(None, "PBF", format!("not a readable .osm.pbf file: {e}"))
+}
+
+fn degrees(lat: i32, lon: i32) -> [f64; 2] {
+    [f64::from(lon) / 1e7, f64::from(lat) / 1e7]
+}
+
 impl Source for PbfSource<'_> {
-    fn scan(&self, f: &mut dyn FnMut(Element<'_>)) -> Result<(), FootprintError> {
-        let degrees = |lat: i32, lon: i32| [f64::from(lon) / 1e7, f64::from(lat) / 1e7];
-        osmpbf::ElementReader::new(self.0)
-            .for_each(|e| match e {
-                osmpbf::Element::Node(n) => {
-                    f(Element::Node(
-                        n.id(),
-                        degrees(n.decimicro_lat(), n.decimicro_lon()),
-                    ));
+    fn scan(&self, with_nodes: bool, f: &mut dyn FnMut(Element<'_>)) -> Result<(), FootprintError> {
+        for blob in osmpbf::BlobReader::new(self.0) {
+            let blob = blob.map_err(pbf_error)?;
+            let osmpbf::BlobDecode::OsmData(block) = blob.decode().map_err(pbf_error)? else {
+                continue;
+            };
+            for group in block.groups() {
+                if with_nodes {
+                    for n in group.nodes() {
+                        f(Element::Node(
+                            n.id(),
+                            degrees(n.decimicro_lat(), n.decimicro_lon()),
+                        ));
+                    }
+                    for n in group.dense_nodes() {
+                        f(Element::Node(
+                            n.id(),
+                            degrees(n.decimicro_lat(), n.decimicro_lon()),
+                        ));
+                    }
                 }
-                osmpbf::Element::DenseNode(n) => {
-                    f(Element::Node(
-                        n.id(),
-                        degrees(n.decimicro_lat(), n.decimicro_lon()),
-                    ));
+                for w in group.ways() {
+                    f(Element::Way(w.id(), w.refs().collect(), pbf_tags(w.tags())));
                 }
-                osmpbf::Element::Way(w) => {
-                    f(Element::Way(w.id(), w.refs().collect(), pbf_tags(w.tags())))
-                }
-                osmpbf::Element::Relation(r) => {
+                for r in group.relations() {
                     let members = r
                         .members()
                         .filter(|m| m.member_type == osmpbf::RelMemberType::Way)
@@ -243,8 +272,46 @@ impl Source for PbfSource<'_> {
                         .collect();
                     f(Element::Relation(r.id(), members, pbf_tags(r.tags())));
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// The blocks are inflated and decoded in parallel (rayon, as osmpbf's own parallel reader
+    /// does): on a city extract this pass, over every node, is the longest.
+    fn nodes(
+        &self,
+        wanted: &HashSet<i64>,
+        out: &mut HashMap<i64, [f64; 2]>,
+    ) -> Result<(), FootprintError> {
+        use rayon::iter::{ParallelBridge, ParallelIterator};
+        let per_block: Vec<Vec<(i64, [f64; 2])>> = osmpbf::BlobReader::new(self.0)
+            .par_bridge()
+            .map(|blob| {
+                let mut out = Vec::new();
+                if let osmpbf::BlobDecode::OsmData(block) = blob?.decode()? {
+                    for group in block.groups() {
+                        let mut keep = |id: i64, p: [f64; 2]| {
+                            if wanted.contains(&id) {
+                                out.push((id, p));
+                            }
+                        };
+                        for n in group.nodes() {
+                            keep(n.id(), degrees(n.decimicro_lat(), n.decimicro_lon()));
+                        }
+                        for n in group.dense_nodes() {
+                            keep(n.id(), degrees(n.decimicro_lat(), n.decimicro_lon()));
+                        }
+                    }
+                }
+                Ok(out)
             })
-            .map_err(|e| err(None, "PBF", format!("not a readable .osm.pbf file: {e}")))
+            .collect::<Result<_, osmpbf::Error>>()
+            .map_err(pbf_error)?;
+        for block in per_block {
+            out.extend(block);
+        }
+        Ok(())
     }
 }
 
@@ -273,7 +340,7 @@ fn buildings(src: &dyn Source, default_height_m: f64) -> Result<OsmBuildings, Fo
     // Pass 1: the building relations and the ways they need.
     let mut relations = Vec::new();
     let mut wanted_ways = HashSet::new();
-    src.scan(&mut |e| {
+    src.scan(false, &mut |e| {
         if let Element::Relation(id, members, tags) = e
             && is_building(&tags)
             && tags.contains(&("type", "multipolygon"))
@@ -294,7 +361,7 @@ fn buildings(src: &dyn Source, default_height_m: f64) -> Result<OsmBuildings, Fo
     let mut member_ways: HashMap<i64, Vec<i64>> = HashMap::new();
     let mut wanted_nodes = HashSet::new();
     let mut refs_kept = 0usize;
-    src.scan(&mut |e| {
+    src.scan(false, &mut |e| {
         if let Element::Way(id, refs, tags) = e {
             let building = is_building(&tags);
             let member = wanted_ways.contains(&id);
@@ -321,13 +388,7 @@ fn buildings(src: &dyn Source, default_height_m: f64) -> Result<OsmBuildings, Fo
     }
     // Pass 3: the nodes.
     let mut nodes: HashMap<i64, [f64; 2]> = HashMap::with_capacity(wanted_nodes.len());
-    src.scan(&mut |e| {
-        if let Element::Node(id, p) = e
-            && wanted_nodes.contains(&id)
-        {
-            nodes.insert(id, p);
-        }
-    })?;
+    src.nodes(&wanted_nodes, &mut nodes)?;
     let mut out = OsmBuildings {
         geo: GeoFootprints {
             buildings: Vec::new(),
