@@ -227,6 +227,61 @@ fn routes_keep_the_height_above_the_ground_by_rasterio() {
     }
 }
 
+/// The FCND city's buildings set down on the Jacksboro hills (`city.csv` in `dir`).
+fn write_city_on_hills(dir: &Path) {
+    let fcnd = std::fs::read_to_string(data("colliders.csv")).unwrap();
+    let body = fcnd.split_once('\n').unwrap().1;
+    std::fs::write(
+        dir.join("city.csv"),
+        format!("lat0 36.56, lon0 -84.28\n{body}"),
+    )
+    .unwrap();
+}
+
+/// The 3D planners treat the ground as an obstacle: every metre of their routes is at least H
+/// above rasterio's ground (geographic and UTM DEMs), and they start no higher than the
+/// ground's relief near the start asks.
+#[test]
+#[ignore = "needs rasterio (pip)"]
+fn three_d_routes_keep_the_height_above_the_ground_by_rasterio() {
+    let dir = tempfile::tempdir().unwrap();
+    write_city_on_hills(dir.path());
+    for (planner, dem, agl) in [
+        ("rrt-connect", "terrain/jacksboro.tif", 30.0),
+        ("voxel", "terrain/jacksboro.tif", 30.0),
+        ("prm", "terrain/jacksboro-utm.tif", 25.0),
+    ] {
+        let path = data(dem);
+        let v = ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --map city.csv --terrain {} --alt-agl-m {agl} --planner {planner} --goal-ne 500,400",
+                path.display()
+            ),
+        );
+        let lla = &v["waypoints_lla"];
+        let [lo, median, hi] = clearance_by_rasterio(&path, lla);
+        eprintln!(
+            "{planner} on {dem}: clearance {lo:.2} / {median:.1} / {hi:.1} m (lowest, median, highest)"
+        );
+        // The planners' columns of ground are as high as the ground gets in them, and the
+        // final check is exact: no metre is lower than H (a centimetre for the two readings).
+        assert!(lo >= agl - 0.05, "{planner}: lowest clearance {lo} m");
+        let w = rows(&v);
+        let ground = v["terrain"]["home_ground_amsl_m"].as_f64().unwrap();
+        for (row, p) in lla.as_array().unwrap().iter().zip(&w) {
+            assert!((row[2].as_f64().unwrap() - (p[2] + ground)).abs() < 1e-6);
+        }
+        // The start (home) is H above the highest ground of the 10 m columns within the
+        // margin: the ground under home is 0 m above home, and the slope there is under 1:1.
+        assert!(
+            w[0][2] >= agl && w[0][2] <= agl + 15.0,
+            "{planner}: starts at {} m",
+            w[0][2]
+        );
+    }
+}
+
 #[test]
 fn slower_climbs_start_earlier() {
     let dir = tempfile::tempdir().unwrap();
@@ -283,13 +338,16 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
         &["no geodetic home", "--home"],
     );
     let here = format!("{random} --home 36.56,-84.28 --terrain {t}");
-    // A colliders map on the hills: the 3D planners do not follow terrain yet.
+    // A colliders map on the hills: over terrain the 3D planners' ends are alt_agl_m above
+    // the ground, not at a given altitude.
     write_hills(dir.path());
     fails_with(
         dir.path(),
-        &format!("plan --map hills.csv --terrain {t} --planner rrt-connect --goal-ne 200,200"),
+        &format!(
+            "plan --map hills.csv --terrain {t} --planner rrt-connect --goal-ne 200,200 --start-alt-m 40"
+        ),
         2,
-        &["rrt-connect", "3D", "terrain"],
+        &["--start-alt-m", "--alt-agl-m", "leave"],
     );
     fails_with(
         dir.path(),

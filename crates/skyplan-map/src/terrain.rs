@@ -42,6 +42,25 @@ pub const MAX_DEM_SAMPLES: u64 = 100_000_000;
 /// Added to each stretch's highest ground: the stretch is straight in local metres, and a
 /// geographic raster's pixel coordinates bend by micrometres over half a pixel.
 const BOUND_PAD_M: f64 = 0.01;
+
+/// How far a [`Column`]'s footprint reaches past its cell's corners, metres: a cell's edges,
+/// straight in the DEM's grid, bow by far less in the local frame.
+pub const COLUMN_PAD_M: f64 = 0.1;
+
+/// Most columns [`Terrain::columns`] makes.
+pub const MAX_COLUMNS: usize = 2_000_000;
+
+/// The ground under one DEM cell, as a box: a local rectangle and the highest the ground
+/// reaches in it ([`Terrain::columns`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Column {
+    /// `[south, north]` edges, metres north of home.
+    pub north_m: [f64; 2],
+    /// `[west, east]` edges, metres east of home.
+    pub east_m: [f64; 2],
+    /// The highest ground in it, metres above the ground under home.
+    pub top_m: f64,
+}
 /// The SRTM void value.
 const HGT_VOID: i16 = -32768;
 
@@ -323,6 +342,31 @@ impl Dem {
         }
     }
 
+    /// Latitude and longitude of pixel position `(x = col, y = row)`, degrees.
+    fn lla_of_pixel(&self, x: f64, y: f64) -> Result<(f64, f64), TerrainError> {
+        match self.georef {
+            Georef::Geographic { origin, step } => {
+                Ok((origin[1] - y * step[1], origin[0] + x * step[0]))
+            }
+            Georef::Utm {
+                zone,
+                north,
+                origin,
+                step,
+            } => utm::wsg84_utm_to_lat_lon(
+                origin[0] + x * step[0],
+                origin[1] - y * step[1],
+                zone,
+                if north { 'N' } else { 'M' },
+            )
+            .map_err(|_| {
+                TerrainError::Argument(format!(
+                    "pixel ({x}, {y}) of the DEM is not a position in UTM zone {zone}"
+                ))
+            }),
+        }
+    }
+
     fn not_covered(&self, lat_deg: f64, lon_deg: f64, what: &str) -> TerrainError {
         let [lat_min, lat_max, lon_min, lon_max] = self.extent_deg();
         TerrainError::NotCovered {
@@ -370,6 +414,25 @@ impl Dem {
     /// in each cell the bilinear surface along a line is a quadratic in the line's parameter,
     /// whose maximum is at an end or at its vertex.
     fn max_on_segment(&self, p: (f64, f64), q: (f64, f64)) -> Option<f64> {
+        self.extreme_on_segment(p, q, 1.0, [0.0, 0.0])
+    }
+
+    /// The lowest the interpolated ground reaches along the pixel-space segment `p → q`.
+    fn min_on_segment(&self, p: (f64, f64), q: (f64, f64)) -> Option<f64> {
+        self.extreme_on_segment(p, q, -1.0, [0.0, 0.0]).map(|v| -v)
+    }
+
+    /// The highest `sign ×` ground less the line from `line[0]` at `p` to `line[1]` at `q`
+    /// along `p → q` (`sign` ±1): with a flat line, the ground's extreme; with a route's
+    /// altitudes (AMSL), how far the ground reaches above the route.
+    fn extreme_on_segment(
+        &self,
+        p: (f64, f64),
+        q: (f64, f64),
+        sign: f64,
+        line: [f64; 2],
+    ) -> Option<f64> {
+        let slope = line[1] - line[0];
         let clamp = |(x, y): (f64, f64)| {
             (
                 x.clamp(0.0, (self.cols - 1) as f64),
@@ -396,21 +459,21 @@ impl Dem {
             let mid = (t0 + t1) / 2.0;
             let c0 = ((p.0 + dx * mid).floor().max(0.0) as usize).min(self.cols - 2);
             let r0 = ((p.1 + dy * mid).floor().max(0.0) as usize).min(self.rows - 2);
-            let z00 = self.sample(r0, c0)?;
-            let z01 = self.sample(r0, c0 + 1)?;
-            let z10 = self.sample(r0 + 1, c0)?;
-            let z11 = self.sample(r0 + 1, c0 + 1)?;
+            let z00 = sign * self.sample(r0, c0)?;
+            let z01 = sign * self.sample(r0, c0 + 1)?;
+            let z10 = sign * self.sample(r0 + 1, c0)?;
+            let z11 = sign * self.sample(r0 + 1, c0 + 1)?;
             let (u0, v0) = (p.0 - c0 as f64, p.1 - r0 as f64);
             let k = z00 - z01 - z10 + z11;
             // f(t) = z00 + (z01 − z00)·u + (z10 − z00)·v + k·u·v, u = u0 + dx·t, v = v0 + dy·t.
             let f = |t: f64| {
                 let (u, v) = (u0 + dx * t, v0 + dy * t);
-                z00 + (z01 - z00) * u + (z10 - z00) * v + k * u * v
+                z00 + (z01 - z00) * u + (z10 - z00) * v + k * u * v - line[0] - slope * t
             };
             best = best.max(f(t0)).max(f(t1));
             let c2 = k * dx * dy;
             if c2 < 0.0 {
-                let b = (z01 - z00) * dx + (z10 - z00) * dy + k * (u0 * dy + v0 * dx);
+                let b = (z01 - z00) * dx + (z10 - z00) * dy + k * (u0 * dy + v0 * dx) - slope;
                 let t = -b / (2.0 * c2);
                 if t > t0 && t < t1 {
                     best = best.max(f(t));
@@ -746,6 +809,14 @@ impl Terrain {
     /// pixel of slack (bilinear interpolation never goes below its corners). `None` if the DEM
     /// has no sample there.
     pub fn min_ground_m_in(&self, north: [f64; 2], east: [f64; 2]) -> Option<f64> {
+        self.ground_range_m_in(north, east).map(|r| r[0])
+    }
+
+    /// Bounds `[lowest, highest]` of the ground (above home) over the local rectangle `north` ×
+    /// `east` (metres): the lowest and highest samples of every DEM cell the rectangle's pixel
+    /// box touches, with a pixel of slack (bilinear interpolation stays between its corners).
+    /// `None` if the DEM has no sample there.
+    pub fn ground_range_m_in(&self, north: [f64; 2], east: [f64; 2]) -> Option<[f64; 2]> {
         let corners = [
             [north[0], east[0]],
             [north[0], east[1]],
@@ -772,15 +843,236 @@ impl Terrain {
         if x1 < -1.0 || y1 < -1.0 || x0 > cols || y0 > rows {
             return None;
         }
-        let mut best = f64::INFINITY;
+        let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
         for r in lo(y0, rows)..=hi(y1, rows) {
             for c in lo(x0, cols)..=hi(x1, cols) {
                 if let Some(v) = self.dem.sample(r, c) {
-                    best = best.min(v);
+                    low = low.min(v);
+                    high = high.max(v);
                 }
             }
         }
-        best.is_finite().then_some(best - self.home_ground_amsl_m)
+        low.is_finite().then_some([
+            low - self.home_ground_amsl_m,
+            high - self.home_ground_amsl_m,
+        ])
+    }
+
+    /// The lowest and highest the ground (above home) reaches over the local rectangle `north`
+    /// × `east`, exactly (to [`BOUND_PAD_M`]): inside one DEM cell the bilinear surface has no
+    /// peak or pit, so over the rectangle it is extreme on the rectangle's edges or at a
+    /// sample inside it. Errors if the DEM does not cover the rectangle or has a void there.
+    pub fn ground_extremes_m_in(
+        &self,
+        north: [f64; 2],
+        east: [f64; 2],
+    ) -> Result<[f64; 2], TerrainError> {
+        let corners = [
+            [north[0], east[0]],
+            [north[0], east[1]],
+            [north[1], east[1]],
+            [north[1], east[0]],
+        ];
+        let mut px = Vec::with_capacity(4);
+        for c in corners {
+            px.push(self.pixel_ne(c)?);
+        }
+        let void = || {
+            let l = self.lla([north[0], east[0]]).unwrap_or(self.frame.home());
+            TerrainError::Void {
+                lat_deg: l.lat_deg,
+                lon_deg: l.lon_deg,
+            }
+        };
+        let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+        for k in 0..4 {
+            let (p, q) = (px[k], px[(k + 1) % 4]);
+            low = low.min(self.dem.min_on_segment(p, q).ok_or_else(void)?);
+            high = high.max(self.dem.max_on_segment(p, q).ok_or_else(void)?);
+        }
+        let (cols, rows) = (self.dem.cols, self.dem.rows);
+        let x0 = px.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let x1 = px.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        let y0 = px.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        let y1 = px.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        let c0 = x0.ceil().max(0.0) as usize;
+        let r0 = y0.ceil().max(0.0) as usize;
+        let c1 = (x1.floor().max(0.0) as usize).min(cols - 1);
+        let r1 = (y1.floor().max(0.0) as usize).min(rows - 1);
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let (lat_deg, lon_deg) = self.dem.lla_of_pixel(c as f64, r as f64)?;
+                let p = self.frame.ned_from_lla(Lla {
+                    lat_deg,
+                    lon_deg,
+                    alt_m: 0.0,
+                })?;
+                if (north[0]..=north[1]).contains(&p.north_m)
+                    && (east[0]..=east[1]).contains(&p.east_m)
+                {
+                    let v = self
+                        .dem
+                        .sample(r, c)
+                        .ok_or(TerrainError::Void { lat_deg, lon_deg })?;
+                    low = low.min(v);
+                    high = high.max(v);
+                }
+            }
+        }
+        Ok([
+            low - BOUND_PAD_M - self.home_ground_amsl_m,
+            high + BOUND_PAD_M - self.home_ground_amsl_m,
+        ])
+    }
+
+    /// The ground under the local rectangle `north` × `east` as columns, for planners that
+    /// see obstacles as boxes: each DEM cell (the square between four samples) that meets the
+    /// rectangle is split alike along both axes into sub-cells about `size_m` across, and each
+    /// sub-cell is a column reaching up to the highest the bilinear ground gets in it (at one
+    /// of its corners: along each pixel axis the surface is linear). A column's footprint is
+    /// the local bounding rectangle of its sub-cell (padded by [`COLUMN_PAD_M`]), so together
+    /// the columns cover the ground under the whole rectangle: a point above every column it
+    /// stands in is above the ground there.
+    /// Errors if the DEM does not cover the rectangle, has a void in it, or it takes more than
+    /// [`MAX_COLUMNS`] columns.
+    pub fn columns(
+        &self,
+        north: [f64; 2],
+        east: [f64; 2],
+        size_m: f64,
+    ) -> Result<Vec<Column>, TerrainError> {
+        let corners = [
+            [north[0], east[0]],
+            [north[0], east[1]],
+            [north[1], east[0]],
+            [north[1], east[1]],
+        ];
+        let mut px = Vec::with_capacity(4);
+        for c in corners {
+            let p = self.pixel_ne(c).map_err(|e| match e {
+                TerrainError::NotCovered { .. } => self
+                    .lla(c)
+                    .map(|l| {
+                        self.dem.not_covered(
+                            l.lat_deg,
+                            l.lon_deg,
+                            &format!(
+                                ", the corner N {:.1} m, E {:.1} m of the flight volume",
+                                c[0], c[1]
+                            ),
+                        )
+                    })
+                    .unwrap_or(e),
+                e => e,
+            })?;
+            px.push(p);
+        }
+        // The pixel box of a local rectangle can bulge a little past its corners' (UTM grids
+        // turn against true north): one cell of slack on each side, clamped to the DEM.
+        let (cols, rows) = (self.dem.cols, self.dem.rows);
+        let x0 = px.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let x1 = px.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        let y0 = px.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        let y1 = px.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        let c0 = ((x0.floor() - 1.0).max(0.0) as usize).min(cols - 2);
+        let c1 = ((x1.ceil() + 1.0).max(0.0) as usize).min(cols - 1);
+        let r0 = ((y0.floor() - 1.0).max(0.0) as usize).min(rows - 2);
+        let r1 = ((y1.ceil() + 1.0).max(0.0) as usize).min(rows - 1);
+        let cells = (c1 - c0) * (r1 - r0);
+        // Sub-cells about `size_m` across (each DEM cell split alike along both axes), as
+        // many as fit under MAX_COLUMNS.
+        let pixel_m = 2.0 * self.stretch_m();
+        let mut split = if size_m.is_finite() && size_m > 0.0 {
+            ((pixel_m / size_m).ceil() as usize).clamp(1, 64)
+        } else {
+            1
+        };
+        while split > 1 && cells * split * split > MAX_COLUMNS {
+            split -= 1;
+        }
+        let count = cells * split * split;
+        if count > MAX_COLUMNS {
+            return Err(TerrainError::Argument(format!(
+                "the flight volume covers {cells} cells of the DEM, more than {MAX_COLUMNS}; use a coarser DEM or a smaller map"
+            )));
+        }
+        // Local positions of the sub-cells' corners, row by row.
+        let w = (c1 - c0) * split + 1;
+        let h = (r1 - r0) * split + 1;
+        let mut ne = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let (lat_deg, lon_deg) = self.dem.lla_of_pixel(
+                    c0 as f64 + x as f64 / split as f64,
+                    r0 as f64 + y as f64 / split as f64,
+                )?;
+                let p = self.frame.ned_from_lla(Lla {
+                    lat_deg,
+                    lon_deg,
+                    alt_m: 0.0,
+                })?;
+                ne.push([p.north_m, p.east_m]);
+            }
+        }
+        let mut out = Vec::with_capacity(count);
+        let f = split as f64;
+        for r in r0..r1 {
+            for c in c0..c1 {
+                let mut z = [[0.0; 2]; 2];
+                for (dr, row) in z.iter_mut().enumerate() {
+                    for (dc, v) in row.iter_mut().enumerate() {
+                        *v = self.dem.sample(r + dr, c + dc).ok_or_else(|| {
+                            let (lat_deg, lon_deg) = self
+                                .dem
+                                .lla_of_pixel((c + dc) as f64, (r + dr) as f64)
+                                .unwrap_or((f64::NAN, f64::NAN));
+                            TerrainError::Void { lat_deg, lon_deg }
+                        })?;
+                    }
+                }
+                let bilinear = |u: f64, v: f64| {
+                    (z[0][0] * (1.0 - u) + z[0][1] * u) * (1.0 - v)
+                        + (z[1][0] * (1.0 - u) + z[1][1] * u) * v
+                };
+                for j in 0..split {
+                    for i in 0..split {
+                        let quad = [(j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1)];
+                        let at = |&(b, a): &(usize, usize)| {
+                            ne[((r - r0) * split + b) * w + (c - c0) * split + a]
+                        };
+                        let lo_n = quad.iter().map(|q| at(q)[0]).fold(f64::INFINITY, f64::min);
+                        let hi_n = quad
+                            .iter()
+                            .map(|q| at(q)[0])
+                            .fold(f64::NEG_INFINITY, f64::max);
+                        let lo_e = quad.iter().map(|q| at(q)[1]).fold(f64::INFINITY, f64::min);
+                        let hi_e = quad
+                            .iter()
+                            .map(|q| at(q)[1])
+                            .fold(f64::NEG_INFINITY, f64::max);
+                        if hi_n < north[0] - COLUMN_PAD_M
+                            || lo_n > north[1] + COLUMN_PAD_M
+                            || hi_e < east[0] - COLUMN_PAD_M
+                            || lo_e > east[1] + COLUMN_PAD_M
+                        {
+                            continue;
+                        }
+                        // Over an axis-aligned square of one cell the bilinear surface is
+                        // highest at a corner.
+                        let top = quad
+                            .iter()
+                            .map(|&(b, a)| bilinear(a as f64 / f, b as f64 / f))
+                            .fold(f64::NEG_INFINITY, f64::max);
+                        out.push(Column {
+                            north_m: [lo_n - COLUMN_PAD_M, hi_n + COLUMN_PAD_M],
+                            east_m: [lo_e - COLUMN_PAD_M, hi_e + COLUMN_PAD_M],
+                            top_m: top + BOUND_PAD_M - self.home_ground_amsl_m,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// Height above mean sea level of a point `alt_m` above home, metres.
@@ -800,23 +1092,24 @@ impl Terrain {
         half.max(0.05)
     }
 
-    /// The stretches of a horizontal polyline (each at most half a pixel long) with an upper
-    /// bound of the ground above home on each: `(start distance, end distance, bound)`, plus
-    /// the distances of the polyline's own vertices.
-    fn stretches(&self, route_ne: &[[f64; 2]]) -> Result<(Vec<[f64; 3]>, Vec<f64>), TerrainError> {
+    /// Walks a horizontal polyline in pieces at most half a pixel long: `visit(leg, t0, t1,
+    /// p, q)` for each, with the leg's index, the piece's parameters along the leg and its ends
+    /// in pixel coordinates.
+    fn walk(
+        &self,
+        route_ne: &[[f64; 2]],
+        mut visit: impl FnMut(usize, f64, f64, (f64, f64), (f64, f64)) -> Result<(), TerrainError>,
+    ) -> Result<(), TerrainError> {
         let step = self.stretch_m();
-        let mut out = Vec::new();
-        let mut corners = vec![0.0];
-        let mut s0 = 0.0;
-        for w in route_ne.windows(2) {
+        for (leg, w) in route_ne.windows(2).enumerate() {
             let (a, b) = (w[0], w[1]);
             let len = (b[0] - a[0]).hypot(b[1] - a[1]);
             let n = (len / step).ceil().max(1.0) as usize;
             let at = |t: f64| [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
             let mut prev = self.pixel_ne(at(0.0))?;
             for k in 1..=n {
-                let t = k as f64 / n as f64;
-                let p = at(t);
+                let (t0, t1) = ((k - 1) as f64 / n as f64, k as f64 / n as f64);
+                let p = at(t1);
                 let cur = self.pixel_ne(p).map_err(|e| match e {
                     TerrainError::NotCovered { .. } => self
                         .lla(p)
@@ -830,25 +1123,46 @@ impl Terrain {
                         .unwrap_or(e),
                     e => e,
                 })?;
-                let bound = self
-                    .dem
-                    .max_on_segment(prev, cur)
-                    .map(|m| m + BOUND_PAD_M)
-                    .ok_or_else(|| {
-                        let l = self.lla(p).unwrap_or(self.frame.home());
-                        TerrainError::Void {
-                            lat_deg: l.lat_deg,
-                            lon_deg: l.lon_deg,
-                        }
-                    })?;
-                let s = s0 + len * t;
-                let start = s0 + len * (k - 1) as f64 / n as f64;
-                out.push([start, s, bound - self.home_ground_amsl_m]);
+                visit(leg, t0, t1, prev, cur)?;
                 prev = cur;
             }
-            s0 += len;
-            corners.push(s0);
         }
+        Ok(())
+    }
+
+    /// A void met at local point `ne`.
+    fn void_at(&self, ne: [f64; 2]) -> TerrainError {
+        let l = self.lla(ne).unwrap_or(self.frame.home());
+        TerrainError::Void {
+            lat_deg: l.lat_deg,
+            lon_deg: l.lon_deg,
+        }
+    }
+
+    /// The stretches of a horizontal polyline (each at most half a pixel long) with an upper
+    /// bound of the ground above home on each: `(start distance, end distance, bound)`, plus
+    /// the distances of the polyline's own vertices.
+    fn stretches(&self, route_ne: &[[f64; 2]]) -> Result<(Vec<[f64; 3]>, Vec<f64>), TerrainError> {
+        let mut corners = vec![0.0];
+        for w in route_ne.windows(2) {
+            let len = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+            corners.push(corners[corners.len() - 1] + len);
+        }
+        let mut out = Vec::new();
+        self.walk(route_ne, |leg, t0, t1, p, q| {
+            let bound = self
+                .dem
+                .max_on_segment(p, q)
+                .map(|m| m + BOUND_PAD_M)
+                .ok_or_else(|| self.void_at(route_ne[leg]))?;
+            let (s0, len) = (corners[leg], corners[leg + 1] - corners[leg]);
+            out.push([
+                s0 + len * t0,
+                s0 + len * t1,
+                bound - self.home_ground_amsl_m,
+            ]);
+            Ok(())
+        })?;
         Ok((out, corners))
     }
 
@@ -944,42 +1258,29 @@ impl Terrain {
     }
 
     /// Checks, independently of [`Terrain::follow`], that the 3D polyline `route` (altitudes
-    /// above home) stays at least `agl_m` above the ground's upper bound everywhere along it.
+    /// above home) stays at least `agl_m` above the ground everywhere along it, exactly: on
+    /// each piece of half a pixel inside one DEM cell the ground less the route's straight
+    /// altitude is a quadratic, whose maximum is at an end or at its vertex.
     pub fn check_clearance(&self, route: &[[f64; 3]], agl_m: f64) -> Result<(), TerrainError> {
-        let ne: Vec<[f64; 2]> = route.iter().map(|p| [p[0], p[1]]).collect();
-        let (pieces, corners) = self.stretches(&ne)?;
-        let alt_at = |d: f64| -> f64 {
-            let k = corners
-                .partition_point(|&c| c <= d)
-                .clamp(1, corners.len().max(2) - 1);
-            let (c0, c1) = (corners[k - 1], corners[k]);
-            let t = if c1 > c0 {
-                ((d - c0) / (c1 - c0)).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            route[k - 1][2] + (route[k][2] - route[k - 1][2]) * t
-        };
         if route.len() == 1 {
             let g = self.ground_m(route[0][0], route[0][1])?;
             return check_one(route[0], route[0][2] - g, agl_m);
         }
-        for p in &pieces {
-            for d in [p[0], p[1]] {
-                let clearance = alt_at(d) - p[2];
-                if clearance < agl_m - 1e-6 {
-                    let k = corners
-                        .partition_point(|&c| c <= d)
-                        .clamp(1, corners.len() - 1);
-                    let (c0, c1) = (corners[k - 1], corners[k]);
-                    let t = if c1 > c0 { (d - c0) / (c1 - c0) } else { 0.0 };
-                    let (a, b) = (route[k - 1], route[k]);
-                    let at = [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, 0.0];
-                    return check_one(at, clearance, agl_m);
-                }
-            }
-        }
-        Ok(())
+        let ne: Vec<[f64; 2]> = route.iter().map(|p| [p[0], p[1]]).collect();
+        let home = self.home_ground_amsl_m;
+        self.walk(&ne, |leg, t0, t1, p, q| {
+            let (a, b) = (route[leg], route[leg + 1]);
+            let alt = |t: f64| a[2] + (b[2] - a[2]) * t + home;
+            // How far the ground reaches above the route less the height asked for, at most.
+            let over = self
+                .dem
+                .extreme_on_segment(p, q, 1.0, [alt(t0) - agl_m, alt(t1) - agl_m])
+                .ok_or_else(|| self.void_at([a[0], a[1]]))?
+                + BOUND_PAD_M;
+            let t = (t0 + t1) / 2.0;
+            let at = [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, 0.0];
+            check_one(at, agl_m - over, agl_m)
+        })
     }
 }
 
@@ -1079,6 +1380,122 @@ mod tests {
         assert!((mid - avg).abs() < 1e-6);
         assert!(matches!(
             d.elevation_amsl_m(36.7, -84.3),
+            Err(TerrainError::NotCovered { .. })
+        ));
+    }
+
+    /// Every point of a rectangle stands in a column at least as high as the ground there,
+    /// and the columns are no higher than the cells' samples (geographic and UTM grids).
+    #[test]
+    fn columns_cover_the_ground_from_above() {
+        let utm = {
+            let (rows, cols) = (120, 150);
+            let v = (0..rows * cols)
+                .map(|i| {
+                    let (r, c) = ((i / cols) as f32, (i % cols) as f32);
+                    300.0 + 60.0 * (r / 9.0).sin() * (c / 11.0).cos()
+                })
+                .collect();
+            let georef = Georef::Utm {
+                zone: 16,
+                north: true,
+                origin: [741_000.0, 4_051_000.0],
+                step: [30.0, 30.0],
+            };
+            Dem::new(rows, cols, v, georef).unwrap()
+        };
+        let cases = [
+            (
+                hills(),
+                frame(36.55, -84.25),
+                [-900.0, 1200.0],
+                [-700.0, 1500.0],
+            ),
+            (
+                utm,
+                frame(36.555, -84.28),
+                [-1000.0, 800.0],
+                [-600.0, 900.0],
+            ),
+        ];
+        for (dem, f, north, east) in cases {
+            let t = Terrain::new(dem, f).unwrap();
+            let cols = t.columns(north, east, 10.0).unwrap();
+            assert!(cols.len() > 100, "{} columns", cols.len());
+            let mut rng = 0x2545_f491_4f6c_dd1du64;
+            let mut unit = || {
+                rng ^= rng << 13;
+                rng ^= rng >> 7;
+                rng ^= rng << 17;
+                (rng >> 11) as f64 / (1u64 << 53) as f64
+            };
+            let mut slack = f64::INFINITY;
+            for _ in 0..5000 {
+                let p = [
+                    north[0] + (north[1] - north[0]) * unit(),
+                    east[0] + (east[1] - east[0]) * unit(),
+                ];
+                let g = t.ground_m(p[0], p[1]).unwrap();
+                let top = cols
+                    .iter()
+                    .filter(|c| {
+                        (c.north_m[0]..=c.north_m[1]).contains(&p[0])
+                            && (c.east_m[0]..=c.east_m[1]).contains(&p[1])
+                    })
+                    .map(|c| c.top_m)
+                    .fold(f64::NEG_INFINITY, f64::max);
+                assert!(top >= g, "at {p:?}: column top {top} under the ground {g}");
+                slack = slack.min(top - g);
+            }
+            // Tight somewhere: the columns are the ground's own heights, not a coarse bound.
+            assert!(slack < 0.5, "closest column is {slack} m above the ground");
+            // Split finer, the columns hug the ground closer: never higher on average.
+            let coarse = t.columns(north, east, 1e9).unwrap();
+            let mean = |c: &[Column]| {
+                c.iter()
+                    .map(|c| c.top_m * (c.north_m[1] - c.north_m[0]) * (c.east_m[1] - c.east_m[0]))
+                    .sum::<f64>()
+                    / c.iter()
+                        .map(|c| (c.north_m[1] - c.north_m[0]) * (c.east_m[1] - c.east_m[0]))
+                        .sum::<f64>()
+            };
+            assert!(coarse.len() < cols.len());
+            assert!(
+                mean(&cols) < mean(&coarse),
+                "{} vs {}",
+                mean(&cols),
+                mean(&coarse)
+            );
+            let (lo, hi) = t.dem().range_m().unwrap();
+            for c in &cols {
+                let amsl = t.amsl_m(c.top_m);
+                assert!(amsl >= lo && amsl <= hi + 0.02, "{amsl} outside {lo}..{hi}");
+            }
+        }
+        // The ground's extremes over rectangles against dense samples.
+        let t = Terrain::new(hills(), frame(36.55, -84.25)).unwrap();
+        for (north, east) in [
+            ([10.0, 13.0], [-4.0, 2.0]),
+            ([-300.0, -120.0], [250.0, 700.0]),
+            ([500.0, 500.5], [500.0, 640.0]),
+        ] {
+            let [lo, hi] = t.ground_extremes_m_in(north, east).unwrap();
+            let (mut dlo, mut dhi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for i in 0..=200 {
+                for j in 0..=200 {
+                    let n = north[0] + (north[1] - north[0]) * i as f64 / 200.0;
+                    let e = east[0] + (east[1] - east[0]) * j as f64 / 200.0;
+                    let g = t.ground_m(n, e).unwrap();
+                    dlo = dlo.min(g);
+                    dhi = dhi.max(g);
+                }
+            }
+            assert!(lo <= dlo && dlo - lo < 0.1, "low {lo} vs sampled {dlo}");
+            assert!(hi >= dhi && hi - dhi < 0.1, "high {hi} vs sampled {dhi}");
+        }
+        let t = Terrain::new(hills(), frame(36.55, -84.25)).unwrap();
+        assert!(matches!(
+            t.columns([0.0, 50_000.0], [0.0, 10.0], 10.0),
             Err(TerrainError::NotCovered { .. })
         ));
     }

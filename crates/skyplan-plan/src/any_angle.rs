@@ -16,7 +16,7 @@ pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailur
     let start = end_cell(&grid, q, "start", q.start_ne)?;
     let goal = end_cell(&grid, q, "goal", q.goal_ne)?;
     let t_build = Instant::now();
-    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0].map(f64::to_bits);
+    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0, 0.0].map(f64::to_bits);
     let graph = match session.any_angle.get(&k) {
         Some(g) => Arc::clone(g),
         None => {

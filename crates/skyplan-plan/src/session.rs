@@ -30,9 +30,9 @@ const GRID_BYTES_PER_CELL: u64 = 2;
 /// Most entries kept per cache (a server asked for many altitudes does not grow without bound).
 const CACHE_ENTRIES: usize = 8;
 
-type Key = [u64; 4];
+pub(crate) type Key = [u64; 5];
 
-fn key(values: [f64; 4]) -> Key {
+pub(crate) fn key(values: [f64; 5]) -> Key {
     values.map(f64::to_bits)
 }
 
@@ -228,7 +228,7 @@ impl Session {
         crate::request::in_range("alt_m", alt_m, 0.0, crate::MAX_ALT_M, " m").map_err(|f| {
             PlanFailure::bad_request(format!("{}: {}", self.world.name(), f.message))
         })?;
-        let k = key([alt_m, safety_m, cell_m, 0.0]);
+        let k = key([alt_m, safety_m, cell_m, 0.0, 0.0]);
         if let Some(g) = self.grids.get(&k) {
             return Ok(Arc::clone(g));
         }
@@ -509,11 +509,26 @@ impl Session {
                 r.planner
             )));
         };
-        let k = key([r.safety_m, r.min_alt_m, r.max_alt_m, r.cell_m]);
+        let terrain = self.world.terrain();
+        let k = key([
+            r.safety_m,
+            r.min_alt_m,
+            r.max_alt_m,
+            r.cell_m,
+            terrain.map_or(-1.0, |_| r.alt_m),
+        ]);
         if let Some(w) = self.boxes.get(&k) {
             return Ok(Arc::clone(w));
         }
         let b = self.world.bounds_ne(r.cell_m);
+        let on_ground;
+        let obstacles = match terrain {
+            None => &map.boxes,
+            Some(t) => {
+                on_ground = boxes_over_terrain(t, &map.boxes, r, &b)?;
+                &on_ground
+            }
+        };
         let spec = WorldSpec {
             safety_m: r.safety_m,
             min_alt_m: r.min_alt_m,
@@ -524,7 +539,7 @@ impl Session {
             min: [b.north_min_m, b.east_min_m, r.min_alt_m],
             max: [b.north_max_m, b.east_max_m, r.max_alt_m],
         };
-        let world = BoxWorld3::with_bounds(&map.boxes, &spec, bounds)
+        let world = BoxWorld3::with_bounds(obstacles, &spec, bounds)
             .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
         Ok(put(&mut self.boxes, k, Arc::new(world)))
     }
@@ -551,7 +566,7 @@ impl Session {
     /// Plans one request with any planner; the route is re-checked before it is returned.
     pub fn plan(&mut self, request: &PlanRequest) -> Result<Plan, PlanFailure> {
         let t0 = Instant::now();
-        let r = Resolved::new(request)?;
+        let mut r = Resolved::new(request)?;
         self.check_request_memory(&r)?;
         let info = r.planner.info();
         if info.maps == MapKinds::CollidersOnly && self.world.colliders().is_none() {
@@ -582,6 +597,12 @@ impl Session {
         let (start_ne, start_lla) =
             self.endpoint(r.start.at, self.world.default_start_ne, "start")?;
         let (goal_ne, goal_lla) = self.endpoint(r.goal.at, self.world.default_goal_ne, "goal")?;
+        let three_d = info.dims == 3;
+        if let (Some(t), true) = (self.world.terrain(), three_d) {
+            let b = self.world.bounds_ne(r.cell_m);
+            terrain_volume(t, &mut r, request, &b, [start_ne, goal_ne])?;
+        }
+        let r = r;
         let world = self.world.clone();
         let q = Query {
             r: &r,
@@ -594,7 +615,7 @@ impl Session {
         let mut route = r.planner.algorithm().plan(self, &q)?;
         recheck(&route)?;
         if let Some(terrain) = world.terrain() {
-            follow_terrain(terrain, &r, &mut route)?;
+            follow_terrain(terrain, &r, &mut route, !three_d)?;
         }
         let mut plan = assemble(&world, &r, route, [start_lla, goal_lla], t0)?;
         if let (Some(terrain), Some(rows)) = (world.terrain(), plan.waypoints_lla.as_mut()) {
@@ -948,6 +969,126 @@ fn first_blocked_grid_segment(grid: &Grid2, p: &[[f64; 3]], touch: Touch) -> Opt
         .position(|w| !grid.segment_is_free_ne((w[0][0], w[0][1]), (w[1][0], w[1][1]), touch))
 }
 
+/// How wide the columns of ground the 3D planners see are, about, metres (DEM cells split to
+/// this; the columns are as high as the ground gets in them, so narrower hugs the ground closer).
+const COLUMN_M: f64 = 10.0;
+
+/// The obstacles of a 3D plan over terrain: the map's boxes standing on the ground (each
+/// reaches from its floor above the lowest ground under it to its top above the highest,
+/// both found exactly), and
+/// the ground itself as columns ([`skyplan_map::terrain::Terrain::columns`]) over the map's
+/// bounds, each topped so that, grown by the margin like every box, it keeps the route
+/// `alt_agl_m` above the cell's highest sample.
+fn boxes_over_terrain(
+    t: &skyplan_map::terrain::Terrain,
+    boxes: &[skyplan_map::colliders::ObstacleBox],
+    r: &Resolved,
+    b: &crate::world::BoundsNe,
+) -> Result<Vec<skyplan_map::colliders::ObstacleBox>, PlanFailure> {
+    use skyplan_map::colliders::ObstacleBox;
+    let mut out = Vec::with_capacity(boxes.len());
+    for (k, o) in boxes.iter().enumerate() {
+        let north = [o.north_m - o.half_north_m, o.north_m + o.half_north_m];
+        let east = [o.east_m - o.half_east_m, o.east_m + o.half_east_m];
+        let [lo, hi] = t.ground_extremes_m_in(north, east).map_err(|e| {
+            PlanFailure::bad_request(format!(
+                "terrain: under obstacle {} (N {:.1} m, E {:.1} m): {e}",
+                k + 1,
+                o.north_m,
+                o.east_m
+            ))
+        })?;
+        let (floor, top) = (o.up_m - o.half_up_m + lo, o.up_m + o.half_up_m + hi);
+        out.push(ObstacleBox {
+            up_m: (floor + top) / 2.0,
+            half_up_m: (top - floor) / 2.0,
+            ..*o
+        });
+    }
+    let columns = t
+        .columns(
+            [b.north_min_m, b.north_max_m],
+            [b.east_min_m, b.east_max_m],
+            COLUMN_M,
+        )
+        .map_err(|e| PlanFailure::bad_request(format!("terrain: {e}")))?;
+    let bottom = r.min_alt_m - r.safety_m - 1.0;
+    for c in columns {
+        let top = c.top_m + r.alt_m - r.safety_m;
+        if top <= bottom {
+            continue;
+        }
+        out.push(ObstacleBox {
+            north_m: (c.north_m[0] + c.north_m[1]) / 2.0,
+            east_m: (c.east_m[0] + c.east_m[1]) / 2.0,
+            up_m: (bottom + top) / 2.0,
+            half_north_m: (c.north_m[1] - c.north_m[0]) / 2.0,
+            half_east_m: (c.east_m[1] - c.east_m[0]) / 2.0,
+            half_up_m: (top - bottom) / 2.0,
+        });
+    }
+    Ok(out)
+}
+
+/// A 3D request over terrain: the flight volume from the lowest ground under the map to
+/// `alt_agl_m` + 20 m over the highest (where not given), and start and goal `alt_agl_m`
+/// above the highest ground column within the margin of them (the lowest the planners can
+/// start: the columns are no lower than the ground, and as high as a DEM cell's highest
+/// sample).
+fn terrain_volume(
+    t: &skyplan_map::terrain::Terrain,
+    r: &mut Resolved,
+    request: &PlanRequest,
+    b: &crate::world::BoundsNe,
+    [start_ne, goal_ne]: [[f64; 2]; 2],
+) -> Result<(), PlanFailure> {
+    if let Some(which) = [
+        ("start_alt_m", request.start_alt_m.is_some()),
+        ("goal_alt_m", request.goal_alt_m.is_some()),
+    ]
+    .iter()
+    .find_map(|(name, given)| given.then_some(name))
+    {
+        return Err(PlanFailure::bad_request(format!(
+            "{which}: over terrain the ends are alt_agl_m above the ground; leave {which} out"
+        )));
+    }
+    let [low, high] = t
+        .ground_range_m_in([b.north_min_m, b.north_max_m], [b.east_min_m, b.east_max_m])
+        .ok_or_else(|| PlanFailure::bad_request("terrain: the DEM has no ground under the map"))?;
+    let h = r.alt_m;
+    if request.min_alt_m.is_none() {
+        r.min_alt_m = low;
+    }
+    if request.max_alt_m.is_none() {
+        r.max_alt_m = high + h + 20.0;
+    }
+    let reach = r.safety_m;
+    for (end, ne, which) in [
+        (&mut r.start, start_ne, "start"),
+        (&mut r.goal, goal_ne, "goal"),
+    ] {
+        let top = t
+            .columns(
+                [ne[0] - reach, ne[0] + reach],
+                [ne[1] - reach, ne[1] + reach],
+                COLUMN_M,
+            )
+            .map_err(|e| PlanFailure::bad_request(format!("terrain: at the {which}: {e}")))?
+            .iter()
+            .map(|c| c.top_m)
+            .fold(f64::NEG_INFINITY, f64::max);
+        end.alt_m = top + h + 0.05;
+    }
+    if r.min_alt_m >= r.max_alt_m {
+        return Err(PlanFailure::bad_request(format!(
+            "min_alt_m {} and max_alt_m {}: the floor of the flight volume must be below its ceiling",
+            r.min_alt_m, r.max_alt_m
+        )));
+    }
+    Ok(())
+}
+
 /// No-fly zones for a route that keeps `agl_m` above the ground: the route over a zone is never
 /// lower than the lowest ground under it plus `agl_m`, so a zone whose ceiling (grown by the
 /// margin) is below that is left out; every other zone blocks at every altitude (the route's
@@ -1008,18 +1149,6 @@ fn zones_over_terrain(
 
 /// Whether a request can be planned over terrain (before planning it).
 fn check_terrain_request(r: &Resolved) -> Result<(), PlanFailure> {
-    let info = r.planner.info();
-    if info.dims != 2 {
-        return Err(PlanFailure::bad_request(format!(
-            "terrain: planner {} plans in 3D and does not follow terrain yet; use a 2D planner ({})",
-            r.planner,
-            PlannerId::for_maps(true)
-                .filter(|p| p.info().dims == 2)
-                .map(|p| p.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
-    }
     if r.trajectory.is_some() {
         return Err(PlanFailure::bad_request(
             "trajectory: over terrain not yet (the corridor does not know the ground); plan the route without --trajectory",
@@ -1035,20 +1164,25 @@ fn check_terrain_request(r: &Resolved) -> Result<(), PlanFailure> {
     Ok(())
 }
 
-/// Lifts a 2D route over the terrain: `alt_m` above the ground everywhere along it, within the
-/// climb and descent slopes; re-checks the lifted route and says what it did in the plan's
-/// `terrain` detail.
+/// Lifts a 2D route over the terrain (`lift`): `alt_m` above the ground everywhere along it,
+/// within the climb and descent slopes; re-checks the route (a 3D planner's as it is) against
+/// the ground exactly and says what it did in the plan's `terrain` detail.
 fn follow_terrain(
     terrain: &skyplan_map::terrain::Terrain,
     r: &Resolved,
     route: &mut Route,
+    lift: bool,
 ) -> Result<(), PlanFailure> {
     let slopes = r.terrain_slopes;
     let agl_m = r.alt_m;
-    let ne: Vec<[f64; 2]> = route.points.iter().map(|p| [p[0], p[1]]).collect();
-    let lifted = terrain
-        .follow(&ne, agl_m, slopes)
-        .map_err(|e| PlanFailure::bad_request(format!("terrain: {e}")))?;
+    let lifted = if lift {
+        let ne: Vec<[f64; 2]> = route.points.iter().map(|p| [p[0], p[1]]).collect();
+        terrain
+            .follow(&ne, agl_m, slopes)
+            .map_err(|e| PlanFailure::bad_request(format!("terrain: {e}")))?
+    } else {
+        route.points.clone()
+    };
     terrain.check_clearance(&lifted, agl_m).map_err(|e| {
         PlanFailure::internal(format!(
             "internal check failed: {e}; please report this with the request"

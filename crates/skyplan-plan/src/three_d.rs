@@ -129,6 +129,18 @@ pub(crate) fn sampling(
     Ok(route)
 }
 
+/// The key of the session's kept PRM roadmap: the volume, the margin, and over terrain the
+/// height above it (the columns' tops depend on it).
+fn prm_key(session: &Session, r: &crate::request::Resolved, lazy: bool) -> crate::session::Key {
+    crate::session::key([
+        r.safety_m,
+        r.min_alt_m,
+        r.max_alt_m,
+        if lazy { 1.0 } else { 0.0 },
+        session.world().terrain().map_or(-1.0, |_| r.alt_m),
+    ])
+}
+
 /// PRM or lazy PRM: the run, its roadmap's statistics (saved if asked), the shortcut path, and
 /// the roadmap kept by the session for the next request on this volume.
 fn prm(
@@ -171,12 +183,7 @@ fn prm(
             skyplan_sampling::shortcut::simplify(world.as_ref(), &solution.path, &mut rng, 200);
         solution.cost_m = skyplan_world3::path_length_m(&solution.path);
     }
-    let lazy = if kind == PlannerKind::LazyPrm {
-        1.0
-    } else {
-        0.0
-    };
-    let key = [r.safety_m, r.min_alt_m, r.max_alt_m, lazy].map(f64::to_bits);
+    let key = prm_key(session, r, kind == PlannerKind::LazyPrm);
     if session.prm.len() >= 8 {
         session.prm.clear();
     }
@@ -207,13 +214,7 @@ fn run_prm(
         }
         return Ok(solve_from(world, roadmap, start, goal, 0, budget));
     }
-    let key = [
-        r.safety_m,
-        r.min_alt_m,
-        r.max_alt_m,
-        if lazy { 1.0 } else { 0.0 },
-    ]
-    .map(f64::to_bits);
+    let key = prm_key(session, r, lazy);
     if let Some(roadmap) = session.prm.remove(&key) {
         return Ok(solve_from(world, roadmap, start, goal, 0, budget));
     }

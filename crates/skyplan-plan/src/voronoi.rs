@@ -17,7 +17,7 @@ fn kept_roadmap(
     grid: &skyplan_cspace::Grid2,
     r: &crate::request::Resolved,
 ) -> Arc<Roadmap> {
-    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0].map(f64::to_bits);
+    let k = [r.alt_m, r.safety_m, r.cell_m, 0.0, 0.0].map(f64::to_bits);
     if let Some(m) = session.voronoi.get(&k) {
         return Arc::clone(m);
     }

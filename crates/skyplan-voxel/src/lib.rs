@@ -249,8 +249,10 @@ fn lattice_axis(bounds: &Aabb, step: Neu, a: usize) -> Result<(f64, usize), Voxe
         ))
     };
     let mut first = (bounds.min[a] / step[a]).ceil();
-    if a == 2 && first < 1.0 {
-        first = 1.0; // no layer on or under the ground at altitude 0
+    if a == 2 && first < 1.0 && bounds.min[2] >= 0.0 {
+        // No layer on or under the ground at altitude 0 (over terrain the volume reaches below
+        // home, and the ground is among the boxes).
+        first = 1.0;
     }
     let mut origin = first * step[a];
     let span = ((bounds.max[a] - origin) / step[a]).floor();
