@@ -282,6 +282,70 @@ fn three_d_routes_keep_the_height_above_the_ground_by_rasterio() {
     }
 }
 
+/// A 3D plan's trajectory over terrain: its samples (10 Hz), put on the Earth about the map's
+/// home, stay H above rasterio's ground each metre; the report says how it was made.
+#[test]
+#[ignore = "needs rasterio (pip)"]
+fn three_d_trajectories_keep_the_height_above_the_ground_by_rasterio() {
+    use skyplan_frames::{Lla, LocalFrame, Ned};
+    let dir = tempfile::tempdir().unwrap();
+    let path = data("terrain/jacksboro.tif");
+    let agl = 30.0;
+    let v = ok_json(
+        dir.path(),
+        &format!(
+            "plan --json --map {} --terrain {} --alt-agl-m {agl} --planner voxel --start-ne 0,0 --goal-ne 550,450 --trajectory",
+            data("terrain/blocks.csv").display(),
+            path.display()
+        ),
+    );
+    let tr = &v["trajectory"];
+    assert!(tr["method"].is_string(), "{tr}");
+    let ground = v["terrain"]["home_ground_amsl_m"].as_f64().unwrap();
+    let frame = LocalFrame::new(Lla {
+        lat_deg: 36.56,
+        lon_deg: -84.28,
+        alt_m: 0.0,
+    })
+    .unwrap();
+    let lla: Vec<[f64; 3]> = tr["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| {
+            let r: Vec<f64> = row
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let p = frame
+                .lla_from_ned(Ned {
+                    north_m: r[1],
+                    east_m: r[2],
+                    down_m: 0.0,
+                })
+                .unwrap();
+            [p.lat_deg, p.lon_deg, r[3] + ground]
+        })
+        .collect();
+    assert!(lla.len() > 100);
+    let [lo, median, hi] = clearance_by_rasterio(&path, &serde_json::json!(lla));
+    eprintln!("voxel trajectory: clearance {lo:.2} / {median:.1} / {hi:.1} m");
+    assert!(lo >= agl - 0.05, "lowest clearance {lo} m");
+    // 2D planners lift their route after planning: no corridor knows the ground for them.
+    fails_with(
+        dir.path(),
+        &format!(
+            "plan --map {} --terrain {} --alt-agl-m {agl} --start-ne 0,0 --goal-ne 550,450 --trajectory",
+            data("terrain/blocks.csv").display(),
+            path.display()
+        ),
+        2,
+        &["trajectory", "3D planner", "voxel"],
+    );
+}
+
 #[test]
 fn slower_climbs_start_earlier() {
     let dir = tempfile::tempdir().unwrap();
@@ -353,7 +417,7 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
         dir.path(),
         &format!("{here} --trajectory"),
         2,
-        &["trajectory", "terrain"],
+        &["trajectory", "terrain", "3D planner"],
     );
     fails_with(
         dir.path(),

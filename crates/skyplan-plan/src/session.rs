@@ -714,6 +714,17 @@ impl Session {
                 }
                 _ => PlanFailure::internal(format!("trajectory: {e}")),
             })?;
+        let samples = traj.samples(spec.sample_hz);
+        if let Some(t) = self.world.terrain() {
+            // The corridor's boxes stand on the ground's columns; the samples (centimetres
+            // off the curve at 10 Hz) are checked against the ground itself.
+            let path: Vec<[f64; 3]> = samples.iter().map(|s| [s[1], s[2], s[3]]).collect();
+            t.check_clearance(&path, r.alt_m - 0.05).map_err(|e| {
+                PlanFailure::internal(format!(
+                    "internal check failed: trajectory: {e}; please report this with the request"
+                ))
+            })?;
+        }
         let stop = tj::stop_at_waypoints(&route, &spec.limits)
             .map_err(|e| PlanFailure::internal(format!("trajectory: {e}")))?;
         let length: f64 = skyplan_world3::path_length_m(&route);
@@ -721,7 +732,7 @@ impl Session {
             duration_s: traj.duration_s(),
             sample_hz: spec.sample_hz,
             columns: TRAJECTORY_COLUMNS,
-            samples: traj.samples(spec.sample_hz),
+            samples,
             length_m: traj.length_m(),
             stop_at_waypoints_s: stop.duration_s(),
             length_over_max_speed_s: length / spec.limits.max_speed_m_s,
@@ -1149,10 +1160,16 @@ fn zones_over_terrain(
 
 /// Whether a request can be planned over terrain (before planning it).
 fn check_terrain_request(r: &Resolved) -> Result<(), PlanFailure> {
-    if r.trajectory.is_some() {
-        return Err(PlanFailure::bad_request(
-            "trajectory: over terrain not yet (the corridor does not know the ground); plan the route without --trajectory",
-        ));
+    if r.trajectory.is_some() && r.planner.info().dims == 2 {
+        return Err(PlanFailure::bad_request(format!(
+            "trajectory: over terrain only with a 3D planner ({}), whose corridor stands on the ground's columns; planner {} lifts its route after planning",
+            PlannerId::for_maps(true)
+                .filter(|p| p.info().dims == 3)
+                .map(|p| p.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+            r.planner
+        )));
     }
     let slopes = r.terrain_slopes;
     if !slopes.iter().all(|s| s.is_finite() && *s > 0.0) {
