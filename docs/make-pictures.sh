@@ -22,7 +22,7 @@ trap 'rm -rf "$tmp"' EXIT
     --change-target-at "120:100.5,150.5" --inflation-radius-m 6 --plot docs/heatmap.png
 # docs/PLANNING.md: the default route's trajectory, coloured by speed, with speed and acceleration.
 "$skyplan" plan --trajectory --out "$tmp/w.json" --plot docs/trajectory.png
-# README: a route 30 m above the hills of a real DEM, with its side profile.
+# README: a route 30 m above the hills of a real DEM (contours in the top view), with its side profile.
 "$skyplan" plan --random 3000x3000 --density 0.0002 --home 36.56,-84.28 --terrain data/terrain/jacksboro.tif \
     --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800 --out "$tmp/w.json" --plot docs/terrain.png
 # docs/FLYING.md: a flight around three seeded buildings the map does not have.

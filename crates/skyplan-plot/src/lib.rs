@@ -46,6 +46,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod contour;
 mod draw;
 mod heatmap;
 mod layout;

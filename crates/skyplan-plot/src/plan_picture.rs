@@ -243,6 +243,9 @@ fn picture3d(
         .terrain()
         .map(|t| ground_profile(t, &points))
         .unwrap_or_default();
+    let ground_grid = world
+        .terrain()
+        .map(|t| ground_grid(t, &points, &geometry.raw_path));
     let scene = crate::Scene3d {
         title: format!(
             "{map}: {}, {:.0} m, margin {safety_m} m{}",
@@ -262,8 +265,37 @@ fn picture3d(
         edges: &edges,
         edges_label: &geometry.edges_label,
         ground: &ground,
+        ground_grid: ground_grid.as_ref(),
     };
     crate::profile::render_plan3d_traced(&scene, trace.as_ref(), format, 1500, 900)
+}
+
+/// The ground over the top view's square, 160 samples a side (unknown where the DEM does not
+/// reach), for its contours.
+fn ground_grid(
+    terrain: &skyplan_map::terrain::Terrain,
+    points: &[[f64; 3]],
+    raw_path: &[[f64; 3]],
+) -> crate::contour::GroundGrid {
+    let (centre, side) = crate::profile::top_view_square(points, raw_path);
+    let n = 160;
+    let step_m = side / (n - 1) as f64;
+    let origin_ne = [centre[0] - side / 2.0, centre[1] - side / 2.0];
+    let values = (0..n * n)
+        .map(|k| {
+            let (i, j) = ((k / n) as f64, (k % n) as f64);
+            terrain
+                .ground_m(origin_ne[0] + i * step_m, origin_ne[1] + j * step_m)
+                .unwrap_or(f64::NAN)
+        })
+        .collect();
+    crate::contour::GroundGrid {
+        origin_ne,
+        step_m,
+        north_n: n,
+        east_n: n,
+        values,
+    }
 }
 
 /// The ground under a route every ~1/600 of its horizontal length: `[distance, altitude above

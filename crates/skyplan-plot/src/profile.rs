@@ -20,6 +20,7 @@ const GOAL_COLOR: RGBColor = RGBColor(222, 30, 30);
 const FRAME_COLOR: RGBColor = RGBColor(40, 40, 40);
 const GRID_COLOR: RGBColor = RGBColor(232, 232, 232);
 const GROUND_COLOR: RGBColor = RGBColor(214, 196, 160);
+const CONTOUR_COLOR: RGBColor = RGBColor(160, 120, 70);
 const GROUND_LINE: RGBColor = RGBColor(140, 110, 60);
 
 /// What a 3D route picture shows. Points are `[north_m, east_m, alt_m]`.
@@ -45,6 +46,9 @@ pub struct Scene3d<'a> {
     /// metres, in order (over terrain; empty: flat ground at altitude 0). Drawn filled under
     /// the profile; buildings stand on it.
     pub ground: &'a [[f64; 2]],
+    /// The ground around the route (over terrain), drawn as contours in the top view; `None`
+    /// for flat ground.
+    pub ground_grid: Option<&'a crate::contour::GroundGrid>,
 }
 
 /// The ground's altitude at distance `d_m` along the route (0 without a ground profile).
@@ -167,7 +171,8 @@ pub fn profile_columns(
 /// let b = ObstacleBox { north_m: 50.0, east_m: 0.0, up_m: 10.0, half_north_m: 5.0, half_east_m: 5.0, half_up_m: 10.0 };
 /// let path = [[0.0, 0.0, 5.0], [40.0, 0.0, 25.0], [60.0, 0.0, 25.0], [100.0, 0.0, 5.0]];
 /// let scene = Scene3d { title: "over the roof".into(), obstacles: &[b], safety_m: 2.0, path: &path,
-///                       raw_path: &[], raw_label: "", edges: &[], edges_label: "", ground: &[] };
+///                       raw_path: &[], raw_label: "", edges: &[], edges_label: "", ground: &[],
+///                       ground_grid: None };
 /// let png = render_plan3d(&scene, PlotFormat::Png, 1000, 600)?;
 /// assert_eq!(&png[1..4], b"PNG");
 /// let svg = String::from_utf8(render_plan3d(&scene, PlotFormat::Svg, 1000, 600)?)?;
@@ -454,17 +459,33 @@ fn draw3d<DB: DrawingBackend>(
     )
 }
 
-/// The top view's panel: the route's surroundings, equal scales, square, on the left.
-fn top_panel(scene: &Scene3d, (w, h): (i32, i32), font: f64) -> Panel {
+/// The square the top view shows around a route: its centre `[north, east]` and side, metres.
+pub(crate) fn top_view_square(path: &[[f64; 3]], raw_path: &[[f64; 3]]) -> ([f64; 2], f64) {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in scene.path.iter().chain(scene.raw_path) {
+    for p in path.iter().chain(raw_path) {
         for a in 0..2 {
             lo[a] = lo[a].min(p[a]);
             hi[a] = hi[a].max(p[a]);
         }
     }
     let side = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(20.0) * 1.2 + 40.0;
-    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], side)
+}
+
+/// Contour levels of the ground: about a dozen, on a 1-2-5 step.
+fn contour_levels(g: &crate::contour::GroundGrid) -> Vec<f64> {
+    let known = g.values.iter().filter(|v| v.is_finite());
+    let lo = known.clone().fold(f64::INFINITY, |a, &b| a.min(b));
+    let hi = known.fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    if !(lo.is_finite() && hi > lo) {
+        return Vec::new();
+    }
+    ticks(lo, hi, 12.0)
+}
+
+/// The top view's panel: the route's surroundings, equal scales, square, on the left.
+fn top_panel(scene: &Scene3d, (w, h): (i32, i32), font: f64) -> Panel {
+    let (centre, side) = top_view_square(scene.path, scene.raw_path);
     let title_h = (2.6 * font) as i32;
     let left = (4.6 * font) as i32;
     let bottom = (3.6 * font) as i32;
@@ -497,6 +518,22 @@ fn draw_top_view<DB: DrawingBackend>(
         let mut chart = ChartBuilder::on(&area)
             .build_cartesian_2d(top.xr.0..top.xr.1, top.yr.0..top.yr.1)
             .map_err(err)?;
+        if let Some(g) = scene.ground_grid {
+            for level in contour_levels(g) {
+                chart
+                    .draw_series(
+                        crate::contour::contour_segments(g, level)
+                            .into_iter()
+                            .map(|s| {
+                                PathElement::new(
+                                    vec![(s[0][1], s[0][0]), (s[1][1], s[1][0])],
+                                    CONTOUR_COLOR.stroke_width(1),
+                                )
+                            }),
+                    )
+                    .map_err(err)?;
+            }
+        }
         let mut boxes: Vec<&ObstacleBox> = scene.obstacles.iter().collect();
         boxes.sort_by(|a, b| a.top_m().total_cmp(&b.top_m()));
         chart
@@ -728,6 +765,18 @@ fn draw_legend3d<DB: DrawingBackend>(
     }
     if !scene.ground.is_empty() {
         entries.push(("ground (DEM)", Swatch::Fill(GROUND_COLOR)));
+    }
+    let contour_text = scene.ground_grid.and_then(|g| {
+        let levels = contour_levels(g);
+        (levels.len() > 1).then(|| {
+            format!(
+                "ground contours every {} m (top view)",
+                levels[1] - levels[0]
+            )
+        })
+    });
+    if let Some(text) = &contour_text {
+        entries.push((text, Swatch::Line(CONTOUR_COLOR, 1.0)));
     }
     if scene.raw_path.len() > 1 && !scene.raw_label.is_empty() {
         entries.insert(1, (scene.raw_label, Swatch::Line(RAW_COLOR, 2.0)));
