@@ -44,6 +44,9 @@ shot="$tmp/serve.png"
 if [ "${SKYPLAN_SCREENSHOT:-0}" = 1 ]; then shot="$root/docs/serve.png"; fi
 node "$here/browser/page.test.mjs" "$bin" "$shot"
 
+step "serve: real maps on the page (a DEM's contours, GeoJSON footprints)"
+node "$here/browser/real_map.test.mjs" "$bin"
+
 step "serve: a flight on the page (the view_flight example: what fly --view publishes)"
 (cd "$root" && cargo build -p skyplan-server --example view_flight --quiet)
 flight_shot="$tmp/view-flight.png"

@@ -572,9 +572,15 @@ pub struct SimArgs {
 
 #[derive(Debug, Args)]
 pub struct ServeArgs {
-    /// Map to serve: .csv (colliders), .yaml (map_server), .map (MovingAI) [default: the bundled city].
+    /// Map to serve: .csv (colliders), .yaml (map_server), .png/.pgm (with --resolution), .map (MovingAI), .geojson (building footprints) or .osm/.osm.pbf (OpenStreetMap buildings) [default: the bundled city].
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
+    /// The map's options: --resolution, --unknown-free, --random, --density, --home.
+    #[command(flatten)]
+    pub grid: crate::grid_args::GridMapArgs,
+    /// The ground under the map, a DEM (GeoTIFF or SRTM .hgt): plans keep alt_agl_m above it, and the page draws its contours.
+    #[arg(long, value_name = "FILE")]
+    pub terrain: Option<PathBuf>,
     /// Address to listen on; only loopback unless another address is named.
     #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:8080")]
     pub bind: std::net::SocketAddr,

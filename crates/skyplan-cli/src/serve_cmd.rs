@@ -2,14 +2,15 @@
 
 use crate::args::ServeArgs;
 use crate::exit::{Result, runtime};
-use crate::grid_args::GridMapArgs;
 use skyplan_server::ServerConfig;
 use std::time::Duration;
 
 pub fn run(args: ServeArgs) -> Result<()> {
     let limits = crate::args::limits(None);
-    let world =
-        crate::world_load::load_world(args.map.as_deref(), &GridMapArgs::default(), 1, &limits)?;
+    let mut world = crate::world_load::load_world(args.map.as_deref(), &args.grid, 1, &limits)?;
+    if let Some(path) = &args.terrain {
+        world = crate::world_load::with_terrain(world, path)?;
+    }
     // Opened once here so that a bad address or database fails the command, not each request.
     skyplan_server::open_airspace(&args.airspace)
         .map_err(|e| runtime(format!("--airspace {}: {e}", args.airspace)))?;

@@ -71,6 +71,25 @@ fn load_file(path: &Path, g: &GridMapArgs, limits: &Limits) -> Result<World> {
     })
 }
 
+/// Puts the map on the DEM in `path` (GeoTIFF or SRTM `.hgt`), read with its size bounded.
+pub fn with_terrain(world: World, path: &Path) -> Result<World> {
+    let name = path.display().to_string();
+    // Bounded before reading: a DEM is at most 100 M samples of up to 8 bytes.
+    if let Ok(meta) = std::fs::metadata(path)
+        && meta.len() > skyplan_map::terrain::MAX_DEM_SAMPLES * 8
+    {
+        return Err(bad_input(format!(
+            "{name}: {} bytes is more than a DEM of {} samples can hold; crop it (gdal_translate -projwin)",
+            meta.len(),
+            skyplan_map::terrain::MAX_DEM_SAMPLES
+        )));
+    }
+    let bytes = crate::files::read_bytes(path)?;
+    let dem = skyplan_map::terrain::parse_dem(&name, &bytes)
+        .map_err(|e| bad_input(format!("{name}: {e}")))?;
+    Ok(world.with_terrain(&name, dem)?)
+}
+
 /// The route options resolved: the world, the request (command line over config file), and the
 /// config's file options.
 pub struct Resolved {
@@ -98,21 +117,7 @@ pub fn resolve(a: &RouteArgs) -> Result<Resolved> {
     }
     let mut world = load_world(map.as_deref(), &a.grid, request.seed_or_default(), &limits)?;
     if let Some(path) = a.terrain.clone().or(config.path(&config.text.terrain)) {
-        let name = path.display().to_string();
-        // Bounded before reading: a DEM is at most 100 M samples of up to 8 bytes.
-        if let Ok(meta) = std::fs::metadata(&path)
-            && meta.len() > skyplan_map::terrain::MAX_DEM_SAMPLES * 8
-        {
-            return Err(bad_input(format!(
-                "{name}: {} bytes is more than a DEM of {} samples can hold; crop it (gdal_translate -projwin)",
-                meta.len(),
-                skyplan_map::terrain::MAX_DEM_SAMPLES
-            )));
-        }
-        let bytes = crate::files::read_bytes(&path)?;
-        let dem = skyplan_map::terrain::parse_dem(&name, &bytes)
-            .map_err(|e| bad_input(format!("{name}: {e}")))?;
-        world = world.with_terrain(&name, dem)?;
+        world = with_terrain(world, &path)?;
     } else if request.alt_agl_m.is_some() {
         return Err(bad_input(
             "--alt-agl-m keeps a height above the ground: give the ground with --terrain FILE (a GeoTIFF or SRTM .hgt DEM)",

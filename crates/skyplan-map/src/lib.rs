@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod colliders;
+pub mod contour;
 pub mod footprints;
 pub mod maze;
 pub mod movingai;

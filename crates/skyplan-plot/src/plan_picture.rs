@@ -276,7 +276,7 @@ fn ground_grid(
     terrain: &skyplan_map::terrain::Terrain,
     points: &[[f64; 3]],
     raw_path: &[[f64; 3]],
-) -> crate::contour::GroundGrid {
+) -> skyplan_map::contour::GroundGrid {
     let (centre, side) = crate::profile::top_view_square(points, raw_path);
     let n = 160;
     let step_m = side / (n - 1) as f64;
@@ -289,7 +289,7 @@ fn ground_grid(
                 .unwrap_or(f64::NAN)
         })
         .collect();
-    crate::contour::GroundGrid {
+    skyplan_map::contour::GroundGrid {
         origin_ne,
         step_m,
         north_n: n,

@@ -48,7 +48,7 @@ pub struct Scene3d<'a> {
     pub ground: &'a [[f64; 2]],
     /// The ground around the route (over terrain), drawn as contours in the top view; `None`
     /// for flat ground.
-    pub ground_grid: Option<&'a crate::contour::GroundGrid>,
+    pub ground_grid: Option<&'a skyplan_map::contour::GroundGrid>,
 }
 
 /// The ground's altitude at distance `d_m` along the route (0 without a ground profile).
@@ -473,7 +473,7 @@ pub(crate) fn top_view_square(path: &[[f64; 3]], raw_path: &[[f64; 3]]) -> ([f64
 }
 
 /// Contour levels of the ground: about a dozen, on a 1-2-5 step.
-fn contour_levels(g: &crate::contour::GroundGrid) -> Vec<f64> {
+fn contour_levels(g: &skyplan_map::contour::GroundGrid) -> Vec<f64> {
     let known = g.values.iter().filter(|v| v.is_finite());
     let lo = known.clone().fold(f64::INFINITY, |a, &b| a.min(b));
     let hi = known.fold(f64::NEG_INFINITY, |a, &b| a.max(b));
@@ -522,7 +522,7 @@ fn draw_top_view<DB: DrawingBackend>(
             for level in contour_levels(g) {
                 chart
                     .draw_series(
-                        crate::contour::contour_segments(g, level)
+                        skyplan_map::contour::contour_segments(g, level)
                             .into_iter()
                             .map(|s| {
                                 PathElement::new(

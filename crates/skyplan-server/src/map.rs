@@ -123,8 +123,28 @@ pub(crate) fn map_info(world: &World) -> Value {
                 .collect()
         })
         .unwrap_or_default();
-    let max_top_m = obstacles.iter().map(|o| o[5]).fold(0.0, f64::max);
+    // Footprint maps: each building's rings (outer first, then holes) and its band.
+    let footprints: Vec<Value> = world
+        .footprints()
+        .map(|m| {
+            m.footprints
+                .iter()
+                .map(|f| json!({ "rings": f.rings, "bottom_m": f.min_height_m, "top_m": f.height_m }))
+                .collect()
+        })
+        .unwrap_or_default();
+    let max_top_m = obstacles
+        .iter()
+        .map(|o| o[5])
+        .chain(
+            world
+                .footprints()
+                .into_iter()
+                .flat_map(|m| m.footprints.iter().map(|f| f.height_m)),
+        )
+        .fold(0.0, f64::max);
     let (default_start_ne, default_goal_ne) = world.default_endpoints_ne();
+    let terrain = world.terrain().map(|t| terrain_info(t, &bounds));
     json!({
         "name": world.name(),
         "kind": world.kind(),
@@ -135,5 +155,64 @@ pub(crate) fn map_info(world: &World) -> Value {
         "obstacle_fields": ["north_m", "east_m", "half_north_m", "half_east_m", "bottom_m", "top_m"],
         "obstacles": obstacles,
         "max_top_m": max_top_m,
+        "footprints": footprints,
+        "terrain": terrain,
+    })
+}
+
+/// The ground under the map (over terrain): contour lines over its bounds, from 200 samples a
+/// side, at about a dozen levels on a 1-2-5 step.
+fn terrain_info(t: &skyplan_map::terrain::Terrain, b: &skyplan_plan::BoundsNe) -> Value {
+    use skyplan_map::contour::{GroundGrid, contour_segments};
+    let n = 200;
+    let span = (b.north_max_m - b.north_min_m).max(b.east_max_m - b.east_min_m);
+    let step_m = (span / (n - 1) as f64).max(1e-3);
+    let north_n = (((b.north_max_m - b.north_min_m) / step_m).ceil() as usize + 1).max(2);
+    let east_n = (((b.east_max_m - b.east_min_m) / step_m).ceil() as usize + 1).max(2);
+    let origin_ne = [b.north_min_m, b.east_min_m];
+    let values: Vec<f64> = (0..north_n * east_n)
+        .map(|k| {
+            let (i, j) = ((k / east_n) as f64, (k % east_n) as f64);
+            t.ground_m(origin_ne[0] + i * step_m, origin_ne[1] + j * step_m)
+                .unwrap_or(f64::NAN)
+        })
+        .collect();
+    let known = values.iter().copied().filter(|v| v.is_finite());
+    let lo = known.clone().fold(f64::INFINITY, f64::min);
+    let hi = known.fold(f64::NEG_INFINITY, f64::max);
+    let grid = GroundGrid {
+        origin_ne,
+        step_m,
+        north_n,
+        east_n,
+        values,
+    };
+    let mut contours = Vec::new();
+    let mut interval_m = Value::Null;
+    if lo.is_finite() && hi > lo {
+        let raw = (hi - lo) / 12.0;
+        let p = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0]
+            .into_iter()
+            .map(|m| m * p)
+            .find(|&s| s >= raw)
+            .unwrap_or(10.0 * p);
+        interval_m = json!(step);
+        let mut level = (lo / step).ceil() * step;
+        while level <= hi {
+            let segments: Vec<[[f64; 2]; 2]> = contour_segments(&grid, level)
+                .into_iter()
+                .map(|s| s.map(|p| p.map(|x| (x * 100.0).round() / 100.0)))
+                .collect();
+            contours.push(json!({ "level_m": level, "segments": segments }));
+            level += step;
+        }
+    }
+    json!({
+        "home_ground_amsl_m": t.home_ground_amsl_m(),
+        "lowest_m": if lo.is_finite() { json!(lo) } else { Value::Null },
+        "highest_m": if hi.is_finite() { json!(hi) } else { Value::Null },
+        "interval_m": interval_m,
+        "contours": contours,
     })
 }

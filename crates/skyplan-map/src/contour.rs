@@ -22,7 +22,7 @@ pub struct GroundGrid {
 /// value). Cells with an unknown corner are left out.
 ///
 /// ```
-/// use skyplan_plot::contour::{GroundGrid, contour_segments};
+/// use skyplan_map::contour::{GroundGrid, contour_segments};
 /// // A plane rising to the east, 1 m per metre: the 2.5 m contour is the line east = 2.5.
 /// let values = (0..5 * 5).map(|k| (k % 5) as f64).collect();
 /// let g = GroundGrid { origin_ne: [0.0, 0.0], step_m: 1.0, north_n: 5, east_n: 5, values };
