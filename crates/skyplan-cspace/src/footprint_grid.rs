@@ -80,29 +80,38 @@ pub(crate) fn block_near_edges(grid: &mut Grid2, rings: &[Vec<[f64; 2]>], margin
             let a = ring[k];
             let b = ring[(k + 1) % n];
             let (r0, r1) = row_range(grid, a[0].min(b[0]) - margin_m, a[0].max(b[0]) + margin_m);
+            let capsule = Capsule::new(a, b, margin_m);
             for r in r0..=r1 {
                 let y0 = n0 + r as f64 * c;
                 let y1 = y0 + c;
+                let start = r as usize * cols as usize;
+                if margin_m > 0.0 {
+                    // The cells of the row closer than the margin to the edge: those whose east
+                    // range meets the east extent of the capsule (the edge grown by the margin)
+                    // within the row's band, since a cell spans the whole band.
+                    let Some((xl, xr)) = capsule.band_span(y0, y1) else {
+                        continue;
+                    };
+                    let c0 = (((xl - e0) / c).floor() as i64).max(0);
+                    let c1 = ((((xr - e0) / c).ceil() as i64) - 1).min(cols - 1);
+                    if c0 <= c1 {
+                        grid.blocked[start + c0 as usize..=start + c1 as usize].fill(true);
+                    }
+                    continue;
+                }
                 // East extent of the edge's points whose north lies within the row ± margin.
                 let Some((xa, xb)) = east_span(a, b, y0 - margin_m, y1 + margin_m) else {
                     continue;
                 };
-                let c0 = (((xa - margin_m - e0) / c).floor() as i64).max(0);
-                let c1 = (((xb + margin_m - e0) / c).floor() as i64).min(cols - 1);
-                let start = r as usize * cols as usize;
+                let c0 = (((xa - e0) / c).floor() as i64).max(0);
+                let c1 = (((xb - e0) / c).floor() as i64).min(cols - 1);
                 for col in c0..=c1 {
                     let i = start + col as usize;
                     if grid.blocked[i] {
                         continue; // already blocked: skip the exact test
                     }
                     let x0 = e0 + col as f64 * c;
-                    let square = [[y0, x0], [y1, x0 + c]];
-                    let hit = if margin_m > 0.0 {
-                        segment_square_dist2(a, b, square) < margin_m * margin_m
-                    } else {
-                        segment_meets_open_square(a, b, square)
-                    };
-                    if hit {
+                    if segment_meets_open_square(a, b, [[y0, x0], [y1, x0 + c]]) {
                         grid.blocked[i] = true;
                     }
                 }
@@ -175,6 +184,97 @@ fn east_span(a: [f64; 2], b: [f64; 2], ylo: f64, yhi: f64) -> Option<(f64, f64)>
     Some((xa.min(xb), xa.max(xb)))
 }
 
+/// The open capsule of radius `m` around a segment `ab` (the points closer than `m` to it), as
+/// its two end discs and the rectangle the segment's normal sweeps.
+struct Capsule {
+    ends: [[f64; 2]; 2],
+    m: f64,
+    /// The rectangle's corners, in order around it (none for a segment of no length).
+    corners: Option<[[f64; 2]; 4]>,
+    /// The rectangle's lowest and highest north.
+    north_range: (f64, f64),
+}
+
+impl Capsule {
+    fn new(a: [f64; 2], b: [f64; 2], m: f64) -> Self {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len = d[0].hypot(d[1]);
+        let corners = (len > 0.0).then(|| {
+            let n = [-d[1] / len * m, d[0] / len * m];
+            [
+                [a[0] + n[0], a[1] + n[1]],
+                [b[0] + n[0], b[1] + n[1]],
+                [b[0] - n[0], b[1] - n[1]],
+                [a[0] - n[0], a[1] - n[1]],
+            ]
+        });
+        let north_range = corners.map_or((0.0, 0.0), |c| {
+            let ys = c.map(|p| p[0]);
+            (
+                ys.iter().fold(f64::INFINITY, |x, &y| x.min(y)),
+                ys.iter().fold(f64::NEG_INFINITY, |x, &y| x.max(y)),
+            )
+        });
+        Capsule {
+            ends: [a, b],
+            m,
+            corners,
+            north_range,
+        }
+    }
+
+    /// The east extent `(inf, sup)` of the capsule within the band of norths `[y0, y1]`, or
+    /// `None` if they do not meet. The extent of a convex set within a band is reached on the
+    /// band's lines or at the capsule's own east-most and west-most points (an end's disc, `m`
+    /// east or west of it).
+    fn band_span(&self, y0: f64, y1: f64) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in self.ends {
+            if p[0] >= y0 && p[0] <= y1 {
+                lo = lo.min(p[1] - self.m);
+                hi = hi.max(p[1] + self.m);
+            }
+        }
+        for y in [y0, y1] {
+            if let Some((l, r)) = self.chord(y) {
+                lo = lo.min(l);
+                hi = hi.max(r);
+            }
+        }
+        (lo < hi).then_some((lo, hi))
+    }
+
+    /// The east extent of the capsule on the line of north `y`: the union of its end discs'
+    /// chords and the rectangle's (each convex, the union an interval as the capsule is).
+    fn chord(&self, y: f64) -> Option<(f64, f64)> {
+        let m = self.m;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in self.ends {
+            let dy = y - p[0];
+            if dy.abs() < m {
+                let h = (m * m - dy * dy).sqrt();
+                lo = lo.min(p[1] - h);
+                hi = hi.max(p[1] + h);
+            }
+        }
+        // Only a line through the open rectangle (not along a side or through one corner).
+        if let Some(corners) = &self.corners
+            && y > self.north_range.0
+            && y < self.north_range.1
+        {
+            for k in 0..4 {
+                let (p, q) = (corners[k], corners[(k + 1) % 4]);
+                if (p[0] - y) * (q[0] - y) <= 0.0 && p[0] != q[0] {
+                    let x = p[1] + (y - p[0]) / (q[0] - p[0]) * (q[1] - p[1]);
+                    lo = lo.min(x);
+                    hi = hi.max(x);
+                }
+            }
+        }
+        (lo < hi).then_some((lo, hi))
+    }
+}
+
 /// The part `[t0, t1]` of segment `ab` inside the closed box `[lo, hi]` (Liang–Barsky), if any.
 fn clip(a: [f64; 2], b: [f64; 2], [lo, hi]: [[f64; 2]; 2]) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
@@ -192,39 +292,6 @@ fn clip(a: [f64; 2], b: [f64; 2], [lo, hi]: [[f64; 2]; 2]) -> Option<(f64, f64)>
         }
     }
     (t0 <= t1).then_some((t0, t1))
-}
-
-fn point_square_dist2(p: [f64; 2], [lo, hi]: [[f64; 2]; 2]) -> f64 {
-    let dy = (lo[0] - p[0]).max(p[0] - hi[0]).max(0.0);
-    let dx = (lo[1] - p[1]).max(p[1] - hi[1]).max(0.0);
-    dy * dy + dx * dx
-}
-
-fn point_segment_dist2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let len2 = d[0] * d[0] + d[1] * d[1];
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let q = [a[0] + t * d[0] - p[0], a[1] + t * d[1] - p[1]];
-    q[0] * q[0] + q[1] * q[1]
-}
-
-/// Squared distance between segment `ab` and the closed square: 0 if they meet, else the
-/// smallest of the endpoint-to-square and corner-to-segment distances (two disjoint convex
-/// sets are closest at a vertex of one of them).
-pub(crate) fn segment_square_dist2(a: [f64; 2], b: [f64; 2], square: [[f64; 2]; 2]) -> f64 {
-    if clip(a, b, square).is_some() {
-        return 0.0;
-    }
-    let [lo, hi] = square;
-    let corners = [lo, [lo[0], hi[1]], hi, [hi[0], lo[1]]];
-    corners.iter().map(|&q| point_segment_dist2(q, a, b)).fold(
-        point_square_dist2(a, square).min(point_square_dist2(b, square)),
-        f64::min,
-    )
 }
 
 /// Whether segment `ab` meets the open square: its part in the closed square has its midpoint
@@ -518,6 +585,76 @@ pub(crate) mod tests {
         assert_eq!(at(5.0, 1.0), 0);
         assert_eq!(at(9.5, 1.0), 400 - 64);
         assert_eq!(at(31.0, 1.0), 0);
+    }
+
+    // The per-cell exact distance the capsule spans replaced, kept as their oracle.
+    fn point_square_dist2(p: [f64; 2], [lo, hi]: [[f64; 2]; 2]) -> f64 {
+        let dy = (lo[0] - p[0]).max(p[0] - hi[0]).max(0.0);
+        let dx = (lo[1] - p[1]).max(p[1] - hi[1]).max(0.0);
+        dy * dy + dx * dx
+    }
+
+    fn point_segment_dist2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len2 = d[0] * d[0] + d[1] * d[1];
+        let t = if len2 > 0.0 {
+            (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let q = [a[0] + t * d[0] - p[0], a[1] + t * d[1] - p[1]];
+        q[0] * q[0] + q[1] * q[1]
+    }
+
+    /// Squared distance between segment `ab` and the closed square: 0 if they meet, else the
+    /// smallest of the endpoint-to-square and corner-to-segment distances (two disjoint convex
+    /// sets are closest at a vertex of one of them).
+    fn segment_square_dist2(a: [f64; 2], b: [f64; 2], square: [[f64; 2]; 2]) -> f64 {
+        if clip(a, b, square).is_some() {
+            return 0.0;
+        }
+        let [lo, hi] = square;
+        let corners = [lo, [lo[0], hi[1]], hi, [hi[0], lo[1]]];
+        corners.iter().map(|&q| point_segment_dist2(q, a, b)).fold(
+            point_square_dist2(a, square).min(point_square_dist2(b, square)),
+            f64::min,
+        )
+    }
+
+    /// The capsule's span within a row band blocks exactly the cells of that row whose
+    /// distance to the segment is under the margin, on random segments, bands and margins.
+    #[test]
+    fn capsule_spans_equal_the_per_cell_distance_test() {
+        let mut rng = Rng(4242);
+        let mut checked = 0;
+        for _ in 0..3000 {
+            let a = [20.0 * rng.unit(), 20.0 * rng.unit()];
+            let b = if rng.unit() < 0.15 {
+                // Axis-aligned and degenerate edges, on the cell lines too.
+                [a[0].round(), (a[1] + 10.0 * rng.unit()).round()]
+            } else {
+                [20.0 * rng.unit(), 20.0 * rng.unit()]
+            };
+            let a = if rng.unit() < 0.1 {
+                [a[0].round(), a[1].round()]
+            } else {
+                a
+            };
+            let m = [0.5, 1.0, 2.5, 4.0][(rng.unit() * 4.0) as usize % 4];
+            let y0 = (rng.unit() * 20.0).floor();
+            let span = Capsule::new(a, b, m).band_span(y0, y0 + 1.0);
+            for col in -8..30 {
+                let x0 = col as f64;
+                let want = segment_square_dist2(a, b, [[y0, x0], [y0 + 1.0, x0 + 1.0]]) < m * m;
+                let got = span.is_some_and(|(l, r)| x0 < r && x0 + 1.0 > l);
+                assert_eq!(
+                    got, want,
+                    "a {a:?} b {b:?} m {m} band {y0} col {col}: span {span:?}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 100_000);
     }
 
     #[test]
