@@ -322,22 +322,8 @@ impl Dem {
                         .ok()
                     })
                     .collect();
-                let f = |g: fn(&(f64, f64)) -> f64, min: bool| {
-                    corners.iter().map(g).fold(
-                        if min {
-                            f64::INFINITY
-                        } else {
-                            f64::NEG_INFINITY
-                        },
-                        |a, b| if min { a.min(b) } else { a.max(b) },
-                    )
-                };
-                [
-                    f(|c| c.0, true),
-                    f(|c| c.0, false),
-                    f(|c| c.1, true),
-                    f(|c| c.1, false),
-                ]
+                // (lat, lon) pairs: their box is [lat_min, lat_max, lon_min, lon_max].
+                pixel_box(&corners)
             }
         }
     }
@@ -804,6 +790,39 @@ impl Terrain {
         Ok(self.dem.elevation_amsl_m(lla.lat_deg, lla.lon_deg)? - self.home_ground_amsl_m)
     }
 
+    /// The pixel positions of the corners of the local rectangle `north` × `east`, in order
+    /// around it; a corner off the DEM is named (`what` says whose rectangle it is).
+    fn rect_pixels(
+        &self,
+        north: [f64; 2],
+        east: [f64; 2],
+        what: &str,
+    ) -> Result<[(f64, f64); 4], TerrainError> {
+        let corners = [
+            [north[0], east[0]],
+            [north[0], east[1]],
+            [north[1], east[1]],
+            [north[1], east[0]],
+        ];
+        let mut px = [(0.0, 0.0); 4];
+        for (slot, c) in px.iter_mut().zip(corners) {
+            *slot = self.pixel_ne(c).map_err(|e| match e {
+                TerrainError::NotCovered { .. } => self
+                    .lla(c)
+                    .map(|l| {
+                        self.dem.not_covered(
+                            l.lat_deg,
+                            l.lon_deg,
+                            &format!(", the corner N {:.1} m, E {:.1} m of {what}", c[0], c[1]),
+                        )
+                    })
+                    .unwrap_or(e),
+                e => e,
+            })?;
+        }
+        Ok(px)
+    }
+
     /// A lower bound of the ground (above home) over the local rectangle `north` × `east`
     /// (metres): the lowest sample of every DEM cell the rectangle's pixel box touches, with a
     /// pixel of slack (bilinear interpolation never goes below its corners). `None` if the DEM
@@ -836,10 +855,7 @@ impl Terrain {
         let (cols, rows) = (self.dem.cols as f64, self.dem.rows as f64);
         let lo = |v: f64, n: f64| (v.floor() - 1.0).clamp(0.0, n - 1.0) as usize;
         let hi = |v: f64, n: f64| (v.ceil() + 1.0).clamp(0.0, n - 1.0) as usize;
-        let x0 = px.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-        let x1 = px.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-        let y0 = px.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        let y1 = px.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        let [x0, x1, y0, y1] = pixel_box(&px);
         if x1 < -1.0 || y1 < -1.0 || x0 > cols || y0 > rows {
             return None;
         }
@@ -867,16 +883,7 @@ impl Terrain {
         north: [f64; 2],
         east: [f64; 2],
     ) -> Result<[f64; 2], TerrainError> {
-        let corners = [
-            [north[0], east[0]],
-            [north[0], east[1]],
-            [north[1], east[1]],
-            [north[1], east[0]],
-        ];
-        let mut px = Vec::with_capacity(4);
-        for c in corners {
-            px.push(self.pixel_ne(c)?);
-        }
+        let px = self.rect_pixels(north, east, "the rectangle")?;
         let void = || {
             let l = self.lla([north[0], east[0]]).unwrap_or(self.frame.home());
             TerrainError::Void {
@@ -891,10 +898,7 @@ impl Terrain {
             high = high.max(self.dem.max_on_segment(p, q).ok_or_else(void)?);
         }
         let (cols, rows) = (self.dem.cols, self.dem.rows);
-        let x0 = px.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-        let x1 = px.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-        let y0 = px.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        let y1 = px.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        let [x0, x1, y0, y1] = pixel_box(&px);
         let c0 = x0.ceil().max(0.0) as usize;
         let r0 = y0.ceil().max(0.0) as usize;
         let c1 = (x1.floor().max(0.0) as usize).min(cols - 1);
@@ -941,39 +945,11 @@ impl Terrain {
         east: [f64; 2],
         size_m: f64,
     ) -> Result<Vec<Column>, TerrainError> {
-        let corners = [
-            [north[0], east[0]],
-            [north[0], east[1]],
-            [north[1], east[0]],
-            [north[1], east[1]],
-        ];
-        let mut px = Vec::with_capacity(4);
-        for c in corners {
-            let p = self.pixel_ne(c).map_err(|e| match e {
-                TerrainError::NotCovered { .. } => self
-                    .lla(c)
-                    .map(|l| {
-                        self.dem.not_covered(
-                            l.lat_deg,
-                            l.lon_deg,
-                            &format!(
-                                ", the corner N {:.1} m, E {:.1} m of the flight volume",
-                                c[0], c[1]
-                            ),
-                        )
-                    })
-                    .unwrap_or(e),
-                e => e,
-            })?;
-            px.push(p);
-        }
+        let px = self.rect_pixels(north, east, "the flight volume")?;
         // The pixel box of a local rectangle can bulge a little past its corners' (UTM grids
         // turn against true north): one cell of slack on each side, clamped to the DEM.
         let (cols, rows) = (self.dem.cols, self.dem.rows);
-        let x0 = px.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-        let x1 = px.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-        let y0 = px.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        let y1 = px.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        let [x0, x1, y0, y1] = pixel_box(&px);
         let c0 = ((x0.floor() - 1.0).max(0.0) as usize).min(cols - 2);
         let c1 = ((x1.ceil() + 1.0).max(0.0) as usize).min(cols - 1);
         let r0 = ((y0.floor() - 1.0).max(0.0) as usize).min(rows - 2);
@@ -1282,6 +1258,26 @@ impl Terrain {
             check_one(at, agl_m - over, agl_m)
         })
     }
+}
+
+/// The box `[x_min, x_max, y_min, y_max]` of `(x, y)` pairs (pixel positions, or lat/lon).
+fn pixel_box(px: &[(f64, f64)]) -> [f64; 4] {
+    let f = |g: fn(&(f64, f64)) -> f64, min: bool| {
+        px.iter().map(g).fold(
+            if min {
+                f64::INFINITY
+            } else {
+                f64::NEG_INFINITY
+            },
+            if min { f64::min } else { f64::max },
+        )
+    };
+    [
+        f(|p| p.0, true),
+        f(|p| p.0, false),
+        f(|p| p.1, true),
+        f(|p| p.1, false),
+    ]
 }
 
 fn check_one(at: [f64; 3], clearance_m: f64, required_m: f64) -> Result<(), TerrainError> {
