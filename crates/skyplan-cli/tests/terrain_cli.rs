@@ -174,6 +174,111 @@ fn zones_over_terrain_apply_by_their_bands_above_sea_level() {
     high["terrain"]["alt_agl_m"].as_f64().unwrap();
 }
 
+/// An inclusion boundary over terrain: the route stays inside it (less the margin) at every
+/// altitude, sampled each metre; a ceiling the ground forces the route above is no path,
+/// naming the boundary.
+#[test]
+fn inclusion_boundaries_over_terrain_hold_the_route_and_their_band() {
+    use skyplan_frames::{Lla, LocalFrame, Ned};
+    let dir = tempfile::tempdir().unwrap();
+    let tif = data("terrain/jacksboro.tif");
+    std::fs::write(
+        dir.path().join("posts.csv"),
+        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n-20,-20,5,1,1,5\n3020,3020,5,1,1,5\n",
+    )
+    .unwrap();
+    let frame = LocalFrame::new(Lla {
+        lat_deg: 36.56,
+        lon_deg: -84.28,
+        alt_m: 0.0,
+    })
+    .unwrap();
+    // An L: north up the western strip, then east along the northern one.
+    let ring_ne = [
+        [0.0, 0.0],
+        [0.0, 400.0],
+        [2500.0, 400.0],
+        [2500.0, 3000.0],
+        [3000.0, 3000.0],
+        [3000.0, 0.0],
+    ];
+    let zone = |ceiling_amsl: f64| {
+        let coords: Vec<String> = ring_ne
+            .iter()
+            .chain(std::iter::once(&ring_ne[0]))
+            .map(|p| {
+                let l = frame
+                    .lla_from_ned(Ned {
+                        north_m: p[0],
+                        east_m: p[1],
+                        down_m: 0.0,
+                    })
+                    .unwrap();
+                format!("[{}, {}]", l.lon_deg, l.lat_deg)
+            })
+            .collect();
+        format!(
+            r#"{{"type": "FeatureCollection", "features": [{{"type": "Feature", "properties": {{"inclusion": true, "floor_m": 0, "ceiling_m": {ceiling_amsl}, "reference": "amsl"}}, "geometry": {{"type": "Polygon", "coordinates": [[{}]]}}}}]}}"#,
+            coords.join(", ")
+        )
+    };
+    std::fs::write(dir.path().join("inside.geojson"), zone(3000.0)).unwrap();
+    let base = format!(
+        "plan --json --map posts.csv --terrain {} --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800",
+        tif.display()
+    );
+    let v = ok_json(dir.path(), &format!("{base} --no-fly inside.geojson"));
+    let w = rows(&v);
+    let margin = 5.0;
+    let inside = |p: [f64; 2]| {
+        let mut odd = false;
+        for k in 0..ring_ne.len() {
+            let (a, b) = (ring_ne[k], ring_ne[(k + 1) % ring_ne.len()]);
+            if (a[0] > p[0]) != (b[0] > p[0])
+                && p[1] < (b[1] - a[1]) * (p[0] - a[0]) / (b[0] - a[0]) + a[1]
+            {
+                odd = !odd;
+            }
+        }
+        let edge = (0..ring_ne.len())
+            .map(|k| {
+                skyplan_testkit::distance_to_segment(
+                    p,
+                    ring_ne[k],
+                    ring_ne[(k + 1) % ring_ne.len()],
+                )
+            })
+            .fold(f64::INFINITY, f64::min);
+        odd && edge >= margin - 1e-6
+    };
+    for l in w.windows(2) {
+        let len = (l[1][0] - l[0][0]).hypot(l[1][1] - l[0][1]);
+        let n = len.ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let p = [
+                l[0][0] + (l[1][0] - l[0][0]) * t,
+                l[0][1] + (l[1][1] - l[0][1]) * t,
+            ];
+            assert!(
+                inside(p),
+                "route point {p:?} outside the boundary less the margin"
+            );
+        }
+    }
+    // The straight line leaves the L: the route turns the corner.
+    assert!(w.iter().any(|p| p[0] > 2400.0 && p[1] < 500.0), "{w:?}");
+    // A ceiling 150 m above the ground under home: the hills lift the route through it.
+    let ground = v["terrain"]["home_ground_amsl_m"].as_f64().unwrap();
+    std::fs::write(dir.path().join("low.geojson"), zone(ground + 150.0)).unwrap();
+    fails_with(
+        dir.path(),
+        &format!("{base} --no-fly low.geojson"),
+        3,
+        &["feature 0", "inclusion boundary", "--alt-agl-m"],
+    );
+}
+
 fn over(dem: &str, home: &str, goal: &str, agl: f64) -> (PathBuf, Value) {
     let dir = tempfile::tempdir().unwrap();
     let path = data(dem);

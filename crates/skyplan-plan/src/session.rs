@@ -616,6 +616,7 @@ impl Session {
         recheck(&route)?;
         if let Some(terrain) = world.terrain() {
             follow_terrain(terrain, &r, &mut route, !three_d)?;
+            check_inclusion_bands(&self.projected_zones(&r)?, &route.points, r.safety_m)?;
         }
         let mut plan = assemble(&world, &r, route, [start_lla, goal_lla], t0)?;
         if let (Some(terrain), Some(rows)) = (world.terrain(), plan.waypoints_lla.as_mut()) {
@@ -634,9 +635,9 @@ impl Session {
     /// grid is at an altitude (colliders or footprints) and a 2D planner. Timed zones count as
     /// active whatever their times (a request carries no departure time: the safe side).
     fn zones(&self, r: &Resolved) -> Result<Vec<skyplan_map::nofly::Zone>, PlanFailure> {
-        let Some(geo) = &r.no_fly else {
+        if r.no_fly.is_none() {
             return Ok(Vec::new());
-        };
+        }
         let name = self.world.name();
         if !matches!(
             self.world.source,
@@ -656,25 +657,34 @@ impl Session {
                     .join(", ")
             )));
         }
+        let zones = self.projected_zones(r)?;
+        match self.world.terrain() {
+            None => Ok(zones),
+            Some(t) => zones_over_terrain(t, zones, r.alt_m, r.safety_m),
+        }
+    }
+
+    /// The request's zones placed about the map's home, as the file gives their bands (AMSL
+    /// bands with the DEM's height at home over terrain).
+    fn projected_zones(&self, r: &Resolved) -> Result<Vec<skyplan_map::nofly::Zone>, PlanFailure> {
+        let Some(geo) = &r.no_fly else {
+            return Ok(Vec::new());
+        };
+        let name = self.world.name();
         let home = self.world.frame().map(|f| f.home()).ok_or_else(|| {
             PlanFailure::bad_request(format!(
                 "no_fly: {name} has no geodetic home to place the zones at"
             ))
         })?;
         let terrain = self.world.terrain();
-        let zones = geo
-            .project(
-                skyplan_map::colliders::GeodeticHome {
-                    lat_deg: home.lat_deg,
-                    lon_deg: home.lon_deg,
-                },
-                terrain.map(|t| t.home_ground_amsl_m()),
-            )
-            .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))?;
-        match terrain {
-            None => Ok(zones),
-            Some(t) => zones_over_terrain(t, zones, r.alt_m, r.safety_m),
-        }
+        geo.project(
+            skyplan_map::colliders::GeodeticHome {
+                lat_deg: home.lat_deg,
+                lon_deg: home.lon_deg,
+            },
+            terrain.map(|t| t.home_ground_amsl_m()),
+        )
+        .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))
     }
 
     /// The trajectory of a plan's waypoints, in the free space the plan was checked in: the 3D
@@ -1103,8 +1113,8 @@ fn terrain_volume(
 /// No-fly zones for a route that keeps `agl_m` above the ground: the route over a zone is never
 /// lower than the lowest ground under it plus `agl_m`, so a zone whose ceiling (grown by the
 /// margin) is below that is left out; every other zone blocks at every altitude (the route's
-/// height over it is only known after planning: the safe side). Inclusion boundaries are
-/// refused over terrain for now.
+/// height over it is only known after planning: the safe side). Inclusion boundaries hold
+/// the route inside them at every altitude; their bands are checked once the route is lifted.
 fn zones_over_terrain(
     terrain: &skyplan_map::terrain::Terrain,
     zones: Vec<skyplan_map::nofly::Zone>,
@@ -1115,10 +1125,11 @@ fn zones_over_terrain(
     let mut out = Vec::with_capacity(zones.len());
     for mut z in zones {
         if z.inclusion {
-            return Err(PlanFailure::bad_request(format!(
-                "no_fly: feature {}: inclusion boundaries over terrain not yet; drop it or --terrain",
-                z.feature
-            )));
+            // Stay inside at every altitude; the band is checked on the lifted route
+            // (`check_inclusion_bands`).
+            (z.floor_m, z.ceiling_m) = (f64::NEG_INFINITY, f64::INFINITY);
+            out.push(z);
+            continue;
         }
         let (north, east) = match &z.shape {
             ZoneShape::Circle { centre, radius_m } => {
@@ -1156,6 +1167,33 @@ fn zones_over_terrain(
         out.push(z);
     }
     Ok(out)
+}
+
+/// Over terrain, whether the lifted route stays within the band of every inclusion boundary
+/// (shrunk by the margin): the route is straight between its points, so its highest and lowest
+/// are at points. A route that must climb above the ceiling (or stay under the floor) to keep
+/// its height above the ground is no path, naming the boundary and where.
+fn check_inclusion_bands(
+    zones: &[skyplan_map::nofly::Zone],
+    route: &[[f64; 3]],
+    margin_m: f64,
+) -> Result<(), PlanFailure> {
+    for z in zones.iter().filter(|z| z.inclusion) {
+        let (low, high) = (z.floor_m + margin_m, z.ceiling_m - margin_m);
+        if let Some(p) = route
+            .iter()
+            .find(|p| p[2] > high + 1e-6 || p[2] < low - 1e-6)
+        {
+            return Err(PlanFailure::new(
+                FailureKind::NoPath,
+                format!(
+                    "no_fly: feature {}: the inclusion boundary's band less the {margin_m} m margin is {low:.1} to {high:.1} m above home, and keeping the height above the ground takes the route to {:.1} m at N {:.1} m, E {:.1} m; lower alt_agl_m or widen the band",
+                    z.feature, p[2], p[0], p[1]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Whether a request can be planned over terrain (before planning it).
