@@ -581,6 +581,9 @@ pub struct ServeArgs {
     /// The ground under the map, a DEM (GeoTIFF or SRTM .hgt): plans keep alt_agl_m above it, and the page draws its contours.
     #[arg(long, value_name = "FILE")]
     pub terrain: Option<PathBuf>,
+    /// No-fly zones (GeoJSON, as plan --no-fly reads): the page draws them and plans around them (API requests give their own no_fly).
+    #[arg(long, value_name = "FILE")]
+    pub no_fly: Option<PathBuf>,
     /// Address to listen on; only loopback unless another address is named.
     #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:8080")]
     pub bind: std::net::SocketAddr,

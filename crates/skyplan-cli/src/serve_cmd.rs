@@ -14,9 +14,20 @@ pub fn run(args: ServeArgs) -> Result<()> {
     // Opened once here so that a bad address or database fails the command, not each request.
     skyplan_server::open_airspace(&args.airspace)
         .map_err(|e| runtime(format!("--airspace {}: {e}", args.airspace)))?;
+    let no_fly = match &args.no_fly {
+        Some(path) => {
+            let text = crate::files::read_text(path)?;
+            // Checked here so that the error names the file.
+            skyplan_map::nofly::parse_no_fly(&text)
+                .map_err(|e| crate::exit::bad_input(format!("{}: {e}", path.display())))?;
+            Some(text)
+        }
+        None => None,
+    };
     let mut config = ServerConfig {
         timeout: Duration::from_millis(args.timeout_ms),
         airspace: args.airspace.clone(),
+        no_fly,
         ..ServerConfig::default()
     };
     if let Some(n) = args.max_concurrent {

@@ -4,7 +4,7 @@
 // Usage: node real_map.test.mjs SKYPLAN_BIN (run from anywhere; data/ is found from here)
 import path from "node:path";
 import { fileURLToPath } from "node:url";
-import { startServer } from "./common.mjs";
+import { connectedClearCells, loadGrid, startServer } from "./common.mjs";
 import { checker, launchBrowser, newPage, openView } from "./view.mjs";
 
 const [bin] = process.argv.slice(2);
@@ -89,6 +89,52 @@ try {
   check("the page fills the footprints", tried >= 4 && inside === tried, `${inside} of ${tried}`);
   const none = await countContourPixels(page);
   check("no contours without terrain", none < 20, `${none} contour-coloured pixels`);
+  await page.close();
+
+  // No-fly zones (serve --no-fly) on the bundled city: drawn, and the page's plans avoid them.
+  const zoned = await startServer(bin, ["--no-fly", path.join(data, "no-fly-sample.geojson")]);
+  servers.push(zoned);
+  const zmap = await (await fetch(`${zoned.url}api/map`)).json();
+  const stadium = zmap.zones.find((z) => z.circle);
+  check("/api/map carries the zones", zmap.zones.length === 3 && stadium && stadium.circle.radius_m === 30 && typeof zmap.no_fly === "string",
+    JSON.stringify(zmap.zones.map((z) => z.feature)));
+  page = await newPage(browser);
+  await openView(page, zoned.url);
+  const zname = await page.textContent("#map-name");
+  check("the header counts the zones", /3 no-fly zones/.test(zname), zname);
+  // Red over whatever lies under the stadium: its hatching and tint.
+  let reddish = 0;
+  const c = stadium.circle.centre_ne;
+  for (let k = 0; k < 16; k++) {
+    const a = (k / 16) * 2 * Math.PI;
+    const [r, g] = await pixelAt(page, [c[0] + 20 * Math.cos(a), c[1] + 20 * Math.sin(a)]);
+    if (r > g + 25) reddish++;
+  }
+  check("the page draws the stadium zone", reddish >= 4, `${reddish} of 16 reddish`);
+  // A plan clicked across the stadium goes around it, and carries the zones.
+  const grid = await loadGrid(zoned.url, 5, 5);
+  const cells = connectedClearCells(grid, [0, 0], 4);
+  const nearest = (p) => cells.reduce((b, q) => (Math.hypot(q[0] - p[0], q[1] - p[1]) < Math.hypot(b[0] - p[0], b[1] - p[1]) ? q : b));
+  const ends = [nearest([c[0] - 120, c[1] - 20]), nearest([c[0] + 120, c[1] + 20])];
+  const straight = Math.min(...Array.from({ length: 101 }, (_, k) => k / 100).map((t) =>
+    Math.hypot(ends[0][0] + (ends[1][0] - ends[0][0]) * t - c[0], ends[0][1] + (ends[1][1] - ends[0][1]) * t - c[1])));
+  check("the clicked ends' straight line crosses the stadium", straight < 30, `${straight.toFixed(1)} m from its centre`);
+  for (const p of ends) {
+    const { x, y } = await page.evaluate(([n, e]) => window.skyplanView.toClient(n, e), p);
+    await page.mouse.click(x, y);
+  }
+  await page.waitForFunction(() => window.skyplanView.state.planned >= 1, null, { timeout: 20000 });
+  const [request, zplan] = await page.evaluate(() => [window.skyplanView.state.lastRequest, window.skyplanView.state.plan]);
+  check("the page's plan request carries the zones", request && request.no_fly === zmap.no_fly);
+  let closest = Infinity;
+  const w = (zplan && zplan.waypoints) || [];
+  for (let i = 0; i + 1 < w.length; i++) {
+    const [a, b] = [[w[i][0], w[i][1]], [w[i + 1][0], w[i + 1][1]]]; // rows are [north, east, alt, heading]
+    for (let t = 0; t <= 1; t += 0.01) {
+      closest = Math.min(closest, Math.hypot(a[0] + (b[0] - a[0]) * t - c[0], a[1] + (b[1] - a[1]) * t - c[1]));
+    }
+  }
+  check("the page's route keeps the margin from the stadium", w.length > 1 && closest >= 30 + request.safety_m - 0.5, `closest ${closest.toFixed(2)} m`);
   await page.close();
 } finally {
   await browser.close();

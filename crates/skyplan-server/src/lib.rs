@@ -109,6 +109,9 @@ pub struct ServerConfig {
     /// every server on the database, on any machine) or `sqlite::memory:` (the default: this
     /// server's memory, gone when it stops).
     pub airspace: String,
+    /// No-fly zones (a GeoJSON FeatureCollection, as `--no-fly` reads) the page draws and sends
+    /// with its plans; API requests give their own `no_fly`. `None`: no zones.
+    pub no_fly: Option<String>,
 }
 
 impl ServerConfig {
@@ -127,6 +130,7 @@ impl Default for ServerConfig {
             timeout: Duration::from_secs(10),
             max_event_clients: 64,
             airspace: DEFAULT_AIRSPACE.into(),
+            no_fly: None,
         }
     }
 }
@@ -165,7 +169,7 @@ pub fn app(world: World, config: ServerConfig) -> App {
             config.effective_queue_depth(),
             config.timeout,
         )),
-        map_info: map::map_info(&world),
+        map_info: map::map_info(&world, config.no_fly.as_deref()),
         planners: handlers::planners_json(&world),
         event_slots: Arc::new(tokio::sync::Semaphore::new(config.max_event_clients)),
         airspace: open_airspace(&config.airspace).map_err(|e| e.to_string()),

@@ -98,8 +98,8 @@ impl GridRuns {
     }
 }
 
-/// The map without the grid (computed once).
-pub(crate) fn map_info(world: &World) -> Value {
+/// The map without the grid (computed once), with the server's no-fly zones (GeoJSON text).
+pub(crate) fn map_info(world: &World, no_fly: Option<&str>) -> Value {
     let home = world.frame().map(|f| {
         let h = f.home();
         json!({ "lat_deg": h.lat_deg, "lon_deg": h.lon_deg })
@@ -157,7 +157,47 @@ pub(crate) fn map_info(world: &World) -> Value {
         "max_top_m": max_top_m,
         "footprints": footprints,
         "terrain": terrain,
+        "zones": zones_info(world, no_fly),
+        "no_fly": no_fly,
     })
+}
+
+/// The zones of `no_fly` about the map's home (bands above home; no ceiling is `null`):
+/// polygons as rings, circles as centre and radius. Empty without zones or a home, or if the
+/// text does not read (the server checks it before serving).
+fn zones_info(world: &World, no_fly: Option<&str>) -> Vec<Value> {
+    use skyplan_map::nofly::ZoneShape;
+    let (Some(text), Some(frame)) = (no_fly, world.frame()) else {
+        return Vec::new();
+    };
+    let home = skyplan_map::colliders::GeodeticHome {
+        lat_deg: frame.home().lat_deg,
+        lon_deg: frame.home().lon_deg,
+    };
+    let zones = skyplan_map::nofly::parse_no_fly(text)
+        .and_then(|z| z.project(home, world.terrain().map(|t| t.home_ground_amsl_m())))
+        .unwrap_or_default();
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    zones
+        .iter()
+        .map(|z| {
+            let (polygon, circle) = match &z.shape {
+                ZoneShape::Polygon(rings) => (json!(rings), Value::Null),
+                ZoneShape::Circle { centre, radius_m } => (
+                    Value::Null,
+                    json!({ "centre_ne": centre, "radius_m": radius_m }),
+                ),
+            };
+            json!({
+                "feature": z.feature,
+                "inclusion": z.inclusion,
+                "floor_m": finite(z.floor_m),
+                "ceiling_m": finite(z.ceiling_m),
+                "polygon": polygon,
+                "circle": circle,
+            })
+        })
+        .collect()
 }
 
 /// The ground under the map (over terrain): contour lines over its bounds, from 200 samples a
