@@ -76,7 +76,7 @@ pub fn with_terrain(world: World, path: &Path) -> Result<World> {
     let name = path.display().to_string();
     // Bounded before reading: a DEM is at most 100 M samples of up to 8 bytes.
     if let Ok(meta) = std::fs::metadata(path)
-        && meta.len() > skyplan_map::terrain::MAX_DEM_SAMPLES * 8
+        && meta.len() > skyplan_map::terrain::MAX_DEM_BYTES
     {
         return Err(bad_input(format!(
             "{name}: {} bytes is more than a DEM of {} samples can hold; crop it (gdal_translate -projwin)",

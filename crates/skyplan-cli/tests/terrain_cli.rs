@@ -539,6 +539,16 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
         2,
         &["does not cover", "on the route at N"],
     );
+    // Too big to be a DEM it can hold: refused from its size, before reading (a sparse file).
+    let big = std::fs::File::create(dir.path().join("big.tif")).unwrap();
+    big.set_len(skyplan_map::terrain::MAX_DEM_BYTES + 1)
+        .unwrap();
+    fails_with(
+        dir.path(),
+        &format!("{random} --home 36.56,-84.28 --terrain big.tif"),
+        2,
+        &["big.tif", "bytes is more than a DEM", "crop it"],
+    );
     // Not a DEM: the file is named.
     std::fs::write(dir.path().join("junk.tif"), b"II*\0 not a tiff").unwrap();
     std::fs::remove_file(dir.path().join("hills.csv")).unwrap();

@@ -39,6 +39,10 @@ use skyplan_frames::{FrameError, Lla, LocalFrame, Ned};
 
 /// Most samples a DEM may hold (100 million: 400 MB as 32-bit floats).
 pub const MAX_DEM_SAMPLES: u64 = 100_000_000;
+
+/// Largest DEM file read, bytes: [`MAX_DEM_SAMPLES`] samples of up to 8 bytes (readers check a
+/// file's size against it before reading it).
+pub const MAX_DEM_BYTES: u64 = MAX_DEM_SAMPLES * 8;
 /// Added to each stretch's highest ground: the stretch is straight in local metres, and a
 /// geographic raster's pixel coordinates bend by micrometres over half a pixel.
 const BOUND_PAD_M: f64 = 0.01;

@@ -217,6 +217,16 @@ impl Planner {
         let world = match terrain {
             Some(path) => {
                 let name = path.display().to_string();
+                // Bounded before reading, as the CLI does.
+                if let Ok(meta) = std::fs::metadata(&path)
+                    && meta.len() > skyplan_map::terrain::MAX_DEM_BYTES
+                {
+                    return Err(bad_input(format!(
+                        "{name}: {} bytes is more than a DEM of {} samples can hold; crop it",
+                        meta.len(),
+                        skyplan_map::terrain::MAX_DEM_SAMPLES
+                    )));
+                }
                 let bytes = std::fs::read(&path).map_err(|e| io_error(&path, e))?;
                 let dem = skyplan_map::terrain::parse_dem(&name, &bytes)
                     .map_err(|e| bad_input(format!("{name}: {e}")))?;

@@ -329,3 +329,9 @@ def test_terrain_equals_the_cli(cli, tmp_path):
         skyplan.Planner(grid, home=(36.56, -84.28)).plan((10.5, 10.5), (290.5, 280.5), alt_agl_m=30)
     with pytest.raises(skyplan.BadInput, match="does not cover"):
         skyplan.Planner(grid, home=(37.79, -122.39), terrain=dem)
+    # A file too big for any DEM it can hold is refused from its size (a sparse file).
+    big = tmp_path / "big.tif"
+    with open(big, "wb") as f:
+        f.truncate(800_000_001)
+    with pytest.raises(skyplan.BadInput, match="more than a DEM"):
+        skyplan.Planner(grid, home=(36.56, -84.28), terrain=big)
