@@ -96,6 +96,16 @@ fn write_hills(dir: &Path) {
     .unwrap();
 }
 
+/// Zones need a map at an altitude: a colliders map on the hills, two posts marking the corners
+/// of 3 km square (`posts.csv` in `dir`).
+fn write_posts(dir: &Path) {
+    std::fs::write(
+        dir.join("posts.csv"),
+        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n-20,-20,5,1,1,5\n3020,3020,5,1,1,5\n",
+    )
+    .unwrap();
+}
+
 /// Smallest horizontal distance from `c` to the route (metres).
 fn distance_to_route(rows: &[[f64; 4]], c: [f64; 2]) -> f64 {
     rows.windows(2)
@@ -108,12 +118,7 @@ fn zones_over_terrain_apply_by_their_bands_above_sea_level() {
     use skyplan_frames::{Lla, LocalFrame};
     let dir = tempfile::tempdir().unwrap();
     let tif = data("terrain/jacksboro.tif");
-    // Zones need a map at an altitude: a colliders map on the hills, two posts marking its corners.
-    std::fs::write(
-        dir.path().join("posts.csv"),
-        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n-20,-20,5,1,1,5\n3020,3020,5,1,1,5\n",
-    )
-    .unwrap();
+    write_posts(dir.path());
     let base = format!(
         "plan --json --map posts.csv --terrain {} --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800",
         tif.display()
@@ -182,11 +187,7 @@ fn inclusion_boundaries_over_terrain_hold_the_route_and_their_band() {
     use skyplan_frames::{Lla, LocalFrame, Ned};
     let dir = tempfile::tempdir().unwrap();
     let tif = data("terrain/jacksboro.tif");
-    std::fs::write(
-        dir.path().join("posts.csv"),
-        "lat0 36.56, lon0 -84.28\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n-20,-20,5,1,1,5\n3020,3020,5,1,1,5\n",
-    )
-    .unwrap();
+    write_posts(dir.path());
     let frame = LocalFrame::new(Lla {
         lat_deg: 36.56,
         lon_deg: -84.28,

@@ -90,6 +90,35 @@ pub fn contour_segments(g: &GroundGrid, level: f64) -> Vec<[[f64; 2]; 2]> {
     out
 }
 
+/// Contour levels over heights `lo..=hi`: about `count` of them, on a 1-2-5 step; returns the
+/// step and the levels (none if the range is empty or not finite).
+///
+/// ```
+/// let (step, levels) = skyplan_map::contour::contour_levels(-147.0, 304.0, 12.0);
+/// assert_eq!(step, 50.0);
+/// assert_eq!(levels, [-100.0, -50.0, 0.0, 50.0, 100.0, 150.0, 200.0, 250.0, 300.0]);
+/// ```
+pub fn contour_levels(lo: f64, hi: f64, count: f64) -> (f64, Vec<f64>) {
+    if !(lo.is_finite() && hi.is_finite() && hi > lo && count > 0.0) {
+        return (0.0, Vec::new());
+    }
+    let raw = (hi - lo) / count;
+    let p = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|&s| s >= raw)
+        .unwrap_or(10.0 * p);
+    let mut levels = Vec::new();
+    let mut k = (lo / step).ceil();
+    while k * step <= hi {
+        let v = k * step;
+        levels.push(if v == 0.0 { 0.0 } else { v });
+        k += 1.0;
+    }
+    (step, levels)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

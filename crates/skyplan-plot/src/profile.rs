@@ -477,10 +477,7 @@ fn contour_levels(g: &skyplan_map::contour::GroundGrid) -> Vec<f64> {
     let known = g.values.iter().filter(|v| v.is_finite());
     let lo = known.clone().fold(f64::INFINITY, |a, &b| a.min(b));
     let hi = known.fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    if !(lo.is_finite() && hi > lo) {
-        return Vec::new();
-    }
-    ticks(lo, hi, 12.0)
+    skyplan_map::contour::contour_levels(lo, hi, 12.0).1
 }
 
 /// The top view's panel: the route's surroundings, equal scales, square, on the left.

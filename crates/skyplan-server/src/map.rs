@@ -227,27 +227,22 @@ fn terrain_info(t: &skyplan_map::terrain::Terrain, b: &skyplan_plan::BoundsNe) -
         east_n,
         values,
     };
-    let mut contours = Vec::new();
-    let mut interval_m = Value::Null;
-    if lo.is_finite() && hi > lo {
-        let raw = (hi - lo) / 12.0;
-        let p = 10f64.powf(raw.log10().floor());
-        let step = [1.0, 2.0, 5.0, 10.0]
-            .into_iter()
-            .map(|m| m * p)
-            .find(|&s| s >= raw)
-            .unwrap_or(10.0 * p);
-        interval_m = json!(step);
-        let mut level = (lo / step).ceil() * step;
-        while level <= hi {
+    let (step, levels) = skyplan_map::contour::contour_levels(lo, hi, 12.0);
+    let interval_m = if levels.is_empty() {
+        Value::Null
+    } else {
+        json!(step)
+    };
+    let contours: Vec<Value> = levels
+        .into_iter()
+        .map(|level| {
             let segments: Vec<[[f64; 2]; 2]> = contour_segments(&grid, level)
                 .into_iter()
                 .map(|s| s.map(|p| p.map(|x| (x * 100.0).round() / 100.0)))
                 .collect();
-            contours.push(json!({ "level_m": level, "segments": segments }));
-            level += step;
-        }
-    }
+            json!({ "level_m": level, "segments": segments })
+        })
+        .collect();
     json!({
         "home_ground_amsl_m": t.home_ground_amsl_m(),
         "lowest_m": if lo.is_finite() { json!(lo) } else { Value::Null },
