@@ -93,6 +93,9 @@ pub enum Timing {
     /// The route's polyline at a constant cruise speed, accelerating from rest at the start
     /// and braking to rest at the goal.
     ConstantSpeed,
+    /// A space-time search's route: cell to cell at the cruise speed, hovering where it waits
+    /// for another flight to pass (skyplan-fleet's safe-interval planner).
+    SpaceTime,
 }
 
 /// The polyline `points` flown from rest to rest at `cruise_m_s` with `accel_m_s2`
@@ -277,6 +280,56 @@ pub fn volumes_from_path(
     frame: &LocalFrame,
     options: &VolumeOptions,
 ) -> Result<FlightVolumes, AirspaceError> {
+    volumes_cut(path, timing, frame, options, false)
+}
+
+/// [`volumes_from_path`], with every stretch also ending at each corner of the route (a point
+/// where its direction changes, or where it starts or stops hovering): each volume's footprint
+/// is then one straight piece grown by the margin, no wider inside a bend than the margin.
+///
+/// ```
+/// use skyplan_airspace::{TimedPoint, Timing, VolumeOptions, volumes_from_straight_pieces};
+/// use skyplan_frames::{LocalFrame, Lla};
+/// let frame = LocalFrame::new(Lla { lat_deg: 37.79, lon_deg: -122.39, alt_m: 0.0 })?;
+/// let p = |t_s, n, e| TimedPoint { t_s, nea: [n, e, 20.0] };
+/// // An L: 5 s north, 5 s east.
+/// let path = vec![p(0.0, 0.0, 0.0), p(5.0, 50.0, 0.0), p(10.0, 50.0, 50.0)];
+/// let o = VolumeOptions::default();
+/// assert_eq!(skyplan_airspace::volumes_from_path(path.clone(), Timing::SpaceTime, &frame, &o)?.relative.len(), 1);
+/// assert_eq!(volumes_from_straight_pieces(path, Timing::SpaceTime, &frame, &o)?.relative.len(), 2);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn volumes_from_straight_pieces(
+    path: Vec<TimedPoint>,
+    timing: Timing,
+    frame: &LocalFrame,
+    options: &VolumeOptions,
+) -> Result<FlightVolumes, AirspaceError> {
+    volumes_cut(path, timing, frame, options, true)
+}
+
+/// Whether the route turns at `path[k]` (an interior point): the unit directions before and
+/// after differ, or one side does not move.
+fn turns_at(path: &[TimedPoint], k: usize) -> bool {
+    let dir = |a: &TimedPoint, b: &TimedPoint| {
+        let d = [0, 1, 2].map(|c| b.nea[c] - a.nea[c]);
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        (n > 1e-9).then(|| d.map(|x| x / n))
+    };
+    match (dir(&path[k - 1], &path[k]), dir(&path[k], &path[k + 1])) {
+        (Some(u), Some(v)) => (0..3).any(|c| (u[c] - v[c]).abs() > 1e-9),
+        (None, None) => false,
+        _ => true,
+    }
+}
+
+fn volumes_cut(
+    path: Vec<TimedPoint>,
+    timing: Timing,
+    frame: &LocalFrame,
+    options: &VolumeOptions,
+    at_corners: bool,
+) -> Result<FlightVolumes, AirspaceError> {
     options.check()?;
     if path.is_empty()
         || path
@@ -302,6 +355,9 @@ pub fn volumes_from_path(
         let mut j = (i + 1).min(path.len() - 1);
         let mut length = if j > i { dist(&path[i], &path[j]) } else { 0.0 };
         while j + 1 < path.len() {
+            if at_corners && j > 0 && turns_at(&path, j) {
+                break;
+            }
             let more = length + dist(&path[j], &path[j + 1]);
             if more > options.stretch_m || path[j + 1].t_s - path[i].t_s > options.stretch_s {
                 break;

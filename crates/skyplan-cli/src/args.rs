@@ -83,6 +83,11 @@ pub struct FleetArgs {
     /// The baseline: refuse a flight whose earliest departure conflicts instead of shifting it.
     #[arg(long)]
     pub reject_on_conflict: bool,
+    /// Re-route each flight in space and time around the others (safe-interval search on the
+    /// map's grid: a later departure, hovering and detours, the earliest arrival) instead of
+    /// only shifting its departure.
+    #[arg(long)]
+    pub space_time: bool,
     /// Map: FCND colliders .csv (as `plan`; a map with a geodetic home) [default: the bundled city].
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,

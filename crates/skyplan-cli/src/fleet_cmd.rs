@@ -173,10 +173,15 @@ pub fn run(args: FleetArgs) -> Result<()> {
     if fresh.is_some() {
         eprintln!("airspace: {url} (a fresh SQLite file; kept)");
     }
-    let mode = if args.reject_on_conflict {
-        Mode::RejectOnConflict
-    } else {
-        Mode::Shift
+    let mode = match (args.reject_on_conflict, args.space_time) {
+        (true, true) => {
+            return Err(bad_input(
+                "--reject-on-conflict and --space-time: choose one way to handle a conflict",
+            ));
+        }
+        (true, false) => Mode::RejectOnConflict,
+        (false, true) => Mode::SpaceTime,
+        (false, false) => Mode::Shift,
     };
     let records = fly(
         world.clone(),
@@ -230,11 +235,22 @@ fn table(records: &[FlightRecord], s: &Summary, conflicts: usize, url: &str, mod
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{:<12} {:<9} {:>8} {:>9} {:>8}  {:<20}  blocking intents",
-        "mission", "status", "delay s", "latency", "checked", "departure"
+        "{:<12} {:<9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>8}  {:<20}  blocking intents",
+        "mission",
+        "status",
+        "delay s",
+        "hover s",
+        "detour m",
+        "arrive +s",
+        "latency",
+        "checked",
+        "departure"
     );
     for r in records {
         let delay = r.delay_s.map_or("-".into(), |d| format!("{d:.0}"));
+        let hover = r.hover_s.map_or("-".into(), |d| format!("{d:.1}"));
+        let detour = r.detour_m.map_or("-".into(), |d| format!("{d:.0}"));
+        let arrive = r.arrival_delay_s.map_or("-".into(), |d| format!("{d:.1}"));
         let departure = r.departure.map_or("-".into(), |d| d.to_string());
         let blocking = match (r.status, &r.message) {
             (Status::NoRoute, Some(m)) => m.clone(),
@@ -247,10 +263,13 @@ fn table(records: &[FlightRecord], s: &Summary, conflicts: usize, url: &str, mod
         };
         let _ = writeln!(
             out,
-            "{:<12} {:<9} {:>8} {:>6.1} ms {:>8}  {:<20}  {blocking}",
+            "{:<12} {:<9} {:>8} {:>8} {:>8} {:>9} {:>6.1} ms {:>8}  {:<20}  {blocking}",
             r.mission,
             r.status.name(),
             delay,
+            hover,
+            detour,
+            arrive,
             r.latency_ms,
             r.checked,
             departure,
@@ -264,7 +283,8 @@ fn table(records: &[FlightRecord], s: &Summary, conflicts: usize, url: &str, mod
 fn totals(s: &Summary, conflicts: usize) -> String {
     format!(
         "flights:   {} missions, {} accepted ({:.1} %), {} refused, {} without a route\n\
-         delay:     mean {:.1} s, p95 {:.0} s (accepted flights)\n\
+         delay:     mean {:.1} s, p95 {:.0} s (accepted flights' departures)\n\
+         arrival:   mean {:.1} s, p95 {:.0} s later than alone; {} hovering, {} detoured\n\
          latency:   plan and reserve p50 {:.1} ms, p99 {:.1} ms\n\
          checked:   {:.1} stored intents per request (max {})\n\
          conflicts: {conflicts} (every pair of stored intents, exact 4D test)\n",
@@ -275,6 +295,10 @@ fn totals(s: &Summary, conflicts: usize) -> String {
         s.no_route,
         s.delay_mean_s,
         s.delay_p95_s,
+        s.arrival_delay_mean_s,
+        s.arrival_delay_p95_s,
+        s.hovering,
+        s.detoured,
         s.latency_p50_ms,
         s.latency_p99_ms,
         s.checked_mean,
@@ -342,7 +366,7 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
         })
     };
     let mut runs = Vec::new();
-    for mode in [Mode::Shift, Mode::RejectOnConflict] {
+    for mode in [Mode::Shift, Mode::SpaceTime, Mode::RejectOnConflict] {
         let path = temp_sqlite("bench-fleet");
         let url = format!("sqlite:{}", path.display());
         let result = run_on(&url, "sqlite", mode);
@@ -387,12 +411,16 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
     );
     let _ = writeln!(
         out,
-        "{:<9} {:<19} {:>8} {:>10} {:>9} {:>8} {:>8} {:>8} {:>9}",
+        "{:<9} {:<19} {:>8} {:>10} {:>9} {:>11} {:>11} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "store",
         "mode",
         "planned",
         "delay avg",
         "delay p95",
+        "arrive +avg",
+        "arrive +p95",
+        "hovering",
+        "detoured",
         "p50 ms",
         "p99 ms",
         "checked",
@@ -402,12 +430,16 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
         let s = &r.summary;
         let _ = writeln!(
             out,
-            "{:<9} {:<19} {:>7.1}% {:>8.1} s {:>7.0} s {:>8.1} {:>8.1} {:>8.1} {:>9}",
+            "{:<9} {:<19} {:>7.1}% {:>8.1} s {:>7.0} s {:>9.1} s {:>9.0} s {:>8} {:>8} {:>8.1} {:>8.1} {:>8.1} {:>9}",
             r.store,
             r.mode.name(),
             100.0 * s.share_planned,
             s.delay_mean_s,
             s.delay_p95_s,
+            s.arrival_delay_mean_s,
+            s.arrival_delay_p95_s,
+            s.hovering,
+            s.detoured,
             s.latency_p50_ms,
             s.latency_p99_ms,
             s.checked_mean,

@@ -20,6 +20,23 @@ fn intersect(a: &OperationalIntent, b: &OperationalIntent) -> bool {
         .any(|x| b.volumes.iter().any(|y| volumes_conflict(x, y)))
 }
 
+/// All pairs, exact 4D test (all priority 0: every stored intent binds every later one).
+fn assert_no_pair_intersects(stored: &[OperationalIntent]) {
+    let mut pairs = 0;
+    for (i, a) in stored.iter().enumerate() {
+        for b in &stored[..i] {
+            pairs += 1;
+            assert!(
+                !intersect(a, b),
+                "accepted intents {} and {} intersect",
+                a.id,
+                b.id
+            );
+        }
+    }
+    assert_eq!(pairs, stored.len() * (stored.len() - 1) / 2);
+}
+
 #[test]
 fn a_random_fleet_stores_no_two_intersecting_intents() {
     let dir = tempfile::tempdir().expect("a temporary directory");
@@ -80,20 +97,7 @@ fn a_random_fleet_stores_no_two_intersecting_intents() {
         "no flight was delayed: the test proves nothing"
     );
     assert!(stored.len() >= 20, "only {} flights accepted", stored.len());
-    // All pairs, exact 4D test (all priority 0: every stored intent binds every later one).
-    let mut pairs = 0;
-    for (i, a) in stored.iter().enumerate() {
-        for b in &stored[..i] {
-            pairs += 1;
-            assert!(
-                !intersect(a, b),
-                "accepted intents {} and {} intersect",
-                a.id,
-                b.id
-            );
-        }
-    }
-    assert_eq!(pairs, stored.len() * (stored.len() - 1) / 2);
+    assert_no_pair_intersects(&stored);
     assert_eq!(r["conflicts"].as_u64(), Some(0));
     // A delayed flight's intent starts its delay later than at its window's start: the
     // departure really moved (the stored volumes, not only the report).
@@ -111,6 +115,71 @@ fn a_random_fleet_stores_no_two_intersecting_intents() {
     }
     let png = std::fs::read(&plot).expect("the picture");
     assert_eq!(&png[1..4], b"PNG");
+}
+
+#[test]
+fn the_space_time_search_hovers_and_goes_around_and_accepts_more() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let run = |extra: &[&str], name: &str| {
+        let db = dir.path().join(format!("{name}.sqlite"));
+        let report = dir.path().join(format!("{name}.json"));
+        skyplan()
+            .args([
+                "fleet",
+                "--random",
+                "40",
+                "--seed",
+                "7",
+                "--spread-s",
+                "600",
+            ])
+            .args(extra)
+            .arg("--airspace")
+            .arg(format!("sqlite:{}", db.display()))
+            .arg("--json")
+            .arg(&report)
+            .assert()
+            .success();
+        let r: Value = serde_json::from_slice(&std::fs::read(&report).expect("the report"))
+            .expect("the report is JSON");
+        let store = SqliteStore::open_url(&format!("sqlite:{}", db.display())).expect("store");
+        (r, store.list().expect("the intents"))
+    };
+    let (r, stored) = run(&["--space-time"], "space-time");
+    assert_eq!(r["mode"], "space_time");
+    assert_no_pair_intersects(&stored);
+    assert_eq!(r["conflicts"].as_u64(), Some(0));
+    let flights = r["flights"].as_array().expect("flights");
+    let accepted: Vec<&Value> = flights
+        .iter()
+        .filter(|f| f["status"] == "accepted")
+        .collect();
+    assert_eq!(stored.len(), accepted.len());
+    let hovered = accepted
+        .iter()
+        .filter(|f| f["hover_s"].as_f64().is_some_and(|h| h > 0.0))
+        .count();
+    let detoured = accepted
+        .iter()
+        .filter(|f| f["detour_m"].as_f64().is_some_and(|d| d > 1.0))
+        .count();
+    assert!(
+        hovered > 0 && detoured > 0,
+        "{hovered} hovered, {detoured} detoured: the test proves nothing"
+    );
+    // Each arrives no earlier than alone, and its departure is within its window.
+    for f in &accepted {
+        assert!(f["arrival_delay_s"].as_f64().expect("arrival delay") >= -1e-6);
+        assert!(f["delay_s"].as_f64().expect("delay") <= 900.0);
+    }
+    let (shifted, _) = run(&[], "shift");
+    let count = |r: &Value| r["summary"]["accepted"].as_u64().expect("accepted");
+    assert!(
+        count(&r) >= count(&shifted),
+        "space-time {} < shift {}",
+        count(&r),
+        count(&shifted)
+    );
 }
 
 #[test]
@@ -285,6 +354,15 @@ fn bad_options_fail_with_exit_2_naming_the_option() {
                 "sqlite::memory:",
             ],
             "error: --map examples/floor.yaml: the map has no geodetic home",
+        ),
+        (
+            &[
+                "--space-time",
+                "--reject-on-conflict",
+                "--airspace",
+                "sqlite::memory:",
+            ],
+            "error: --reject-on-conflict and --space-time: choose one",
         ),
         (
             &["--start", "tomorrow", "--airspace", "sqlite::memory:"],

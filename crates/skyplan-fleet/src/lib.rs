@@ -36,6 +36,8 @@
 mod flight;
 mod mission;
 mod run;
+pub mod sipp;
+mod space_time;
 
 pub use flight::{
     DEPARTURE_STEP_MS, FieldError, FlightError, FlightRequest, HORIZON_MS, PAST_SLACK_MS,
@@ -48,4 +50,8 @@ pub use mission::{
 pub use run::{
     Decile, FleetError, FlightRecord, Mode, RunOptions, Status, Summary, binding_conflicts,
     fly_fleet, fly_mission, percentile,
+};
+pub use space_time::{
+    MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M, STRETCH_S, SpaceTimeFlight,
+    reserve_space_time,
 };

@@ -21,6 +21,9 @@ pub enum Mode {
     /// The baseline: refused when its earliest departure conflicts (detect and reject, as
     /// InterUSS's mock USS does).
     RejectOnConflict,
+    /// Re-routed in space and time around the others ([`crate::reserve_space_time`]): a later
+    /// departure, hovering and detours, the earliest arrival.
+    SpaceTime,
 }
 
 impl Mode {
@@ -29,6 +32,7 @@ impl Mode {
         match self {
             Self::Shift => "shift departure",
             Self::RejectOnConflict => "reject on conflict",
+            Self::SpaceTime => "space-time search",
         }
     }
 }
@@ -95,6 +99,13 @@ pub struct FlightRecord {
     pub delay_s: Option<f64>,
     /// Its duration, seconds (planned flights).
     pub duration_s: Option<f64>,
+    /// Seconds hovering after departure (accepted flights, space-time search).
+    pub hover_s: Option<f64>,
+    /// Metres longer than the route in an empty sky (accepted flights, space-time search).
+    pub detour_m: Option<f64>,
+    /// Seconds later at the goal than in an empty sky leaving at the window's start
+    /// (accepted flights, space-time search; the delay with the other modes).
+    pub arrival_delay_s: Option<f64>,
     /// The intents that blocked it (refused flights), sorted by id.
     pub blocking: Vec<IntentRef>,
     /// Why there is no route (`no_route`).
@@ -158,6 +169,9 @@ pub fn fly_mission(
         departure: None,
         delay_s: None,
         duration_s: None,
+        hover_s: None,
+        detour_m: None,
+        arrival_delay_s: None,
         blocking: Vec::new(),
         message: None,
         plan_ms,
@@ -177,7 +191,7 @@ pub fn fly_mission(
     };
     record.route_ne = plan.points_nea().iter().map(|p| (p[0], p[1])).collect();
     let window = match options.mode {
-        Mode::Shift => mission.window,
+        Mode::Shift | Mode::SpaceTime => mission.window,
         Mode::RejectOnConflict => DepartureWindow::at(mission.window.earliest),
     };
     let request = FlightRequest {
@@ -193,6 +207,19 @@ pub fn fly_mission(
         mission: mission.id.clone(),
         error,
     };
+    if options.mode == Mode::SpaceTime {
+        let no_fly = base.no_fly.is_some();
+        return space_time(
+            session,
+            store,
+            &plan,
+            &request,
+            record,
+            (t0, t1),
+            no_fly,
+            fail,
+        );
+    }
     let flight = flight_volumes(&plan, &request).map_err(|e: FlightError| fail(e.to_string()))?;
     record.duration_s = Some(flight.duration_s);
     let (result, counts) = reserve_flight(store, &flight, &request);
@@ -205,6 +232,7 @@ pub fn fly_mission(
             record.intent_id = Some(r.intent.id.clone());
             record.departure = Some(r.departure);
             record.delay_s = Some(r.delay_ms as f64 / 1000.0);
+            record.arrival_delay_s = record.delay_s;
             record.intent = Some(r.intent);
         }
         Err(ReserveError::Blocked(b)) => {
@@ -215,6 +243,65 @@ pub fn fly_mission(
         Err(ReserveError::Store(error)) => {
             return Err(FleetError::Store {
                 mission: mission.id.clone(),
+                error,
+            });
+        }
+    }
+    Ok(record)
+}
+
+/// [`fly_mission`]'s reservation in [`Mode::SpaceTime`].
+#[allow(clippy::too_many_arguments)]
+fn space_time(
+    session: &mut Session,
+    store: &dyn IntentStore,
+    plan: &skyplan_plan::Plan,
+    request: &FlightRequest,
+    mut record: FlightRecord,
+    (t0, t1): (Instant, Instant),
+    no_fly: bool,
+    fail: impl Fn(String) -> FleetError,
+) -> Result<FlightRecord, FleetError> {
+    if no_fly {
+        return Err(fail(
+            "the space-time search does not honour no-fly zones yet; use the departure shift"
+                .into(),
+        ));
+    }
+    let Some(g) = plan.grid else {
+        return Err(fail(format!(
+            "the space-time search needs a 2D grid planner; {} has no grid",
+            plan.planner.name()
+        )));
+    };
+    let grid = session
+        .grid(g.alt_m, g.safety_m, g.cell_m.max(crate::SEARCH_CELL_M))
+        .map_err(|f| fail(f.message))?;
+    let (result, nearby) = crate::reserve_space_time(store, &grid, plan, request);
+    record.reserve_ms = t1.elapsed().as_secs_f64() * 1e3;
+    record.latency_ms = t0.elapsed().as_secs_f64() * 1e3;
+    record.checked = nearby;
+    match result {
+        Ok(r) => {
+            record.status = Status::Accepted;
+            record.intent_id = Some(r.intent.id.clone());
+            record.departure = Some(r.departure);
+            record.delay_s = Some(r.delay_ms as f64 / 1000.0);
+            record.duration_s = Some(r.flight.duration_s);
+            record.hover_s = Some(r.hover_s);
+            record.detour_m = Some(r.detour_m);
+            record.arrival_delay_s = Some(r.arrival_delay_s);
+            record.route_ne = r.route_nea.iter().map(|p| (p[0], p[1])).collect();
+            record.intent = Some(r.intent);
+        }
+        Err(ReserveError::Blocked(b)) => {
+            record.status = Status::Refused;
+            record.blocking = b.blocking;
+        }
+        Err(ReserveError::Invalid(e)) => return Err(fail(e.to_string())),
+        Err(ReserveError::Store(error)) => {
+            return Err(FleetError::Store {
+                mission: record.mission.clone(),
                 error,
             });
         }
@@ -292,6 +379,15 @@ pub struct Summary {
     pub delay_mean_s: f64,
     /// 95th percentile of their delay, seconds.
     pub delay_p95_s: f64,
+    /// Mean of how much later than alone the accepted flights arrive, seconds (the delay,
+    /// plus the hovering and detours of the space-time search).
+    pub arrival_delay_mean_s: f64,
+    /// Its 95th percentile, seconds.
+    pub arrival_delay_p95_s: f64,
+    /// Accepted flights that hover on the way.
+    pub hovering: usize,
+    /// Accepted flights whose route is more than a metre longer than alone.
+    pub detoured: usize,
     /// Median plan-and-reserve latency over every flight, milliseconds.
     pub latency_p50_ms: f64,
     /// Its 99th percentile, milliseconds.
@@ -312,6 +408,7 @@ impl Summary {
             .filter(|r| r.status == Status::Accepted)
             .collect();
         let delays: Vec<f64> = accepted.iter().filter_map(|r| r.delay_s).collect();
+        let arrivals: Vec<f64> = accepted.iter().filter_map(|r| r.arrival_delay_s).collect();
         let latency: Vec<f64> = records.iter().map(|r| r.latency_ms).collect();
         let planned: Vec<&FlightRecord> = records
             .iter()
@@ -360,6 +457,16 @@ impl Summary {
             },
             delay_mean_s: mean(&delays),
             delay_p95_s: percentile(&delays, 95.0),
+            arrival_delay_mean_s: mean(&arrivals),
+            arrival_delay_p95_s: percentile(&arrivals, 95.0),
+            hovering: accepted
+                .iter()
+                .filter(|r| r.hover_s.is_some_and(|h| h > 0.0))
+                .count(),
+            detoured: accepted
+                .iter()
+                .filter(|r| r.detour_m.is_some_and(|d| d > 1.0))
+                .count(),
             latency_p50_ms: percentile(&latency, 50.0),
             latency_p99_ms: percentile(&latency, 99.0),
             checked_mean: mean(&checked),
@@ -460,6 +567,9 @@ mod tests {
             departure: None,
             delay_s: (status == Status::Accepted).then_some(k as f64),
             duration_s: None,
+            hover_s: None,
+            detour_m: None,
+            arrival_delay_s: (status == Status::Accepted).then_some(k as f64),
             blocking: Vec::new(),
             message: None,
             plan_ms: 0.0,

@@ -1,0 +1,399 @@
+//! Safe-interval path planning (SIPP; Phillips & Likhachev, "SIPP: Safe Interval Path Planning
+//! for Dynamic Environments", ICRA 2011) on an occupancy grid: the earliest arrival at the goal
+//! when cells are unsafe at known times, waiting (hovering) allowed anywhere and a later
+//! departure allowed within a window.
+//!
+//! Each cell's timeline is cut into its *safe intervals*, the maximal stretches of time it is
+//! not blocked. A search state is a cell and one of its safe intervals, reached at the earliest
+//! time the search has found; a move from cell `c` to a neighbour `n` takes `τ` (its length over
+//! the speed) and is allowed at a departure `t` when both cells are safe over all of
+//! `[t, t + τ]`. Since arriving earlier in an interval never hurts (one can wait), keeping the
+//! earliest arrival per state makes the search exact: with an admissible heuristic (the
+//! octile distance at full speed) the first goal state taken from the queue is the earliest
+//! arrival over all routes on the grid's moves and all waits.
+
+use skyplan_cspace::{Cell, Grid2};
+use std::cmp::Ordering;
+use std::collections::{BinaryHeap, HashMap};
+
+/// Safe intervals start this long after a blocked one ends and end this long before the next
+/// begins, seconds: blocked intervals are closed, safe ones closed too, and never touch.
+pub const GAP_S: f64 = 1e-3;
+
+/// A closed interval of time, seconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    /// Start, seconds.
+    pub start_s: f64,
+    /// End, seconds.
+    pub end_s: f64,
+}
+
+/// Sorts and merges closed intervals (those that overlap or touch become one).
+///
+/// ```
+/// use skyplan_fleet::sipp::{Interval, merge_intervals};
+/// let iv = |start_s, end_s| Interval { start_s, end_s };
+/// let merged = merge_intervals(vec![iv(5.0, 8.0), iv(0.0, 2.0), iv(1.0, 3.0)]);
+/// assert_eq!(merged, vec![iv(0.0, 3.0), iv(5.0, 8.0)]);
+/// ```
+pub fn merge_intervals(mut blocked: Vec<Interval>) -> Vec<Interval> {
+    blocked.retain(|b| b.start_s <= b.end_s);
+    blocked.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
+    let mut out: Vec<Interval> = Vec::with_capacity(blocked.len());
+    for b in blocked {
+        match out.last_mut() {
+            Some(last) if b.start_s <= last.end_s => last.end_s = last.end_s.max(b.end_s),
+            _ => out.push(b),
+        }
+    }
+    out
+}
+
+/// The safe intervals between merged blocked ones, from −∞ to +∞.
+fn safe_intervals(blocked: &[Interval]) -> Vec<Interval> {
+    let mut out = Vec::with_capacity(blocked.len() + 1);
+    let mut from = f64::NEG_INFINITY;
+    for b in blocked {
+        let end = b.start_s - GAP_S;
+        if end >= from {
+            out.push(Interval {
+                start_s: from,
+                end_s: end,
+            });
+        }
+        from = b.end_s + GAP_S;
+    }
+    out.push(Interval {
+        start_s: from,
+        end_s: f64::INFINITY,
+    });
+    out
+}
+
+/// Where and when each cell is blocked, asked once per cell the search reaches.
+pub trait Timeline {
+    /// The times `cell` is blocked (any order; they are merged).
+    fn blocked(&mut self, cell: Cell) -> Vec<Interval>;
+}
+
+impl<F: FnMut(Cell) -> Vec<Interval>> Timeline for F {
+    fn blocked(&mut self, cell: Cell) -> Vec<Interval> {
+        self(cell)
+    }
+}
+
+/// A space-time search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SippQuery {
+    /// The start cell.
+    pub start: Cell,
+    /// The goal cell.
+    pub goal: Cell,
+    /// Seconds to cross one cell north, south, east or west (a diagonal takes √2 times as long).
+    pub cell_s: f64,
+    /// The latest departure, seconds (the earliest is 0).
+    pub latest_departure_s: f64,
+    /// No arrival later than this, seconds.
+    pub horizon_s: f64,
+    /// Diagonal moves (never between two blocked orthogonal neighbours: no corner cutting).
+    pub diagonals: bool,
+    /// Most states taken from the queue before giving up.
+    pub max_expansions: usize,
+}
+
+/// A cell of the route and when the flight is in it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimedCell {
+    /// The cell.
+    pub cell: Cell,
+    /// Arrival (for the start: the departure), seconds.
+    pub arrive_s: f64,
+    /// Departure to the next cell (for the goal: its arrival), seconds.
+    pub leave_s: f64,
+}
+
+/// The route found and what the search did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SippPath {
+    /// The cells in order, with times.
+    pub cells: Vec<TimedCell>,
+    /// States taken from the queue.
+    pub expansions: usize,
+}
+
+impl SippPath {
+    /// The departure, seconds.
+    pub fn departure_s(&self) -> f64 {
+        self.cells.first().map_or(0.0, |c| c.arrive_s)
+    }
+
+    /// The arrival at the goal, seconds.
+    pub fn arrival_s(&self) -> f64 {
+        self.cells.last().map_or(0.0, |c| c.arrive_s)
+    }
+
+    /// Seconds spent waiting after departure (hovering).
+    pub fn hover_s(&self) -> f64 {
+        self.cells.iter().map(|c| c.leave_s - c.arrive_s).sum()
+    }
+}
+
+/// Why no route was found.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SippError {
+    /// The start or goal is blocked or off the grid.
+    #[error("the {which} cell (row {}, col {}) is blocked or off the grid", .cell.row, .cell.col)]
+    Endpoint {
+        /// "start" or "goal".
+        which: &'static str,
+        /// The cell.
+        cell: Cell,
+    },
+    /// Every route and wait within the window and horizon meets a blocked time.
+    #[error(
+        "no route reaches the goal by {horizon_s:.0} s leaving within {latest_departure_s:.0} s ({expansions} states searched)"
+    )]
+    NoRoute {
+        /// The latest departure searched, seconds.
+        latest_departure_s: f64,
+        /// The horizon, seconds.
+        horizon_s: f64,
+        /// States taken from the queue.
+        expansions: usize,
+    },
+    /// The search stopped at its budget of states.
+    #[error("stopped after {0} states without reaching the goal")]
+    Budget(usize),
+}
+
+struct Node {
+    cell: Cell,
+    interval: u32,
+    arrive_s: f64,
+    /// Departure from the parent.
+    left_parent_s: f64,
+    parent: u32,
+    /// Superseded by an earlier arrival at the same state.
+    stale: bool,
+}
+
+#[derive(PartialEq)]
+struct Open {
+    f: f64,
+    g: f64,
+    node: u32,
+}
+
+impl Eq for Open {}
+
+impl Ord for Open {
+    fn cmp(&self, other: &Self) -> Ordering {
+        // Smallest f first; among equals the later arrival (deeper) first.
+        other
+            .f
+            .total_cmp(&self.f)
+            .then_with(|| self.g.total_cmp(&other.g))
+    }
+}
+
+impl PartialOrd for Open {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+const NONE: u32 = u32::MAX;
+
+/// The earliest arrival at `q.goal` from `q.start`, leaving at a time in
+/// `[0, q.latest_departure_s]` (waiting before departure costs nothing and occupies nothing),
+/// over the free cells of `grid` and the safe intervals `timeline` gives. Of the routes that
+/// arrive first, the one found waits on the ground rather than over the start where the
+/// window allows.
+///
+/// ```
+/// use skyplan_cspace::{Cell, Grid2};
+/// use skyplan_fleet::sipp::{Interval, SippQuery, sipp};
+/// // A corridor whose middle cell is blocked from 0 to 10 s: the flight waits short of it.
+/// let grid = Grid2::from_ascii(".....")?;
+/// let q = SippQuery {
+///     start: Cell::new(0, 0), goal: Cell::new(0, 4), cell_s: 1.0,
+///     latest_departure_s: 0.0, horizon_s: 100.0, diagonals: true, max_expansions: 10_000,
+/// };
+/// let mut timeline = |c: Cell| if c.col == 2 { vec![Interval { start_s: 0.0, end_s: 10.0 }] } else { vec![] };
+/// let path = sipp(&grid, &q, &mut timeline)?;
+/// assert!((path.arrival_s() - 13.001).abs() < 1e-9);
+/// assert!((path.hover_s() - 9.001).abs() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn sipp(
+    grid: &Grid2,
+    q: &SippQuery,
+    timeline: &mut dyn Timeline,
+) -> Result<SippPath, SippError> {
+    for (which, cell) in [("start", q.start), ("goal", q.goal)] {
+        if !grid.contains(cell) || grid.is_blocked(cell) {
+            return Err(SippError::Endpoint { which, cell });
+        }
+    }
+    let mut intervals: HashMap<Cell, Vec<Interval>> = HashMap::new();
+    let mut safe_of = |cell: Cell, timeline: &mut dyn Timeline| -> Vec<Interval> {
+        intervals
+            .entry(cell)
+            .or_insert_with(|| safe_intervals(&merge_intervals(timeline.blocked(cell))))
+            .clone()
+    };
+    let h = |c: Cell| {
+        let dr = f64::from(c.row.abs_diff(q.goal.row));
+        let dc = f64::from(c.col.abs_diff(q.goal.col));
+        let octile = if q.diagonals {
+            dr.max(dc) + (std::f64::consts::SQRT_2 - 1.0) * dr.min(dc)
+        } else {
+            dr + dc
+        };
+        octile * q.cell_s
+    };
+    let mut nodes: Vec<Node> = Vec::new();
+    let mut best: HashMap<(Cell, u32), u32> = HashMap::new();
+    let mut open = BinaryHeap::new();
+    for (k, iv) in safe_of(q.start, timeline).iter().enumerate() {
+        if iv.end_s < 0.0 || iv.start_s > q.latest_departure_s {
+            continue;
+        }
+        let g = iv.start_s.max(0.0);
+        let id = nodes.len() as u32;
+        nodes.push(Node {
+            cell: q.start,
+            interval: k as u32,
+            arrive_s: g,
+            left_parent_s: g,
+            parent: NONE,
+            stale: false,
+        });
+        best.insert((q.start, k as u32), id);
+        open.push(Open {
+            f: g + h(q.start),
+            g,
+            node: id,
+        });
+    }
+    let moves: &[(i32, i32, f64)] = if q.diagonals {
+        &[
+            (1, 0, 1.0),
+            (-1, 0, 1.0),
+            (0, 1, 1.0),
+            (0, -1, 1.0),
+            (1, 1, std::f64::consts::SQRT_2),
+            (1, -1, std::f64::consts::SQRT_2),
+            (-1, 1, std::f64::consts::SQRT_2),
+            (-1, -1, std::f64::consts::SQRT_2),
+        ]
+    } else {
+        &[(1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0)]
+    };
+    let free = |r: i64, c: i64| grid.is_free_at(r, c);
+    let mut expansions = 0;
+    while let Some(Open { g, node, .. }) = open.pop() {
+        let (cell, interval) = (nodes[node as usize].cell, nodes[node as usize].interval);
+        if nodes[node as usize].stale {
+            continue;
+        }
+        expansions += 1;
+        if cell == q.goal {
+            let mut cells = walk_back(&nodes, node);
+            // A wait at the start before the latest departure is spent on the ground.
+            if let Some(first) = cells.first_mut() {
+                first.arrive_s = first.leave_s.min(q.latest_departure_s).max(first.arrive_s);
+            }
+            return Ok(SippPath { cells, expansions });
+        }
+        if expansions > q.max_expansions {
+            return Err(SippError::Budget(q.max_expansions));
+        }
+        let here_end = safe_of(cell, timeline)[interval as usize].end_s;
+        let (r, c) = (i64::from(cell.row), i64::from(cell.col));
+        for &(dr, dc, len) in moves {
+            let (nr, nc) = (r + i64::from(dr), c + i64::from(dc));
+            if !free(nr, nc) || (dr != 0 && dc != 0 && !(free(r + i64::from(dr), c) && free(r, nc)))
+            {
+                continue;
+            }
+            let Some(next) = grid.checked_cell(nr, nc) else {
+                continue;
+            };
+            let tau = len * q.cell_s;
+            for (k, iv) in safe_of(next, timeline).iter().enumerate() {
+                let leave = g.max(iv.start_s);
+                let arrive = leave + tau;
+                if iv.start_s > here_end {
+                    break;
+                }
+                if arrive > here_end.min(iv.end_s) || arrive > q.horizon_s {
+                    continue;
+                }
+                let key = (next, k as u32);
+                if let Some(&id) = best.get(&key)
+                    && nodes[id as usize].arrive_s <= arrive
+                {
+                    continue;
+                }
+                let id = nodes.len() as u32;
+                nodes.push(Node {
+                    cell: next,
+                    interval: k as u32,
+                    arrive_s: arrive,
+                    left_parent_s: leave,
+                    parent: node,
+                    stale: false,
+                });
+                if let Some(old) = best.insert(key, id) {
+                    nodes[old as usize].stale = true;
+                }
+                open.push(Open {
+                    f: arrive + h(next),
+                    g: arrive,
+                    node: id,
+                });
+            }
+        }
+    }
+    Err(SippError::NoRoute {
+        latest_departure_s: q.latest_departure_s,
+        horizon_s: q.horizon_s,
+        expansions,
+    })
+}
+
+fn walk_back(nodes: &[Node], goal: u32) -> Vec<TimedCell> {
+    let mut out = Vec::new();
+    let mut leave = nodes[goal as usize].arrive_s;
+    let mut at = goal;
+    while at != NONE {
+        let n = &nodes[at as usize];
+        out.push(TimedCell {
+            cell: n.cell,
+            arrive_s: n.arrive_s,
+            leave_s: leave,
+        });
+        leave = n.left_parent_s;
+        at = n.parent;
+    }
+    out.reverse();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn safe_intervals_leave_gaps_around_the_blocked_ones() {
+        let iv = |start_s, end_s| Interval { start_s, end_s };
+        let safe = safe_intervals(&[iv(0.0, 1.0), iv(3.0, 4.0)]);
+        assert_eq!(safe.len(), 3);
+        assert_eq!(safe[0].end_s, -GAP_S);
+        assert_eq!((safe[1].start_s, safe[1].end_s), (1.0 + GAP_S, 3.0 - GAP_S));
+        assert_eq!(safe[2].start_s, 4.0 + GAP_S);
+        assert!(safe[2].end_s.is_infinite());
+    }
+}

@@ -1,0 +1,528 @@
+//! Planning around the others in space and time: a plan's flight re-routed on its grid by
+//! [`crate::sipp`] with the stored intents as moving obstacles — a later departure, hovering
+//! and detours allowed, the earliest arrival the objective — then its volumes reserved with the
+//! store's exact check-and-insert.
+//!
+//! **Why the search's answer passes the exact check.** The route's volumes are cut at every
+//! corner and every [`STRETCH_S`] (volumes from straight pieces), so each volume's footprint is
+//! one straight piece of the route grown by the lateral margin `L` (an 8-gon circumscribing the
+//! disc, so no wider than `L / cos 22.5°`), and its time window that piece's times grown by the
+//! time buffer `B`. A stored volume meets it only if some point of the piece is within that
+//! width of the stored footprint while the windows overlap; that point is within half a cell's
+//! diagonal of a cell the flight is in at that moment, at a time within `B + STRETCH_S` of the
+//! stored window. So each cell is blocked, for the search, over each stored window grown by
+//! `B + STRETCH_S` (and a millisecond for rounding) when its centre is within
+//! `L / cos 22.5° + half a diagonal` (and [`SLACK_M`] for the projections) of the stored
+//! footprint, and the altitude bands overlap. The check-and-insert is still the judge; an
+//! intent it names that the read missed (stored meanwhile) is added and the search run again.
+
+use crate::flight::FlightRequest;
+use crate::sipp::{Interval, SippError, SippQuery, TimedCell, sipp};
+use skyplan_airspace::{
+    AirspaceError, FlightVolumes, IntentRef, IntentState, OperationalIntent, Timestamp, Timing,
+    Volume4D, volumes_from_plan, volumes_from_straight_pieces,
+};
+use skyplan_airspace_store::{Insert, IntentStore, RESERVE_TRIES, ReserveError, new_id};
+use skyplan_cspace::{Cell, Grid2};
+use skyplan_frames::{Lla, LocalFrame};
+use skyplan_plan::Plan;
+use std::collections::HashMap;
+
+/// Longest stretch of time in one volume of a space-time route, seconds.
+pub const STRETCH_S: f64 = 5.0;
+/// Longest stretch of a space-time route in one volume, metres.
+pub const STRETCH_M: f64 = 50.0;
+/// Added to the distance at which a stored footprint blocks a cell, metres: the projections
+/// between latitude/longitude and the map's frame (a few millimetres over a city).
+pub const SLACK_M: f64 = 0.5;
+/// How far around the planned route stored intents are read, metres.
+pub const READ_REACH_M: f64 = 300.0;
+/// The cell size the fleet searches in space and time on (or the plan's, if coarser), metres:
+/// far coarser than the lateral margin would not pay, finer costs time for nothing.
+pub const SEARCH_CELL_M: f64 = 4.0;
+/// The search's budget of states.
+pub const MAX_EXPANSIONS: usize = 4_000_000;
+
+/// A flight reserved along a space-time route.
+#[derive(Debug, Clone)]
+pub struct SpaceTimeFlight {
+    /// The intent stored.
+    pub intent: OperationalIntent,
+    /// Its departure.
+    pub departure: Timestamp,
+    /// Milliseconds after the window's earliest departure.
+    pub delay_ms: i64,
+    /// Seconds hovering after departure.
+    pub hover_s: f64,
+    /// Metres longer than the same search's route in an empty sky.
+    pub detour_m: f64,
+    /// Seconds later at the goal than the same search's route in an empty sky, leaving at
+    /// the window's start.
+    pub arrival_delay_s: f64,
+    /// The empty sky's route, metres (the grid's moves: at least the planned route).
+    pub alone_m: f64,
+    /// The route flown: corners and hover points, `[north_m, east_m, alt_m]`.
+    pub route_nea: Vec<[f64; 3]>,
+    /// Its volumes (departure at the epoch) and duration.
+    pub flight: FlightVolumes,
+    /// States the last search took from its queue.
+    pub expansions: usize,
+    /// Stored intents read near the flight.
+    pub nearby: usize,
+    /// Searches run.
+    pub tries: usize,
+}
+
+/// A stored volume as the search sees it: its footprint in the map's frame and its grown
+/// time window, seconds after the window's start.
+struct Obstacle {
+    ring_ne: Vec<[f64; 2]>,
+    bbox_ne: [f64; 4],
+    blocked: Interval,
+}
+
+/// Distance from `p` to a closed polygon given as a ring (0 inside).
+fn distance_to_ring(ring: &[[f64; 2]], p: [f64; 2]) -> f64 {
+    let n = ring.len();
+    let mut inside = false;
+    let mut best = f64::INFINITY;
+    for i in 0..n {
+        let (a, b) = (ring[i], ring[(i + 1) % n]);
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if p[0] < x {
+                inside = !inside;
+            }
+        }
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = dx * dx + dy * dy;
+        let t = if len2 > 0.0 {
+            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (ex, ey) = (a[0] + t * dx - p[0], a[1] + t * dy - p[1]);
+        best = best.min((ex * ex + ey * ey).sqrt());
+    }
+    if inside { 0.0 } else { best }
+}
+
+/// Side of the square buckets the obstacles are filed in, metres.
+const BUCKET_M: f64 = 32.0;
+
+/// The stored volumes that bind the flight and share its altitudes, as obstacles, filed by
+/// the buckets their footprint grown by the reach touches.
+struct Obstacles {
+    list: Vec<Obstacle>,
+    reach_m: f64,
+    buckets: HashMap<(i64, i64), Vec<u32>>,
+}
+
+fn bucket_of(m: f64) -> i64 {
+    (m / BUCKET_M).floor() as i64
+}
+
+impl Obstacles {
+    fn new(reach_m: f64) -> Self {
+        Self {
+            list: Vec::new(),
+            reach_m,
+            buckets: HashMap::new(),
+        }
+    }
+
+    fn clear(&mut self) {
+        self.list.clear();
+        self.buckets.clear();
+    }
+
+    fn file(&mut self, o: Obstacle) {
+        let r = self.reach_m;
+        let id = self.list.len() as u32;
+        let (n0, n1) = (bucket_of(o.bbox_ne[0] - r), bucket_of(o.bbox_ne[2] + r));
+        let (e0, e1) = (bucket_of(o.bbox_ne[1] - r), bucket_of(o.bbox_ne[3] + r));
+        for bn in n0..=n1 {
+            for be in e0..=e1 {
+                self.buckets.entry((bn, be)).or_default().push(id);
+            }
+        }
+        self.list.push(o);
+    }
+
+    /// Adds the volumes of `intent` that share the band `[lo, hi]` (W84 metres).
+    fn add(
+        &mut self,
+        intent: &OperationalIntent,
+        band: (f64, f64),
+        frame: &LocalFrame,
+        t0: Timestamp,
+        pad_s: f64,
+    ) -> Result<(), AirspaceError> {
+        for v in &intent.volumes {
+            if v.volume.altitude_upper.value < band.0 || v.volume.altitude_lower.value > band.1 {
+                continue;
+            }
+            let mut ring_ne = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
+            for p in &v.volume.outline_polygon.vertices {
+                let ned = frame.ned_from_lla(Lla {
+                    lat_deg: p.lat,
+                    lon_deg: p.lng,
+                    alt_m: 0.0,
+                })?;
+                ring_ne.push([ned.north_m, ned.east_m]);
+            }
+            let bbox_ne = ring_ne.iter().fold(
+                [
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ],
+                |b, p| {
+                    [
+                        b[0].min(p[0]),
+                        b[1].min(p[1]),
+                        b[2].max(p[0]),
+                        b[3].max(p[1]),
+                    ]
+                },
+            );
+            let s = |t: &skyplan_airspace::Time| t.value.ms_since(t0) as f64 / 1000.0;
+            self.file(Obstacle {
+                ring_ne,
+                bbox_ne,
+                blocked: Interval {
+                    start_s: s(&v.time_start) - pad_s,
+                    end_s: s(&v.time_end) + pad_s,
+                },
+            });
+        }
+        Ok(())
+    }
+
+    /// When the cell centred at `(n, e)` is blocked.
+    fn blocked_at(&self, n: f64, e: f64) -> Vec<Interval> {
+        let r = self.reach_m;
+        let Some(ids) = self.buckets.get(&(bucket_of(n), bucket_of(e))) else {
+            return Vec::new();
+        };
+        ids.iter()
+            .map(|&k| &self.list[k as usize])
+            .filter(|o| {
+                n >= o.bbox_ne[0] - r
+                    && n <= o.bbox_ne[2] + r
+                    && e >= o.bbox_ne[1] - r
+                    && e <= o.bbox_ne[3] + r
+                    && distance_to_ring(&o.ring_ne, [n, e]) <= r
+            })
+            .map(|o| o.blocked)
+            .collect()
+    }
+}
+
+/// The free cell for a place: its own, or the nearest free one.
+fn cell_for(grid: &Grid2, north_m: f64, east_m: f64) -> Option<Cell> {
+    grid.cell_at_ne(north_m, east_m)
+        .filter(|&c| !grid.is_blocked(c))
+        .or_else(|| grid.nearest_free_ne(north_m, east_m))
+}
+
+fn route_length(points: &[[f64; 3]]) -> f64 {
+    points
+        .windows(2)
+        .map(|w| {
+            ((w[1][0] - w[0][0]).powi(2)
+                + (w[1][1] - w[0][1]).powi(2)
+                + (w[1][2] - w[0][2]).powi(2))
+            .sqrt()
+        })
+        .sum()
+}
+
+/// The searched cells as a route with times (seconds after departure): each cell's centre at
+/// its arrival and, where the flight waits, at its departure; the plan's own start and goal
+/// points at the ends.
+fn timed_points(
+    grid: &Grid2,
+    cells: &[TimedCell],
+    start: [f64; 2],
+    goal: [f64; 2],
+    alt_m: f64,
+) -> Vec<skyplan_airspace::TimedPoint> {
+    let t0 = cells.first().map_or(0.0, |c| c.arrive_s);
+    let mut out = Vec::with_capacity(cells.len() + 8);
+    let last = cells.len().saturating_sub(1);
+    // The plan's own start and goal where they are inside the end cells (else the centres:
+    // the straight leg from a point outside a cell is not the grid's to vouch for).
+    let inside = |p: [f64; 2], c: Cell| grid.cell_at_ne(p[0], p[1]) == Some(c);
+    for (k, c) in cells.iter().enumerate() {
+        let (n, e) = grid.center_ne(c.cell);
+        let ne = match k {
+            0 if inside(start, c.cell) => start,
+            k if k == last && inside(goal, c.cell) => goal,
+            _ => [n, e],
+        };
+        let nea = [ne[0], ne[1], alt_m];
+        out.push(skyplan_airspace::TimedPoint {
+            t_s: c.arrive_s - t0,
+            nea,
+        });
+        if c.leave_s > c.arrive_s && k != last {
+            out.push(skyplan_airspace::TimedPoint {
+                t_s: c.leave_s - t0,
+                nea,
+            });
+        }
+    }
+    out
+}
+
+/// The corners and hover points of a route with times (points where it turns or waits).
+fn corners(path: &[skyplan_airspace::TimedPoint]) -> Vec<[f64; 3]> {
+    let mut out: Vec<[f64; 3]> = Vec::new();
+    for (k, p) in path.iter().enumerate() {
+        let keep = k == 0 || k + 1 == path.len() || {
+            let (a, b, c) = (path[k - 1].nea, p.nea, path[k + 1].nea);
+            let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
+            let cross = u[0] * v[1] - u[1] * v[0];
+            let dot = u[0] * v[0] + u[1] * v[1];
+            cross.abs() > 1e-9 || dot <= 0.0
+        };
+        // A hover is the same point twice: kept once.
+        if keep && out.last() != Some(&p.nea) {
+            out.push(p.nea);
+        }
+    }
+    out
+}
+
+/// Re-routes `plan` (a 2D grid plan at one altitude) on `grid` (a grid of the same map at the
+/// plan's altitude and margin, e.g. of [`SEARCH_CELL_M`] cells) in space and time around the stored intents that bind it, and reserves the result; the
+/// counts of what was read as in [`skyplan_airspace_store::reserve_counted`].
+///
+/// ```
+/// use skyplan_fleet::{FlightRequest, reserve_space_time};
+/// use skyplan_airspace::{DepartureWindow, Timestamp};
+/// use skyplan_airspace_store::SqliteStore;
+/// use skyplan_plan::{PlanRequest, Session, World};
+/// let mut session = Session::new(World::fcnd_city());
+/// let plan = session.plan(&PlanRequest::default())?;
+/// let g = plan.grid.expect("a grid plan");
+/// let grid = session.grid(g.alt_m, g.safety_m, g.cell_m.max(skyplan_fleet::SEARCH_CELL_M))?;
+/// let store = SqliteStore::open_url("sqlite::memory:")?;
+/// let t0: Timestamp = "2026-03-01T12:00:00Z".parse()?;
+/// let window = DepartureWindow { earliest: t0, latest: t0.plus_ms(600_000) };
+/// let request = FlightRequest::new(window, 0, "demo".into());
+/// let first = reserve_space_time(&store, &grid, &plan, &request).0?;
+/// assert_eq!((first.delay_ms, first.hover_s, first.arrival_delay_s), (0, 0.0, 0.0));
+/// // The same flight again in the same window: it arrives later than alone.
+/// let second = reserve_space_time(&store, &grid, &plan, &request).0?;
+/// assert!(second.arrival_delay_s > 0.0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn reserve_space_time(
+    store: &dyn IntentStore,
+    grid: &Grid2,
+    plan: &Plan,
+    request: &FlightRequest,
+) -> (Result<SpaceTimeFlight, ReserveError>, usize) {
+    let mut nearby = 0;
+    let result = space_time_inner(store, grid, plan, request, &mut nearby);
+    (result, nearby)
+}
+
+fn invalid(field: &str, why: impl Into<String>) -> ReserveError {
+    ReserveError::Invalid(AirspaceError::Invalid {
+        field: field.into(),
+        why: why.into(),
+    })
+}
+
+fn space_time_inner(
+    store: &dyn IntentStore,
+    grid: &Grid2,
+    plan: &Plan,
+    request: &FlightRequest,
+    nearby_count: &mut usize,
+) -> Result<SpaceTimeFlight, ReserveError> {
+    let o = request.volumes;
+    let window = request.window;
+    if window.latest < window.earliest {
+        return Err(invalid("departure", "the window ends before it starts"));
+    }
+    let home = plan
+        .home
+        .ok_or(ReserveError::Invalid(AirspaceError::NoHome))?;
+    let frame = LocalFrame::new(Lla {
+        lat_deg: home.lat_deg,
+        lon_deg: home.lon_deg,
+        alt_m: 0.0,
+    })
+    .map_err(|e| ReserveError::Invalid(e.into()))?;
+    let Some(g) = plan.grid else {
+        return Err(invalid(
+            "planner",
+            format!(
+                "planning in space and time needs a 2D grid planner's plan; {} has no grid",
+                plan.planner.name()
+            ),
+        ));
+    };
+    let planned = plan.points_nea();
+    let alt_m = planned.first().map_or(g.alt_m, |p| p[2]);
+    if planned.iter().any(|p| (p[2] - alt_m).abs() > 1e-6) {
+        return Err(invalid(
+            "planner",
+            "planning in space and time needs a route at one altitude",
+        ));
+    }
+    // The stored intents are read around the planned route, grown by READ_REACH_M.
+    let reach = skyplan_airspace::VolumeOptions {
+        lateral_margin_m: o.lateral_margin_m + READ_REACH_M,
+        ..o
+    };
+    let read_volumes = volumes_from_plan(plan, &reach)
+        .map_err(ReserveError::Invalid)?
+        .at(window.earliest);
+    let span_ms = window.latest.ms_since(window.earliest).max(0);
+    let length_m = route_length(&planned);
+    let cell_m = grid.frame().cell_m;
+    let cell_s = cell_m / o.cruise_m_s;
+    let latest_departure_s = span_ms as f64 / 1000.0;
+    let horizon_s = latest_departure_s + 3.0 * (length_m / o.cruise_m_s) + 600.0;
+    let later_ms = (horizon_s * 1000.0) as i64;
+    let start = cell_for(grid, plan.start.north_m, plan.start.east_m)
+        .ok_or_else(|| invalid("start", "no free cell on the grid"))?;
+    let goal = cell_for(grid, plan.goal.north_m, plan.goal.east_m)
+        .ok_or_else(|| invalid("goal", "no free cell on the grid"))?;
+    let band = (
+        o.home_alt_w84_m + alt_m - o.vertical_buffer_m,
+        o.home_alt_w84_m + alt_m + o.vertical_buffer_m,
+    );
+    let reach_m = o.lateral_margin_m.max(0.01) / (std::f64::consts::PI / 8.0).cos()
+        + cell_m * std::f64::consts::SQRT_2 / 2.0
+        + SLACK_M;
+    let pad_s = o.time_buffer_s + STRETCH_S + 0.002;
+    let mut obstacles = Obstacles::new(reach_m);
+    let mut extra: Vec<OperationalIntent> = Vec::new();
+    let mut last_conflicts: Vec<IntentRef> = Vec::new();
+    let stretch = skyplan_airspace::VolumeOptions {
+        stretch_s: STRETCH_S,
+        stretch_m: STRETCH_M,
+        ..o
+    };
+    let query = SippQuery {
+        start,
+        goal,
+        cell_s,
+        latest_departure_s,
+        horizon_s,
+        diagonals: true,
+        max_expansions: MAX_EXPANSIONS,
+    };
+    // The same search in an empty sky: what the delay and the detour are measured against.
+    let alone = match sipp(grid, &query, &mut |_: Cell| Vec::new()) {
+        Ok(alone) => alone,
+        Err(e) => return Err(invalid("route", e.to_string())),
+    };
+    let alone_m = route_length(&corners(&timed_points(
+        grid,
+        &alone.cells,
+        [plan.start.north_m, plan.start.east_m],
+        [plan.goal.north_m, plan.goal.east_m],
+        alt_m,
+    )));
+    for tries in 1..=RESERVE_TRIES {
+        let mut near = store.nearby(&read_volumes, later_ms)?;
+        *nearby_count = near.len();
+        near.extend(extra.iter().cloned());
+        obstacles.clear();
+        let mut binding = Vec::new();
+        for intent in &near {
+            if request.rule.binds(request.priority, intent) {
+                obstacles
+                    .add(intent, band, &frame, window.earliest, pad_s)
+                    .map_err(ReserveError::Invalid)?;
+                binding.push(intent.reference());
+            }
+        }
+        let mut timeline = |c: Cell| {
+            let (n, e) = grid.center_ne(c);
+            obstacles.blocked_at(n, e)
+        };
+        let found = match sipp(grid, &query, &mut timeline) {
+            Ok(found) => found,
+            Err(SippError::Endpoint { which, cell }) => {
+                return Err(invalid(
+                    which,
+                    format!("cell (row {}, col {}) is blocked", cell.row, cell.col),
+                ));
+            }
+            Err(_) => {
+                binding.sort();
+                binding.dedup();
+                return Err(ReserveError::Blocked(skyplan_airspace::Blocked {
+                    window,
+                    blocking: binding,
+                }));
+            }
+        };
+        let path = timed_points(
+            grid,
+            &found.cells,
+            [plan.start.north_m, plan.start.east_m],
+            [plan.goal.north_m, plan.goal.east_m],
+            alt_m,
+        );
+        let route_nea = corners(&path);
+        let flight = volumes_from_straight_pieces(path, Timing::SpaceTime, &frame, &stretch)
+            .map_err(ReserveError::Invalid)?;
+        let delay_ms = (found.departure_s() * 1000.0).ceil() as i64;
+        let departure = window.earliest.plus_ms(delay_ms);
+        let volumes: Vec<Volume4D> = flight.at(departure);
+        let intent = OperationalIntent {
+            id: new_id(),
+            version: 1,
+            state: IntentState::Accepted,
+            priority: request.priority,
+            owner: request.owner.clone(),
+            volumes,
+        };
+        match store.insert_if_clear(&intent, request.rule)? {
+            Insert::Accepted { .. } => {
+                let flown = route_length(&route_nea);
+                return Ok(SpaceTimeFlight {
+                    departure,
+                    delay_ms,
+                    hover_s: found.hover_s(),
+                    detour_m: flown - alone_m,
+                    arrival_delay_s: found.arrival_s() - alone.arrival_s(),
+                    alone_m,
+                    route_nea,
+                    intent,
+                    flight,
+                    expansions: found.expansions,
+                    nearby: *nearby_count,
+                    tries,
+                });
+            }
+            Insert::Conflicts(c) => {
+                // Stored since the read, or beyond it: read them and search again.
+                last_conflicts = c
+                    .iter()
+                    .map(skyplan_airspace::Conflict::reference)
+                    .collect();
+                for r in &c {
+                    if let Some(i) = store.get(&r.id)? {
+                        extra.push(i);
+                    }
+                }
+            }
+        }
+    }
+    last_conflicts.sort();
+    Err(ReserveError::Blocked(skyplan_airspace::Blocked {
+        window,
+        blocking: last_conflicts,
+    }))
+}
