@@ -205,6 +205,18 @@ impl PartialOrd for Open {
 
 const NONE: u32 = u32::MAX;
 
+/// Each reached cell's safe intervals, asked of the timeline once.
+#[derive(Default)]
+struct SafeCache(HashMap<Cell, Vec<Interval>>);
+
+impl SafeCache {
+    fn of(&mut self, cell: Cell, timeline: &mut dyn Timeline) -> &[Interval] {
+        self.0
+            .entry(cell)
+            .or_insert_with(|| safe_intervals(&merge_intervals(timeline.blocked(cell))))
+    }
+}
+
 /// The earliest arrival at `q.goal` from `q.start`, leaving at a time in
 /// `[0, q.latest_departure_s]` (waiting before departure costs nothing and occupies nothing),
 /// over the free cells of `grid` and the safe intervals `timeline` gives. Of the routes that
@@ -236,13 +248,7 @@ pub fn sipp(
             return Err(SippError::Endpoint { which, cell });
         }
     }
-    let mut intervals: HashMap<Cell, Vec<Interval>> = HashMap::new();
-    let mut safe_of = |cell: Cell, timeline: &mut dyn Timeline| -> Vec<Interval> {
-        intervals
-            .entry(cell)
-            .or_insert_with(|| safe_intervals(&merge_intervals(timeline.blocked(cell))))
-            .clone()
-    };
+    let mut safe = SafeCache::default();
     let h = |c: Cell| {
         let dr = f64::from(c.row.abs_diff(q.goal.row));
         let dc = f64::from(c.col.abs_diff(q.goal.col));
@@ -256,7 +262,7 @@ pub fn sipp(
     let mut nodes: Vec<Node> = Vec::new();
     let mut best: HashMap<(Cell, u32), u32> = HashMap::new();
     let mut open = BinaryHeap::new();
-    for (k, iv) in safe_of(q.start, timeline).iter().enumerate() {
+    for (k, iv) in safe.of(q.start, timeline).iter().enumerate() {
         if iv.end_s < 0.0 || iv.start_s > q.latest_departure_s {
             continue;
         }
@@ -310,7 +316,7 @@ pub fn sipp(
         if expansions > q.max_expansions {
             return Err(SippError::Budget(q.max_expansions));
         }
-        let here_end = safe_of(cell, timeline)[interval as usize].end_s;
+        let here_end = safe.of(cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
         for &(dr, dc, len) in moves {
             let (nr, nc) = (r + i64::from(dr), c + i64::from(dc));
@@ -322,7 +328,7 @@ pub fn sipp(
                 continue;
             };
             let tau = len * q.cell_s;
-            for (k, iv) in safe_of(next, timeline).iter().enumerate() {
+            for (k, iv) in safe.of(next, timeline).iter().enumerate() {
                 let leave = g.max(iv.start_s);
                 let arrive = leave + tau;
                 if iv.start_s > here_end {
