@@ -76,9 +76,63 @@ pub struct SpaceTimeFlight {
 /// A stored volume as the search sees it: its footprint in the map's frame and its grown
 /// time window, seconds after the window's start.
 struct Obstacle {
+    /// The footprint's convex hull, counter-clockwise.
     ring_ne: Vec<[f64; 2]>,
+    /// Each hull edge's outward unit normal `u` and offset `u · a`: the largest `u · p − c`
+    /// is a lower bound of the distance outside and ≤ 0 inside.
+    edges: Vec<([f64; 2], f64)>,
     bbox_ne: [f64; 4],
     blocked: Interval,
+}
+
+impl Obstacle {
+    fn new(points: &[[f64; 2]], blocked: Interval) -> Self {
+        let ring_ne = skyplan_airspace::geometry::convex_hull(points);
+        let n = ring_ne.len();
+        let edges = if n >= 3 {
+            (0..n)
+                .filter_map(|i| {
+                    let (a, b) = (ring_ne[i], ring_ne[(i + 1) % n]);
+                    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                    let len = dx.hypot(dy);
+                    (len > 0.0).then(|| {
+                        let u = [dy / len, -dx / len];
+                        (u, u[0] * a[0] + u[1] * a[1])
+                    })
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let bbox_ne = ring_ne.iter().fold(
+            [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
+            |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+        );
+        Self {
+            ring_ne,
+            edges,
+            bbox_ne,
+            blocked,
+        }
+    }
+
+    /// Whether `p` is within `r` of the footprint.
+    fn near(&self, p: [f64; 2], r: f64) -> bool {
+        if self.edges.is_empty() {
+            return distance_to_ring(&self.ring_ne, p) <= r;
+        }
+        let outside = self
+            .edges
+            .iter()
+            .map(|(u, c)| u[0] * p[0] + u[1] * p[1] - c)
+            .fold(f64::NEG_INFINITY, f64::max);
+        outside <= 0.0 || (outside <= r && distance_to_ring(&self.ring_ne, p) <= r)
+    }
 }
 
 /// Distance from `p` to a closed polygon given as a ring (0 inside).
@@ -162,40 +216,23 @@ impl Obstacles {
             if v.volume.altitude_upper.value < band.0 || v.volume.altitude_lower.value > band.1 {
                 continue;
             }
-            let mut ring_ne = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
+            let mut points = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
             for p in &v.volume.outline_polygon.vertices {
                 let ned = frame.ned_from_lla(Lla {
                     lat_deg: p.lat,
                     lon_deg: p.lng,
                     alt_m: 0.0,
                 })?;
-                ring_ne.push([ned.north_m, ned.east_m]);
+                points.push([ned.north_m, ned.east_m]);
             }
-            let bbox_ne = ring_ne.iter().fold(
-                [
-                    f64::INFINITY,
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                    f64::NEG_INFINITY,
-                ],
-                |b, p| {
-                    [
-                        b[0].min(p[0]),
-                        b[1].min(p[1]),
-                        b[2].max(p[0]),
-                        b[3].max(p[1]),
-                    ]
-                },
-            );
             let s = |t: &skyplan_airspace::Time| t.value.ms_since(t0) as f64 / 1000.0;
-            self.file(Obstacle {
-                ring_ne,
-                bbox_ne,
-                blocked: Interval {
+            self.file(Obstacle::new(
+                &points,
+                Interval {
                     start_s: s(&v.time_start) - pad_s,
                     end_s: s(&v.time_end) + pad_s,
                 },
-            });
+            ));
         }
         Ok(())
     }
@@ -213,7 +250,7 @@ impl Obstacles {
                     && n <= o.bbox_ne[2] + r
                     && e >= o.bbox_ne[1] - r
                     && e <= o.bbox_ne[3] + r
-                    && distance_to_ring(&o.ring_ne, [n, e]) <= r
+                    && o.near([n, e], r)
             })
             .map(|o| o.blocked)
             .collect()
@@ -541,4 +578,43 @@ fn space_time_inner(
         window,
         blocking: last_conflicts,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn the_edge_test_agrees_with_the_exact_distance() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut near = 0;
+        for _ in 0..2000 {
+            let points: Vec<[f64; 2]> = (0..rng.random_range(1..9))
+                .map(|_| [rng.random_range(-20.0..20.0), rng.random_range(-20.0..20.0)])
+                .collect();
+            let o = Obstacle::new(
+                &points,
+                Interval {
+                    start_s: 0.0,
+                    end_s: 1.0,
+                },
+            );
+            let hull = skyplan_airspace::geometry::convex_hull(&points);
+            for _ in 0..20 {
+                let p = [rng.random_range(-40.0..40.0), rng.random_range(-40.0..40.0)];
+                let r = rng.random_range(0.0..10.0);
+                // Brute force: the hull's edges and the point-in-hull test by cross products.
+                let inside = hull.len() >= 3
+                    && (0..hull.len()).all(|i| {
+                        skyplan_airspace::geometry::cross(hull[i], hull[(i + 1) % hull.len()], p)
+                            >= 0.0
+                    });
+                let d = if inside { 0.0 } else { distance_to_ring(&hull, p) };
+                assert_eq!(o.near(p, r), d <= r, "{points:?} {p:?} {r}");
+                near += usize::from(d <= r);
+            }
+        }
+        assert!(near > 2000, "{near}");
+    }
 }

@@ -35,6 +35,20 @@ struct IntentRequest {
     priority: u32,
     /// Who flies it.
     owner: String,
+    /// How a conflict is resolved: `departure` (the default: the planned route, its departure
+    /// moved within the window) or `space_time` (the route re-planned around the others:
+    /// a later departure, hovering, detours; the earliest arrival).
+    #[serde(default)]
+    search: Search,
+}
+
+/// `IntentRequest::search`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum Search {
+    #[default]
+    Departure,
+    SpaceTime,
 }
 
 fn bad(message: String) -> ApiError {
@@ -103,42 +117,117 @@ pub(crate) async fn create(
     let store = store(&s)?;
     let plan_request = request.plan;
     let shape = crate::handlers::shape(&plan_request);
+    if request.search == Search::SpaceTime && plan_request.no_fly.is_some() {
+        return Err(bad(
+            "no_fly: the space-time search does not honour no-fly zones yet; use \"search\": \"departure\"".into(),
+        ));
+    }
+    let space_time = request.search == Search::SpaceTime;
     let planned = s
         .pool
-        .run(shape, move |session| session.plan(&plan_request))
+        .run(shape, move |session| {
+            let plan = session.plan(&plan_request)?;
+            // The space-time search's grid, built in the session (and kept there).
+            let grid = match (space_time, plan.grid) {
+                (true, Some(g)) => Some(session.grid(
+                    g.alt_m,
+                    g.safety_m,
+                    g.cell_m.max(skyplan_fleet::SEARCH_CELL_M),
+                )?),
+                _ => None,
+            };
+            Ok::<_, skyplan_plan::PlanFailure>((plan, grid))
+        })
         .await?;
-    let plan = planned.map_err(ApiError::from)?;
+    let (plan, grid) = planned.map_err(ApiError::from)?;
     let flight_request = FlightRequest::new(window, request.priority, owner);
-    let flight =
-        skyplan_fleet::flight_volumes(&plan, &flight_request).map_err(|e| bad(e.to_string()))?;
-    let (timing, duration_s) = (flight.timing, flight.duration_s);
-    let reserved = blocking(move || {
-        skyplan_fleet::reserve_flight(store.as_ref(), &flight, &flight_request)
-            .0
-            .map_err(|e| match e {
-                ReserveError::Blocked(b) => {
-                    ApiError::new(ErrorKind::Conflict, b.to_string()).with_conflicts(b.blocking)
-                }
-                ReserveError::Invalid(e) => bad(e.to_string()),
-                ReserveError::Store(e) => store_error(e),
+    let reserved = if space_time {
+        let Some(grid) = grid else {
+            return Err(bad(format!(
+                "search: space_time needs a 2D grid planner's plan; {} has no grid",
+                plan.planner.name()
+            )));
+        };
+        let plan = plan.clone();
+        blocking(move || {
+            let r =
+                skyplan_fleet::reserve_space_time(store.as_ref(), &grid, &plan, &flight_request)
+                    .0
+                    .map_err(reserve_error)?;
+            Ok(Reserved {
+                intent: r.intent,
+                departure: r.departure,
+                delay_ms: r.delay_ms,
+                nearby: r.nearby,
+                duration_s: r.flight.duration_s,
+                timing: r.flight.timing,
+                space_time: Some(json!({
+                    "hover_s": r.hover_s,
+                    "detour_m": r.detour_m,
+                    "arrival_delay_s": r.arrival_delay_s,
+                    "route_ne": r.route_nea.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>(),
+                })),
             })
-    })
-    .await?;
+        })
+        .await?
+    } else {
+        let flight = skyplan_fleet::flight_volumes(&plan, &flight_request)
+            .map_err(|e| bad(e.to_string()))?;
+        blocking(move || {
+            let r = skyplan_fleet::reserve_flight(store.as_ref(), &flight, &flight_request)
+                .0
+                .map_err(reserve_error)?;
+            Ok(Reserved {
+                intent: r.intent,
+                departure: r.departure,
+                delay_ms: r.delay_ms,
+                nearby: r.nearby,
+                duration_s: flight.duration_s,
+                timing: flight.timing,
+                space_time: None,
+            })
+        })
+        .await?
+    };
     let request_id = s
         .next_request_id
         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let wall_time_us = u64::try_from(t0.elapsed().as_micros()).unwrap_or(u64::MAX);
-    let answer = json!({
+    let mut answer = json!({
         "status": "ok",
         "intent": reserved.intent,
         "departure": reserved.departure,
         "delay_s": reserved.delay_ms as f64 / 1000.0,
-        "duration_s": duration_s,
-        "timing": timing,
+        "duration_s": reserved.duration_s,
+        "timing": reserved.timing,
         "nearby_intents": reserved.nearby,
         "plan": plan_json(&plan, wall_time_us, request_id)?,
     });
+    if let (Some(extra), Some(map)) = (reserved.space_time, answer.as_object_mut()) {
+        map.insert("space_time".into(), extra);
+    }
     Ok((StatusCode::CREATED, Json(answer)))
+}
+
+/// A reservation as the answer reports it.
+struct Reserved {
+    intent: OperationalIntent,
+    departure: Timestamp,
+    delay_ms: i64,
+    nearby: usize,
+    duration_s: f64,
+    timing: skyplan_airspace::Timing,
+    space_time: Option<Value>,
+}
+
+fn reserve_error(e: ReserveError) -> ApiError {
+    match e {
+        ReserveError::Blocked(b) => {
+            ApiError::new(ErrorKind::Conflict, b.to_string()).with_conflicts(b.blocking)
+        }
+        ReserveError::Invalid(e) => bad(e.to_string()),
+        ReserveError::Store(e) => store_error(e),
+    }
 }
 
 /// `GET /api/intents`.

@@ -776,6 +776,76 @@ async fn intents_answer_201_409_404_as_documented() {
 }
 
 #[tokio::test]
+async fn intents_searched_in_space_and_time_keep_clear_as_documented() {
+    let doc = document();
+    let app = router(World::fcnd_city(), ServerConfig::default());
+    let at = departure(0);
+    let body = |departure: Value, search: &str| json!({ "plan": {}, "departure": departure, "priority": 0, "owner": "o", "search": search });
+    let (status, first) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        body(json!(at), "departure"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{first}");
+    assert!(first.get("space_time").is_none());
+    // The same route in a window that starts at the same instant: re-planned in space and time.
+    let window = json!({ "earliest": at, "latest": departure(600) });
+    let (status, second) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        body(window, "space_time"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{second}");
+    matches_schema(&doc, "/api/intents", "post", status, &second);
+    assert_eq!(second["timing"], "space_time");
+    let st = &second["space_time"];
+    assert!(
+        st["arrival_delay_s"].as_f64().expect("arrival delay") > 0.0,
+        "{st}"
+    );
+    assert!(st["route_ne"].as_array().expect("route").len() >= 2);
+    // The two intents as stored share no point in space and time (the exact 4D test).
+    let intent = |v: &Value| -> skyplan_airspace::OperationalIntent {
+        serde_json::from_value(v["intent"].clone()).expect("an intent")
+    };
+    let (a, b) = (intent(&first), intent(&second));
+    assert_eq!(
+        skyplan_airspace::first_conflict(&b.volumes, &a.volumes),
+        None
+    );
+    // At the very instant, with no window, its start is under the first flight: 409 naming it.
+    let (status, refused) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        body(json!(at), "space_time"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CONFLICT, "{refused}");
+    matches_schema(&doc, "/api/intents", "post", status, &refused);
+    assert!(message(&refused).contains(&a.id), "{refused}");
+    // Bad values name the field.
+    for (body, want) in [
+        (
+            body(json!(departure(0)), "sideways"),
+            "search: unknown variant `sideways`",
+        ),
+        (
+            json!({ "plan": { "no_fly": include_str!("../../../data/no-fly-sample.geojson") }, "departure": departure(0), "priority": 0, "owner": "o", "search": "space_time" }),
+            "no_fly: the space-time search does not honour no-fly zones yet",
+        ),
+    ] {
+        let (status, v) = send(app.clone(), "POST", "/api/intents", body).await;
+        assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
+        assert!(message(&v).contains(want), "{want:?} not in {v}");
+    }
+}
+
+#[tokio::test]
 async fn bad_intent_requests_get_400_naming_the_field_and_store_nothing() {
     let doc = document();
     let app = router(World::fcnd_city(), ServerConfig::default());
