@@ -111,7 +111,14 @@ impl Obstacle {
                 f64::NEG_INFINITY,
                 f64::NEG_INFINITY,
             ],
-            |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+            |b, p| {
+                [
+                    b[0].min(p[0]),
+                    b[1].min(p[1]),
+                    b[2].max(p[0]),
+                    b[3].max(p[1]),
+                ]
+            },
         );
         Self {
             ring_ne,
@@ -610,7 +617,11 @@ mod tests {
                         skyplan_airspace::geometry::cross(hull[i], hull[(i + 1) % hull.len()], p)
                             >= 0.0
                     });
-                let d = if inside { 0.0 } else { distance_to_ring(&hull, p) };
+                let d = if inside {
+                    0.0
+                } else {
+                    distance_to_ring(&hull, p)
+                };
                 assert_eq!(o.near(p, r), d <= r, "{points:?} {p:?} {r}");
                 near += usize::from(d <= r);
             }
