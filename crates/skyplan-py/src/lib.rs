@@ -10,6 +10,9 @@
 //!   heuristics (`heuristic_override`) and its paths, ties included.
 //! * [`planner`]: `planners()` (the registry's rows), `Planner` (a world loaded once, sessions
 //!   of the planning API) and `Plan`.
+//! * [`airspace`]: `Airspace` — a shared airspace store; flights reserved as operational
+//!   intents one at a time (`reserve`, the departure shifted or the route re-planned in space
+//!   and time) or as a fleet (`fleet`), as `POST /api/intents` and `skyplan fleet` do.
 //! * [`arrays`]: numpy arrays and Python values in, checked; every failure a Python exception.
 //!
 //! Everything planning-related goes through the planning API crate `skyplan-plan`; the GIL is
@@ -17,6 +20,7 @@
 
 use pyo3::prelude::*;
 
+mod airspace;
 mod arrays;
 mod errors;
 mod fcnd;
@@ -35,5 +39,6 @@ fn _skyplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(planner::planners, m)?)?;
     m.add_class::<planner::Planner>()?;
     m.add_class::<planner::Plan>()?;
+    m.add_class::<airspace::Airspace>()?;
     Ok(())
 }

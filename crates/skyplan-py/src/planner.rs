@@ -78,7 +78,7 @@ fn grid_world(grid: &Bound<'_, PyAny>, origin_ne: [f64; 2], cell_m: f64) -> PyRe
 }
 
 /// A JSON value as a Python object (through the `json` module).
-fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(value)
         .map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
     py.import("json")?.call_method1("loads", (text,))
@@ -154,7 +154,77 @@ pub struct Planner {
     idle: Mutex<Vec<Session>>,
 }
 
+/// A plan request from `plan`'s arguments: `start`/`goal` as `(north_m, east_m)` and every
+/// other keyword a planning option.
+pub(crate) fn request_of(
+    start: Option<&Bound<'_, PyAny>>,
+    goal: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PlanRequest> {
+    let mut fields = Map::new();
+    if let Some(opts) = options {
+        for (k, v) in opts.iter() {
+            let key: String = k.extract()?;
+            let value = to_json(&v, &key)?;
+            fields.insert(key, value);
+        }
+    }
+    for (which, given) in [("start", start), ("goal", goal)] {
+        let Some(point) = given.filter(|p| !p.is_none()) else {
+            continue;
+        };
+        if fields.contains_key(&format!("{which}_ne"))
+            || fields.contains_key(&format!("{which}_lla"))
+        {
+            return Err(bad_input(format!(
+                "{which}: given twice (positionally and as {which}_ne= or {which}_lla=)"
+            )));
+        }
+        let [n, e] = float_pair(point, which)?;
+        fields.insert(format!("{which}_ne"), serde_json::json!([n, e]));
+    }
+    // The option named on errors (`alt_m: invalid type: …`), as the HTTP API does.
+    serde_path_to_error::deserialize(Value::Object(fields)).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        if path == "." || path.is_empty() {
+            bad_input(format!("options: {inner}"))
+        } else {
+            bad_input(format!("{path}: {inner}"))
+        }
+    })
+}
+
 impl Planner {
+    /// Runs `job` on one of the planner's sessions with the GIL released; a panic is a
+    /// `PlanError` (its session dropped).
+    pub(crate) fn with_session<T: Send>(
+        &self,
+        py: Python<'_>,
+        job: impl FnOnce(&mut Session) -> T + Send,
+    ) -> PyResult<T> {
+        let mut session = self.take_session();
+        let outcome = py.detach(|| {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job(&mut session)))
+                .map(|result| (result, session))
+        });
+        match outcome {
+            Ok((result, session)) => {
+                self.give_back(session);
+                Ok(result)
+            }
+            // A panic is a bug: its session is dropped, and Python gets a PlanError.
+            Err(_) => Err(to_py(PlanFailure::internal(
+                "internal error while planning (a panic); please report this with the request",
+            ))),
+        }
+    }
+
+    /// The planner's world.
+    pub(crate) fn world(&self) -> &World {
+        &self.world
+    }
+
     fn take_session(&self) -> Session {
         let mut idle = self.idle.lock().unwrap_or_else(|p| p.into_inner());
         idle.pop()
@@ -284,45 +354,9 @@ impl Planner {
         goal: Option<&Bound<'_, PyAny>>,
         options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Plan> {
-        let mut fields = Map::new();
-        if let Some(opts) = options {
-            for (k, v) in opts.iter() {
-                let key: String = k.extract()?;
-                let value = to_json(&v, &key)?;
-                fields.insert(key, value);
-            }
-        }
-        for (which, given) in [("start", start), ("goal", goal)] {
-            let Some(point) = given.filter(|p| !p.is_none()) else {
-                continue;
-            };
-            if fields.contains_key(&format!("{which}_ne"))
-                || fields.contains_key(&format!("{which}_lla"))
-            {
-                return Err(bad_input(format!(
-                    "{which}: given twice (positionally and as {which}_ne= or {which}_lla=)"
-                )));
-            }
-            let [n, e] = float_pair(point, which)?;
-            fields.insert(format!("{which}_ne"), serde_json::json!([n, e]));
-        }
-        let request: PlanRequest = serde_json::from_value(Value::Object(fields))
-            .map_err(|e| bad_input(format!("options: {e}")))?;
-        let mut session = self.take_session();
-        let outcome = py.detach(|| {
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| session.plan(&request)))
-                .map(|result| (result, session))
-        });
-        match outcome {
-            Ok((result, session)) => {
-                self.give_back(session);
-                result.map(|inner| Plan { inner }).map_err(to_py)
-            }
-            // A panic is a bug: its session is dropped, and Python gets a PlanError.
-            Err(_) => Err(to_py(PlanFailure::internal(
-                "internal error while planning (a panic); please report this with the request",
-            ))),
-        }
+        let request = request_of(start, goal, options)?;
+        let result = self.with_session(py, move |session| session.plan(&request))?;
+        result.map(|inner| Plan { inner }).map_err(to_py)
     }
 
     fn __repr__(&self) -> String {
@@ -337,7 +371,7 @@ impl Planner {
 /// `cost_m`; `stats`: everything else the planner reports, as a dict.
 #[pyclass(module = "skyplan", frozen)]
 pub struct Plan {
-    inner: skyplan_plan::Plan,
+    pub(crate) inner: skyplan_plan::Plan,
 }
 
 #[pymethods]

@@ -16,13 +16,28 @@ an occupancy image, a MovingAI map or a numpy grid) and plans with any skyplan p
 maps, summary, and the predicates ``exact``, ``grid_path``, ``colliders_only``); :class:`Plan`
 holds the waypoints as numpy arrays.
 
+The shared airspace: :class:`Airspace` (a SQLite file, memory or PostgreSQL store) reserves
+flights planned by a :class:`Planner` as operational intents -- the departure shifted, or the
+route re-planned around the others in space and time -- one by one (``reserve``) or as a fleet
+(``fleet``); :class:`Conflict` when no way is free.
+
 Failures raise :class:`PlanError` subclasses: :class:`InvalidStart`, :class:`InvalidGoal`,
 :class:`NoPath`, :class:`Timeout`, :class:`BadInput`. The GIL is released while planning.
 """
 
-from ._errors import BadInput, InvalidGoal, InvalidStart, NoPath, PlanError, Timeout
+from ._errors import (
+    AirspaceUnavailable,
+    BadInput,
+    Conflict,
+    InvalidGoal,
+    InvalidStart,
+    NoPath,
+    PlanError,
+    Timeout,
+)
 from ._heuristic import Heuristic
 from ._skyplan import (
+    Airspace,
     Plan,
     Planner,
     __version__,
@@ -35,7 +50,10 @@ from ._skyplan import (
 )
 
 __all__ = [
+    "Airspace",
+    "AirspaceUnavailable",
     "BadInput",
+    "Conflict",
     "Heuristic",
     "InvalidGoal",
     "InvalidStart",

@@ -19,7 +19,9 @@ from typing import (
 import numpy as np
 import numpy.typing as npt
 
+from ._errors import AirspaceUnavailable as AirspaceUnavailable
 from ._errors import BadInput as BadInput
+from ._errors import Conflict as Conflict
 from ._errors import InvalidGoal as InvalidGoal
 from ._errors import InvalidStart as InvalidStart
 from ._errors import NoPath as NoPath
@@ -29,7 +31,10 @@ from ._heuristic import Heuristic as Heuristic
 
 __version__: str
 __all__ = [
+    "Airspace",
+    "AirspaceUnavailable",
     "BadInput",
+    "Conflict",
     "Heuristic",
     "InvalidGoal",
     "InvalidStart",
@@ -207,3 +212,40 @@ class Planner:
         ``no_fly``: the text of a no-fly zone file (GeoJSON or a QGroundControl ``.plan``), e.g.
         ``open("data/no-fly-sample.geojson").read()``; the 2D planners go around the zones.
         """
+
+@final
+class Airspace:
+    """A shared airspace store of operational intents: ``"sqlite:FILE"``, ``"sqlite::memory:"``
+    or ``"postgres://USER@HOST:PORT/DATABASE"``."""
+
+    def __new__(cls, url: str) -> "Airspace": ...
+    @property
+    def url(self) -> str: ...
+    def reserve(
+        self,
+        planner: Planner,
+        departure: Union[str, Tuple[str, str], Dict[str, str]],
+        *,
+        priority: int = 0,
+        owner: str = "python",
+        search: str = "departure",
+        start: Optional[Tuple[float, float]] = None,
+        goal: Optional[Tuple[float, float]] = None,
+        **options: Any,
+    ) -> Dict[str, Any]:
+        """Plans with ``planner`` and reserves the flight as a new intent (``search``:
+        ``"departure"`` or ``"space_time"``); raises :class:`Conflict` when no way is free."""
+    def intents(self) -> List[Dict[str, Any]]: ...
+    def get(self, id: str) -> Optional[Dict[str, Any]]: ...
+    def delete(self, id: str) -> Optional[Dict[str, Any]]: ...
+    def conflicts(self) -> List[Tuple[str, str]]: ...
+    def fleet(
+        self,
+        planner: Planner,
+        missions: Sequence[Dict[str, Any]],
+        *,
+        mode: str = "shift",
+        start: Optional[str] = None,
+    ) -> Dict[str, Any]:
+        """Plans and reserves ``missions`` in order (``mode``: ``"shift"``, ``"space_time"`` or
+        ``"reject_on_conflict"``); the report as ``skyplan fleet --json`` writes it."""

@@ -40,3 +40,17 @@ class BadInput(PlanError, ValueError):
     """Invalid input: a wrong dtype or shape, NaN, an unknown option, a value out of range."""
 
     kind = "bad_request"
+
+
+class Conflict(PlanError):
+    """No departure of the window is free of the stored intents of equal or higher priority
+    (``Airspace.reserve``); ``conflicts`` lists the blocking intents as ``(id, version)``."""
+
+    kind = "conflict"
+    conflicts: list = []
+
+
+class AirspaceUnavailable(PlanError):
+    """The airspace store cannot be reached or failed (``Airspace``)."""
+
+    kind = "store_unavailable"
