@@ -47,6 +47,9 @@ node "$here/browser/page.test.mjs" "$bin" "$shot"
 step "serve: real maps on the page (a DEM's contours, GeoJSON footprints)"
 node "$here/browser/real_map.test.mjs" "$bin"
 
+step "serve: the shared airspace on the page (intents by /api/events, the time slider)"
+node "$here/browser/intents.test.mjs" "$bin"
+
 step "serve: a flight on the page (the view_flight example: what fly --view publishes)"
 (cd "$root" && cargo build -p skyplan-server --example view_flight --quiet)
 flight_shot="$tmp/view-flight.png"

@@ -19,6 +19,8 @@ pub enum ViewEvent {
     Route(RouteEvent),
     /// What the vehicle's obstacle sensor saw last (`OBSTACLE_DISTANCE`).
     Sensed(SensedEvent),
+    /// An operational intent accepted or deleted (`POST`/`DELETE /api/intents`).
+    Intent(IntentEvent),
 }
 
 impl ViewEvent {
@@ -29,6 +31,7 @@ impl ViewEvent {
             ViewEvent::Flight(_) => "flight",
             ViewEvent::Route(_) => "route",
             ViewEvent::Sensed(_) => "sensed",
+            ViewEvent::Intent(_) => "intent",
         }
     }
 }
@@ -115,6 +118,42 @@ impl TrajectoryEvent {
             columns: t.columns,
             samples: t.samples.clone(),
         })
+    }
+}
+
+/// An operational intent that changed in the shared airspace: clients re-read
+/// `GET /api/intents` (the page draws the others' intents on a time slider).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IntentEvent {
+    /// `accepted` or `deleted`.
+    pub action: &'static str,
+    /// The intent's id.
+    pub id: String,
+    /// Its version.
+    pub version: u64,
+    /// Who flies it.
+    pub owner: String,
+    /// Its priority.
+    pub priority: u32,
+    /// When its first volume starts and its last ends (RFC 3339).
+    pub time_start: Option<String>,
+    /// See `time_start`.
+    pub time_end: Option<String>,
+}
+
+impl IntentEvent {
+    /// The event for `intent` and `action`.
+    pub fn of(action: &'static str, intent: &skyplan_airspace::OperationalIntent) -> Self {
+        let bounds = intent.time_bounds();
+        Self {
+            action,
+            id: intent.id.clone(),
+            version: intent.version,
+            owner: intent.owner.clone(),
+            priority: intent.priority,
+            time_start: bounds.map(|b| b.0.to_string()),
+            time_end: bounds.map(|b| b.1.to_string()),
+        }
     }
 }
 

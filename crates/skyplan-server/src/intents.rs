@@ -193,6 +193,11 @@ pub(crate) async fn create(
         .next_request_id
         .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let wall_time_us = u64::try_from(t0.elapsed().as_micros()).unwrap_or(u64::MAX);
+    s.events
+        .publish(&crate::ViewEvent::Intent(crate::IntentEvent::of(
+            "accepted",
+            &reserved.intent,
+        )));
     let mut answer = json!({
         "status": "ok",
         "intent": reserved.intent,
@@ -275,5 +280,12 @@ pub(crate) async fn delete(
     State(s): State<AppState>,
     path: Result<Path<String>, PathRejection>,
 ) -> Result<Json<Value>, ApiError> {
-    one_intent(&s, path, |store, id| store.delete(id)).await
+    let gone = one_intent(&s, path, |store, id| store.delete(id)).await?;
+    if let Ok(intent) = serde_json::from_value::<OperationalIntent>(gone.0.clone()) {
+        s.events
+            .publish(&crate::ViewEvent::Intent(crate::IntentEvent::of(
+                "deleted", &intent,
+            )));
+    }
+    Ok(gone)
 }

@@ -12,7 +12,7 @@
 //! | `GET /api/status` | workers, busy, queued, queue depth, served/rejected/timed-out counters |
 //! | `POST /api/intents` | a plan request, a `departure` (RFC 3339, or a window `{earliest, latest}`), a `priority` (0–100) and an `owner` → 201 with the operational intent reserved at the earliest free departure and its plan, or 409 naming the intents in the way (ids and versions) |
 //! | `GET /api/intents`, `GET`/`DELETE /api/intents/{id}` | the stored intents; one; one removed (404 when there is none) |
-//! | `GET /api/events` | server-sent events: plan results, flight states, routes ([`ViewEvent`]) |
+//! | `GET /api/events` | server-sent events: plan results, flight states, routes, intents accepted or deleted ([`ViewEvent`]) |
 //! | `GET /api/openapi.json` | the OpenAPI 3 description of all of this |
 //!
 //! [`ViewServer`] serves the same page from a background thread of `fly`/`sim` (`--view`), and
@@ -50,7 +50,8 @@ mod view;
 
 pub use error::{ApiError, ErrorKind};
 pub use events::{
-    EventSink, FlightEvent, PlanEvent, RouteEvent, SensedEvent, TrajectoryEvent, ViewEvent,
+    EventSink, FlightEvent, IntentEvent, PlanEvent, RouteEvent, SensedEvent, TrajectoryEvent,
+    ViewEvent,
 };
 pub use host::{host_allowed, with_host_check};
 pub use intents::{DEPARTURE_STEP_MS, HORIZON_MS, MAX_OWNER_CHARS, PAST_SLACK_MS};

@@ -288,6 +288,8 @@ impl<W: Write + Seek> Recorder<W> {
                 let m = serde_json::to_value(p)?;
                 self.write(self.channels.plans, ns, &m)?;
             }
+            // The shared airspace is the server's, not a flight's: not recorded.
+            ViewEvent::Intent(_) => {}
         }
         Ok(())
     }
