@@ -60,7 +60,7 @@ pub use model::{
 pub use time::{TimeError, Timestamp};
 pub use volumes::{
     FlightVolumes, TimedPoint, Timing, VolumeOptions, timed_path, timed_route, volumes_from_path,
-    volumes_from_plan, volumes_from_straight_pieces,
+    volumes_from_plan, volumes_hugging_path,
 };
 
 /// Why volumes could not be made or an intent is refused.

@@ -280,15 +280,17 @@ pub fn volumes_from_path(
     frame: &LocalFrame,
     options: &VolumeOptions,
 ) -> Result<FlightVolumes, AirspaceError> {
-    volumes_cut(path, timing, frame, options, false)
+    volumes_cut(path, timing, frame, options, None)
 }
 
-/// [`volumes_from_path`], with every stretch also ending at each corner of the route (a point
-/// where its direction changes, or where it starts or stops hovering): each volume's footprint
-/// is then one straight piece grown by the margin, no wider inside a bend than the margin.
+/// [`volumes_from_path`], with every stretch also ending before a point of it would lie more
+/// than `max_bulge_m` from the straight line between its ends: each volume's footprint is then
+/// within `2 · max_bulge_m` plus the margin of the route itself (every point of the stretch's
+/// hull is within `max_bulge_m` of that chord, and every point of the chord within
+/// `max_bulge_m` of the route between its ends). With 0, stretches end at every corner.
 ///
 /// ```
-/// use skyplan_airspace::{TimedPoint, Timing, VolumeOptions, volumes_from_straight_pieces};
+/// use skyplan_airspace::{TimedPoint, Timing, VolumeOptions, volumes_hugging_path};
 /// use skyplan_frames::{LocalFrame, Lla};
 /// let frame = LocalFrame::new(Lla { lat_deg: 37.79, lon_deg: -122.39, alt_m: 0.0 })?;
 /// let p = |t_s, n, e| TimedPoint { t_s, nea: [n, e, 20.0] };
@@ -296,31 +298,37 @@ pub fn volumes_from_path(
 /// let path = vec![p(0.0, 0.0, 0.0), p(5.0, 50.0, 0.0), p(10.0, 50.0, 50.0)];
 /// let o = VolumeOptions::default();
 /// assert_eq!(skyplan_airspace::volumes_from_path(path.clone(), Timing::SpaceTime, &frame, &o)?.relative.len(), 1);
-/// assert_eq!(volumes_from_straight_pieces(path, Timing::SpaceTime, &frame, &o)?.relative.len(), 2);
+/// assert_eq!(volumes_hugging_path(path.clone(), Timing::SpaceTime, &frame, &o, 0.0)?.relative.len(), 2);
+/// // A stair of 1 m steps keeps within 1 m of its chord: one volume.
+/// let stair: Vec<TimedPoint> = (0..10).map(|k| p(k as f64, (k / 2) as f64, ((k + 1) / 2) as f64)).collect();
+/// assert_eq!(volumes_hugging_path(stair, Timing::SpaceTime, &frame, &o, 1.0)?.relative.len(), 1);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn volumes_from_straight_pieces(
+pub fn volumes_hugging_path(
     path: Vec<TimedPoint>,
     timing: Timing,
     frame: &LocalFrame,
     options: &VolumeOptions,
+    max_bulge_m: f64,
 ) -> Result<FlightVolumes, AirspaceError> {
-    volumes_cut(path, timing, frame, options, true)
+    volumes_cut(path, timing, frame, options, Some(max_bulge_m.max(0.0)))
 }
 
-/// Whether the route turns at `path[k]` (an interior point): the unit directions before and
-/// after differ, or one side does not move.
-fn turns_at(path: &[TimedPoint], k: usize) -> bool {
-    let dir = |a: &TimedPoint, b: &TimedPoint| {
-        let d = [0, 1, 2].map(|c| b.nea[c] - a.nea[c]);
-        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        (n > 1e-9).then(|| d.map(|x| x / n))
-    };
-    match (dir(&path[k - 1], &path[k]), dir(&path[k], &path[k + 1])) {
-        (Some(u), Some(v)) => (0..3).any(|c| (u[c] - v[c]).abs() > 1e-9),
-        (None, None) => false,
-        _ => true,
-    }
+/// Whether every point of `path[i..=j]` is within `max` of the segment between its ends.
+fn hugs_chord(path: &[TimedPoint], i: usize, j: usize, max: f64) -> bool {
+    let (a, b) = (path[i].nea, path[j].nea);
+    let d = [0, 1, 2].map(|c| b[c] - a[c]);
+    let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    path[i..=j].iter().all(|p| {
+        let w = [0, 1, 2].map(|c| p.nea[c] - a[c]);
+        let t = if len2 > 0.0 {
+            ((w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let e = [0, 1, 2].map(|c| w[c] - t * d[c]);
+        (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt() <= max + 1e-9
+    })
 }
 
 fn volumes_cut(
@@ -328,7 +336,7 @@ fn volumes_cut(
     timing: Timing,
     frame: &LocalFrame,
     options: &VolumeOptions,
-    at_corners: bool,
+    max_bulge_m: Option<f64>,
 ) -> Result<FlightVolumes, AirspaceError> {
     options.check()?;
     if path.is_empty()
@@ -355,7 +363,7 @@ fn volumes_cut(
         let mut j = (i + 1).min(path.len() - 1);
         let mut length = if j > i { dist(&path[i], &path[j]) } else { 0.0 };
         while j + 1 < path.len() {
-            if at_corners && j > 0 && turns_at(&path, j) {
+            if max_bulge_m.is_some_and(|m| !hugs_chord(&path, i, j + 1, m)) {
                 break;
             }
             let more = length + dist(&path[j], &path[j + 1]);

@@ -52,6 +52,6 @@ pub use run::{
     fly_fleet, fly_mission, percentile,
 };
 pub use space_time::{
-    MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M, STRETCH_S, SpaceTimeFlight,
-    reserve_space_time,
+    BULGE_CELLS, MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M, STRETCH_S,
+    SpaceTimeFlight, reserve_space_time,
 };

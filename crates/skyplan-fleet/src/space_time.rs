@@ -3,24 +3,26 @@
 //! and detours allowed, the earliest arrival the objective — then its volumes reserved with the
 //! store's exact check-and-insert.
 //!
-//! **Why the search's answer passes the exact check.** The route's volumes are cut at every
-//! corner and every [`STRETCH_S`] (volumes from straight pieces), so each volume's footprint is
-//! one straight piece of the route grown by the lateral margin `L` (an 8-gon circumscribing the
-//! disc, so no wider than `L / cos 22.5°`), and its time window that piece's times grown by the
-//! time buffer `B`. A stored volume meets it only if some point of the piece is within that
-//! width of the stored footprint while the windows overlap; that point is within half a cell's
-//! diagonal of a cell the flight is in at that moment, at a time within `B + STRETCH_S` of the
-//! stored window. So each cell is blocked, for the search, over each stored window grown by
-//! `B + STRETCH_S` (and a millisecond for rounding) when its centre is within
-//! `L / cos 22.5° + half a diagonal` (and [`SLACK_M`] for the projections) of the stored
-//! footprint, and the altitude bands overlap. The check-and-insert is still the judge; an
-//! intent it names that the read missed (stored meanwhile) is added and the search run again.
+//! **Why the search's answer passes the exact check.** The route's volumes are cut every
+//! [`STRETCH_S`] and wherever a point would stray more than `δ` ([`BULGE_CELLS`] of a cell) from
+//! the straight line between a stretch's ends ([`volumes_hugging_path`]), so each volume's
+//! footprint is within `2δ` of the route flown in its stretch, grown by the lateral margin `L`
+//! (an 8-gon circumscribing the disc, so no wider than `L / cos 22.5°`), and its time window is
+//! that stretch's times grown by the time buffer `B`. A stored volume meets it only if some point
+//! of the stretch's route is within that width of the stored footprint while the windows
+//! overlap; that point is within half a cell's diagonal of a cell the flight is in at that
+//! moment, at a time within `B + STRETCH_S` of the stored window. So each cell is blocked, for
+//! the search, over each stored window grown by `B + STRETCH_S` (and a millisecond for
+//! rounding) when its centre is within `L / cos 22.5° + half a diagonal + 2δ` (and [`SLACK_M`]
+//! for the projections) of the stored footprint, and the altitude bands overlap. The
+//! check-and-insert is still the judge; an intent it names that the read missed (stored
+//! meanwhile) is added and the search run again.
 
 use crate::flight::FlightRequest;
 use crate::sipp::{Interval, SippError, SippQuery, TimedCell, sipp};
 use skyplan_airspace::{
     AirspaceError, FlightVolumes, IntentRef, IntentState, OperationalIntent, Timestamp, Timing,
-    Volume4D, volumes_from_plan, volumes_from_straight_pieces,
+    Volume4D, volumes_from_plan, volumes_hugging_path,
 };
 use skyplan_airspace_store::{Insert, IntentStore, RESERVE_TRIES, ReserveError, new_id};
 use skyplan_cspace::{Cell, Grid2};
@@ -35,6 +37,11 @@ pub const STRETCH_M: f64 = 50.0;
 /// Added to the distance at which a stored footprint blocks a cell, metres: the projections
 /// between latitude/longitude and the map's frame (a few millimetres over a city).
 pub const SLACK_M: f64 = 0.5;
+/// How far a volume's stretch of route may stray from the straight line between its ends, in
+/// cells. 0: a volume per straight piece. Measured on 100 random flights on the city, half a
+/// cell gave 13 % fewer volumes (the 5 s cut makes most of them) but 24 % more arrival delay
+/// (twice the bulge is kept from the others as well).
+pub const BULGE_CELLS: f64 = 0.0;
 /// How far around the planned route stored intents are read, metres.
 pub const READ_REACH_M: f64 = 300.0;
 /// The cell size the fleet searches in space and time on (or the plan's, if coarser), metres:
@@ -459,8 +466,10 @@ fn space_time_inner(
         o.home_alt_w84_m + alt_m - o.vertical_buffer_m,
         o.home_alt_w84_m + alt_m + o.vertical_buffer_m,
     );
+    let bulge_m = BULGE_CELLS * cell_m;
     let reach_m = o.lateral_margin_m.max(0.01) / (std::f64::consts::PI / 8.0).cos()
         + cell_m * std::f64::consts::SQRT_2 / 2.0
+        + 2.0 * bulge_m
         + SLACK_M;
     let pad_s = o.time_buffer_s + STRETCH_S + 0.002;
     let mut obstacles = Obstacles::new(reach_m);
@@ -535,7 +544,7 @@ fn space_time_inner(
             alt_m,
         );
         let route_nea = corners(&path);
-        let flight = volumes_from_straight_pieces(path, Timing::SpaceTime, &frame, &stretch)
+        let flight = volumes_hugging_path(path, Timing::SpaceTime, &frame, &stretch, bulge_m)
             .map_err(ReserveError::Invalid)?;
         let delay_ms = (found.departure_s() * 1000.0).ceil() as i64;
         let departure = window.earliest.plus_ms(delay_ms);
