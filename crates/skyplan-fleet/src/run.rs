@@ -226,14 +226,29 @@ pub fn fly_mission(
     record.reserve_ms = t1.elapsed().as_secs_f64() * 1e3;
     record.latency_ms = t0.elapsed().as_secs_f64() * 1e3;
     record.checked = counts.nearby;
+    settle(record, result, fail, |record, r| {
+        record.arrival_delay_s = Some(r.delay_ms as f64 / 1000.0);
+        (r.intent, r.departure, r.delay_ms)
+    })
+}
+
+/// A record completed by its reservation's outcome: accepted (`accept` fills what the mode
+/// knows and gives the intent, departure and delay), refused (the blocking intents), or the
+/// run's error.
+fn settle<T>(
+    mut record: FlightRecord,
+    result: Result<T, ReserveError>,
+    fail: impl Fn(String) -> FleetError,
+    accept: impl FnOnce(&mut FlightRecord, T) -> (OperationalIntent, Timestamp, i64),
+) -> Result<FlightRecord, FleetError> {
     match result {
         Ok(r) => {
+            let (intent, departure, delay_ms) = accept(&mut record, r);
             record.status = Status::Accepted;
-            record.intent_id = Some(r.intent.id.clone());
-            record.departure = Some(r.departure);
-            record.delay_s = Some(r.delay_ms as f64 / 1000.0);
-            record.arrival_delay_s = record.delay_s;
-            record.intent = Some(r.intent);
+            record.intent_id = Some(intent.id.clone());
+            record.departure = Some(departure);
+            record.delay_s = Some(delay_ms as f64 / 1000.0);
+            record.intent = Some(intent);
         }
         Err(ReserveError::Blocked(b)) => {
             record.status = Status::Refused;
@@ -242,7 +257,7 @@ pub fn fly_mission(
         Err(ReserveError::Invalid(e)) => return Err(fail(e.to_string())),
         Err(ReserveError::Store(error)) => {
             return Err(FleetError::Store {
-                mission: mission.id.clone(),
+                mission: record.mission.clone(),
                 error,
             });
         }
@@ -268,45 +283,24 @@ fn space_time(
                 .into(),
         ));
     }
-    let Some(g) = plan.grid else {
+    let Some(grid) = crate::search_grid(session, plan).map_err(|f| fail(f.message))? else {
         return Err(fail(format!(
             "the space-time search needs a 2D grid planner; {} has no grid",
             plan.planner.name()
         )));
     };
-    let grid = session
-        .grid(g.alt_m, g.safety_m, g.cell_m.max(crate::SEARCH_CELL_M))
-        .map_err(|f| fail(f.message))?;
     let (result, nearby) = crate::reserve_space_time(store, &grid, plan, request);
     record.reserve_ms = t1.elapsed().as_secs_f64() * 1e3;
     record.latency_ms = t0.elapsed().as_secs_f64() * 1e3;
     record.checked = nearby;
-    match result {
-        Ok(r) => {
-            record.status = Status::Accepted;
-            record.intent_id = Some(r.intent.id.clone());
-            record.departure = Some(r.departure);
-            record.delay_s = Some(r.delay_ms as f64 / 1000.0);
-            record.duration_s = Some(r.flight.duration_s);
-            record.hover_s = Some(r.hover_s);
-            record.detour_m = Some(r.detour_m);
-            record.arrival_delay_s = Some(r.arrival_delay_s);
-            record.route_ne = r.route_nea.iter().map(|p| (p[0], p[1])).collect();
-            record.intent = Some(r.intent);
-        }
-        Err(ReserveError::Blocked(b)) => {
-            record.status = Status::Refused;
-            record.blocking = b.blocking;
-        }
-        Err(ReserveError::Invalid(e)) => return Err(fail(e.to_string())),
-        Err(ReserveError::Store(error)) => {
-            return Err(FleetError::Store {
-                mission: record.mission.clone(),
-                error,
-            });
-        }
-    }
-    Ok(record)
+    settle(record, result, fail, |record, r| {
+        record.duration_s = Some(r.flight.duration_s);
+        record.hover_s = Some(r.hover_s);
+        record.detour_m = Some(r.detour_m);
+        record.arrival_delay_s = Some(r.arrival_delay_s);
+        record.route_ne = r.route_nea.iter().map(|p| (p[0], p[1])).collect();
+        (r.intent, r.departure, r.delay_ms)
+    })
 }
 
 /// Every mission in order ([`fly_mission`]), calling `progress(k, record)` after the k-th.

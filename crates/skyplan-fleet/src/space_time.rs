@@ -80,6 +80,31 @@ pub struct SpaceTimeFlight {
     pub tries: usize,
 }
 
+impl SpaceTimeFlight {
+    /// What the search did, as the HTTP API and Python report it: `hover_s`, `detour_m`,
+    /// `arrival_delay_s` and `route_ne` (`[north_m, east_m]` corners and hover points).
+    pub fn search_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "hover_s": self.hover_s,
+            "detour_m": self.detour_m,
+            "arrival_delay_s": self.arrival_delay_s,
+            "route_ne": self.route_nea.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>(),
+        })
+    }
+}
+
+/// The grid the space-time search runs on for `plan`, from `session` (built once there): the
+/// plan's map at its altitude and margin in cells of [`SEARCH_CELL_M`] (or the plan's own, if
+/// coarser); `None` for a plan without a grid (the 3D planners).
+pub fn search_grid(
+    session: &mut skyplan_plan::Session,
+    plan: &Plan,
+) -> Result<Option<std::sync::Arc<Grid2>>, skyplan_plan::PlanFailure> {
+    plan.grid
+        .map(|g| session.grid(g.alt_m, g.safety_m, g.cell_m.max(SEARCH_CELL_M)))
+        .transpose()
+}
+
 /// A stored volume as the search sees it: its footprint in the map's frame and its grown
 /// time window, seconds after the window's start.
 struct Obstacle {

@@ -176,13 +176,10 @@ impl Airspace {
         }
         let planned = planner.with_session(py, move |session| {
             let plan = session.plan(&request)?;
-            let grid = match (space_time, plan.grid) {
-                (true, Some(g)) => Some(session.grid(
-                    g.alt_m,
-                    g.safety_m,
-                    g.cell_m.max(skyplan_fleet::SEARCH_CELL_M),
-                )?),
-                _ => None,
+            let grid = if space_time {
+                skyplan_fleet::search_grid(session, &plan)?
+            } else {
+                None
             };
             Ok::<_, PlanFailure>((plan, grid))
         })?;
@@ -208,12 +205,7 @@ impl Airspace {
                 "duration_s": r.flight.duration_s,
                 "timing": r.flight.timing,
                 "nearby_intents": r.nearby,
-                "space_time": {
-                    "hover_s": r.hover_s,
-                    "detour_m": r.detour_m,
-                    "arrival_delay_s": r.arrival_delay_s,
-                    "route_ne": r.route_nea.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>(),
-                },
+                "space_time": r.search_json(),
             })
         } else {
             let r = py

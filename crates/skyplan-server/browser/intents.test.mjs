@@ -3,21 +3,11 @@
 // while they are active. Checked on the canvas's own pixels.
 // Usage: node intents.test.mjs SKYPLAN_BIN
 import { startServer } from "./common.mjs";
-import { checker, launchBrowser, newPage, openView } from "./view.mjs";
+import { checker, launchBrowser, newPage, openView, pixelAt } from "./view.mjs";
 
 const [bin] = process.argv.slice(2);
 if (!bin) throw new Error("usage: node intents.test.mjs SKYPLAN_BIN");
 const { check, finish } = checker();
-
-/** The canvas's colour at a local point. */
-function pixelAt(page, ne) {
-  return page.evaluate(([n, e]) => {
-    const c = document.getElementById("map");
-    const r = c.getBoundingClientRect();
-    const p = window.skyplanView.toClient(n, e);
-    return Array.from(c.getContext("2d").getImageData(Math.round(p.x - r.left), Math.round(p.y - r.top), 1, 1).data);
-  }, ne);
-}
 
 /** The intents' violet over the map's pale background (blue well above green). */
 const violet = ([r, g, b]) => b > g + 15 && r > g + 8;

@@ -5,7 +5,7 @@
 import path from "node:path";
 import { fileURLToPath } from "node:url";
 import { connectedClearCells, loadGrid, startServer } from "./common.mjs";
-import { checker, launchBrowser, newPage, openView } from "./view.mjs";
+import { checker, launchBrowser, newPage, openView, pixelAt } from "./view.mjs";
 
 const [bin] = process.argv.slice(2);
 if (!bin) throw new Error("usage: node real_map.test.mjs SKYPLAN_BIN");
@@ -24,16 +24,6 @@ function countContourPixels(page) {
     }
     return n;
   });
-}
-
-/** The canvas's colour at a local point. */
-function pixelAt(page, ne) {
-  return page.evaluate(([n, e]) => {
-    const c = document.getElementById("map");
-    const r = c.getBoundingClientRect();
-    const p = window.skyplanView.toClient(n, e);
-    return Array.from(c.getContext("2d").getImageData(Math.round(p.x - r.left), Math.round(p.y - r.top), 1, 1).data);
-  }, ne);
 }
 
 const browser = await launchBrowser();

@@ -38,3 +38,13 @@ export async function openView(page, url) {
 export function waitForVehicleState(page, prefix) {
   return page.waitForFunction((p) => document.getElementById("v-state").textContent.startsWith(p), prefix, { timeout: 20000 });
 }
+
+/** The canvas's colour `[r, g, b, a]` at a local point `[north_m, east_m]`. */
+export function pixelAt(page, ne) {
+  return page.evaluate(([n, e]) => {
+    const c = document.getElementById("map");
+    const r = c.getBoundingClientRect();
+    const p = window.skyplanView.toClient(n, e);
+    return Array.from(c.getContext("2d").getImageData(Math.round(p.x - r.left), Math.round(p.y - r.top), 1, 1).data);
+  }, ne);
+}

@@ -128,13 +128,10 @@ pub(crate) async fn create(
         .run(shape, move |session| {
             let plan = session.plan(&plan_request)?;
             // The space-time search's grid, built in the session (and kept there).
-            let grid = match (space_time, plan.grid) {
-                (true, Some(g)) => Some(session.grid(
-                    g.alt_m,
-                    g.safety_m,
-                    g.cell_m.max(skyplan_fleet::SEARCH_CELL_M),
-                )?),
-                _ => None,
+            let grid = if space_time {
+                skyplan_fleet::search_grid(session, &plan)?
+            } else {
+                None
             };
             Ok::<_, skyplan_plan::PlanFailure>((plan, grid))
         })
@@ -154,6 +151,7 @@ pub(crate) async fn create(
                 skyplan_fleet::reserve_space_time(store.as_ref(), &grid, &plan, &flight_request)
                     .0
                     .map_err(reserve_error)?;
+            let search = r.search_json();
             Ok(Reserved {
                 intent: r.intent,
                 departure: r.departure,
@@ -161,12 +159,7 @@ pub(crate) async fn create(
                 nearby: r.nearby,
                 duration_s: r.flight.duration_s,
                 timing: r.flight.timing,
-                space_time: Some(json!({
-                    "hover_s": r.hover_s,
-                    "detour_m": r.detour_m,
-                    "arrival_delay_s": r.arrival_delay_s,
-                    "route_ne": r.route_nea.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>(),
-                })),
+                space_time: Some(search),
             })
         })
         .await?
