@@ -62,6 +62,17 @@ fn reserve_error(e: ReserveError) -> PyErr {
     }
 }
 
+/// Intents are in latitude and longitude: the planner's map needs a geodetic home.
+fn needs_home(planner: &Planner) -> PyResult<()> {
+    if planner.world().frame().is_none() {
+        return Err(bad_input(format!(
+            "planner: the map {} has no geodetic home, so its routes have no latitude and longitude for an operational intent",
+            planner.world().name()
+        )));
+    }
+    Ok(())
+}
+
 fn to_dict<'py>(py: Python<'py>, v: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
     let value =
         serde_json::to_value(v).map_err(|e| to_py(PlanFailure::internal(format!("JSON: {e}"))))?;
@@ -162,12 +173,7 @@ impl Airspace {
                 )));
             }
         };
-        if planner.world().frame().is_none() {
-            return Err(bad_input(format!(
-                "planner: the map {} has no geodetic home, so its routes have no latitude and longitude for an operational intent",
-                planner.world().name()
-            )));
-        }
+        needs_home(planner)?;
         let request = request_of(start, goal, options)?;
         if space_time && request.no_fly.is_some() {
             return Err(bad_input(
@@ -286,12 +292,7 @@ impl Airspace {
                 )));
             }
         };
-        if planner.world().frame().is_none() {
-            return Err(bad_input(format!(
-                "planner: the map {} has no geodetic home, so its routes have no latitude and longitude for an operational intent",
-                planner.world().name()
-            )));
-        }
+        needs_home(planner)?;
         let now = Timestamp::now();
         let start = match start {
             Some(text) => text
