@@ -124,6 +124,11 @@ def test_bad_stores_and_fleets_are_refused(city, tmp_path):
     with pytest.raises(skyplan.AirspaceUnavailable):
         skyplan.Airspace("postgres://nobody@127.0.0.1:1/none?connect_timeout=1")
     air = skyplan.Airspace(f"sqlite:{tmp_path / 'air.sqlite'}")
+    import numpy as np
+
+    homeless = skyplan.Planner(np.zeros((20, 20)))
+    with pytest.raises(skyplan.BadInput, match="no geodetic home"):
+        air.reserve(homeless, at(0), start=(0.5, 0.5), goal=(15.5, 15.5))
     with pytest.raises(skyplan.BadInput, match="mode"):
         air.fleet(city, [], mode="fast")
     with pytest.raises(skyplan.BadInput, match=r"missions\[0\]"):
