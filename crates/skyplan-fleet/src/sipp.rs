@@ -220,8 +220,8 @@ impl SafeCache {
 /// The earliest arrival at `q.goal` from `q.start`, leaving at a time in
 /// `[0, q.latest_departure_s]` (waiting before departure costs nothing and occupies nothing),
 /// over the free cells of `grid` and the safe intervals `timeline` gives. Of the routes that
-/// arrive first, the one found waits on the ground rather than over the start where the
-/// window allows.
+/// arrive first, the one found waits on the ground rather than in the air where the window
+/// and the others allow (its waits moved to a later departure).
 ///
 /// ```
 /// use skyplan_cspace::{Cell, Grid2};
@@ -307,10 +307,9 @@ pub fn sipp(
         expansions += 1;
         if cell == q.goal {
             let mut cells = walk_back(&nodes, node);
-            // A wait at the start before the latest departure is spent on the ground.
-            if let Some(first) = cells.first_mut() {
-                first.arrive_s = first.leave_s.min(q.latest_departure_s).max(first.arrive_s);
-            }
+            ground_waits(&mut cells, q.latest_departure_s, &mut |c| {
+                safe.of(c, timeline).to_vec()
+            });
             return Ok(SippPath { cells, expansions });
         }
         if expansions > q.max_expansions {
@@ -370,6 +369,54 @@ pub fn sipp(
     })
 }
 
+/// Whether `[from, to]` lies in one of `safe`.
+fn within(safe: &[Interval], from: f64, to: f64) -> bool {
+    safe.iter().any(|iv| iv.start_s <= from && to <= iv.end_s)
+}
+
+/// Moves waits in the air to the ground where the window allows: a wait at the start becomes a
+/// later departure (up to the latest), and a wait further on moves to the start — the route
+/// before it shifted later by the whole wait — when every cell of that part stays safe over
+/// its shifted occupancy (from the move into it starting to the move out of it ending). The
+/// arrival does not change; hovering only shrinks.
+fn ground_waits(
+    cells: &mut [TimedCell],
+    latest_departure_s: f64,
+    safe_of: &mut dyn FnMut(Cell) -> Vec<Interval>,
+) {
+    let Some(first) = cells.first_mut() else {
+        return;
+    };
+    first.arrive_s = first.leave_s.min(latest_departure_s).max(first.arrive_s);
+    for k in 1..cells.len().saturating_sub(1) {
+        let wait = cells[k].leave_s - cells[k].arrive_s;
+        if wait <= 0.0 || cells[0].arrive_s + wait > latest_departure_s {
+            continue;
+        }
+        // The occupancy of cell j ≤ k after the shift.
+        let ok = (0..=k).all(|j| {
+            let from = if j == 0 {
+                cells[0].arrive_s + wait
+            } else {
+                cells[j - 1].leave_s + wait
+            };
+            let to = if j == k {
+                cells[k + 1].arrive_s
+            } else {
+                cells[j + 1].arrive_s + wait
+            };
+            within(&safe_of(cells[j].cell), from, to)
+        });
+        if ok {
+            for c in cells[..k].iter_mut() {
+                c.arrive_s += wait;
+                c.leave_s += wait;
+            }
+            cells[k].arrive_s += wait;
+        }
+    }
+}
+
 fn walk_back(nodes: &[Node], goal: u32) -> Vec<TimedCell> {
     let mut out = Vec::new();
     let mut leave = nodes[goal as usize].arrive_s;
@@ -391,6 +438,40 @@ fn walk_back(nodes: &[Node], goal: u32) -> Vec<TimedCell> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn waits_move_to_the_ground_when_the_window_allows() {
+        let grid = Grid2::from_ascii(".....").expect("grid");
+        let mut timeline = |c: Cell| {
+            if c.col == 2 {
+                vec![Interval {
+                    start_s: 0.0,
+                    end_s: 10.0,
+                }]
+            } else {
+                vec![]
+            }
+        };
+        let q = |latest_departure_s| SippQuery {
+            start: Cell::new(0, 0),
+            goal: Cell::new(0, 4),
+            cell_s: 1.0,
+            latest_departure_s,
+            horizon_s: 100.0,
+            diagonals: true,
+            max_expansions: 1000,
+        };
+        // No window: it hovers short of the blocked cell.
+        let air = sipp(&grid, &q(0.0), &mut timeline).expect("a route");
+        assert!((air.hover_s() - 9.001).abs() < 1e-9 && air.departure_s() == 0.0);
+        // A window: the same arrival, leaving later, no hovering.
+        let ground = sipp(&grid, &q(20.0), &mut timeline).expect("a route");
+        assert!((ground.arrival_s() - 13.001).abs() < 1e-9);
+        assert!((ground.departure_s() - 9.001).abs() < 1e-9 && ground.hover_s() == 0.0);
+        // Too short a window for the whole wait: it stays in the air.
+        let short = sipp(&grid, &q(5.0), &mut timeline).expect("a route");
+        assert!((short.arrival_s() - 13.001).abs() < 1e-9 && short.hover_s() > 0.0);
+    }
 
     #[test]
     fn safe_intervals_leave_gaps_around_the_blocked_ones() {
