@@ -127,3 +127,64 @@ fn a_crowded_fleet_is_rerouted_in_space_and_time_without_a_conflict() {
         shift.arrival_delay_mean_s
     );
 }
+
+/// The search's model of the others is conservative enough that the store's exact check never
+/// refuses what it found: with one writer, every reservation succeeds on its first try (a
+/// refusal there would be searched again, and show as a second try).
+#[test]
+fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
+    use skyplan_airspace::DepartureWindow;
+    use skyplan_fleet::{FlightRequest, reserve_space_time, search_grid};
+    let mut session = Session::new(World::fcnd_city());
+    let base = PlanRequest::default();
+    let spec = base.spec().expect("spec");
+    let grid = session
+        .grid(spec.alt_m, spec.safety_m, spec.cell_m)
+        .expect("grid");
+    let t0: Timestamp = "2026-03-01T12:00:00Z".parse().expect("time");
+    let missions = random_missions(
+        &grid,
+        spec.move_model,
+        &RandomMissions {
+            count: 30,
+            seed: 11,
+            min_distance_m: 300.0,
+            spread_s: 60.0,
+            window_s: 120.0,
+            start: t0,
+        },
+    );
+    let store = SqliteStore::open_url("sqlite::memory:").expect("store");
+    let (mut accepted, mut waited) = (0, 0);
+    for m in &missions {
+        let plan = session.plan(&m.request(&base)).expect("a route");
+        let search = search_grid(&mut session, &plan)
+            .expect("grid")
+            .expect("a grid plan");
+        let request = FlightRequest::new(
+            DepartureWindow {
+                earliest: m.window.earliest,
+                latest: m.window.latest,
+            },
+            0,
+            "test".into(),
+        );
+        match reserve_space_time(&store, &search, &plan, &request).0 {
+            Ok(r) => {
+                assert_eq!(
+                    r.tries, 1,
+                    "{}: the exact check refused the search's route",
+                    m.id
+                );
+                accepted += 1;
+                waited += usize::from(r.arrival_delay_s > 0.0);
+            }
+            Err(skyplan_airspace_store::ReserveError::Blocked(_)) => {}
+            Err(e) => panic!("{}: {e}", m.id),
+        }
+    }
+    assert!(
+        accepted >= 20 && waited >= 5,
+        "{accepted} accepted, {waited} later than alone"
+    );
+}
