@@ -589,8 +589,9 @@ fn space_time_inner(
                     departure,
                     delay_ms,
                     hover_s: found.hover_s(),
-                    detour_m: (flown - alone_cells) * cell_m,
-                    arrival_delay_s: found.arrival_s() - alone_cells * cell_s,
+                    // Never below the empty sky's: a negative value is rounding.
+                    detour_m: ((flown - alone_cells) * cell_m).max(0.0),
+                    arrival_delay_s: (found.arrival_s() - alone_cells * cell_s).max(0.0),
                     alone_m: alone_cells * cell_m,
                     route_nea,
                     intent,
