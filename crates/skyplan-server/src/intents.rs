@@ -228,10 +228,135 @@ fn reserve_error(e: ReserveError) -> ApiError {
     }
 }
 
-/// `GET /api/intents`.
-pub(crate) async fn list(State(s): State<AppState>) -> Result<Json<Value>, ApiError> {
+/// `GET /api/intents`'s filters: an intent is listed when one of its volumes meets all those
+/// given (closed sets, as the conflict test).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ListQuery {
+    /// `lat_min,lng_min,lat_max,lng_max`, degrees.
+    bbox: Option<String>,
+    /// Lowest altitude, W84 metres.
+    altitude_lower: Option<f64>,
+    /// Highest altitude, W84 metres.
+    altitude_upper: Option<f64>,
+    /// From (RFC 3339).
+    time_start: Option<String>,
+    /// Until (RFC 3339).
+    time_end: Option<String>,
+}
+
+/// The checked filters of a [`ListQuery`].
+struct Filter {
+    bbox: Option<skyplan_airspace::Volume4D>,
+    altitudes: (f64, f64),
+    times: (Timestamp, Timestamp),
+}
+
+impl Filter {
+    fn of(q: &ListQuery) -> Result<Self, ApiError> {
+        let time = |field: &str, v: &Option<String>, default: Timestamp| match v {
+            Some(text) => text
+                .parse::<Timestamp>()
+                .map_err(|e| bad(format!("{field}: {e}"))),
+            None => Ok(default),
+        };
+        let times = (
+            time(
+                "time_start",
+                &q.time_start,
+                Timestamp::from_unix_ms(i64::MIN / 2),
+            )?,
+            time(
+                "time_end",
+                &q.time_end,
+                Timestamp::from_unix_ms(i64::MAX / 2),
+            )?,
+        );
+        if times.1 < times.0 {
+            return Err(bad("time_end: before time_start".into()));
+        }
+        let altitudes = (
+            q.altitude_lower.unwrap_or(f64::NEG_INFINITY),
+            q.altitude_upper.unwrap_or(f64::INFINITY),
+        );
+        if altitudes.0.is_nan() || altitudes.1.is_nan() || altitudes.1 < altitudes.0 {
+            return Err(bad(
+                "altitude_upper: expected numbers with altitude_lower ≤ altitude_upper".into(),
+            ));
+        }
+        let bbox = match &q.bbox {
+            None => None,
+            Some(text) => {
+                let v: Vec<f64> = text
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .unwrap_or_default();
+                let ok = v.len() == 4
+                    && v.iter().all(|x| x.is_finite())
+                    && (-90.0..=90.0).contains(&v[0])
+                    && (-90.0..=90.0).contains(&v[2])
+                    && (-180.0..=180.0).contains(&v[1])
+                    && (-180.0..=180.0).contains(&v[3])
+                    && v[0] < v[2]
+                    && v[1] < v[3];
+                if !ok {
+                    return Err(bad(format!(
+                        "bbox: expected lat_min,lng_min,lat_max,lng_max in degrees with min < max, got {text:?}"
+                    )));
+                }
+                let corner = |lat, lng| skyplan_airspace::LatLng { lat, lng };
+                let at = skyplan_airspace::Altitude::w84_m(0.0);
+                let now: skyplan_airspace::Time = Timestamp::from_unix_ms(0).into();
+                Some(skyplan_airspace::Volume4D {
+                    volume: skyplan_airspace::Volume3D {
+                        outline_polygon: skyplan_airspace::Polygon {
+                            vertices: vec![
+                                corner(v[0], v[1]),
+                                corner(v[0], v[3]),
+                                corner(v[2], v[3]),
+                                corner(v[2], v[1]),
+                            ],
+                        },
+                        altitude_lower: at,
+                        altitude_upper: at,
+                    },
+                    time_start: now,
+                    time_end: now,
+                })
+            }
+        };
+        Ok(Self {
+            bbox,
+            altitudes,
+            times,
+        })
+    }
+
+    fn keeps(&self, intent: &OperationalIntent) -> bool {
+        intent.volumes.iter().any(|v| {
+            v.time_end.value >= self.times.0
+                && v.time_start.value <= self.times.1
+                && v.volume.altitude_upper.value >= self.altitudes.0
+                && v.volume.altitude_lower.value <= self.altitudes.1
+                && self
+                    .bbox
+                    .as_ref()
+                    .is_none_or(|b| skyplan_airspace::footprints_intersect(v, b))
+        })
+    }
+}
+
+/// `GET /api/intents`: every stored intent in the order accepted, or those meeting the filters.
+pub(crate) async fn list(
+    State(s): State<AppState>,
+    query: Result<axum::extract::Query<ListQuery>, axum::extract::rejection::QueryRejection>,
+) -> Result<Json<Value>, ApiError> {
+    let axum::extract::Query(q) = query.map_err(|e| bad(e.body_text()))?;
+    let filter = Filter::of(&q)?;
     let store = store(&s)?;
-    let intents = blocking(move || store.list().map_err(store_error)).await?;
+    let mut intents = blocking(move || store.list().map_err(store_error)).await?;
+    intents.retain(|i| filter.keeps(i));
     Ok(Json(json!({ "intents": intents })))
 }
 

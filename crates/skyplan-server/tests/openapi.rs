@@ -846,6 +846,87 @@ async fn intents_searched_in_space_and_time_keep_clear_as_documented() {
 }
 
 #[tokio::test]
+async fn listing_intents_filters_by_time_altitude_and_area() {
+    let doc = document();
+    let app = router(World::fcnd_city(), ServerConfig::default());
+    let mut ids = Vec::new();
+    for (s, owner) in [(0, "early"), (1200, "late")] {
+        let (status, v) = send(
+            app.clone(),
+            "POST",
+            "/api/intents",
+            intent_request(json!(departure(s)), 0, owner),
+        )
+        .await;
+        assert_eq!(status, StatusCode::CREATED, "{v}");
+        ids.push(v["intent"].clone());
+    }
+    let span = |i: &Value, which: &str| -> Vec<String> {
+        i["volumes"]
+            .as_array()
+            .expect("volumes")
+            .iter()
+            .map(|v| v[which]["value"].as_str().expect("time").to_string())
+            .collect()
+    };
+    let first_end = span(&ids[0], "time_end").into_iter().max().expect("an end");
+    let owners = |v: &Value| -> Vec<String> {
+        v["intents"]
+            .as_array()
+            .expect("intents")
+            .iter()
+            .map(|i| i["owner"].as_str().unwrap_or_default().to_string())
+            .collect()
+    };
+    let get = |q: String| {
+        let app = app.clone();
+        async move { send(app, "GET", &format!("/api/intents{q}"), Value::Null).await }
+    };
+    let (status, all) = get(String::new()).await;
+    matches_schema(&doc, "/api/intents", "get", status, &all);
+    assert_eq!(owners(&all), ["early", "late"]);
+    // Up to the first flight's end: only it (the second starts 20 minutes later).
+    let (status, v) = get(format!("?time_end={first_end}")).await;
+    assert_eq!(
+        (status, owners(&v)),
+        (StatusCode::OK, vec!["early".to_string()]),
+        "{v}"
+    );
+    // From a second after it: only the second.
+    let after = skyplan_airspace::Timestamp::from_unix_ms(
+        first_end
+            .parse::<skyplan_airspace::Timestamp>()
+            .expect("time")
+            .unix_ms()
+            + 1000,
+    );
+    let (_, v) = get(format!("?time_start={after}")).await;
+    assert_eq!(owners(&v), ["late"]);
+    // Altitudes: the volumes are within 10 m of 5 m above home (at 0 m W84).
+    let (_, v) = get("?altitude_lower=100".into()).await;
+    assert!(owners(&v).is_empty(), "{v}");
+    let (_, v) = get("?altitude_lower=-20&altitude_upper=0".into()).await;
+    assert_eq!(owners(&v).len(), 2);
+    // Area: a box around home holds both; one a few kilometres north neither.
+    let (_, v) = get("?bbox=37.7920,-122.3980,37.7930,-122.3970".into()).await;
+    assert_eq!(owners(&v).len(), 2, "{v}");
+    let (_, v) = get("?bbox=37.85,-122.40,37.86,-122.39".into()).await;
+    assert!(owners(&v).is_empty(), "{v}");
+    for (q, want) in [
+        ("?bbox=1,2,3", "bbox: expected"),
+        ("?bbox=37.9,-122.4,37.8,-122.3", "bbox: expected"),
+        ("?time_start=soon", "time_start:"),
+        ("?altitude_lower=50&altitude_upper=10", "altitude_upper:"),
+        ("?colour=red", "colour"),
+    ] {
+        let (status, v) = get(q.to_string()).await;
+        assert_eq!(status, StatusCode::BAD_REQUEST, "{q}: {v}");
+        matches_schema(&doc, "/api/intents", "get", status, &v);
+        assert!(message(&v).contains(want), "{q}: {want:?} not in {v}");
+    }
+}
+
+#[tokio::test]
 async fn bad_intent_requests_get_400_naming_the_field_and_store_nothing() {
     let doc = document();
     let app = router(World::fcnd_city(), ServerConfig::default());
