@@ -366,7 +366,7 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
         })
     };
     let mut runs = Vec::new();
-    for mode in [Mode::Shift, Mode::SpaceTime, Mode::RejectOnConflict] {
+    for mode in Mode::ALL {
         let path = temp_sqlite("bench-fleet");
         let url = format!("sqlite:{}", path.display());
         let result = run_on(&url, "sqlite", mode);

@@ -12,8 +12,9 @@ use skyplan_airspace_store::{IntentStore, ReserveError, StoreError};
 use skyplan_plan::{PlanRequest, Session};
 use std::time::Instant;
 
-/// How a flight whose departure conflicts is handled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// How a flight whose departure conflicts is handled. Its JSON name (`shift`,
+/// `reject_on_conflict`, `space_time`) is what reports write and Python takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Mode {
     /// Its departure moves to the earliest free one of its window.
@@ -27,6 +28,31 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Every mode, in the order `bench --fleet` runs them.
+    pub const ALL: [Mode; 3] = [Mode::Shift, Mode::SpaceTime, Mode::RejectOnConflict];
+
+    /// The mode of a JSON name (`"space_time"`), if there is one.
+    ///
+    /// ```
+    /// use skyplan_fleet::Mode;
+    /// assert_eq!(Mode::of_key("space_time"), Some(Mode::SpaceTime));
+    /// assert_eq!(Mode::of_key("fast"), None);
+    /// assert_eq!(Mode::keys(), "shift, space_time, reject_on_conflict");
+    /// ```
+    pub fn of_key(key: &str) -> Option<Self> {
+        serde_json::from_value(serde_json::Value::String(key.to_string())).ok()
+    }
+
+    /// The JSON names of every mode, comma-separated (for error messages).
+    pub fn keys() -> String {
+        Self::ALL
+            .iter()
+            .filter_map(|m| serde_json::to_value(m).ok())
+            .filter_map(|v| v.as_str().map(str::to_string))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The mode's name in reports.
     pub fn name(self) -> &'static str {
         match self {

@@ -6,7 +6,7 @@
 use skyplan_airspace::{PriorityRule, Timestamp};
 use skyplan_airspace_store::{IntentStore, SqliteStore};
 use skyplan_fleet::{
-    Mode, RandomMissions, RunOptions, Status, Summary, binding_conflicts, fly_fleet,
+    Mission, Mode, RandomMissions, RunOptions, Status, Summary, binding_conflicts, fly_fleet,
     random_missions,
 };
 use skyplan_plan::{FCND_CITY_CSV, PlanRequest, Session, World};
@@ -40,12 +40,11 @@ fn clearance(boxes: &[[f64; 6]], n: f64, e: f64, alt_m: f64, margin: f64) -> f64
         .fold(f64::INFINITY, f64::min)
 }
 
-#[test]
-fn a_crowded_fleet_is_rerouted_in_space_and_time_without_a_conflict() {
-    let world = World::fcnd_city();
-    let base = PlanRequest::default();
-    let spec = base.spec().expect("spec");
-    let mut session = Session::new(world);
+/// The city's session and `count` random missions (seed, departures spread over `spread_s`,
+/// windows of `window_s`) from 2026-03-01T12:00:00Z.
+fn crowd(count: usize, seed: u64, spread_s: f64, window_s: f64) -> (Session, Vec<Mission>) {
+    let mut session = Session::new(World::fcnd_city());
+    let spec = PlanRequest::default().spec().expect("spec");
     let grid = session
         .grid(spec.alt_m, spec.safety_m, spec.cell_m)
         .expect("grid");
@@ -54,14 +53,22 @@ fn a_crowded_fleet_is_rerouted_in_space_and_time_without_a_conflict() {
         &grid,
         spec.move_model,
         &RandomMissions {
-            count: 24,
-            seed: 5,
+            count,
+            seed,
             min_distance_m: 300.0,
-            spread_s: 120.0,
-            window_s: 300.0,
+            spread_s,
+            window_s,
             start,
         },
     );
+    (session, missions)
+}
+
+#[test]
+fn a_crowded_fleet_is_rerouted_in_space_and_time_without_a_conflict() {
+    let base = PlanRequest::default();
+    let spec = base.spec().expect("spec");
+    let (mut session, missions) = crowd(24, 5, 120.0, 300.0);
     let run = |mode: Mode, session: &mut Session| {
         let store = SqliteStore::open_url("sqlite::memory:").expect("store");
         let options = RunOptions {
@@ -135,25 +142,8 @@ fn a_crowded_fleet_is_rerouted_in_space_and_time_without_a_conflict() {
 fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
     use skyplan_airspace::DepartureWindow;
     use skyplan_fleet::{FlightRequest, reserve_space_time, search_grid};
-    let mut session = Session::new(World::fcnd_city());
     let base = PlanRequest::default();
-    let spec = base.spec().expect("spec");
-    let grid = session
-        .grid(spec.alt_m, spec.safety_m, spec.cell_m)
-        .expect("grid");
-    let t0: Timestamp = "2026-03-01T12:00:00Z".parse().expect("time");
-    let missions = random_missions(
-        &grid,
-        spec.move_model,
-        &RandomMissions {
-            count: 30,
-            seed: 11,
-            min_distance_m: 300.0,
-            spread_s: 60.0,
-            window_s: 120.0,
-            start: t0,
-        },
-    );
+    let (mut session, missions) = crowd(30, 11, 60.0, 120.0);
     let store = SqliteStore::open_url("sqlite::memory:").expect("store");
     let (mut accepted, mut waited) = (0, 0);
     for m in &missions {

@@ -282,16 +282,12 @@ impl Airspace {
         mode: &str,
         start: Option<&str>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let mode = match mode {
-            "shift" => Mode::Shift,
-            "space_time" => Mode::SpaceTime,
-            "reject_on_conflict" => Mode::RejectOnConflict,
-            other => {
-                return Err(bad_input(format!(
-                    "mode: expected \"shift\", \"space_time\" or \"reject_on_conflict\", got {other:?}"
-                )));
-            }
-        };
+        let mode = Mode::of_key(mode).ok_or_else(|| {
+            bad_input(format!(
+                "mode: expected one of {}, got {mode:?}",
+                Mode::keys()
+            ))
+        })?;
         needs_home(planner)?;
         let now = Timestamp::now();
         let start = match start {
