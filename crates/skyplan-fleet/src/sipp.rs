@@ -13,7 +13,8 @@
 //! arrival over all routes on the grid's moves and all waits.
 
 use skyplan_cspace::{Cell, Grid2};
-use std::cmp::Ordering;
+// The open list's entries: smallest f first, then the later arrival (deeper), then the older state.
+use skyplan_search::OpenEntry;
 use std::collections::{BinaryHeap, HashMap};
 
 /// Safe intervals start this long after a blocked one ends and end this long before the next
@@ -178,31 +179,6 @@ struct Node {
     stale: bool,
 }
 
-#[derive(PartialEq)]
-struct Open {
-    f: f64,
-    g: f64,
-    node: u32,
-}
-
-impl Eq for Open {}
-
-impl Ord for Open {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Smallest f first; among equals the later arrival (deeper) first.
-        other
-            .f
-            .total_cmp(&self.f)
-            .then_with(|| self.g.total_cmp(&other.g))
-    }
-}
-
-impl PartialOrd for Open {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
 const NONE: u32 = u32::MAX;
 
 /// Each reached cell's safe intervals, asked of the timeline once.
@@ -277,7 +253,7 @@ pub fn sipp(
             stale: false,
         });
         best.insert((q.start, k as u32), id);
-        open.push(Open {
+        open.push(OpenEntry {
             f: g + h(q.start),
             g,
             node: id,
@@ -299,7 +275,7 @@ pub fn sipp(
     };
     let free = |r: i64, c: i64| grid.is_free_at(r, c);
     let mut expansions = 0;
-    while let Some(Open { g, node, .. }) = open.pop() {
+    while let Some(OpenEntry { g, node, .. }) = open.pop() {
         let (cell, interval) = (nodes[node as usize].cell, nodes[node as usize].interval);
         if nodes[node as usize].stale {
             continue;
@@ -354,7 +330,7 @@ pub fn sipp(
                 if let Some(old) = best.insert(key, id) {
                     nodes[old as usize].stale = true;
                 }
-                open.push(Open {
+                open.push(OpenEntry {
                     f: arrive + h(next),
                     g: arrive,
                     node: id,
