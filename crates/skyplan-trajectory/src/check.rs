@@ -97,6 +97,18 @@ fn region_holds(region: &Region, ctrl: &[Neu], free: &dyn FreeSpace) -> Result<(
 /// Checks every guarantee of `traj` against `free` and its limits, returning the proven
 /// bounds, or the first guarantee broken, in a sentence.
 pub fn verify(traj: &Trajectory, free: &dyn FreeSpace) -> Result<Bounds, String> {
+    verify_from(traj, free, [0.0; 3], [0.0; 3])
+}
+
+/// As [`verify`] for a trajectory that starts moving (made by [`crate::plan_from`]): its
+/// velocity and acceleration at the start must be `vel_neu_m_s` and `accel_neu_m_s2` (to a
+/// micrometre per second); it still ends at rest.
+pub fn verify_from(
+    traj: &Trajectory,
+    free: &dyn FreeSpace,
+    vel_neu_m_s: Neu,
+    accel_neu_m_s2: Neu,
+) -> Result<Bounds, String> {
     let lim = &traj.limits;
     let mut all = Bounds::default();
     let (Some(first), Some(last)) = (traj.pieces.first(), traj.pieces.last()) else {
@@ -138,11 +150,27 @@ pub fn verify(traj: &Trajectory, free: &dyn FreeSpace) -> Result<Bounds, String>
         hodograph(&v0, first.duration_s),
         hodograph(&v1, last.duration_s),
     );
-    let at_rest = norm(eval(&v0, 0.0)) + norm(eval(&v1, 1.0));
-    let still = norm(eval(&a0, 0.0)) + norm(eval(&a1, 1.0));
+    let off = |got: Neu, want: Neu| norm([0, 1, 2].map(|i| got[i] - want[i]));
+    let (v_start, a_start) = (
+        off(eval(&v0, 0.0), vel_neu_m_s),
+        off(eval(&a0, 0.0), accel_neu_m_s2),
+    );
+    // At rest exactly (as the end); a moving start is set from the numbers given.
+    let tol = if vel_neu_m_s == [0.0; 3] && accel_neu_m_s2 == [0.0; 3] {
+        1e-9
+    } else {
+        1e-6
+    };
+    if v_start > tol || a_start > tol {
+        return Err(format!(
+            "the trajectory does not start in the state asked (velocity off by {v_start:.2e} m/s, acceleration by {a_start:.2e} m/s²)"
+        ));
+    }
+    let at_rest = norm(eval(&v1, 1.0));
+    let still = norm(eval(&a1, 1.0));
     if at_rest > 1e-9 || still > 1e-9 {
         return Err(format!(
-            "the trajectory is not at rest at both ends (speeds {at_rest:.2e} m/s, accelerations {still:.2e} m/s²)"
+            "the trajectory is not at rest at its end (speed {at_rest:.2e} m/s, acceleration {still:.2e} m/s²)"
         ));
     }
     // Yaw rate.

@@ -54,7 +54,7 @@ mod optimize;
 mod passes;
 mod yaw;
 
-pub use check::{Bounds, verify};
+pub use check::{Bounds, verify, verify_from};
 pub use corridor::{CorridorCell, CorridorOptions, FreeSpace, GridLayer, build_corridor};
 pub use fallback::stop_at_waypoints;
 pub use passes::Pass;
@@ -529,7 +529,7 @@ pub(crate) fn assemble(
     limits: &Limits,
     pieces: Vec<Piece>,
 ) -> Trajectory {
-    let yaw = yaw::profile(&pieces, limits.max_yaw_rate_rad_s());
+    let yaw = yaw::profile(&pieces, limits.max_yaw_rate_rad_s(), None);
     Trajectory {
         method,
         fallback_reason,
@@ -539,4 +539,94 @@ pub(crate) fn assemble(
         yaw,
         compute_us: 0,
     }
+}
+
+/// Makes a trajectory from a vehicle in motion: from `start` (its position, velocity,
+/// acceleration and heading, as a trajectory being flown has them at some instant) through
+/// `route` (whose first point is taken to be `start`'s position) to rest at the route's end,
+/// in `free`, within `limits` — what a replan in flight switches to without stopping.
+///
+/// Minimum jerk in a corridor as [`plan`], with the start's velocity and acceleration held;
+/// the durations come from a speed profile that starts at the start's speed, and any piece
+/// over a limit is flown slower until every bound holds. There is no stop-at-each-waypoint
+/// fallback from a moving start: when no curve passes [`verify_from`], the error says why
+/// (the caller stops the vehicle instead). A start at rest is [`plan`]'s.
+///
+/// ```
+/// use skyplan_trajectory::{plan, plan_from, GridLayer, Limits, Options};
+/// use skyplan_cspace::Grid2;
+/// // An empty 60 m × 60 m square at 10 m.
+/// let free = GridLayer::new(Grid2::from_ascii(&(".".repeat(60) + "\n").repeat(60))?, 10.0);
+/// let first = plan(&[[5.0, 5.0, 10.0], [5.0, 55.0, 10.0]], &free, &Limits::default(), &Options::default())?;
+/// // Half-way east, turn north instead, without stopping.
+/// let now = first.state_at(first.duration_s() / 2.0);
+/// let turn = [now.point_neu, [55.0, now.point_neu[1], 10.0]];
+/// let next = plan_from(&now, &turn, &free, &Limits::default(), &Options::default())?;
+/// let s = next.state_at(0.0);
+/// assert!((0..3).all(|i| (s.vel_neu_m_s[i] - now.vel_neu_m_s[i]).abs() < 1e-6));
+/// assert_eq!(next.state_at(next.duration_s()).vel_neu_m_s, [0.0; 3]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn plan_from(
+    start: &State,
+    route: &[Neu],
+    free: &dyn FreeSpace,
+    limits: &Limits,
+    opts: &Options,
+) -> Result<Trajectory, TrajectoryError> {
+    let t0 = Instant::now();
+    limits.check()?;
+    let (vel, accel) = (start.vel_neu_m_s, start.accel_neu_m_s2);
+    if ![vel, accel, start.point_neu]
+        .iter()
+        .flatten()
+        .chain([&start.yaw_rad])
+        .all(|v| v.is_finite())
+    {
+        return Err(TrajectoryError::Route(
+            "starts in a state that is not a number".into(),
+        ));
+    }
+    let mut points = route.to_vec();
+    if let Some(first) = points.first_mut() {
+        *first = start.point_neu;
+    }
+    if vel == [0.0; 3] && accel == [0.0; 3] {
+        return plan(&points, free, limits, opts);
+    }
+    let route = check_route(&points)?;
+    let planar = route.iter().all(|p| (p[2] - route[0][2]).abs() <= 1e-9)
+        && vel[2].abs() <= 1e-12
+        && accel[2].abs() <= 1e-12;
+    let corridor_opts = opts.corridor.unwrap_or(CorridorOptions {
+        piece_m: 50.0,
+        grow_m: 20.0,
+    });
+    // Short stretches first: the start's motion is turned in the first pieces, and each gets
+    // its own box to swing out into.
+    let mut points = split_legs(&route, limits);
+    let first_leg_m = skyplan_world3::distance_m(points[0], points[1]);
+    let cuts: Vec<Neu> = [3.0, 8.0, 15.0]
+        .iter()
+        .filter(|&&d| d < first_leg_m - 1.0)
+        .map(|&d| skyplan_world3::lerp(points[0], points[1], d / first_leg_m))
+        .collect();
+    points.splice(1..1, cuts);
+    let cells = build_corridor(&points, free, planar, &corridor_opts)?;
+    let pieces = optimize::minimum_jerk_from(&cells, planar, limits, t0 + opts.budget, vel, accel)
+        .map_err(|why| TrajectoryError::Unproven(format!("from the moving start: {why}")))?;
+    let yaw = yaw::profile(&pieces, limits.max_yaw_rate_rad_s(), Some(start.yaw_rad));
+    let mut traj = Trajectory {
+        method: Method::MinimumJerk,
+        fallback_reason: None,
+        limits: *limits,
+        bounds: Bounds::default(),
+        pieces,
+        yaw,
+        compute_us: 0,
+    };
+    traj.bounds = verify_from(&traj, free, vel, accel)
+        .map_err(|why| TrajectoryError::Unproven(format!("from the moving start: {why}")))?;
+    traj.compute_us = t0.elapsed().as_micros() as u64;
+    Ok(traj)
 }

@@ -90,6 +90,21 @@ struct Problem<'a> {
     warm: Option<Vec<[Neu; 3]>>,
     /// How far inside each box the active-set method keeps the control points, metres.
     hair: f64,
+    /// The velocity and acceleration at the start (zero: at rest).
+    moving: Moving,
+}
+
+/// A start in motion: velocity and acceleration `[north, east, up]`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Moving {
+    pub vel: Neu,
+    pub accel: Neu,
+}
+
+impl Moving {
+    fn at_rest(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 impl Problem<'_> {
@@ -119,15 +134,23 @@ impl Problem<'_> {
         CscMatrix::new_from_triplets(nv, nv, pi, pj, pv)
     }
 
-    /// Rest at both ends and C² joins.
+    /// The start's state (rest, or the motion given), rest at the goal and C² joins.
     fn equalities(&self, rows: &mut Rows) {
         let n = self.times.len();
         let l = n - 1;
+        let t0 = self.times[0];
         for d in 0..self.dims {
             let x = |p, k| self.var(p, k, d);
+            // A quintic's velocity at 0 is 5 (c1 − c0) / T, its acceleration 20 (c2 − 2c1 + c0) / T².
             rows.push(&[(x(0, 0), 1.0)], 0.0);
-            rows.push(&[(x(0, 1), 1.0), (x(0, 0), -1.0)], 0.0);
-            rows.push(&[(x(0, 2), 1.0), (x(0, 1), -2.0), (x(0, 0), 1.0)], 0.0);
+            rows.push(
+                &[(x(0, 1), 1.0), (x(0, 0), -1.0)],
+                self.moving.vel[d] * t0 / 5.0,
+            );
+            rows.push(
+                &[(x(0, 2), 1.0), (x(0, 1), -2.0), (x(0, 0), 1.0)],
+                self.moving.accel[d] * t0 * t0 / 20.0,
+            );
             rows.push(&[(x(l, 5), 1.0)], self.goal[d]);
             rows.push(&[(x(l, 5), 1.0), (x(l, 4), -1.0)], 0.0);
             rows.push(&[(x(l, 5), 1.0), (x(l, 4), -2.0), (x(l, 3), 1.0)], 0.0);
@@ -275,7 +298,9 @@ impl Problem<'_> {
     }
 
     fn solve(&self, deadline: Instant) -> Result<Vec<f64>, SolveError> {
+        // The banded active-set method is written for a start at rest.
         if self.active_set
+            && self.moving.at_rest()
             && let Some(x) = self.solve_active_set()
         {
             return Ok(x);
@@ -399,13 +424,16 @@ fn circumradius(a: Neu, b: Neu, c: Neu) -> f64 {
 /// its radius allows at half the acceleration limit, then forward and backward passes with
 /// half the acceleration limit from rest at both ends; each piece lasts its length over its
 /// mean speed.
-fn profile_times(points: &[Neu], lim: &Limits) -> Vec<f64> {
+fn profile_times(points: &[Neu], lim: &Limits, start_speed_m_s: f64) -> Vec<f64> {
     let n = points.len() - 1; // pieces
     let a = 0.5 * lim.max_accel_m_s2;
     let lens: Vec<f64> = points.windows(2).map(|w| distance_m(w[0], w[1])).collect();
     let mut v: Vec<f64> = (0..=n)
         .map(|i| {
-            if i == 0 || i == n {
+            if i == 0 {
+                return start_speed_m_s;
+            }
+            if i == n {
                 return 0.0;
             }
             let leg = crate::leg_speed_m_s(points[i - 1], points[i], lim)
@@ -416,8 +444,12 @@ fn profile_times(points: &[Neu], lim: &Limits) -> Vec<f64> {
     for i in 1..=n {
         v[i] = v[i].min((v[i - 1] * v[i - 1] + 2.0 * a * lens[i - 1]).sqrt());
     }
-    for i in (0..n).rev() {
+    // The start's speed is given: the backward pass slows the rest, not the start.
+    for i in (1..n).rev() {
         v[i] = v[i].min((v[i + 1] * v[i + 1] + 2.0 * a * lens[i]).sqrt());
+    }
+    if start_speed_m_s == 0.0 {
+        v[0] = v[0].min((v[1] * v[1] + 2.0 * a * lens[0]).sqrt());
     }
     floored(
         (0..n)
@@ -453,6 +485,7 @@ fn ratios(pieces: &[Piece], lim: &Limits) -> Vec<f64> {
 }
 
 /// The pieces for given durations, from one solve per moving axis.
+#[allow(clippy::too_many_arguments)]
 fn shape(
     cells: &[CorridorCell],
     planar: bool,
@@ -461,6 +494,7 @@ fn shape(
     joints: Option<&[Neu]>,
     warm: Option<&[Piece]>,
     deadline: Instant,
+    moving: Moving,
 ) -> Result<Vec<Piece>, SolveError> {
     let n = cells.len();
     let start = cells[0].from;
@@ -515,6 +549,7 @@ fn shape(
                 .collect(),
         }),
         hair: HAIR_M,
+        moving,
     };
     let x = problem.solve(deadline)?;
     let mut ctrl = vec![[start; K]; n];
@@ -534,8 +569,13 @@ fn shape(
         ctrl[p][5] = joint;
         ctrl[p + 1][0] = joint;
     }
+    // The start's state exactly (see `equalities`), and rest at the goal.
+    let t0 = times[0];
+    ctrl[0][0] = start;
+    ctrl[0][1] = [0, 1, 2].map(|d| start[d] + moving.vel[d] * t0 / 5.0);
+    ctrl[0][2] =
+        [0, 1, 2].map(|d| 2.0 * ctrl[0][1][d] - start[d] + moving.accel[d] * t0 * t0 / 20.0);
     for k in 0..3 {
-        ctrl[0][k] = start;
         ctrl[n - 1][5 - k] = goal;
     }
     Ok(ctrl
@@ -585,7 +625,8 @@ pub(crate) fn minimum_jerk(
     }
     // 1. The shape, at the limit speed everywhere.
     let times = shape_times(cells, lim);
-    let first = match shape(cells, planar, &times, lim, None, None, deadline) {
+    let rest = Moving::default();
+    let first = match shape(cells, planar, &times, lim, None, None, deadline, rest) {
         Ok(p) => p,
         Err(SolveError::Infeasible) => return Err("no curve met the corridor".into()),
         Err(SolveError::Other(why)) => return Err(why),
@@ -594,7 +635,7 @@ pub(crate) fn minimum_jerk(
     let mut points: Vec<Neu> = first.iter().map(|p| p.control_points_neu[0]).collect();
     points.push(cells[cells.len() - 1].to);
     let joints: Vec<Neu> = points[1..points.len() - 1].to_vec();
-    let times = profile_times(&points, lim);
+    let times = profile_times(&points, lim, 0.0);
     let shaped = shape(
         cells,
         planar,
@@ -603,8 +644,9 @@ pub(crate) fn minimum_jerk(
         Some(&joints),
         Some(&first),
         deadline,
+        rest,
     )
-    .or_else(|_| shape(cells, planar, &times, lim, None, None, deadline));
+    .or_else(|_| shape(cells, planar, &times, lim, None, None, deadline, rest));
     let mut best = scale_to_limits(first, lim);
     if let Ok(p) = shaped {
         let p = scale_to_limits(p, lim);
@@ -636,6 +678,7 @@ pub(crate) fn minimum_jerk(
             Some(&joints),
             Some(&current),
             deadline,
+            rest,
         ) else {
             break;
         };
@@ -648,6 +691,93 @@ pub(crate) fn minimum_jerk(
         }
     }
     Ok(best)
+}
+
+/// The longest duration up to `t_s` (shortened by 15 % steps) for which the first piece's
+/// control points fixed by the start's motion stay in its box: `c1 = p + v T / 5` and
+/// `c2 = p + 2 v T / 5 + a T² / 20` (a long first piece would carry them out of it).
+fn first_piece_fits(cell: &CorridorCell, planar: bool, moving: Moving, t_s: f64) -> f64 {
+    let (p, b) = (cell.from, &cell.region);
+    let dims = if planar { 2 } else { 3 };
+    let fits = |t: f64| {
+        (0..dims).all(|d| {
+            let (v, a) = (moving.vel[d], moving.accel[d]);
+            [v * t / 5.0, 2.0 * v * t / 5.0 + a * t * t / 20.0]
+                .iter()
+                .all(|dx| (b.min[d] + HAIR_M..=b.max[d] - HAIR_M).contains(&(p[d] + dx)))
+        })
+    };
+    let mut t = t_s;
+    for _ in 0..40 {
+        if fits(t) {
+            return t;
+        }
+        t *= 0.85;
+    }
+    t
+}
+
+/// Minimum-jerk pieces in the corridor from a start in motion (`vel`, `accel`), or why not.
+///
+/// One common time factor cannot scale such pieces to the limits (it would scale the start's
+/// velocity too), so the durations come from a speed profile starting at the start's speed,
+/// and each piece whose bounds break a limit is flown slower (its duration times its ratio),
+/// until every piece holds or the rounds or the time run out.
+pub(crate) fn minimum_jerk_from(
+    cells: &[CorridorCell],
+    planar: bool,
+    lim: &Limits,
+    deadline: Instant,
+    vel: Neu,
+    accel: Neu,
+) -> Result<Vec<Piece>, String> {
+    /// Rounds of slowing the pieces that break a limit.
+    const ROUNDS: usize = 16;
+    if cells.is_empty() {
+        return Err("the corridor is empty".into());
+    }
+    let moving = Moving { vel, accel };
+    let mut points: Vec<Neu> = cells.iter().map(|c| c.from).collect();
+    points.push(cells[cells.len() - 1].to);
+    let mut times = profile_times(&points, lim, crate::bezier::norm(vel));
+    let mut why = String::from("the time budget ran out");
+    for _ in 0..ROUNDS {
+        if Instant::now() >= deadline {
+            return Err(why);
+        }
+        times[0] = first_piece_fits(&cells[0], planar, moving, times[0]);
+        let pieces = match shape(cells, planar, &times, lim, None, None, deadline, moving) {
+            Ok(p) => p,
+            Err(SolveError::Infeasible) => {
+                return Err("no curve from the start's motion met the corridor".into());
+            }
+            Err(SolveError::Other(e)) => return Err(e),
+        };
+        let r = ratios(&pieces, lim);
+        let worst = r.iter().copied().fold(0.0, f64::max);
+        if worst <= 1.0 {
+            return Ok(pieces);
+        }
+        why = format!(
+            "a piece still broke a limit by a factor {worst:.3} after {ROUNDS} rounds of slowing"
+        );
+        // The pieces over a limit, and less so their neighbours (a piece's bounds depend on
+        // the joins it shares), are slowed.
+        let grow: Vec<f64> = (0..r.len())
+            .map(|i| {
+                let own = r[i].max(1.0).powi(2) * if r[i] > 1.0 { 1.05 } else { 1.0 };
+                let near = [i.wrapping_sub(1), i + 1]
+                    .iter()
+                    .filter_map(|&j| r.get(j))
+                    .fold(1.0_f64, |m, &rj| m.max(rj.max(1.0).sqrt()));
+                own.max(near)
+            })
+            .collect();
+        for (t, g) in times.iter_mut().zip(grow) {
+            *t *= g;
+        }
+    }
+    Err(why)
 }
 
 #[cfg(test)]
@@ -711,6 +841,7 @@ mod tests {
             active_set,
             warm: None,
             hair: HAIR_M,
+            moving: Moving::default(),
         }
     }
 

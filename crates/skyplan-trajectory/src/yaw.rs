@@ -43,13 +43,29 @@ fn hold(duration_s: f64, y: f64) -> YawPiece {
     }
 }
 
-/// Yaw pieces covering the same total time as `pieces`.
-pub(crate) fn profile(pieces: &[Piece], max_rate_rad_s: f64) -> Vec<YawPiece> {
+/// Yaw pieces covering the same total time as `pieces`, starting at `start_yaw_rad` (turned to
+/// the first piece's heading at once) or, without one, at the first piece's heading.
+pub(crate) fn profile(
+    pieces: &[Piece],
+    max_rate_rad_s: f64,
+    start_yaw_rad: Option<f64>,
+) -> Vec<YawPiece> {
     let total: f64 = pieces.iter().map(|p| p.duration_s).sum();
     let heads = headings(pieces);
     let mut out = Vec::new();
-    let mut yaw = heads.first().copied().unwrap_or(0.0);
+    let first = heads.first().copied().unwrap_or(0.0);
+    let mut yaw = start_yaw_rad.unwrap_or(first);
     let mut now = 0.0; // where the yaw profile has reached
+    let delta = wrap_rad(first - yaw);
+    if delta.abs() >= 1e-9 {
+        let d = turn_duration_s(delta, max_rate_rad_s).min(total);
+        out.push(YawPiece {
+            duration_s: d,
+            control_points_rad: [yaw, yaw, yaw + delta, yaw + delta],
+        });
+        yaw += delta;
+        now = d;
+    }
     let mut junction = 0.0;
     for (k, p) in pieces.iter().enumerate() {
         junction += p.duration_s;
