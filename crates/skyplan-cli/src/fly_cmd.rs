@@ -79,11 +79,6 @@ pub fn run(args: FlyArgs) -> Result<()> {
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
-    if request.trajectory == Some(true) && (args.hidden.is_some() || args.hidden_random > 0) {
-        return Err(bad_input(
-            "--trajectory is not replanned in flight yet: with --hidden or --hidden-random the vehicle would fly into what the map lacks; drop one of them (without --trajectory the replanner flies around them)",
-        ));
-    }
     if world.terrain().is_some() {
         return Err(bad_input(
             "fly --terrain: not yet. Over terrain the altitudes are above the map's home, while the vehicle's relative altitudes are above where it armed; flying needs missions in the AMSL frame first. Plan with `skyplan plan --terrain` instead",

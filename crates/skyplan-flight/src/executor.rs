@@ -44,7 +44,8 @@ pub use report::{
     ConfigError, ExecutorConfig, Failure, Note, Outcome, Output, Reached, TrackingReport,
 };
 pub use tracking::{
-    REFERENCE_PERIOD_S, ReferenceExecutor, ReferenceTracking, START_SPEED_M_S, START_TOLERANCE_M,
+    AHEAD_STEP_S, REFERENCE_PERIOD_S, ReferenceExecutor, ReferenceTracking, Rereference,
+    SPLICE_LEAD_S, START_SPEED_M_S, START_TOLERANCE_M,
 };
 
 #[cfg(test)]

@@ -186,6 +186,59 @@ impl MinJerkLine {
     }
 }
 
+/// One reference followed up to `at_s`, then another from its own start: what a replan in
+/// flight makes of the trajectory being flown (the second starts in the first's state at
+/// `at_s`, so the setpoints run on without a jump).
+///
+/// ```
+/// use std::sync::Arc;
+/// use skyplan_flight::reference::{MinJerkLine, Reference, Spliced};
+/// let first = Arc::new(MinJerkLine::new(vec![[0.0, 0.0, -5.0], [10.0, 0.0, -5.0]], vec![4.0])?);
+/// let then = Arc::new(MinJerkLine::new(vec![[10.0, 0.0, -5.0], [10.0, 10.0, -5.0]], vec![5.0])?);
+/// let r = Spliced::new(first, 4.0, then);
+/// assert_eq!(r.duration_s(), 9.0);
+/// assert_eq!(r.setpoint(2.0).point_ned[0], 5.0);
+/// assert_eq!(r.setpoint(9.0).point_ned, [10.0, 10.0, -5.0]);
+/// # Ok::<(), skyplan_flight::reference::ReferenceError>(())
+/// ```
+#[derive(Clone)]
+pub struct Spliced {
+    first: std::sync::Arc<dyn Reference>,
+    at_s: f64,
+    then: std::sync::Arc<dyn Reference>,
+}
+
+impl Spliced {
+    /// `first` up to its time `at_s` (clamped to its duration), then `then`.
+    pub fn new(
+        first: std::sync::Arc<dyn Reference>,
+        at_s: f64,
+        then: std::sync::Arc<dyn Reference>,
+    ) -> Self {
+        let at_s = at_s.clamp(0.0, first.duration_s());
+        Self { first, at_s, then }
+    }
+
+    /// When the second reference takes over, seconds of this one's clock.
+    pub fn switch_s(&self) -> f64 {
+        self.at_s
+    }
+}
+
+impl Reference for Spliced {
+    fn duration_s(&self) -> f64 {
+        self.at_s + self.then.duration_s()
+    }
+
+    fn setpoint(&self, t_s: f64) -> Setpoint {
+        if t_s < self.at_s {
+            self.first.setpoint(t_s)
+        } else {
+            self.then.setpoint(t_s - self.at_s)
+        }
+    }
+}
+
 impl Reference for MinJerkLine {
     fn duration_s(&self) -> f64 {
         self.durations_s.iter().sum()

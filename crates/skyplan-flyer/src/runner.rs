@@ -148,8 +148,9 @@ pub type MakeReference = Arc<dyn Fn(&Plan) -> Result<Arc<dyn Reference>, String>
 
 /// What a GUIDED run flies by instead of waypoint-by-waypoint position targets
 /// ([`fly_mission_with`]): setpoints with feed-forward streamed from a [`Reference`]'s clock
-/// ([`ReferenceExecutor`]). No replanner watches such a flight (a reference cannot be replanned
-/// in flight yet).
+/// ([`ReferenceExecutor`]). With a replanner (a plan with a trajectory), each replanned route
+/// becomes a trajectory from the one being flown, flown on without stopping
+/// ([`crate::trajectory::rereference`]).
 #[derive(Clone)]
 pub enum ReferenceSource {
     /// This reference, whatever the plan (its frame: the map's local NED about its home).
@@ -294,8 +295,8 @@ pub fn fly_mission_with<O: RunObserver>(
     let map_boxes = world.colliders().map(|m| m.boxes.clone());
     let session = Session::new(world).with_limits(limits);
     let replanner = match o.mode {
-        Mode::Guided(replanner) if reference.is_none() => replanner,
-        Mode::Guided(_) | Mode::Upload { .. } => None,
+        Mode::Guided(replanner) => replanner,
+        Mode::Upload { .. } => None,
     };
     let (plan, watcher) =
         plan_with_replanner(session, request.clone(), replanner).map_err(RunError::from)?;
@@ -335,9 +336,6 @@ pub fn fly_mission_with<O: RunObserver>(
     }
     let targets: Vec<Target> = mission.waypoints.iter().map(Target::from).collect();
     if let Some(source) = reference {
-        if matches!(o.mode, Mode::Guided(Some(_))) {
-            observer.say("replan     none: a flight by a reference is not replanned in flight");
-        }
         let r = source.reference(&plan)?;
         let (start, end) = (
             r.setpoint(0.0).point_ned,
@@ -353,14 +351,24 @@ pub fn fly_mission_with<O: RunObserver>(
             end[1],
             -end[2]
         ));
-        let mut ex = ReferenceExecutor::new(r, config).map_err(bad)?;
-        let (log, outcome, _) = fly_with(&mut gcs, &mut ex, frame, sim, observer)?;
+        // A replanned route becomes a trajectory from the one being flown, within its limits.
+        let limits = plan.trajectory.as_ref().map(|t| t.trajectory.limits);
+        let mut ex = match (&watcher, limits) {
+            (Some(w), Some(limits)) => {
+                let make = crate::trajectory::rereference(w, limits).map_err(RunError::from)?;
+                observer.say("replan     a replanned route becomes a trajectory from the vehicle's motion, flown on without stopping");
+                ReferenceExecutor::replanning(r, config, make)
+            }
+            _ => ReferenceExecutor::new(r, config),
+        }
+        .map_err(bad)?;
+        let (log, outcome, replanned) = fly_with(&mut gcs, &mut ex, frame, sim, observer)?;
         return Ok(Flight {
             log,
             ended: Ended::Flight(outcome),
             plan,
-            watcher: None,
-            replanned: Vec::new(),
+            watcher,
+            replanned,
             tracking: ex.tracking(),
         });
     }
@@ -1066,6 +1074,8 @@ mod tests {
             max_path_error_m,
             samples: 500,
             setpoints_sent: 1200,
+            switches: 0,
+            slowest_switch_ms: 0.0,
         };
         let done = Some(Outcome::Completed);
         assert_eq!(

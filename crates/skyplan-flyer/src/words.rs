@@ -100,6 +100,8 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
 ///     max_path_error_m: 0.02,
 ///     samples: 480,
 ///     setpoints_sent: 790,
+///     switches: 0,
+///     slowest_switch_ms: 0.0,
 /// };
 /// assert_eq!(
 ///     skyplan_flyer::words::tracking_line(&r),
@@ -113,8 +115,19 @@ pub fn tracking_line(r: &TrackingReport) -> String {
         (Some(_), None, _) => "its end not reached".to_string(),
         (None, None, _) => "its clock never started (the start was not reached)".to_string(),
     };
+    let switches = match r.switches {
+        0 => String::new(),
+        1 => format!(
+            "; switched once to a replanned trajectory without stopping (made in {:.1} ms)",
+            r.slowest_switch_ms
+        ),
+        n => format!(
+            "; switched {n} times to a replanned trajectory without stopping (each made in at most {:.1} ms)",
+            r.slowest_switch_ms
+        ),
+    };
     format!(
-        "reference  max tracking error {:.2} m over {} samples ({:.2} m from its path); reference duration {:.1} s, {flown}; {} setpoints sent",
+        "reference  max tracking error {:.2} m over {} samples ({:.2} m from its path); reference duration {:.1} s, {flown}; {} setpoints sent{switches}",
         r.max_tracking_error_m, r.samples, r.max_path_error_m, r.duration_s, r.setpoints_sent
     )
 }

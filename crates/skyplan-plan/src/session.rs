@@ -698,22 +698,9 @@ impl Session {
     ) -> Result<TrajectoryReport, PlanFailure> {
         use skyplan_trajectory as tj;
         let route = plan.points_nea();
-        let (boxes, layer);
-        let free: &dyn tj::FreeSpace = if self.world.colliders().is_some() && r.no_fly.is_none() {
-            boxes = self.boxes(r)?;
-            boxes.as_ref()
-        } else if let Some(grid) = &plan.grid_used {
-            layer = tj::GridLayer::new(grid.as_ref().clone(), r.alt_m);
-            &layer
-        } else {
-            return Err(PlanFailure::bad_request(format!(
-                "trajectory: planner {} gives no grid on {} to build a corridor in",
-                r.planner,
-                self.world.name()
-            )));
-        };
-        let traj =
-            tj::plan(&route, free, &spec.limits, &tj::Options::default()).map_err(|e| match e {
+        let free = self.free_space(r, plan)?;
+        let traj = tj::plan(&route, free.as_ref(), &spec.limits, &tj::Options::default()).map_err(
+            |e| match e {
                 tj::TrajectoryError::Corridor { .. } => {
                     PlanFailure::new(FailureKind::NoCorridor, format!("trajectory: {e}"))
                 }
@@ -723,7 +710,8 @@ impl Session {
                     PlanFailure::bad_request(format!("trajectory: {e}"))
                 }
                 _ => PlanFailure::internal(format!("trajectory: {e}")),
-            })?;
+            },
+        )?;
         let samples = traj.samples(spec.sample_hz);
         if let Some(t) = self.world.terrain() {
             // The corridor's boxes stand on the ground's columns; the samples (centimetres
@@ -748,6 +736,39 @@ impl Session {
             length_over_max_speed_s: length / spec.limits.max_speed_m_s,
             trajectory: traj,
         })
+    }
+
+    /// The free space a plan's trajectory is made in: the 3D boxes grown by the margin on
+    /// colliders maps (without no-fly zones), else the plan's grid at its altitude — what a
+    /// trajectory replanned in flight must keep to as well.
+    pub fn trajectory_space(
+        &mut self,
+        request: &PlanRequest,
+        plan: &Plan,
+    ) -> Result<Arc<dyn skyplan_trajectory::FreeSpace + Send + Sync>, PlanFailure> {
+        let r = Resolved::new(request)?;
+        self.free_space(&r, plan)
+    }
+
+    fn free_space(
+        &mut self,
+        r: &Resolved,
+        plan: &Plan,
+    ) -> Result<Arc<dyn skyplan_trajectory::FreeSpace + Send + Sync>, PlanFailure> {
+        if self.world.colliders().is_some() && r.no_fly.is_none() {
+            Ok(self.boxes(r)?)
+        } else if let Some(grid) = &plan.grid_used {
+            Ok(Arc::new(skyplan_trajectory::GridLayer::new(
+                grid.as_ref().clone(),
+                r.alt_m,
+            )))
+        } else {
+            Err(PlanFailure::bad_request(format!(
+                "trajectory: planner {} gives no grid on {} to build a corridor in",
+                r.planner,
+                self.world.name()
+            )))
+        }
     }
 
     /// Plans `request` again from another start (where the vehicle is now), reusing the caches.

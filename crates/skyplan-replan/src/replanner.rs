@@ -301,6 +301,7 @@ struct Found {
 pub struct Replanner {
     session: Session,
     plan: Plan,
+    request: PlanRequest,
     options: ReplanOptions,
     model: MoveModel,
     touch: Touch,
@@ -392,6 +393,7 @@ impl Replanner {
         Ok(Self {
             session,
             plan,
+            request: request.clone(),
             options,
             model,
             touch,
@@ -448,6 +450,25 @@ impl Replanner {
             .map(|l| (l.alt_m, l.world.learned_points_ne()))
             .filter(|(_, p)| !p.is_empty())
             .collect()
+    }
+
+    /// The cells learned at the layer of `alt_m` (within a millimetre of a layer's altitude),
+    /// alone, as a grid ([`WorldModel::learned_grid`]); `None` off every layer.
+    pub fn learned_grid_at(&self, alt_m: f64) -> Option<Grid2> {
+        self.layers
+            .iter()
+            .find(|l| (l.alt_m - alt_m).abs() <= 1e-3)
+            .map(|l| l.world.learned_grid())
+    }
+
+    /// The free space the first plan's trajectory was made in
+    /// ([`Session::trajectory_space`]): a trajectory replanned in flight keeps to it and out
+    /// of the learned cells ([`Replanner::learned_grid_at`]).
+    pub fn trajectory_space(
+        &mut self,
+    ) -> Result<std::sync::Arc<dyn skyplan_plan::trajectory::FreeSpace + Send + Sync>, PlanFailure>
+    {
+        self.session.trajectory_space(&self.request, &self.plan)
     }
 
     /// Cells learned as occupied, summed over the layers.

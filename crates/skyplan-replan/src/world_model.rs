@@ -90,6 +90,20 @@ impl WorldModel {
             .collect()
     }
 
+    /// The learned cells alone (grown by the margin) as a grid in the map's frame: what the
+    /// map does not know, for a check that has the map's obstacles otherwise (a trajectory
+    /// replanned in flight keeps out of both).
+    pub fn learned_grid(&self) -> Grid2 {
+        let blocked: Vec<bool> = self.cover.iter().map(|&c| c > 0).collect();
+        Grid2::new(
+            self.known.rows(),
+            self.known.cols(),
+            blocked,
+            self.known.frame(),
+        )
+        .unwrap_or_else(|_| (*self.known).clone())
+    }
+
     /// How many cells are occupied because of what was learned.
     pub fn learned_count(&self) -> usize {
         self.learned

@@ -591,6 +591,10 @@ pub fn plan_from(
     if let Some(first) = points.first_mut() {
         *first = start.point_neu;
     }
+    // A start evaluated on a level curve may be an ulp off the level: it is the level.
+    if points.len() >= 2 && (points[0][2] - points[1][2]).abs() <= 1e-6 {
+        points[0][2] = points[1][2];
+    }
     if vel == [0.0; 3] && accel == [0.0; 3] {
         return plan(&points, free, limits, opts);
     }

@@ -41,6 +41,31 @@ pub trait Strategy: Clone + fmt::Debug {
     fn tracking(&self) -> Option<TrackingReport> {
         None
     }
+    /// Whether this strategy can replace its route in flight ([`Executor::replace_route`]):
+    /// [`Strategy::REPLANS`], unless the strategy decides per flight.
+    fn replaces(&self) -> bool {
+        Self::REPLANS
+    }
+    /// Whether the strategy can replace its route at this moment (by default whenever it
+    /// [`Strategy::replaces`]).
+    fn replaces_now(&self) -> bool {
+        self.replaces()
+    }
+    /// Replaces the route still to fly with `targets` (from where the vehicle is; the last is
+    /// the goal): by default the targets become the route, flown from the first.
+    fn replace(
+        &mut self,
+        core: &mut Core,
+        now_s: f64,
+        targets: &[Target],
+    ) -> Result<(), ConfigError> {
+        core.start_route(now_s, targets)
+    }
+    /// The route still to fly as a route watcher should see it, when it is not the targets
+    /// (a reference's path ahead); `None`: the targets from the current one.
+    fn route_ahead(&self) -> Option<&[Target]> {
+        None
+    }
 }
 
 /// The state every executor keeps, and the steps all of them share.
@@ -591,6 +616,11 @@ impl<S: Strategy> Executor<S> {
         })
     }
 
+    /// The strategy, to set it up after construction.
+    pub(crate) fn strategy_mut(&mut self) -> &mut S {
+        &mut self.strategy
+    }
+
     /// The current state.
     pub fn state(&self) -> FlightState {
         self.core.state
@@ -626,6 +656,9 @@ impl<S: Strategy> Executor<S> {
     pub fn remaining_targets(&self) -> &[Target] {
         match self.core.state {
             FlightState::Waypoint if self.core.no_route.is_none() => {
+                if let Some(ahead) = self.strategy.route_ahead() {
+                    return ahead;
+                }
                 let i = self.core.next_index().min(self.core.targets.len() - 1);
                 &self.core.targets[i..]
             }
@@ -636,7 +669,7 @@ impl<S: Strategy> Executor<S> {
     /// Whether a route watcher may act now: in WAYPOINT, flying the route (no stop, hold,
     /// lost link or landing under way), with a strategy that can replace its route.
     pub fn accepts_route_change(&self) -> bool {
-        S::REPLANS && self.core.flying_route()
+        self.strategy.replaces_now() && self.core.flying_route()
     }
 
     /// Replaces the route still to fly with `targets` (from where the vehicle is now; the last
@@ -649,7 +682,7 @@ impl<S: Strategy> Executor<S> {
         targets: &[Target],
         event: ReplanEvent,
     ) -> Result<Output, ConfigError> {
-        if !S::REPLANS {
+        if !self.strategy.replaces() {
             return Err(ConfigError(
                 "this mission strategy cannot change its route in flight".into(),
             ));
@@ -660,7 +693,7 @@ impl<S: Strategy> Executor<S> {
                 self.core.state
             )));
         }
-        self.core.start_route(now_s, targets)?;
+        self.strategy.replace(&mut self.core, now_s, targets)?;
         let mut out = Output::default();
         out.notes.push(Note::Replanned {
             event,
@@ -973,7 +1006,7 @@ impl<S: Strategy> FlightExecutor for Executor<S> {
         Executor::accepts_route_change(self)
     }
     fn replans(&self) -> bool {
-        S::REPLANS
+        self.strategy.replaces()
     }
     fn replace_route(
         &mut self,

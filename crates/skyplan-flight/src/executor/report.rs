@@ -316,6 +316,12 @@ pub struct TrackingReport {
     pub samples: usize,
     /// Setpoints sent.
     pub setpoints_sent: usize,
+    /// Routes replaced in flight, each a new reference flown on from the old one's state
+    /// without stopping (the duration counts the old one up to each switch).
+    pub switches: usize,
+    /// The longest wall time one of those new references took to make, milliseconds (0
+    /// without switches): it must stay under [`super::SPLICE_LEAD_S`] of vehicle time.
+    pub slowest_switch_ms: f64,
 }
 
 impl TrackingReport {

@@ -11,12 +11,19 @@
 //!    time (the vehicle's time stamp, [`Telemetry::sample_time_s`], when the link has it);
 //! 3. *holding*: the last point streamed as a position target until the vehicle is within the
 //!    deadband (target 1 reached: the arrival), then the landing as in GUIDED.
+//!
+//! With a [`Rereference`] (`fly --trajectory` with a replanner), a route watcher sees the path
+//! ahead (the reference sampled every [`AHEAD_STEP_S`]) and may replace the route while
+//! streaming: the new reference starts [`SPLICE_LEAD_S`] ahead on the current one's clock, in
+//! its state there (position, velocity, acceleration, heading), and the two are flown as one
+//! ([`Spliced`]): the vehicle switches without stopping. If no reference can be made from
+//! there, the replacement is refused and the route watcher's caller holds the vehicle.
 
 use super::core::{Core, Executor, Strategy};
 use super::guided::{goto, takeoff_to_first};
 use super::interface::{Command, Event, Target, Telemetry};
 use super::report::{ConfigError, ExecutorConfig, Failure, Output, TrackingReport};
-use crate::reference::Reference;
+use crate::reference::{Reference, Setpoint, Spliced};
 use std::fmt;
 use std::sync::Arc;
 
@@ -30,6 +37,21 @@ pub const START_TOLERANCE_M: f64 = 0.2;
 
 /// …and slower than this, m/s: at rest, as the reference starts.
 pub const START_SPEED_M_S: f64 = 0.1;
+
+/// How far ahead on the reference's clock a replaced route takes over, seconds of vehicle
+/// time: the time a new trajectory may take to make (tens of milliseconds of wall time on the
+/// city; a simulator sped up 20× turns 50 ms into 1 s), so the vehicle still follows the old
+/// one meanwhile. At 10 m/s it flies 10 m on the old path first, well within a 30 m sensor.
+pub const SPLICE_LEAD_S: f64 = 1.0;
+
+/// Spacing of the path ahead a route watcher sees, reference seconds.
+pub const AHEAD_STEP_S: f64 = 0.5;
+
+/// Makes the reference for a new route from a state of the one being flown (its setpoint at the
+/// switch, north/east/down) through `targets` (the new route, its first point where the vehicle
+/// was when it was planned); or why not, in a sentence.
+pub type Rereference =
+    Arc<dyn Fn(&Setpoint, &[Target]) -> Result<Arc<dyn Reference>, String> + Send + Sync>;
 
 /// Where the reference flight stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -52,6 +74,19 @@ pub struct ReferenceTracking {
     samples: usize,
     last_sample_s: Option<f64>,
     setpoints_sent: usize,
+    /// Makes a new reference for a replaced route (none: the route is never replaced).
+    rereference: Option<Rereference>,
+    /// The path ahead, sampled every [`AHEAD_STEP_S`] of reference time from `ahead_from_s`.
+    ahead: Vec<Target>,
+    ahead_from_s: f64,
+    /// Where `ahead` starts now (advanced as the clock runs).
+    ahead_index: usize,
+    /// Reference times at which a replaced route took over.
+    switches_s: Vec<f64>,
+    /// The reference time at the last step while streaming.
+    t_ref_s: f64,
+    /// The longest wall time a new reference took to make, milliseconds.
+    slowest_switch_ms: f64,
 }
 
 impl fmt::Debug for ReferenceTracking {
@@ -107,6 +142,19 @@ impl Executor<ReferenceTracking> {
         Self::with_strategy(&[target(start), target(end)], config, strategy)
     }
 
+    /// As [`Executor::new`], and a route watcher may replace the route in flight:
+    /// `rereference` makes the new reference, flown from [`SPLICE_LEAD_S`] ahead without
+    /// stopping (see the module documentation).
+    pub fn replanning(
+        reference: Arc<dyn Reference>,
+        config: ExecutorConfig,
+        rereference: Rereference,
+    ) -> Result<Self, ConfigError> {
+        let mut ex = Self::new(reference, config)?;
+        ex.strategy_mut().rereference = Some(rereference);
+        Ok(ex)
+    }
+
     /// How the reference is being followed.
     pub fn tracking(&self) -> Option<TrackingReport> {
         super::FlightExecutor::tracking(self)
@@ -132,7 +180,48 @@ impl ReferenceTracking {
             samples: 0,
             last_sample_s: None,
             setpoints_sent: 0,
+            rereference: None,
+            ahead: Vec::new(),
+            ahead_from_s: 0.0,
+            ahead_index: 0,
+            switches_s: Vec::new(),
+            t_ref_s: 0.0,
+            slowest_switch_ms: 0.0,
         }
+    }
+
+    /// The path ahead from reference time `from_s`: a target every [`AHEAD_STEP_S`] to the end.
+    fn sample_ahead(&mut self, from_s: f64) {
+        let n = ((self.duration_s - from_s).max(0.0) / AHEAD_STEP_S).ceil() as usize;
+        self.ahead = (0..=n)
+            .map(|k| {
+                let s = self
+                    .reference
+                    .setpoint((from_s + k as f64 * AHEAD_STEP_S).min(self.duration_s));
+                Target {
+                    north_m: s.point_ned[0],
+                    east_m: s.point_ned[1],
+                    alt_m: -s.point_ned[2],
+                    heading_rad: s.yaw_rad,
+                }
+            })
+            .collect();
+        self.ahead_from_s = from_s;
+        self.ahead_index = 0;
+    }
+
+    /// Moves the start of the path ahead to the sample after reference time `t_ref`.
+    fn advance_ahead(&mut self, t_ref: f64) {
+        self.t_ref_s = t_ref;
+        let k = ((t_ref - self.ahead_from_s) / AHEAD_STEP_S).floor() + 1.0;
+        if k.is_finite() && k > 0.0 {
+            self.ahead_index = (k as usize).min(self.ahead.len().saturating_sub(1));
+        }
+    }
+
+    /// Reference times at which a replaced route took over, in order.
+    pub fn switches_s(&self) -> &[f64] {
+        &self.switches_s
     }
 
     /// The distance from `point_ned` to the reference's path within [`PATH_WINDOW_S`] of
@@ -231,6 +320,9 @@ impl Strategy for ReferenceTracking {
                 self.clock_start_s = Some(now_s);
                 self.phase = Phase::Streaming;
                 core.last_send_s = None;
+                if self.rereference.is_some() {
+                    self.sample_ahead(0.0);
+                }
             } else {
                 let budget_s = core.leg_budget_s(0);
                 if now_s - core.leg_since_s > budget_s {
@@ -251,6 +343,7 @@ impl Strategy for ReferenceTracking {
         let start_s = self.clock_start_s.unwrap_or(now_s);
         if self.phase == Phase::Streaming {
             let t_ref = now_s - start_s;
+            self.advance_ahead(t_ref);
             if t_ref < self.duration_s {
                 if core.due(now_s, 0.9 * REFERENCE_PERIOD_S) {
                     out.commands.push(Command::Track {
@@ -292,6 +385,84 @@ impl Strategy for ReferenceTracking {
         false
     }
 
+    fn replaces(&self) -> bool {
+        self.rereference.is_some()
+    }
+
+    /// While streaming, and not within [`SPLICE_LEAD_S`] of the end.
+    fn replaces_now(&self) -> bool {
+        self.rereference.is_some()
+            && self.phase == Phase::Streaming
+            && self.t_ref_s + SPLICE_LEAD_S < self.duration_s
+    }
+
+    fn route_ahead(&self) -> Option<&[Target]> {
+        (self.phase == Phase::Streaming && self.rereference.is_some())
+            .then(|| &self.ahead[self.ahead_index.min(self.ahead.len())..])
+    }
+
+    /// The new reference starts [`SPLICE_LEAD_S`] ahead on the clock, in the current one's
+    /// state there; refused outside streaming, too near the end, or when no reference can be
+    /// made from that state (the caller holds the vehicle then).
+    fn replace(
+        &mut self,
+        core: &mut Core,
+        now_s: f64,
+        targets: &[Target],
+    ) -> Result<(), ConfigError> {
+        let (Some(make), Some(start_s)) = (self.rereference.clone(), self.clock_start_s) else {
+            return Err(ConfigError(
+                "this reference flight cannot change its route in flight".into(),
+            ));
+        };
+        if self.phase != Phase::Streaming {
+            return Err(ConfigError(
+                "a reference flight changes its route only while following its reference".into(),
+            ));
+        }
+        let at_s = now_s - start_s + SPLICE_LEAD_S;
+        if at_s >= self.duration_s {
+            return Err(ConfigError(format!(
+                "the reference ends within {SPLICE_LEAD_S} s: too late to switch to a new route"
+            )));
+        }
+        let Some(goal) = targets.last().copied() else {
+            return Err(ConfigError("the new route has no waypoint".into()));
+        };
+        if targets
+            .iter()
+            .any(|t| !t.is_finite() || t.alt_m <= core.config.landed_alt_m)
+        {
+            return Err(ConfigError(
+                "the new route has a waypoint that is not finite or not above the ground".into(),
+            ));
+        }
+        let state = self.reference.setpoint(at_s);
+        let t0 = std::time::Instant::now();
+        let made = make(&state, targets);
+        self.slowest_switch_ms = self
+            .slowest_switch_ms
+            .max(t0.elapsed().as_secs_f64() * 1000.0);
+        let next = made.map_err(|e| {
+            ConfigError(format!(
+                "no trajectory for the new route from the moving vehicle: {e}"
+            ))
+        })?;
+        let spliced = Spliced::new(Arc::clone(&self.reference), at_s, next);
+        self.duration_s = spliced.duration_s();
+        self.reference = Arc::new(spliced);
+        self.switches_s.push(at_s);
+        let end = self.reference.setpoint(self.duration_s);
+        core.targets[1] = Target {
+            north_m: end.point_ned[0],
+            east_m: end.point_ned[1],
+            alt_m: -end.point_ned[2],
+            heading_rad: goal.heading_rad,
+        };
+        self.sample_ahead(now_s - start_s);
+        Ok(())
+    }
+
     fn tracking(&self) -> Option<TrackingReport> {
         Some(TrackingReport {
             duration_s: self.duration_s,
@@ -301,6 +472,8 @@ impl Strategy for ReferenceTracking {
             max_path_error_m: self.max_path_error_m,
             samples: self.samples,
             setpoints_sent: self.setpoints_sent,
+            switches: self.switches_s.len(),
+            slowest_switch_ms: self.slowest_switch_ms,
         })
     }
 }
@@ -308,7 +481,7 @@ impl Strategy for ReferenceTracking {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::executor::{FlightState, Note, Outcome};
+    use crate::executor::{FlightExecutor, FlightState, Note, Outcome};
     use crate::reference::MinJerkLine;
     use crate::sim::{SimConfig, SimVehicle};
     use crate::testkit::{apply, telemetry};
@@ -391,6 +564,180 @@ mod tests {
             (s.position_ned_m[0] - 20.0).hypot(s.position_ned_m[1] - 80.0) < 1.0,
             "{s:?}"
         );
+    }
+
+    /// With a re-referencer, a route watcher sees the path ahead and may replace the route
+    /// while streaming: the new reference is asked for in the current one's state
+    /// [`SPLICE_LEAD_S`] ahead, takes over there, and the setpoints run on without a jump to
+    /// the new goal; a re-referencer that fails leaves everything as it was.
+    #[test]
+    fn a_replaced_route_is_spliced_on_ahead_in_the_references_state() {
+        use crate::reference::Setpoint;
+        use std::sync::Mutex;
+        let r: Arc<dyn Reference> = Arc::new(three_legs());
+        let asked: Arc<Mutex<Vec<Setpoint>>> = Arc::default();
+        let fail = Arc::new(Mutex::new(true));
+        let (asked2, fail2) = (Arc::clone(&asked), Arc::clone(&fail));
+        let make: Rereference = Arc::new(move |s: &Setpoint, targets: &[Target]| {
+            asked2.lock().unwrap().push(*s);
+            if *fail2.lock().unwrap() {
+                return Err("no corridor".into());
+            }
+            let g = targets.last().unwrap();
+            Ok(Arc::new(Hermite {
+                from: *s,
+                to: [g.north_m, g.east_m, -g.alt_m],
+                t_s: 12.0,
+            }) as Arc<dyn Reference>)
+        });
+        let plain = ReferenceExecutor::new(Arc::clone(&r), ExecutorConfig::default()).unwrap();
+        assert!(!FlightExecutor::replans(&plain));
+        let mut ex =
+            ReferenceExecutor::replanning(Arc::clone(&r), ExecutorConfig::default(), make).unwrap();
+        assert!(FlightExecutor::replans(&ex));
+        let mut v = SimVehicle::new(SimConfig::default());
+        let (mut t, mut pending) = (0.0, Vec::new());
+        let mut tracks: Vec<[f64; 3]> = Vec::new();
+        let goal = Target {
+            north_m: 40.0,
+            east_m: 30.0,
+            alt_m: 12.0,
+            heading_rad: 0.0,
+        };
+        let mut switched_at = None;
+        while ex.outcome().is_none() && t < 400.0 {
+            for _ in 0..5 {
+                v.step(0.01);
+            }
+            t += 0.05;
+            let mut events = std::mem::take(&mut pending);
+            events.push(Event::Telemetry(telemetry(&v)));
+            for e in events {
+                for c in ex.handle(t, e).commands {
+                    if let Command::Track { setpoint, .. } = c {
+                        tracks.push(setpoint.point_ned);
+                    }
+                    pending.extend(apply(&mut v, c));
+                }
+            }
+            let Some(start) = ex.tracking().unwrap().started_s else {
+                assert!(!ex.accepts_route_change());
+                continue;
+            };
+            if switched_at.is_none() && t - start > 6.0 {
+                assert!(ex.accepts_route_change());
+                // The path ahead: the reference every AHEAD_STEP_S after now, to its end.
+                let ahead = ex.remaining_targets().to_vec();
+                let next =
+                    r.setpoint(((t - start) / AHEAD_STEP_S).floor() * AHEAD_STEP_S + AHEAD_STEP_S);
+                assert!(
+                    (ahead[0].north_m - next.point_ned[0]).abs() < 1e-9,
+                    "{ahead:?}"
+                );
+                let end = ahead.last().unwrap();
+                assert!((end.north_m - 20.0).abs() < 1e-9 && (end.east_m - 80.0).abs() < 1e-9);
+                let here = Target {
+                    north_m: v.state().position_ned_m[0],
+                    east_m: v.state().position_ned_m[1],
+                    alt_m: 12.0,
+                    heading_rad: 0.0,
+                };
+                let ev = crate::sensing::ReplanEvent {
+                    time_s: t,
+                    position_ned: v.state().position_ned_m,
+                    reason: "test".into(),
+                    planner: "test".into(),
+                    latency_ms: 0.0,
+                    cpu_ms: None,
+                    expansions: 0,
+                    route_length_m: 0.0,
+                    learned_cells: 0,
+                };
+                assert!(ex.replace_route(t, &[here, goal], ev.clone()).is_err());
+                assert_eq!(ex.tracking().unwrap().switches, 0);
+                *fail.lock().unwrap() = false;
+                let out = ex.replace_route(t, &[here, goal], ev).unwrap();
+                assert!(
+                    out.notes
+                        .iter()
+                        .any(|n| matches!(n, Note::Replanned { .. }))
+                );
+                let at = t - start + SPLICE_LEAD_S;
+                assert_eq!(asked.lock().unwrap().last(), Some(&r.setpoint(at)));
+                let report = ex.tracking().unwrap();
+                assert_eq!(report.switches, 1);
+                assert!((report.duration_s - (at + 12.0)).abs() < 1e-9, "{report:?}");
+                switched_at = Some(at);
+            }
+        }
+        assert!(switched_at.is_some());
+        assert_eq!(
+            ex.outcome(),
+            Some(&Outcome::Completed),
+            "{:?}",
+            ex.outcome()
+        );
+        // No jump between two setpoints: at most the fastest speed (8 m/s peak, ≤ 1.875 × the
+        // new leg's mean) over a period and a half.
+        let jump = tracks
+            .windows(2)
+            .map(|w| {
+                ((w[1][0] - w[0][0]).powi(2)
+                    + (w[1][1] - w[0][1]).powi(2)
+                    + (w[1][2] - w[0][2]).powi(2))
+                .sqrt()
+            })
+            .fold(0.0, f64::max);
+        assert!(jump < 8.0 * 1.5 * REFERENCE_PERIOD_S, "{jump}");
+        let s = v.state();
+        assert!(
+            (s.position_ned_m[0] - 40.0).hypot(s.position_ned_m[1] - 30.0) < 1.0,
+            "{s:?}"
+        );
+        assert!(ex.tracking().unwrap().max_tracking_error_m < 0.3);
+    }
+
+    /// A cubic from a setpoint's position and velocity to rest at `to` over `t_s`.
+    struct Hermite {
+        from: crate::reference::Setpoint,
+        to: [f64; 3],
+        t_s: f64,
+    }
+
+    impl Reference for Hermite {
+        fn duration_s(&self) -> f64 {
+            self.t_s
+        }
+
+        fn setpoint(&self, t_s: f64) -> crate::reference::Setpoint {
+            let (t, u) = (self.t_s, (t_s / self.t_s).clamp(0.0, 1.0));
+            let (p0, v0, p1) = (self.from.point_ned, self.from.vel_ned_m_s, self.to);
+            // The Hermite basis (p0, T v0, p1; no end velocity) and its derivatives in u.
+            let basis = [
+                [
+                    2.0 * u.powi(3) - 3.0 * u * u + 1.0,
+                    u.powi(3) - 2.0 * u * u + u,
+                    -2.0 * u.powi(3) + 3.0 * u * u,
+                ],
+                [
+                    6.0 * u * u - 6.0 * u,
+                    3.0 * u * u - 4.0 * u + 1.0,
+                    -6.0 * u * u + 6.0 * u,
+                ],
+                [12.0 * u - 6.0, 6.0 * u - 4.0, -12.0 * u + 6.0],
+            ];
+            let at = |d: usize| {
+                let h = basis[d];
+                [0, 1, 2]
+                    .map(|k| (h[0] * p0[k] + h[1] * t * v0[k] + h[2] * p1[k]) / t.powi(d as i32))
+            };
+            crate::reference::Setpoint {
+                point_ned: at(0),
+                vel_ned_m_s: at(1),
+                accel_ned_m_s2: at(2),
+                yaw_rad: self.from.yaw_rad,
+            }
+        }
     }
 
     /// A vehicle that never gets to the start at rest: the approach times out (its leg budget)

@@ -1407,10 +1407,11 @@ impl FlightLoop {
                         self.replans.push(event);
                         Some(output)
                     }
+                    // The route ahead is blocked and the new one cannot be flown: stop.
                     Err(e) => {
                         let warning = format!("replanned route refused: {e}");
-                        self.updates.push(Update::Warning(warning));
-                        None
+                        self.updates.push(Update::Warning(warning.clone()));
+                        Some(ex.hold_no_route(t, warning))
                     }
                 }
             }
