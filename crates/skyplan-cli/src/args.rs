@@ -522,6 +522,9 @@ pub struct FlyArgs {
     /// With --sim: range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
     #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), allow_negative_numbers = true, requires = "sim")]
     pub sensor_range_m: f64,
+    /// With --sim: how the simulated vehicle reports its sensor: obstacle-distance (OBSTACLE_DISTANCE, 72 sectors of 5°, as a companion computer's sensor) or distance-sensor (eight DISTANCE_SENSOR wedges of 45°, only when asked, as ArduCopter's proximity library)
+    #[arg(long, value_enum, default_value_t = ProximityArg::ObstacleDistance, requires = "sim")]
+    pub proximity: ProximityArg,
     /// With --sim: N random buildings on or near the planned route, unknown to the map (seeded by --seed; never on the ends, never sealing the goal).
     #[arg(long, value_name = "N", default_value_t = 0, requires = "sim")]
     pub hidden_random: usize,
@@ -570,6 +573,9 @@ pub struct SimArgs {
     /// Range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
     #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), allow_negative_numbers = true)]
     pub sensor_range_m: f64,
+    /// How the simulated vehicle reports its sensor: obstacle-distance (OBSTACLE_DISTANCE, 72 sectors of 5°, as a companion computer's sensor) or distance-sensor (eight DISTANCE_SENSOR wedges of 45°, only when asked, as ArduCopter's proximity library)
+    #[arg(long, value_enum, default_value_t = ProximityArg::ObstacleDistance)]
+    pub proximity: ProximityArg,
     /// Serve the live view on this address (e.g. 127.0.0.1:8080): the map, the vehicle (position, heading, mode, armed) and what its sensor sees, at 10 updates per second.
     #[arg(long, value_name = "ADDR")]
     pub view: Option<String>,
@@ -604,4 +610,22 @@ pub struct ServeArgs {
     /// Where the shared airspace's operational intents are kept: sqlite:FILE (a SQLite file in WAL mode; servers on the same file share one airspace), postgres://USER@HOST:PORT/DATABASE (PostgreSQL; servers on the same database, on any machines, share one airspace) or sqlite::memory: (this server's memory, gone when it stops).
     #[arg(long, value_name = "URL", default_value = skyplan_server::DEFAULT_AIRSPACE)]
     pub airspace: String,
+}
+
+/// How a simulated vehicle reports its proximity sensor (`--proximity`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ProximityArg {
+    /// OBSTACLE_DISTANCE: 72 sectors of 5°, unrequested.
+    ObstacleDistance,
+    /// DISTANCE_SENSOR: eight 45° wedges, once asked for (ArduCopter).
+    DistanceSensor,
+}
+
+impl From<ProximityArg> for skyplan_link::vehicle::Proximity {
+    fn from(p: ProximityArg) -> Self {
+        match p {
+            ProximityArg::ObstacleDistance => Self::ObstacleDistance,
+            ProximityArg::DistanceSensor => Self::DistanceSensor,
+        }
+    }
 }

@@ -292,6 +292,7 @@ fn vehicle(
         link_gap_s: args.sim_link_gap_s,
         ekf_delay_s: args.sim_ekf_delay_s,
         sensor_range_m: args.sensor_range_m,
+        proximity: args.proximity.into(),
         hidden: hidden.to_vec(),
         ..SimServerConfig::at(frame.home())
     };

@@ -56,6 +56,7 @@ pub fn run(args: SimArgs) -> Result<()> {
     let config = SimServerConfig {
         hidden,
         sensor_range_m: args.sensor_range_m,
+        proximity: args.proximity.into(),
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
         ekf_delay_s: args.ekf_delay_s,

@@ -861,6 +861,42 @@ fn fly_replans_around_hidden_buildings_and_lands_at_the_goal() {
 
 /// Without replanning the same flight meets the hidden buildings: the simulator's collision
 /// check (against the true world) reports it and the exit is not 0.
+/// The simulated vehicle reports its sensor as ArduCopter does — eight DISTANCE_SENSOR wedges of
+/// 45°, only once the ground station asks for them — and nothing else: `fly` asks, reads them,
+/// replans around the hidden buildings on them alone and lands at the goal without a collision.
+#[test]
+fn fly_replans_on_the_autopilots_distance_sensor_wedges() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = run(
+        dir.path(),
+        "fly --sim --speedup 50 --hidden-random 3 --seed 1 --proximity distance-sensor",
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stdout);
+    r.stdout_has(&[
+        "result     landed and disarmed after reaching all",
+        "no collision with the map's obstacles or the 3 hidden buildings",
+    ]);
+    let replans = r
+        .stdout
+        .lines()
+        .filter(|l| l.starts_with("replan "))
+        .count();
+    assert!(replans >= 1, "no replan:\n{}", r.stdout);
+    // "replans    N (dstar-lite) from M sensor readings"
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("replans "))
+        .expect("a replans line");
+    let readings: usize = line
+        .split(" from ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no readings in {line}"));
+    assert!(readings >= 100, "{line}");
+}
+
 #[test]
 fn fly_without_replanning_hits_the_hidden_buildings() {
     let dir = tempfile::tempdir().unwrap();

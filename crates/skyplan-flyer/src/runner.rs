@@ -287,7 +287,10 @@ pub fn fly_mission_with<O: RunObserver>(
         request.start_lla = Some([info.position.lat_deg, info.position.lon_deg]);
         request.start_ne = None;
     }
-    if reference.is_some() && info.autopilot != Autopilot::Px4 {
+    // A trajectory flown by setpoints, or pacing an uploaded mission (seen against ArduCopter
+    // SITL: paced at 9.8 m/s past its WPNAV limits, it ran 19 % over its duration).
+    let trajectory = reference.is_some() || request.trajectory == Some(true);
+    if trajectory && info.autopilot != Autopilot::Px4 {
         cap_to_vehicle(&mut gcs, &mut request, observer);
     }
     let t_plan = Instant::now();

@@ -50,8 +50,8 @@ pub mod fuzzing;
 pub mod protocol;
 
 pub use protocol::{
-    FenceDownload, FlightLoop, GroundProtocol, UploadDriver, VehicleWait, WaitStep,
-    mission_result_name,
+    DISTANCE_SENSOR_RATE_HZ, FenceDownload, FlightLoop, GroundProtocol, UploadDriver, VehicleWait,
+    WaitStep, mission_result_name,
 };
 
 /// Wall seconds to wait for GPS_GLOBAL_ORIGIN once the vehicle has a position.

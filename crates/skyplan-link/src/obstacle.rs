@@ -12,8 +12,18 @@
 //! skyplan's simulator sends `MAV_FRAME_LOCAL_NED` (true north), `increment` 5 and
 //! `increment_f` 5.0, `angle_offset` 0 (element 0 centred on north), `min_distance` 20 cm.
 //! Readings are turned into the map's frame (grid north) by the UTM convergence.
+//!
+//! And MAVLink `DISTANCE_SENSOR` (id 132), which is what ArduPilot's proximity library sends a
+//! ground station (it never sends `OBSTACLE_DISTANCE` itself): one message per horizontal body
+//! orientation (`MAV_SENSOR_ROTATION_NONE` … `YAW_315`, ids 10–17), each the nearest obstacle in
+//! that 45° wedge in centimetres, `max_distance` − 10 cm when nothing is within range
+//! ([`distance_sensors`], [`reading_from_distance_sensor`]). The wedge does not say where in it
+//! the obstacle is, so a reading puts it on the whole arc at that distance: conservative.
 
-use mavlink::dialects::common::{MavDistanceSensor, MavFrame, MavMessage, OBSTACLE_DISTANCE_DATA};
+use mavlink::dialects::common::{
+    DISTANCE_SENSOR_DATA, MavDistanceSensor, MavFrame, MavMessage, MavSensorOrientation,
+    OBSTACLE_DISTANCE_DATA,
+};
 use skyplan_flight::sensing::{ObstacleReading, SectorRange};
 use skyplan_flight::sensor::{RangeSensor, SECTORS};
 
@@ -28,6 +38,14 @@ pub enum ObstacleError {
         "OBSTACLE_DISTANCE: frame {0} is not supported (expected MAV_FRAME_LOCAL_NED, a MAV_FRAME_GLOBAL* frame or MAV_FRAME_BODY_FRD)"
     )]
     Frame(u32),
+    /// A `DISTANCE_SENSOR` whose `max_distance` is 0 or not above `min_distance`.
+    #[error("DISTANCE_SENSOR: max_distance {max_cm} cm is not above min_distance {min_cm} cm")]
+    SensorRange {
+        /// `min_distance`, cm.
+        min_cm: u16,
+        /// `max_distance`, cm.
+        max_cm: u16,
+    },
     /// `max_distance` is 0 or not above `min_distance`.
     #[error("OBSTACLE_DISTANCE: max_distance {max_cm} cm is not above min_distance {min_cm} cm")]
     Range {
@@ -194,9 +212,256 @@ pub fn reading_from_obstacle_distance(
     })
 }
 
+/// Width of the wedge one `DISTANCE_SENSOR` orientation covers when it does not say
+/// (`horizontal_fov` 0), degrees: ArduPilot's proximity sectors.
+pub const WEDGE_DEG: f64 = 45.0;
+
+/// The body yaw of a horizontal `DISTANCE_SENSOR` orientation, degrees (`None`: not
+/// horizontal, as up and down are).
+pub fn orientation_yaw_deg(o: MavSensorOrientation) -> Option<f64> {
+    use MavSensorOrientation::*;
+    let k = match o {
+        MAV_SENSOR_ROTATION_NONE => 0,
+        MAV_SENSOR_ROTATION_YAW_45 => 1,
+        MAV_SENSOR_ROTATION_YAW_90 => 2,
+        MAV_SENSOR_ROTATION_YAW_135 => 3,
+        MAV_SENSOR_ROTATION_YAW_180 => 4,
+        MAV_SENSOR_ROTATION_YAW_225 => 5,
+        MAV_SENSOR_ROTATION_YAW_270 => 6,
+        MAV_SENSOR_ROTATION_YAW_315 => 7,
+        _ => return None,
+    };
+    Some(WEDGE_DEG * f64::from(k))
+}
+
+/// The angle from `b` to `a`, degrees in (−180, 180].
+fn diff_deg(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(360.0);
+    if d > 180.0 { d - 360.0 } else { d }
+}
+
+/// A sweep (sector 0 on true north, 5° steps) as ArduPilot's proximity library reports it to a
+/// ground station: eight `DISTANCE_SENSOR`s, ids 10–17, orientation `k` the wedge of 45° centred
+/// `45 k`° clockwise from the nose (`yaw_true_rad`), each the nearest obstacle in its wedge, or
+/// `max_distance` − 10 cm when none is within range.
+///
+/// ```
+/// use mavlink::dialects::common::MavMessage;
+/// use skyplan_flight::sensing::SectorRange;
+/// use skyplan_flight::sensor::RangeSensor;
+/// use skyplan_link::obstacle::distance_sensors;
+/// let mut sweep = vec![SectorRange::Clear; 72];
+/// sweep[18] = SectorRange::Obstacle(12.0); // 12 m due east
+/// let nose_north = distance_sensors(&sweep, &RangeSensor::default(), 0.0, 0);
+/// let cm: Vec<u16> = nose_north.iter().map(|m| match m {
+///     MavMessage::DISTANCE_SENSOR(d) => d.current_distance,
+///     _ => unreachable!(),
+/// }).collect();
+/// assert_eq!(cm, [2990, 2990, 1200, 2990, 2990, 2990, 2990, 2990]); // the right-hand wedge
+/// ```
+pub fn distance_sensors(
+    sweep: &[SectorRange],
+    sensor: &RangeSensor,
+    yaw_true_rad: f64,
+    time_boot_ms: u32,
+) -> Vec<MavMessage> {
+    use MavSensorOrientation::*;
+    let min_cm = (sensor.min_range_m * 100.0).round().clamp(0.0, 65533.0) as u16;
+    let max_cm = (sensor.max_range_m * 100.0)
+        .round()
+        .clamp(f64::from(min_cm) + 11.0, 65534.0) as u16;
+    let step_deg = 360.0 / sweep.len().max(1) as f64;
+    let orientations = [
+        MAV_SENSOR_ROTATION_NONE,
+        MAV_SENSOR_ROTATION_YAW_45,
+        MAV_SENSOR_ROTATION_YAW_90,
+        MAV_SENSOR_ROTATION_YAW_135,
+        MAV_SENSOR_ROTATION_YAW_180,
+        MAV_SENSOR_ROTATION_YAW_225,
+        MAV_SENSOR_ROTATION_YAW_270,
+        MAV_SENSOR_ROTATION_YAW_315,
+    ];
+    orientations
+        .iter()
+        .enumerate()
+        .map(|(k, &orientation)| {
+            let centre = yaw_true_rad.to_degrees() + WEDGE_DEG * k as f64;
+            let nearest = sweep
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| diff_deg(*i as f64 * step_deg, centre).abs() <= WEDGE_DEG / 2.0)
+                .filter_map(|(_, r)| match r {
+                    SectorRange::Obstacle(d) => Some(*d),
+                    _ => None,
+                })
+                .fold(f64::INFINITY, f64::min);
+            let current = if nearest.is_finite() {
+                (nearest * 100.0)
+                    .round()
+                    .clamp(f64::from(min_cm), f64::from(max_cm - 11)) as u16
+            } else {
+                max_cm - 10
+            };
+            MavMessage::DISTANCE_SENSOR(DISTANCE_SENSOR_DATA {
+                time_boot_ms,
+                min_distance: min_cm,
+                max_distance: max_cm,
+                current_distance: current,
+                mavtype: MavDistanceSensor::MAV_DISTANCE_SENSOR_LASER,
+                id: 10 + k as u8,
+                orientation,
+                covariance: 0,
+                horizontal_fov: WEDGE_DEG.to_radians() as f32,
+                ..Default::default()
+            })
+        })
+        .collect()
+}
+
+/// Decodes a `DISTANCE_SENSOR` of a horizontal orientation into a reading in the map's frame
+/// (as [`reading_from_obstacle_distance`]): 72 sectors of 5°, those of its wedge
+/// (`horizontal_fov`, else [`WEDGE_DEG`], centred on the nose's yaw plus the orientation's)
+/// all at the distance read — where in the wedge the obstacle is is not known, so the whole arc
+/// is taken as occupied — or clear when it reads within 10 cm of `max_distance` (ArduPilot's
+/// 19990 of 20000); the others
+/// unknown. `Ok(None)` for the other orientations (up, down, custom).
+///
+/// ```
+/// use mavlink::dialects::common::{DISTANCE_SENSOR_DATA, MavSensorOrientation};
+/// use skyplan_flight::sensing::SectorRange;
+/// use skyplan_link::obstacle::reading_from_distance_sensor;
+/// let m = DISTANCE_SENSOR_DATA { min_distance: 20, max_distance: 20000, current_distance: 1500,
+///     orientation: MavSensorOrientation::MAV_SENSOR_ROTATION_YAW_90, ..Default::default() };
+/// // The nose points north: the right-hand wedge is east, 67.5° to 112.5°.
+/// let r = reading_from_distance_sensor(&m, 1.0, [0.0, 0.0, -5.0], 0.0, 0.0)?.unwrap();
+/// assert_eq!(r.ranges[18], SectorRange::Obstacle(15.0));
+/// assert_eq!((r.ranges[14], r.ranges[22], r.ranges[23]), (SectorRange::Obstacle(15.0), SectorRange::Obstacle(15.0), SectorRange::Unknown));
+/// # Ok::<(), skyplan_link::obstacle::ObstacleError>(())
+/// ```
+pub fn reading_from_distance_sensor(
+    m: &DISTANCE_SENSOR_DATA,
+    time_s: f64,
+    position_ned: [f64; 3],
+    yaw_true_rad: f64,
+    convergence_rad: f64,
+) -> Result<Option<ObstacleReading>, ObstacleError> {
+    let Some(body_deg) = orientation_yaw_deg(m.orientation) else {
+        return Ok(None);
+    };
+    if m.max_distance == 0 || m.max_distance <= m.min_distance {
+        return Err(ObstacleError::SensorRange {
+            min_cm: m.min_distance,
+            max_cm: m.max_distance,
+        });
+    }
+    let fov = f64::from(m.horizontal_fov).to_degrees();
+    let wedge_deg = if fov.is_finite() && fov > 0.0 && fov < 360.0 {
+        fov
+    } else {
+        WEDGE_DEG
+    };
+    let value = if u32::from(m.current_distance) + 10 >= u32::from(m.max_distance) {
+        SectorRange::Clear
+    } else {
+        SectorRange::Obstacle(f64::from(m.current_distance.max(m.min_distance)) * 0.01)
+    };
+    let centre = yaw_true_rad.to_degrees() + body_deg;
+    let step_deg = 360.0 / SECTORS as f64;
+    let ranges = (0..SECTORS)
+        .map(|i| {
+            if diff_deg(i as f64 * step_deg, centre).abs() <= wedge_deg / 2.0 {
+                value
+            } else {
+                SectorRange::Unknown
+            }
+        })
+        .collect();
+    Ok(Some(ObstacleReading {
+        time_s,
+        position_ned,
+        first_bearing_rad: -convergence_rad,
+        increment_rad: step_deg.to_radians(),
+        min_range_m: f64::from(m.min_distance) * 0.01,
+        max_range_m: f64::from(m.max_distance) * 0.01,
+        ranges,
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sweep sent as ArduPilot's eight wedges and read back: each obstacle of the sweep lies
+    /// in the arc of the wedge that holds it, at a distance no nearer than the wedge reads, and
+    /// that distance is the nearest in the wedge (independently: the sweep's own sectors by
+    /// true bearing); an empty wedge reads clear; up and down are not horizontal.
+    #[test]
+    fn distance_sensor_wedges_carry_the_nearest_obstacle_of_each_sector() {
+        let mut rng = skyplan_testkit::XorShift::new(5);
+        for _ in 0..200 {
+            let mut sweep = vec![SectorRange::Clear; SECTORS];
+            for _ in 0..6 {
+                let i = (rng.unit() * SECTORS as f64) as usize;
+                sweep[i] = SectorRange::Obstacle(0.5 + 29.0 * rng.unit());
+            }
+            let yaw = (rng.unit() - 0.5) * 7.0;
+            let conv = (rng.unit() - 0.5) * 0.02;
+            let sensor = RangeSensor::default();
+            let messages = distance_sensors(&sweep, &sensor, yaw, 0);
+            assert_eq!(messages.len(), 8);
+            for m in &messages {
+                let MavMessage::DISTANCE_SENSOR(d) = m else {
+                    panic!("not a DISTANCE_SENSOR");
+                };
+                let r = reading_from_distance_sensor(d, 0.0, [0.0; 3], yaw, conv)
+                    .unwrap()
+                    .unwrap();
+                let centre = yaw.to_degrees() + orientation_yaw_deg(d.orientation).unwrap();
+                let in_wedge = |i: usize| diff_deg(5.0 * i as f64, centre).abs() <= 22.5;
+                let nearest = (0..SECTORS)
+                    .filter(|&i| in_wedge(i))
+                    .filter_map(|i| match sweep[i] {
+                        SectorRange::Obstacle(x) => Some(x),
+                        _ => None,
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                for i in 0..SECTORS {
+                    let got = r.ranges[i];
+                    if !in_wedge(i) {
+                        assert_eq!(got, SectorRange::Unknown, "sector {i}");
+                    } else if nearest.is_finite() {
+                        // To the centimetre the message carries.
+                        let SectorRange::Obstacle(x) = got else {
+                            panic!("sector {i}: {got:?}, expected {nearest} m");
+                        };
+                        assert!((x - nearest).abs() <= 0.005 + 1e-9, "{x} vs {nearest}");
+                    } else {
+                        assert_eq!(got, SectorRange::Clear);
+                    }
+                }
+                assert!((r.first_bearing_rad + conv).abs() < 1e-12);
+            }
+        }
+        let up = DISTANCE_SENSOR_DATA {
+            min_distance: 20,
+            max_distance: 3000,
+            orientation: MavSensorOrientation::MAV_SENSOR_ROTATION_PITCH_90,
+            ..Default::default()
+        };
+        assert_eq!(
+            reading_from_distance_sensor(&up, 0.0, [0.0; 3], 0.0, 0.0),
+            Ok(None)
+        );
+        let bad = DISTANCE_SENSOR_DATA {
+            max_distance: 0,
+            ..up
+        };
+        let bad = DISTANCE_SENSOR_DATA {
+            orientation: MavSensorOrientation::MAV_SENSOR_ROTATION_NONE,
+            ..bad
+        };
+        assert!(reading_from_distance_sensor(&bad, 0.0, [0.0; 3], 0.0, 0.0).is_err());
+    }
 
     fn message(frame: MavFrame) -> OBSTACLE_DISTANCE_DATA {
         let mut distances = [3001u16; 72];

@@ -95,6 +95,20 @@ pub struct SimServerConfig {
     pub hidden: Vec<ObstacleBox>,
     /// Range of the simulated obstacle sensor, metres (`OBSTACLE_DISTANCE`'s `max_distance`).
     pub sensor_range_m: f64,
+    /// How the sensor's sweeps reach the ground station.
+    pub proximity: Proximity,
+}
+
+/// How the simulated vehicle reports its proximity sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Proximity {
+    /// `OBSTACLE_DISTANCE` (72 sectors of 5°, true north), unrequested, every sweep: as a
+    /// companion computer's sensor does.
+    #[default]
+    ObstacleDistance,
+    /// Eight `DISTANCE_SENSOR`s per sweep (the nearest obstacle in each 45° wedge about the nose),
+    /// only once asked for with SET_MESSAGE_INTERVAL: as ArduCopter's proximity library does.
+    DistanceSensor,
 }
 
 /// The simulated sensor's range by default, metres.
@@ -138,6 +152,7 @@ impl SimServerConfig {
             step_s: 0.02,
             hidden: Vec::new(),
             sensor_range_m: DEFAULT_SENSOR_RANGE_M,
+            proximity: Proximity::default(),
         }
     }
 }
@@ -217,11 +232,26 @@ pub struct SimServer {
 struct Streams {
     period_s: [Option<f64>; STREAMS.len()],
     last_s: [f64; STREAMS.len()],
+    /// DISTANCE_SENSOR's period once asked for (sent only with [`Proximity::DistanceSensor`]),
+    /// and when it was last sent.
+    distance_sensor: Option<f64>,
+    distance_sensor_last_s: f64,
 }
 
 impl Streams {
     /// SET_MESSAGE_INTERVAL: −1 stops, 0 is the default rate; `false` for an unknown message.
     fn set_interval(&mut self, id: u32, interval_us: f32) -> bool {
+        if id == DISTANCE_SENSOR_DATA::ID {
+            self.distance_sensor = (interval_us >= 0.0).then(|| {
+                if interval_us == 0.0 {
+                    0.2
+                } else {
+                    f64::from(interval_us) * 1e-6
+                }
+            });
+            self.distance_sensor_last_s = f64::NEG_INFINITY;
+            return true;
+        }
         let Some(k) = STREAMS.iter().position(|m| m.id == id) else {
             return false;
         };

@@ -107,11 +107,16 @@ pub struct Core {
 /// A stop with [`FailsafeAction::Return`] in WAYPOINT.
 #[derive(Debug, Clone, PartialEq)]
 enum Homing {
-    /// Holding at `target` until the way home comes, at most [`ExecutorConfig::replan_hold_s`].
+    /// Holding at `target` (where the vehicle was stopped): first until it is at rest there —
+    /// a vehicle stopped at speed overshoots and comes back, and a way home flown from a point it
+    /// is still moving through would be skipped past — at most
+    /// [`ExecutorConfig::leg_timeout_base_s`]; then until the way home comes, at most
+    /// [`ExecutorConfig::replan_hold_s`] (`since_s` restarts when it settles).
     Wanted {
         since_s: f64,
         target: Command,
         from_ned: [f64; 3],
+        settled: bool,
     },
     /// Flying the way home, which may take this long (its legs' budgets), seconds.
     Flying { budget_s: f64 },
@@ -474,6 +479,7 @@ impl Core {
             since_s: now_s,
             target,
             from_ned: [t.north_m, t.east_m, t.down_m],
+            settled: false,
         });
         self.no_route = None;
         out.notes.push(Note::WayHomeWanted {
@@ -487,11 +493,45 @@ impl Core {
     /// [`ExecutorConfig::replan_hold_s`] without a route, the landing.
     fn hold_for_way_home(&mut self, now_s: f64, out: &mut Output) {
         let Some(Homing::Wanted {
-            since_s, target, ..
+            since_s,
+            target,
+            from_ned,
+            settled,
         }) = self.homing
         else {
             return;
         };
+        if !settled {
+            let c = self.config;
+            let at_rest = self.last.is_some_and(|t| {
+                let (dn, de) = (t.north_m - from_ned[0], t.east_m - from_ned[1]);
+                dn.hypot(de) <= c.deadband_m
+                    && (t.down_m - from_ned[2]).abs() <= c.vertical_deadband_m
+                    && t.speed_m_s() < c.land_speed_m_s
+            });
+            if at_rest {
+                self.homing = Some(Homing::Wanted {
+                    since_s: now_s,
+                    target,
+                    from_ned,
+                    settled: true,
+                });
+            } else if now_s - since_s >= c.leg_timeout_base_s {
+                let wait_s = c.leg_timeout_base_s;
+                self.land_without_way_home(
+                    now_s,
+                    format!(
+                        "the vehicle did not come to rest where it was stopped within {wait_s:.0} s"
+                    ),
+                    out,
+                );
+                return;
+            }
+            if self.due(now_s, c.target_period_s) {
+                out.commands.push(target);
+            }
+            return;
+        }
         if now_s - since_s >= self.config.replan_hold_s {
             let hold_s = self.config.replan_hold_s;
             self.land_without_way_home(
@@ -536,7 +576,9 @@ impl Core {
     pub(crate) fn landing_budget_s(&self) -> f64 {
         let homing_s = match self.homing {
             None => 0.0,
-            Some(Homing::Wanted { .. }) => self.config.replan_hold_s,
+            Some(Homing::Wanted { .. }) => {
+                self.config.leg_timeout_base_s + self.config.replan_hold_s
+            }
             Some(Homing::Flying { budget_s }) => budget_s,
         };
         self.faults.landing_budget_s(&self.config)
@@ -735,11 +777,19 @@ impl<S: Strategy> Executor<S> {
         out
     }
 
-    /// Where the vehicle was when it stopped with [`FailsafeAction::Return`] and now holds,
-    /// waiting for the way home (north, east, down about home, metres); `None` otherwise.
+    /// Where the vehicle was when it stopped with [`FailsafeAction::Return`] and now holds at
+    /// rest, waiting for the way home (north, east, down about home, metres); `None` otherwise,
+    /// and while it is still braking or coming back to that point.
     pub fn way_home_wanted(&self) -> Option<[f64; 3]> {
         match (&self.core.homing, self.core.state) {
-            (Some(Homing::Wanted { from_ned, .. }), FlightState::Waypoint) => Some(*from_ned),
+            (
+                Some(Homing::Wanted {
+                    from_ned,
+                    settled: true,
+                    ..
+                }),
+                FlightState::Waypoint,
+            ) => Some(*from_ned),
             _ => None,
         }
     }

@@ -766,6 +766,62 @@ fn failsafe_return_holds_then_flies_the_way_home_it_is_given_and_lands_at_launch
     );
 }
 
+/// Stopped at speed, the vehicle brakes past the point where it was stopped and comes back: the
+/// way home is asked for only once it is at rest there (seen against ArduCopter SITL: asked at
+/// once, the way home's first target was "reached" while the vehicle still flew through it, and
+/// it skipped on to the second, 23 m further, by a straight line nobody planned).
+#[test]
+fn the_way_home_is_asked_for_only_once_the_vehicle_is_at_rest_where_it_was_stopped() {
+    let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();
+    let mut v = SimVehicle::new(SimConfig::default());
+    let mut stopped: Option<(f64, [f64; 3])> = None;
+    let mut asked: Vec<(f64, [f64; 3], f64, [f64; 3])> = Vec::new();
+    let vehicle = std::cell::RefCell::new(Vec::new());
+    fly_homing(
+        &mut ex,
+        &mut v,
+        300.0,
+        |t, v| {
+            let s = v.state();
+            vehicle
+                .borrow_mut()
+                .push((s.position_ned_m, s.velocity_ned_m_s));
+            let speed = s.velocity_ned_m_s[0].hypot(s.velocity_ned_m_s[1]);
+            (stopped.is_none() && t > 8.0 && speed > 3.0).then(|| {
+                stopped = Some((speed, s.position_ned_m));
+                Event::Stop {
+                    reason: "interrupted by Ctrl-C".into(),
+                    action: FailsafeAction::Return,
+                }
+            })
+        },
+        |ex, t, from| {
+            let (at, vel) = *vehicle.borrow().last().unwrap();
+            asked.push((t, from, vel[0].hypot(vel[1]), at));
+            Some(ex.return_home(t, &dogleg_home(from)).unwrap())
+        },
+    );
+    let (speed, at_stop) = stopped.expect("stopped at speed");
+    assert!(speed > 3.0);
+    assert_eq!(asked.len(), 1, "{asked:?}");
+    let (_, from, speed_then, at) = asked[0];
+    // Asked from where it was stopped, with the vehicle at rest there.
+    assert!(
+        (from[0] - at_stop[0]).hypot(from[1] - at_stop[1]) < 0.5,
+        "{from:?} vs {at_stop:?}"
+    );
+    assert!(speed_then < 0.5, "asked while moving at {speed_then} m/s");
+    assert!(
+        (at[0] - from[0]).hypot(at[1] - from[1]) <= 1.0,
+        "{at:?} vs {from:?}"
+    );
+    let s = v.state();
+    assert!(
+        s.on_ground && s.position_ned_m[0].hypot(s.position_ned_m[1]) < 1.5,
+        "{s:?}"
+    );
+}
+
 #[test]
 fn ctrl_c_return_without_a_way_home_lands_where_the_vehicle_is() {
     let mut ex = MissionExecutor::new(&route(), ExecutorConfig::default()).unwrap();

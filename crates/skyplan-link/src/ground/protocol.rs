@@ -19,7 +19,7 @@ use super::{
     Waiting, fence_item_int, global_lla, grid_convergence_rad, mission_item_int,
 };
 use crate::Received;
-use crate::obstacle::reading_from_obstacle_distance;
+use crate::obstacle::{reading_from_distance_sensor, reading_from_obstacle_distance};
 use crate::streams::STREAMS;
 use mavlink::dialects::common::*;
 use skyplan_flight::executor::{
@@ -66,6 +66,10 @@ impl Default for GroundProtocol {
         Self::new()
     }
 }
+
+/// The rate the ground station asks for the autopilot's DISTANCE_SENSOR messages at, Hz
+/// (ArduPilot sends one per proximity sector at this rate).
+pub const DISTANCE_SENSOR_RATE_HZ: f64 = 5.0;
 
 impl GroundProtocol {
     /// A station that knows nothing yet.
@@ -460,7 +464,8 @@ impl GroundProtocol {
         ))
     }
 
-    /// Asks the vehicle to stream what the flight needs (SET_MESSAGE_INTERVAL; with `fallback`,
+    /// Asks the vehicle to stream what the flight needs (SET_MESSAGE_INTERVAL, and the
+    /// autopilot's proximity readings, DISTANCE_SENSOR, at [`DISTANCE_SENSOR_RATE_HZ`]; with `fallback`,
     /// REQUEST_DATA_STREAM of every stream too, for autopilots without the former).
     pub fn stream_requests(&self, fallback: bool) -> Vec<MavMessage> {
         let mut out: Vec<MavMessage> = STREAMS
@@ -473,6 +478,19 @@ impl GroundProtocol {
                 )
             })
             .collect();
+        // The autopilot's own proximity readings (ArduPilot streams them only when asked).
+        out.push(self.command_long(
+            MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+            [
+                <DISTANCE_SENSOR_DATA as mavlink::MessageData>::ID as f32,
+                (1e6 / DISTANCE_SENSOR_RATE_HZ) as f32,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+        ));
         if fallback {
             let (sys, comp) = self.target();
             #[allow(deprecated)] // superseded by SET_MESSAGE_INTERVAL, still honoured by ArduPilot
@@ -1180,12 +1198,20 @@ impl FlightLoop {
         r: &Received,
     ) -> FromMessage {
         let mut events = Vec::new();
+        let from_vehicle = p
+            .vehicle
+            .is_some_and(|(sys, _)| u32::from(sys) == r.header.system_id);
         let reading = match &r.message {
-            MavMessage::OBSTACLE_DISTANCE(o)
-                if p.vehicle
-                    .is_some_and(|(sys, _)| u32::from(sys) == r.header.system_id) =>
-            {
-                self.reading(p, ex, now_s, o)
+            MavMessage::OBSTACLE_DISTANCE(o) if from_vehicle => {
+                self.reading(p, ex, now_s, |time_s, at, yaw, conv| {
+                    reading_from_obstacle_distance(o, time_s, at, yaw, conv).map(Some)
+                })
+            }
+            // What ArduPilot's proximity library sends: one 45° wedge per message.
+            MavMessage::DISTANCE_SENSOR(d) if from_vehicle => {
+                self.reading(p, ex, now_s, |time_s, at, yaw, conv| {
+                    reading_from_distance_sensor(d, time_s, at, yaw, conv)
+                })
             }
             _ => None,
         };
@@ -1236,20 +1262,28 @@ impl FlightLoop {
         self.boot_offset_s.map(|o| boot_s - o)
     }
 
-    /// An OBSTACLE_DISTANCE from the vehicle decoded at its last position (`None` before the
-    /// first telemetry, or when it cannot be decoded: warned once per kind of error).
+    /// A range message from the vehicle (OBSTACLE_DISTANCE, DISTANCE_SENSOR) decoded by
+    /// `decode` (vehicle time, position, true yaw, convergence) at its last position (`None`
+    /// before the first telemetry, for a message that carries no horizontal reading, or when it
+    /// cannot be decoded: warned once per kind of error).
     fn reading<E: FlightExecutor>(
         &mut self,
         p: &GroundProtocol,
         ex: &E,
         now_s: f64,
-        o: &OBSTACLE_DISTANCE_DATA,
+        decode: impl FnOnce(
+            f64,
+            [f64; 3],
+            f64,
+            f64,
+        ) -> Result<Option<ObstacleReading>, crate::obstacle::ObstacleError>,
     ) -> Option<ObstacleReading> {
         let t = ex.last_telemetry()?;
         let at = [t.north_m, t.east_m, t.down_m];
         let time_s = self.vehicle_s(now_s);
-        match reading_from_obstacle_distance(o, time_s, at, p.yaw_rad, self.convergence_rad) {
-            Ok(x) => {
+        match decode(time_s, at, p.yaw_rad, self.convergence_rad) {
+            Ok(None) => None,
+            Ok(Some(x)) => {
                 self.readings += 1;
                 self.last_hits_ne = x.hits_ne().collect();
                 self.updates.push(Update::Reading(x.clone()));

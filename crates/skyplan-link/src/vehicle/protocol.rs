@@ -4,10 +4,10 @@
 //! moves the messages; the fuzz harness drives this as it is.
 
 use super::{
-    SENSOR_PERIOD_S, Side, SimNote, SimReport, SimServerConfig, SimStatus, Streams, Upload,
-    handle_message, heartbeat_of, request_int,
+    Proximity, SENSOR_PERIOD_S, Side, SimNote, SimReport, SimServerConfig, SimStatus, Streams,
+    Upload, handle_message, heartbeat_of, request_int,
 };
-use crate::obstacle::obstacle_distance;
+use crate::obstacle::{distance_sensors, obstacle_distance};
 use mavlink::dialects::common::*;
 use skyplan_flight::collision::{BoxWorld, TrackCheck, true_world};
 use skyplan_flight::flat_earth::FlatEarth;
@@ -334,11 +334,35 @@ impl SimProtocol {
         for id in self.side.streams.due(s.time_s) {
             out.extend(self.side.message(id, &s, self.vehicle.mission().len()));
         }
-        // Every sweep: ≥ 10 Hz of vehicle time at any speed-up.
-        for (time_s, sweep) in self.sweeps.drain(..) {
-            if self.side.position_ready(&s) {
-                let time_usec = (time_s * 1e6) as u64;
-                out.push(obstacle_distance(&sweep, &self.sensor, time_usec));
+        match self.cfg.proximity {
+            // Every sweep: ≥ 10 Hz of vehicle time at any speed-up.
+            Proximity::ObstacleDistance => {
+                for (time_s, sweep) in self.sweeps.drain(..) {
+                    if self.side.position_ready(&s) {
+                        let time_usec = (time_s * 1e6) as u64;
+                        out.push(obstacle_distance(&sweep, &self.sensor, time_usec));
+                    }
+                }
+            }
+            // The latest sweep, at the period asked for, as ArduCopter's eight sectors.
+            Proximity::DistanceSensor => {
+                let latest = self.sweeps.drain(..).next_back();
+                let ready = self.side.position_ready(&s);
+                let streams = &mut self.side.streams;
+                if let (Some((time_s, sweep)), Some(period_s)) = (latest, streams.distance_sensor)
+                    && s.time_s - streams.distance_sensor_last_s >= period_s
+                    && ready
+                {
+                    streams.distance_sensor_last_s = s.time_s;
+                    // The sweep is on true north, as the vehicle's own yaw.
+                    let time_boot_ms = (time_s * 1000.0) as u32;
+                    out.extend(distance_sensors(
+                        &sweep,
+                        &self.sensor,
+                        s.yaw_rad,
+                        time_boot_ms,
+                    ));
+                }
             }
         }
         out
