@@ -84,6 +84,16 @@ pub fn run(args: FlyArgs) -> Result<()> {
             "fly --terrain: not yet. Over terrain the altitudes are above the map's home, while the vehicle's relative altitudes are above where it armed; flying needs missions in the AMSL frame first. Plan with `skyplan plan --terrain` instead",
         ));
     }
+    // Said before connecting: the planning that would find it waits for the vehicle first.
+    if request.goal_ne.is_none()
+        && request.goal_lla.is_none()
+        && world.default_endpoints_ne().1.is_none()
+    {
+        return Err(bad_input(format!(
+            "missing goal: give --goal-ne N,E (metres north,east of the map's origin; {}) or --goal-lla LAT,LON",
+            world.bounds_ne(1.0)
+        )));
+    }
     if args.fence && request.no_fly.is_none() {
         return Err(bad_input(
             "--fence uploads the no-fly zones as the vehicle's fence: give them with --no-fly FILE (or no_fly in --config)",

@@ -897,6 +897,29 @@ fn fly_replans_on_the_autopilots_distance_sensor_wedges() {
     assert!(readings >= 100, "{line}");
 }
 
+/// The bundled map read from its file keeps its default goal (`plan` plans the default route),
+/// and a map without one makes `fly` say so at once, before connecting to any vehicle.
+#[test]
+fn the_bundled_map_from_its_file_keeps_its_goal_and_a_missing_goal_is_said_before_connecting() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/colliders.csv");
+    let from_file = common::ok_json(dir.path(), &format!("plan --map {file} --json"));
+    let bundled = common::ok_json(dir.path(), "plan --json");
+    assert_eq!(from_file["waypoints"], bundled["waypoints"]);
+    let text = std::fs::read_to_string(file).unwrap();
+    let cut: String = text.lines().take(500).map(|l| format!("{l}\n")).collect();
+    std::fs::write(dir.path().join("part.csv"), cut).unwrap();
+    let port = free_udp_port();
+    let t0 = Instant::now();
+    let r = run(
+        dir.path(),
+        &format!("fly --map part.csv --connect tcp:127.0.0.1:{port}"),
+    );
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    r.stderr_has(&["missing goal: give --goal-ne N,E"]);
+    assert!(t0.elapsed() < Duration::from_secs(10), "{:?}", t0.elapsed());
+}
+
 #[test]
 fn fly_without_replanning_hits_the_hidden_buildings() {
     let dir = tempfile::tempdir().unwrap();

@@ -265,11 +265,22 @@ impl World {
     }
 
     /// An FCND colliders map from its text; `name` is used in messages. The default start is
-    /// the home.
+    /// the home; the bundled map's own text (read from a file, say) also gets its default goal.
+    ///
+    /// ```
+    /// use skyplan_plan::{World, FCND_CITY_CSV};
+    /// let world = World::from_colliders_csv("colliders.csv", FCND_CITY_CSV)?;
+    /// assert_eq!(world.default_endpoints_ne(), World::fcnd_city().default_endpoints_ne());
+    /// # Ok::<(), skyplan_plan::PlanFailure>(())
+    /// ```
     pub fn from_colliders_csv(name: &str, text: &str) -> Result<Self, PlanFailure> {
         let map =
             skyplan_map::colliders::parse_colliders(text).map_err(|e| parse_failure(name, e))?;
-        Self::from_colliders(name, map)
+        let mut world = Self::from_colliders(name, map)?;
+        if text.replace("\r\n", "\n") == FCND_CITY_CSV.replace("\r\n", "\n") {
+            world.default_goal_ne = Some(FCND_DEFAULT_GOAL_NE);
+        }
+        Ok(world)
     }
 
     /// An FCND colliders map already parsed.
