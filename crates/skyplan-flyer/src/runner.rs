@@ -796,7 +796,9 @@ pub enum Unfinished {
         "the flight completed but the vehicle strayed up to {max_error_m:.2} m from its trajectory's path, more than half ({half_m} m) the route's {margin_m} m safety margin: not done (fly slower: lower --max-speed-m-s and --max-accel-m-s2, or check the vehicle's tuning)", half_m = margin_m / 2.0
     )]
     OffTrack {
-        /// The largest distance between the vehicle and its setpoint, metres.
+        /// The largest distance between the vehicle and its trajectory's path (the closest
+        /// setpoint within a few seconds of its own: being early or late is not straying),
+        /// metres.
         max_error_m: f64,
         /// The safety margin the route was planned with, metres.
         margin_m: f64,
