@@ -32,6 +32,28 @@ fn number_after(text: &str, prefix: &str) -> f64 {
         .unwrap_or_else(|_| panic!("no number after {prefix:?} in {text}"))
 }
 
+/// A flight by `line` (which writes `--log flight.csv`) that exits 0: its stdout, its logged
+/// ground speeds (rows that have one) and where it ended (north, east).
+fn fly_logged(line: &str) -> (String, Vec<f64>, (f64, f64)) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = cmd(dir.path(), line).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    let log = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
+    let mut lines = log.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (speed, north, east) = (col("ground_speed_m_s"), col("north_m"), col("east_m"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let speeds = rows
+        .iter()
+        .filter_map(|r| r[speed].parse::<f64>().ok())
+        .collect();
+    let last = rows.last().unwrap();
+    let end = (last[north].parse().unwrap(), last[east].parse().unwrap());
+    (text, speeds, end)
+}
+
 #[test]
 fn the_default_routes_trajectory_is_flown_within_half_a_metre_and_on_time() {
     let (code, text) = run("fly --sim --trajectory --speedup 20 --timeout-s 300");
@@ -68,11 +90,8 @@ fn the_default_routes_trajectory_is_flown_within_half_a_metre_and_on_time() {
 /// above the fastest leg speed, landed at the goal, no collision.
 #[test]
 fn an_uploaded_trajectory_paces_the_mission_with_leg_speeds() {
-    let dir = tempfile::tempdir().unwrap();
-    let line = "fly --sim --trajectory --upload --speedup 20 --timeout-s 300 --log flight.csv";
-    let out = cmd(dir.path(), line).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    assert_eq!(out.status.code(), Some(0), "{text}");
+    let (text, flown, (n, e)) =
+        fly_logged("fly --sim --trajectory --upload --speedup 20 --timeout-s 300 --log flight.csv");
     assert!(
         text.contains("DO_CHANGE_SPEED to its leg's speed"),
         "{text}"
@@ -109,23 +128,12 @@ fn an_uploaded_trajectory_paces_the_mission_with_leg_speeds() {
         &format!("mission    {items} items: home, take-off to 5 m, "),
     ) as usize;
     assert_eq!(items, 3 * waypoints + 3, "{text}");
-    let log = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
-    let mut lines = log.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (speed, north, east) = (col("ground_speed_m_s"), col("north_m"), col("east_m"));
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let fastest_flown = rows
-        .iter()
-        .map(|r| r[speed].parse::<f64>().unwrap())
-        .fold(0.0, f64::max);
+    let fastest_flown = flown.iter().copied().fold(0.0, f64::max);
     assert!(fastest_flown > 5.5, "flew at most {fastest_flown} m/s");
     assert!(
         fastest_flown <= hi + 0.3,
         "flew {fastest_flown} m/s, legs at most {hi}"
     );
-    let last = rows.last().unwrap();
-    let (n, e): (f64, f64) = (last[north].parse().unwrap(), last[east].parse().unwrap());
     assert!((n - 420.0).hypot(e - 390.0) < 1.5, "landed at N {n}, E {e}");
 }
 
@@ -137,11 +145,9 @@ fn an_uploaded_trajectory_paces_the_mission_with_leg_speeds() {
 /// turn into more than the executor's 1 s of lead.
 #[test]
 fn a_trajectory_flight_replans_around_hidden_buildings_without_stopping() {
-    let dir = tempfile::tempdir().unwrap();
-    let line = "fly --sim --trajectory --hidden-random 3 --seed 1 --speedup 5 --timeout-s 300 --log flight.csv";
-    let out = cmd(dir.path(), line).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    assert_eq!(out.status.code(), Some(0), "{text}");
+    let (text, speeds, (n, e)) = fly_logged(
+        "fly --sim --trajectory --hidden-random 3 --seed 1 --speedup 5 --timeout-s 300 --log flight.csv",
+    );
     assert!(
         text.contains("no collision with the map's obstacles or the 3 hidden buildings"),
         "{text}"
@@ -157,16 +163,6 @@ fn a_trajectory_flight_replans_around_hidden_buildings_without_stopping() {
         (0.95..=1.05).contains(&ratio),
         "flown/duration {ratio}: {text}"
     );
-    let log = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
-    let mut lines = log.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (speed, north, east) = (col("ground_speed_m_s"), col("north_m"), col("east_m"));
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let speeds: Vec<f64> = rows
-        .iter()
-        .filter_map(|r| r[speed].parse::<f64>().ok())
-        .collect();
     let first = speeds.iter().position(|&v| v > 2.0).expect("flew");
     let last = speeds.iter().rposition(|&v| v > 2.0).expect("flew");
     let slowest = speeds[first..=last]
@@ -174,8 +170,6 @@ fn a_trajectory_flight_replans_around_hidden_buildings_without_stopping() {
         .copied()
         .fold(f64::INFINITY, f64::min);
     assert!(slowest >= 2.0, "slowed to {slowest} m/s on the way");
-    let end = rows.last().unwrap();
-    let (n, e): (f64, f64) = (end[north].parse().unwrap(), end[east].parse().unwrap());
     assert!((n - 420.0).hypot(e - 390.0) < 1.5, "landed at N {n}, E {e}");
 }
 

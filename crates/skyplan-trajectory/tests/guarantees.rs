@@ -11,30 +11,14 @@ use skyplan_trajectory::{
 };
 use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, segment_hits_box};
 
-fn norm(v: Neu) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
+mod common;
+use common::{dense_check_free_and_within_limits, norm};
 
-/// Samples so close that consecutive points are ≤ 1 cm apart (at the proven speed bound).
+/// Samples so close that consecutive points are ≤ 1 cm apart (at the proven speed bound), free
+/// and within the limits, at rest at both ends at the route's ends.
 fn dense_check(traj: &Trajectory, is_free: &dyn Fn(Neu) -> bool, route: &[Neu]) {
-    let lim = traj.limits;
-    let dt = 0.01 / traj.bounds.speed_m_s.max(1e-3);
+    dense_check_free_and_within_limits(traj, is_free);
     let total = traj.duration_s();
-    let n = (total / dt).ceil() as usize;
-    for i in 0..=n {
-        let s = traj.state_at(total * i as f64 / n as f64);
-        assert!(
-            is_free(s.point_neu),
-            "{}: point {:?} at t {} s is not free",
-            traj.method.name(),
-            s.point_neu,
-            s.t_s
-        );
-        assert!(norm(s.vel_neu_m_s) <= lim.max_speed_m_s * (1.0 + 1e-9));
-        assert!(norm(s.accel_neu_m_s2) <= lim.max_accel_m_s2 * (1.0 + 1e-9));
-        assert!(s.vel_neu_m_s[2] <= lim.max_climb_m_s * (1.0 + 1e-9));
-        assert!(-s.vel_neu_m_s[2] <= lim.max_descent_m_s * (1.0 + 1e-9));
-    }
     let (a, b) = (traj.state_at(0.0), traj.state_at(total));
     let (first, last) = (route[0], route[route.len() - 1]);
     assert!(norm([0, 1, 2].map(|k| a.point_neu[k] - first[k])) < 1e-9);

@@ -11,9 +11,8 @@ use skyplan_trajectory::{
 };
 use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, Neu, segment_hits_box};
 
-fn norm(v: Neu) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
+mod common;
+use common::{dense_check_free_and_within_limits, norm};
 
 fn gap(a: Neu, b: Neu) -> f64 {
     norm([0, 1, 2].map(|k| a[k] - b[k]))
@@ -22,21 +21,8 @@ fn gap(a: Neu, b: Neu) -> f64 {
 /// The new trajectory from `start` to `goal`: free at ≤ 1 cm of travel, within the limits at
 /// every sample, starting in `start`'s state and ending at rest at `goal`.
 fn check_switch(traj: &Trajectory, start: &State, goal: Neu, is_free: &dyn Fn(Neu) -> bool) {
-    let lim = traj.limits;
-    let dt = 0.01 / traj.bounds.speed_m_s.max(1e-3);
+    dense_check_free_and_within_limits(traj, is_free);
     let total = traj.duration_s();
-    let n = (total / dt).ceil() as usize;
-    for i in 0..=n {
-        let s = traj.state_at(total * i as f64 / n as f64);
-        assert!(
-            is_free(s.point_neu),
-            "point {:?} at {} s not free",
-            s.point_neu,
-            s.t_s
-        );
-        assert!(norm(s.vel_neu_m_s) <= lim.max_speed_m_s * (1.0 + 1e-9));
-        assert!(norm(s.accel_neu_m_s2) <= lim.max_accel_m_s2 * (1.0 + 1e-9));
-    }
     let (a, b) = (traj.state_at(0.0), traj.state_at(total));
     assert!(gap(a.point_neu, start.point_neu) < 1e-6);
     assert!(

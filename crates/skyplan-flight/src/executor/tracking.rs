@@ -486,6 +486,29 @@ mod tests {
     use crate::sim::{SimConfig, SimVehicle};
     use crate::testkit::{apply, telemetry};
 
+    /// Flies `ex` against `v` in steps of 0.05 s until the flight ends (or 400 s), handing each
+    /// step's outputs (their commands already applied to `v`) to `each` with the time.
+    fn fly_steps(
+        ex: &mut ReferenceExecutor,
+        v: &mut SimVehicle,
+        mut each: impl FnMut(f64, &mut ReferenceExecutor, &SimVehicle, &[Output]),
+    ) {
+        let (mut t, mut pending) = (0.0, Vec::new());
+        while ex.outcome().is_none() && t < 400.0 {
+            for _ in 0..5 {
+                v.step(0.01);
+            }
+            t += 0.05;
+            let mut events = std::mem::take(&mut pending);
+            events.push(Event::Telemetry(telemetry(v)));
+            let outs: Vec<Output> = events.into_iter().map(|e| ex.handle(t, e)).collect();
+            for c in outs.iter().flat_map(|o| &o.commands) {
+                pending.extend(apply(v, *c));
+            }
+            each(t, ex, v, &outs);
+        }
+    }
+
     /// Three legs, up to 8 m/s, starting 10 m east of home (the vehicle flies there first).
     fn three_legs() -> MinJerkLine {
         let points = vec![
@@ -502,24 +525,14 @@ mod tests {
         let r = Arc::new(three_legs());
         let mut ex = ReferenceExecutor::new(r.clone(), ExecutorConfig::default()).unwrap();
         let mut v = SimVehicle::new(SimConfig::default());
-        let (mut t, mut pending, mut states) = (0.0, Vec::new(), vec![ex.state()]);
+        let mut states = vec![ex.state()];
         let mut worst: f64 = 0.0;
-        while ex.outcome().is_none() && t < 400.0 {
-            for _ in 0..5 {
-                v.step(0.01);
-            }
-            t += 0.05;
-            let mut events = std::mem::take(&mut pending);
-            events.push(Event::Telemetry(telemetry(&v)));
-            for e in events {
-                let out = ex.handle(t, e);
+        fly_steps(&mut ex, &mut v, |t, ex, v, outs| {
+            for out in outs {
                 for n in &out.notes {
                     if let Note::State { to, .. } = n {
                         states.push(*to);
                     }
-                }
-                for c in out.commands {
-                    pending.extend(apply(&mut v, c));
                 }
             }
             // Independent check: the vehicle against the reference at the same time.
@@ -529,7 +542,7 @@ mod tests {
                     worst = worst.max(r.setpoint(tr).distance_m(v.state().position_ned_m));
                 }
             }
-        }
+        });
         assert_eq!(
             ex.outcome(),
             Some(&Outcome::Completed),
@@ -596,7 +609,6 @@ mod tests {
             ReferenceExecutor::replanning(Arc::clone(&r), ExecutorConfig::default(), make).unwrap();
         assert!(FlightExecutor::replans(&ex));
         let mut v = SimVehicle::new(SimConfig::default());
-        let (mut t, mut pending) = (0.0, Vec::new());
         let mut tracks: Vec<[f64; 3]> = Vec::new();
         let goal = Target {
             north_m: 40.0,
@@ -605,24 +617,15 @@ mod tests {
             heading_rad: 0.0,
         };
         let mut switched_at = None;
-        while ex.outcome().is_none() && t < 400.0 {
-            for _ in 0..5 {
-                v.step(0.01);
-            }
-            t += 0.05;
-            let mut events = std::mem::take(&mut pending);
-            events.push(Event::Telemetry(telemetry(&v)));
-            for e in events {
-                for c in ex.handle(t, e).commands {
-                    if let Command::Track { setpoint, .. } = c {
-                        tracks.push(setpoint.point_ned);
-                    }
-                    pending.extend(apply(&mut v, c));
+        fly_steps(&mut ex, &mut v, |t, ex, v, outs| {
+            for c in outs.iter().flat_map(|o| &o.commands) {
+                if let Command::Track { setpoint, .. } = c {
+                    tracks.push(setpoint.point_ned);
                 }
             }
             let Some(start) = ex.tracking().unwrap().started_s else {
                 assert!(!ex.accepts_route_change());
-                continue;
+                return;
             };
             if switched_at.is_none() && t - start > 6.0 {
                 assert!(ex.accepts_route_change());
@@ -669,7 +672,7 @@ mod tests {
                 assert!((report.duration_s - (at + 12.0)).abs() < 1e-9, "{report:?}");
                 switched_at = Some(at);
             }
-        }
+        });
         assert!(switched_at.is_some());
         assert_eq!(
             ex.outcome(),
