@@ -173,6 +173,32 @@ fn a_trajectory_flight_replans_around_hidden_buildings_without_stopping() {
     assert!((n - 420.0).hypot(e - 390.0) < 1.5, "landed at N {n}, E {e}");
 }
 
+/// The two hidden buildings of `examples/hidden.csv` are sensed too close to turn within the
+/// trajectory's limits: the replanned route is flown by waypoints instead (told), and the flight
+/// still lands at the goal without a collision.
+#[test]
+fn a_route_too_sharp_for_a_trajectory_from_the_moving_vehicle_is_flown_by_waypoints() {
+    let hidden = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/hidden.csv");
+    let (text, _, (n, e)) = fly_logged(&format!(
+        "fly --sim --trajectory --hidden {hidden} --speedup 5 --timeout-s 300 --log flight.csv"
+    ));
+    assert!(
+        text.contains("no collision with the map's obstacles or the 2 hidden buildings"),
+        "{text}"
+    );
+    assert!(
+        text.contains("result     landed and disarmed after flying the reference"),
+        "{text}"
+    );
+    if text.contains("a replanned route flown by waypoints") {
+        assert!(
+            text.contains(": flying the new route by waypoints"),
+            "{text}"
+        );
+    }
+    assert!((n - 420.0).hypot(e - 390.0) < 1.5, "landed at N {n}, E {e}");
+}
+
 #[test]
 fn limits_need_a_trajectory() {
     let (code, text) = run("fly --sim --max-speed-m-s 3");

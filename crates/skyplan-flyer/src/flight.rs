@@ -120,6 +120,9 @@ pub fn summary_lines<E: FlightExecutor>(summary: &FlightSummary, ex: &E) -> Vec<
         ));
     }
     lines.push(match ex.outcome() {
+        Some(Outcome::Completed) if ex.tracking().is_some_and(|r| r.by_waypoints_from_s.is_some()) => {
+            "result     landed and disarmed after flying the reference, then a replanned route by waypoints to the goal".to_string()
+        }
         Some(Outcome::Completed) if ex.tracking().is_some() => {
             "result     landed and disarmed after flying the reference to its end".to_string()
         }

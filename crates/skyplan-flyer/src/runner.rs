@@ -1081,6 +1081,7 @@ mod tests {
             setpoints_sent: 1200,
             switches: 0,
             slowest_switch_ms: 0.0,
+            by_waypoints_from_s: None,
         };
         let done = Some(Outcome::Completed);
         assert_eq!(

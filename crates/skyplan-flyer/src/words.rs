@@ -62,7 +62,12 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
             event.route_length_m
         ),
         Note::Holding { reason, hold_s } => {
-            format!("hold       {t:7.1} s  no route: {reason}; holding {hold_s:.1} s, then landing")
+            format!(
+                "hold       {t:7.1} s  no route: {reason}; holding {hold_s:.1} s (and until at rest), then landing"
+            )
+        }
+        Note::ByWaypoints { reason } => {
+            format!("replan     {t:7.1} s  {reason}: flying the new route by waypoints")
         }
         Note::WayHomeWanted { reason } => {
             format!("home       {t:7.1} s  {reason}: holding while the way home is planned")
@@ -102,6 +107,7 @@ pub fn note_line(t: f64, n: usize, note: &Note) -> Option<String> {
 ///     setpoints_sent: 790,
 ///     switches: 0,
 ///     slowest_switch_ms: 0.0,
+///     by_waypoints_from_s: None,
 /// };
 /// assert_eq!(
 ///     skyplan_flyer::words::tracking_line(&r),
@@ -115,6 +121,9 @@ pub fn tracking_line(r: &TrackingReport) -> String {
         (Some(_), None, _) => "its end not reached".to_string(),
         (None, None, _) => "its clock never started (the start was not reached)".to_string(),
     };
+    let by_waypoints = r.by_waypoints_from_s.map_or(String::new(), |t| {
+        format!("; from {t:.1} s on it, a replanned route flown by waypoints")
+    });
     let switches = match r.switches {
         0 => String::new(),
         1 => format!(
@@ -127,7 +136,7 @@ pub fn tracking_line(r: &TrackingReport) -> String {
         ),
     };
     format!(
-        "reference  max tracking error {:.2} m over {} samples ({:.2} m from its path); reference duration {:.1} s, {flown}; {} setpoints sent{switches}",
+        "reference  max tracking error {:.2} m over {} samples ({:.2} m from its path); reference duration {:.1} s, {flown}; {} setpoints sent{switches}{by_waypoints}",
         r.max_tracking_error_m, r.samples, r.max_path_error_m, r.duration_s, r.setpoints_sent
     )
 }

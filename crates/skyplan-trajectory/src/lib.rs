@@ -602,13 +602,72 @@ pub fn plan_from(
     let planar = route.iter().all(|p| (p[2] - route[0][2]).abs() <= 1e-9)
         && vel[2].abs() <= 1e-12
         && accel[2].abs() <= 1e-12;
+    let deadline = t0 + opts.budget;
+    // The route as given; failing that (a sharp turn at speed leaves the corridor no room to
+    // brake), with a run-out straight ahead first — the braking distance, then two thirds of
+    // it — where that is free.
+    let speed = bezier::norm(vel);
+    let brake_m = speed * speed / (2.0 * limits.max_accel_m_s2)
+        + speed * limits.max_accel_m_s2 / limits.max_jerk_m_s3;
+    let mut why = String::new();
+    for run_out_m in [0.0, brake_m, brake_m * 2.0 / 3.0] {
+        let mut tried = route.clone();
+        if run_out_m > 0.0 {
+            let p = route[0];
+            let ahead = [0, 1, 2].map(|i| p[i] + vel[i] / speed.max(1e-9) * run_out_m);
+            if !(free.segment_is_free(p, ahead) && free.segment_is_free(ahead, route[1])) {
+                continue;
+            }
+            tried.insert(1, ahead);
+        }
+        match moving_pieces(&tried, free, planar, limits, opts, deadline, (vel, accel)) {
+            Ok(pieces) => {
+                let yaw = yaw::profile(&pieces, limits.max_yaw_rate_rad_s(), Some(start.yaw_rad));
+                let mut traj = Trajectory {
+                    method: Method::MinimumJerk,
+                    fallback_reason: None,
+                    limits: *limits,
+                    bounds: Bounds::default(),
+                    pieces,
+                    yaw,
+                    compute_us: 0,
+                };
+                match verify_from(&traj, free, vel, accel) {
+                    Ok(b) => {
+                        traj.bounds = b;
+                        traj.compute_us = t0.elapsed().as_micros() as u64;
+                        return Ok(traj);
+                    }
+                    Err(e) => why = e,
+                }
+            }
+            Err(TrajectoryError::Unproven(e)) => why = e,
+            Err(e) if why.is_empty() => return Err(e),
+            Err(_) => {}
+        }
+    }
+    Err(TrajectoryError::Unproven(format!(
+        "from the moving start: {why}"
+    )))
+}
+
+/// The minimum-jerk pieces through `route` from a start moving at `vel` with `accel`.
+fn moving_pieces(
+    route: &[Neu],
+    free: &dyn FreeSpace,
+    planar: bool,
+    limits: &Limits,
+    opts: &Options,
+    deadline: Instant,
+    (vel, accel): (Neu, Neu),
+) -> Result<Vec<Piece>, TrajectoryError> {
     let corridor_opts = opts.corridor.unwrap_or(CorridorOptions {
         piece_m: 50.0,
         grow_m: 20.0,
     });
     // Short stretches first: the start's motion is turned in the first pieces, and each gets
     // its own box to swing out into.
-    let mut points = split_legs(&route, limits);
+    let mut points = split_legs(route, limits);
     let first_leg_m = skyplan_world3::distance_m(points[0], points[1]);
     let cuts: Vec<Neu> = [3.0, 8.0, 15.0]
         .iter()
@@ -617,20 +676,6 @@ pub fn plan_from(
         .collect();
     points.splice(1..1, cuts);
     let cells = build_corridor(&points, free, planar, &corridor_opts)?;
-    let pieces = optimize::minimum_jerk_from(&cells, planar, limits, t0 + opts.budget, vel, accel)
-        .map_err(|why| TrajectoryError::Unproven(format!("from the moving start: {why}")))?;
-    let yaw = yaw::profile(&pieces, limits.max_yaw_rate_rad_s(), Some(start.yaw_rad));
-    let mut traj = Trajectory {
-        method: Method::MinimumJerk,
-        fallback_reason: None,
-        limits: *limits,
-        bounds: Bounds::default(),
-        pieces,
-        yaw,
-        compute_us: 0,
-    };
-    traj.bounds = verify_from(&traj, free, vel, accel)
-        .map_err(|why| TrajectoryError::Unproven(format!("from the moving start: {why}")))?;
-    traj.compute_us = t0.elapsed().as_micros() as u64;
-    Ok(traj)
+    optimize::minimum_jerk_from(&cells, planar, limits, deadline, vel, accel)
+        .map_err(TrajectoryError::Unproven)
 }

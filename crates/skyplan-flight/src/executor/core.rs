@@ -425,7 +425,17 @@ impl Core {
         let Some(h) = &self.no_route else {
             return;
         };
-        if now_s - h.since_s >= self.config.replan_hold_s {
+        // Held long enough, and at rest: a vehicle stopped at speed brakes past the point and
+        // comes back (seen against ArduCopter SITL: told to land 1.8 s after the hold while
+        // still at 4.4 m/s, it landed 17 m on, towards what it had sensed), within the leg
+        // timeout.
+        let moving = self
+            .last
+            .is_some_and(|t| t.speed_m_s() >= self.config.land_speed_m_s);
+        let held_s = now_s - h.since_s;
+        if held_s >= self.config.replan_hold_s
+            && (!moving || held_s >= self.config.leg_timeout_base_s)
+        {
             let reason = h.reason.clone();
             self.no_route = None;
             self.ending = Some(Failure::NoRoute { reason });
@@ -441,7 +451,11 @@ impl Core {
     /// Makes `targets` the route to fly from where the vehicle is now (a replan, the way home):
     /// the current target restarts at its first, the leg clock restarts. Refused (nothing
     /// changes) for an empty route or a waypoint not finite or not above the ground.
-    fn start_route(&mut self, now_s: f64, targets: &[Target]) -> Result<(), ConfigError> {
+    pub(crate) fn start_route(
+        &mut self,
+        now_s: f64,
+        targets: &[Target],
+    ) -> Result<(), ConfigError> {
         if targets.is_empty() {
             return Err(ConfigError("the new route has no waypoint".into()));
         }

@@ -51,9 +51,15 @@ pub enum Note {
         /// The new route, first target first.
         targets: Vec<Target>,
     },
+    /// A replanned route could not be made a trajectory from the moving vehicle (`reason`):
+    /// the flight flies it by waypoints instead, as a flight without a trajectory does.
+    ByWaypoints {
+        /// Why, in the user's words.
+        reason: String,
+    },
     /// No route can be flown: the vehicle holds its position for
-    /// [`ExecutorConfig::replan_hold_s`], then lands, and the flight fails with
-    /// [`Failure::NoRoute`].
+    /// [`ExecutorConfig::replan_hold_s`] (and until it is at rest), then lands, and the flight
+    /// fails with [`Failure::NoRoute`].
     Holding {
         /// Why, in the user's words.
         reason: String,
@@ -322,6 +328,9 @@ pub struct TrackingReport {
     /// The longest wall time one of those new references took to make, milliseconds (0
     /// without switches): it must stay under [`super::SPLICE_LEAD_S`] of vehicle time.
     pub slowest_switch_ms: f64,
+    /// Reference time at which a replanned route could not be made a trajectory from the
+    /// moving vehicle, and the flight went on by waypoints (position targets) instead.
+    pub by_waypoints_from_s: Option<f64>,
 }
 
 impl TrackingReport {

@@ -20,7 +20,7 @@
 //! there, the replacement is refused and the route watcher's caller holds the vehicle.
 
 use super::core::{Core, Executor, Strategy};
-use super::guided::{goto, takeoff_to_first};
+use super::guided::{GuidedTargets, goto, takeoff_to_first};
 use super::interface::{Command, Event, Target, Telemetry};
 use super::report::{ConfigError, ExecutorConfig, Failure, Output, TrackingReport};
 use crate::reference::{Reference, Setpoint, Spliced};
@@ -59,6 +59,8 @@ enum Phase {
     Approach,
     Streaming,
     Holding,
+    /// A replanned route is flown by waypoints (no trajectory from the moving vehicle).
+    Waypoints,
 }
 
 /// Reference tracking: see the module documentation.
@@ -87,6 +89,10 @@ pub struct ReferenceTracking {
     t_ref_s: f64,
     /// The longest wall time a new reference took to make, milliseconds.
     slowest_switch_ms: f64,
+    /// Reference time at which the flight went on by waypoints.
+    by_waypoints_from_s: Option<f64>,
+    /// A note to tell at the next step (why the flight went on by waypoints).
+    pending_note: Option<String>,
 }
 
 impl fmt::Debug for ReferenceTracking {
@@ -187,6 +193,8 @@ impl ReferenceTracking {
             switches_s: Vec::new(),
             t_ref_s: 0.0,
             slowest_switch_ms: 0.0,
+            by_waypoints_from_s: None,
+            pending_note: None,
         }
     }
 
@@ -248,6 +256,9 @@ impl ReferenceTracking {
         let Some(start_s) = self.clock_start_s else {
             return;
         };
+        if self.phase == Phase::Waypoints {
+            return;
+        }
         let sample_s = t.sample_time_s.unwrap_or(now_s);
         if self.last_sample_s == Some(sample_s) {
             return;
@@ -284,7 +295,10 @@ impl Strategy for ReferenceTracking {
         true
     }
 
-    fn observe(&mut self, _core: &mut Core, now_s: f64, event: &Event, _out: &mut Output) {
+    fn observe(&mut self, _core: &mut Core, now_s: f64, event: &Event, out: &mut Output) {
+        if let Some(reason) = self.pending_note.take() {
+            out.notes.push(super::Note::ByWaypoints { reason });
+        }
         if let Event::Telemetry(t) = event {
             self.measure(t, now_s);
         }
@@ -299,6 +313,9 @@ impl Strategy for ReferenceTracking {
     }
 
     fn waypoint(&mut self, core: &mut Core, now_s: f64, t: &Telemetry, out: &mut Output) -> bool {
+        if self.phase == Phase::Waypoints {
+            return GuidedTargets.waypoint(core, now_s, t, out);
+        }
         let c = core.config;
         if !t.armed {
             core.fail(Failure::DisarmedInFlight { state: core.state }, out);
@@ -392,8 +409,9 @@ impl Strategy for ReferenceTracking {
     /// While streaming, and not within [`SPLICE_LEAD_S`] of the end.
     fn replaces_now(&self) -> bool {
         self.rereference.is_some()
-            && self.phase == Phase::Streaming
-            && self.t_ref_s + SPLICE_LEAD_S < self.duration_s
+            && (self.phase == Phase::Waypoints
+                || (self.phase == Phase::Streaming
+                    && self.t_ref_s + SPLICE_LEAD_S < self.duration_s))
     }
 
     fn route_ahead(&self) -> Option<&[Target]> {
@@ -415,6 +433,9 @@ impl Strategy for ReferenceTracking {
                 "this reference flight cannot change its route in flight".into(),
             ));
         };
+        if self.phase == Phase::Waypoints {
+            return core.start_route(now_s, targets);
+        }
         if self.phase != Phase::Streaming {
             return Err(ConfigError(
                 "a reference flight changes its route only while following its reference".into(),
@@ -443,11 +464,22 @@ impl Strategy for ReferenceTracking {
         self.slowest_switch_ms = self
             .slowest_switch_ms
             .max(t0.elapsed().as_secs_f64() * 1000.0);
-        let next = made.map_err(|e| {
-            ConfigError(format!(
-                "no trajectory for the new route from the moving vehicle: {e}"
-            ))
-        })?;
+        let next = match made {
+            Ok(next) => next,
+            // Flown by waypoints instead: the autopilot's own limits shape the turn, as in a
+            // flight without a trajectory (seen against ArduCopter SITL: a hidden box sensed
+            // too close to turn within the limits; holding and landing stranded the flight).
+            Err(e) => {
+                core.start_route(now_s, targets)?;
+                self.phase = Phase::Waypoints;
+                self.by_waypoints_from_s = Some(now_s - start_s);
+                self.ahead.clear();
+                self.pending_note = Some(format!(
+                    "no trajectory for the new route from the moving vehicle ({e})"
+                ));
+                return Ok(());
+            }
+        };
         let spliced = Spliced::new(Arc::clone(&self.reference), at_s, next);
         self.duration_s = spliced.duration_s();
         self.reference = Arc::new(spliced);
@@ -474,6 +506,7 @@ impl Strategy for ReferenceTracking {
             setpoints_sent: self.setpoints_sent,
             switches: self.switches_s.len(),
             slowest_switch_ms: self.slowest_switch_ms,
+            by_waypoints_from_s: self.by_waypoints_from_s,
         })
     }
 }
@@ -582,20 +615,16 @@ mod tests {
     /// With a re-referencer, a route watcher sees the path ahead and may replace the route
     /// while streaming: the new reference is asked for in the current one's state
     /// [`SPLICE_LEAD_S`] ahead, takes over there, and the setpoints run on without a jump to
-    /// the new goal; a re-referencer that fails leaves everything as it was.
+    /// the new goal.
     #[test]
     fn a_replaced_route_is_spliced_on_ahead_in_the_references_state() {
         use crate::reference::Setpoint;
         use std::sync::Mutex;
         let r: Arc<dyn Reference> = Arc::new(three_legs());
         let asked: Arc<Mutex<Vec<Setpoint>>> = Arc::default();
-        let fail = Arc::new(Mutex::new(true));
-        let (asked2, fail2) = (Arc::clone(&asked), Arc::clone(&fail));
+        let asked2 = Arc::clone(&asked);
         let make: Rereference = Arc::new(move |s: &Setpoint, targets: &[Target]| {
             asked2.lock().unwrap().push(*s);
-            if *fail2.lock().unwrap() {
-                return Err("no corridor".into());
-            }
             let g = targets.last().unwrap();
             Ok(Arc::new(Hermite {
                 from: *s,
@@ -656,9 +685,6 @@ mod tests {
                     route_length_m: 0.0,
                     learned_cells: 0,
                 };
-                assert!(ex.replace_route(t, &[here, goal], ev.clone()).is_err());
-                assert_eq!(ex.tracking().unwrap().switches, 0);
-                *fail.lock().unwrap() = false;
                 let out = ex.replace_route(t, &[here, goal], ev).unwrap();
                 assert!(
                     out.notes
@@ -698,6 +724,80 @@ mod tests {
             "{s:?}"
         );
         assert!(ex.tracking().unwrap().max_tracking_error_m < 0.3);
+    }
+
+    /// A re-referencer that cannot make a trajectory from the moving vehicle: the replaced
+    /// route is flown by waypoints instead — told once, the reference no longer measured — and
+    /// the flight lands at the new goal, completed.
+    #[test]
+    fn a_route_with_no_trajectory_from_the_moving_vehicle_is_flown_by_waypoints() {
+        let r: Arc<dyn Reference> = Arc::new(three_legs());
+        let make: Rereference = Arc::new(|_: &Setpoint, _: &[Target]| Err("too close".into()));
+        let mut ex = ReferenceExecutor::replanning(r, ExecutorConfig::default(), make).unwrap();
+        let mut v = SimVehicle::new(SimConfig::default());
+        let goal = Target {
+            north_m: 40.0,
+            east_m: 30.0,
+            alt_m: 12.0,
+            heading_rad: 0.0,
+        };
+        let (mut replaced, mut told) = (false, 0);
+        fly_steps(&mut ex, &mut v, |t, ex, v, outs| {
+            told += outs
+                .iter()
+                .flat_map(|o| &o.notes)
+                .filter(
+                    |n| matches!(n, Note::ByWaypoints { reason } if reason.contains("too close")),
+                )
+                .count();
+            let Some(start) = ex.tracking().unwrap().started_s else {
+                return;
+            };
+            if !replaced && t - start > 6.0 {
+                let p = v.state().position_ned_m;
+                let here = Target {
+                    north_m: p[0],
+                    east_m: p[1],
+                    alt_m: 12.0,
+                    heading_rad: 0.0,
+                };
+                let ev = crate::sensing::ReplanEvent {
+                    time_s: t,
+                    position_ned: p,
+                    reason: "test".into(),
+                    planner: "test".into(),
+                    latency_ms: 0.0,
+                    cpu_ms: None,
+                    expansions: 0,
+                    route_length_m: 0.0,
+                    learned_cells: 0,
+                };
+                ex.replace_route(t, &[here, goal], ev).unwrap();
+                replaced = true;
+                // Replanning goes on, by waypoints.
+                assert!(ex.accepts_route_change());
+                assert_eq!(ex.remaining_targets().last(), Some(&goal));
+            }
+        });
+        assert!(replaced);
+        assert_eq!(told, 1);
+        assert_eq!(
+            ex.outcome(),
+            Some(&Outcome::Completed),
+            "{:?}",
+            ex.outcome()
+        );
+        let report = ex.tracking().unwrap();
+        assert!(
+            report.by_waypoints_from_s.is_some_and(|s| s > 6.0),
+            "{report:?}"
+        );
+        assert!(report.max_path_error_m < 0.3, "{report:?}");
+        let s = v.state();
+        assert!(
+            (s.position_ned_m[0] - 40.0).hypot(s.position_ned_m[1] - 30.0) < 1.5,
+            "{s:?}"
+        );
     }
 
     /// A cubic from a setpoint's position and velocity to rest at `to` over `t_s`.
