@@ -519,6 +519,21 @@ mod tests {
     use crate::sim::{SimConfig, SimVehicle};
     use crate::testkit::{apply, telemetry};
 
+    /// A replan at `t` from `position_ned`, as a route watcher tells it.
+    fn replan_event(t: f64, position_ned: [f64; 3]) -> crate::sensing::ReplanEvent {
+        crate::sensing::ReplanEvent {
+            time_s: t,
+            position_ned,
+            reason: "test".into(),
+            planner: "test".into(),
+            latency_ms: 0.0,
+            cpu_ms: None,
+            expansions: 0,
+            route_length_m: 0.0,
+            learned_cells: 0,
+        }
+    }
+
     /// Flies `ex` against `v` in steps of 0.05 s until the flight ends (or 400 s), handing each
     /// step's outputs (their commands already applied to `v`) to `each` with the time.
     fn fly_steps(
@@ -674,17 +689,7 @@ mod tests {
                     alt_m: 12.0,
                     heading_rad: 0.0,
                 };
-                let ev = crate::sensing::ReplanEvent {
-                    time_s: t,
-                    position_ned: v.state().position_ned_m,
-                    reason: "test".into(),
-                    planner: "test".into(),
-                    latency_ms: 0.0,
-                    cpu_ms: None,
-                    expansions: 0,
-                    route_length_m: 0.0,
-                    learned_cells: 0,
-                };
+                let ev = replan_event(t, v.state().position_ned_m);
                 let out = ex.replace_route(t, &[here, goal], ev).unwrap();
                 assert!(
                     out.notes
@@ -761,17 +766,7 @@ mod tests {
                     alt_m: 12.0,
                     heading_rad: 0.0,
                 };
-                let ev = crate::sensing::ReplanEvent {
-                    time_s: t,
-                    position_ned: p,
-                    reason: "test".into(),
-                    planner: "test".into(),
-                    latency_ms: 0.0,
-                    cpu_ms: None,
-                    expansions: 0,
-                    route_length_m: 0.0,
-                    learned_cells: 0,
-                };
+                let ev = replan_event(t, p);
                 ex.replace_route(t, &[here, goal], ev).unwrap();
                 replaced = true;
                 // Replanning goes on, by waypoints.
