@@ -94,6 +94,11 @@ pub fn run(args: FlyArgs) -> Result<()> {
             world.bounds_ne(1.0)
         )));
     }
+    if request.departure.is_some() {
+        return Err(bad_input(
+            "--departure: fly takes off now and keeps out of every no-fly zone whatever its time window (a replanned flight's arrival is not known in advance); --departure is for plan and the API",
+        ));
+    }
     if args.fence && request.no_fly.is_none() {
         return Err(bad_input(
             "--fence uploads the no-fly zones as the vehicle's fence: give them with --no-fly FILE (or no_fly in --config)",

@@ -9,7 +9,7 @@ use skyplan_map::colliders::GeodeticHome;
 use skyplan_map::nofly::{Zone, ZoneShape, parse_no_fly};
 use std::path::{Path, PathBuf};
 mod common;
-use common::{fails_with, ok_json, rows};
+use common::{fails_with, ok_json, rows, succeed};
 use skyplan_testkit::distance_to_segment;
 
 fn data(name: &str) -> PathBuf {
@@ -269,4 +269,184 @@ fn a_plan_file_refuses_a_fence_whose_dropped_hole_holds_the_route() {
         polygons[0]["polygon"][0],
         serde_json::json!([37.79948, -122.40045])
     );
+}
+
+/// The sample zones with the helipad's (feature 1) window replaced by `start`, `end`.
+fn with_helipad_window(start: &str, end: &str) -> String {
+    let text = std::fs::read_to_string(data("no-fly-sample.geojson")).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    let props = &mut v["features"][1]["properties"];
+    props["start"] = start.into();
+    props["end"] = end.into();
+    v.to_string()
+}
+
+#[test]
+fn a_departure_applies_only_the_zones_active_during_the_flight() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    let plan = |zones: &Path, departure: &str| {
+        ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --no-fly {} --departure {departure}",
+                zones.display()
+            ),
+        )
+    };
+    // The helipad (feature 1) is closed 08:00 to 20:00 on 2026-12-03.
+    let early = plan(&zones_path, "2026-12-03T07:00:00Z");
+    let zones = zones_of(&zones_path, &early["home"]);
+    let (stadium, helipad) = (&zones[0], &zones[1]);
+    assert_eq!(early["no_fly"]["outside_window"], serde_json::json!([1]));
+    assert!(
+        clearance(&rows(&early), helipad) < 5.0,
+        "crosses the open helipad"
+    );
+    assert!(clearance(&rows(&early), stadium) >= 5.0 - 1e-6);
+    let (dep, arrival) = (
+        early["no_fly"]["departure"].as_str().unwrap().to_string(),
+        early["no_fly"]["latest_arrival"]
+            .as_str()
+            .unwrap()
+            .to_string(),
+    );
+    assert_eq!(dep, "2026-12-03T07:00:00Z");
+    // The latest arrival bounds the flight: at least its length at 10 m/s.
+    let window_s = skyplan_map::nofly::parse_rfc3339(&arrival).unwrap()
+        - skyplan_map::nofly::parse_rfc3339(&dep).unwrap();
+    let length_m = early["mission_length_m"].as_f64().unwrap();
+    assert!(window_s as f64 > length_m / 10.0 + 60.0, "{window_s} s");
+    for departure in [
+        "2026-12-03T07:58:00Z",
+        "2026-12-03T12:00:00Z",
+        "2026-12-03T19:59:00Z",
+    ] {
+        let v = plan(&zones_path, departure);
+        assert_eq!(v["no_fly"]["outside_window"], serde_json::json!([]));
+        for z in [stadium, helipad] {
+            assert!(clearance(&rows(&v), z) >= 5.0 - 1e-6, "{departure}");
+        }
+    }
+    let late = plan(&zones_path, "2026-12-03T20:00:00Z");
+    assert_eq!(late["waypoints"], early["waypoints"]);
+    // At the edge of the window: a zone opening one second before the latest arrival applies,
+    // one opening one second after does not.
+    let second = |s: i64| {
+        skyplan_map::nofly::rfc3339_from_unix_s(
+            skyplan_map::nofly::parse_rfc3339(&arrival).unwrap() + s,
+        )
+    };
+    for (opens, applies) in [(second(-1), true), (second(1), false)] {
+        let path = dir.path().join("timed.geojson");
+        std::fs::write(&path, with_helipad_window(&opens, "2026-12-04T00:00:00Z")).unwrap();
+        let v = plan(&path, &dep);
+        assert_eq!(
+            clearance(&rows(&v), helipad) >= 5.0 - 1e-6,
+            applies,
+            "{opens}"
+        );
+        if !applies {
+            assert_eq!(v["no_fly"]["latest_arrival"], arrival.as_str());
+        }
+    }
+    // Without a departure the helipad applies whatever its times, and the summary says so.
+    let out = succeed(
+        dir.path(),
+        &format!("plan --no-fly {}", zones_path.display()),
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("no-fly     3 zones: 2 apply; not at this altitude: feature 2; timed, counted as active at every time"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_bad_departure_or_one_without_zones_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones = data("no-fly-sample.geojson");
+    fails_with(
+        dir.path(),
+        &format!(
+            "plan --no-fly {} --departure 2026-13-01T00:00:00Z",
+            zones.display()
+        ),
+        2,
+        &["departure \"2026-13-01T00:00:00Z\": expected an RFC 3339 time"],
+    );
+    fails_with(
+        dir.path(),
+        "plan --departure 2026-12-03T07:00:00Z",
+        2,
+        &["departure is used only with no-fly zones (--no-fly)"],
+    );
+    fails_with(
+        dir.path(),
+        &format!(
+            "fly --sim --no-fly {} --departure 2026-12-03T07:00:00Z",
+            zones.display()
+        ),
+        2,
+        &["--departure: fly takes off now"],
+    );
+}
+
+/// The flown track of a `fly --log` CSV as waypoint rows (north, east, altitude, 0).
+fn track(log: &Path) -> Vec<[f64; 4]> {
+    let text = std::fs::read_to_string(log).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let (n, e, a) = (col("north_m"), col("east_m"), col("alt_m"));
+    lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .map(|f| {
+            [
+                f[n].parse().unwrap(),
+                f[e].parse().unwrap(),
+                f[a].parse().unwrap(),
+                0.0,
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn a_flight_replanned_around_hidden_buildings_keeps_out_of_the_zones() {
+    // Seed 1's hidden buildings send the replanned route straight through the stadium and the
+    // helipad when the replanner does not know the zones.
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    let out = succeed(
+        dir.path(),
+        &format!(
+            "fly --sim --speedup 20 --no-fly {} --hidden-random 3 --seed 1 --log track.csv",
+            zones_path.display()
+        ),
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("landed and disarmed after reaching all"),
+        "{text}"
+    );
+    let replans: usize = text
+        .lines()
+        .find_map(|l| l.strip_prefix("replans"))
+        .and_then(|l| l.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0);
+    assert!(replans >= 1, "{text}");
+    let plan = ok_json(
+        dir.path(),
+        &format!("plan --json --no-fly {}", zones_path.display()),
+    );
+    let flown = track(&dir.path().join("track.csv"));
+    for z in zones_of(&zones_path, &plan["home"])
+        .iter()
+        .filter(|z| z.meets_altitude(5.0, 5.0))
+    {
+        // The margin less the vehicle's tracking error.
+        let c = clearance(&flown, z);
+        assert!(c >= 4.0, "zone {}: {c:.2} m", z.feature);
+    }
 }

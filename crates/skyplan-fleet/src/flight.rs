@@ -92,6 +92,28 @@ pub fn departure_window(
     Ok(window)
 }
 
+/// Refuses a plan request that gives its own `departure`: an intent's departure (a window the
+/// reservation may move it in) says when it flies, and the request's no-fly zones all apply
+/// whatever their time windows.
+///
+/// ```
+/// use skyplan_plan::PlanRequest;
+/// assert!(skyplan_fleet::refuse_plan_departure(&PlanRequest::default()).is_ok());
+/// let timed = PlanRequest { departure: Some("2026-12-03T17:00:00Z".into()), ..Default::default() };
+/// assert!(skyplan_fleet::refuse_plan_departure(&timed).unwrap_err().starts_with("plan.departure"));
+/// ```
+pub fn refuse_plan_departure(request: &skyplan_plan::PlanRequest) -> Result<(), String> {
+    match request.departure {
+        None => Ok(()),
+        Some(_) => Err(
+            "plan.departure: an intent's departure (its window) says when it flies; \
+             give it there, not in the plan (the plan's no-fly zones all apply whatever their \
+             time windows)"
+                .into(),
+        ),
+    }
+}
+
 /// Refuses a window that ends before it starts, starts more than [`PAST_SLACK_MS`] before
 /// `now` or ends more than [`HORIZON_MS`] after it.
 pub fn check_window(

@@ -41,7 +41,8 @@ mod space_time;
 
 pub use flight::{
     DEPARTURE_STEP_MS, FieldError, FlightError, FlightRequest, HORIZON_MS, PAST_SLACK_MS,
-    ReservedFlight, check_window, departure_window, flight_volumes, reserve_flight, reserve_plan,
+    ReservedFlight, check_window, departure_window, flight_volumes, refuse_plan_departure,
+    reserve_flight, reserve_plan,
 };
 pub use mission::{
     Clock, DEFAULT_WINDOW_S, Format, MAX_NAME_CHARS, MAX_WINDOW_S, Mission, MissionsError, Place,

@@ -185,6 +185,10 @@ pub fn fly_mission(
     options: &RunOptions,
     stored_before: usize,
 ) -> Result<FlightRecord, FleetError> {
+    crate::refuse_plan_departure(base).map_err(|error| FleetError::Flight {
+        mission: mission.id.clone(),
+        error,
+    })?;
     let t0 = Instant::now();
     let planned = session.plan(&mission.request(base));
     let plan_ms = t0.elapsed().as_secs_f64() * 1e3;

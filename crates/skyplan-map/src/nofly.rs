@@ -607,6 +607,34 @@ pub fn parse_rfc3339(s: &str) -> Option<i64> {
     Some(days * 86_400 + h * 3600 + mi * 60 + sec - offset_s)
 }
 
+/// The RFC 3339 text of a time in Unix seconds, UTC (`2026-12-03T17:00:00Z`): what
+/// [`parse_rfc3339`] reads back.
+///
+/// ```
+/// use skyplan_map::nofly::{parse_rfc3339, rfc3339_from_unix_s};
+/// assert_eq!(rfc3339_from_unix_s(951_868_800), "2000-03-01T00:00:00Z");
+/// assert_eq!(parse_rfc3339(&rfc3339_from_unix_s(1_796_317_200)), Some(1_796_317_200));
+/// ```
+pub fn rfc3339_from_unix_s(unix_s: i64) -> String {
+    let (days, s) = (unix_s.div_euclid(86_400), unix_s.rem_euclid(86_400));
+    // The civil date of a day number (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        s / 3600,
+        s / 60 % 60,
+        s % 60
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -763,6 +791,13 @@ mod tests {
         ] {
             let e = parse_no_fly(bad).unwrap_err().to_string();
             assert!(e.starts_with(want), "{e}\nwanted {want}");
+        }
+    }
+
+    #[test]
+    fn rfc3339_text_round_trips() {
+        for t in (-3_000_000_000i64..5_000_000_000).step_by(7_777_777) {
+            assert_eq!(parse_rfc3339(&rfc3339_from_unix_s(t)), Some(t), "{t}");
         }
     }
 

@@ -130,6 +130,8 @@ pub fn in_cli_words(message: &str) -> String {
             .filter(|(key, _)| key.contains('_'))
             // The session's memory limit (`Limits`), an option of every command that plans.
             .chain([("max_memory".to_string(), "--max-memory".to_string())])
+            // The zones' file, read by the CLI into the request's text.
+            .chain([("no_fly".to_string(), "--no-fly".to_string())])
             .collect()
     });
     let mut out = String::with_capacity(message.len() + 8);

@@ -93,22 +93,30 @@ pub(crate) fn end_cell(
 /// altitude, with the request's no-fly zones blocked on a copy.
 pub(crate) fn grid_for(session: &mut Session, q: &Query) -> Result<(Arc<Grid2>, u64), PlanFailure> {
     let t = Instant::now();
-    let mut grid = session.grid(q.r.alt_m, q.r.safety_m, q.r.cell_m)?;
-    if !q.zones.is_empty() {
-        let mut zoned = grid.as_ref().clone();
-        zoned
-            .block_zones(
-                q.zones,
-                skyplan_cspace::GridSpec {
-                    alt_m: q.r.alt_m,
-                    safety_m: q.r.safety_m,
-                    cell_m: q.r.cell_m,
-                },
-            )
-            .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))?;
-        grid = Arc::new(zoned);
+    let grid = session.grid(q.r.alt_m, q.r.safety_m, q.r.cell_m)?;
+    let spec = skyplan_cspace::GridSpec {
+        alt_m: q.r.alt_m,
+        safety_m: q.r.safety_m,
+        cell_m: q.r.cell_m,
+    };
+    Ok((with_zones(grid, q.zones, spec)?, micros(t.elapsed())))
+}
+
+/// `grid` with `zones` blocked at `spec`'s altitude and margin, on a copy (the same grid when
+/// there are none).
+pub(crate) fn with_zones(
+    grid: Arc<Grid2>,
+    zones: &[skyplan_map::nofly::Zone],
+    spec: skyplan_cspace::GridSpec,
+) -> Result<Arc<Grid2>, PlanFailure> {
+    if zones.is_empty() {
+        return Ok(grid);
     }
-    Ok((grid, micros(t.elapsed())))
+    let mut zoned = grid.as_ref().clone();
+    zoned
+        .block_zones(zones, spec)
+        .map_err(|e| PlanFailure::bad_request(format!("no_fly: {e}")))?;
+    Ok(Arc::new(zoned))
 }
 
 /// Why the goal cannot be reached: both regions' sizes and the reachable point nearest the goal.

@@ -87,6 +87,7 @@ mod summary;
 mod three_d;
 mod voronoi;
 mod world;
+mod zone_times;
 
 pub use cell_search::CellSearch;
 pub use config::{ConfigError, ConfigText, parse_config_toml};
@@ -109,3 +110,4 @@ pub use world::{
     BoundsNe, FCND_CITY_CSV, FCND_CITY_NAME, FCND_DEFAULT_GOAL_NE, Limits, MapFormat, MapKind,
     World, human_bytes,
 };
+pub use zone_times::{ARRIVAL_FACTOR, ARRIVAL_SLACK_S, latest_arrival_s};

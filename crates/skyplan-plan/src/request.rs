@@ -187,6 +187,12 @@ pub struct PlanRequest {
     /// footprint maps; the 3D planners and Voronoi refuse it.
     #[cfg_attr(feature = "clap", arg(skip))]
     pub no_fly: Option<String>,
+    /// When the flight leaves, an RFC 3339 time (`2026-12-03T17:00:00Z`): a no-fly zone with
+    /// a time window then applies only when that window meets the flight's, from the departure
+    /// to the latest arrival ([`latest_arrival_s`](crate::latest_arrival_s)). Without it every
+    /// timed zone applies whatever its times (the safe side). Used only with `no_fly`.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "TIME"))]
+    pub departure: Option<String>,
     /// A saved PRM roadmap to start from / return the roadmap (Rust callers only).
     #[serde(skip)]
     #[cfg_attr(feature = "clap", arg(skip))]
@@ -227,7 +233,7 @@ impl PlanRequest {
             prune, epsilon, shortcut, time_limit_ms, seed, min_alt_m, max_alt_m, climb_weight,
             voxel_m, layer_m, field, inscribed_radius_m, inflation_radius_m, cost_scaling,
             cost_weight, trajectory, max_speed_m_s, max_accel_m_s2, max_jerk_m_s3, max_climb_m_s,
-            max_descent_m_s, max_yaw_rate_deg_s, sample_hz, geometry, no_fly)
+            max_descent_m_s, max_yaw_rate_deg_s, sample_hz, geometry, no_fly, departure)
     }
 
     /// The trajectory limits given, each over its default.
@@ -406,6 +412,8 @@ pub(crate) struct Resolved {
     pub trajectory: Option<TrajectorySpec>,
     /// The request's no-fly zones, parsed (longitude/latitude).
     pub no_fly: Option<skyplan_map::nofly::NoFlyZones>,
+    /// The departure (Unix seconds, UTC), when given.
+    pub departure_unix_s: Option<i64>,
     /// `alt_agl_m` when given (the flight altitude `alt_m` is then this height).
     pub alt_agl_m: Option<f64>,
     /// Steepest climb and descent over terrain, metres per metre flown horizontally.
@@ -583,6 +591,27 @@ fn volume(r: &PlanRequest, start: &End, goal: &End) -> Result<(f64, f64), PlanFa
     Ok((min_alt_m, max_alt_m))
 }
 
+/// The request's departure in Unix seconds: an RFC 3339 time, given with no-fly zones.
+fn departure(r: &PlanRequest) -> Result<Option<i64>, PlanFailure> {
+    let Some(text) = &r.departure else {
+        return Ok(None);
+    };
+    if r.no_fly.is_none() {
+        return Err(bad(
+            "departure is used only with no-fly zones (no_fly): it says which timed zones apply"
+                .into(),
+        ));
+    }
+    skyplan_map::nofly::parse_rfc3339(text)
+        .map(Some)
+        .ok_or_else(|| {
+            bad(format!(
+                "departure \"{}\": expected an RFC 3339 time such as \"2026-12-03T17:00:00Z\"",
+                text.chars().take(40).collect::<String>()
+            ))
+        })
+}
+
 impl Resolved {
     /// The values every front end reads back from a plan.
     pub(crate) fn spec(&self) -> PlanSpec {
@@ -680,6 +709,7 @@ impl Resolved {
                 .map(skyplan_map::nofly::parse_no_fly)
                 .transpose()
                 .map_err(|e| bad(format!("no_fly: {e}")))?,
+            departure_unix_s: departure(r)?,
             alt_agl_m,
             terrain_slopes: [
                 limits.max_climb_m_s / limits.max_speed_m_s,

@@ -11,9 +11,11 @@ use crate::plan::{
 use crate::planner_id::{MapKinds, PlannerId};
 use crate::request::{PlanRequest, Position, Resolved, RoadmapIo, TrajectorySpec};
 use crate::world::{Limits, Source, World, check_memory};
+use crate::zone_times::{ZoneReport, meets_window};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
+use skyplan_map::nofly::Zone;
 use skyplan_mission::Mission;
 use skyplan_search::ch_file::ChFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
@@ -612,13 +614,15 @@ impl Session {
             roadmap: &request.roadmap,
             zones: &zones,
         };
-        let mut route = r.planner.algorithm().plan(self, &q)?;
-        recheck(&route)?;
+        let (mut route, zone_report) = self.route_among_zones(&q, &request.trajectory_limits())?;
         if let Some(terrain) = world.terrain() {
             follow_terrain(terrain, &r, &mut route, !three_d)?;
             check_inclusion_bands(&self.projected_zones(&r)?, &route.points, r.safety_m)?;
         }
         let mut plan = assemble(&world, &r, route, [start_lla, goal_lla], t0)?;
+        if let Some(report) = zone_report {
+            plan.details.insert("no_fly".into(), report.json());
+        }
         if let (Some(terrain), Some(rows)) = (world.terrain(), plan.waypoints_lla.as_mut()) {
             for (row, w) in rows.iter_mut().zip(&plan.waypoints) {
                 row.push(terrain.amsl_m(w[2]));
@@ -631,9 +635,70 @@ impl Session {
         Ok(plan)
     }
 
+    /// The route of `q` (re-checked), planned among the zones that apply to its flight (see
+    /// [`crate::zone_times`]), and what the plan says about its zones (`None` without zones).
+    fn route_among_zones(
+        &mut self,
+        q: &Query,
+        limits: &crate::TrajectoryLimits,
+    ) -> Result<(Route, Option<ZoneReport>), PlanFailure> {
+        let route_with = |session: &mut Self, zones: &[Zone]| {
+            let route =
+                q.r.planner
+                    .algorithm()
+                    .plan(session, &Query { zones, ..*q })?;
+            recheck(&route)?;
+            Ok::<_, PlanFailure>(route)
+        };
+        let report = |applied: &[Zone]| ZoneReport::new(q.zones, applied, q.r.alt_m, q.r.safety_m);
+        if q.r.no_fly.is_none() {
+            return Ok((route_with(self, q.zones)?, None));
+        }
+        let Some(departure) = q.r.departure_unix_s else {
+            let mut r = report(q.zones);
+            r.timed_always = (q.zones.iter())
+                .filter(|z| z.start_unix_s.is_some() || z.end_unix_s.is_some())
+                .map(|z| z.feature)
+                .collect();
+            return Ok((route_with(self, q.zones)?, Some(r)));
+        };
+        let arrival = |route: &Route| -> Result<i64, PlanFailure> {
+            let stop = skyplan_trajectory::stop_at_waypoints(&route.points, limits)
+                .map_err(|e| PlanFailure::internal(format!("the flight's latest arrival: {e}")))?;
+            Ok(departure.saturating_add(crate::latest_arrival_s(stop.duration_s()).ceil() as i64))
+        };
+        let open: Vec<Zone> = (q.zones.iter())
+            .filter(|z| meets_window(z, departure, i64::MAX))
+            .cloned()
+            .collect();
+        let first = route_with(self, &open)?;
+        let first_arrival = arrival(&first)?;
+        let during = |zones: &[Zone], until: i64| -> Vec<Zone> {
+            (zones.iter())
+                .filter(|z| meets_window(z, departure, until))
+                .cloned()
+                .collect()
+        };
+        let fewer = during(&open, first_arrival);
+        if fewer.len() < open.len()
+            && let Ok(second) = route_with(self, &fewer)
+        {
+            let second_arrival = arrival(&second)?;
+            // The zones open during a flight only grow with its length.
+            if during(&open, second_arrival).len() <= fewer.len() {
+                let mut r = report(&fewer);
+                r.window = Some((departure, second_arrival));
+                return Ok((second, Some(r)));
+            }
+        }
+        let mut r = report(&open);
+        r.window = Some((departure, first_arrival));
+        Ok((first, Some(r)))
+    }
+
     /// The request's no-fly zones in the map's frame, or a bad request: zones need a map whose
-    /// grid is at an altitude (colliders or footprints) and a 2D planner. Timed zones count as
-    /// active whatever their times (a request carries no departure time: the safe side).
+    /// grid is at an altitude (colliders or footprints) and a 2D planner; all of them, whatever
+    /// their times ([`Session::route_among_zones`] picks those that apply).
     fn zones(&self, r: &Resolved) -> Result<Vec<skyplan_map::nofly::Zone>, PlanFailure> {
         if r.no_fly.is_none() {
             return Ok(Vec::new());
@@ -736,6 +801,48 @@ impl Session {
             length_over_max_speed_s: length / spec.limits.max_speed_m_s,
             trajectory: traj,
         })
+    }
+
+    /// The grid a 2D flight of `request` keeps to at `alt_m` (the replanner's layers): the
+    /// map's grid at that altitude with the request's margin and cell size, less every no-fly
+    /// zone of the request that applies there — whatever its time window, but for those that
+    /// end before the request's departure, since a flight replanned in the air has no arrival
+    /// known in advance.
+    ///
+    /// ```
+    /// use skyplan_plan::{PlanRequest, Session, World};
+    /// let zones = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/no-fly-sample.geojson"))?;
+    /// let request = PlanRequest { no_fly: Some(zones), ..Default::default() };
+    /// let mut session = Session::new(World::fcnd_city());
+    /// let plain = session.grid(5.0, 5.0, 1.0)?;
+    /// let zoned = session.zoned_grid(&request, 5.0)?;
+    /// // The stadium's disc and the helipad are blocked too; the approach path (60 m up) is not.
+    /// assert!(zoned.blocked_count() > plain.blocked_count() + 3000);
+    /// // 60 m up, in the approach path's band: more still.
+    /// let high = session.zoned_grid(&request, 60.0)?;
+    /// assert!(high.blocked_count() > session.grid(60.0, 5.0, 1.0)?.blocked_count() + 3000);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn zoned_grid(
+        &mut self,
+        request: &PlanRequest,
+        alt_m: f64,
+    ) -> Result<Arc<Grid2>, PlanFailure> {
+        let r = Resolved::new(request)?;
+        let grid = self.grid(alt_m, r.safety_m, r.cell_m)?;
+        if r.no_fly.is_none() {
+            return Ok(grid);
+        }
+        let mut zones = self.zones(&r)?;
+        if let Some(departure) = r.departure_unix_s {
+            zones.retain(|z| meets_window(z, departure, i64::MAX));
+        }
+        let spec = GridSpec {
+            alt_m,
+            safety_m: r.safety_m,
+            cell_m: r.cell_m,
+        };
+        crate::grid::with_zones(grid, &zones, spec)
     }
 
     /// The free space a plan's trajectory is made in: the 3D boxes grown by the margin on

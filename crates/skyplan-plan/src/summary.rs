@@ -77,6 +77,13 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             num("climb_m")
         )?;
     }
+    if let Some(line) = plan
+        .details
+        .get("no_fly")
+        .and_then(crate::zone_times::summary_line)
+    {
+        writeln!(f, "{line}")?;
+    }
     writeln!(
         f,
         "start      {}{}",

@@ -175,6 +175,7 @@ impl Airspace {
         };
         needs_home(planner)?;
         let request = request_of(start, goal, options)?;
+        skyplan_fleet::refuse_plan_departure(&request).map_err(bad_input)?;
         if space_time && request.no_fly.is_some() {
             return Err(bad_input(
                 "no_fly: the space-time search does not honour no-fly zones yet; use search=\"departure\"",

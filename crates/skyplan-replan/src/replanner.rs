@@ -353,7 +353,8 @@ impl Replanner {
             if k > 0 && (flat || alt_m > options.max_alt_m + 1e-9) {
                 break;
             }
-            let known = session.grid(alt_m, info.safety_m, info.cell_m)?;
+            // The request's no-fly zones are as much in the way as the map's obstacles.
+            let known = session.zoned_grid(request, alt_m)?;
             layers.push(Layer {
                 alt_m,
                 world: WorldModel::new(known, info.safety_m),

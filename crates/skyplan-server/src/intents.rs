@@ -116,6 +116,7 @@ pub(crate) async fn create(
     }
     let store = store(&s)?;
     let plan_request = request.plan;
+    skyplan_fleet::refuse_plan_departure(&plan_request).map_err(bad)?;
     let shape = crate::handlers::shape(&plan_request);
     if request.search == Search::SpaceTime && plan_request.no_fly.is_some() {
         return Err(bad(

@@ -204,6 +204,7 @@ class Planner:
         time_limit_ms: Optional[int] = None,
         seed: Optional[int] = None,
         no_fly: Optional[str] = None,
+        departure: Optional[str] = None,
         **options: Any,
     ) -> Plan:
         """Plans a route from ``start`` to ``goal`` ((north_m, east_m)); options as the CLI's.
@@ -211,6 +212,9 @@ class Planner:
         ``planner``: a ``name`` from :func:`planners` (every planner of the registry).
         ``no_fly``: the text of a no-fly zone file (GeoJSON or a QGroundControl ``.plan``), e.g.
         ``open("data/no-fly-sample.geojson").read()``; the 2D planners go around the zones.
+        ``departure``: when the flight leaves (RFC 3339, ``"2026-12-03T17:00:00Z"``); a zone
+        with a time window then applies only if it is active between the departure and the
+        latest arrival (without it every timed zone applies).
         """
 
 @final
