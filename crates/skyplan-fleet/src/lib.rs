@@ -54,5 +54,5 @@ pub use run::{
 };
 pub use space_time::{
     BULGE_CELLS, MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M, STRETCH_S,
-    SpaceTimeFlight, reserve_space_time, search_grid,
+    SearchSpace, SpaceTimeFlight, reserve_space_time, search_grid,
 };

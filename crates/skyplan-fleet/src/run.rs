@@ -238,7 +238,6 @@ pub fn fly_mission(
         error,
     };
     if options.mode == Mode::SpaceTime {
-        let no_fly = base.no_fly.is_some();
         return space_time(
             session,
             store,
@@ -246,7 +245,7 @@ pub fn fly_mission(
             &request,
             record,
             (t0, t1),
-            no_fly,
+            &mission.request(base),
             fail,
         );
     }
@@ -304,16 +303,11 @@ fn space_time(
     request: &FlightRequest,
     mut record: FlightRecord,
     (t0, t1): (Instant, Instant),
-    no_fly: bool,
+    planned_for: &PlanRequest,
     fail: impl Fn(String) -> FleetError,
 ) -> Result<FlightRecord, FleetError> {
-    if no_fly {
-        return Err(fail(
-            "the space-time search does not honour no-fly zones yet; use the departure shift"
-                .into(),
-        ));
-    }
-    let Some(grid) = crate::search_grid(session, plan).map_err(|f| fail(f.message))? else {
+    let Some(grid) = crate::search_grid(session, planned_for, plan).map_err(|f| fail(f.message))?
+    else {
         return Err(fail(format!(
             "the space-time search needs a 2D grid planner; {} has no grid",
             plan.planner.name()

@@ -27,6 +27,7 @@ use skyplan_airspace::{
 use skyplan_airspace_store::{Insert, IntentStore, RESERVE_TRIES, ReserveError, new_id};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_frames::{Lla, LocalFrame};
+use skyplan_map::nofly::Zone;
 use skyplan_plan::Plan;
 use std::collections::HashMap;
 
@@ -93,16 +94,80 @@ impl SpaceTimeFlight {
     }
 }
 
-/// The grid the space-time search runs on for `plan`, from `session` (built once there): the
-/// plan's map at its altitude and margin in cells of [`SEARCH_CELL_M`] (or the plan's own, if
-/// coarser); `None` for a plan without a grid (the 3D planners).
+/// Where the space-time search may go: its grid and the no-fly zones it keeps out of.
+#[derive(Debug, Clone)]
+pub struct SearchSpace {
+    /// The plan's map at its altitude and margin, the request's no-fly zones blocked (whatever
+    /// their time windows), in cells of [`SEARCH_CELL_M`] (or the plan's own, if coarser).
+    pub grid: std::sync::Arc<Grid2>,
+    /// The request's no-fly zones in the map's frame: the route found is checked against them
+    /// exactly before it is reserved.
+    pub zones: Vec<Zone>,
+    /// The plan's margin, metres.
+    pub margin_m: f64,
+}
+
+/// Where the space-time search runs for `plan` of `request`, from `session` (the map's grid
+/// built once there); `None` for a plan without a grid (the 3D planners).
 pub fn search_grid(
     session: &mut skyplan_plan::Session,
+    request: &skyplan_plan::PlanRequest,
     plan: &Plan,
-) -> Result<Option<std::sync::Arc<Grid2>>, skyplan_plan::PlanFailure> {
-    plan.grid
-        .map(|g| session.grid(g.alt_m, g.safety_m, g.cell_m.max(SEARCH_CELL_M)))
-        .transpose()
+) -> Result<Option<SearchSpace>, skyplan_plan::PlanFailure> {
+    let Some(g) = plan.grid else {
+        return Ok(None);
+    };
+    let coarse = skyplan_plan::PlanRequest {
+        cell_m: Some(g.cell_m.max(SEARCH_CELL_M)),
+        safety_m: Some(g.safety_m),
+        ..request.clone()
+    };
+    Ok(Some(SearchSpace {
+        grid: session.zoned_grid(&coarse, g.alt_m)?,
+        zones: session.zones_for(request)?,
+        margin_m: g.safety_m,
+    }))
+}
+
+/// The first zone (feature index, clearance) the route at `alt_m` keeps less than the margin
+/// from: an exclusion zone whose band grown by the margin holds the altitude and that the
+/// route nears; an inclusion boundary whose band shrunk by the margin does not hold the
+/// altitude, that the route starts outside of, or whose boundary it nears.
+fn zone_in_the_way(
+    route_nea: &[[f64; 3]],
+    zones: &[Zone],
+    alt_m: f64,
+    margin_m: f64,
+) -> Option<(usize, f64)> {
+    // A millimetre for the projections' rounding.
+    let enough = margin_m - 1e-3;
+    let segments = || {
+        route_nea
+            .windows(2)
+            .map(|w| ([w[0][0], w[0][1]], [w[1][0], w[1][1]]))
+    };
+    for z in zones {
+        let (bad, clearance) = if z.inclusion {
+            let inside = (route_nea.first())
+                .is_some_and(|p| z.clearance_m([p[0], p[1]], [p[0], p[1]]) == 0.0);
+            let c = segments()
+                .map(|(a, b)| z.boundary_clearance_m(a, b))
+                .fold(f64::INFINITY, f64::min);
+            (
+                !z.holds_altitude(alt_m, margin_m) || !inside || c < enough,
+                c,
+            )
+        } else {
+            let c = segments()
+                .map(|(a, b)| z.clearance_m(a, b))
+                .fold(f64::INFINITY, f64::min);
+            (z.meets_altitude(alt_m, margin_m) && c < enough, c)
+        };
+        if bad {
+            return Some((z.feature, clearance));
+        }
+    }
+    None
 }
 
 /// A stored volume as the search sees it: its footprint in the map's frame and its grown
@@ -387,19 +452,19 @@ fn corners(path: &[skyplan_airspace::TimedPoint]) -> Vec<[f64; 3]> {
     out
 }
 
-/// Re-routes `plan` (a 2D grid plan at one altitude) on `grid` (a grid of the same map at the
-/// plan's altitude and margin, e.g. of [`SEARCH_CELL_M`] cells) in space and time around the stored intents that bind it, and reserves the result; the
-/// counts of what was read as in [`skyplan_airspace_store::reserve_counted`].
+/// Re-routes `plan` (a 2D grid plan at one altitude) in `space` ([`search_grid`]: a grid of
+/// the same map at the plan's altitude and margin with its no-fly zones) in space and time
+/// around the stored intents that bind it, checks the route against the zones exactly, and
+/// reserves it; the counts of what was read as in [`skyplan_airspace_store::reserve_counted`].
 ///
 /// ```
-/// use skyplan_fleet::{FlightRequest, reserve_space_time};
+/// use skyplan_fleet::{FlightRequest, reserve_space_time, search_grid};
 /// use skyplan_airspace::{DepartureWindow, Timestamp};
 /// use skyplan_airspace_store::SqliteStore;
 /// use skyplan_plan::{PlanRequest, Session, World};
 /// let mut session = Session::new(World::fcnd_city());
 /// let plan = session.plan(&PlanRequest::default())?;
-/// let g = plan.grid.expect("a grid plan");
-/// let grid = session.grid(g.alt_m, g.safety_m, g.cell_m.max(skyplan_fleet::SEARCH_CELL_M))?;
+/// let grid = search_grid(&mut session, &PlanRequest::default(), &plan)?.expect("a grid plan");
 /// let store = SqliteStore::open_url("sqlite::memory:")?;
 /// let t0: Timestamp = "2026-03-01T12:00:00Z".parse()?;
 /// let window = DepartureWindow { earliest: t0, latest: t0.plus_ms(600_000) };
@@ -414,12 +479,12 @@ fn corners(path: &[skyplan_airspace::TimedPoint]) -> Vec<[f64; 3]> {
 /// ```
 pub fn reserve_space_time(
     store: &dyn IntentStore,
-    grid: &Grid2,
+    space: &SearchSpace,
     plan: &Plan,
     request: &FlightRequest,
 ) -> (Result<SpaceTimeFlight, ReserveError>, usize) {
     let mut nearby = 0;
-    let result = space_time_inner(store, grid, plan, request, &mut nearby);
+    let result = space_time_inner(store, space, plan, request, &mut nearby);
     (result, nearby)
 }
 
@@ -432,11 +497,12 @@ fn invalid(field: &str, why: impl Into<String>) -> ReserveError {
 
 fn space_time_inner(
     store: &dyn IntentStore,
-    grid: &Grid2,
+    space: &SearchSpace,
     plan: &Plan,
     request: &FlightRequest,
     nearby_count: &mut usize,
 ) -> Result<SpaceTimeFlight, ReserveError> {
+    let grid = space.grid.as_ref();
     let o = request.volumes;
     let window = request.window;
     if window.latest < window.earliest {
@@ -569,6 +635,17 @@ fn space_time_inner(
             alt_m,
         );
         let route_nea = corners(&path);
+        // The cells kept the route out of the zones; this is the exact word on it.
+        if let Some((feature, c)) = zone_in_the_way(&route_nea, &space.zones, alt_m, space.margin_m)
+        {
+            return Err(invalid(
+                "no_fly",
+                format!(
+                    "the route found in space and time comes {c:.2} m from no-fly zone {feature}, within the margin of {} m; nothing reserved",
+                    space.margin_m
+                ),
+            ));
+        }
         let flight = volumes_hugging_path(path, Timing::SpaceTime, &frame, &stretch, bulge_m)
             .map_err(ReserveError::Invalid)?;
         let delay_ms = (found.departure_s() * 1000.0).ceil() as i64;

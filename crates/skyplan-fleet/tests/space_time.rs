@@ -148,7 +148,7 @@ fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
     let (mut accepted, mut waited) = (0, 0);
     for m in &missions {
         let plan = session.plan(&m.request(&base)).expect("a route");
-        let search = search_grid(&mut session, &plan)
+        let search = search_grid(&mut session, &m.request(&base), &plan)
             .expect("grid")
             .expect("a grid plan");
         let request = FlightRequest::new(

@@ -119,6 +119,87 @@ impl Zone {
         self.start_unix_s.is_none_or(|s| s <= t) && self.end_unix_s.is_none_or(|e| t < e)
     }
 
+    /// The distance from the segment `a`–`b` (`[north, east]` metres) to the zone's shape, 0
+    /// where they meet (a polygon's holes are outside it; a circle is a disc).
+    ///
+    /// ```
+    /// use skyplan_map::nofly::{Zone, ZoneShape};
+    /// let disc = Zone { feature: 0, shape: ZoneShape::Circle { centre: [0.0, 0.0], radius_m: 1.0 },
+    ///                   floor_m: 0.0, ceiling_m: 50.0, inclusion: false, start_unix_s: None, end_unix_s: None };
+    /// assert_eq!(disc.clearance_m([3.0, -5.0], [3.0, 5.0]), 2.0);
+    /// assert_eq!(disc.clearance_m([0.5, -5.0], [0.5, 5.0]), 0.0);
+    /// ```
+    pub fn clearance_m(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
+        match &self.shape {
+            ZoneShape::Circle { centre, radius_m } => {
+                (point_segment_m(*centre, a, b) - radius_m).max(0.0)
+            }
+            ZoneShape::Polygon(rings) => {
+                // Even-odd over every ring: inside the outer ring and no hole.
+                let crossings: usize = (rings.iter())
+                    .map(|ring| {
+                        (0..ring.len())
+                            .filter(|&k| {
+                                let (c, d) = (ring[k], ring[(k + 1) % ring.len()]);
+                                (c[1] > a[1]) != (d[1] > a[1])
+                                    && a[0] < c[0] + (a[1] - c[1]) / (d[1] - c[1]) * (d[0] - c[0])
+                            })
+                            .count()
+                    })
+                    .sum();
+                if crossings % 2 == 1 {
+                    0.0
+                } else {
+                    self.boundary_clearance_m(a, b)
+                }
+            }
+        }
+    }
+
+    /// The distance from the segment `a`–`b` to the shape's boundary (a circle's rim, a
+    /// polygon's rings), 0 where it crosses or touches it: how far a route inside an inclusion
+    /// boundary keeps from leaving it.
+    ///
+    /// ```
+    /// use skyplan_map::nofly::{Zone, ZoneShape};
+    /// let disc = Zone { feature: 0, shape: ZoneShape::Circle { centre: [0.0, 0.0], radius_m: 10.0 },
+    ///                   floor_m: 0.0, ceiling_m: 50.0, inclusion: true, start_unix_s: None, end_unix_s: None };
+    /// assert_eq!(disc.boundary_clearance_m([0.0, -6.0], [0.0, 6.0]), 4.0);
+    /// assert_eq!(disc.boundary_clearance_m([0.0, -6.0], [0.0, 16.0]), 0.0);
+    /// ```
+    pub fn boundary_clearance_m(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
+        match &self.shape {
+            ZoneShape::Circle { centre, radius_m } => {
+                let far = (a[0] - centre[0])
+                    .hypot(a[1] - centre[1])
+                    .max((b[0] - centre[0]).hypot(b[1] - centre[1]));
+                let near = point_segment_m(*centre, a, b);
+                if far <= *radius_m {
+                    radius_m - far
+                } else {
+                    (near - radius_m).max(0.0)
+                }
+            }
+            ZoneShape::Polygon(rings) => {
+                let mut best = f64::INFINITY;
+                for ring in rings {
+                    for k in 0..ring.len() {
+                        let (c, d) = (ring[k], ring[(k + 1) % ring.len()]);
+                        if segments_meet(a, b, c, d) {
+                            return 0.0;
+                        }
+                        best = best
+                            .min(point_segment_m(a, c, d))
+                            .min(point_segment_m(b, c, d))
+                            .min(point_segment_m(c, a, b))
+                            .min(point_segment_m(d, a, b));
+                    }
+                }
+                best
+            }
+        }
+    }
+
     /// The shape's bounding box `(min, max)`, `[north, east]`, without margin.
     pub fn bbox_ne(&self) -> ([f64; 2], [f64; 2]) {
         match &self.shape {
@@ -525,6 +606,37 @@ fn parse_zone(i: usize, f: &Value, vertices: &mut usize) -> Result<GeoZone, Foot
     })
 }
 
+/// The distance from `p` to the segment `a`–`b`.
+fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a[0] + t * dx - p[0]).hypot(a[1] + t * dy - p[1])
+}
+
+/// Whether the closed segments `a`–`b` and `c`–`d` share a point.
+fn segments_meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+    let cross = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+    };
+    let (d1, d2) = (cross(a, b, c), cross(a, b, d));
+    let (d3, d4) = (cross(c, d, a), cross(c, d, b));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    // Touching or collinear: an end on the other segment.
+    point_segment_m(c, a, b) == 0.0
+        || point_segment_m(d, a, b) == 0.0
+        || point_segment_m(a, c, d) == 0.0
+        || point_segment_m(b, c, d) == 0.0
+}
+
 /// Seconds since 1970-01-01T00:00:00Z of an RFC 3339 date-time (`2026-12-03T17:00:00Z`,
 /// `…T17:00:00.5+01:00`; fractions of a second are dropped), or `None`.
 ///
@@ -791,6 +903,88 @@ mod tests {
         ] {
             let e = parse_no_fly(bad).unwrap_err().to_string();
             assert!(e.starts_with(want), "{e}\nwanted {want}");
+        }
+    }
+
+    #[test]
+    fn segment_clearance_agrees_with_dense_sampling() {
+        // SplitMix64: uniform numbers in [-10, 40).
+        let mut state = 7u64;
+        let mut uniform = || {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            -10.0 + 50.0 * ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        // An L-shaped polygon with a square hole, and a disc.
+        let l_shape = vec![
+            vec![
+                [0.0, 0.0],
+                [0.0, 30.0],
+                [10.0, 30.0],
+                [10.0, 10.0],
+                [30.0, 10.0],
+                [30.0, 0.0],
+            ],
+            vec![[2.0, 2.0], [2.0, 6.0], [6.0, 6.0], [6.0, 2.0]],
+        ];
+        let zone = |shape| Zone {
+            feature: 0,
+            shape,
+            floor_m: 0.0,
+            ceiling_m: 10.0,
+            inclusion: false,
+            start_unix_s: None,
+            end_unix_s: None,
+        };
+        let zones = [
+            zone(ZoneShape::Polygon(l_shape.clone())),
+            zone(ZoneShape::Circle {
+                centre: [15.0, 15.0],
+                radius_m: 4.0,
+            }),
+        ];
+        // A point's distance to the zone: 0 inside (even-odd), else to the nearest edge.
+        let point_m = |z: &Zone, p: [f64; 2]| match &z.shape {
+            ZoneShape::Circle { centre, radius_m } => {
+                ((p[0] - centre[0]).hypot(p[1] - centre[1]) - radius_m).max(0.0)
+            }
+            ZoneShape::Polygon(rings) => {
+                let mut odd = false;
+                let mut d = f64::INFINITY;
+                for ring in rings {
+                    for k in 0..ring.len() {
+                        let (c, e) = (ring[k], ring[(k + 1) % ring.len()]);
+                        d = d.min(point_segment_m(p, c, e));
+                        if (c[0] > p[0]) != (e[0] > p[0])
+                            && p[1] < c[1] + (p[0] - c[0]) / (e[0] - c[0]) * (e[1] - c[1])
+                        {
+                            odd = !odd;
+                        }
+                    }
+                }
+                if odd { 0.0 } else { d }
+            }
+        };
+        for _ in 0..400 {
+            let (a, b) = ([uniform(), uniform()], [uniform(), uniform()]);
+            for z in &zones {
+                let n = 20_000;
+                let sampled = (0..=n)
+                    .map(|k| {
+                        let t = f64::from(k) / f64::from(n);
+                        point_m(z, [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let exact = z.clearance_m(a, b);
+                // Sampling finds no less than the truth, and at most a step's length more.
+                let step = (b[0] - a[0]).hypot(b[1] - a[1]) / f64::from(n);
+                assert!(
+                    exact <= sampled + 1e-9 && sampled <= exact + step,
+                    "{a:?} {b:?}: {exact} vs {sampled}"
+                );
+            }
         }
     }
 

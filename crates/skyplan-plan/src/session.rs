@@ -845,6 +845,13 @@ impl Session {
         crate::grid::with_zones(grid, &zones, spec)
     }
 
+    /// The request's no-fly zones in the map's frame (bands above home), all of them whatever
+    /// their bands and times; empty without `no_fly`. Refused as a plan would refuse them (a
+    /// map without a home or an altitude, a planner that does not honour zones).
+    pub fn zones_for(&self, request: &PlanRequest) -> Result<Vec<Zone>, PlanFailure> {
+        self.zones(&Resolved::new(request)?)
+    }
+
     /// The free space a plan's trajectory is made in: the 3D boxes grown by the margin on
     /// colliders maps (without no-fly zones), else the plan's grid at its altitude — what a
     /// trajectory replanned in flight must keep to as well.

@@ -176,15 +176,10 @@ impl Airspace {
         needs_home(planner)?;
         let request = request_of(start, goal, options)?;
         skyplan_fleet::refuse_plan_departure(&request).map_err(bad_input)?;
-        if space_time && request.no_fly.is_some() {
-            return Err(bad_input(
-                "no_fly: the space-time search does not honour no-fly zones yet; use search=\"departure\"",
-            ));
-        }
         let planned = planner.with_session(py, move |session| {
             let plan = session.plan(&request)?;
             let grid = if space_time {
-                skyplan_fleet::search_grid(session, &plan)?
+                skyplan_fleet::search_grid(session, &request, &plan)?
             } else {
                 None
             };

@@ -118,11 +118,6 @@ pub(crate) async fn create(
     let plan_request = request.plan;
     skyplan_fleet::refuse_plan_departure(&plan_request).map_err(bad)?;
     let shape = crate::handlers::shape(&plan_request);
-    if request.search == Search::SpaceTime && plan_request.no_fly.is_some() {
-        return Err(bad(
-            "no_fly: the space-time search does not honour no-fly zones yet; use \"search\": \"departure\"".into(),
-        ));
-    }
     let space_time = request.search == Search::SpaceTime;
     let planned = s
         .pool
@@ -130,7 +125,7 @@ pub(crate) async fn create(
             let plan = session.plan(&plan_request)?;
             // The space-time search's grid, built in the session (and kept there).
             let grid = if space_time {
-                skyplan_fleet::search_grid(session, &plan)?
+                skyplan_fleet::search_grid(session, &plan_request, &plan)?
             } else {
                 None
             };

@@ -835,15 +835,44 @@ async fn intents_searched_in_space_and_time_keep_clear_as_documented() {
             "search: unknown variant `sideways`",
         ),
         (
-            json!({ "plan": { "no_fly": include_str!("../../../data/no-fly-sample.geojson") }, "departure": departure(0), "priority": 0, "owner": "o", "search": "space_time" }),
-            "no_fly: the space-time search does not honour no-fly zones yet",
+            json!({ "plan": { "no_fly": ZONES, "departure": departure(0) }, "departure": departure(0), "priority": 0, "owner": "o", "search": "space_time" }),
+            "plan.departure: an intent's departure (its window) says when it flies",
         ),
     ] {
         let (status, v) = send(app.clone(), "POST", "/api/intents", body).await;
         assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
         assert!(message(&v).contains(want), "{want:?} not in {v}");
     }
+    // With no-fly zones: re-routed around the others and out of the zones by the margin.
+    let (status, zoned) = send(
+        app.clone(),
+        "POST",
+        "/api/intents",
+        json!({ "plan": { "no_fly": ZONES }, "departure": departure(7200), "priority": 0, "owner": "zones", "search": "space_time" }),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{zoned}");
+    matches_schema(&doc, "/api/intents", "post", status, &zoned);
+    let route: Vec<[f64; 2]> =
+        serde_json::from_value(zoned["space_time"]["route_ne"].clone()).expect("route_ne");
+    let home = skyplan_map::colliders::GeodeticHome {
+        lat_deg: 37.792480,
+        lon_deg: -122.397450,
+    };
+    let zones = skyplan_map::nofly::parse_no_fly(ZONES)
+        .expect("zones")
+        .project(home, None)
+        .expect("projected");
+    for z in zones.iter().filter(|z| z.meets_altitude(5.0, 5.0)) {
+        let c = route
+            .windows(2)
+            .map(|w| z.clearance_m(w[0], w[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(c >= 5.0 - 1e-3, "zone {}: {c:.3} m", z.feature);
+    }
 }
+
+const ZONES: &str = include_str!("../../../data/no-fly-sample.geojson");
 
 #[tokio::test]
 async fn listing_intents_filters_by_time_altitude_and_area() {
