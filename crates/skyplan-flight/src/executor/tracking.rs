@@ -8,7 +8,12 @@
 //!    starts the reference clock;
 //! 2. *streaming*: [`Command::Track`] of `setpoint(t)` every [`REFERENCE_PERIOD_S`] until
 //!    t ≥ the duration; each telemetry sample is compared with the setpoint at its own reference
-//!    time (the vehicle's time stamp, [`Telemetry::sample_time_s`], when the link has it);
+//!    time (the vehicle's time stamp, [`Telemetry::sample_time_s`], when the link has it). The
+//!    reference clock `t` runs on the vehicle's clock when the link has its time stamps: the
+//!    latest stamp, plus the executor time since it arrived up to [`CLOCK_LEAD_GAPS`] usual gaps
+//!    between samples (at least [`CLOCK_LEAD_MIN_S`]), never backwards. A vehicle that stalls
+//!    (a simulator behind the wall clock) stalls its reference with it: seen against ArduCopter
+//!    SITL, a 2.4 s stall on the ground station's clock made the setpoint jump 94 m ahead;
 //! 3. *holding*: the last point streamed as a position target until the vehicle is within the
 //!    deadband (target 1 reached: the arrival), then the landing as in GUIDED.
 //!
@@ -37,6 +42,13 @@ pub const START_TOLERANCE_M: f64 = 0.2;
 
 /// …and slower than this, m/s: at rest, as the reference starts.
 pub const START_SPEED_M_S: f64 = 0.1;
+
+/// The reference clock runs at most this many of the usual gaps between the vehicle's time
+/// stamps ahead of the latest one…
+pub const CLOCK_LEAD_GAPS: f64 = 3.0;
+
+/// …and at most this much, seconds, when that is longer.
+pub const CLOCK_LEAD_MIN_S: f64 = 0.5;
 
 /// How far ahead on the reference's clock a replaced route takes over, seconds of vehicle
 /// time: the time a new trajectory may take to make (tens of milliseconds of wall time on the
@@ -93,6 +105,13 @@ pub struct ReferenceTracking {
     by_waypoints_from_s: Option<f64>,
     /// A note to tell at the next step (why the flight went on by waypoints).
     pending_note: Option<String>,
+    /// The vehicle's latest time stamp and the executor time it arrived at.
+    vehicle_clock: Option<(f64, f64)>,
+    /// The usual executor time between two of the vehicle's time stamps (a running mean, each
+    /// gap counted at most twice the mean so that a stall does not stretch it).
+    sample_gap_s: f64,
+    /// The clock's latest reading: it never runs backwards.
+    clock_s: f64,
 }
 
 impl fmt::Debug for ReferenceTracking {
@@ -195,7 +214,39 @@ impl ReferenceTracking {
             slowest_switch_ms: 0.0,
             by_waypoints_from_s: None,
             pending_note: None,
+            vehicle_clock: None,
+            sample_gap_s: 0.1,
+            clock_s: f64::NEG_INFINITY,
         }
+    }
+
+    /// Takes a vehicle time stamp `sample_s` that arrived at executor time `now_s`.
+    fn note_vehicle_time(&mut self, sample_s: f64, now_s: f64) {
+        if let Some((last_s, at_s)) = self.vehicle_clock {
+            if sample_s <= last_s {
+                return;
+            }
+            let gap_s = now_s - at_s;
+            if gap_s > 0.0 {
+                self.sample_gap_s =
+                    0.9 * self.sample_gap_s + 0.1 * gap_s.min(2.0 * self.sample_gap_s);
+            }
+        }
+        self.vehicle_clock = Some((sample_s, now_s));
+    }
+
+    /// The clock the reference runs on at executor time `now_s`: the vehicle's (see the module
+    /// documentation), or the executor's for a link without time stamps.
+    fn clock(&mut self, now_s: f64) -> f64 {
+        let reading = match self.vehicle_clock {
+            None => now_s,
+            Some((sample_s, at_s)) => {
+                let lead_s = (CLOCK_LEAD_GAPS * self.sample_gap_s).max(CLOCK_LEAD_MIN_S);
+                sample_s + (now_s - at_s).clamp(0.0, lead_s)
+            }
+        };
+        self.clock_s = self.clock_s.max(reading);
+        self.clock_s
     }
 
     /// The path ahead from reference time `from_s`: a target every [`AHEAD_STEP_S`] to the end.
@@ -300,6 +351,9 @@ impl Strategy for ReferenceTracking {
             out.notes.push(super::Note::ByWaypoints { reason });
         }
         if let Event::Telemetry(t) = event {
+            if let Some(sample_s) = t.sample_time_s {
+                self.note_vehicle_time(sample_s, now_s);
+            }
             self.measure(t, now_s);
         }
     }
@@ -334,7 +388,7 @@ impl Strategy for ReferenceTracking {
                 && t.speed_m_s() < START_SPEED_M_S
             {
                 core.reach(now_s, 0, out);
-                self.clock_start_s = Some(now_s);
+                self.clock_start_s = Some(self.clock(now_s));
                 self.phase = Phase::Streaming;
                 core.last_send_s = None;
                 if self.rereference.is_some() {
@@ -359,13 +413,14 @@ impl Strategy for ReferenceTracking {
         }
         let start_s = self.clock_start_s.unwrap_or(now_s);
         if self.phase == Phase::Streaming {
-            let t_ref = now_s - start_s;
+            let t_ref = self.clock(now_s) - start_s;
             self.advance_ahead(t_ref);
             if t_ref < self.duration_s {
                 if core.due(now_s, 0.9 * REFERENCE_PERIOD_S) {
                     out.commands.push(Command::Track {
                         setpoint: self.reference.setpoint(t_ref),
-                        time_s: now_s,
+                        // The instant it holds at, on the clock it runs on.
+                        time_s: start_s + t_ref,
                     });
                     self.setpoints_sent += 1;
                 }
@@ -441,7 +496,8 @@ impl Strategy for ReferenceTracking {
                 "a reference flight changes its route only while following its reference".into(),
             ));
         }
-        let at_s = now_s - start_s + SPLICE_LEAD_S;
+        let now_ref_s = self.clock(now_s) - start_s;
+        let at_s = now_ref_s + SPLICE_LEAD_S;
         if at_s >= self.duration_s {
             return Err(ConfigError(format!(
                 "the reference ends within {SPLICE_LEAD_S} s: too late to switch to a new route"
@@ -472,7 +528,7 @@ impl Strategy for ReferenceTracking {
             Err(e) => {
                 core.start_route(now_s, targets)?;
                 self.phase = Phase::Waypoints;
-                self.by_waypoints_from_s = Some(now_s - start_s);
+                self.by_waypoints_from_s = Some(now_ref_s);
                 self.ahead.clear();
                 self.pending_note = Some(format!(
                     "no trajectory for the new route from the moving vehicle ({e})"
@@ -491,7 +547,7 @@ impl Strategy for ReferenceTracking {
             alt_m: -end.point_ned[2],
             heading_rad: goal.heading_rad,
         };
-        self.sample_ahead(now_s - start_s);
+        self.sample_ahead(now_ref_s);
         Ok(())
     }
 
@@ -627,6 +683,57 @@ mod tests {
         );
     }
 
+    /// A vehicle that stalls (a simulator behind the ground station's clock: no messages for
+    /// 12 s of executor time, then its own clock runs on from where it stopped) stalls the
+    /// reference with it: no setpoint leaps ahead, and the flight ends as planned.
+    #[test]
+    fn a_stalled_vehicle_stalls_its_reference() {
+        let r = Arc::new(three_legs());
+        let mut ex = ReferenceExecutor::new(r.clone(), ExecutorConfig::default()).unwrap();
+        let mut v = SimVehicle::new(SimConfig::default());
+        let (mut t, mut pending) = (0.0, Vec::new());
+        let mut stalled = false;
+        let (mut farthest_m, mut after_stall) = (0.0_f64, 0);
+        while ex.outcome().is_none() && t < 400.0 {
+            t += 0.05;
+            let streaming_for = ex.tracking().and_then(|tr| tr.started_s).map(|s| t - s);
+            if !stalled && streaming_for.is_some_and(|s| s > 15.0) {
+                // Nothing arrives for 12 s; the vehicle stands still in its own time.
+                stalled = true;
+                t += 12.0;
+            }
+            for _ in 0..5 {
+                v.step(0.01);
+            }
+            let mut events = std::mem::take(&mut pending);
+            events.push(Event::Telemetry(telemetry(&v)));
+            for e in events {
+                let out = ex.handle(t, e);
+                for c in &out.commands {
+                    if let Command::Track { setpoint, .. } = c {
+                        let d = setpoint.distance_m(v.state().position_ned_m);
+                        farthest_m = farthest_m.max(d);
+                        after_stall += usize::from(stalled);
+                    }
+                    pending.extend(apply(&mut v, *c));
+                }
+            }
+        }
+        assert!(stalled && after_stall > 100, "{after_stall}");
+        assert_eq!(ex.outcome(), Some(&Outcome::Completed));
+        // At 8 m/s the executor's clock alone would put the setpoint 96 m ahead.
+        assert!(
+            farthest_m < 5.0,
+            "a setpoint {farthest_m:.1} m from the vehicle"
+        );
+        let report = ex.tracking().unwrap();
+        assert!(report.max_path_error_m < 0.5, "{report:?}");
+        assert!(
+            (1.0..1.05).contains(&report.time_ratio().unwrap()),
+            "{report:?}"
+        );
+    }
+
     /// With a re-referencer, a route watcher sees the path ahead and may replace the route
     /// while streaming: the new reference is asked for in the current one's state
     /// [`SPLICE_LEAD_S`] ahead, takes over there, and the setpoints run on without a jump to
@@ -697,7 +804,16 @@ mod tests {
                         .any(|n| matches!(n, Note::Replanned { .. }))
                 );
                 let at = t - start + SPLICE_LEAD_S;
-                assert_eq!(asked.lock().unwrap().last(), Some(&r.setpoint(at)));
+                // Asked in the reference's state then (to rounding: the clock is the vehicle's).
+                let asked_at = *asked.lock().unwrap().last().unwrap();
+                assert!(
+                    asked_at.distance_m(r.setpoint(at).point_ned) < 1e-9,
+                    "{asked_at:?}"
+                );
+                let dv: f64 = (0..3)
+                    .map(|i| (asked_at.vel_ned_m_s[i] - r.setpoint(at).vel_ned_m_s[i]).abs())
+                    .sum();
+                assert!(dv < 1e-9, "{asked_at:?}");
                 let report = ex.tracking().unwrap();
                 assert_eq!(report.switches, 1);
                 assert!((report.duration_s - (at + 12.0)).abs() < 1e-9, "{report:?}");
