@@ -135,7 +135,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
 
     let (address, sim) = vehicle(&args, &map, &frame, &request, &hidden)?;
     let zones = crate::picture::zones_of(&world, &request);
-    let drawing = plot.map(|plot| (world.clone(), plot, zones));
+    let drawing = plot.map(|plot| (world.clone(), plot, zones.clone()));
     let bar = progress_bar(0);
     bar.set_prefix("WAITING");
     let mut terminal = Terminal {
@@ -168,7 +168,14 @@ pub fn run(args: FlyArgs) -> Result<()> {
     }
     let report = sim.and_then(finish_sim);
     let flight = result?;
-    conclude(&args, &flight, drawing, &hidden, report.as_ref(), t0)
+    conclude(
+        &args,
+        &flight,
+        drawing,
+        (&hidden, &zones),
+        report.as_ref(),
+        t0,
+    )
 }
 
 /// With the built-in simulator the start is known, so a 2D route that cannot begin or end where
@@ -214,7 +221,7 @@ fn conclude(
         (Target, PictureKind),
         Vec<skyplan_map::nofly::Zone>,
     )>,
-    hidden: &[ObstacleBox],
+    (hidden, zones): (&[ObstacleBox], &[skyplan_map::nofly::Zone]),
     report: Option<&SimReport>,
     t0: Instant,
 ) -> Result<()> {
@@ -250,7 +257,14 @@ fn conclude(
         );
     }
     let margin_m = runner::plan_margin_m(&flight.plan);
-    finish_flight(report, outcome, margin_m, flight.tracking.as_ref(), t0)
+    let zone = skyplan_flyer::zones::closest_zone(&flight.log, zones, margin_m.unwrap_or(0.0));
+    finish_flight(
+        report,
+        outcome,
+        margin_m,
+        (flight.tracking.as_ref(), zone.as_ref()),
+        t0,
+    )
 }
 
 /// The obstacles of the simulated world that the map does not have: `--hidden FILE` and
@@ -362,14 +376,20 @@ fn finish_flight(
     report: Option<&SimReport>,
     outcome: Option<Outcome>,
     margin_m: Option<f64>,
-    tracking: Option<&skyplan_flight::executor::TrackingReport>,
+    (tracking, zone): (
+        Option<&skyplan_flight::executor::TrackingReport>,
+        Option<&skyplan_flyer::zones::ZonePass>,
+    ),
     t0: Instant,
 ) -> Result<()> {
     if let Some(r) = report {
         println!("{}", flight::track_line(r, margin_m));
     }
+    if let Some(z) = zone {
+        println!("{}", skyplan_flyer::zones::zone_line(z, margin_m));
+    }
     println!("time       {:.2} s wall in all", t0.elapsed().as_secs_f64());
-    runner::verdict(outcome, report, margin_m, tracking).map_err(|e| match e {
+    runner::verdict(outcome, report, margin_m, tracking, zone).map_err(|e| match e {
         Unfinished::NoRoute(_) => Failure::new(Kind::NoPath, e),
         e => runtime(e),
     })

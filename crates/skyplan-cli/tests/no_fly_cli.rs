@@ -436,11 +436,18 @@ fn a_flight_replanned_around_hidden_buildings_keeps_out_of_the_zones() {
         .and_then(|l| l.split_whitespace().next()?.parse().ok())
         .unwrap_or(0);
     assert!(replans >= 1, "{text}");
+    // The flight's own account of the zones agrees with the distances computed here.
+    let said: f64 = text
+        .lines()
+        .find_map(|l| l.strip_prefix("no-fly     closest "))
+        .and_then(|l| l.split_whitespace().next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no no-fly line in {text}"));
     let plan = ok_json(
         dir.path(),
         &format!("plan --json --no-fly {}", zones_path.display()),
     );
     let flown = track(&dir.path().join("track.csv"));
+    let mut closest = f64::INFINITY;
     for z in zones_of(&zones_path, &plan["home"])
         .iter()
         .filter(|z| z.meets_altitude(5.0, 5.0))
@@ -448,5 +455,11 @@ fn a_flight_replanned_around_hidden_buildings_keeps_out_of_the_zones() {
         // The margin less the vehicle's tracking error.
         let c = clearance(&flown, z);
         assert!(c >= 4.0, "zone {}: {c:.2} m", z.feature);
+        closest = closest.min(c);
     }
+    // The log's positions are rounded to millimetres.
+    assert!(
+        (said - closest).abs() < 0.01,
+        "said {said} m, measured {closest} m"
+    );
 }

@@ -19,3 +19,4 @@ pub mod mission;
 pub mod runner;
 pub mod trajectory;
 pub mod words;
+pub mod zones;

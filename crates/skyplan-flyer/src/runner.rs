@@ -780,6 +780,22 @@ pub enum Unfinished {
         /// When, simulated seconds.
         time_s: f64,
     },
+    /// Every waypoint was reached, but the vehicle flew closer to a no-fly zone than half the
+    /// safety margin (or into it, or out of an inclusion boundary).
+    #[error(
+        "the flight completed but the vehicle came within {clearance_m:.2} m of no-fly zone {feature} at {time_s:.1} s, closer than half ({half_m} m) the route's {margin_m} m safety margin: not done", half_m = margin_m / 2.0
+    )]
+    NearZone {
+        /// The zone's feature index in its file.
+        feature: usize,
+        /// The closest approach, metres (0: inside an exclusion zone, or outside an inclusion
+        /// boundary).
+        clearance_m: f64,
+        /// The safety margin the route was planned with, metres.
+        margin_m: f64,
+        /// When, seconds of the flight log.
+        time_s: f64,
+    },
     /// No route in the true world: the "no path" of planning.
     #[error("flight failed: {0}")]
     NoRoute(skyplan_flight::executor::Failure),
@@ -900,18 +916,29 @@ pub fn plan_margin_m(plan: &Plan) -> Option<f64> {
 /// use skyplan_flight::executor::Outcome;
 /// use skyplan_flyer::runner::{Unfinished, verdict};
 ///
-/// assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0), None), Ok(()));
-/// assert_eq!(verdict(None, None, Some(5.0), None), Err(Unfinished::NotLanded));
+/// assert_eq!(verdict(Some(Outcome::Completed), None, Some(5.0), None, None), Ok(()));
+/// assert_eq!(verdict(None, None, Some(5.0), None, None), Err(Unfinished::NotLanded));
 /// ```
 pub fn verdict(
     outcome: Option<Outcome>,
     report: Option<&skyplan_link::vehicle::SimReport>,
     margin_m: Option<f64>,
     tracking: Option<&TrackingReport>,
+    zone: Option<&crate::zones::ZonePass>,
 ) -> Result<(), Unfinished> {
     use skyplan_flight::executor::Failure;
     match outcome {
         Some(Outcome::Completed) => {
+            if let (Some(z), Some(margin_m)) = (zone, margin_m)
+                && z.clearance_m < 0.5 * margin_m
+            {
+                return Err(Unfinished::NearZone {
+                    feature: z.feature,
+                    clearance_m: z.clearance_m,
+                    margin_m,
+                    time_s: z.time_s,
+                });
+            }
             if let (Some(t), Some(margin_m)) = (tracking, margin_m)
                 && t.max_path_error_m > 0.5 * margin_m
             {
@@ -1046,20 +1073,28 @@ mod tests {
             None,
             Some(5.0),
             None,
+            None,
         );
         assert_eq!(got, Err(Unfinished::NoRoute(no_route)));
         let lost = Failure::LinkLost {
             state: FlightState::Waypoint,
             silent_s: 6.0,
         };
-        let got = verdict(Some(Outcome::Failed(lost.clone())), None, Some(5.0), None).unwrap_err();
+        let got = verdict(
+            Some(Outcome::Failed(lost.clone())),
+            None,
+            Some(5.0),
+            None,
+            None,
+        )
+        .unwrap_err();
         assert_eq!(got.to_string(), format!("flight failed: {lost}"));
         assert_eq!(
-            verdict(Some(Outcome::Completed), None, Some(5.0), None),
+            verdict(Some(Outcome::Completed), None, Some(5.0), None, None),
             Ok(())
         );
         assert!(
-            verdict(None, None, Some(5.0), None)
+            verdict(None, None, Some(5.0), None, None)
                 .unwrap_err()
                 .to_string()
                 .contains("did not land in time")
@@ -1085,10 +1120,10 @@ mod tests {
         };
         let done = Some(Outcome::Completed);
         assert_eq!(
-            verdict(done.clone(), None, Some(5.0), Some(&tracking(2.4))),
+            verdict(done.clone(), None, Some(5.0), Some(&tracking(2.4)), None),
             Ok(())
         );
-        let got = verdict(done, None, Some(5.0), Some(&tracking(51.05))).unwrap_err();
+        let got = verdict(done, None, Some(5.0), Some(&tracking(51.05)), None).unwrap_err();
         assert_eq!(
             got,
             Unfinished::OffTrack {
@@ -1137,7 +1172,13 @@ mod tests {
     fn a_completed_flight_closer_than_half_the_margin_is_not_done() {
         // The tower's face is 2 m from the track: inside half of a 5 m margin, outside half of 3 m.
         let report = report_past_tower(3.0);
-        let got = verdict(Some(Outcome::Completed), Some(&report), Some(5.0), None);
+        let got = verdict(
+            Some(Outcome::Completed),
+            Some(&report),
+            Some(5.0),
+            None,
+            None,
+        );
         let Err(Unfinished::TooClose {
             clearance_m,
             margin_m,
@@ -1159,18 +1200,24 @@ mod tests {
             "{text}"
         );
         assert_eq!(
-            verdict(Some(Outcome::Completed), Some(&report), Some(3.0), None),
+            verdict(
+                Some(Outcome::Completed),
+                Some(&report),
+                Some(3.0),
+                None,
+                None
+            ),
             Ok(())
         );
         // Without a margin to judge by, only collisions count.
         assert_eq!(
-            verdict(Some(Outcome::Completed), Some(&report), None, None),
+            verdict(Some(Outcome::Completed), Some(&report), None, None, None),
             Ok(())
         );
         // A collision is told as one, whatever the margin.
         let hit = report_past_tower(0.5);
         assert!(matches!(
-            verdict(Some(Outcome::Completed), Some(&hit), Some(5.0), None),
+            verdict(Some(Outcome::Completed), Some(&hit), Some(5.0), None, None),
             Err(Unfinished::Collided { box_index: 0, .. })
         ));
     }

@@ -93,7 +93,8 @@ fn a_run_flies_the_reference_made_from_its_plan_and_tells_the_tracking() {
             Some(Outcome::Completed),
             report.as_ref(),
             runner::plan_margin_m(&flight.plan),
-            flight.tracking.as_ref()
+            flight.tracking.as_ref(),
+            None
         ),
         Ok(())
     );
