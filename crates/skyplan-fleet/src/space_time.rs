@@ -71,6 +71,8 @@ pub struct SpaceTimeFlight {
     pub alone_m: f64,
     /// The route flown: corners and hover points, `[north_m, east_m, alt_m]`.
     pub route_nea: Vec<[f64; 3]>,
+    /// The route flown cell by cell with its times, seconds after `departure`.
+    pub path: Vec<skyplan_airspace::TimedPoint>,
     /// Its volumes (departure at the epoch) and duration.
     pub flight: FlightVolumes,
     /// States the last search took from its queue.
@@ -97,12 +99,16 @@ impl SpaceTimeFlight {
 /// Where the space-time search may go: its grid and the no-fly zones it keeps out of.
 #[derive(Debug, Clone)]
 pub struct SearchSpace {
-    /// The plan's map at its altitude and margin, the request's no-fly zones blocked (whatever
-    /// their time windows), in cells of [`SEARCH_CELL_M`] (or the plan's own, if coarser).
+    /// The plan's map at its altitude and margin in cells of [`SEARCH_CELL_M`] (or the plan's
+    /// own, if coarser), with the request's no-fly zones that have no time window (and every
+    /// inclusion boundary) blocked.
     pub grid: std::sync::Arc<Grid2>,
     /// The request's no-fly zones in the map's frame: the route found is checked against them
-    /// exactly before it is reserved.
+    /// exactly before it is reserved, each while it is active.
     pub zones: Vec<Zone>,
+    /// The exclusion zones with a time window, by their index in `zones`, and the grid cells
+    /// each blocks while active (cell indices, row-major).
+    pub timed: Vec<(usize, Vec<u32>)>,
     /// The plan's margin, metres.
     pub margin_m: f64,
 }
@@ -117,39 +123,76 @@ pub fn search_grid(
     let Some(g) = plan.grid else {
         return Ok(None);
     };
-    let coarse = skyplan_plan::PlanRequest {
-        cell_m: Some(g.cell_m.max(SEARCH_CELL_M)),
-        safety_m: Some(g.safety_m),
-        ..request.clone()
+    let cell_m = g.cell_m.max(SEARCH_CELL_M);
+    let map = session.grid(g.alt_m, g.safety_m, cell_m)?;
+    let zones = session.zones_for(request)?;
+    let spec = skyplan_cspace::GridSpec {
+        alt_m: g.alt_m,
+        safety_m: g.safety_m,
+        cell_m,
     };
+    let bad = |e: skyplan_cspace::GridError| {
+        skyplan_plan::PlanFailure::bad_request(format!("no_fly: {e}"))
+    };
+    let is_timed = |z: &Zone| !z.inclusion && (z.start_unix_s.is_some() || z.end_unix_s.is_some());
+    let fixed: Vec<Zone> = zones.iter().filter(|z| !is_timed(z)).cloned().collect();
+    let mut grid = map.as_ref().clone();
+    grid.block_zones(&fixed, spec).map_err(bad)?;
+    let mut timed = Vec::new();
+    for (k, z) in zones.iter().enumerate().filter(|(_, z)| is_timed(z)) {
+        let mut alone = Grid2::new(
+            map.rows(),
+            map.cols(),
+            vec![false; map.blocked_cells().len()],
+            map.frame(),
+        )
+        .map_err(bad)?;
+        alone
+            .block_zones(std::slice::from_ref(z), spec)
+            .map_err(bad)?;
+        let cells: Vec<u32> = (alone.blocked_cells().iter().enumerate())
+            .filter(|(_, b)| **b)
+            .map(|(i, _)| i as u32)
+            .collect();
+        timed.push((k, cells));
+    }
     Ok(Some(SearchSpace {
-        grid: session.zoned_grid(&coarse, g.alt_m)?,
-        zones: session.zones_for(request)?,
+        grid: std::sync::Arc::new(grid),
+        zones,
+        timed,
         margin_m: g.safety_m,
     }))
 }
 
-/// The first zone (feature index, clearance) the route at `alt_m` keeps less than the margin
-/// from: an exclusion zone whose band grown by the margin holds the altitude and that the
+/// The first zone (feature index, clearance) the timed route at `alt_m` keeps less than the
+/// margin from while the zone is active (`departure_unix_s` + the points' times against its
+/// window): an exclusion zone whose band grown by the margin holds the altitude and that the
 /// route nears; an inclusion boundary whose band shrunk by the margin does not hold the
 /// altitude, that the route starts outside of, or whose boundary it nears.
 fn zone_in_the_way(
-    route_nea: &[[f64; 3]],
+    path: &[skyplan_airspace::TimedPoint],
+    departure_unix_s: f64,
     zones: &[Zone],
     alt_m: f64,
     margin_m: f64,
 ) -> Option<(usize, f64)> {
     // A millimetre for the projections' rounding.
     let enough = margin_m - 1e-3;
-    let segments = || {
-        route_nea
-            .windows(2)
-            .map(|w| ([w[0][0], w[0][1]], [w[1][0], w[1][1]]))
-    };
     for z in zones {
+        // Whether the zone is active at some moment of the stretch from `a` to `b`.
+        let active = |a: f64, b: f64| {
+            let (from, to) = (departure_unix_s + a, departure_unix_s + b);
+            z.start_unix_s.is_none_or(|s| (s as f64) <= to)
+                && z.end_unix_s.is_none_or(|e| (e as f64) > from)
+        };
+        let segments = || {
+            path.windows(2)
+                .filter(|w| active(w[0].t_s, w[1].t_s))
+                .map(|w| ([w[0].nea[0], w[0].nea[1]], [w[1].nea[0], w[1].nea[1]]))
+        };
         let (bad, clearance) = if z.inclusion {
-            let inside = (route_nea.first())
-                .is_some_and(|p| z.clearance_m([p[0], p[1]], [p[0], p[1]]) == 0.0);
+            let inside = (path.first())
+                .is_some_and(|p| z.clearance_m([p.nea[0], p.nea[1]], [p.nea[0], p.nea[1]]) == 0.0);
             let c = segments()
                 .map(|(a, b)| z.boundary_clearance_m(a, b))
                 .fold(f64::INFINITY, f64::min);
@@ -564,6 +607,28 @@ fn space_time_inner(
         + SLACK_M;
     let pad_s = o.time_buffer_s + STRETCH_S + 0.002;
     let mut obstacles = Obstacles::new(reach_m);
+    // When each cell a timed no-fly zone blocks is blocked, on the search's clock (seconds
+    // after the window's start), grown by the same pad as the others' volumes.
+    let mut zone_times: HashMap<u32, Vec<Interval>> = HashMap::new();
+    for (k, cells) in &space.timed {
+        let z = &space.zones[*k];
+        if !z.meets_altitude(alt_m, space.margin_m) {
+            continue;
+        }
+        let after_start_s =
+            |unix_s: i64| (unix_s as f64 * 1000.0 - window.earliest.unix_ms() as f64) / 1000.0;
+        let active = Interval {
+            start_s: z
+                .start_unix_s
+                .map_or(f64::NEG_INFINITY, |s| after_start_s(s) - pad_s),
+            end_s: z
+                .end_unix_s
+                .map_or(f64::INFINITY, |e| after_start_s(e) + pad_s),
+        };
+        for &c in cells {
+            zone_times.entry(c).or_default().push(active);
+        }
+    }
     let mut extra: Vec<OperationalIntent> = Vec::new();
     let mut last_conflicts: Vec<IntentRef> = Vec::new();
     let stretch = skyplan_airspace::VolumeOptions {
@@ -608,7 +673,11 @@ fn space_time_inner(
         }
         let mut timeline = |c: Cell| {
             let (n, e) = grid.center_ne(c);
-            obstacles.blocked_at(n, e)
+            let mut blocked = obstacles.blocked_at(n, e);
+            if let Some(zoned) = zone_times.get(&(grid.index(c) as u32)) {
+                blocked.extend_from_slice(zoned);
+            }
+            blocked
         };
         let found = match sipp(grid, &query, &mut timeline) {
             Ok(found) => found,
@@ -636,7 +705,10 @@ fn space_time_inner(
         );
         let route_nea = corners(&path);
         // The cells kept the route out of the zones; this is the exact word on it.
-        if let Some((feature, c)) = zone_in_the_way(&route_nea, &space.zones, alt_m, space.margin_m)
+        let departure_unix_s =
+            (window.earliest.unix_ms() as f64 + (found.departure_s() * 1000.0).ceil()) / 1000.0;
+        if let Some((feature, c)) =
+            zone_in_the_way(&path, departure_unix_s, &space.zones, alt_m, space.margin_m)
         {
             return Err(invalid(
                 "no_fly",
@@ -646,6 +718,7 @@ fn space_time_inner(
                 ),
             ));
         }
+        let timed_path = path.clone();
         let flight = volumes_hugging_path(path, Timing::SpaceTime, &frame, &stretch, bulge_m)
             .map_err(ReserveError::Invalid)?;
         let delay_ms = (found.departure_s() * 1000.0).ceil() as i64;
@@ -671,6 +744,7 @@ fn space_time_inner(
                     arrival_delay_s: (found.arrival_s() - alone_cells * cell_s).max(0.0),
                     alone_m: alone_cells * cell_m,
                     route_nea,
+                    path: timed_path,
                     intent,
                     flight,
                     expansions: found.expansions,

@@ -178,3 +178,90 @@ fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
         "{accepted} accepted, {waited} later than alone"
     );
 }
+
+/// A timed no-fly zone blocks the space-time search only while it is active: the sample's
+/// helipad (feature 1) across the default route, closed from the window's start for an hour,
+/// is kept out of by the margin (exactly, segment by segment); opening only half an hour after
+/// the window's start, after the flight, it is flown straight over. The stadium (no times)
+/// is kept out of in both.
+#[test]
+fn a_timed_zone_blocks_the_space_time_search_only_while_active() {
+    use skyplan_airspace::DepartureWindow;
+    use skyplan_fleet::{FlightRequest, reserve_space_time, search_grid};
+    use skyplan_map::nofly::{Zone, rfc3339_from_unix_s};
+    let t0: Timestamp = "2026-03-01T12:00:00Z".parse().expect("time");
+    let at = |s: i64| rfc3339_from_unix_s(t0.unix_ms() / 1000 + s);
+    let zones_text = |start: String, end: String| {
+        let mut v: serde_json::Value =
+            serde_json::from_str(include_str!("../../../data/no-fly-sample.geojson"))
+                .expect("json");
+        v["features"][1]["properties"]["start"] = start.into();
+        v["features"][1]["properties"]["end"] = end.into();
+        v.to_string()
+    };
+    // The smallest distance, over the segments flown while the zone is active, to the zone.
+    let clearance = |r: &skyplan_fleet::SpaceTimeFlight, z: &Zone| {
+        let dep = r.departure.unix_ms() as f64 / 1000.0;
+        r.path
+            .windows(2)
+            .filter(|w| {
+                z.start_unix_s.is_none_or(|s| s as f64 <= dep + w[1].t_s)
+                    && z.end_unix_s.is_none_or(|e| e as f64 > dep + w[0].t_s)
+            })
+            .map(|w| z.clearance_m([w[0].nea[0], w[0].nea[1]], [w[1].nea[0], w[1].nea[1]]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut session = Session::new(World::fcnd_city());
+    for (window, closed_all_along) in [((at(-3600), at(3600)), true), ((at(1800), at(7200)), false)]
+    {
+        let request = PlanRequest {
+            no_fly: Some(zones_text(window.0, window.1)),
+            ..PlanRequest::default()
+        };
+        let plan = session.plan(&request).expect("a route");
+        let space = search_grid(&mut session, &request, &plan)
+            .expect("grid")
+            .expect("a grid plan");
+        let store = SqliteStore::open_url("sqlite::memory:").expect("store");
+        let flight = FlightRequest::new(
+            DepartureWindow {
+                earliest: t0,
+                latest: t0.plus_ms(600_000),
+            },
+            0,
+            "zones".into(),
+        );
+        let r = reserve_space_time(&store, &space, &plan, &flight)
+            .0
+            .expect("reserved");
+        let (stadium, helipad) = (&space.zones[0], &space.zones[1]);
+        assert!(
+            clearance(&r, stadium) >= 5.0 - 1e-3,
+            "{}",
+            clearance(&r, stadium)
+        );
+        // Every point of the flight, whatever the zone's times.
+        let whole = Zone {
+            start_unix_s: None,
+            end_unix_s: None,
+            ..helipad.clone()
+        };
+        if closed_all_along {
+            assert!(
+                clearance(&r, helipad) >= 5.0 - 1e-3,
+                "{}",
+                clearance(&r, helipad)
+            );
+        } else {
+            assert!(
+                clearance(&r, &whole) < 5.0,
+                "the open helipad is gone around"
+            );
+            assert_eq!(
+                clearance(&r, helipad),
+                f64::INFINITY,
+                "flown while it was closed"
+            );
+        }
+    }
+}

@@ -863,7 +863,20 @@ async fn intents_searched_in_space_and_time_keep_clear_as_documented() {
         .expect("zones")
         .project(home, None)
         .expect("projected");
-    for z in zones.iter().filter(|z| z.meets_altitude(5.0, 5.0)) {
+    // Zones active at some moment of the hour after the departure (the sample's helipad
+    // closed on 2026-12-03: flown over after that).
+    let departure =
+        skyplan_map::nofly::parse_rfc3339(zoned["departure"].as_str().expect("departure"))
+            .expect("RFC 3339");
+    let active = |z: &&skyplan_map::nofly::Zone| {
+        z.start_unix_s.is_none_or(|s| s < departure + 3600)
+            && z.end_unix_s.is_none_or(|e| e > departure)
+    };
+    for z in zones
+        .iter()
+        .filter(|z| z.meets_altitude(5.0, 5.0))
+        .filter(active)
+    {
         let c = route
             .windows(2)
             .map(|w| z.clearance_m(w[0], w[1]))
