@@ -322,6 +322,7 @@ impl ContractionHierarchy {
             cost,
             edge_id,
             edges,
+            id: crate::contraction::next_id(),
         })
     }
 }

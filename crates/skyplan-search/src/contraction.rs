@@ -103,6 +103,87 @@ pub struct ContractionHierarchy {
     pub(crate) edge_id: Vec<u32>,
     /// Every edge ever created (for unpacking), endpoints as ranks.
     pub(crate) edges: Vec<Edge>,
+    /// Tells this hierarchy's unpacked shortcuts in a [`ChQuery`] from another's.
+    pub(crate) id: u64,
+}
+
+/// A new hierarchy's [`ContractionHierarchy::id`].
+pub(crate) fn next_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Shortcuts unpacked into at least this many ranks are kept for the next queries…
+pub const MEMO_MIN_RANKS: usize = 16;
+/// …until this many ranks are kept (16 MiB), per [`ChQuery`].
+pub const MEMO_MAX_RANKS: usize = 4 << 20;
+
+/// Shortcuts already unpacked, for the queries after: each as its ranks from `a` to `b`.
+#[derive(Debug, Default)]
+struct Memo {
+    /// The hierarchy they are of.
+    of: u64,
+    /// Per edge id: its span in `ranks`, or `NONE`.
+    slot: Vec<u32>,
+    spans: Vec<(u32, u32)>,
+    ranks: Vec<u32>,
+}
+
+impl Memo {
+    fn for_hierarchy(&mut self, ch: &ContractionHierarchy) {
+        if self.of != ch.id || self.slot.len() != ch.edges.len() {
+            self.of = ch.id;
+            self.slot.clear();
+            self.slot.resize(ch.edges.len(), NONE);
+            self.spans.clear();
+            self.ranks.clear();
+        }
+    }
+
+    /// Appends edge `e` walked from its `a` end (`forward`) or its `b` end, if kept.
+    #[inline]
+    fn extend(&self, e: u32, forward: bool, out: &mut Vec<u32>) -> bool {
+        let k = self.slot[e as usize];
+        if k == NONE {
+            return false;
+        }
+        let (start, len) = self.spans[k as usize];
+        let kept = &self.ranks[start as usize..(start + len) as usize];
+        if forward {
+            out.extend_from_slice(&kept[1..]);
+        } else {
+            out.extend(kept[..kept.len() - 1].iter().rev());
+        }
+        true
+    }
+
+    /// Keeps `walked`: edge `e` (from `a` to `b`) walked from `from`, without `from`.
+    fn keep(&mut self, edge: &Edge, e: u32, from: u32, walked: &[u32]) {
+        if walked.len() < MEMO_MIN_RANKS
+            || self.ranks.len() + walked.len() + 1 > MEMO_MAX_RANKS
+            || self.slot[e as usize] != NONE
+        {
+            return;
+        }
+        let start = self.ranks.len() as u32;
+        if from == edge.a {
+            self.ranks.push(edge.a);
+            self.ranks.extend_from_slice(walked);
+        } else {
+            self.ranks.extend(walked.iter().rev());
+            self.ranks.push(edge.b);
+        }
+        self.slot[e as usize] = self.spans.len() as u32;
+        self.spans.push((start, walked.len() as u32 + 1));
+    }
+}
+
+/// One step of unpacking: walk edge `e` from `x`, or (`Keep`) what was appended since `at` is
+/// edge `e` walked from `x`.
+#[derive(Debug, Clone, Copy)]
+enum Step {
+    Walk { x: u32, e: u32 },
+    Keep { x: u32, e: u32, at: u32 },
 }
 
 /// Reusable buffers of [`ContractionHierarchy::search`] (one per thread).
@@ -113,7 +194,8 @@ pub struct ChQuery {
     stamp: [Vec<u32>; 2],
     now: u32,
     heap: [BinaryHeap<Reverse<(u64, u32)>>; 2],
-    stack: Vec<(u32, u32)>,
+    stack: Vec<Step>,
+    memo: Memo,
 }
 
 impl ContractionHierarchy {
@@ -254,25 +336,46 @@ impl ContractionHierarchy {
     }
 
     /// Appends the ranks of edge `e` walked from `from` (excluding `from`); returns its far end.
+    /// Shortcuts unpacked before with the same `query` are copied, and long ones unpacked now
+    /// are kept for the next queries (up to [`MEMO_MAX_RANKS`]).
     fn unpack(&self, query: &mut ChQuery, from: u32, e: u32, out: &mut Vec<u32>) -> u32 {
-        let stack = &mut query.stack;
+        let ChQuery { stack, memo, .. } = query;
+        memo.for_hierarchy(self);
         stack.clear();
-        stack.push((from, e));
+        stack.push(Step::Walk { x: from, e });
         let end = other(&self.edges[e as usize], from);
-        while let Some((x, e)) = stack.pop() {
-            let edge = self.edges[e as usize];
-            if edge.mid == NONE {
-                out.push(other(&edge, x));
-                continue;
+        while let Some(step) = stack.pop() {
+            match step {
+                Step::Keep { x, e, at } => {
+                    memo.keep(&self.edges[e as usize], e, x, &out[at as usize..]);
+                }
+                Step::Walk { x, e } => {
+                    let edge = self.edges[e as usize];
+                    if edge.mid == NONE {
+                        out.push(other(&edge, x));
+                        continue;
+                    }
+                    if memo.extend(e, x == edge.a, out) {
+                        continue;
+                    }
+                    // Walk x → mid → far end: push the second half first.
+                    let (near, far) = if x == edge.a {
+                        (edge.first, edge.second)
+                    } else {
+                        (edge.second, edge.first)
+                    };
+                    stack.push(Step::Keep {
+                        x,
+                        e,
+                        at: out.len() as u32,
+                    });
+                    stack.push(Step::Walk {
+                        x: edge.mid,
+                        e: far,
+                    });
+                    stack.push(Step::Walk { x, e: near });
+                }
             }
-            // Walk x → mid → far end: push the second half first.
-            let (near, far) = if x == edge.a {
-                (edge.first, edge.second)
-            } else {
-                (edge.second, edge.first)
-            };
-            stack.push((edge.mid, far));
-            stack.push((x, near));
         }
         end
     }
@@ -697,6 +800,7 @@ impl Builder {
             cost,
             edge_id,
             edges,
+            id: next_id(),
         }
     }
 }
@@ -744,6 +848,60 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Shortcuts kept from earlier queries give the same paths as unpacking afresh, also when
+    /// one workspace serves two hierarchies in turn; the costs are the oracle's.
+    #[test]
+    fn kept_shortcuts_give_the_paths_of_a_fresh_unpacking() {
+        // A 120 × 120 grid, 30 % blocked (SplitMix64), long winding paths.
+        let mut state = 5u64;
+        let mut next = || {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^ (z >> 31)
+        };
+        let (rows, cols) = (120u32, 120u32);
+        let blocked: Vec<bool> = (0..rows * cols).map(|_| next() % 100 < 30).collect();
+        let grid = Arc::new(Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap());
+        let octile = ContractionHierarchy::build(Arc::clone(&grid), MoveModel::Octile).unwrap();
+        let four =
+            ContractionHierarchy::build(Arc::clone(&grid), MoveModel::FourConnected).unwrap();
+        let free: Vec<Cell> = (0..rows * cols)
+            .map(|i| Cell::new(i / cols, i % cols))
+            .filter(|&c| !grid.is_blocked(c))
+            .collect();
+        let mut shared = ChQuery::default();
+        let (mut compared, mut kept_max) = (0, 0);
+        for pass in 0..4 {
+            let ch = if pass % 2 == 0 { &octile } else { &four };
+            for k in 0..100 {
+                let s = free[(next() % free.len() as u64) as usize];
+                let t = free[(next() % free.len() as u64) as usize];
+                let fresh = ch.search(&mut ChQuery::default(), s, t).ok();
+                let again = ch.search(&mut shared, s, t).ok();
+                kept_max = kept_max.max(shared.memo.spans.len());
+                assert_eq!(
+                    fresh.as_ref().map(|p| &p.cells),
+                    again.as_ref().map(|p| &p.cells),
+                    "pass {pass}, query {k}"
+                );
+                if let Some(p) = &again {
+                    assert_eq!(crate::check_path(&grid, &p.cells, ch.model()), Ok(()));
+                    if k % 10 == 0 {
+                        let want = dijkstra_exact(&grid, s, t, ch.model())
+                            .map(|c| (c.straight, c.diagonal));
+                        assert_eq!(Some((p.straight_moves, p.diagonal_moves)), want);
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 300, "{compared}");
+        // Shortcuts were kept and served (the workspace switched hierarchies and back).
+        assert!(kept_max > 50, "{kept_max}");
     }
 
     #[test]
