@@ -34,7 +34,7 @@ fn number_after(text: &str, prefix: &str) -> f64 {
 
 /// A flight by `line` (which writes `--log flight.csv`) that exits 0: its stdout, its logged
 /// ground speeds (rows that have one) and where it ended (north, east).
-fn fly_logged(line: &str) -> (String, Vec<f64>, (f64, f64)) {
+fn fly_logged(line: &str) -> (String, Vec<f64>, (f64, f64), f64) {
     let dir = tempfile::tempdir().unwrap();
     let out = cmd(dir.path(), line).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout).to_string();
@@ -51,7 +51,15 @@ fn fly_logged(line: &str) -> (String, Vec<f64>, (f64, f64)) {
         .collect();
     let last = rows.last().unwrap();
     let end = (last[north].parse().unwrap(), last[east].parse().unwrap());
-    (text, speeds, end)
+    // Moving faster than 2 m/s: how far the vehicle is from the target logged with it.
+    let (tn, te) = (col("target_north_m"), col("target_east_m"));
+    let num = |r: &Vec<&str>, k: usize| r[k].parse::<f64>().unwrap_or(f64::NAN);
+    let farthest_m = rows
+        .iter()
+        .filter(|r| num(r, speed) > 2.0)
+        .map(|r| (num(r, north) - num(r, tn)).hypot(num(r, east) - num(r, te)))
+        .fold(0.0, f64::max);
+    (text, speeds, end, farthest_m)
 }
 
 #[test]
@@ -90,7 +98,7 @@ fn the_default_routes_trajectory_is_flown_within_half_a_metre_and_on_time() {
 /// above the fastest leg speed, landed at the goal, no collision.
 #[test]
 fn an_uploaded_trajectory_paces_the_mission_with_leg_speeds() {
-    let (text, flown, (n, e)) =
+    let (text, flown, (n, e), _) =
         fly_logged("fly --sim --trajectory --upload --speedup 20 --timeout-s 300 --log flight.csv");
     assert!(
         text.contains("DO_CHANGE_SPEED to its leg's speed"),
@@ -145,9 +153,11 @@ fn an_uploaded_trajectory_paces_the_mission_with_leg_speeds() {
 /// turn into more than the executor's 1 s of lead.
 #[test]
 fn a_trajectory_flight_replans_around_hidden_buildings_without_stopping() {
-    let (text, speeds, (n, e)) = fly_logged(
+    let (text, speeds, (n, e), farthest_m) = fly_logged(
         "fly --sim --trajectory --hidden-random 3 --seed 1 --speedup 5 --timeout-s 300 --log flight.csv",
     );
+    // The log's targets are the setpoints streamed, which the vehicle follows closely.
+    assert!(farthest_m < 2.0, "{farthest_m} m from the setpoint logged");
     assert!(
         text.contains("no collision with the map's obstacles or the 3 hidden buildings"),
         "{text}"
@@ -179,7 +189,7 @@ fn a_trajectory_flight_replans_around_hidden_buildings_without_stopping() {
 #[test]
 fn a_route_too_sharp_for_a_trajectory_from_the_moving_vehicle_is_flown_by_waypoints() {
     let hidden = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/hidden.csv");
-    let (text, _, (n, e)) = fly_logged(&format!(
+    let (text, _, (n, e), _) = fly_logged(&format!(
         "fly --sim --trajectory --hidden {hidden} --speedup 5 --timeout-s 300 --log flight.csv"
     ));
     assert!(

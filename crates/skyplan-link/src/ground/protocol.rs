@@ -991,6 +991,8 @@ pub struct FlightLoop {
     last_global_ms: Option<u32>,
     last_mode: Option<VehicleMode>,
     sent_targets: usize,
+    /// The last reference setpoint streamed and when (the log's target while streaming).
+    last_track: Option<(f64, skyplan_flight::reference::Setpoint)>,
     /// The vehicle's clock minus ours (vehicle seconds): the largest seen, i.e. the position
     /// that came fastest; frozen once a reference's setpoints are stamped with it.
     boot_offset_s: Option<f64>,
@@ -1070,6 +1072,7 @@ impl FlightLoop {
             last_global_ms: None,
             last_mode: None,
             sent_targets: 0,
+            last_track: None,
             boot_offset_s: None,
             offset_frozen: false,
             readings: 0,
@@ -1374,6 +1377,7 @@ impl FlightLoop {
                 self.sent_targets += 1;
             }
             if let Command::Track { setpoint, time_s } = c {
+                self.last_track = Some((t, *setpoint));
                 // Stamped with the vehicle's time of the instant it holds at.
                 self.offset_frozen = true;
                 let stamp_ms = self.boot_offset_s.map_or(0, |o| {
@@ -1413,7 +1417,19 @@ impl FlightLoop {
             alt_m: tel.alt_m(),
             yaw_rad: tel.yaw_rad,
             speed_m_s: tel.ground_speed_m_s(),
-            target: ex.current_target(),
+            target: match (ex.current_target(), self.last_track) {
+                // Streaming a reference: the setpoint (sent within the last second).
+                (Some((index, _)), Some((sent_s, sp))) if t - sent_s <= 1.0 => Some((
+                    index,
+                    skyplan_flight::executor::Target {
+                        north_m: sp.point_ned[0],
+                        east_m: sp.point_ned[1],
+                        alt_m: -sp.point_ned[2],
+                        heading_rad: sp.yaw_rad,
+                    },
+                )),
+                (target, _) => target,
+            },
         });
     }
 
