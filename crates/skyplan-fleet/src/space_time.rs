@@ -295,15 +295,7 @@ fn distance_to_ring(ring: &[[f64; 2]], p: [f64; 2]) -> f64 {
                 inside = !inside;
             }
         }
-        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let len2 = dx * dx + dy * dy;
-        let t = if len2 > 0.0 {
-            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let (ex, ey) = (a[0] + t * dx - p[0], a[1] + t * dy - p[1]);
-        best = best.min((ex * ex + ey * ey).sqrt());
+        best = best.min(skyplan_map::nofly::point_segment_m(p, a, b));
     }
     if inside { 0.0 } else { best }
 }

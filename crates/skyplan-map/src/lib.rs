@@ -27,6 +27,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod civil;
 pub mod colliders;
 pub mod contour;
 pub mod footprints;

@@ -607,7 +607,12 @@ fn parse_zone(i: usize, f: &Value, vertices: &mut usize) -> Result<GeoZone, Foot
 }
 
 /// The distance from `p` to the segment `a`–`b`.
-fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+///
+/// ```
+/// assert_eq!(skyplan_map::nofly::point_segment_m([3.0, 4.0], [0.0, 0.0], [0.0, 0.0]), 5.0);
+/// assert_eq!(skyplan_map::nofly::point_segment_m([1.0, 2.0], [0.0, 0.0], [0.0, 10.0]), 1.0);
+/// ```
+pub fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
     let t = if len2 > 0.0 {
@@ -708,14 +713,7 @@ pub fn parse_rfc3339(s: &str) -> Option<i64> {
     if h > 23 || mi > 59 || sec > 60 {
         return None;
     }
-    // Days from the civil date (Howard Hinnant's algorithm).
-    let yy = if mo <= 2 { y - 1 } else { y };
-    let era = yy.div_euclid(400);
-    let yoe = yy - era * 400;
-    let mp = (mo + 9) % 12;
-    let doy = (153 * mp + 2) / 5 + d - 1;
-    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    let days = era * 146_097 + doe - 719_468;
+    let days = crate::civil::days_from_civil(y, mo, d);
     Some(days * 86_400 + h * 3600 + mi * 60 + sec - offset_s)
 }
 
@@ -729,16 +727,7 @@ pub fn parse_rfc3339(s: &str) -> Option<i64> {
 /// ```
 pub fn rfc3339_from_unix_s(unix_s: i64) -> String {
     let (days, s) = (unix_s.div_euclid(86_400), unix_s.rem_euclid(86_400));
-    // The civil date of a day number (Howard Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
+    let (y, m, d) = crate::civil::civil_from_days(days);
     format!(
         "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
         s / 3600,
