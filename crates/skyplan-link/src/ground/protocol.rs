@@ -40,6 +40,11 @@ use skyplan_flight::upload::{
 };
 use skyplan_frames::{Lla, LocalFrame, Ned};
 
+/// Our clock running this much further than the vehicle's between two of its positions, in
+/// wall-clock seconds (ours runs at `--speedup` times the wall clock), is told as a warning: a
+/// simulator that stalled, a link that held messages back.
+pub const STALL_WARN_WALL_S: f64 = 1.0;
+
 /// What the ground station knows of the vehicle, from every message absorbed.
 #[derive(Debug, Clone)]
 pub struct GroundProtocol {
@@ -989,6 +994,8 @@ pub struct FlightLoop {
     closed_reported: bool,
     link_lost: bool,
     last_global_ms: Option<u32>,
+    /// When (our clock) the last position arrived.
+    last_global_at_s: Option<f64>,
     last_mode: Option<VehicleMode>,
     sent_targets: usize,
     /// The last reference setpoint streamed and when (the log's target while streaming).
@@ -1070,6 +1077,7 @@ impl FlightLoop {
             closed_reported: false,
             link_lost: false,
             last_global_ms: None,
+            last_global_at_s: None,
             last_mode: None,
             sent_targets: 0,
             last_track: None,
@@ -1243,7 +1251,19 @@ impl FlightLoop {
             && self.last_global_ms != Some(g.time_boot_ms)
             && let Some(mut tel) = p.telemetry(g, &self.frame, self.convergence_rad)
         {
+            let ours_s = self.vehicle_s(now_s);
+            if let (Some(ms), Some(at_s)) = (self.last_global_ms, self.last_global_at_s) {
+                // Vehicle seconds: ours (wall × speed-up) against its stamps.
+                let behind_s = (ours_s - at_s) - f64::from(g.time_boot_ms.wrapping_sub(ms)) * 1e-3;
+                if behind_s > STALL_WARN_WALL_S * self.speedup {
+                    self.updates.push(Update::Warning(format!(
+                        "the vehicle's clock fell {:.1} s (wall time) behind ours between two positions (a stalled simulator or link): a trajectory waits for the vehicle's clock",
+                        behind_s / self.speedup
+                    )));
+                }
+            }
             self.last_global_ms = Some(g.time_boot_ms);
+            self.last_global_at_s = Some(ours_s);
             tel.sample_time_s = self.sample_time_s(now_s, g.time_boot_ms);
             events.push(Event::Telemetry(tel));
         }
@@ -1486,5 +1506,91 @@ impl FlightLoop {
             last_hits_ne: self.last_hits_ne,
             tracking: None,
         }
+    }
+}
+
+#[cfg(test)]
+mod stall_tests {
+    use super::*;
+    use skyplan_flight::executor::{ExecutorConfig, MissionExecutor, Target};
+
+    /// Positions whose stamps advance with our clock pass quietly; a vehicle whose clock stood
+    /// still for 3 s of wall time (at 5× speed-up: 15 s of ours) is told once.
+    #[test]
+    fn a_vehicle_clock_that_stands_still_is_told() {
+        let home = Lla {
+            lat_deg: 37.79248,
+            lon_deg: -122.39745,
+            alt_m: 0.0,
+        };
+        let frame = LocalFrame::new(home).unwrap();
+        let target = Target {
+            north_m: 0.0,
+            east_m: 0.0,
+            alt_m: 5.0,
+            heading_rad: 0.0,
+        };
+        let mut ex = MissionExecutor::new(&[target], ExecutorConfig::default()).unwrap();
+        let config = GroundConfig {
+            speedup: 5.0,
+            ..GroundConfig::default()
+        };
+        let mut flight = FlightLoop::with_convergence(&frame, config, 0.0, None, 0.0);
+        let mut p = GroundProtocol::new();
+        let header = mavlink::MavHeader {
+            system_id: 1,
+            component_id: 1,
+            sequence: 0,
+        };
+        let mut send = |flight: &mut FlightLoop, p: &mut GroundProtocol, wall_s: f64, message| {
+            let r = Received { header, message };
+            flight.step(p, &mut ex, wall_s, Some(&r), (None, false));
+        };
+        send(
+            &mut flight,
+            &mut p,
+            0.0,
+            MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                mavtype: MavType::MAV_TYPE_QUADROTOR,
+                autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+                ..Default::default()
+            }),
+        );
+        let position = |time_boot_ms| {
+            MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+                time_boot_ms,
+                lat: (home.lat_deg * 1e7) as i32,
+                lon: (home.lon_deg * 1e7) as i32,
+                ..Default::default()
+            })
+        };
+        let warnings = |flight: &mut FlightLoop| {
+            (flight.take_updates().into_iter())
+                .filter_map(|u| match u {
+                    Update::Warning(w) if w.contains("clock fell") => Some(w),
+                    _ => None,
+                })
+                .collect::<Vec<_>>()
+        };
+        // 0.1 s of wall time apart: 0.5 s of the vehicle's.
+        for k in 0..10u32 {
+            send(
+                &mut flight,
+                &mut p,
+                0.1 * f64::from(k),
+                position(1000 + 500 * k),
+            );
+        }
+        assert_eq!(warnings(&mut flight), Vec::<String>::new());
+        // 3 s of wall time, the vehicle's clock 0.5 s on.
+        send(&mut flight, &mut p, 3.9, position(6000));
+        let told = warnings(&mut flight);
+        assert_eq!(told.len(), 1, "{told:?}");
+        assert!(
+            told[0].contains("fell 2.9 s (wall time) behind"),
+            "{told:?}"
+        );
+        send(&mut flight, &mut p, 4.0, position(6500));
+        assert_eq!(warnings(&mut flight), Vec::<String>::new());
     }
 }
