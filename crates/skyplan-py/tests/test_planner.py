@@ -335,3 +335,20 @@ def test_terrain_equals_the_cli(cli, tmp_path):
         f.truncate(800_000_001)
     with pytest.raises(skyplan.BadInput, match="more than a DEM"):
         skyplan.Planner(grid, home=(36.56, -84.28), terrain=big)
+
+
+def test_departure_applies_timed_zones_as_the_cli(city, cli, tmp_path):
+    """no_fly and departure as keywords give the CLI's route and its no_fly details: departing
+    before the sample helipad closes, it is inactive and flown over; without a departure it
+    applies."""
+    zones = REPO / "data" / "no-fly-sample.geojson"
+    early = "2026-12-03T07:00:00Z"
+    want, _ = cli_plan(cli, tmp_path, "--no-fly", str(zones), "--departure", early)
+    plan = city.plan(no_fly=zones.read_text(), departure=early)
+    assert np.array_equal(plan.waypoints, np.array(want["waypoints"], dtype=np.float64))
+    got = json.loads(plan.to_json())["no_fly"]
+    assert got == want["no_fly"] and got["outside_window"] == [1]
+    always = json.loads(city.plan(no_fly=zones.read_text()).to_json())["no_fly"]
+    assert always["outside_window"] == [] and always["timed_always"] == [1]
+    with pytest.raises(skyplan.BadInput, match="departure"):
+        city.plan(no_fly=zones.read_text(), departure="tomorrow")
