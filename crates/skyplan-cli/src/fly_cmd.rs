@@ -483,7 +483,8 @@ impl RunObserver for Terminal {
             } else {
                 Default::default()
             };
-            crate::plan_cmd::write_waypoints(file, mission, &summary, &fence)?;
+            // fly refuses terrain: the mission's altitudes are above home.
+            crate::plan_cmd::write_waypoints(file, mission, &summary, (&fence, None))?;
             println!("wrote      {} ({})", path.display(), format.name());
         }
         Ok(())

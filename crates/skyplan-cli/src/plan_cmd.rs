@@ -33,16 +33,18 @@ pub(crate) fn output_file(out: &Path, format: Option<&str>) -> Result<(Target, F
 pub(crate) type WaypointFile = (PathBuf, Target, Format);
 
 /// Writes `mission` (with a summary of its plan) to a waypoint file; a `.plan` file carries
-/// `fence` as its `geoFence`.
+/// `fence` as its `geoFence`, and its altitudes above mean sea level when the home's height is
+/// known (`home_amsl_m`: a plan over a DEM).
 pub(crate) fn write_waypoints(
     (_, target, format): &WaypointFile,
     mission: &skyplan_mission::Mission,
     summary: &serde_json::Value,
-    fence: &skyplan_export::GeoFence,
+    (fence, home_amsl_m): (&skyplan_export::GeoFence, Option<f64>),
 ) -> Result<()> {
     let options = skyplan_export::ExportOptions {
         qgc_plan: skyplan_export::QgcPlanOptions {
             geo_fence: fence.clone(),
+            home_amsl_m,
             ..Default::default()
         },
     };
@@ -395,6 +397,7 @@ fn write_outputs(
 ) -> Result<Written> {
     let mut written = Written {
         waypoints: None,
+        altitudes: None,
         plot: None,
         roadmap: None,
         samples: None,
@@ -406,8 +409,15 @@ fn write_outputs(
             .ok_or_else(|| bad_input("waypoint files need a map with a geodetic home"))?;
         let summary =
             serde_json::json!({ "map": plan.map, "planner": plan.planner, "cost_m": plan.cost_m });
-        write_waypoints(file, mission, &summary, fence)?;
+        let home_amsl_m = world.terrain().map(|t| t.home_ground_amsl_m());
+        write_waypoints(file, mission, &summary, (fence, home_amsl_m))?;
         written.waypoints = Some((path.display().to_string(), format.name()));
+        if *format == Format::QgcPlan {
+            written.altitudes = Some(match home_amsl_m {
+                Some(_) => "above mean sea level, MAV_FRAME_GLOBAL",
+                None => "above home, MAV_FRAME_GLOBAL_RELATIVE_ALT",
+            });
+        }
     }
     if let Some((path, target, kind)) = &outputs.plot {
         write_target(

@@ -7,6 +7,8 @@ use skyplan_plan::Plan;
 /// The files a command wrote, for the report.
 pub struct Written {
     pub waypoints: Option<(String, &'static str)>,
+    /// What a mission file's altitudes are measured from, and in which MAVLink frame.
+    pub altitudes: Option<&'static str>,
     pub plot: Option<String>,
     pub roadmap: Option<String>,
     pub samples: Option<String>,
@@ -19,6 +21,7 @@ pub fn json_report(plan: &Plan, written: &Written, wall_time_us: u64) -> Value {
     v["outputs"] = json!({
         "waypoints": written.waypoints.as_ref().map(|w| w.0.clone()),
         "format": written.waypoints.as_ref().map(|w| w.1),
+        "altitudes": written.altitudes,
         "plot": written.plot,
         "roadmap": written.roadmap,
         "samples": written.samples,
@@ -33,7 +36,10 @@ pub fn summary(plan: &Plan, written: &Written, wall_ms: f64) -> String {
     let mut files: Vec<String> = Vec::new();
     if let Some((path, format)) = &written.waypoints {
         let path = if path == "-" { "standard output" } else { path };
-        files.push(format!("{path} ({format})"));
+        match written.altitudes {
+            Some(a) => files.push(format!("{path} ({format}; altitudes {a})")),
+            None => files.push(format!("{path} ({format})")),
+        }
     }
     files.extend(written.plot.iter().cloned());
     files.extend(written.roadmap.iter().map(|r| format!("{r} (roadmap)")));

@@ -577,3 +577,33 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
     std::fs::remove_file(dir.path().join("hills.csv")).unwrap();
     assert_no_waypoints(dir.path(), "nothing is written on a refusal");
 }
+
+/// Over a DEM a `.plan` file's takeoff and waypoints are above mean sea level
+/// (MAV_FRAME_GLOBAL): each item's altitude is its waypoint's `alt_amsl_m` in `waypoints_lla`,
+/// and the summary says which frame.
+#[test]
+fn a_mission_over_terrain_is_written_above_mean_sea_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = data("terrain/jacksboro.tif");
+    let line = format!(
+        "plan --random 3000x3000 --density 0.0002 --home 36.56,-84.28 --terrain {} --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800",
+        dem.display()
+    );
+    let v = ok_json(dir.path(), &format!("{line} --json"));
+    let out = common::succeed(dir.path(), &format!("{line} --out m.plan"));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("m.plan (plan; altitudes above mean sea level, MAV_FRAME_GLOBAL)"),
+        "{text}"
+    );
+    let plan: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("m.plan")).unwrap()).unwrap();
+    let items = plan["mission"]["items"].as_array().unwrap();
+    let lla = v["waypoints_lla"].as_array().unwrap();
+    assert_eq!(items.len(), lla.len() + 1);
+    for (item, row) in items.iter().zip(lla) {
+        assert_eq!(item["frame"], 0);
+        let (got, want) = (item["Altitude"].as_f64().unwrap(), row[2].as_f64().unwrap());
+        assert!((got - want).abs() < 1e-6, "{got} vs {want}");
+    }
+}

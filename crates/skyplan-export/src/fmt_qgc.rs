@@ -18,6 +18,8 @@ pub mod mavlink {
     pub const MAV_CMD_NAV_TAKEOFF: u16 = 22;
     /// `MAV_FRAME_GLOBAL_RELATIVE_ALT`: lat/lon, altitude above home.
     pub const MAV_FRAME_GLOBAL_RELATIVE_ALT: u8 = 3;
+    /// `MAV_FRAME_GLOBAL`: lat/lon, altitude above mean sea level.
+    pub const MAV_FRAME_GLOBAL: u8 = 0;
     /// `MAV_AUTOPILOT_ARDUPILOTMEGA`.
     pub const MAV_AUTOPILOT_ARDUPILOTMEGA: u8 = 3;
     /// `MAV_AUTOPILOT_PX4`.
@@ -26,6 +28,10 @@ pub mod mavlink {
     pub const MAV_TYPE_QUADROTOR: u8 = 2;
     /// QGroundControl's `AltitudeMode` "Relative" (altitude above home).
     pub const QGC_ALTITUDE_MODE_RELATIVE: u8 = 1;
+    /// QGroundControl's `AltitudeMode` "Absolute" (above mean sea level, `MAV_FRAME_GLOBAL`).
+    pub const QGC_ALTITUDE_MODE_ABSOLUTE: u8 = 2;
+    /// QGroundControl's `AltitudeMode` "Mixed": each item says its own (a plan's global mode).
+    pub const QGC_ALTITUDE_MODE_MIXED: u8 = 0;
 }
 
 use mavlink::*;
@@ -133,6 +139,12 @@ pub struct QgcPlanOptions {
     pub vehicle_type: u8,
     /// The `geoFence` (default: none).
     pub geo_fence: GeoFence,
+    /// The home's height above mean sea level, metres, when known (a plan over a DEM): the
+    /// takeoff and waypoint items are then in `MAV_FRAME_GLOBAL` (`AltitudeMode` 2), at the
+    /// mission's altitudes plus this, so a vehicle launched anywhere flies them at the heights
+    /// planned; the landing item stays relative (its altitude is not flown). Default `None`:
+    /// every item in `MAV_FRAME_GLOBAL_RELATIVE_ALT`.
+    pub home_amsl_m: Option<f64>,
 }
 
 impl Default for QgcPlanOptions {
@@ -143,6 +155,7 @@ impl Default for QgcPlanOptions {
             firmware_type: MAV_AUTOPILOT_PX4,
             vehicle_type: MAV_TYPE_QUADROTOR,
             geo_fence: GeoFence::default(),
+            home_amsl_m: None,
         }
     }
 }
@@ -161,6 +174,15 @@ impl QgcPlanOptions {
                 });
             }
         }
+        if let Some(h) = self.home_amsl_m
+            && !h.is_finite()
+        {
+            return Err(ExportError::InvalidOption {
+                name: "home_amsl_m",
+                value: h,
+                reason: "must be finite",
+            });
+        }
         self.geo_fence.validate()
     }
 }
@@ -172,33 +194,46 @@ fn yaw_deg(heading_rad: f64) -> f64 {
     if deg >= 360.0 { 0.0 } else { deg }
 }
 
-/// One `SimpleItem` in `MAV_FRAME_GLOBAL_RELATIVE_ALT`.
-fn simple_item(do_jump_id: usize, command: u16, altitude_m: f64, params: Value) -> Value {
+/// One `SimpleItem`, in `MAV_FRAME_GLOBAL` with `amsl`, else `MAV_FRAME_GLOBAL_RELATIVE_ALT`.
+fn simple_item(
+    do_jump_id: usize,
+    command: u16,
+    (altitude_m, amsl): (f64, bool),
+    params: Value,
+) -> Value {
+    let (mode, frame) = if amsl {
+        (QGC_ALTITUDE_MODE_ABSOLUTE, MAV_FRAME_GLOBAL)
+    } else {
+        (QGC_ALTITUDE_MODE_RELATIVE, MAV_FRAME_GLOBAL_RELATIVE_ALT)
+    };
     json!({
         "AMSLAltAboveTerrain": null,
         "Altitude": altitude_m,
-        "AltitudeMode": QGC_ALTITUDE_MODE_RELATIVE,
+        "AltitudeMode": mode,
         "autoContinue": true,
         "command": command,
         "doJumpId": do_jump_id,
-        "frame": MAV_FRAME_GLOBAL_RELATIVE_ALT,
+        "frame": frame,
         "params": params,
         "type": "SimpleItem",
     })
 }
 
 /// The mission items: takeoff at the first waypoint, a waypoint for each later one, land at the
-/// last. `doJumpId`s count from 1.
-fn items(wps: &[Waypoint]) -> Vec<Value> {
+/// last. `doJumpId`s count from 1. With `home_amsl_m`, the takeoff and the waypoints are above
+/// mean sea level.
+fn items(wps: &[Waypoint], home_amsl_m: Option<f64>) -> Vec<Value> {
     let mut items = Vec::with_capacity(wps.len() + 1);
     let (Some(first), Some(last)) = (wps.first(), wps.last()) else {
         return items;
     };
+    let amsl = home_amsl_m.is_some();
+    let alt = |w: &Waypoint| w.alt_m + home_amsl_m.unwrap_or(0.0);
     items.push(simple_item(
         1,
         MAV_CMD_NAV_TAKEOFF,
-        first.alt_m,
-        json!([0, 0, 0, null, first.lat_deg, first.lon_deg, first.alt_m]),
+        (alt(first), amsl),
+        json!([0, 0, 0, null, first.lat_deg, first.lon_deg, alt(first)]),
     ));
     for w in &wps[1..] {
         // hold time s, acceptance radius m, pass radius m, yaw deg, lat, lon, alt.
@@ -209,24 +244,31 @@ fn items(wps: &[Waypoint]) -> Vec<Value> {
             yaw_deg(w.heading_rad),
             w.lat_deg,
             w.lon_deg,
-            w.alt_m
+            alt(w)
         ]);
         items.push(simple_item(
             items.len() + 1,
             MAV_CMD_NAV_WAYPOINT,
-            w.alt_m,
+            (alt(w), amsl),
             params,
         ));
     }
     let params = json!([0, 0, 0, null, last.lat_deg, last.lon_deg, 0]);
-    items.push(simple_item(items.len() + 1, MAV_CMD_NAV_LAND, 0.0, params));
+    items.push(simple_item(
+        items.len() + 1,
+        MAV_CMD_NAV_LAND,
+        (0.0, false),
+        params,
+    ));
     items
 }
 
 /// Encodes a mission as a QGroundControl `.plan` file (pretty JSON, trailing newline).
 ///
 /// The mission items, all `SimpleItem`s in `MAV_FRAME_GLOBAL_RELATIVE_ALT` (frame 3,
-/// `AltitudeMode` 1, altitudes above home), are:
+/// `AltitudeMode` 1, altitudes above home) — or, with `options.home_amsl_m`, the takeoff and
+/// waypoints in `MAV_FRAME_GLOBAL` (frame 0, `AltitudeMode` 2, above mean sea level; the plan's
+/// `globalPlanAltitudeMode` 0, mixed, and its home at that height) — are:
 /// 1. `MAV_CMD_NAV_TAKEOFF` (22) at the first waypoint, to its altitude;
 /// 2. `MAV_CMD_NAV_WAYPOINT` (16) for every later waypoint, with its heading as the yaw
 ///    (param 4, degrees clockwise from north in `[0, 360)`) and zero hold time and radii;
@@ -241,6 +283,10 @@ pub fn to_qgc_plan(mission: &Mission, options: &QgcPlanOptions) -> Result<String
     check_len(Format::QgcPlan, mission, 1)?;
     options.validate()?;
     let home = &mission.home;
+    let (global_mode, home_alt_m) = match options.home_amsl_m {
+        Some(h) => (QGC_ALTITUDE_MODE_MIXED, h),
+        None => (QGC_ALTITUDE_MODE_RELATIVE, home.alt_m),
+    };
     let plan = json!({
         "fileType": "Plan",
         "geoFence": options.geo_fence.to_json(),
@@ -248,10 +294,10 @@ pub fn to_qgc_plan(mission: &Mission, options: &QgcPlanOptions) -> Result<String
         "mission": {
             "cruiseSpeed": options.cruise_speed_m_s,
             "firmwareType": options.firmware_type,
-            "globalPlanAltitudeMode": QGC_ALTITUDE_MODE_RELATIVE,
+            "globalPlanAltitudeMode": global_mode,
             "hoverSpeed": options.hover_speed_m_s,
-            "items": items(&mission.waypoints),
-            "plannedHomePosition": [home.lat_deg, home.lon_deg, home.alt_m],
+            "items": items(&mission.waypoints, options.home_amsl_m),
+            "plannedHomePosition": [home.lat_deg, home.lon_deg, home_alt_m],
             "vehicleType": options.vehicle_type,
             "version": 2,
         },

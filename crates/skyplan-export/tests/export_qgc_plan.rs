@@ -135,6 +135,7 @@ fn plan_options_are_written() {
         firmware_type: mavlink::MAV_AUTOPILOT_ARDUPILOTMEGA,
         vehicle_type: mavlink::MAV_TYPE_QUADROTOR,
         geo_fence: GeoFence::default(),
+        home_amsl_m: None,
     };
     let doc = parse(&to_qgc_plan(&common::sample(), &options).unwrap());
     assert_eq!(num(&doc["mission"]["cruiseSpeed"]), 8.5);
@@ -181,4 +182,41 @@ fn geofence_is_written_in_qgroundcontrols_layout() {
     let mut bad = options;
     bad.geo_fence.polygons[0].vertices_lat_lon_deg.pop();
     assert!(to_qgc_plan(&common::sample(), &bad).is_err());
+}
+
+/// With the home's height above mean sea level (a plan over a DEM), the takeoff and the
+/// waypoints go in MAV_FRAME_GLOBAL at the mission's altitudes plus that height (QGroundControl's
+/// AltitudeMode 2), the landing stays relative, the plan's mode is mixed and its home at that
+/// height; a height that is not finite is refused.
+#[test]
+fn altitudes_above_mean_sea_level_go_in_the_global_frame() {
+    let mission = common::sample();
+    let options = QgcPlanOptions {
+        home_amsl_m: Some(312.5),
+        ..QgcPlanOptions::default()
+    };
+    let doc = parse(&to_qgc_plan(&mission, &options).unwrap());
+    assert_eq!(doc["mission"]["globalPlanAltitudeMode"], 0);
+    assert_eq!(num(&doc["mission"]["plannedHomePosition"][2]), 312.5);
+    let items = doc["mission"]["items"].as_array().unwrap();
+    assert_eq!(items.len(), mission.waypoints.len() + 1);
+    for (item, w) in items.iter().zip(&mission.waypoints) {
+        assert_eq!(item["frame"], u64::from(mavlink::MAV_FRAME_GLOBAL));
+        assert_eq!(item["AltitudeMode"], 2);
+        assert_eq!(num(&item["Altitude"]), w.alt_m + 312.5);
+        assert_eq!(num(&item["params"][6]), w.alt_m + 312.5);
+    }
+    let land = items.last().unwrap();
+    assert_eq!(land["command"], u64::from(mavlink::MAV_CMD_NAV_LAND));
+    assert_eq!(
+        land["frame"],
+        u64::from(mavlink::MAV_FRAME_GLOBAL_RELATIVE_ALT)
+    );
+    for bad in [f64::NAN, f64::INFINITY] {
+        let options = QgcPlanOptions {
+            home_amsl_m: Some(bad),
+            ..QgcPlanOptions::default()
+        };
+        assert!(to_qgc_plan(&mission, &options).is_err());
+    }
 }
