@@ -246,6 +246,8 @@ struct Filter {
     bbox: Option<skyplan_airspace::Volume4D>,
     altitudes: (f64, f64),
     times: (Timestamp, Timestamp),
+    /// Both ends of the time window given.
+    bounded: bool,
 }
 
 impl Filter {
@@ -326,7 +328,17 @@ impl Filter {
             bbox,
             altitudes,
             times,
+            bounded: q.time_start.is_some() && q.time_end.is_some(),
         })
+    }
+
+    /// The area and time window as one volume for the store's index (a superset of what the
+    /// filter keeps), when both are given.
+    fn probe(&self) -> Option<skyplan_airspace::Volume4D> {
+        let mut v = self.bbox.clone().filter(|_| self.bounded)?;
+        v.time_start = self.times.0.into();
+        v.time_end = self.times.1.into();
+        Some(v)
     }
 
     fn keeps(&self, intent: &OperationalIntent) -> bool {
@@ -351,7 +363,20 @@ pub(crate) async fn list(
     let axum::extract::Query(q) = query.map_err(|e| bad(e.body_text()))?;
     let filter = Filter::of(&q)?;
     let store = store(&s)?;
-    let mut intents = blocking(move || store.list().map_err(store_error)).await?;
+    let probe = filter.probe();
+    let mut intents = blocking(move || {
+        // An area and a time window: the intents the index files there (in the order stored),
+        // unless they cover more index keys than it takes: then every intent.
+        if let Some(v) = probe {
+            match store.nearby(std::slice::from_ref(&v), 0) {
+                Ok(found) => return Ok(found),
+                Err(skyplan_airspace_store::StoreError::TooLarge(_)) => {}
+                Err(e) => return Err(store_error(e)),
+            }
+        }
+        store.list().map_err(store_error)
+    })
+    .await?;
     intents.retain(|i| filter.keeps(i));
     Ok(Json(json!({ "intents": intents })))
 }

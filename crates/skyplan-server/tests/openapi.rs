@@ -954,6 +954,29 @@ async fn listing_intents_filters_by_time_altitude_and_area() {
     assert_eq!(owners(&v).len(), 2, "{v}");
     let (_, v) = get("?bbox=37.85,-122.40,37.86,-122.39".into()).await;
     assert!(owners(&v).is_empty(), "{v}");
+    // Area and time window together go through the store's index (or, over more index keys
+    // than it takes, the whole list): the same answers, in the order stored.
+    let whole_day = format!(
+        "time_start={}&time_end={}",
+        departure(-7200),
+        departure(86_400)
+    );
+    let (_, v) = get(format!(
+        "?bbox=37.7920,-122.3980,37.7930,-122.3970&{whole_day}"
+    ))
+    .await;
+    assert_eq!(owners(&v), ["early", "late"], "{v}");
+    let (_, v) = get(format!("?bbox=37.85,-122.40,37.86,-122.39&{whole_day}")).await;
+    assert!(owners(&v).is_empty(), "{v}");
+    let (_, v) = get(format!(
+        "?bbox=37.7920,-122.3980,37.7930,-122.3970&time_start={after}&time_end={}",
+        departure(86_400)
+    ))
+    .await;
+    assert_eq!(owners(&v), ["late"], "{v}");
+    let (status, v) = get(format!("?bbox=-80,-170,80,170&{whole_day}")).await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    assert_eq!(owners(&v), ["early", "late"], "{v}");
     for (q, want) in [
         ("?bbox=1,2,3", "bbox: expected"),
         ("?bbox=37.9,-122.4,37.8,-122.3", "bbox: expected"),
