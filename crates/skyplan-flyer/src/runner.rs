@@ -322,6 +322,9 @@ pub fn fly_mission_with<O: RunObserver>(
         alts.fold(f64::NEG_INFINITY, f64::max),
         t_plan.elapsed().as_secs_f64() * 1000.0
     ));
+    if let Some(line) = plan.no_fly_line() {
+        observer.say(&line);
+    }
     observer.planned(&plan)?;
     if o.fence {
         upload_fence(&mut gcs, &request, mission, plan.spec.safety_m, observer)?;

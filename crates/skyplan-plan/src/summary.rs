@@ -8,6 +8,16 @@ fn ms(us: u64) -> f64 {
     us as f64 / 1000.0
 }
 
+impl Plan {
+    /// The summary's `no-fly` line: how many zones the request gave, how many apply, which do
+    /// not and why (`None` without zones).
+    pub fn no_fly_line(&self) -> Option<String> {
+        self.details
+            .get("no_fly")
+            .and_then(crate::zone_times::summary_line)
+    }
+}
+
 impl fmt::Display for Plan {
     /// The human summary, a line per aspect (map, grid, ends, path, details, waypoints).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -77,11 +87,7 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             num("climb_m")
         )?;
     }
-    if let Some(line) = plan
-        .details
-        .get("no_fly")
-        .and_then(crate::zone_times::summary_line)
-    {
+    if let Some(line) = plan.no_fly_line() {
         writeln!(f, "{line}")?;
     }
     writeln!(

@@ -127,7 +127,7 @@ pub(crate) fn summary_line(v: &Value) -> Option<String> {
     }
     if !always.is_empty() {
         line += &format!(
-            "; timed, counted as active at every time (give a departure to apply them only when active): {}",
+            "; timed, counted as active at every time without a departure: {}",
             features(&always)
         );
     }
