@@ -86,6 +86,21 @@ pub(crate) fn end_cell(
             ),
         ));
     }
+    // On a side or corner its free cell shares with a blocked one: the final re-check counts
+    // the blocked cell as touched (closed cells), so no route could leave from there.
+    if !grid.segment_is_free_ne((ne[0], ne[1]), (ne[0], ne[1]), q.r.model.touch()) {
+        return Err(PlanFailure::new(
+            kind,
+            format!(
+                "{which} {}{lla} is on the edge of a blocked cell (an obstacle's {} m safety margin at {} m altitude, in cells of {} m); {}",
+                describe(grid, ne),
+                q.r.safety_m,
+                q.r.alt_m,
+                grid.frame().cell_m,
+                nearest_hint(grid, ne)
+            ),
+        ));
+    }
     Ok(cell)
 }
 
