@@ -27,7 +27,7 @@ fn fly(line: &str) -> (Option<i32>, String) {
 /// kind of map decides here).
 fn takes_colliders(planner: PlannerId) -> bool {
     match planner.info().maps {
-        MapKinds::AnyGrid | MapKinds::CollidersOnly => true,
+        MapKinds::AnyGrid | MapKinds::Obstacles => true,
     }
 }
 

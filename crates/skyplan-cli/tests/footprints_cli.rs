@@ -75,16 +75,25 @@ fn clearance_m(map: &FootprintMap, wps: &[[f64; 4]], alt_m: f64, margin_m: f64) 
         .filter(|f| f.meets_altitude(alt_m, margin_m))
     {
         for w in wps.windows(2) {
-            let (a, b) = ([w[0][0], w[0][1]], [w[1][0], w[1][1]]);
-            if inside(a, &f.rings) {
-                return 0.0;
-            }
-            for ring in &f.rings {
-                for k in 0..ring.len() {
-                    let d = segment_segment(a, b, ring[k], ring[(k + 1) % ring.len()]);
-                    best = best.min(d);
-                }
-            }
+            best = best.min(polygon_clearance_m(
+                &f.rings,
+                [w[0][0], w[0][1]],
+                [w[1][0], w[1][1]],
+            ));
+        }
+    }
+    best
+}
+
+/// The distance from the segment `a`–`b` to the polygon (0 if it enters it).
+fn polygon_clearance_m(rings: &[Vec<[f64; 2]>], a: [f64; 2], b: [f64; 2]) -> f64 {
+    if inside(a, rings) {
+        return 0.0;
+    }
+    let mut best = f64::INFINITY;
+    for ring in rings {
+        for k in 0..ring.len() {
+            best = best.min(segment_segment(a, b, ring[k], ring[(k + 1) % ring.len()]));
         }
     }
     best
@@ -148,8 +157,86 @@ fn grid_planners_plan_on_footprints_keeping_the_margin() {
     }
 }
 
+/// The smallest distance from the route's 3D segments to the footprint prisms, each taken
+/// with its band grown by the margin (0 if the route enters one): the part of a segment within
+/// a prism's grown band is measured against its polygon.
+fn clearance_3d_m(map: &FootprintMap, wps: &[[f64; 4]], margin_m: f64) -> f64 {
+    let mut best = f64::INFINITY;
+    for f in &map.footprints {
+        let (lo, hi) = (f.min_height_m - margin_m, f.height_m + margin_m);
+        for w in wps.windows(2) {
+            let (za, zb) = (w[0][2], w[1][2]);
+            let (t0, t1) = if za == zb {
+                if za < lo || za > hi {
+                    continue;
+                }
+                (0.0, 1.0)
+            } else {
+                let (s, t) = ((lo - za) / (zb - za), (hi - za) / (zb - za));
+                (s.min(t).max(0.0), s.max(t).min(1.0))
+            };
+            if t0 > t1 {
+                continue;
+            }
+            let at = |t: f64| {
+                [
+                    w[0][0] + (w[1][0] - w[0][0]) * t,
+                    w[0][1] + (w[1][1] - w[0][1]) * t,
+                ]
+            };
+            best = best.min(polygon_clearance_m(&f.rings, at(t0), at(t1)));
+        }
+    }
+    best
+}
+
 #[test]
-fn home_moves_the_frame_and_3d_planners_refuse_footprints() {
+fn three_d_planners_and_voronoi_plan_on_footprints() {
+    let dir = tempfile::tempdir().unwrap();
+    let map_arg = sample_path();
+    let map_arg = map_arg.display();
+    let map = sample_map(None);
+    for planner in [
+        "voxel",
+        "rrt-connect",
+        "prm",
+        "lazy-prm",
+        "rrt-star",
+        "voronoi",
+    ] {
+        let v = ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --map {map_arg} --planner {planner} --safety-m 4 --goal-ne 118,-61{}",
+                if planner == "voronoi" {
+                    ""
+                } else {
+                    " --time-limit-ms 3000"
+                }
+            ),
+        );
+        assert_eq!(v["status"], "ok", "{planner}");
+        let wps = rows(&v);
+        let last = wps[wps.len() - 1];
+        assert_eq!(
+            (wps[0][0], wps[0][1], last[0], last[1]),
+            (0.0, 0.0, 118.0, -61.0)
+        );
+        let clearance = clearance_3d_m(&map, &wps, 4.0);
+        assert!(
+            clearance >= 4.0 - 1e-9,
+            "{planner}: the route comes {clearance} m from a footprint"
+        );
+        // Not the straight line: a building stands in the way at 5 m.
+        assert!(
+            v["cost_m"].as_f64().unwrap() > 118f64.hypot(61.0) + 1.0,
+            "{planner}"
+        );
+    }
+}
+
+#[test]
+fn home_moves_the_frame() {
     let dir = tempfile::tempdir().unwrap();
     let map_arg = sample_path();
     let map_arg = map_arg.display();
@@ -171,12 +258,6 @@ fn home_moves_the_frame_and_3d_planners_refuse_footprints() {
     assert_eq!(v["grid"]["blocked_cells"], grid.blocked_count());
     let wps = rows(&v);
     assert!(clearance_m(&moved, &wps, 5.0, 5.0) >= 5.0);
-    fails_with(
-        dir.path(),
-        &format!("plan --map {map_arg} --planner voxel --goal-ne 118,-61"),
-        2,
-        &["planner voxel", "footprint maps have no boxes"],
-    );
 }
 
 #[test]

@@ -35,6 +35,7 @@ pub mod maze;
 pub mod movingai;
 pub mod nofly;
 pub mod osm;
+pub mod planar;
 pub mod terrain;
 mod tile;
 

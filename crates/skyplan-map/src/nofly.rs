@@ -134,25 +134,7 @@ impl Zone {
             ZoneShape::Circle { centre, radius_m } => {
                 (point_segment_m(*centre, a, b) - radius_m).max(0.0)
             }
-            ZoneShape::Polygon(rings) => {
-                // Even-odd over every ring: inside the outer ring and no hole.
-                let crossings: usize = (rings.iter())
-                    .map(|ring| {
-                        (0..ring.len())
-                            .filter(|&k| {
-                                let (c, d) = (ring[k], ring[(k + 1) % ring.len()]);
-                                (c[1] > a[1]) != (d[1] > a[1])
-                                    && a[0] < c[0] + (a[1] - c[1]) / (d[1] - c[1]) * (d[0] - c[0])
-                            })
-                            .count()
-                    })
-                    .sum();
-                if crossings % 2 == 1 {
-                    0.0
-                } else {
-                    self.boundary_clearance_m(a, b)
-                }
-            }
+            ZoneShape::Polygon(rings) => crate::planar::region_segment_m(rings, a, b),
         }
     }
 
@@ -180,23 +162,7 @@ impl Zone {
                     (near - radius_m).max(0.0)
                 }
             }
-            ZoneShape::Polygon(rings) => {
-                let mut best = f64::INFINITY;
-                for ring in rings {
-                    for k in 0..ring.len() {
-                        let (c, d) = (ring[k], ring[(k + 1) % ring.len()]);
-                        if segments_meet(a, b, c, d) {
-                            return 0.0;
-                        }
-                        best = best
-                            .min(point_segment_m(a, c, d))
-                            .min(point_segment_m(b, c, d))
-                            .min(point_segment_m(c, a, b))
-                            .min(point_segment_m(d, a, b));
-                    }
-                }
-                best
-            }
+            ZoneShape::Polygon(rings) => crate::planar::boundary_segment_m(rings, a, b),
         }
     }
 
@@ -606,41 +572,7 @@ fn parse_zone(i: usize, f: &Value, vertices: &mut usize) -> Result<GeoZone, Foot
     })
 }
 
-/// The distance from `p` to the segment `a`–`b`.
-///
-/// ```
-/// assert_eq!(skyplan_map::nofly::point_segment_m([3.0, 4.0], [0.0, 0.0], [0.0, 0.0]), 5.0);
-/// assert_eq!(skyplan_map::nofly::point_segment_m([1.0, 2.0], [0.0, 0.0], [0.0, 10.0]), 1.0);
-/// ```
-pub fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a[0] + t * dx - p[0]).hypot(a[1] + t * dy - p[1])
-}
-
-/// Whether the closed segments `a`–`b` and `c`–`d` share a point.
-fn segments_meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-    let cross = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
-        (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
-    };
-    let (d1, d2) = (cross(a, b, c), cross(a, b, d));
-    let (d3, d4) = (cross(c, d, a), cross(c, d, b));
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
-        return true;
-    }
-    // Touching or collinear: an end on the other segment.
-    point_segment_m(c, a, b) == 0.0
-        || point_segment_m(d, a, b) == 0.0
-        || point_segment_m(a, c, d) == 0.0
-        || point_segment_m(b, c, d) == 0.0
-}
+pub use crate::planar::point_segment_m;
 
 /// Seconds since 1970-01-01T00:00:00Z of an RFC 3339 date-time (`2026-12-03T17:00:00Z`,
 /// `…T17:00:00.5+01:00`; fractions of a second are dropped), or `None`.

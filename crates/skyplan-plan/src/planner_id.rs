@@ -36,8 +36,9 @@ pub enum Optimality {
 pub enum MapKinds {
     /// Every map: colliders (as a grid at the altitude), images, MovingAI, random, grids.
     AnyGrid,
-    /// Only FCND colliders maps (it needs the boxes).
-    CollidersOnly,
+    /// Only maps of obstacles: FCND colliders, GeoJSON or OpenStreetMap footprints (it needs
+    /// the boxes or the footprint prisms, not a fixed grid).
+    Obstacles,
 }
 
 /// A group of request options that only some planners use. A request that gives an option of
@@ -178,22 +179,22 @@ planners! {
     Costmap => "costmap", "costmap A*", 2, ExactForObjective, AnyGrid, [GridPath, Inflation], "", &a::COSTMAP,
         "inflated cost map (Nav2-style): A* minimising length + weight x cost";
     /// Voronoi roadmap.
-    Voronoi => "voronoi", "Voronoi roadmap", 2, Feasible, CollidersOnly, [], "the roadmap per altitude, margin and cell size", &a::VORONOI,
+    Voronoi => "voronoi", "Voronoi roadmap", 2, Feasible, Obstacles, [], "the roadmap per altitude, margin and cell size", &a::VORONOI,
         "Voronoi roadmap of the grown footprints at the altitude: exactly free edges, graph A*";
     /// Probabilistic roadmap in 3D.
-    Prm => "prm", "PRM", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::Prm),
-        "3D probabilistic roadmap among the boxes (grown until start and goal connect)";
+    Prm => "prm", "PRM", 3, Feasible, Obstacles, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::Prm),
+        "3D probabilistic roadmap among the grown obstacles (grown until start and goal connect)";
     /// Lazy PRM in 3D.
-    LazyPrm => "lazy-prm", "lazy PRM", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::LazyPrm),
+    LazyPrm => "lazy-prm", "lazy PRM", 3, Feasible, Obstacles, [ThreeD, TimeLimit], "the roadmap per flight volume and seed", &a::Sampling(K::LazyPrm),
         "3D lazy PRM: edges checked only on found paths";
     /// RRT-Connect in 3D.
-    RrtConnect => "rrt-connect", "RRT-Connect", 3, Feasible, CollidersOnly, [ThreeD, TimeLimit], "the grown boxes per flight volume", &a::Sampling(K::RrtConnect),
+    RrtConnect => "rrt-connect", "RRT-Connect", 3, Feasible, Obstacles, [ThreeD, TimeLimit], "the grown obstacles per flight volume", &a::Sampling(K::RrtConnect),
         "3D RRT-Connect: bidirectional trees, stops at the first path";
     /// Informed RRT\* in 3D.
-    RrtStar => "rrt-star", "RRT*", 3, AsymptoticallyOptimal, CollidersOnly, [ThreeD, TimeLimit], "the grown boxes per flight volume", &a::Sampling(K::RrtStar),
+    RrtStar => "rrt-star", "RRT*", 3, AsymptoticallyOptimal, Obstacles, [ThreeD, TimeLimit], "the grown obstacles per flight volume", &a::Sampling(K::RrtStar),
         "3D Informed RRT*: improves the path until the time limit";
     /// Voxel A\* in 3D.
-    Voxel => "voxel", "voxel A*", 3, ExactForObjective, CollidersOnly, [ThreeD, TimeLimit, Lattice], "the grown boxes per flight volume", &a::Voxel,
+    Voxel => "voxel", "voxel A*", 3, ExactForObjective, Obstacles, [ThreeD, TimeLimit, Lattice], "the grown obstacles per flight volume", &a::Voxel,
         "3D voxel A* (26-connected, altitude layers, climb cost): may climb over low buildings";
 }
 
@@ -248,12 +249,13 @@ impl PlannerId {
         self.info().optimality == Optimality::Exact
     }
 
-    /// The planners that take this map kind.
-    pub fn for_maps(colliders: bool) -> impl Iterator<Item = PlannerId> {
+    /// The planners that take a map: every one on a map of obstacles (colliders or footprints),
+    /// the grid planners on a fixed grid.
+    pub fn for_maps(obstacles: bool) -> impl Iterator<Item = PlannerId> {
         Self::ALL
             .iter()
             .copied()
-            .filter(move |p| colliders || p.info().maps == MapKinds::AnyGrid)
+            .filter(move |p| obstacles || p.info().maps == MapKinds::AnyGrid)
     }
 
     /// Every name, comma-separated (for messages).

@@ -502,14 +502,19 @@ impl Session {
         rule
     }
 
-    /// The 3D box world for a request: boxes grown by the margin, the ground, the altitude band,
-    /// and horizontal bounds that cover the grid's (so every planner takes the same points).
+    /// The 3D world for a request: the map's boxes or footprint prisms grown by the margin,
+    /// the ground, the altitude band, and horizontal bounds that cover the grid's (so every
+    /// planner takes the same points).
     pub(crate) fn boxes(&mut self, r: &Resolved) -> Result<Arc<BoxWorld3>, PlanFailure> {
-        let Some(map) = self.world.colliders() else {
-            return Err(PlanFailure::bad_request(format!(
-                "planner {}: needs an FCND colliders map (a colliders CSV file, or the bundled map)",
-                r.planner
-            )));
+        let (boxes, footprints) = match (self.world.colliders(), self.world.footprints()) {
+            (Some(map), _) => (&map.boxes[..], &[][..]),
+            (None, Some(f)) => (&[][..], &f.footprints[..]),
+            (None, None) => {
+                return Err(PlanFailure::bad_request(format!(
+                    "planner {}: needs a map of obstacles (FCND colliders, GeoJSON or OpenStreetMap footprints)",
+                    r.planner
+                )));
+            }
         };
         let terrain = self.world.terrain();
         let k = key([
@@ -523,12 +528,13 @@ impl Session {
             return Ok(Arc::clone(w));
         }
         let b = self.world.bounds_ne(r.cell_m);
-        let on_ground;
-        let obstacles = match terrain {
-            None => &map.boxes,
+        let (on_ground, standing);
+        let (obstacles, footprints) = match terrain {
+            None => (boxes, footprints),
             Some(t) => {
-                on_ground = boxes_over_terrain(t, &map.boxes, r, &b)?;
-                &on_ground
+                on_ground = boxes_over_terrain(t, boxes, r, &b)?;
+                standing = footprints_over_terrain(t, footprints)?;
+                (&on_ground[..], &standing[..])
             }
         };
         let spec = WorldSpec {
@@ -541,7 +547,7 @@ impl Session {
             min: [b.north_min_m, b.east_min_m, r.min_alt_m],
             max: [b.north_max_m, b.east_max_m, r.max_alt_m],
         };
-        let world = BoxWorld3::with_bounds(obstacles, &spec, bounds)
+        let world = BoxWorld3::with_footprints(obstacles, footprints, &spec, bounds)
             .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
         Ok(put(&mut self.boxes, k, Arc::new(world)))
     }
@@ -571,14 +577,12 @@ impl Session {
         let mut r = Resolved::new(request)?;
         self.check_request_memory(&r)?;
         let info = r.planner.info();
-        if info.maps == MapKinds::CollidersOnly && self.world.colliders().is_none() {
-            let why = if self.world.footprints().is_some() {
-                " (footprint maps have no boxes yet: the 3D planners and Voronoi refuse them)"
-            } else {
-                ""
-            };
+        if info.maps == MapKinds::Obstacles
+            && self.world.colliders().is_none()
+            && self.world.footprints().is_none()
+        {
             return Err(PlanFailure::bad_request(format!(
-                "planner {}: needs an FCND colliders map (a colliders CSV file, or the bundled map){why}; on {} use one of {}",
+                "planner {}: needs a map of obstacles (FCND colliders, GeoJSON or OpenStreetMap footprints), not a fixed grid; on {} use one of {}",
                 r.planner,
                 self.world.name(),
                 PlannerId::for_maps(false)
@@ -712,7 +716,7 @@ impl Session {
                 "no_fly: {name} is a fixed grid, not a map at an altitude; no-fly zones need a colliders or footprint map"
             )));
         }
-        if r.planner.info().maps == MapKinds::CollidersOnly {
+        if r.planner.info().maps == MapKinds::Obstacles {
             return Err(PlanFailure::bad_request(format!(
                 "no_fly: planner {} does not honour no-fly zones (only the 2D grid planners do); use one of {}",
                 r.planner,
@@ -1184,6 +1188,34 @@ fn boxes_over_terrain(
         });
     }
     Ok(out)
+}
+
+/// The footprints of a 3D plan over terrain, standing on the ground: each reaches from its
+/// floor above the lowest ground under its bounding box to its top above the highest.
+fn footprints_over_terrain(
+    t: &skyplan_map::terrain::Terrain,
+    footprints: &[skyplan_map::footprints::Footprint],
+) -> Result<Vec<skyplan_map::footprints::Footprint>, PlanFailure> {
+    (footprints.iter())
+        .map(|f| {
+            let (lo, hi) = f.bbox_ne();
+            let [low, high] = t
+                .ground_extremes_m_in([lo[0], hi[0]], [lo[1], hi[1]])
+                .map_err(|e| {
+                    PlanFailure::bad_request(format!(
+                        "terrain: under the footprint of feature {} (N {:.1} m, E {:.1} m): {e}",
+                        f.feature + 1,
+                        (lo[0] + hi[0]) / 2.0,
+                        (lo[1] + hi[1]) / 2.0
+                    ))
+                })?;
+            Ok(skyplan_map::footprints::Footprint {
+                min_height_m: f.min_height_m + low,
+                height_m: f.height_m + high,
+                ..f.clone()
+            })
+        })
+        .collect()
 }
 
 /// A 3D request over terrain: the flight volume from the lowest ground under the map to

@@ -65,7 +65,7 @@ fn summary(plan: &Plan, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let num = |x: &Value| x.as_f64().unwrap_or(f64::NAN);
         writeln!(
             f,
-            "volume     N {:.1}..{:.1} m, E {:.1}..{:.1} m, altitude {:.1}..{:.1} m, {} m margin around every box",
+            "volume     N {:.1}..{:.1} m, E {:.1}..{:.1} m, altitude {:.1}..{:.1} m, {} m margin around every obstacle",
             num(&lo[0]),
             num(&hi[0]),
             num(&lo[1]),

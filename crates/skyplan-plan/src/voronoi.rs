@@ -1,5 +1,7 @@
-//! The Voronoi roadmap of the grown footprints at the flight altitude, with the grid (JPS) as
-//! the fallback; the roadmap is built once per altitude/margin/cell size in a session.
+//! The Voronoi roadmap of the grown obstacles at the flight altitude, with the grid (JPS) as
+//! the fallback; the roadmap is built once per altitude/margin/cell size in a session. On a
+//! colliders map its sites sample the grown boxes' sides; on a footprint map they are the
+//! blocked cells along the free space (footprints of any shape).
 
 use crate::failure::{FailureKind, PlanFailure};
 use crate::grid::grid_for;
@@ -13,7 +15,7 @@ use std::time::Instant;
 /// The session's roadmap at the request's altitude, margin and cell size, built if it has none.
 fn kept_roadmap(
     session: &mut Session,
-    map: &skyplan_map::colliders::CollidersMap,
+    map: Option<&skyplan_map::colliders::CollidersMap>,
     grid: &skyplan_cspace::Grid2,
     r: &crate::request::Resolved,
 ) -> Arc<Roadmap> {
@@ -21,13 +23,11 @@ fn kept_roadmap(
     if let Some(m) = session.voronoi.get(&k) {
         return Arc::clone(m);
     }
-    let m = Arc::new(Roadmap::build(
-        map,
-        grid,
-        r.alt_m,
-        r.safety_m,
-        &RoadmapSpec::default(),
-    ));
+    let spec = RoadmapSpec::default();
+    let m = Arc::new(match map {
+        Some(map) => Roadmap::build(map, grid, r.alt_m, r.safety_m, &spec),
+        None => Roadmap::from_sites(grid, &skyplan_roadmap::grid_boundary_sites(grid), &spec),
+    });
     if session.voronoi.len() >= 8 {
         session.voronoi.clear();
     }
@@ -37,10 +37,7 @@ fn kept_roadmap(
 
 pub(crate) fn plan(session: &mut Session, q: &Query) -> Result<Route, PlanFailure> {
     let r = q.r;
-    let map = q
-        .world
-        .colliders()
-        .ok_or_else(|| PlanFailure::bad_request("planner voronoi needs an FCND colliders map"))?;
+    let map = q.world.colliders();
     let (grid, grid_us) = grid_for(session, q)?;
     let t_build = Instant::now();
     let roadmap = kept_roadmap(session, map, &grid, r);

@@ -107,7 +107,7 @@ fn planner_row(py: Python<'_>, planner: PlannerId) -> PyResult<Bound<'_, PyDict>
     row.set_item("summary", info.summary)?;
     row.set_item("exact", info.optimality == Optimality::Exact)?;
     row.set_item("grid_path", planner.is_cell_planner())?;
-    row.set_item("colliders_only", info.maps == MapKinds::CollidersOnly)?;
+    row.set_item("needs_obstacles", info.maps == MapKinds::Obstacles)?;
     Ok(row)
 }
 
@@ -117,11 +117,12 @@ fn planner_row(py: Python<'_>, planner: PlannerId) -> PyResult<Bound<'_, PyDict>
 /// Each dict: `name` (the `planner=` value), `label`, `dims` (2: routes at one altitude, 3:
 /// routes that climb), `optimality` (`exact`, `exact_for_objective`, `any_angle`,
 /// `exact_any_angle`, `feasible`, `asymptotically_optimal`), `maps` (`any_grid` or
-/// `colliders_only`), `summary` (one line), and three predicates: `exact` (the shortest grid
+/// `obstacles`), `summary` (one line), and three predicates: `exact` (the shortest grid
 /// path under the move model: its cost equals Dijkstra's), `grid_path` (it searches grid cells
 /// and takes the grid-path options `connectivity`, `corner_cutting`, `prune`, `epsilon`,
 /// `shortcut`; its route is that cell path unless its optimality is `any_angle`),
-/// `colliders_only` (it needs an FCND colliders map: its boxes).
+/// `needs_obstacles` (it needs a map of obstacles: FCND colliders or footprints, not a fixed
+/// grid).
 #[pyfunction]
 pub fn planners(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let rows = PlannerId::ALL

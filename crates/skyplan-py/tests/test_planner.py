@@ -135,11 +135,11 @@ def test_planners_are_the_clis(cli, tmp_path):
     for p in PLANNERS:
         assert list(p) == [
             "name", "label", "dims", "optimality", "maps", "summary",
-            "exact", "grid_path", "colliders_only",
+            "exact", "grid_path", "needs_obstacles",
         ]
         assert p["dims"] in (2, 3) and p["label"]
         assert p["exact"] == (p["optimality"] == "exact")
-        assert p["colliders_only"] == (p["maps"] == "colliders_only")
+        assert p["needs_obstacles"] == (p["maps"] == "obstacles")
         assert isinstance(p["grid_path"], bool)
 
 
@@ -150,10 +150,10 @@ def den312d():
 
 @pytest.mark.parametrize("row", PLANNERS, ids=by_name)
 def test_every_planner_equals_the_cli(city, den312d, cli, tmp_path, row):
-    """Each planner on a map it takes: the bundled city for the colliders-only ones, a MovingAI
+    """Each planner on a map it takes: the bundled city for those that need obstacles, a MovingAI
     map (small: planners that preprocess the grid stay quick) for the others."""
     name = row["name"]
-    if row["colliders_only"]:
+    if row["needs_obstacles"]:
         planner, start, goal, map_args = city, (0.0, 0.0), (60.0, 40.0), []
     else:
         path = MOVINGAI / "den312d.map"
@@ -194,7 +194,7 @@ def maze():
 def test_registry_predicates_hold_on_a_grid(maze):
     """What each row's predicates promise, checked on a numpy grid against Dijkstra: `exact`
     planners find its cost; `grid_path` ones take the grid-path options (and, unless any-angle,
-    never beat Dijkstra); exact any-angle ones are the shortest of all; `colliders_only` ones
+    never beat Dijkstra); exact any-angle ones are the shortest of all; `needs_obstacles` ones
     refuse the grid."""
     grid, start, goal, want = maze
     planner = skyplan.Planner(grid)
@@ -203,8 +203,8 @@ def test_registry_predicates_hold_on_a_grid(maze):
     costs = {}
     for row in PLANNERS:
         name = row["name"]
-        if row["colliders_only"]:
-            with pytest.raises(skyplan.BadInput, match="colliders map"):
+        if row["needs_obstacles"]:
+            with pytest.raises(skyplan.BadInput, match="map of obstacles"):
                 planner.plan(*ends, planner=name)
             continue
         plan = planner.plan(*ends, planner=name)

@@ -565,7 +565,8 @@ pub struct WorldFingerprint {
     pub bounds_max: Neu,
     /// Number of boxes.
     pub boxes: usize,
-    /// FNV-1a (64 bits, hexadecimal) of the grown boxes' coordinates, bit for bit.
+    /// FNV-1a (64 bits, hexadecimal) of the grown boxes' coordinates, then the grown prisms'
+    /// bounding boxes and rings, bit for bit.
     pub boxes_fnv1a: String,
 }
 
@@ -573,13 +574,20 @@ impl WorldFingerprint {
     /// The fingerprint of a box world.
     pub fn of(world: &BoxWorld3) -> Self {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        for b in world.inflated_boxes() {
-            for v in b.min.iter().chain(b.max.iter()) {
-                for byte in v.to_bits().to_le_bytes() {
-                    h ^= u64::from(byte);
-                    h = h.wrapping_mul(0x0000_0100_0000_01b3);
-                }
+        let mut add = |v: f64| {
+            for byte in v.to_bits().to_le_bytes() {
+                h ^= u64::from(byte);
+                h = h.wrapping_mul(0x0000_0100_0000_01b3);
             }
+        };
+        for b in world.inflated_boxes() {
+            b.min.iter().chain(b.max.iter()).for_each(|&v| add(v));
+        }
+        // Footprint prisms (none on a colliders map, whose hash stays as it was).
+        for p in world.prisms() {
+            let b = p.bbox();
+            b.min.iter().chain(b.max.iter()).for_each(|&v| add(v));
+            p.rings().iter().flatten().flatten().for_each(|&v| add(v));
         }
         let bounds = world.bounds();
         Self {

@@ -51,12 +51,12 @@ pub(crate) async fn method_not_allowed() -> ApiError {
 
 /// The planner registry with what this map takes.
 pub(crate) fn planners_json(world: &World) -> Value {
-    let colliders = world.colliders().is_some();
+    let obstacles = world.colliders().is_some() || world.footprints().is_some();
     let planners: Vec<Value> = PlannerId::ALL
         .iter()
         .map(|p| {
             let mut v = serde_json::to_value(p.info()).unwrap_or(Value::Null);
-            v["available"] = json!(PlannerId::for_maps(colliders).any(|q| q == *p));
+            v["available"] = json!(PlannerId::for_maps(obstacles).any(|q| q == *p));
             v
         })
         .collect();

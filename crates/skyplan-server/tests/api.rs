@@ -382,7 +382,7 @@ async fn the_registry_lists_every_planner_and_what_this_map_takes() {
     let want: Vec<&str> = PlannerId::ALL.iter().map(|p| p.name()).collect();
     assert_eq!(names, want);
     assert_eq!(v["default"], "jps");
-    // A grid map does not take the colliders-only planners.
+    // A grid map does not take the planners that need obstacles.
     let grid = skyplan_cspace::Grid2::from_ascii("....\n....").expect("a grid");
     let (_, v) = send(
         router(World::from_grid("tiny", grid), ServerConfig::default()),

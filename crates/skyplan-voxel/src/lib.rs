@@ -318,6 +318,9 @@ impl<'w> VoxelGrid<'w> {
         for b in world.inflated_boxes() {
             grid.rasterise(b);
         }
+        for p in world.prisms() {
+            grid.rasterise_prism(p);
+        }
         grid.build_us = t0.elapsed().as_micros() as u64;
         Ok(grid)
     }
@@ -380,6 +383,46 @@ impl<'w> VoxelGrid<'w> {
             for j in inside[1].0..=inside[1].1 {
                 let t = &mut self.heights.top_m[i * self.dims[1] + j];
                 *t = t.max(b.max[2]);
+                for k in inside[2].0..=inside[2].1 {
+                    let v = self.index([i, j, k]);
+                    self.state[v] = BLOCKED;
+                }
+            }
+        }
+    }
+
+    /// Marks the voxels near a grown prism's bounding box (their edges need a test), blocks
+    /// those whose centre lies in the prism and raises the height map under them.
+    fn rasterise_prism(&mut self, p: &skyplan_world3::Prism) {
+        let bbox = p.bbox();
+        let Some((near, inside)) = self.box_ranges(&bbox) else {
+            return;
+        };
+        for i in near[0].0..=near[0].1 {
+            for j in near[1].0..=near[1].1 {
+                for k in near[2].0..=near[2].1 {
+                    let v = self.index([i, j, k]);
+                    if self.state[v] == CLEAR {
+                        self.state[v] = NEAR;
+                    }
+                }
+            }
+        }
+        if inside[0].0 > inside[0].1 || inside[1].0 > inside[1].1 || inside[2].0 > inside[2].1 {
+            return;
+        }
+        for i in inside[0].0..=inside[0].1 {
+            for j in inside[1].0..=inside[1].1 {
+                let centre = [
+                    self.coord(0, i as f64),
+                    self.coord(1, j as f64),
+                    bbox.min[2],
+                ];
+                if !p.contains(centre) {
+                    continue; // the column misses the grown footprint
+                }
+                let t = &mut self.heights.top_m[i * self.dims[1] + j];
+                *t = t.max(bbox.max[2]);
                 for k in inside[2].0..=inside[2].1 {
                     let v = self.index([i, j, k]);
                     self.state[v] = BLOCKED;

@@ -30,6 +30,10 @@
 #![warn(missing_docs)]
 
 use skyplan_map::colliders::ObstacleBox;
+use skyplan_map::footprints::Footprint;
+
+mod prism;
+pub use prism::Prism;
 
 /// A point `[north_m, east_m, alt_m]` in metres about the map's home (altitude positive up).
 pub type Neu = [f64; 3];
@@ -204,6 +208,7 @@ const BUCKET_M: f64 = 10.0;
 #[derive(Debug, Clone)]
 pub struct BoxWorld3 {
     boxes: Vec<Aabb>,
+    prisms: Vec<Prism>,
     bounds: Aabb,
     spec: WorldSpec,
     origin_ne: [f64; 2],
@@ -268,6 +273,33 @@ impl BoxWorld3 {
         spec: &WorldSpec,
         bounds: Aabb,
     ) -> Result<Self, WorldError> {
+        Self::with_footprints(obstacles, &[], spec, bounds)
+    }
+
+    /// Like [`BoxWorld3::with_bounds`] with building footprints too: each a [`Prism`] grown by
+    /// the margin (horizontally by a disc, vertically by the margin). Indices of obstacles
+    /// count the boxes first, then the prisms.
+    ///
+    /// ```
+    /// use skyplan_map::footprints::Footprint;
+    /// use skyplan_world3::{Aabb, BoxWorld3, CollisionChecker, WorldSpec};
+    /// // An L-shaped building 30 m tall; 2 m margin.
+    /// let l_shape = vec![vec![[0.0, 0.0], [20.0, 0.0], [20.0, 5.0], [5.0, 5.0], [5.0, 20.0], [0.0, 20.0]]];
+    /// let f = Footprint { feature: 0, rings: l_shape, min_height_m: 0.0, height_m: 30.0 };
+    /// let spec = WorldSpec { safety_m: 2.0, ..WorldSpec::default() };
+    /// let bounds = Aabb { min: [-50.0, -50.0, 0.0], max: [50.0, 50.0, 100.0] };
+    /// let w = BoxWorld3::with_footprints(&[], &[f], &spec, bounds)?;
+    /// assert!(w.is_free([15.0, 15.0, 10.0])); // in the L's notch
+    /// assert!(!w.segment_is_free([15.0, 15.0, 10.0], [-5.0, -5.0, 10.0])); // through it
+    /// assert!(w.segment_is_free([15.0, 15.0, 33.0], [-5.0, -5.0, 32.5])); // over the roof
+    /// # Ok::<(), skyplan_world3::WorldError>(())
+    /// ```
+    pub fn with_footprints(
+        obstacles: &[ObstacleBox],
+        footprints: &[Footprint],
+        spec: &WorldSpec,
+        bounds: Aabb,
+    ) -> Result<Self, WorldError> {
         check_spec(spec)?;
         if !(0..3).all(|i| {
             bounds.min[i].is_finite() && bounds.max[i].is_finite() && bounds.min[i] < bounds.max[i]
@@ -287,6 +319,10 @@ impl BoxWorld3 {
             .iter()
             .map(|b| Aabb::from_obstacle(b, spec.safety_m))
             .collect();
+        let prisms: Vec<Prism> = footprints
+            .iter()
+            .map(|f| Prism::from_footprint(f, spec.safety_m))
+            .collect();
         let origin_ne = [bounds.min[0], bounds.min[1]];
         let cells_ne = [
             (((bounds.max[0] - bounds.min[0]) / BUCKET_M).floor() as usize + 1).max(1),
@@ -299,7 +335,8 @@ impl BoxWorld3 {
             let c = ((v - origin_ne[axis]) / BUCKET_M).floor();
             c.clamp(0.0, (cells_ne[axis] - 1) as f64) as usize
         };
-        for (k, b) in boxes.iter().enumerate() {
+        let extents = (boxes.iter().copied()).chain(prisms.iter().map(Prism::bbox));
+        for (k, b) in extents.enumerate() {
             // Boxes entirely outside the bounds or below the ground can never be touched by a
             // free point; keep them anyway (they are clamped into the edge cells), it is cheap.
             let (r0, r1) = (cell_of(b.min[0], 0), cell_of(b.max[0], 0));
@@ -321,6 +358,7 @@ impl BoxWorld3 {
         }
         Ok(Self {
             boxes,
+            prisms,
             bounds,
             spec: *spec,
             origin_ne,
@@ -336,6 +374,35 @@ impl BoxWorld3 {
         &self.boxes
     }
 
+    /// The grown footprint prisms, in map order.
+    pub fn prisms(&self) -> &[Prism] {
+        &self.prisms
+    }
+
+    /// Whether obstacle `k` (boxes first, then prisms) contains the point.
+    fn obstacle_contains(&self, k: usize, p: Neu) -> bool {
+        match k.checked_sub(self.boxes.len()) {
+            None => self.boxes[k].contains(p),
+            Some(i) => self.prisms[i].contains(p),
+        }
+    }
+
+    /// Whether obstacle `k` (boxes first, then prisms) meets the closed box.
+    fn obstacle_meets(&self, k: usize, b: &Aabb) -> bool {
+        match k.checked_sub(self.boxes.len()) {
+            None => self.boxes[k].meets(b),
+            Some(i) => self.prisms[i].meets(b),
+        }
+    }
+
+    /// Whether obstacle `k` (boxes first, then prisms) meets the segment.
+    fn obstacle_hit(&self, k: usize, a: Neu, b: Neu) -> bool {
+        match k.checked_sub(self.boxes.len()) {
+            None => segment_hits_box(a, b, &self.boxes[k]),
+            Some(i) => self.prisms[i].segment_hits(a, b),
+        }
+    }
+
     /// The spec the world was built with.
     pub fn spec(&self) -> &WorldSpec {
         &self.spec
@@ -345,17 +412,19 @@ impl BoxWorld3 {
     pub fn brute_force(&self) -> BruteForce<'_> {
         BruteForce {
             boxes: &self.boxes,
+            prisms: &self.prisms,
             bounds: self.bounds,
         }
     }
 
-    /// The index of an inflated box containing the point, if any (bounds and ground ignored).
+    /// The index of an inflated box or grown prism containing the point, if any (boxes first,
+    /// then prisms; bounds and ground ignored).
     pub fn box_containing(&self, p: Neu) -> Option<usize> {
         let i = self.cell_index(p[0], p[1])?;
         self.cell(i)
             .iter()
             .map(|&k| k as usize)
-            .find(|&k| self.boxes[k].contains(p))
+            .find(|&k| self.obstacle_contains(k, p))
     }
 
     /// Whether the closed box `b` lies inside the bounds (above the ground) and meets no
@@ -390,7 +459,7 @@ impl BoxWorld3 {
                 if self
                     .cell(i)
                     .iter()
-                    .any(|&k| self.boxes[k as usize].meets(b))
+                    .any(|&k| self.obstacle_meets(k as usize, b))
                 {
                     return false;
                 }
@@ -427,7 +496,7 @@ impl BoxWorld3 {
                     continue;
                 }
                 for &k in self.cell(i) {
-                    if segment_hits_box(a, b, &self.boxes[k as usize]) {
+                    if self.obstacle_hit(k as usize, a, b) {
                         return true;
                     }
                 }
@@ -499,6 +568,8 @@ pub fn lerp(a: Neu, b: Neu, t: f64) -> Neu {
 pub struct BruteForce<'a> {
     /// The inflated boxes.
     pub boxes: &'a [Aabb],
+    /// The grown footprint prisms.
+    pub prisms: &'a [Prism],
     /// The flyable bounds (the ground is their floor).
     pub bounds: Aabb,
 }
@@ -506,19 +577,24 @@ pub struct BruteForce<'a> {
 impl BruteForce<'_> {
     /// [`BoxWorld3::box_is_free`] testing every box.
     pub fn box_is_free(&self, b: &Aabb) -> bool {
-        self.bounds.holds(b) && !self.boxes.iter().any(|o| o.meets(b))
+        self.bounds.holds(b)
+            && !self.boxes.iter().any(|o| o.meets(b))
+            && !self.prisms.iter().any(|o| o.meets(b))
     }
 }
 
 impl CollisionChecker for BruteForce<'_> {
     fn is_free(&self, p: Neu) -> bool {
-        self.bounds.contains(p) && !self.boxes.iter().any(|b| b.contains(p))
+        self.bounds.contains(p)
+            && !self.boxes.iter().any(|b| b.contains(p))
+            && !self.prisms.iter().any(|o| o.contains(p))
     }
 
     fn segment_is_free(&self, a: Neu, b: Neu) -> bool {
         self.bounds.contains(a)
             && self.bounds.contains(b)
             && !self.boxes.iter().any(|bx| segment_hits_box(a, b, bx))
+            && !self.prisms.iter().any(|o| o.segment_hits(a, b))
     }
 
     fn bounds(&self) -> Aabb {

@@ -13,7 +13,7 @@ pyastar2d drop-in (``import skyplan as pyastar2d``): :func:`astar_path` (float32
 The whole planner: :class:`Planner` loads a map once (the bundled FCND city, a colliders.csv,
 an occupancy image, a MovingAI map or a numpy grid) and plans with any skyplan planner:
 :func:`planners` lists them all, from the planning API's registry (name, dims, optimality,
-maps, summary, and the predicates ``exact``, ``grid_path``, ``colliders_only``); :class:`Plan`
+maps, summary, and the predicates ``exact``, ``grid_path``, ``needs_obstacles``); :class:`Plan`
 holds the waypoints as numpy arrays.
 
 The shared airspace: :class:`Airspace` (a SQLite file, memory or PostgreSQL store) reserves

@@ -122,15 +122,15 @@ class _PlannerRow(TypedDict):
     summary: str
     exact: bool
     grid_path: bool
-    colliders_only: bool
+    needs_obstacles: bool
 
 def planners() -> List[_PlannerRow]:
     """Every planner, from the planning API's registry, in its order.
 
     ``name`` (the ``planner=`` value), ``label``, ``dims`` (2 or 3), ``optimality``, ``maps``
-    (``any_grid`` or ``colliders_only``), ``summary``; predicates: ``exact`` (shortest grid
+    (``any_grid`` or ``obstacles``), ``summary``; predicates: ``exact`` (shortest grid
     path: Dijkstra's cost), ``grid_path`` (a path through grid cells: takes ``connectivity``,
-    ``corner_cutting``, ``prune``, ``epsilon``, ``shortcut``), ``colliders_only``.
+    ``corner_cutting``, ``prune``, ``epsilon``, ``shortcut``), ``needs_obstacles`` (a map of obstacles, not a fixed grid).
     """
 
 @final
