@@ -8,6 +8,7 @@ use crate::exit::{Failure, Kind, Result, bad_input};
 use crate::files::{Target, write_atomic, write_target};
 use crate::picture::PictureKind;
 use crate::replan_cmd::flight_picture;
+use skyplan_flight::collision::BoxWorld;
 use skyplan_flight::executor::{ExecutorConfig, FlightState, Note, Outcome, Telemetry};
 use skyplan_flyer::flight::{self, Observer, reached_index};
 use skyplan_flyer::runner::{self, Ended, FlyOptions, Mode, RunObserver, Unfinished};
@@ -17,7 +18,7 @@ use skyplan_link::ground::{GroundConfig, Update, Waiting};
 use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::{SimReport, SimServerConfig};
 use skyplan_link::{Address, Role};
-use skyplan_map::colliders::{CollidersMap, ObstacleBox};
+use skyplan_map::colliders::{GeodeticHome, ObstacleBox};
 use skyplan_plan::FailureKind;
 use skyplan_plan::Plan;
 use std::io::IsTerminal;
@@ -108,12 +109,14 @@ pub fn run(args: FlyArgs) -> Result<()> {
     let out = (args.out.clone().or(config.path(&config.text.out)))
         .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))
         .transpose()?;
-    let (Some(map), Some(frame)) = (world.colliders().cloned(), world.frame().cloned()) else {
+    let (Some(obstacles), Some(frame)) = (runner::map_obstacles(&world), world.frame().cloned())
+    else {
         return Err(bad_input(format!(
-            "fly: {} is not an FCND colliders map; flying needs the map's boxes and geodetic home (--map FILE.csv, or the bundled map)",
+            "fly: {} is not a map of obstacles; flying needs the map's buildings and geodetic home (an FCND colliders map --map FILE.csv, footprints --map FILE.geojson or .osm, or the bundled map)",
             world.name()
         )));
     };
+    let home = frame.home();
     let plot = (args.plot.as_ref())
         .map(|path| {
             // A flight is drawn on the map whatever its planner (no heat map): a scene's kind.
@@ -124,16 +127,20 @@ pub fn run(args: FlyArgs) -> Result<()> {
     if args.sim {
         check_ends(&world, &limits, &request)?;
     }
-    let hidden = hidden_obstacles(&args, &world, &request, &map)?;
+    let home = GeodeticHome {
+        lat_deg: home.lat_deg,
+        lon_deg: home.lon_deg,
+    };
+    let hidden = hidden_obstacles(&args, &world, &request, &home)?;
     println!(
         "map        {}: {} obstacles, home lat {:.6}, lon {:.6}",
         world.name(),
-        map.boxes.len(),
-        map.home.lat_deg,
-        map.home.lon_deg
+        obstacles.len(),
+        home.lat_deg,
+        home.lon_deg
     );
 
-    let (address, sim) = vehicle(&args, &map, &frame, &request, &hidden)?;
+    let (address, sim) = vehicle(&args, obstacles, &frame, &request, &hidden)?;
     let zones = crate::picture::zones_of(&world, &request);
     let drawing = plot.map(|plot| (world.clone(), plot, zones.clone()));
     let bar = progress_bar(0);
@@ -273,10 +280,10 @@ fn hidden_obstacles(
     args: &FlyArgs,
     world: &skyplan_plan::World,
     request: &skyplan_plan::PlanRequest,
-    map: &CollidersMap,
+    home: &GeodeticHome,
 ) -> Result<Vec<ObstacleBox>> {
     let mut hidden = (args.hidden.as_ref())
-        .map(|path| crate::sim_cmd::load_hidden(path, &map.home))
+        .map(|path| crate::sim_cmd::load_hidden(path, home))
         .transpose()?
         .unwrap_or_default();
     if args.hidden_random > 0 {
@@ -294,7 +301,7 @@ fn hidden_obstacles(
 /// The vehicle: the built-in simulator on a free loopback port (`--sim`), or `--connect`.
 fn vehicle(
     args: &FlyArgs,
-    map: &CollidersMap,
+    obstacles: BoxWorld,
     frame: &LocalFrame,
     request: &skyplan_plan::PlanRequest,
     hidden: &[ObstacleBox],
@@ -325,7 +332,7 @@ fn vehicle(
         hidden: hidden.to_vec(),
         ..SimServerConfig::at(frame.home())
     };
-    let (sim, home) = runner::start_sim(map, frame, request, config)?;
+    let (sim, home) = runner::start_sim(obstacles, frame, request, config)?;
     println!(
         "sim        simulated multicopter on tcp:127.0.0.1:{}, {}× real time, at lat {:.7}, lon {:.7}",
         sim.port(),

@@ -11,7 +11,7 @@ use skyplan_search::MoveModel;
 use skyplan_search::oracle::dijkstra_exact;
 use std::path::{Path, PathBuf};
 mod common;
-use common::{fails_with, ok_json, rows};
+use common::{fails_with, ok_json, rows, run_args};
 use skyplan_testkit::distance_to_segment;
 
 const SAMPLE: &str = include_str!("../../../data/footprints-sample.geojson");
@@ -233,6 +233,100 @@ fn three_d_planners_and_voronoi_plan_on_footprints() {
             "{planner}"
         );
     }
+}
+
+/// `fly --sim` on a footprint map with a hidden pole on the last leg: the replanner learns it
+/// from the simulated sensor and flies around it; the flight log's track keeps more than half
+/// the margin from every building whose band holds its altitude (measured here from the
+/// polygons), and from the pole; the RTL altitude clears the tallest building under a straight
+/// way home.
+#[test]
+fn fly_replans_on_a_footprint_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = sample_map(None);
+    let home = map.home;
+    std::fs::write(
+        dir.path().join("pole.csv"),
+        format!(
+            "lat0 {}, lon0 {}\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n95,-61,10,2,2,10\n",
+            home.lat_deg, home.lon_deg
+        ),
+    )
+    .unwrap();
+    let map_arg = sample_path();
+    let r = run_args(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "20",
+            "--map",
+            &map_arg.display().to_string(),
+            "--goal-ne",
+            "118,-61",
+            "--hidden",
+            "pole.csv",
+            "--log",
+            "flight.csv",
+        ],
+    );
+    r.expect_code(0);
+    for needle in [
+        ": 42 obstacles",
+        "result     landed and disarmed after reaching all",
+        "no collision with the map's obstacles or the hidden building",
+    ] {
+        assert!(r.stdout.contains(needle), "{needle} in {}", r.stdout);
+    }
+    let replans: usize = (r.stdout.lines())
+        .find_map(|l| l.strip_prefix("replans    "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{}", r.stdout));
+    assert!(replans >= 1, "{}", r.stdout);
+    let log = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
+    let mut lines = log.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (n, e, a) = (col("north_m"), col("east_m"), col("alt_m"));
+    let (mut airborne, mut closest) = (0, f64::INFINITY);
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let p = [f[n].parse::<f64>().unwrap(), f[e].parse::<f64>().unwrap()];
+        let alt: f64 = f[a].parse().unwrap();
+        if alt < 1.0 {
+            continue;
+        }
+        airborne += 1;
+        for fp in map
+            .footprints
+            .iter()
+            .filter(|fp| fp.meets_altitude(alt, 0.0))
+        {
+            closest = closest.min(polygon_clearance_m(&fp.rings, p, p));
+        }
+        let pole =
+            (((p[0] - 95.0).abs() - 2.0).max(0.0)).hypot(((p[1] + 61.0).abs() - 2.0).max(0.0));
+        closest = closest.min(pole);
+    }
+    assert!(airborne > 100, "{airborne} airborne rows");
+    assert!(
+        closest > 2.5,
+        "the track came {closest} m from a building or the pole"
+    );
+    let rtl: f64 = (r.stdout.lines())
+        .find_map(|l| l.split("RTL altitude of at least ").nth(1))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{}", r.stdout));
+    // The tallest building whose footprint a straight way home from the route passes within the
+    // margin of sets it: at least the top of a building the route itself flies beside.
+    let tops: Vec<f64> = map.footprints.iter().map(|f| f.height_m + 5.0).collect();
+    assert!(
+        tops.contains(&rtl),
+        "{rtl} is no building's top plus the margin"
+    );
 }
 
 #[test]

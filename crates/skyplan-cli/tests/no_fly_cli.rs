@@ -96,6 +96,80 @@ fn the_default_route_goes_around_the_sample_zones() {
     assert_eq!(from_config["waypoints"], v["waypoints"]);
 }
 
+/// A 3D route's smallest distance to a zone whose band, grown by `margin_m`, meets it: each
+/// segment's part within the grown band, measured by [`clearance`].
+fn clearance_3d(wps: &[[f64; 4]], z: &Zone, margin_m: f64) -> f64 {
+    let (lo, hi) = (z.floor_m - margin_m, z.ceiling_m + margin_m);
+    let mut best = f64::INFINITY;
+    for w in wps.windows(2) {
+        let (za, zb) = (w[0][2], w[1][2]);
+        let (t0, t1) = if za == zb {
+            if za < lo || za > hi {
+                continue;
+            }
+            (0.0, 1.0)
+        } else {
+            let (s, t) = ((lo - za) / (zb - za), (hi - za) / (zb - za));
+            (s.min(t).max(0.0), s.max(t).min(1.0))
+        };
+        if t0 > t1 {
+            continue;
+        }
+        let at = |t: f64| {
+            let p = |k: usize| w[0][k] + (w[1][k] - w[0][k]) * t;
+            [p(0), p(1), p(2), 0.0]
+        };
+        best = best.min(clearance(&[at(t0), at(t1)], z));
+    }
+    best
+}
+
+/// The 3D planners keep the margin from every zone (each a prism: its polygon or circle grown
+/// by the margin, its band by the margin): from home to N 400, E -80 at 5 m, whose voxel route
+/// without zones crosses the stadium (up to 120 m: no way over it below the ceiling).
+#[test]
+fn the_3d_planners_keep_out_of_the_zones() {
+    let dir = tempfile::tempdir().unwrap();
+    let zones_path = data("no-fly-sample.geojson");
+    let plain = ok_json(dir.path(), "plan --json --planner voxel --goal-ne 400,-80");
+    let zones = zones_of(&zones_path, &plain["home"]);
+    assert!(
+        (zones.iter()).any(|z| clearance_3d(&rows(&plain), z, 5.0) < 5.0),
+        "the route without zones crosses none: the test shows nothing"
+    );
+    for planner in ["voxel", "rrt-connect", "prm", "lazy-prm", "rrt-star"] {
+        let v = ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --planner {planner} --goal-ne 400,-80 --time-limit-ms 3000 --no-fly {}",
+                zones_path.display()
+            ),
+        );
+        let wps = rows(&v);
+        for z in &zones {
+            let c = clearance_3d(&wps, z, 5.0);
+            assert!(c >= 5.0 - 1e-6, "{planner}: {c} m from zone {}", z.feature);
+        }
+        assert_eq!(v["no_fly"]["zones"].as_array().map(Vec::len), Some(3));
+    }
+    // An inclusion boundary is for the 2D planners.
+    let fence = common::dir_with(&[(
+        "fence.geojson",
+        r#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+            "properties": {"radius_m": 900, "inclusion": true},
+            "geometry": {"type": "Point", "coordinates": [-122.3975, 37.7925]}}]}"#,
+    )]);
+    fails_with(
+        fence.path(),
+        "plan --planner rrt-connect --no-fly fence.geojson",
+        2,
+        &[
+            "feature 0 is an inclusion boundary",
+            "3D planners keep out of exclusion zones only",
+        ],
+    );
+}
+
 #[test]
 fn a_circle_on_a_footprint_map_counts_only_in_its_band() {
     let dir = common::dir_with(&[(

@@ -1,6 +1,7 @@
-//! Checking a flown track against the obstacle boxes of the true world (the real boxes, no
-//! margin): collisions, and the closest approach ([`Closest`]) that a flight's verdict judges
-//! against the route's safety margin.
+//! Checking a flown track against the obstacles of the true world (the real boxes and building
+//! footprint prisms, no margin): collisions, and the closest approach ([`Closest`]) that a
+//! flight's verdict judges against the route's safety margin. Obstacles are numbered footprints
+//! first, then boxes.
 //!
 //! ```
 //! use skyplan_flight::collision::{BoxWorld, TrackCheck};
@@ -16,16 +17,30 @@
 //! ```
 
 use skyplan_map::colliders::ObstacleBox;
+use skyplan_map::footprints::Footprint;
+use skyplan_map::planar::region_segment_m;
 use std::collections::HashMap;
 
 /// Size of the buckets of the spatial index, metres.
 const BUCKET_M: f64 = 20.0;
 
-/// The obstacle boxes with a coarse horizontal bucket index.
+/// The obstacles — building footprints (prisms) and boxes — with a coarse horizontal bucket
+/// index.
 #[derive(Debug, Clone)]
 pub struct BoxWorld {
+    footprints: Vec<Footprint>,
     boxes: Vec<ObstacleBox>,
     buckets: HashMap<(i64, i64), Vec<u32>>,
+}
+
+/// The horizontal distance from `p` to a footprint's polygon (0 inside), metres.
+fn footprint_distance_m(f: &Footprint, p: [f64; 2]) -> f64 {
+    region_segment_m(&f.rings, p, p)
+}
+
+/// How far the altitude `up` is from the band `[lo, hi]`, metres (0 inside).
+fn band_gap_m(up: f64, lo: f64, hi: f64) -> f64 {
+    (lo - up).max(up - hi).max(0.0)
 }
 
 fn bucket(x_m: f64) -> i64 {
@@ -35,34 +50,91 @@ fn bucket(x_m: f64) -> i64 {
 impl BoxWorld {
     /// Indexes the boxes.
     pub fn new(boxes: &[ObstacleBox]) -> Self {
+        Self::with_footprints(&[], boxes)
+    }
+
+    /// Indexes building footprints (numbered first) and boxes.
+    ///
+    /// ```
+    /// use skyplan_flight::collision::BoxWorld;
+    /// use skyplan_map::footprints::Footprint;
+    /// // A triangular building 20 m tall.
+    /// let rings = vec![vec![[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]]];
+    /// let f = Footprint { feature: 0, rings, min_height_m: 0.0, height_m: 20.0 };
+    /// let world = BoxWorld::with_footprints(&[f], &[]);
+    /// assert_eq!(world.hit([2.0, 2.0, -5.0]), Some(0));
+    /// assert_eq!(world.hit([6.0, 6.0, -5.0]), None); // beyond the hypotenuse
+    /// let (k, d) = world.nearest([6.0, 6.0, -5.0], 10.0).unwrap();
+    /// assert!(k == 0 && (d - 2f64.sqrt()).abs() < 1e-12);
+    /// ```
+    pub fn with_footprints(footprints: &[Footprint], boxes: &[ObstacleBox]) -> Self {
         let mut buckets: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
-        for (i, b) in boxes.iter().enumerate() {
-            let (n0, n1) = (
-                bucket(b.north_m - b.half_north_m),
-                bucket(b.north_m + b.half_north_m),
-            );
-            let (e0, e1) = (
-                bucket(b.east_m - b.half_east_m),
-                bucket(b.east_m + b.half_east_m),
-            );
-            for n in n0..=n1 {
-                for e in e0..=e1 {
+        let extents = (footprints.iter().map(Footprint::bbox_ne)).chain(boxes.iter().map(|b| {
+            (
+                [b.north_m - b.half_north_m, b.east_m - b.half_east_m],
+                [b.north_m + b.half_north_m, b.east_m + b.half_east_m],
+            )
+        }));
+        for (i, (lo, hi)) in extents.enumerate() {
+            for n in bucket(lo[0])..=bucket(hi[0]) {
+                for e in bucket(lo[1])..=bucket(hi[1]) {
                     buckets.entry((n, e)).or_default().push(i as u32);
                 }
             }
         }
         Self {
+            footprints: footprints.to_vec(),
             boxes: boxes.to_vec(),
             buckets,
         }
     }
 
-    /// The boxes.
+    /// The boxes (numbered after the footprints).
     pub fn boxes(&self) -> &[ObstacleBox] {
         &self.boxes
     }
 
-    /// Indices of the boxes whose footprint may come within `range_m` of a north/east point
+    /// The building footprints (numbered first).
+    pub fn footprints(&self) -> &[Footprint] {
+        &self.footprints
+    }
+
+    /// How many obstacles: footprints and boxes.
+    pub fn len(&self) -> usize {
+        self.footprints.len() + self.boxes.len()
+    }
+
+    /// Whether the world has no obstacle.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Obstacle `i` (footprints first, then boxes).
+    pub fn obstacle(&self, i: usize) -> Obstacle<'_> {
+        match i.checked_sub(self.footprints.len()) {
+            None => Obstacle::Footprint(&self.footprints[i]),
+            Some(k) => Obstacle::Box(&self.boxes[k]),
+        }
+    }
+
+    /// The distance from a NED point to obstacle `i`, metres (0 touching or inside).
+    pub fn distance_m(&self, i: usize, point_ned_m: [f64; 3]) -> f64 {
+        let [n, e, d] = point_ned_m;
+        let up = -d;
+        match self.obstacle(i) {
+            Obstacle::Footprint(f) => {
+                footprint_distance_m(f, [n, e]).hypot(band_gap_m(up, f.min_height_m, f.height_m))
+            }
+            Obstacle::Box(b) => {
+                let dn = ((n - b.north_m).abs() - b.half_north_m).max(0.0);
+                let de = ((e - b.east_m).abs() - b.half_east_m).max(0.0);
+                let du = ((up - b.up_m).abs() - b.half_up_m).max(0.0);
+                (dn * dn + de * de + du * du).sqrt()
+            }
+        }
+    }
+
+    /// Indices of the obstacles whose footprint may come within `range_m` of a north/east point
     /// (a superset from the bucket index, each once, ascending).
     pub fn boxes_within(&self, north_m: f64, east_m: f64, range_m: f64) -> Vec<usize> {
         let r = range_m.max(0.0);
@@ -79,20 +151,14 @@ impl BoxWorld {
         out
     }
 
-    /// The first box containing a NED point (faces included), if any.
+    /// The first obstacle containing a NED point (faces included), if any.
     pub fn hit(&self, point_ned_m: [f64; 3]) -> Option<usize> {
-        let [n, e, d] = point_ned_m;
-        let up = -d;
+        let [n, e, _] = point_ned_m;
         self.buckets
             .get(&(bucket(n), bucket(e)))?
             .iter()
-            .find_map(|&i| {
-                let b = &self.boxes[i as usize];
-                ((n - b.north_m).abs() <= b.half_north_m
-                    && (e - b.east_m).abs() <= b.half_east_m
-                    && (up - b.up_m).abs() <= b.half_up_m)
-                    .then_some(i as usize)
-            })
+            .map(|&i| i as usize)
+            .find(|&i| self.distance_m(i, point_ned_m) == 0.0)
     }
 
     /// Distance from a NED point to the nearest box, metres, if one is within `max_m`
@@ -101,18 +167,13 @@ impl BoxWorld {
         self.nearest(point_ned_m, max_m).map(|(_, d)| d)
     }
 
-    /// The nearest box to a NED point and its distance, metres, if one is within `max_m`
-    /// (`max_m` ≤ 20 m; farther boxes may be missed); the lower index on a tie.
+    /// The nearest obstacle to a NED point and its distance, metres, if one is within `max_m`
+    /// (`max_m` ≤ 20 m; farther obstacles may be missed); the lower index on a tie.
     pub fn nearest(&self, point_ned_m: [f64; 3], max_m: f64) -> Option<(usize, f64)> {
-        let [n, e, d] = point_ned_m;
-        let up = -d;
+        let [n, e, _] = point_ned_m;
         let mut best: Option<(usize, f64)> = None;
         for i in self.boxes_within(n, e, max_m) {
-            let b = &self.boxes[i];
-            let dn = ((n - b.north_m).abs() - b.half_north_m).max(0.0);
-            let de = ((e - b.east_m).abs() - b.half_east_m).max(0.0);
-            let du = ((up - b.up_m).abs() - b.half_up_m).max(0.0);
-            let dist = (dn * dn + de * de + du * du).sqrt();
+            let dist = self.distance_m(i, point_ned_m);
             if dist <= max_m && best.is_none_or(|(_, x)| dist < x) {
                 best = Some((i, dist));
             }
@@ -121,13 +182,25 @@ impl BoxWorld {
     }
 }
 
-/// The true world of a flight: the map's boxes followed by the hidden ones the planner does not
-/// know (so a box's index tells which it is); `None` without either. The one box world that the
-/// flown track is checked against and the simulated sensor sees.
+/// One obstacle of a [`BoxWorld`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Obstacle<'a> {
+    /// A building footprint: a prism between its floor and its top.
+    Footprint(&'a Footprint),
+    /// A box.
+    Box(&'a ObstacleBox),
+}
+
+/// The true world of a flight: the map's obstacles followed by the hidden boxes the planner
+/// does not know (so an obstacle's index tells which it is); `None` without either. The one
+/// world that the flown track is checked against and the simulated sensor sees.
 pub fn true_world(map: Option<&BoxWorld>, hidden: &[ObstacleBox]) -> Option<BoxWorld> {
     match (map, hidden.is_empty()) {
         (Some(w), true) => Some(w.clone()),
-        (Some(w), false) => Some(BoxWorld::new(&[w.boxes(), hidden].concat())),
+        (Some(w), false) => Some(BoxWorld::with_footprints(
+            w.footprints(),
+            &[w.boxes(), hidden].concat(),
+        )),
         (None, false) => Some(BoxWorld::new(hidden)),
         (None, true) => None,
     }

@@ -1,9 +1,11 @@
 //! The simulated horizontal range sensor: one ray per sector, cast at the vehicle's altitude
-//! against the true world's boxes (exact 2D ray–rectangle intersection, no sampling).
+//! against the true world's obstacles (exact 2D ray–rectangle and ray–polygon intersection, no
+//! sampling).
 //!
-//! A box takes part when its vertical extent covers the altitude (faces included); the ray from
-//! the vehicle's north/east position along a bearing (radians clockwise from north) hits its
-//! footprint at the entry distance of the slab test, or at 0 when the vehicle is inside it.
+//! An obstacle takes part when its vertical extent covers the altitude (faces included); the
+//! ray from the vehicle's north/east position along a bearing (radians clockwise from north)
+//! hits a box's footprint at the entry distance of the slab test, a building's polygon where it
+//! first crosses an edge, or at 0 when the vehicle is inside it.
 //!
 //! ```
 //! use skyplan_flight::collision::BoxWorld;
@@ -22,9 +24,10 @@
 //! assert_eq!(RangeSensor::default().scan(&world, [0.0, 0.0, -25.0], 0.0)[18], SectorRange::Clear); // above it
 //! ```
 
-use crate::collision::BoxWorld;
+use crate::collision::{BoxWorld, Obstacle};
 use crate::sensing::SectorRange;
 use skyplan_map::colliders::ObstacleBox;
+use skyplan_map::planar::region_segment_m;
 
 /// Sectors of a sweep, as MAVLink `OBSTACLE_DISTANCE` carries them.
 pub const SECTORS: usize = 72;
@@ -77,24 +80,84 @@ impl RangeSensor {
     }
 }
 
-/// The boxes that may be hit within `range_m` of the position, at its altitude.
-fn boxes_near(world: &BoxWorld, position_ned: [f64; 3], range_m: f64) -> Vec<ObstacleBox> {
+/// The obstacles that may be hit within `range_m` of the position, at its altitude.
+fn boxes_near(world: &BoxWorld, position_ned: [f64; 3], range_m: f64) -> Vec<Obstacle<'_>> {
     let up = -position_ned[2];
     world
         .boxes_within(position_ned[0], position_ned[1], range_m)
         .into_iter()
-        .map(|i| world.boxes()[i])
-        .filter(|b| (up - b.up_m).abs() <= b.half_up_m)
+        .map(|i| world.obstacle(i))
+        .filter(|o| match o {
+            Obstacle::Box(b) => (up - b.up_m).abs() <= b.half_up_m,
+            Obstacle::Footprint(f) => f.min_height_m <= up && up <= f.height_m,
+        })
         .collect()
 }
 
-fn nearest_hit(boxes: &[ObstacleBox], p: [f64; 3], bearing_rad: f64, max_m: f64) -> Option<f64> {
+fn nearest_hit(near: &[Obstacle], p: [f64; 3], bearing_rad: f64, max_m: f64) -> Option<f64> {
     let dir = [bearing_rad.cos(), bearing_rad.sin()];
-    boxes
-        .iter()
-        .filter_map(|b| ray_box_entry_m([p[0], p[1]], dir, b))
+    near.iter()
+        .filter_map(|o| match o {
+            Obstacle::Box(b) => ray_box_entry_m([p[0], p[1]], dir, b),
+            Obstacle::Footprint(f) => ray_polygon_entry_m([p[0], p[1]], dir, &f.rings),
+        })
         .filter(|d| *d <= max_m)
         .min_by(f64::total_cmp)
+}
+
+/// Where a ray from `origin_ne` along the unit vector `dir_ne` enters a polygon with holes
+/// (`[north, east]` rings, even-odd, closed), metres along it: where it first crosses an edge,
+/// 0 when the origin is inside or on an edge.
+///
+/// ```
+/// use skyplan_flight::sensor::ray_polygon_entry_m;
+/// let triangle = vec![vec![[10.0, -5.0], [10.0, 5.0], [20.0, 0.0]]];
+/// assert_eq!(ray_polygon_entry_m([0.0, 0.0], [1.0, 0.0], &triangle), Some(10.0));
+/// assert_eq!(ray_polygon_entry_m([0.0, 0.0], [-1.0, 0.0], &triangle), None);
+/// assert_eq!(ray_polygon_entry_m([12.0, 0.0], [0.0, 1.0], &triangle), Some(0.0));
+/// ```
+pub fn ray_polygon_entry_m(
+    origin_ne: [f64; 2],
+    dir_ne: [f64; 2],
+    rings: &[Vec<[f64; 2]>],
+) -> Option<f64> {
+    if region_segment_m(rings, origin_ne, origin_ne) == 0.0 {
+        return Some(0.0);
+    }
+    let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+    let mut best: Option<f64> = None;
+    for ring in rings {
+        for k in 0..ring.len() {
+            let (c, e) = (ring[k], ring[(k + 1) % ring.len()]);
+            let edge = [e[0] - c[0], e[1] - c[1]];
+            let to_c = [c[0] - origin_ne[0], c[1] - origin_ne[1]];
+            let denom = cross(dir_ne, edge);
+            let t = if denom == 0.0 {
+                if cross(to_c, dir_ne) != 0.0 {
+                    continue; // parallel, off the ray's line
+                }
+                // Along the ray's line: its nearer end ahead of the origin (the origin is not
+                // on the edge).
+                let along = |p: [f64; 2]| {
+                    (p[0] - origin_ne[0]) * dir_ne[0] + (p[1] - origin_ne[1]) * dir_ne[1]
+                };
+                let (s, u) = (along(c), along(e));
+                if s.max(u) < 0.0 {
+                    continue;
+                }
+                s.min(u).max(0.0)
+            } else {
+                let s = cross(to_c, dir_ne) / denom;
+                let t = cross(to_c, edge) / denom;
+                if !(0.0..=1.0).contains(&s) || t < 0.0 {
+                    continue;
+                }
+                t
+            };
+            best = Some(best.map_or(t, |b: f64| b.min(t)));
+        }
+    }
+    best
 }
 
 /// Distance from `position_ned` along `bearing_rad` (horizontal, at the position's altitude) to
@@ -177,7 +240,33 @@ mod tests {
                     }
                 })
                 .collect();
-            let world = BoxWorld::new(&boxes);
+            // Buildings: star-shaped polygons (concave), some with a floor above the ground.
+            let footprints: Vec<skyplan_map::footprints::Footprint> = (0..6)
+                .map(|feature| {
+                    let centre = [rng.range(-40.0, 40.0), rng.range(-40.0, 40.0)];
+                    let n = 3 + (rng.unit() * 7.0) as usize;
+                    let ring = (0..n)
+                        .map(|k| {
+                            let a =
+                                (k as f64 + 0.5 * rng.unit()) / n as f64 * std::f64::consts::TAU;
+                            let r = rng.range(2.0, 9.0);
+                            [centre[0] + r * a.cos(), centre[1] + r * a.sin()]
+                        })
+                        .collect();
+                    let floor = if rng.unit() < 0.3 {
+                        rng.range(0.0, 10.0)
+                    } else {
+                        0.0
+                    };
+                    skyplan_map::footprints::Footprint {
+                        feature,
+                        rings: vec![ring],
+                        min_height_m: floor,
+                        height_m: floor + rng.range(2.0, 25.0),
+                    }
+                })
+                .collect();
+            let world = BoxWorld::with_footprints(&footprints, &boxes);
             for _ in 0..6 {
                 let p = [
                     rng.range(-30.0, 30.0),

@@ -91,11 +91,12 @@ pub struct RtlClearance {
 /// let tower = ObstacleBox::from_row([50.0, 0.0, 20.0, 5.0, 5.0, 20.0]);
 /// let aside = ObstacleBox::from_row([50.0, 300.0, 50.0, 5.0, 5.0, 50.0]);
 /// let route = [[100.0, -20.0], [100.0, 20.0]];
-/// let c = rtl_clearance(&[tower, aside], &route, [0.0, 0.0], 5.0).unwrap();
+/// let world = skyplan_flight::collision::BoxWorld::new(&[tower, aside]);
+/// let c = rtl_clearance(&world, &route, [0.0, 0.0], 5.0).unwrap();
 /// assert_eq!((c.alt_m, c.obstacle), (45.0, 0));
 /// ```
 pub fn rtl_clearance(
-    boxes: &[skyplan_map::colliders::ObstacleBox],
+    world: &skyplan_flight::collision::BoxWorld,
     route_ne: &[[f64; 2]],
     launch_ne: [f64; 2],
     margin_m: f64,
@@ -109,7 +110,23 @@ pub fn rtl_clearance(
             .collect(),
     };
     let mut best: Option<RtlClearance> = None;
-    for (i, b) in boxes.iter().enumerate() {
+    for (i, f) in world.footprints().iter().enumerate() {
+        let top_m = f.height_m + margin_m;
+        if best.is_some_and(|c| c.alt_m >= top_m) {
+            continue;
+        }
+        if triangles
+            .iter()
+            .any(|t| triangle_meets_grown(t, &f.rings, margin_m))
+        {
+            best = Some(RtlClearance {
+                alt_m: top_m,
+                obstacle: i,
+            });
+        }
+    }
+    let first_box = world.footprints().len();
+    for (i, b) in world.boxes().iter().enumerate() {
         let top_m = b.up_m + b.half_up_m + margin_m;
         if best.is_some_and(|c| c.alt_m >= top_m) {
             continue;
@@ -127,11 +144,33 @@ pub fn rtl_clearance(
         if triangles.iter().any(|t| triangle_meets_rect(t, &rect)) {
             best = Some(RtlClearance {
                 alt_m: top_m,
-                obstacle: i,
+                obstacle: first_box + i,
             });
         }
     }
     best
+}
+
+/// Whether the (closed) triangle `t` meets the polygon `rings` grown by `margin_m`: an edge of
+/// the triangle comes within the margin of the polygon, or the polygon lies inside the
+/// triangle (then its first vertex does).
+fn triangle_meets_grown(t: &[[f64; 2]; 3], rings: &[Vec<[f64; 2]>], margin_m: f64) -> bool {
+    use skyplan_map::planar::region_segment_m;
+    if (0..3).any(|k| region_segment_m(rings, t[k], t[(k + 1) % 3]) <= margin_m) {
+        return true;
+    }
+    let Some(&p) = rings.first().and_then(|r| r.first()) else {
+        return false;
+    };
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let d = [
+        cross(t[0], t[1], p),
+        cross(t[1], t[2], p),
+        cross(t[2], t[0], p),
+    ];
+    d.iter().all(|&x| x >= 0.0) || d.iter().all(|&x| x <= 0.0)
 }
 
 /// Whether the (closed) triangle `t` and the axis-aligned rectangle `[min, max]` share a point:

@@ -23,7 +23,7 @@ use skyplan_link::ground::{
 use skyplan_link::in_process::InProcessSim;
 use skyplan_link::vehicle::SimServerConfig;
 use skyplan_link::{Address, LinkError};
-use skyplan_map::colliders::{CollidersMap, ObstacleBox};
+use skyplan_map::colliders::ObstacleBox;
 use skyplan_map::nofly::parse_no_fly;
 use skyplan_plan::{Limits, Plan, PlanFailure, PlanRequest, Session, World};
 use skyplan_replan::bench::{FlightResult, Scenario, ScenarioSpec, SharedReplanner};
@@ -77,11 +77,21 @@ pub trait RunObserver: Observer {
     fn landed(&mut self, _time_s: f64, _state: FlightState, _telemetry: Option<&Telemetry>) {}
 }
 
+/// The map's obstacles as the simulator and the flight checks see them (no margin): a colliders
+/// map's boxes or a footprint map's buildings; `None` for a grid map.
+pub fn map_obstacles(world: &World) -> Option<BoxWorld> {
+    match (world.colliders(), world.footprints()) {
+        (Some(map), _) => Some(BoxWorld::new(&map.boxes)),
+        (None, Some(f)) => Some(BoxWorld::with_footprints(&f.footprints, &[])),
+        (None, None) => None,
+    }
+}
+
 /// Starts the simulator in-process on a free loopback port at the request's start (its
-/// lat/lon, its north/east, else the map's home), `map`'s boxes and `config.hidden` its world;
-/// `config`'s home and map home are set here. Returns it and where it starts.
+/// lat/lon, its north/east, else the map's home), the map's `obstacles` and `config.hidden`
+/// its world; `config`'s home and map home are set here. Returns it and where it starts.
 pub fn start_sim(
-    map: &CollidersMap,
+    obstacles: BoxWorld,
     frame: &LocalFrame,
     request: &PlanRequest,
     config: SimServerConfig,
@@ -106,10 +116,7 @@ pub fn start_sim(
         map_home: Some(frame.home()),
         ..config
     };
-    Ok((
-        InProcessSim::start(config, BoxWorld::new(&map.boxes))?,
-        home,
-    ))
+    Ok((InProcessSim::start(config, obstacles)?, home))
 }
 
 /// How a mission is flown.
@@ -295,7 +302,7 @@ pub fn fly_mission_with<O: RunObserver>(
     }
     let t_plan = Instant::now();
     let home_world = returns.then(|| world.clone());
-    let map_boxes = world.colliders().map(|m| m.boxes.clone());
+    let map_boxes = map_obstacles(&world);
     let session = Session::new(world).with_limits(limits);
     let replanner = match o.mode {
         Mode::Guided(replanner) => replanner,
@@ -600,7 +607,7 @@ const RTL_CEILING_M: f64 = 120.0;
 /// The highest obstacle the autopilot's own way home (RTL: a straight line to the launch point,
 /// the route's start) would fly over from anywhere on the route.
 fn mission_rtl_clearance(
-    boxes: &[ObstacleBox],
+    obstacles: &BoxWorld,
     mission: &skyplan_mission::Mission,
     margin_m: f64,
 ) -> Option<RtlClearance> {
@@ -609,7 +616,7 @@ fn mission_rtl_clearance(
         .iter()
         .map(|w| [w.north_m, w.east_m])
         .collect();
-    rtl_clearance(boxes, &route, *route.first()?, margin_m)
+    rtl_clearance(obstacles, &route, *route.first()?, margin_m)
 }
 
 /// Sets the autopilot's RTL altitude (ArduPilot `RTL_ALT` in centimetres with `RTL_CONE_SLOPE`
@@ -734,7 +741,9 @@ pub fn hidden_random(
 ) -> Result<Vec<ObstacleBox>, RunError> {
     let map = world
         .colliders()
-        .ok_or_else(|| bad("--hidden-random needs a colliders map"))?;
+        .ok_or_else(|| {
+            bad("--hidden-random needs a colliders map (give hidden buildings on other maps with --hidden FILE)")
+        })?;
     let mut plain = request.clone();
     plain.max_alt_m = None;
     let plan = Session::new(world.clone()).plan(&plain)?;

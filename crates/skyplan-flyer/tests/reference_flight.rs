@@ -10,7 +10,6 @@ use skyplan_flyer::runner::{
 };
 use skyplan_link::ground::GroundConfig;
 use skyplan_link::vehicle::SimServerConfig;
-use skyplan_map::colliders::parse_colliders;
 use skyplan_plan::{Limits, PlanRequest, World};
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
@@ -34,7 +33,6 @@ impl RunObserver for Lines {
 #[test]
 fn a_run_flies_the_reference_made_from_its_plan_and_tells_the_tracking() {
     let world = World::from_colliders_csv("one.csv", MAP).unwrap();
-    let map = parse_colliders(MAP).unwrap();
     let frame = *world.frame().unwrap();
     let request = PlanRequest {
         goal_ne: Some([70.0, 60.0]),
@@ -47,7 +45,13 @@ fn a_run_flies_the_reference_made_from_its_plan_and_tells_the_tracking() {
         ekf_delay_s: 1.0,
         ..SimServerConfig::at(frame.home())
     };
-    let (sim, _) = runner::start_sim(&map, &frame, &request, config).unwrap();
+    let (sim, _) = runner::start_sim(
+        runner::map_obstacles(&world).unwrap(),
+        &frame,
+        &request,
+        config,
+    )
+    .unwrap();
     let options = FlyOptions {
         ground: GroundConfig {
             speedup,

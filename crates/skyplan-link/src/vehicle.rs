@@ -205,7 +205,8 @@ pub struct SimReport {
     pub max_alt_m: f64,
     /// Horizontal distance flown, metres.
     pub distance_m: f64,
-    /// Boxes of the map's world (obstacle numbers below this are the map's).
+    /// Obstacles of the map's world, footprints and boxes (obstacle numbers below this are
+    /// the map's).
     pub map_boxes: usize,
     /// Hidden boxes (obstacle numbers from `map_boxes` on), absent from the planner's map.
     pub hidden_boxes: usize,

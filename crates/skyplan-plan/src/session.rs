@@ -15,12 +15,12 @@ use crate::zone_times::{ZoneReport, meets_window};
 use serde_json::{Map, Value};
 use skyplan_cspace::{Cell, Grid2, GridSpec, Touch};
 use skyplan_frames::{Lla, Ned};
-use skyplan_map::nofly::Zone;
+use skyplan_map::nofly::{Zone, ZoneShape};
 use skyplan_mission::Mission;
 use skyplan_search::ch_file::ChFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
 use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel};
-use skyplan_world3::{Aabb, BoxWorld3, WorldSpec};
+use skyplan_world3::{Aabb, BoxWorld3, Prism, WorldSpec};
 use std::collections::HashMap;
 use std::io::{Read, Write};
 use std::sync::Arc;
@@ -503,9 +503,14 @@ impl Session {
     }
 
     /// The 3D world for a request: the map's boxes or footprint prisms grown by the margin,
-    /// the ground, the altitude band, and horizontal bounds that cover the grid's (so every
-    /// planner takes the same points).
-    pub(crate) fn boxes(&mut self, r: &Resolved) -> Result<Arc<BoxWorld3>, PlanFailure> {
+    /// the no-fly `zones` as prisms grown by it (a circle by its radius plus the margin), the
+    /// ground, the altitude band, and horizontal bounds that cover the grid's (so every planner
+    /// takes the same points). Kept per volume when there are no zones.
+    pub(crate) fn boxes(
+        &mut self,
+        r: &Resolved,
+        zones: &[Zone],
+    ) -> Result<Arc<BoxWorld3>, PlanFailure> {
         let (boxes, footprints) = match (self.world.colliders(), self.world.footprints()) {
             (Some(map), _) => (&map.boxes[..], &[][..]),
             (None, Some(f)) => (&[][..], &f.footprints[..]),
@@ -524,7 +529,9 @@ impl Session {
             r.cell_m,
             terrain.map_or(-1.0, |_| r.alt_m),
         ]);
-        if let Some(w) = self.boxes.get(&k) {
+        if zones.is_empty()
+            && let Some(w) = self.boxes.get(&k)
+        {
             return Ok(Arc::clone(w));
         }
         let b = self.world.bounds_ne(r.cell_m);
@@ -547,8 +554,23 @@ impl Session {
             min: [b.north_min_m, b.east_min_m, r.min_alt_m],
             max: [b.north_max_m, b.east_max_m, r.max_alt_m],
         };
-        let world = BoxWorld3::with_footprints(obstacles, footprints, &spec, bounds)
+        let m = r.safety_m;
+        let prisms = (footprints.iter())
+            .map(|f| Prism::from_footprint(f, m))
+            .chain(zones.iter().map(|z| match &z.shape {
+                ZoneShape::Polygon(rings) => {
+                    Prism::with_growth(rings.clone(), z.floor_m, z.ceiling_m, m, m)
+                }
+                ZoneShape::Circle { centre, radius_m } => {
+                    Prism::with_growth(vec![vec![*centre]], z.floor_m, z.ceiling_m, radius_m + m, m)
+                }
+            }))
+            .collect();
+        let world = BoxWorld3::with_prisms(obstacles, prisms, &spec, bounds)
             .map_err(|e| PlanFailure::bad_request(format!("{}: {e}", self.world.name())))?;
+        if !zones.is_empty() {
+            return Ok(Arc::new(world));
+        }
         Ok(put(&mut self.boxes, k, Arc::new(world)))
     }
 
@@ -654,7 +676,13 @@ impl Session {
             recheck(&route)?;
             Ok::<_, PlanFailure>(route)
         };
-        let report = |applied: &[Zone]| ZoneReport::new(q.zones, applied, q.r.alt_m, q.r.safety_m);
+        // The altitudes the route may take: the flight altitude, or a 3D planner's volume.
+        let alts = if q.r.planner.info().dims == 3 {
+            [q.r.min_alt_m, q.r.max_alt_m]
+        } else {
+            [q.r.alt_m, q.r.alt_m]
+        };
+        let report = |applied: &[Zone]| ZoneReport::new(q.zones, applied, alts, q.r.safety_m);
         if q.r.no_fly.is_none() {
             return Ok((route_with(self, q.zones)?, None));
         }
@@ -716,9 +744,10 @@ impl Session {
                 "no_fly: {name} is a fixed grid, not a map at an altitude; no-fly zones need a colliders or footprint map"
             )));
         }
-        if r.planner.info().maps == MapKinds::Obstacles {
+        let info = r.planner.info();
+        if info.dims == 2 && info.maps == MapKinds::Obstacles {
             return Err(PlanFailure::bad_request(format!(
-                "no_fly: planner {} does not honour no-fly zones (only the 2D grid planners do); use one of {}",
+                "no_fly: planner {} does not honour no-fly zones (the grid planners and the 3D planners do); use one of {}",
                 r.planner,
                 PlannerId::for_maps(false)
                     .map(|p| p.name())
@@ -727,6 +756,17 @@ impl Session {
             )));
         }
         let zones = self.projected_zones(r)?;
+        if info.dims == 3 {
+            // The 3D planners' altitudes are above home, as the zones' bands: each zone is a
+            // prism in their world (over terrain too).
+            if let Some(z) = zones.iter().find(|z| z.inclusion) {
+                return Err(PlanFailure::bad_request(format!(
+                    "no_fly: feature {} is an inclusion boundary (stay inside); the 3D planners keep out of exclusion zones only; a 2D grid planner keeps inside it",
+                    z.feature
+                )));
+            }
+            return Ok(zones);
+        }
         match self.world.terrain() {
             None => Ok(zones),
             Some(t) => zones_over_terrain(t, zones, r.alt_m, r.safety_m),
@@ -856,9 +896,10 @@ impl Session {
         self.zones(&Resolved::new(request)?)
     }
 
-    /// The free space a plan's trajectory is made in: the 3D boxes grown by the margin on
-    /// colliders maps (without no-fly zones), else the plan's grid at its altitude — what a
-    /// trajectory replanned in flight must keep to as well.
+    /// The free space a plan's trajectory is made in: a 3D planner's world (boxes or footprint
+    /// prisms and no-fly zones, grown by the margin), the 3D boxes of a colliders map for a 2D
+    /// route without zones, else the plan's grid at its altitude — what a trajectory replanned
+    /// in flight must keep to as well.
     pub fn trajectory_space(
         &mut self,
         request: &PlanRequest,
@@ -873,8 +914,13 @@ impl Session {
         r: &Resolved,
         plan: &Plan,
     ) -> Result<Arc<dyn skyplan_trajectory::FreeSpace + Send + Sync>, PlanFailure> {
-        if self.world.colliders().is_some() && r.no_fly.is_none() {
-            Ok(self.boxes(r)?)
+        let three_d = r.planner.info().dims == 3;
+        if three_d {
+            // The 3D world the route was planned in: boxes or footprints, and the zones.
+            let zones = self.zones(r)?;
+            Ok(self.boxes(r, &zones)?)
+        } else if self.world.colliders().is_some() && r.no_fly.is_none() {
+            Ok(self.boxes(r, &[])?)
         } else if let Some(grid) = &plan.grid_used {
             Ok(Arc::new(skyplan_trajectory::GridLayer::new(
                 grid.as_ref().clone(),

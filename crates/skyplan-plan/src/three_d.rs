@@ -86,7 +86,7 @@ pub(crate) fn sampling(
 ) -> Result<Route, PlanFailure> {
     let r = q.r;
     let t_world = Instant::now();
-    let world = session.boxes(r)?;
+    let world = session.boxes(r, q.zones)?;
     let world_us = micros(t_world.elapsed());
     let (start, goal) = check_ends(&world, q)?;
     let budget = Budget::time(r.time_limit);
@@ -183,11 +183,14 @@ fn prm(
             skyplan_sampling::shortcut::simplify(world.as_ref(), &solution.path, &mut rng, 200);
         solution.cost_m = skyplan_world3::path_length_m(&solution.path);
     }
-    let key = prm_key(session, r, kind == PlannerKind::LazyPrm);
-    if session.prm.len() >= 8 {
-        session.prm.clear();
+    // A roadmap among no-fly zones is for those zones only: not kept.
+    if q.zones.is_empty() {
+        let key = prm_key(session, r, kind == PlannerKind::LazyPrm);
+        if session.prm.len() >= 8 {
+            session.prm.clear();
+        }
+        session.prm.insert(key, roadmap);
     }
-    session.prm.insert(key, roadmap);
     Ok((solution, extras))
 }
 
@@ -215,7 +218,9 @@ fn run_prm(
         return Ok(solve_from(world, roadmap, start, goal, 0, budget));
     }
     let key = prm_key(session, r, lazy);
-    if let Some(roadmap) = session.prm.remove(&key) {
+    if q.zones.is_empty()
+        && let Some(roadmap) = session.prm.remove(&key)
+    {
         return Ok(solve_from(world, roadmap, start, goal, 0, budget));
     }
     let config = PrmConfig {
@@ -289,7 +294,7 @@ pub(crate) fn voxel(session: &mut Session, q: &Query) -> Result<Route, PlanFailu
     use skyplan_voxel::{End, Query as VoxelQuery, VoxelError, VoxelGrid, VoxelSpec};
     let r = q.r;
     let t_world = Instant::now();
-    let world = session.boxes(r)?;
+    let world = session.boxes(r, q.zones)?;
     let world_us = micros(t_world.elapsed());
     let (start, goal) = ends(q);
     let spec = VoxelSpec {

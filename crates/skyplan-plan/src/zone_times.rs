@@ -43,7 +43,7 @@ pub(crate) fn meets_window(z: &Zone, from: i64, until: i64) -> bool {
 pub(crate) struct ZoneReport {
     /// Every zone of the request, by feature index.
     pub zones: Vec<usize>,
-    /// Exclusion zones whose band, grown by the margin, does not hold the flight altitude.
+    /// Exclusion zones whose band, grown by the margin, holds none of the flight's altitudes.
     pub out_of_band: Vec<usize>,
     /// Timed zones: `(departure, latest arrival)` when a departure was given.
     pub window: Option<(i64, i64)>,
@@ -54,13 +54,25 @@ pub(crate) struct ZoneReport {
 }
 
 impl ZoneReport {
-    pub(crate) fn new(zones: &[Zone], applied: &[Zone], alt_m: f64, margin_m: f64) -> Self {
+    /// The report on `zones` of which `applied` were planned among, for a flight between the
+    /// altitudes `[low, high]` (one altitude for a 2D route).
+    pub(crate) fn new(
+        zones: &[Zone],
+        applied: &[Zone],
+        [low, high]: [f64; 2],
+        margin_m: f64,
+    ) -> Self {
         let kept = |z: &Zone| applied.iter().any(|a| a.feature == z.feature);
         ZoneReport {
             zones: zones.iter().map(|z| z.feature).collect(),
             out_of_band: zones
                 .iter()
-                .filter(|z| !z.inclusion && !z.meets_altitude(alt_m, margin_m))
+                .filter(|z| {
+                    let band = (z.floor_m - margin_m, z.ceiling_m + margin_m);
+                    // As `Zone::meets_altitude` (open band) over the range of altitudes.
+                    let meets = band.0 < high && band.1 > low;
+                    !z.inclusion && !meets
+                })
                 .map(|z| z.feature)
                 .collect(),
             window: None,
@@ -179,7 +191,7 @@ mod tests {
             z
         }];
         let applied = [zones[0].clone(), zones[2].clone()];
-        let mut report = ZoneReport::new(&zones, &applied, 10.0, 5.0);
+        let mut report = ZoneReport::new(&zones, &applied, [10.0, 10.0], 5.0);
         report.window = Some((0, 300));
         let line = summary_line(&report.json()).unwrap_or_default();
         assert_eq!(

@@ -178,14 +178,14 @@ fn bad_zones_and_planners_that_cannot_honour_them_are_refused() {
     );
     let e = session
         .plan(&PlanRequest {
-            planner: Some(PlannerId::RrtConnect),
+            planner: Some(PlannerId::Voronoi),
             no_fly: Some(ZONES.to_string()),
             ..Default::default()
         })
         .unwrap_err();
     assert!(
         e.message
-            .starts_with("no_fly: planner rrt-connect does not honour no-fly zones"),
+            .starts_with("no_fly: planner voronoi does not honour no-fly zones"),
         "{}",
         e.message
     );

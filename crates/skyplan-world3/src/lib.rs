@@ -300,6 +300,20 @@ impl BoxWorld3 {
         spec: &WorldSpec,
         bounds: Aabb,
     ) -> Result<Self, WorldError> {
+        let prisms = (footprints.iter())
+            .map(|f| Prism::from_footprint(f, spec.safety_m))
+            .collect();
+        Self::with_prisms(obstacles, prisms, spec, bounds)
+    }
+
+    /// Like [`BoxWorld3::with_bounds`] with prisms grown already (footprints, no-fly zones):
+    /// the boxes are grown by the spec's margin, the prisms are taken as they are.
+    pub fn with_prisms(
+        obstacles: &[ObstacleBox],
+        prisms: Vec<Prism>,
+        spec: &WorldSpec,
+        bounds: Aabb,
+    ) -> Result<Self, WorldError> {
         check_spec(spec)?;
         if !(0..3).all(|i| {
             bounds.min[i].is_finite() && bounds.max[i].is_finite() && bounds.min[i] < bounds.max[i]
@@ -318,10 +332,6 @@ impl BoxWorld3 {
         let boxes: Vec<Aabb> = obstacles
             .iter()
             .map(|b| Aabb::from_obstacle(b, spec.safety_m))
-            .collect();
-        let prisms: Vec<Prism> = footprints
-            .iter()
-            .map(|f| Prism::from_footprint(f, spec.safety_m))
             .collect();
         let origin_ne = [bounds.min[0], bounds.min[1]];
         let cells_ne = [

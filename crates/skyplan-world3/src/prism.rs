@@ -31,6 +31,27 @@ impl Prism {
     /// The prism of the polygon `rings` (`[north, east]` metres, outer ring first, then holes,
     /// even-odd) between `floor_m` and `top_m`, grown by `grow_m` (≥ 0).
     pub fn new(rings: Vec<Vec<[f64; 2]>>, floor_m: f64, top_m: f64, grow_m: f64) -> Self {
+        Self::with_growth(rings, floor_m, top_m, grow_m, grow_m)
+    }
+
+    /// The prism grown by `grow_ne_m` horizontally and `grow_up_m` vertically: a no-fly circle
+    /// is the prism of its centre (a ring of one point) grown by its radius plus the margin
+    /// horizontally and by the margin vertically.
+    ///
+    /// ```
+    /// use skyplan_world3::Prism;
+    /// let disc = Prism::with_growth(vec![vec![[0.0, 0.0]]], 0.0, 50.0, 30.0 + 5.0, 5.0);
+    /// assert!(disc.contains([34.9, 0.0, 54.9]) && !disc.contains([35.1, 0.0, 10.0]));
+    /// assert!(!disc.contains([0.0, 0.0, 55.5]));
+    /// ```
+    pub fn with_growth(
+        rings: Vec<Vec<[f64; 2]>>,
+        floor_m: f64,
+        top_m: f64,
+        grow_ne_m: f64,
+        grow_up_m: f64,
+    ) -> Self {
+        let grow_m = grow_ne_m;
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for p in rings.iter().flatten() {
@@ -40,8 +61,8 @@ impl Prism {
             }
         }
         let bbox = Aabb {
-            min: [lo[0] - grow_m, lo[1] - grow_m, floor_m - grow_m],
-            max: [hi[0] + grow_m, hi[1] + grow_m, top_m + grow_m],
+            min: [lo[0] - grow_m, lo[1] - grow_m, floor_m - grow_up_m],
+            max: [hi[0] + grow_m, hi[1] + grow_m, top_m + grow_up_m],
         };
         Self {
             rings,
@@ -65,7 +86,7 @@ impl Prism {
         &self.rings
     }
 
-    /// How far the prism is grown, metres.
+    /// How far the prism is grown horizontally, metres.
     pub fn grow_m(&self) -> f64 {
         self.grow_m
     }

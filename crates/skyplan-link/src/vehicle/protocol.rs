@@ -79,7 +79,7 @@ impl SimProtocol {
         let last_mode = vehicle.state().mode;
         Self {
             truth: true_world(world, &cfg.hidden),
-            map_boxes: world.map_or(0, |w| w.boxes().len()),
+            map_boxes: world.map_or(0, BoxWorld::len),
             sensor,
             convergence_rad,
             speedup: cfg.speedup.max(0.1),
