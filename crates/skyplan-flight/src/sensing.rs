@@ -14,6 +14,7 @@
 //! let reading = ObstacleReading {
 //!     time_s: 3.0,
 //!     position_ned: [0.0, 0.0, -5.0],
+//!     velocity_ned_m_s: [0.0; 3],
 //!     first_bearing_rad: 0.0,
 //!     increment_rad: 5f64.to_radians(),
 //!     min_range_m: 0.2,
@@ -45,6 +46,8 @@ pub struct ObstacleReading {
     pub time_s: f64,
     /// Where the vehicle was (north, east, down about home), metres.
     pub position_ned: [f64; 3],
+    /// How it was moving then (north, east, down), m/s; zeros when not known.
+    pub velocity_ned_m_s: [f64; 3],
     /// Bearing of the centre of sector 0, radians clockwise from north.
     pub first_bearing_rad: f64,
     /// Angular width of each sector, radians.

@@ -309,7 +309,8 @@ pub fn fly_mission_with<O: RunObserver>(
         Mode::Upload { .. } => None,
     };
     let (plan, watcher) =
-        plan_with_replanner(session, request.clone(), replanner).map_err(RunError::from)?;
+        plan_with_replanner(session, request.clone(), replanner, brake(trajectory))
+            .map_err(RunError::from)?;
     if let Some(w) = &watcher {
         gcs.set_watcher(Box::new(w.clone()));
     }
@@ -702,6 +703,17 @@ fn fly_with<E: FlightExecutor, O: RunObserver>(
     Ok((flown.log, flown.outcome, replanned))
 }
 
+/// The braking a replan made at speed assumes, m/s²: ArduCopter braked 24–26 m from its
+/// waypoint speed before turning onto a new route in SITL (about 2 m/s² from 10 m/s).
+const BRAKE_ACCEL_M_S2: f64 = 2.0;
+
+/// How a replanned route begins: where the vehicle comes to rest when it flies waypoints
+/// (braking at [`BRAKE_ACCEL_M_S2`]), where it is when it flies a trajectory (which is made
+/// from the vehicle's motion).
+fn brake(trajectory: bool) -> Option<f64> {
+    (!trajectory).then_some(BRAKE_ACCEL_M_S2)
+}
+
 /// Whether a request's planner can be replanned in flight (the 2D cell searches).
 pub fn replannable(request: &PlanRequest) -> bool {
     request.planner.unwrap_or_default().is_cell_search()
@@ -714,6 +726,7 @@ pub fn plan_with_replanner(
     mut session: Session,
     mut request: PlanRequest,
     replanner: Option<ReplannerKind>,
+    brake_accel_m_s2: Option<f64>,
 ) -> Result<(Plan, Option<SharedReplanner>), PlanFailure> {
     let kind = match replanner {
         Some(kind) if replannable(&request) => kind,
@@ -725,6 +738,7 @@ pub fn plan_with_replanner(
             .max_alt_m
             .take()
             .unwrap_or(ReplanOptions::default().max_alt_m),
+        brake_accel_m_s2,
         ..ReplanOptions::default()
     };
     let r = Replanner::new(session, &request, options)?;
@@ -1001,7 +1015,8 @@ pub fn fly_scenario(
         return Err(bad("bench --replan needs a colliders map"));
     };
     let session = Session::new(world.clone());
-    let (plan, watcher) = plan_with_replanner(session, scenario.request.clone(), replanner)?;
+    let (plan, watcher) =
+        plan_with_replanner(session, scenario.request.clone(), replanner, brake(false))?;
     let start = frame
         .lla_from_ned(Ned {
             north_m: plan.start.north_m,

@@ -204,6 +204,7 @@ pub fn reading_from_obstacle_distance(
     Ok(ObstacleReading {
         time_s,
         position_ned,
+        velocity_ned_m_s: [0.0; 3],
         first_bearing_rad: base_rad + offset_deg.to_radians() - convergence_rad,
         increment_rad: increment_deg.to_radians(),
         min_range_m: f64::from(m.min_distance) * 0.01,
@@ -379,6 +380,7 @@ pub fn reading_from_distance_sensor(
     Ok(Some(ObstacleReading {
         time_s,
         position_ned,
+        velocity_ned_m_s: [0.0; 3],
         first_bearing_rad: -convergence_rad,
         increment_rad: step_deg.to_radians(),
         min_range_m: f64::from(m.min_distance) * 0.01,

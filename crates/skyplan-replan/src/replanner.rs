@@ -73,6 +73,12 @@ pub struct ReplanOptions {
     /// that replan searches from scratch (JPS) and D\* Lite goes on repairing, within the same
     /// budget, at the readings that follow until it has caught up. `None`: no limit.
     pub dstar_budget_expansions: Option<u64>,
+    /// The vehicle's braking deceleration, m/s²: a replan made while the vehicle moves starts
+    /// where it comes to rest along its heading (v² / 2a ahead, no farther than the free space
+    /// there), so that the new route begins where the vehicle can turn onto it. `None`: every
+    /// new route starts where the vehicle is (what a trajectory replanned from the vehicle's
+    /// motion wants).
+    pub brake_accel_m_s2: Option<f64>,
 }
 
 impl Default for ReplanOptions {
@@ -82,6 +88,7 @@ impl Default for ReplanOptions {
             max_alt_m: 30.0,
             climb_step_m: 5.0,
             dstar_budget_expansions: Some(2_000),
+            brake_accel_m_s2: None,
         }
     }
 }
@@ -284,7 +291,7 @@ struct Found {
 /// // Something 15 m ahead (bearing 350°), right on the route.
 /// let mut ranges = vec![SectorRange::Clear; 72];
 /// ranges[70] = SectorRange::Obstacle(15.0);
-/// let reading = ObstacleReading { time_s: 1.0, position_ned: [250.5, -38.5, -5.0], first_bearing_rad: 0.0,
+/// let reading = ObstacleReading { time_s: 1.0, position_ned: [250.5, -38.5, -5.0], velocity_ned_m_s: [0.0; 3], first_bearing_rad: 0.0,
 ///     increment_rad: 5f64.to_radians(), min_range_m: 0.2, max_range_m: 30.0, ranges };
 /// match replanner.on_reading(&reading, &route) {
 ///     RouteDecision::Replace { targets, event } => {
@@ -612,11 +619,45 @@ impl Replanner {
         }
     }
 
+    /// Where the vehicle comes to rest on layer `k` if it brakes now, going straight on (see
+    /// [`ReplanOptions::brake_accel_m_s2`]): `None` when it is (nearly) at rest, when braking is
+    /// not modelled, or when it cannot go on freely at all.
+    fn rest_point(&self, reading: &ObstacleReading, k: usize) -> Option<[f64; 2]> {
+        let a = self.options.brake_accel_m_s2?;
+        let [vn, ve, _] = reading.velocity_ned_m_s;
+        let v = vn.hypot(ve);
+        if !(a.is_finite() && a > 0.0 && v.is_finite() && v > 0.5) {
+            return None;
+        }
+        let stop_m = v * v / (2.0 * a);
+        let [n, e, _] = reading.position_ned;
+        let grid = self.layers[k].world.grid();
+        let at = |s: f64| [n + vn / v * s, e + ve / v * s];
+        let free = |s: f64| {
+            let p = at(s);
+            grid.segment_is_free_ne((n, e), (p[0], p[1]), self.touch)
+        };
+        // The farthest free point within the stopping distance (free segments from here only
+        // get shorter): bisection to a centimetre.
+        let reach = if free(stop_m) {
+            stop_m
+        } else {
+            let (mut lo, mut hi) = (0.0, stop_m);
+            while hi - lo > 0.01 {
+                let mid = 0.5 * (lo + hi);
+                if free(mid) { lo = mid } else { hi = mid }
+            }
+            lo
+        };
+        (reach >= 1.0).then(|| at(reach))
+    }
+
     fn replan(&mut self, reading: &ObstacleReading, reason: String, t0: Started) -> RouteDecision {
         let [n, e, d] = reading.position_ned;
         let alt_m = -d;
         let from = [n, e];
         let here = self.layer_of(alt_m);
+        let rest = self.rest_point(reading, here);
         let mut tried = Vec::new();
         let mut overhead = None;
         for k in here..self.layers.len() {
@@ -631,7 +672,13 @@ impl Replanner {
                 break;
             }
             tried.push(format!("{:.1}", self.layers[k].alt_m));
-            let Some(found) = self.route_at(k, from) else {
+            // At the flight's layer the new route begins where the vehicle comes to rest, if
+            // one starts there; a climb begins where it is.
+            let resting = rest.filter(|_| k == here);
+            let Some(found) = resting
+                .and_then(|p| self.route_at(k, p))
+                .or_else(|| self.route_at(k, from))
+            else {
                 continue;
             };
             let mut points = found.points;
@@ -835,6 +882,7 @@ mod tests {
         ObstacleReading {
             time_s: 1.0,
             position_ned: [FROM[0], FROM[1], -5.0],
+            velocity_ned_m_s: [0.0; 3],
             first_bearing_rad: 0.0,
             increment_rad: 5f64.to_radians(),
             min_range_m: 0.2,
@@ -874,6 +922,7 @@ mod tests {
             let reading = ObstacleReading {
                 time_s: 1.0,
                 position_ned: [10.5, 0.5, -5.0],
+                velocity_ned_m_s: [0.0; 3],
                 first_bearing_rad: bearing,
                 increment_rad: 0.1,
                 min_range_m: 0.2,
@@ -890,6 +939,65 @@ mod tests {
             }
         }
         panic!("no hold after the wall was seen whole");
+    }
+
+    /// A replan at speed begins where the vehicle comes to rest going straight on (v² / 2a
+    /// ahead), no farther than the free space ahead; at rest, or without braking modelled, it
+    /// begins where the vehicle is.
+    #[test]
+    fn a_replan_at_speed_begins_where_the_vehicle_comes_to_rest() {
+        let grid = skyplan_cspace::Grid2::new(
+            21,
+            41,
+            vec![false; 21 * 41],
+            skyplan_cspace::GridFrame::default(),
+        )
+        .unwrap();
+        let request = PlanRequest {
+            start_ne: Some([10.5, 0.5]),
+            goal_ne: Some([10.5, 40.5]),
+            safety_m: Some(1.0),
+            ..Default::default()
+        };
+        let first_target = |speed_m_s: f64, brake: Option<f64>| {
+            let world = World::from_grid("strip", grid.clone());
+            let options = ReplanOptions {
+                brake_accel_m_s2: brake,
+                ..ReplanOptions::default()
+            };
+            let mut r = Replanner::new(Session::new(world), &request, options).unwrap();
+            let route = r.initial_targets();
+            // Heading east along the route; a pole 15 m ahead, on it.
+            let reading = ObstacleReading {
+                time_s: 1.0,
+                position_ned: [10.5, 0.5, -5.0],
+                velocity_ned_m_s: [0.0, speed_m_s, 0.0],
+                first_bearing_rad: std::f64::consts::FRAC_PI_2,
+                increment_rad: 0.01,
+                min_range_m: 0.2,
+                max_range_m: 30.0,
+                ranges: vec![SectorRange::Obstacle(15.0)],
+            };
+            let RouteDecision::Replace { targets, .. } = r.on_reading(&reading, &route) else {
+                panic!("a pole on the route is a replan");
+            };
+            let learned = r.world().grid().clone();
+            let t = targets[0];
+            assert!(
+                learned.segment_is_free_ne((10.5, 0.5), (t.north_m, t.east_m), r.touch),
+                "the way to the first target is free"
+            );
+            [t.north_m, t.east_m]
+        };
+        // 6 m/s at 2 m/s²: 9 m on.
+        assert_eq!(first_target(6.0, Some(2.0)), [10.5, 9.5]);
+        // 10 m/s: 25 m on, but the pole's learned margin begins about 13 m on.
+        let [n, e] = first_target(10.0, Some(2.0));
+        assert!(n == 10.5 && (11.0..14.5).contains(&e), "{n}, {e}");
+        // At rest, or not braking: the route leaves the vehicle's spot for a corner.
+        for [n, e] in [first_target(0.0, Some(2.0)), first_target(10.0, None)] {
+            assert!(n != 10.5 || e < 9.5 - 1e-9, "{n}, {e}");
+        }
     }
 
     #[test]

@@ -20,7 +20,7 @@ use std::sync::Arc;
 /// let mut ranges = vec![SectorRange::Clear; 4];
 /// ranges[0] = SectorRange::Obstacle(10.0); // 10 m north of the vehicle at (5.5, 5.5)
 /// let reading = ObstacleReading {
-///     time_s: 0.0, position_ned: [5.5, 5.5, -5.0], first_bearing_rad: 0.0,
+///     time_s: 0.0, position_ned: [5.5, 5.5, -5.0], velocity_ned_m_s: [0.0; 3], first_bearing_rad: 0.0,
 ///     increment_rad: std::f64::consts::FRAC_PI_2, min_range_m: 0.2, max_range_m: 20.0, ranges,
 /// };
 /// let changed = world.apply(&reading);
@@ -265,6 +265,7 @@ mod tests {
         ObstacleReading {
             time_s: 0.0,
             position_ned: [at[0], at[1], -5.0],
+            velocity_ned_m_s: [0.0; 3],
             first_bearing_rad: 0.0,
             increment_rad: FRAC_PI_2,
             min_range_m: 0.2,

@@ -1306,7 +1306,8 @@ impl FlightLoop {
         let time_s = self.vehicle_s(now_s);
         match decode(time_s, at, p.yaw_rad, self.convergence_rad) {
             Ok(None) => None,
-            Ok(Some(x)) => {
+            Ok(Some(mut x)) => {
+                x.velocity_ned_m_s = t.velocity_ned_m_s;
                 self.readings += 1;
                 self.last_hits_ne = x.hits_ne().collect();
                 self.updates.push(Update::Reading(x.clone()));

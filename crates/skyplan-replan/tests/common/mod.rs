@@ -84,6 +84,7 @@ pub fn sense(boxes: &[ObstacleBox], p: [f64; 3], time_s: f64) -> ObstacleReading
     ObstacleReading {
         time_s,
         position_ned: [p[0], p[1], -p[2]],
+        velocity_ned_m_s: [0.0; 3],
         first_bearing_rad: 0.0,
         increment_rad: inc,
         min_range_m: 0.2,
