@@ -642,7 +642,7 @@ async fn bad_no_fly_zones_are_bad_requests() {
     let zones = include_str!("../../../data/no-fly-sample.geojson");
     let (status, got) = post_plan(
         city(),
-        json!({ "planner": "voxel", "goal_ne": [60.0, 40.0], "no_fly": zones }),
+        json!({ "planner": "voronoi", "goal_ne": [60.0, 40.0], "no_fly": zones }),
     )
     .await;
     assert_eq!(status, StatusCode::BAD_REQUEST, "{got}");
