@@ -346,6 +346,11 @@ fn a_plan_file_refuses_a_fence_whose_dropped_hole_holds_the_route() {
 }
 
 /// The sample zones with the helipad's (feature 1) window replaced by `start`, `end`.
+/// The default route's waypoints without zones.
+fn early_plain_waypoints(dir: &Path) -> Value {
+    ok_json(dir, "plan --json")["waypoints"].clone()
+}
+
 fn with_helipad_window(start: &str, end: &str) -> String {
     let text = std::fs::read_to_string(data("no-fly-sample.geojson")).unwrap();
     let mut v: Value = serde_json::from_str(&text).unwrap();
@@ -424,6 +429,30 @@ fn a_departure_applies_only_the_zones_active_during_the_flight() {
             assert_eq!(v["no_fly"]["latest_arrival"], arrival.as_str());
         }
     }
+    // A zone over the goal that opens hours after the departure does not stop the flight (it
+    // made every route fail before); while it is open the goal is in it.
+    let over_goal = common::dir_with(&[(
+        "goal.geojson",
+        r#"{"type": "FeatureCollection", "features": [{"type": "Feature",
+            "properties": {"radius_m": 40, "floor_m": 0, "ceiling_m": 120,
+                           "start": "2026-12-03T10:00:00Z", "end": "2026-12-03T12:00:00Z"},
+            "geometry": {"type": "Point", "coordinates": [-122.39298968, 37.79624260]}}]}"#,
+    )]);
+    let v = ok_json(
+        over_goal.path(),
+        "plan --json --no-fly goal.geojson --departure 2026-12-03T07:00:00Z",
+    );
+    assert_eq!(v["no_fly"]["outside_window"], serde_json::json!([0]));
+    assert_eq!(v["waypoints"], early_plain_waypoints(dir.path()));
+    fails_with(
+        over_goal.path(),
+        "plan --no-fly goal.geojson --departure 2026-12-03T10:30:00Z",
+        2,
+        &[
+            "goal N 420.00 m, E 390.00 m",
+            "inside an obstacle or its 5 m safety margin",
+        ],
+    );
     // Without a departure the helipad applies whatever its times, and the summary says so.
     let out = succeed(
         dir.path(),

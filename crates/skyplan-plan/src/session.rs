@@ -703,14 +703,41 @@ impl Session {
             .filter(|z| meets_window(z, departure, i64::MAX))
             .cloned()
             .collect();
-        let first = route_with(self, &open)?;
-        let first_arrival = arrival(&first)?;
         let during = |zones: &[Zone], until: i64| -> Vec<Zone> {
             (zones.iter())
                 .filter(|z| meets_window(z, departure, until))
                 .cloned()
                 .collect()
         };
+        let first = match route_with(self, &open) {
+            Ok(route) => route,
+            // A zone that opens only later may be what blocks every way (or covers an end):
+            // among the zones active at the departure alone, kept if no other opens before
+            // that route's latest arrival.
+            Err(e)
+                if matches!(
+                    e.kind,
+                    FailureKind::NoPath | FailureKind::InvalidStart | FailureKind::InvalidGoal
+                ) =>
+            {
+                let now = during(&open, departure.saturating_add(1));
+                if now.len() == open.len() {
+                    return Err(e);
+                }
+                let Ok(route) = route_with(self, &now) else {
+                    return Err(e);
+                };
+                let until = arrival(&route)?;
+                if during(&open, until).len() > now.len() {
+                    return Err(e);
+                }
+                let mut r = report(&now);
+                r.window = Some((departure, until));
+                return Ok((route, Some(r)));
+            }
+            Err(e) => return Err(e),
+        };
+        let first_arrival = arrival(&first)?;
         let fewer = during(&open, first_arrival);
         if fewer.len() < open.len()
             && let Ok(second) = route_with(self, &fewer)
