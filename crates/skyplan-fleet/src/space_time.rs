@@ -136,8 +136,14 @@ pub fn search_grid(
     };
     let is_timed = |z: &Zone| !z.inclusion && (z.start_unix_s.is_some() || z.end_unix_s.is_some());
     let fixed: Vec<Zone> = zones.iter().filter(|z| !is_timed(z)).cloned().collect();
-    let mut grid = map.as_ref().clone();
-    grid.block_zones(&fixed, spec).map_err(bad)?;
+    // The map's own grid, kept by the session, unless some untimed zones are blocked on a copy.
+    let grid = if fixed.is_empty() {
+        std::sync::Arc::clone(&map)
+    } else {
+        let mut grid = map.as_ref().clone();
+        grid.block_zones(&fixed, spec).map_err(bad)?;
+        std::sync::Arc::new(grid)
+    };
     let mut timed = Vec::new();
     for (k, z) in zones.iter().enumerate().filter(|(_, z)| is_timed(z)) {
         let mut alone = Grid2::new(
@@ -157,7 +163,7 @@ pub fn search_grid(
         timed.push((k, cells));
     }
     Ok(Some(SearchSpace {
-        grid: std::sync::Arc::new(grid),
+        grid,
         zones,
         timed,
         margin_m: g.safety_m,
