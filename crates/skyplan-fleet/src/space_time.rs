@@ -274,36 +274,41 @@ impl Obstacle {
         }
     }
 
-    /// Whether `p` is within `r` of the footprint.
+    /// Whether `p` is within `r` of the footprint. Squared distances (no square roots: this
+    /// runs for every candidate volume of every cell the search reaches).
     fn near(&self, p: [f64; 2], r: f64) -> bool {
         if self.edges.is_empty() {
-            return distance_to_ring(&self.ring_ne, p) <= r;
+            // A point or a segment: no inside.
+            return ring_distance2(&self.ring_ne, p) <= r * r;
         }
         let outside = self
             .edges
             .iter()
             .map(|(u, c)| u[0] * p[0] + u[1] * p[1] - c)
             .fold(f64::NEG_INFINITY, f64::max);
-        outside <= 0.0 || (outside <= r && distance_to_ring(&self.ring_ne, p) <= r)
+        // Outside the convex hull, its distance is the nearest edge's.
+        outside <= 0.0 || (outside <= r && ring_distance2(&self.ring_ne, p) <= r * r)
     }
 }
 
-/// Distance from `p` to a closed polygon given as a ring (0 inside).
-fn distance_to_ring(ring: &[[f64; 2]], p: [f64; 2]) -> f64 {
+/// The squared distance from `p` to the nearest edge of a closed ring (its vertices for one or
+/// two points).
+fn ring_distance2(ring: &[[f64; 2]], p: [f64; 2]) -> f64 {
     let n = ring.len();
-    let mut inside = false;
     let mut best = f64::INFINITY;
     for i in 0..n {
         let (a, b) = (ring[i], ring[(i + 1) % n]);
-        if (a[1] > p[1]) != (b[1] > p[1]) {
-            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-            if p[0] < x {
-                inside = !inside;
-            }
-        }
-        best = best.min(skyplan_map::nofly::point_segment_m(p, a, b));
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = dx * dx + dy * dy;
+        let t = if len2 > 0.0 {
+            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (x, y) = (a[0] + t * dx - p[0], a[1] + t * dy - p[1]);
+        best = best.min(x * x + y * y);
     }
-    if inside { 0.0 } else { best }
+    best
 }
 
 /// Side of the square buckets the obstacles are filed in, metres.
@@ -804,7 +809,12 @@ mod tests {
                 let d = if inside {
                     0.0
                 } else {
-                    distance_to_ring(&hull, p)
+                    (0..hull.len())
+                        .map(|i| {
+                            let j = (i + 1) % hull.len();
+                            skyplan_map::nofly::point_segment_m(p, hull[i], hull[j])
+                        })
+                        .fold(f64::INFINITY, f64::min)
                 };
                 assert_eq!(o.near(p, r), d <= r, "{points:?} {p:?} {r}");
                 near += usize::from(d <= r);
