@@ -329,6 +329,39 @@ fn fly_replans_on_a_footprint_map() {
     );
 }
 
+/// `--hidden-random` on a footprint map: the buildings placed keep the goal reachable on the
+/// footprints' grid, and the flight replans around them without touching any.
+#[test]
+fn fly_around_random_hidden_buildings_on_a_footprint_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let map_arg = sample_path().display().to_string();
+    let r = run_args(
+        dir.path(),
+        &[
+            "fly",
+            "--sim",
+            "--speedup",
+            "50",
+            "--map",
+            &map_arg,
+            "--goal-ne",
+            "118,-61",
+            "--hidden-random",
+            "2",
+            "--seed",
+            "3",
+        ],
+    );
+    r.expect_code(0);
+    for needle in [
+        "hidden     2 buildings on or near the route (seed 3)",
+        "no collision with the map's obstacles or the 2 hidden buildings",
+    ] {
+        assert!(r.stdout.contains(needle), "{needle} in {}", r.stdout);
+    }
+    assert!(!r.stdout.contains("replans    0 "), "{}", r.stdout);
+}
+
 #[test]
 fn home_moves_the_frame() {
     let dir = tempfile::tempdir().unwrap();

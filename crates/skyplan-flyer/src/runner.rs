@@ -753,11 +753,12 @@ pub fn hidden_random(
     count: usize,
     seed: u64,
 ) -> Result<Vec<ObstacleBox>, RunError> {
-    let map = world
-        .colliders()
-        .ok_or_else(|| {
-            bad("--hidden-random needs a colliders map (give hidden buildings on other maps with --hidden FILE)")
-        })?;
+    let not_obstacles = || {
+        bad("--hidden-random needs a map of obstacles (colliders or footprints), not a fixed grid")
+    };
+    if world.colliders().is_none() && world.footprints().is_none() {
+        return Err(not_obstacles());
+    }
     let mut plain = request.clone();
     plain.max_alt_m = None;
     let plan = Session::new(world.clone()).plan(&plain)?;
@@ -775,7 +776,13 @@ pub fn hidden_random(
         cell_m: grid.cell_m,
         model: plan.spec.move_model,
     };
-    place_hidden(map, &spec).map_err(bad)
+    match (world.colliders(), world.footprints()) {
+        (Some(map), _) => place_hidden(map, &spec).map_err(bad),
+        (None, Some(f)) => {
+            skyplan_replan::hidden::place_hidden_among_footprints(f, &spec).map_err(bad)
+        }
+        (None, None) => Err(not_obstacles()),
+    }
 }
 
 /// Why a flown mission does not count as done ([`verdict`]).

@@ -5,6 +5,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use skyplan_cspace::{Grid2, GridSpec};
 use skyplan_map::colliders::{CollidersMap, ObstacleBox};
+use skyplan_map::footprints::{Footprint, FootprintMap};
 use skyplan_plan::{PlanFailure, World};
 use skyplan_search::{GridSearch, MoveModel, Planner};
 
@@ -81,6 +82,55 @@ pub fn place_hidden(
     map: &CollidersMap,
     spec: &HiddenSpec,
 ) -> Result<Vec<ObstacleBox>, HiddenError> {
+    place_with(spec, |hidden, grid_spec| {
+        let mut trial = map.clone();
+        trial.boxes.extend_from_slice(hidden);
+        Grid2::from_colliders(&trial, grid_spec)
+    })
+}
+
+/// [`place_hidden`] on a map of building footprints: the reachability check's grid is the
+/// footprints' with each hidden box as one more (rectangular) footprint.
+///
+/// ```
+/// use skyplan_replan::hidden::{HiddenSpec, place_hidden_among_footprints};
+/// use skyplan_search::MoveModel;
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/footprints-sample.geojson"));
+/// let map = skyplan_map::footprints::parse_geojson(text, 10.0).unwrap().project(None).unwrap();
+/// let spec = HiddenSpec {
+///     count: 2, seed: 7, route_ne: vec![[0.0, 0.0], [62.5, -21.5], [62.5, -49.5], [118.0, -61.0]],
+///     start_ne: [0.0, 0.0], goal_ne: [118.0, -61.0], alt_m: 5.0, safety_m: 5.0, cell_m: 1.0,
+///     model: MoveModel::Octile,
+/// };
+/// assert_eq!(place_hidden_among_footprints(&map, &spec)?.len(), 2);
+/// # Ok::<(), skyplan_replan::hidden::HiddenError>(())
+/// ```
+pub fn place_hidden_among_footprints(
+    map: &FootprintMap,
+    spec: &HiddenSpec,
+) -> Result<Vec<ObstacleBox>, HiddenError> {
+    place_with(spec, |hidden, grid_spec| {
+        let mut trial = map.clone();
+        trial.footprints.extend(hidden.iter().map(|b| Footprint {
+            feature: usize::MAX,
+            rings: vec![vec![
+                [b.north_m - b.half_north_m, b.east_m - b.half_east_m],
+                [b.north_m + b.half_north_m, b.east_m - b.half_east_m],
+                [b.north_m + b.half_north_m, b.east_m + b.half_east_m],
+                [b.north_m - b.half_north_m, b.east_m + b.half_east_m],
+            ]],
+            min_height_m: b.up_m - b.half_up_m,
+            height_m: b.up_m + b.half_up_m,
+        }));
+        Grid2::from_footprints(&trial, grid_spec)
+    })
+}
+
+/// The placement, with `grid_with(hidden, spec)` the map's grid with the `hidden` boxes added.
+fn place_with(
+    spec: &HiddenSpec,
+    grid_with: impl Fn(&[ObstacleBox], GridSpec) -> Result<Grid2, skyplan_cspace::GridError>,
+) -> Result<Vec<ObstacleBox>, HiddenError> {
     let finite = spec.alt_m.is_finite()
         && spec.safety_m.is_finite()
         && spec.safety_m >= 0.0
@@ -107,7 +157,6 @@ pub fn place_hidden(
         return Err(HiddenError::BadSpec("the route has no length".to_string()));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
-    let mut trial = map.clone();
     let mut hidden = Vec::new();
     let mut search = GridSearch::new();
     let attempts_max = ATTEMPTS_PER_BOX * spec.count.max(1);
@@ -142,11 +191,9 @@ pub fn place_hidden(
         if !keep_clear(&b, spec.start_ne) || !keep_clear(&b, spec.goal_ne) {
             continue;
         }
-        trial.boxes.push(b);
-        if reachable(&trial, spec, &mut search)? {
-            hidden.push(b);
-        } else {
-            trial.boxes.pop();
+        hidden.push(b);
+        if !reachable(&grid_with, &hidden, spec, &mut search)? {
+            hidden.pop();
         }
     }
     if hidden.len() < spec.count {
@@ -159,14 +206,16 @@ pub fn place_hidden(
     Ok(hidden)
 }
 
-/// True if the goal is reachable from the start at the flight altitude among `map`'s boxes.
+/// True if the goal is reachable from the start at the flight altitude among the map's
+/// obstacles and the `hidden` boxes.
 fn reachable(
-    map: &CollidersMap,
+    grid_with: &impl Fn(&[ObstacleBox], GridSpec) -> Result<Grid2, skyplan_cspace::GridError>,
+    hidden: &[ObstacleBox],
     spec: &HiddenSpec,
     search: &mut GridSearch,
 ) -> Result<bool, HiddenError> {
-    let grid = Grid2::from_colliders(
-        map,
+    let grid = grid_with(
+        hidden,
         GridSpec {
             alt_m: spec.alt_m,
             safety_m: spec.safety_m,
