@@ -165,26 +165,9 @@ fn clearance_3d_m(map: &FootprintMap, wps: &[[f64; 4]], margin_m: f64) -> f64 {
     for f in &map.footprints {
         let (lo, hi) = (f.min_height_m - margin_m, f.height_m + margin_m);
         for w in wps.windows(2) {
-            let (za, zb) = (w[0][2], w[1][2]);
-            let (t0, t1) = if za == zb {
-                if za < lo || za > hi {
-                    continue;
-                }
-                (0.0, 1.0)
-            } else {
-                let (s, t) = ((lo - za) / (zb - za), (hi - za) / (zb - za));
-                (s.min(t).max(0.0), s.max(t).min(1.0))
-            };
-            if t0 > t1 {
-                continue;
+            if let Some((a, b)) = common::part_in_band(w[0], w[1], lo, hi) {
+                best = best.min(polygon_clearance_m(&f.rings, a, b));
             }
-            let at = |t: f64| {
-                [
-                    w[0][0] + (w[1][0] - w[0][0]) * t,
-                    w[0][1] + (w[1][1] - w[0][1]) * t,
-                ]
-            };
-            best = best.min(polygon_clearance_m(&f.rings, at(t0), at(t1)));
         }
     }
     best

@@ -102,24 +102,12 @@ fn clearance_3d(wps: &[[f64; 4]], z: &Zone, margin_m: f64) -> f64 {
     let (lo, hi) = (z.floor_m - margin_m, z.ceiling_m + margin_m);
     let mut best = f64::INFINITY;
     for w in wps.windows(2) {
-        let (za, zb) = (w[0][2], w[1][2]);
-        let (t0, t1) = if za == zb {
-            if za < lo || za > hi {
-                continue;
-            }
-            (0.0, 1.0)
-        } else {
-            let (s, t) = ((lo - za) / (zb - za), (hi - za) / (zb - za));
-            (s.min(t).max(0.0), s.max(t).min(1.0))
-        };
-        if t0 > t1 {
-            continue;
+        if let Some((a, b)) = common::part_in_band(w[0], w[1], lo, hi) {
+            best = best.min(clearance(
+                &[[a[0], a[1], 0.0, 0.0], [b[0], b[1], 0.0, 0.0]],
+                z,
+            ));
         }
-        let at = |t: f64| {
-            let p = |k: usize| w[0][k] + (w[1][k] - w[0][k]) * t;
-            [p(0), p(1), p(2), 0.0]
-        };
-        best = best.min(clearance(&[at(t0), at(t1)], z));
     }
     best
 }

@@ -298,15 +298,7 @@ fn ring_distance2(ring: &[[f64; 2]], p: [f64; 2]) -> f64 {
     let mut best = f64::INFINITY;
     for i in 0..n {
         let (a, b) = (ring[i], ring[(i + 1) % n]);
-        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let len2 = dx * dx + dy * dy;
-        let t = if len2 > 0.0 {
-            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let (x, y) = (a[0] + t * dx - p[0], a[1] + t * dy - p[1]);
-        best = best.min(x * x + y * y);
+        best = best.min(skyplan_map::planar::point_segment2_m2(p, a, b));
     }
     best
 }

@@ -26,6 +26,25 @@
 /// assert_eq!(skyplan_map::planar::point_segment_m([1.0, 2.0], [0.0, 0.0], [0.0, 10.0]), 1.0);
 /// ```
 pub fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let [x, y] = nearest_offset(p, a, b);
+    x.hypot(y)
+}
+
+/// The squared distance from the point `p` to the closed segment `a`–`b`, square metres: for
+/// comparisons in inner loops (no square root).
+///
+/// ```
+/// assert_eq!(skyplan_map::planar::point_segment2_m2([3.0, 4.0], [0.0, 0.0], [0.0, 0.0]), 25.0);
+/// ```
+#[inline]
+pub fn point_segment2_m2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let [x, y] = nearest_offset(p, a, b);
+    x * x + y * y
+}
+
+/// The segment's point nearest to `p`, less `p`.
+#[inline]
+fn nearest_offset(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
     let t = if len2 > 0.0 {
@@ -33,7 +52,7 @@ pub fn point_segment_m(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    (a[0] + t * dx - p[0]).hypot(a[1] + t * dy - p[1])
+    [a[0] + t * dx - p[0], a[1] + t * dy - p[1]]
 }
 
 /// Whether the closed segments `a`–`b` and `c`–`d` share a point.

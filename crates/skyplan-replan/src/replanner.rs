@@ -879,8 +879,8 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_wall_across_a_grid_map_holds_without_climbing() {
+    /// A replanner on an empty 21 m × 41 m grid, from its west end to its east end, 1 m margin.
+    fn strip(options: ReplanOptions) -> Replanner {
         let grid = skyplan_cspace::Grid2::new(
             21,
             41,
@@ -895,8 +895,12 @@ mod tests {
             ..Default::default()
         };
         let world = World::from_grid("strip", grid);
-        let mut r =
-            Replanner::new(Session::new(world), &request, ReplanOptions::default()).unwrap();
+        Replanner::new(Session::new(world), &request, options).unwrap()
+    }
+
+    #[test]
+    fn a_wall_across_a_grid_map_holds_without_climbing() {
+        let mut r = strip(ReplanOptions::default());
         let route = r.initial_targets();
         // A wall 15 m east, from the southern edge to the northern one: 41 sectors of 1 m.
         let ranges = (0..=20)
@@ -934,26 +938,11 @@ mod tests {
     /// it begins where the vehicle is.
     #[test]
     fn a_replan_at_speed_begins_where_the_vehicle_comes_to_rest() {
-        let grid = skyplan_cspace::Grid2::new(
-            21,
-            41,
-            vec![false; 21 * 41],
-            skyplan_cspace::GridFrame::default(),
-        )
-        .unwrap();
-        let request = PlanRequest {
-            start_ne: Some([10.5, 0.5]),
-            goal_ne: Some([10.5, 40.5]),
-            safety_m: Some(1.0),
-            ..Default::default()
-        };
         let first_target = |speed_m_s: f64, brake: Option<f64>| {
-            let world = World::from_grid("strip", grid.clone());
-            let options = ReplanOptions {
+            let mut r = strip(ReplanOptions {
                 brake_accel_m_s2: brake,
                 ..ReplanOptions::default()
-            };
-            let mut r = Replanner::new(Session::new(world), &request, options).unwrap();
+            });
             let route = r.initial_targets();
             // Heading east along the route; a pole 15 m ahead, on it.
             let reading = ObstacleReading {

@@ -360,12 +360,9 @@ impl<'w> VoxelGrid<'w> {
         Some((near, inside))
     }
 
-    /// Marks the voxels near an inflated box (their edges need a test), blocks those inside it
-    /// and raises the height map under it.
-    fn rasterise(&mut self, b: &Aabb) {
-        let Some((near, inside)) = self.box_ranges(b) else {
-            return;
-        };
+    /// Marks the voxels of the index ranges `near` that are clear as near an obstacle (their
+    /// edges need a test).
+    fn mark_near(&mut self, near: &IndexRanges) {
         for i in near[0].0..=near[0].1 {
             for j in near[1].0..=near[1].1 {
                 for k in near[2].0..=near[2].1 {
@@ -376,6 +373,15 @@ impl<'w> VoxelGrid<'w> {
                 }
             }
         }
+    }
+
+    /// Marks the voxels near an inflated box (their edges need a test), blocks those inside it
+    /// and raises the height map under it.
+    fn rasterise(&mut self, b: &Aabb) {
+        let Some((near, inside)) = self.box_ranges(b) else {
+            return;
+        };
+        self.mark_near(&near);
         if inside[0].0 > inside[0].1 || inside[1].0 > inside[1].1 {
             return;
         }
@@ -398,16 +404,7 @@ impl<'w> VoxelGrid<'w> {
         let Some((near, inside)) = self.box_ranges(&bbox) else {
             return;
         };
-        for i in near[0].0..=near[0].1 {
-            for j in near[1].0..=near[1].1 {
-                for k in near[2].0..=near[2].1 {
-                    let v = self.index([i, j, k]);
-                    if self.state[v] == CLEAR {
-                        self.state[v] = NEAR;
-                    }
-                }
-            }
-        }
+        self.mark_near(&near);
         if inside[0].0 > inside[0].1 || inside[1].0 > inside[1].1 || inside[2].0 > inside[2].1 {
             return;
         }

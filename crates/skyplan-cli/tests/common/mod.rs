@@ -292,3 +292,20 @@ pub fn run_args(dir: &Path, args: &[&str]) -> Run {
         stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
     }
 }
+
+/// The part of the route segment `a`–`b` (rows north, east, altitude, …) whose altitude lies in
+/// `[lo, hi]`, as its two north/east ends; `None` if no part does.
+pub fn part_in_band(a: [f64; 4], b: [f64; 4], lo: f64, hi: f64) -> Option<([f64; 2], [f64; 2])> {
+    let (za, zb) = (a[2], b[2]);
+    let (t0, t1) = if za == zb {
+        if za < lo || za > hi {
+            return None;
+        }
+        (0.0, 1.0)
+    } else {
+        let (s, t) = ((lo - za) / (zb - za), (hi - za) / (zb - za));
+        (s.min(t).max(0.0), s.max(t).min(1.0))
+    };
+    let at = |t: f64| [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
+    (t0 <= t1).then(|| (at(t0), at(t1)))
+}
