@@ -140,6 +140,16 @@ fn the_3d_planners_keep_out_of_the_zones() {
         }
         assert_eq!(v["no_fly"]["zones"].as_array().map(Vec::len), Some(3));
     }
+    // A goal in the stadium is refused naming it.
+    fails_with(
+        dir.path(),
+        &format!(
+            "plan --planner rrt-connect --goal-ne 250,-40 --no-fly {}",
+            zones_path.display()
+        ),
+        2,
+        &["goal N 250.00 m, E -40.00 m, altitude 5.00 m is within 5 m of no-fly zone 0"],
+    );
     // An inclusion boundary is for the 2D planners.
     let fence = common::dir_with(&[(
         "fence.geojson",

@@ -5,6 +5,7 @@ use crate::failure::{FailureKind, PlanFailure};
 use crate::session::{Check, Query, Route, Session, micros};
 use rand::SeedableRng;
 use serde_json::json;
+use skyplan_map::nofly::Zone;
 use skyplan_sampling::prm::{PrmConfig, Roadmap, solve, solve_from};
 use skyplan_sampling::{Budget, CollisionChecker, PlannerKind, Request, Solution, Status};
 use skyplan_world3::{BoxWorld3, Neu};
@@ -15,8 +16,16 @@ fn at(p: Neu) -> String {
     format!("N {:.2} m, E {:.2} m, altitude {:.2} m", p[0], p[1], p[2])
 }
 
-/// Why a point is not free: below the floor, outside the volume, or within the margin.
-fn why_invalid(world: &BoxWorld3, p: Neu, safety_m: f64) -> String {
+/// Why a point is not free: below the floor, outside the volume, within the margin of a no-fly
+/// zone (the last `zones.len()` prisms of the world) or of an obstacle.
+fn why_invalid(world: &BoxWorld3, p: Neu, safety_m: f64, zones: &[Zone]) -> String {
+    let first_zone = world.inflated_boxes().len() + world.prisms().len() - zones.len();
+    if let Some(k) = world.box_containing(p).filter(|&k| k >= first_zone) {
+        return format!(
+            "within {safety_m} m of no-fly zone {}",
+            zones[k - first_zone].feature
+        );
+    }
     let b = world.bounds();
     if p[2] < b.min[2] && b.min[2] > 0.0 {
         format!(
@@ -54,7 +63,7 @@ fn check_ends(world: &BoxWorld3, q: &Query) -> Result<(Neu, Neu), PlanFailure> {
                 format!(
                     "{which} {} is {}",
                     at(p),
-                    why_invalid(world, p, q.r.safety_m)
+                    why_invalid(world, p, q.r.safety_m, q.zones)
                 ),
             ));
         }
@@ -241,7 +250,7 @@ fn finish(
 ) -> Result<Route, PlanFailure> {
     let (start, goal) = ends(q);
     let invalid = |kind: FailureKind, end: &str, p: Neu| {
-        let why = why_invalid(world, p, q.r.safety_m);
+        let why = why_invalid(world, p, q.r.safety_m, q.zones);
         Err(PlanFailure::new(kind, format!("{end} {} is {why}", at(p))))
     };
     match s.status {
@@ -323,7 +332,7 @@ pub(crate) fn voxel(session: &mut Session, q: &Query) -> Result<Route, PlanFailu
                     "{} {} is {}",
                     end.name(),
                     at(p),
-                    why_invalid(&world, p, r.safety_m)
+                    why_invalid(&world, p, r.safety_m, q.zones)
                 ),
             ));
         }
