@@ -388,6 +388,45 @@ fn three_d_routes_keep_the_height_above_the_ground_by_rasterio() {
     }
 }
 
+/// Building footprints on the hills (the sample's moved onto the DEM): the 3D planners plan among
+/// them standing on the ground, every metre of the route H above rasterio's ground.
+#[test]
+#[ignore = "needs rasterio (pip)"]
+fn three_d_routes_among_footprints_on_the_hills() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(data("footprints-sample.geojson")).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    // From San Francisco to the Jacksboro hills, every position moved by the same degrees.
+    fn shift(c: &mut Value) {
+        match c.as_array_mut() {
+            Some(a) if a.len() == 2 && a[0].is_number() => {
+                a[0] = (a[0].as_f64().unwrap() + (-84.28 + 122.3975)).into();
+                a[1] = (a[1].as_f64().unwrap() + (36.56 - 37.7925)).into();
+            }
+            Some(a) => a.iter_mut().for_each(shift),
+            None => {}
+        }
+    }
+    for f in v["features"].as_array_mut().unwrap() {
+        shift(&mut f["geometry"]["coordinates"]);
+    }
+    std::fs::write(dir.path().join("hills.geojson"), v.to_string()).unwrap();
+    let path = data("terrain/jacksboro.tif");
+    for planner in ["rrt-connect", "voxel"] {
+        let v = ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --map hills.geojson --terrain {} --alt-agl-m 30 --planner {planner} --goal-ne 118,-61",
+                path.display()
+            ),
+        );
+        assert_eq!(v["obstacles"], 42, "{planner}");
+        let [lo, median, hi] = clearance_by_rasterio(&path, &v["waypoints_lla"]);
+        eprintln!("{planner}: clearance {lo:.2} / {median:.1} / {hi:.1} m");
+        assert!(lo >= 30.0 - 0.05, "{planner}: lowest clearance {lo} m");
+    }
+}
+
 /// A 3D plan's trajectory over terrain: its samples (10 Hz), put on the Earth about the map's
 /// home, stay H above rasterio's ground each metre; the report says how it was made.
 #[test]
