@@ -345,6 +345,117 @@ fn fly_around_random_hidden_buildings_on_a_footprint_map() {
     assert!(!r.stdout.contains("replans    0 "), "{}", r.stdout);
 }
 
+/// The Euclidean-shortest route among polygons grown by a margin, by shapely: a visibility
+/// graph over the vertices of the footprints buffered by the margin (inscribed arcs: obstacles
+/// a little smaller than the true grown ones, so its length is a lower bound of the exact
+/// optimum) and the ends, an edge kept when it does not meet the grown union shrunk by 1 cm;
+/// Dijkstra over it. Input JSON `{margin, polys: [[outer, hole, …], …], start, goal}` in
+/// (east, north); prints the length.
+const VISIBILITY: &str = r#"
+import heapq, json, sys
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+d = json.load(sys.stdin)
+m = d["margin"]
+grown = shapely.union_all([Polygon(p[0], p[1:]).buffer(m, quad_segs=4) for p in d["polys"]])
+inner = grown.buffer(-0.01)
+shapely.prepare(inner)
+start, goal = tuple(d["start"]), tuple(d["goal"])
+lo = np.minimum(start, goal) - 100.0
+hi = np.maximum(start, goal) + 100.0
+pts = [start, goal]
+for g in getattr(grown, "geoms", [grown]):
+    for ring in [g.exterior, *g.interiors]:
+        for c in ring.coords[:-1]:
+            if np.all(np.asarray(c) >= lo) and np.all(np.asarray(c) <= hi):
+                pts.append(tuple(c))
+P = np.array(pts)
+n = len(P)
+i, j = np.triu_indices(n, 1)
+lines = shapely.linestrings(np.stack([P[i], P[j]], axis=1))
+ok = ~shapely.intersects(lines, inner)
+adj = [[] for _ in range(n)]
+for a, b in zip(i[ok], j[ok]):
+    w = float(np.hypot(*(P[a] - P[b])))
+    adj[a].append((b, w))
+    adj[b].append((a, w))
+dist = [float("inf")] * n
+dist[0] = 0.0
+q = [(0.0, 0)]
+while q:
+    du, u = heapq.heappop(q)
+    if du > dist[u]:
+        continue
+    for v, w in adj[u]:
+        if du + w < dist[v]:
+            dist[v] = du + w
+            heapq.heappush(q, (du + w, v))
+print(json.dumps(dist[1]))
+"#;
+
+/// The any-angle route on a footprint map is within 3 % of the exact Euclidean optimum among
+/// the footprints grown by the margin (and never shorter than shapely's lower bound of it).
+#[test]
+#[ignore = "needs SKYPLAN_PYTHON with shapely (.ci/run's virtual environment has it)"]
+fn any_angle_is_within_3_percent_of_the_euclidean_optimum() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = sample_map(None);
+    let map_arg = sample_path().display().to_string();
+    for (goal, alt_m, margin_m) in [
+        ([118.0, -61.0], 5.0, 5.0),
+        ([-155.5, 138.5], 5.0, 3.0),
+        ([-130.0, -120.0], 25.0, 5.0),
+        ([130.0, 150.0], 5.0, 3.0),
+    ] {
+        let v = ok_json(
+            dir.path(),
+            &format!(
+                "plan --json --map {map_arg} --planner any-angle --alt-m {alt_m} --safety-m {margin_m} --goal-ne {},{}",
+                goal[0], goal[1]
+            ),
+        );
+        let ours = v["cost_m"].as_f64().unwrap();
+        let en = |p: [f64; 2]| serde_json::json!([p[1], p[0]]);
+        let polys: Vec<Value> = (map.footprints.iter())
+            .filter(|f| f.meets_altitude(alt_m, margin_m))
+            .map(|f| {
+                Value::from(
+                    (f.rings.iter())
+                        .map(|r| Value::from(r.iter().map(|p| en(*p)).collect::<Vec<_>>()))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .collect();
+        let input = serde_json::json!({
+            "margin": margin_m, "polys": polys, "start": en([0.0, 0.0]), "goal": en(goal),
+        });
+        let mut child = std::process::Command::new(common::python())
+            .args(["-c", VISIBILITY])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .expect("python with shapely (set SKYPLAN_PYTHON)");
+        std::io::Write::write_all(
+            &mut child.stdin.take().unwrap(),
+            input.to_string().as_bytes(),
+        )
+        .unwrap();
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.success(), "the shapely script failed");
+        let bound: f64 = String::from_utf8(out.stdout)
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        eprintln!(
+            "goal {goal:?} at {alt_m} m, margin {margin_m} m: any-angle {ours:.2} m, shapely's bound {bound:.2} m"
+        );
+        assert!(ours >= bound - 1e-6, "{ours} below the lower bound {bound}");
+        assert!(ours <= 1.03 * bound, "{ours} more than 3 % over {bound}");
+    }
+}
+
 #[test]
 fn home_moves_the_frame() {
     let dir = tempfile::tempdir().unwrap();
