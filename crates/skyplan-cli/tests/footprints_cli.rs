@@ -303,12 +303,25 @@ fn fly_replans_on_a_footprint_map() {
         .and_then(|l| l.split(' ').next())
         .and_then(|v| v.parse().ok())
         .unwrap_or_else(|| panic!("{}", r.stdout));
-    // The tallest building whose footprint a straight way home from the route passes within the
-    // margin of sets it: at least the top of a building the route itself flies beside.
-    let tops: Vec<f64> = map.footprints.iter().map(|f| f.height_m + 5.0).collect();
+    // The building named sets it: its top plus the margin.
+    let feature: usize = (r.stdout.lines())
+        .find_map(|l| l.split("passes over the building of feature ").nth(1))
+        .and_then(|l| l.split(':').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{}", r.stdout));
+    let top = (map.footprints.iter())
+        .find(|f| f.feature == feature)
+        .map(|f| f.height_m)
+        .unwrap();
     assert!(
-        tops.contains(&rtl),
-        "{rtl} is no building's top plus the margin"
+        (rtl - (top + 5.0)).abs() < 0.006,
+        "{rtl} vs feature {feature}'s top {top}"
+    );
+    // The closest building is named by its feature too.
+    assert!(
+        r.stdout.contains("(the building of feature "),
+        "{}",
+        r.stdout
     );
 }
 

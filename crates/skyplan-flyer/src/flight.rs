@@ -170,12 +170,16 @@ pub fn track_line(report: &SimReport, margin_m: Option<f64>) -> String {
     }
 }
 
-/// An obstacle of the simulated world by its index: a map obstacle or a hidden building.
+/// An obstacle of the simulated world by its index: a map obstacle (a footprint map's building
+/// by its feature in the file), or a hidden building.
 pub fn obstacle_name(report: &SimReport, box_index: usize) -> String {
     let hidden = report.hidden_boxes;
     match box_index.checked_sub(report.map_boxes) {
         Some(k) if hidden > 0 => format!("hidden building #{} of {hidden}", k + 1),
-        _ => format!("map obstacle #{box_index}"),
+        _ => match report.map_features.get(box_index) {
+            Some(feature) => format!("the building of feature {feature}"),
+            None => format!("map obstacle #{box_index}"),
+        },
     }
 }
 

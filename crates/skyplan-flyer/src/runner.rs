@@ -340,7 +340,7 @@ pub fn fly_mission_with<O: RunObserver>(
     let mut config = o.executor;
     if let Some(boxes) = &map_boxes {
         let clearance = mission_rtl_clearance(boxes, mission, plan.spec.safety_m);
-        observer.say(&rtl_line(clearance));
+        observer.say(&rtl_line(clearance, boxes));
         // The ceiling: the request's climbing limit, else the 120 m most rules set for drones.
         let ceiling_m = request.max_alt_m.unwrap_or(RTL_CEILING_M);
         config.rtl_alt_m = set_rtl_alt(&mut gcs, info.autopilot, clearance, ceiling_m, observer);
@@ -669,11 +669,15 @@ fn set_rtl_alt<O: RunObserver>(
 }
 
 /// What [`mission_rtl_clearance`] found, in a line.
-fn rtl_line(clearance: Option<RtlClearance>) -> String {
+fn rtl_line(clearance: Option<RtlClearance>, obstacles: &BoxWorld) -> String {
     match clearance {
         Some(c) => format!(
-            "rtl        a straight way home (the autopilot's RTL) from this route passes over obstacle #{}: only an RTL altitude of at least {:.2} m clears it with the margin; --on-interrupt return and --failsafe return fly a planned way home instead",
-            c.obstacle, c.alt_m
+            "rtl        a straight way home (the autopilot's RTL) from this route passes over {}: only an RTL altitude of at least {:.2} m clears it with the margin; --on-interrupt return and --failsafe return fly a planned way home instead",
+            match obstacles.footprints().get(c.obstacle) {
+                Some(f) => format!("the building of feature {}", f.feature),
+                None => format!("obstacle #{}", c.obstacle),
+            },
+            c.alt_m
         ),
         None => "rtl        no obstacle under a straight way home (the autopilot's RTL) from any point of this route".into(),
     }
@@ -1198,6 +1202,7 @@ mod tests {
             max_alt_m: 5.0,
             distance_m: 40.0,
             map_boxes: 1,
+            map_features: Vec::new(),
             hidden_boxes: 0,
         }
     }

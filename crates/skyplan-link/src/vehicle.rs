@@ -208,6 +208,9 @@ pub struct SimReport {
     /// Obstacles of the map's world, footprints and boxes (obstacle numbers below this are
     /// the map's).
     pub map_boxes: usize,
+    /// The source feature of each of the map's building footprints (the first obstacle
+    /// numbers), empty on a map of boxes.
+    pub map_features: Vec<usize>,
     /// Hidden boxes (obstacle numbers from `map_boxes` on), absent from the planner's map.
     pub hidden_boxes: usize,
 }

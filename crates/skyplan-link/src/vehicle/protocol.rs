@@ -24,6 +24,7 @@ pub struct SimProtocol {
     /// The true world: the map's boxes and the hidden ones (their indices follow the map's).
     truth: Option<BoxWorld>,
     map_boxes: usize,
+    map_features: Vec<usize>,
     sensor: RangeSensor,
     /// Sector 0 is true north; the map's boxes are in its grid-north frame.
     convergence_rad: f64,
@@ -80,6 +81,9 @@ impl SimProtocol {
         Self {
             truth: true_world(world, &cfg.hidden),
             map_boxes: world.map_or(0, BoxWorld::len),
+            map_features: world.map_or(Vec::new(), |w| {
+                w.footprints().iter().map(|f| f.feature).collect()
+            }),
             sensor,
             convergence_rad,
             speedup: cfg.speedup.max(0.1),
@@ -386,6 +390,7 @@ impl SimProtocol {
             max_alt_m: self.max_alt_m,
             distance_m: self.distance_m,
             map_boxes: self.map_boxes,
+            map_features: self.map_features,
             hidden_boxes: self.cfg.hidden.len(),
         }
     }
