@@ -169,7 +169,7 @@ pub fn parse_hidden(text: &str, map_home: &GeodeticHome) -> Result<Vec<ObstacleB
         && (hidden.home.lon_deg - map_home.lon_deg).abs() < 1e-9;
     if !same {
         return Err(format!(
-            "line 1: its home lat0 {}, lon0 {} is not the map's home lat0 {}, lon0 {} (hidden obstacles are placed in the map's frame: use the map's first line)",
+            "line 1: its home lat0 {}, lon0 {} is not the map's home lat0 {}, lon0 {} (hidden obstacles are placed in the map's frame: write the map's home on line 1)",
             hidden.home.lat_deg, hidden.home.lon_deg, map_home.lat_deg, map_home.lon_deg
         ));
     }
