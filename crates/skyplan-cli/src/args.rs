@@ -552,7 +552,7 @@ pub struct SimArgs {
     /// Home (start position) as latitude,longitude; default: the map's home.
     #[arg(long, value_name = "LAT,LON", value_parser = lat_lon, allow_hyphen_values = true)]
     pub home: Option<[f64; 2]>,
-    /// Map whose obstacles the flown track is checked against (default: the bundled city map).
+    /// Map whose obstacles the flown track is checked against and the sensor sees: .csv (colliders), .geojson or .osm/.osm.pbf (building footprints about the data's centre, as fly places them) [default: the bundled city map].
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
     /// Simulated seconds per wall second.

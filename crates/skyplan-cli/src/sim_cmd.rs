@@ -3,7 +3,6 @@
 use crate::args::SimArgs;
 use crate::exit::{Classify, Kind, Result, bad_input};
 use crate::files::{map_text, read_text};
-use skyplan_flight::collision::BoxWorld;
 use skyplan_flyer::flight::sim_listening_line;
 use skyplan_flyer::words::sim_note_line;
 use skyplan_frames::Lla;
@@ -33,24 +32,48 @@ fn homes(args: &SimArgs, map_home: &skyplan_map::colliders::GeodeticHome) -> (Ll
     (map_home, args.home.map_or(map_home, at))
 }
 
-/// `--view ADDR`: the live view of the simulator's state.
-fn live_view(args: &SimArgs, map_name: &str, text: &str) -> Result<crate::live::Live> {
-    let Some(addr) = &args.view else {
-        return Ok(crate::live::Live::default());
-    };
-    let world = skyplan_plan::World::from_colliders_csv(map_name, text)
+/// The simulator's map: a colliders file (or the bundled city), or building footprints
+/// (`.geojson`, `.osm`, `.osm.pbf`, about the data's centre as `plan` and `fly` place them).
+fn sim_world(args: &SimArgs) -> Result<(String, skyplan_plan::World)> {
+    use skyplan_plan::MapFormat;
+    if let Some(path) = args.map.as_deref()
+        && matches!(
+            MapFormat::of_path(path),
+            Some(MapFormat::GeoJson | MapFormat::Osm | MapFormat::OsmPbf)
+        )
+    {
+        let world = crate::world_load::load_world(
+            Some(path),
+            &crate::grid_args::GridMapArgs::default(),
+            1,
+            &skyplan_plan::Limits::default(),
+        )?;
+        return Ok((path.display().to_string(), world));
+    }
+    let (map_name, text) = map_text(args.map.as_deref(), FCND_CITY_NAME)?;
+    let world = skyplan_plan::World::from_colliders_csv(&map_name, &text)
         .map_err(|e| bad_input(format!("{map_name}: {}", e.message)))?;
-    crate::live::Live::start(&world, Some(addr), None)
+    Ok((map_name, world))
 }
 
 pub fn run(args: SimArgs) -> Result<()> {
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
-    let (map_name, text) = map_text(args.map.as_deref(), FCND_CITY_NAME)?;
-    let map = skyplan_map::colliders::parse_colliders(&text)
-        .map_err(|e| bad_input(format!("{map_name}: {e}")))?;
-    let (map_home, home) = homes(&args, &map.home);
+    let (map_name, map_world) = sim_world(&args)?;
+    let (Some(world), Some(frame)) = (
+        skyplan_flyer::runner::map_obstacles(&map_world),
+        map_world.frame(),
+    ) else {
+        return Err(bad_input(format!(
+            "{map_name}: the simulator needs a map of obstacles with a geodetic home (FCND colliders, GeoJSON or OpenStreetMap footprints)"
+        )));
+    };
+    let map_home = skyplan_map::colliders::GeodeticHome {
+        lat_deg: frame.home().lat_deg,
+        lon_deg: frame.home().lon_deg,
+    };
+    let (map_home_lla, home) = homes(&args, &map_home);
     let hidden = (args.hidden.as_ref())
-        .map(|path| load_hidden(path, &map.home))
+        .map(|path| load_hidden(path, &map_home))
         .transpose()?
         .unwrap_or_default();
     let config = SimServerConfig {
@@ -60,7 +83,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         speedup: args.speedup,
         drop_link_after_s: args.drop_link_after_s,
         ekf_delay_s: args.ekf_delay_s,
-        map_home: Some(map_home),
+        map_home: Some(map_home_lla),
         ..SimServerConfig::at(home)
     };
     let server = SimServer::bind(&address, config.clone()).or_exit(Kind::Runtime)?;
@@ -71,10 +94,12 @@ pub fn run(args: SimArgs) -> Result<()> {
     let hidden_from = args.hidden.as_ref().map(|p| p.display().to_string());
     let line = sim_listening_line(&shown, &config, &map_name, hidden_from.as_deref());
     println!("{line}");
-    let mut live = live_view(&args, &map_name, &text)?;
+    let mut live = match &args.view {
+        Some(addr) => crate::live::Live::start(&map_world, Some(addr), None)?,
+        None => crate::live::Live::default(),
+    };
     let stop = SimServer::stop_after(args.duration_s);
-    let world = BoxWorld::new(&map.boxes);
-    let map_boxes = map.boxes.len();
+    let map_boxes = world.len();
     let report = server.run_with_state(
         Some(&world),
         &stop,

@@ -469,6 +469,42 @@ fn any_angle_is_within_3_percent_of_the_euclidean_optimum() {
     }
 }
 
+/// `skyplan sim --map FILE.geojson` in its own process: the vehicle starts at the footprints'
+/// home (the data's centre, as `fly` places it), and `fly --connect` with the same map lands
+/// at the goal without meeting a building.
+#[test]
+fn a_separate_sim_takes_a_footprint_map() {
+    let map_arg = sample_path().display().to_string();
+    let sim =
+        common::SimProcess::start(&["--map", &map_arg, "--speedup", "20", "--duration-s", "120"]);
+    let dir = tempfile::tempdir().unwrap();
+    let r = run_args(
+        dir.path(),
+        &[
+            "fly",
+            "--connect",
+            &sim.address,
+            "--speedup",
+            "20",
+            "--map",
+            &map_arg,
+            "--goal-ne",
+            "118,-61",
+            "--timeout-s",
+            "60",
+        ],
+    );
+    r.expect_code(0);
+    assert!(
+        r.stdout
+            .contains("result     landed and disarmed after reaching all"),
+        "{}",
+        r.stdout
+    );
+    // The vehicle was where the map's home is: the plan starts there.
+    assert!(r.stdout.contains("plan       jps: N 0.0"), "{}", r.stdout);
+}
+
 #[test]
 fn home_moves_the_frame() {
     let dir = tempfile::tempdir().unwrap();
