@@ -179,19 +179,17 @@ fn three_d_planners_and_voronoi_plan_on_footprints() {
     let map_arg = sample_path();
     let map_arg = map_arg.display();
     let map = sample_map(None);
-    for planner in [
-        "voxel",
-        "rrt-connect",
-        "prm",
-        "lazy-prm",
-        "rrt-star",
-        "voronoi",
-    ] {
+    // Every planner that needs a map of obstacles (the registry's), on footprints.
+    let planners = skyplan_plan::PlannerId::ALL
+        .iter()
+        .filter(|p| p.info().maps == skyplan_plan::MapKinds::Obstacles);
+    for p in planners {
+        let planner = p.name();
         let v = ok_json(
             dir.path(),
             &format!(
                 "plan --json --map {map_arg} --planner {planner} --safety-m 4 --goal-ne 118,-61{}",
-                if planner == "voronoi" {
+                if p.info().dims == 2 {
                     ""
                 } else {
                     " --time-limit-ms 3000"

@@ -125,7 +125,9 @@ fn the_3d_planners_keep_out_of_the_zones() {
         (zones.iter()).any(|z| clearance_3d(&rows(&plain), z, 5.0) < 5.0),
         "the route without zones crosses none: the test shows nothing"
     );
-    for planner in ["voxel", "rrt-connect", "prm", "lazy-prm", "rrt-star"] {
+    // Every 3D planner of the registry.
+    let three_d = (skyplan_plan::PlannerId::ALL.iter()).filter(|p| p.info().dims == 3);
+    for planner in three_d.map(|p| p.name()) {
         let v = ok_json(
             dir.path(),
             &format!(
