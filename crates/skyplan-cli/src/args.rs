@@ -570,6 +570,9 @@ pub struct SimArgs {
     /// Obstacles in the simulated world that the map does not have (colliders format, same lat0/lon0 as the map); the sensor and the collision check see them.
     #[arg(long, value_name = "FILE")]
     pub hidden: Option<PathBuf>,
+    /// The ground, a DEM (GeoTIFF or SRTM .hgt) covering the map: the vehicle stands on it, lands on it, and flying into it is a ground strike; the map's buildings stand on it.
+    #[arg(long, value_name = "FILE")]
+    pub terrain: Option<PathBuf>,
     /// Range of the simulated obstacle sensor (OBSTACLE_DISTANCE), metres, 0.5 to 650.
     #[arg(long, value_name = "M", default_value_t = skyplan_link::vehicle::DEFAULT_SENSOR_RANGE_M, value_parser = within(0.5, 650.0), allow_negative_numbers = true)]
     pub sensor_range_m: f64,

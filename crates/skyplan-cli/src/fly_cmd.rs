@@ -80,9 +80,9 @@ pub fn run(args: FlyArgs) -> Result<()> {
         request,
         config,
     } = crate::world_load::resolve(&args.route)?;
-    if world.terrain().is_some() {
+    if world.terrain().is_some() && (args.hidden.is_some() || args.hidden_random > 0) {
         return Err(bad_input(
-            "fly --terrain: not yet. Over terrain the altitudes are above the map's home, while the vehicle's relative altitudes are above where it armed; flying needs missions in the AMSL frame first. Plan with `skyplan plan --terrain` instead",
+            "--hidden and --hidden-random over terrain: not yet. Going around what the map lacks is the replanner's work, and it keeps one altitude; over terrain fly flies its planned route, which follows the ground",
         ));
     }
     // Said before connecting: the planning that would find it waits for the vehicle first.
@@ -109,7 +109,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
     let out = (args.out.clone().or(config.path(&config.text.out)))
         .map(|path| crate::plan_cmd::output_file(&path, format).map(|(t, f)| (path, t, f)))
         .transpose()?;
-    let (Some(obstacles), Some(frame)) = (runner::map_obstacles(&world), world.frame().cloned())
+    let (Some(obstacles), Some(frame)) = (runner::map_obstacles(&world)?, world.frame().cloned())
     else {
         return Err(bad_input(format!(
             "fly: {} is not a map of obstacles; flying needs the map's buildings and geodetic home (an FCND colliders map --map FILE.csv, footprints --map FILE.geojson or .osm, or the bundled map)",
@@ -140,7 +140,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         home.lon_deg
     );
 
-    let (address, sim) = vehicle(&args, obstacles, &frame, &request, &hidden)?;
+    let (address, sim) = vehicle(&args, (obstacles, &world), &frame, &request, &hidden)?;
     let zones = crate::picture::zones_of(&world, &request);
     let drawing = plot.map(|plot| (world.clone(), plot, zones.clone()));
     let bar = progress_bar(0);
@@ -159,6 +159,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
     let uploads = args.upload || args.upload_only;
     let reference =
         (request.trajectory == Some(true) && !uploads).then(skyplan_flyer::trajectory::from_plan);
+    let ground = world.terrain_shared().map(|t| (t, request.alt_agl_m));
     let planned = (world, limits, request);
     let result = runner::fly_mission_with(
         &address,
@@ -179,7 +180,7 @@ pub fn run(args: FlyArgs) -> Result<()> {
         &args,
         &flight,
         drawing,
-        (&hidden, &zones),
+        (&hidden, &zones, ground),
         report.as_ref(),
         t0,
     )
@@ -219,6 +220,9 @@ fn check_ends(
     }
 }
 
+/// The map's terrain and the height above it the route keeps, for the flight's account.
+type Ground = Option<(Arc<skyplan_map::terrain::Terrain>, Option<f64>)>;
+
 /// After the flight: the replanner's account, the picture, the flight log and the exit.
 fn conclude(
     args: &FlyArgs,
@@ -228,7 +232,7 @@ fn conclude(
         (Target, PictureKind),
         Vec<skyplan_map::nofly::Zone>,
     )>,
-    (hidden, zones): (&[ObstacleBox], &[skyplan_map::nofly::Zone]),
+    (hidden, zones, ground): (&[ObstacleBox], &[skyplan_map::nofly::Zone], Ground),
     report: Option<&SimReport>,
     t0: Instant,
 ) -> Result<()> {
@@ -252,6 +256,17 @@ fn conclude(
         }
         Ended::Flight(outcome) => outcome.clone(),
     };
+    if let Some((terrain, agl_m)) = &ground
+        && let Some(low) = skyplan_flyer::flight::lowest_over_ground(&flight.log, terrain)
+    {
+        let planned = agl_m.map_or(String::new(), |h| {
+            format!(" (the route keeps {h} m above it)")
+        });
+        println!(
+            "terrain    lowest {:.1} m above the ground while flying the route{planned}, at {:.1} s (N {:.1} m, E {:.1} m)",
+            low.above_ground_m, low.time_s, low.ne_m[0], low.ne_m[1]
+        );
+    }
     if let Some(path) = &args.log {
         write_atomic(
             path,
@@ -301,7 +316,7 @@ fn hidden_obstacles(
 /// The vehicle: the built-in simulator on a free loopback port (`--sim`), or `--connect`.
 fn vehicle(
     args: &FlyArgs,
-    obstacles: BoxWorld,
+    (obstacles, world): (BoxWorld, &skyplan_plan::World),
     frame: &LocalFrame,
     request: &skyplan_plan::PlanRequest,
     hidden: &[ObstacleBox],
@@ -330,6 +345,7 @@ fn vehicle(
         sensor_range_m: args.sensor_range_m,
         proximity: args.proximity.into(),
         hidden: hidden.to_vec(),
+        terrain: world.terrain_shared(),
         ..SimServerConfig::at(frame.home())
     };
     let (sim, home) = runner::start_sim(obstacles, frame, request, config)?;

@@ -58,9 +58,12 @@ fn sim_world(args: &SimArgs) -> Result<(String, skyplan_plan::World)> {
 
 pub fn run(args: SimArgs) -> Result<()> {
     let address = Address::parse(&args.listen, Role::Server).map_err(bad_input)?;
-    let (map_name, map_world) = sim_world(&args)?;
+    let (map_name, mut map_world) = sim_world(&args)?;
+    if let Some(path) = &args.terrain {
+        map_world = crate::world_load::with_terrain(map_world, path)?;
+    }
     let (Some(world), Some(frame)) = (
-        skyplan_flyer::runner::map_obstacles(&map_world),
+        skyplan_flyer::runner::map_obstacles(&map_world)?,
         map_world.frame(),
     ) else {
         return Err(bad_input(format!(
@@ -71,7 +74,14 @@ pub fn run(args: SimArgs) -> Result<()> {
         lat_deg: frame.home().lat_deg,
         lon_deg: frame.home().lon_deg,
     };
-    let (map_home_lla, home) = homes(&args, &map_home);
+    let (map_home_lla, mut home) = homes(&args, &map_home);
+    if let Some(t) = map_world.terrain() {
+        // The vehicle stands on the ground: its home's height above mean sea level.
+        let at = (frame.ned_from_lla(home)).map_err(|e| bad_input(format!("--home: {e}")))?;
+        let ground_m = (t.ground_m(at.north_m, at.east_m))
+            .map_err(|e| bad_input(format!("--terrain: under the vehicle's home: {e}")))?;
+        home.alt_m = t.amsl_m(ground_m);
+    }
     let hidden = (args.hidden.as_ref())
         .map(|path| load_hidden(path, &map_home))
         .transpose()?
@@ -84,6 +94,7 @@ pub fn run(args: SimArgs) -> Result<()> {
         drop_link_after_s: args.drop_link_after_s,
         ekf_delay_s: args.ekf_delay_s,
         map_home: Some(map_home_lla),
+        terrain: map_world.terrain_shared(),
         ..SimServerConfig::at(home)
     };
     let server = SimServer::bind(&address, config.clone()).or_exit(Kind::Runtime)?;

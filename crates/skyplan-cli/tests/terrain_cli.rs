@@ -17,19 +17,35 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// rasterio's ground (bilinear over its own reading of the DEM) under the route, sampled each
-/// metre; prints the smallest and largest clearance.
-const CLEARANCE: &str = r#"
+/// rasterio's ground: `ground(d, a, lat, lon)` is the DEM `d` (its band `a`) interpolated
+/// bilinearly between pixel centres at points, metres above sea level.
+const GROUND: &str = r#"
 import json, sys
 import numpy as np
 import rasterio
 from rasterio.warp import transform
+def ground(d, a, lat, lon):
+    if d.crs.to_epsg() == 4326:
+        x, y = lon, lat
+    else:
+        x, y = transform("EPSG:4326", d.crs, list(lon), list(lat))
+    h, w = a.shape
+    col, row = ~d.transform * (np.asarray(x), np.asarray(y))
+    cx, ry = col - 0.5, row - 0.5
+    c0 = np.clip(np.floor(cx).astype(int), 0, w - 2)
+    r0 = np.clip(np.floor(ry).astype(int), 0, h - 2)
+    fx, fy = cx - c0, ry - r0
+    return (a[r0, c0] * (1 - fx) + a[r0, c0 + 1] * fx) * (1 - fy) + \
+        (a[r0 + 1, c0] * (1 - fx) + a[r0 + 1, c0 + 1] * fx) * fy
+"#;
+
+/// With [`GROUND`]: the height above the ground under the route (stdin: `[lat, lon, amsl]`
+/// rows), sampled each metre; prints the smallest, median and largest.
+const CLEARANCE: &str = r#"
 path = sys.argv[1]
 lla = np.array(json.load(sys.stdin))
 with rasterio.open(path) as d:
     a = d.read(1).astype(float)
-    T = d.transform
-    h, w = a.shape
     out = []
     for p, q in zip(lla[:-1], lla[1:]):
         # Metres between the two waypoints (equirectangular is plenty for a step count).
@@ -38,25 +54,29 @@ with rasterio.open(path) as d:
         n = max(1, int(np.ceil(np.hypot(dn, de))))
         t = np.linspace(0.0, 1.0, n + 1)
         lat, lon, amsl = (p[None, :] + t[:, None] * (q - p)[None, :]).T
-        if d.crs.to_epsg() == 4326:
-            x, y = lon, lat
-        else:
-            x, y = transform("EPSG:4326", d.crs, list(lon), list(lat))
-        col, row = ~T * (np.asarray(x), np.asarray(y))
-        cx, ry = col - 0.5, row - 0.5
-        c0 = np.clip(np.floor(cx).astype(int), 0, w - 2)
-        r0 = np.clip(np.floor(ry).astype(int), 0, h - 2)
-        fx, fy = cx - c0, ry - r0
-        g = (a[r0, c0] * (1 - fx) + a[r0, c0 + 1] * fx) * (1 - fy) + \
-            (a[r0 + 1, c0] * (1 - fx) + a[r0 + 1, c0 + 1] * fx) * fy
-        out.append(amsl - g)
+        out.append(amsl - ground(d, a, lat, lon))
     c = np.concatenate(out)
     print(json.dumps([float(c.min()), float(np.median(c)), float(c.max())]))
 "#;
 
-fn clearance_by_rasterio(dem: &Path, lla: &Value) -> [f64; 3] {
+/// With [`GROUND`]: the height above the ground of flown positions (stdin: `{"home": [lat,
+/// lon], "rows": [[lat, lon, metres above the home's ground]…]}`); prints the smallest,
+/// median and largest.
+const FLOWN: &str = r#"
+path = sys.argv[1]
+q = json.load(sys.stdin)
+rows = np.array(q["rows"])
+with rasterio.open(path) as d:
+    a = d.read(1).astype(float)
+    home = ground(d, a, np.array([q["home"][0]]), np.array([q["home"][1]]))[0]
+    c = rows[:, 2] + home - ground(d, a, rows[:, 0], rows[:, 1])
+    print(json.dumps([float(c.min()), float(np.median(c)), float(c.max())]))
+"#;
+
+/// Runs `script` (after [`GROUND`]) on `dem` with `input` on stdin; its JSON answer.
+fn by_rasterio(script: &str, dem: &Path, input: &Value) -> [f64; 3] {
     let mut child = Command::new(python())
-        .args(["-c", CLEARANCE, dem.to_str().unwrap()])
+        .args(["-c", &format!("{GROUND}{script}"), dem.to_str().unwrap()])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -66,7 +86,7 @@ fn clearance_by_rasterio(dem: &Path, lla: &Value) -> [f64; 3] {
         .stdin
         .take()
         .unwrap()
-        .write_all(lla.to_string().as_bytes())
+        .write_all(input.to_string().as_bytes())
         .unwrap();
     let out = child.wait_with_output().unwrap();
     assert!(
@@ -75,6 +95,10 @@ fn clearance_by_rasterio(dem: &Path, lla: &Value) -> [f64; 3] {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn clearance_by_rasterio(dem: &Path, lla: &Value) -> [f64; 3] {
+    by_rasterio(CLEARANCE, dem, lla)
 }
 
 /// Slopes of the route: each leg's altitude change over its horizontal length.
@@ -605,13 +629,14 @@ fn bad_terrain_requests_are_refused_naming_the_problem() {
         2,
         &["N36W085.hgt", "1000 bytes"],
     );
-    // Flying over terrain waits for missions in the AMSL frame.
+    // Over terrain fly flies the planned route: going around what the map lacks waits for a
+    // replanner that follows the ground.
     write_hills(dir.path());
     fails_with(
         dir.path(),
-        &format!("fly --sim --map hills.csv --terrain {t} --goal-ne 200,200"),
+        &format!("fly --sim --map hills.csv --terrain {t} --goal-ne 200,200 --hidden-random 2"),
         2,
-        &["fly --terrain", "AMSL"],
+        &["--hidden-random over terrain", "one altitude"],
     );
     std::fs::remove_file(dir.path().join("hills.csv")).unwrap();
     assert_no_waypoints(dir.path(), "nothing is written on a refusal");
@@ -645,4 +670,120 @@ fn a_mission_over_terrain_is_written_above_mean_sea_level() {
         let (got, want) = (item["Altitude"].as_f64().unwrap(), row[2].as_f64().unwrap());
         assert!((got - want).abs() < 1e-6, "{got} vs {want}");
     }
+}
+
+/// `fly --sim` over the Jacksboro hills among the bundled blocks, taking off 134 m higher up
+/// than the map's home and landing 100 m lower: the
+/// vehicle's own altitudes are above where it stands, the run's above the map's home; the
+/// flown positions (the log, every row once the first waypoint is reached) keep the route's
+/// height above the ground as rasterio reads it, less the tracking error, and the vehicle lands
+/// on the ground at the goal. The RTL altitude clears the ground under a straight way home.
+#[test]
+#[ignore = "needs rasterio (pip)"]
+fn flights_over_terrain_keep_the_height_above_the_ground_by_rasterio() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = data("terrain/jacksboro.tif");
+    let out = common::succeed(
+        dir.path(),
+        &format!(
+            "fly --sim --speedup 40 --timeout-s 300 --map {} --terrain {} --alt-agl-m 30 --start-ne 400,100 --goal-ne -50,450 --log flight.csv",
+            data("terrain/blocks.csv").display(),
+            dem.display()
+        ),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "terrain    the vehicle stands on ground +134.",
+        "rtl        the ground under a straight way home rises to",
+        "terrain    lowest ",
+        "(the route keeps 30 m above it)",
+        "no collision with the map's obstacles",
+        "result     landed and disarmed after reaching all ",
+    ] {
+        assert!(stdout.contains(needle), "{needle:?} in:\n{stdout}");
+    }
+    assert!(!stdout.contains("GROUND STRIKE"), "{stdout}");
+    let text = std::fs::read_to_string(dir.path().join("flight.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let f = |s: &str| s.parse::<f64>().unwrap();
+    // Columns: time, state, north, east, alt, heading, speed, target index (from 1), …, lat, lon.
+    let on_the_way: Vec<[f64; 3]> = (rows.iter())
+        .filter(|r| r[1] == "WAYPOINT" && r[7].parse::<usize>().is_ok_and(|k| k >= 2))
+        .map(|r| [f(r[12]), f(r[13]), f(r[4])])
+        .collect();
+    assert!(on_the_way.len() > 100, "{} rows", on_the_way.len());
+    let input = serde_json::json!({"home": [36.56, -84.28], "rows": on_the_way});
+    let [low, median, _] = by_rasterio(FLOWN, &dem, &input);
+    assert!(
+        low >= 30.0 - 1.5 - 1.0,
+        "lowest {low:.2} m above the ground (median {median:.2})"
+    );
+    // It took off on the ground at the start and landed on the ground at the goal: both ends
+    // of the log are at the ground's height above the map's home.
+    let ends = [rows.first().unwrap(), rows.last().unwrap()];
+    let ends: Vec<[f64; 3]> = ends.iter().map(|r| [f(r[12]), f(r[13]), f(r[4])]).collect();
+    let input = serde_json::json!({"home": [36.56, -84.28], "rows": ends});
+    let [lo, _, hi] = by_rasterio(FLOWN, &dem, &input);
+    assert!(
+        lo > -0.5 && hi < 0.5,
+        "ends {lo:.2}..{hi:.2} m above the ground"
+    );
+    let [first, last] = [ends[0], ends[1]];
+    assert!(
+        first[2] > 100.0,
+        "the start stands high above home: {first:?}"
+    );
+    assert!(first[2] - last[2] > 50.0, "the goal lies lower: {ends:?}");
+}
+
+/// `skyplan sim --terrain` in its own process, its vehicle 134 m up the hill (`--home`), and
+/// `fly --connect` with the same DEM: the ground station finds the vehicle's ground from where
+/// it reports itself, flies the profile and lands it on the ground at the goal.
+#[test]
+fn a_separate_simulator_stands_its_vehicle_on_the_terrain() {
+    let (blocks, dem) = (data("terrain/blocks.csv"), data("terrain/jacksboro.tif"));
+    let (blocks, dem) = (blocks.to_str().unwrap(), dem.to_str().unwrap());
+    let sim = common::SimProcess::start(&[
+        "--speedup",
+        "40",
+        "--duration-s",
+        "200",
+        "--map",
+        blocks,
+        "--terrain",
+        dem,
+        "--home",
+        "36.5635765,-84.2787574",
+    ]);
+    let dir = tempfile::tempdir().unwrap();
+    let out = common::succeed(
+        dir.path(),
+        &format!(
+            "fly --connect {} --speedup 40 --timeout-s 200 --map {blocks} --terrain {dem} --alt-agl-m 30 --goal-ne -50,450",
+            sim.address
+        ),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "terrain    the vehicle stands on ground +134.",
+        "result     landed and disarmed after reaching all ",
+        "terrain    lowest ",
+    ] {
+        assert!(stdout.contains(needle), "{needle:?} in:\n{stdout}");
+    }
+    // It landed on the ground at the goal, 105 m below where it took off.
+    let end: f64 = (stdout.lines())
+        .find_map(|l| l.strip_prefix("vehicle    at N "))
+        .and_then(|l| l.split(", ").nth(2))
+        .and_then(|a| a.strip_suffix(" m above home"))
+        .and_then(|a| a.parse().ok())
+        .unwrap_or_else(|| panic!("no final altitude:\n{stdout}"));
+    assert!(
+        (end - 29.1).abs() < 1.0,
+        "landed at {end} m above the map's home"
+    );
 }

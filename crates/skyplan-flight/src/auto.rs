@@ -196,7 +196,7 @@ impl Strategy for AutoMission {
             self.seen_auto = true;
         }
         let alt_m = core.targets[0].alt_m;
-        if self.takeoff_done || t.alt_m() >= c.takeoff_fraction * alt_m {
+        if self.takeoff_done || core.climbed(t, alt_m) {
             self.takeoff_done = true;
             core.enter(FlightState::Waypoint, now_s, out);
             core.leg_since_s = now_s;

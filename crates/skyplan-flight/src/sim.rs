@@ -2,9 +2,13 @@
 //!
 //! A position controller (proportional, with the square-root braking law so that it stops at the
 //! target within the acceleration limit) asks for a velocity within the horizontal, climb and
-//! descent limits; the velocity follows it as a first-order lag with time constant
+//! descent limits, the faster of the horizontal and the vertical slowed to arrive with the
+//! slower (a straight line to the target in 3D, as ArduCopter's waypoint controller flies it);
+//! the velocity follows it as a first-order lag with time constant
 //! [`SimConfig::velocity_tau_s`], its change clamped to the acceleration limit; the heading turns
-//! toward the target heading at most at the yaw-rate limit. The ground stops descent.
+//! toward the target heading at most at the yaw-rate limit. The ground stops descent (it may
+//! rise under the vehicle: [`SimVehicle::set_ground_up_m`]; meeting it outside a landing is a
+//! [`SimEvent::GroundStrike`]).
 //!
 //! A GUIDED target with velocity and acceleration ([`SimVehicle::set_target`]) is followed as
 //! ArduCopter's position-velocity-acceleration controller does: the target moves on with its own
@@ -243,6 +247,9 @@ pub enum SimEvent {
     Landed,
     /// The vehicle disarmed itself after landing.
     AutoDisarmed,
+    /// The vehicle flew into the ground (terrain rising into its way, or a descent below it)
+    /// outside a landing: a crash on a real vehicle.
+    GroundStrike,
 }
 
 /// The vehicle's state, as its telemetry reports it.
@@ -298,6 +305,9 @@ pub struct SimVehicle {
     mission_landing: bool,
     /// AUTO: the speed a DO_CHANGE_SPEED set, m/s (`None`: the configured limit).
     mission_speed_m_s: Option<f64>,
+    /// The ground under the vehicle, metres up from the home's ground (0: flat; terrain
+    /// moves it, [`SimVehicle::set_ground_up_m`]).
+    ground_up_m: f64,
 }
 
 fn norm2(v: [f64; 2]) -> f64 {
@@ -327,6 +337,31 @@ impl SimVehicle {
             rtl_cone_slope: 3.0,
             mission_landing: false,
             mission_speed_m_s: None,
+            ground_up_m: 0.0,
+        }
+    }
+
+    /// Where the ground is under the vehicle now, metres up from the home's ground (the home
+    /// is where the vehicle stands when created: 0 there). A caller with terrain sets it before
+    /// each [`SimVehicle::step`]; the ground stops descents, and a vehicle that meets it away
+    /// from a landing touches down there.
+    ///
+    /// ```
+    /// use skyplan_flight::sim::{SimConfig, SimMode, SimVehicle};
+    /// let mut v = SimVehicle::new(SimConfig::default());
+    /// v.set_mode(SimMode::Guided);
+    /// v.arm().unwrap();
+    /// v.takeoff(20.0).unwrap();
+    /// for _ in 0..1500 { v.step(0.02); }
+    /// v.set_mode(SimMode::Land);
+    /// v.set_ground_up_m(12.0); // a hill under it
+    /// for _ in 0..1500 { v.set_ground_up_m(12.0); v.step(0.02); }
+    /// let s = v.state();
+    /// assert!(s.on_ground && !s.armed && (s.position_ned_m[2] + 12.0).abs() < 1e-9);
+    /// ```
+    pub fn set_ground_up_m(&mut self, up_m: f64) {
+        if up_m.is_finite() {
+            self.ground_up_m = up_m;
         }
     }
 
@@ -679,15 +714,30 @@ impl SimVehicle {
                 }
                 _ => {
                     if let Some((p, yaw)) = self.target {
-                        let h = self.horizontal_command([p[0], p[1]]);
+                        let mut h = self.horizontal_command([p[0], p[1]]);
                         let dz = p[2] - self.position[2];
                         let brake = (2.0 * c.max_accel_m_s2 * dz.abs()).sqrt();
                         let vz = (c.position_gain_per_s * dz.abs()).min(brake);
-                        let vz = if dz > 0.0 {
+                        let mut vz = if dz > 0.0 {
                             vz.min(c.max_descent_m_s)
                         } else {
                             -vz.min(c.max_climb_m_s)
                         };
+                        // As ArduCopter's waypoint controller: a straight line to the target in
+                        // 3D, the faster of the horizontal and the vertical waiting for the
+                        // slower (a climb or descent is not done ahead of the leg).
+                        let (h_m_s, d_h) = (
+                            norm2(h),
+                            norm2([p[0] - self.position[0], p[1] - self.position[1]]),
+                        );
+                        if h_m_s > 1e-6 && vz.abs() > 1e-6 {
+                            let (t_h, t_v) = (d_h / h_m_s, dz.abs() / vz.abs());
+                            if t_v < t_h {
+                                vz *= t_v / t_h;
+                            } else {
+                                h = [h[0] * t_h / t_v, h[1] * t_h / t_v];
+                            }
+                        }
                         v_cmd = [h[0], h[1], vz];
                         yaw_target = yaw;
                     }
@@ -701,16 +751,26 @@ impl SimVehicle {
     /// mission's landing.
     fn ground_contact(&mut self, v_cmd: [f64; 3], events: &mut Vec<SimEvent>) {
         let was_on_ground = self.on_ground;
-        if self.position[2] >= 0.0 {
-            self.position[2] = 0.0;
+        let ground_down_m = -self.ground_up_m;
+        let landing = match self.mode {
+            SimMode::Land => true,
+            SimMode::Rtl => self.rtl_descending,
+            SimMode::Auto => self.mission_landing,
+            _ => false,
+        };
+        if self.armed && !was_on_ground && !landing && self.position[2] >= ground_down_m {
+            events.push(SimEvent::GroundStrike);
+        }
+        if self.position[2] >= ground_down_m {
+            self.position[2] = ground_down_m;
             if self.velocity[2] > 0.0 {
                 self.velocity[2] = 0.0;
             }
         }
         let climbing = self.velocity[2] < -0.05 || v_cmd[2] < 0.0;
-        self.on_ground = self.position[2] > -0.05 && !climbing;
+        self.on_ground = self.position[2] > ground_down_m - 0.05 && !climbing;
         if self.on_ground {
-            self.position[2] = 0.0;
+            self.position[2] = ground_down_m;
             self.velocity[2] = 0.0;
             self.velocity[0] *= 0.5;
             self.velocity[1] *= 0.5;
@@ -852,6 +912,86 @@ mod tests {
         v
     }
 
+    /// Flies `v` for `seconds` over a ground `ground_up_m(north, east)`, set before each step.
+    fn run_over(
+        v: &mut SimVehicle,
+        seconds: f64,
+        ground_up_m: impl Fn(f64, f64) -> f64,
+    ) -> Vec<SimEvent> {
+        let mut all = Vec::new();
+        for _ in 0..(seconds / 0.02).round() as usize {
+            let p = v.state().position_ned_m;
+            v.set_ground_up_m(ground_up_m(p[0], p[1]));
+            all.extend(v.step(0.02));
+        }
+        all
+    }
+
+    #[test]
+    fn a_climbing_or_descending_target_is_flown_in_a_straight_line() {
+        // From 10 m up to a point 80 m north and 30 m higher, and back down: every sampled
+        // position within 1 m of the straight line between the ends.
+        for (from_up, to_up) in [(10.0, 40.0), (40.0, 10.0)] {
+            let mut v = flying(from_up);
+            run(&mut v, 15.0); // settled at its altitude
+            let start = v.state().position_ned_m;
+            let end = [80.0, 0.0, -to_up];
+            v.set_position_target(end, 0.0).unwrap();
+            let mut worst: f64 = 0.0;
+            for _ in 0..3000 {
+                v.step(0.02);
+                let p = v.state().position_ned_m;
+                let (dn, dd) = (end[0] - start[0], end[2] - start[2]);
+                let t = (((p[0] - start[0]) * dn + (p[2] - start[2]) * dd) / (dn * dn + dd * dd))
+                    .clamp(0.0, 1.0);
+                let off = (p[0] - start[0] - t * dn).hypot(p[2] - start[2] - t * dd);
+                worst = worst.max(off);
+            }
+            let p = v.state().position_ned_m;
+            assert!(
+                (p[0] - end[0]).abs() < 0.1 && (p[2] - end[2]).abs() < 0.1,
+                "{p:?}"
+            );
+            assert!(
+                worst < 1.0,
+                "{from_up} → {to_up} m: {worst:.2} m off the line"
+            );
+        }
+    }
+
+    #[test]
+    fn rising_ground_strikes_a_level_flight_and_a_landing_stops_on_it() {
+        // A slope rising 1 m per 2 m north of 20 m north: 25 m high at 70 m.
+        let slope = |n: f64, _e: f64| ((n - 20.0) * 0.5).clamp(0.0, 40.0);
+        let mut v = flying(15.0);
+        v.set_position_target([100.0, 0.0, -15.0], 0.0).unwrap();
+        let events = run_over(&mut v, 40.0, slope);
+        assert!(events.contains(&SimEvent::GroundStrike), "{events:?}");
+        let s = v.state();
+        assert!(
+            s.position_ned_m[0] < 60.0,
+            "it cannot pass the slope: {:?}",
+            s.position_ned_m
+        );
+        // Above the slope and clear of it, LAND stops on the ground there, without a strike.
+        let mut v = flying(40.0);
+        v.set_position_target([60.0, 0.0, -40.0], 0.0).unwrap();
+        let events = run_over(&mut v, 30.0, slope);
+        assert!(!events.contains(&SimEvent::GroundStrike), "{events:?}");
+        v.set_mode(SimMode::Land);
+        let events = run_over(&mut v, 60.0, slope);
+        let s = v.state();
+        assert!(!events.contains(&SimEvent::GroundStrike), "{events:?}");
+        assert!(events.contains(&SimEvent::Landed) && s.on_ground && !s.armed);
+        let ground = slope(s.position_ned_m[0], s.position_ned_m[1]);
+        assert!(
+            (s.position_ned_m[2] + ground).abs() < 1e-9,
+            "{:?} on {ground}",
+            s.position_ned_m
+        );
+        assert!(ground > 15.0, "landed on the slope: {ground}");
+    }
+
     /// A scripted GUIDED flight with position-only targets: take-off, two targets.
     fn scripted(target: impl Fn(&mut SimVehicle, [f64; 3], f64)) -> SimState {
         let mut v = SimVehicle::new(SimConfig::default());
@@ -866,19 +1006,19 @@ mod tests {
         v.state()
     }
 
-    /// Position-only targets fly bit for bit as before feed-forward targets existed: the state
-    /// after 28 s equals the one the earlier simulator reached (recorded from its code, commit
-    /// c3335f7), through `set_position_target` and through `set_target` without velocity and
-    /// acceleration alike.
+    /// Position-only targets fly bit for bit alike through `set_position_target` and through
+    /// `set_target` without velocity and acceleration, and as the simulator flew them when its
+    /// waypoint controller began flying straight lines in 3D (session 14; the feed-forward
+    /// targets of commit c3335f7 had left them unchanged before).
     #[test]
     fn position_only_targets_fly_exactly_as_before() {
         let golden: [u64; 7] = [
-            4628503901139262748,
-            13836276021142905310,
-            13839570665719688474,
-            13835945745410316564,
-            4616628159875639513,
-            4582988312324080819,
+            4628481673298431302,
+            13835949769852632121,
+            13842877537150379921,
+            13835945758800189303,
+            4616628156252615343,
+            4600860193949518246,
             13835058055282163711,
         ];
         let bits = |s: SimState| -> Vec<u64> {
@@ -1122,6 +1262,7 @@ mod tests {
                     SimEvent::MissionItemReached(seq) => reached.push((seq, k, v.state().yaw_rad)),
                     SimEvent::Landed => landed_at = Some(k),
                     SimEvent::AutoDisarmed => {}
+                    SimEvent::GroundStrike => panic!("a mission on flat ground struck it"),
                 }
             }
             let s = v.state();

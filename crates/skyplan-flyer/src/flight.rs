@@ -207,9 +207,16 @@ pub fn sim_listening_line(
         (Some(from), n) => format!(" and {n} hidden obstacles from {from}"),
         (None, _) => String::new(),
     };
+    let ground = match config.terrain {
+        Some(_) => format!(
+            ", on the DEM's ground ({:.1} m above sea level there)",
+            config.home.alt_m
+        ),
+        None => String::new(),
+    };
     format!(
         "sim        simulated multicopter (MAVLink system 1, ArduCopter modes) listening on {listening}, \
-         {}× real time, home lat {:.7}, lon {:.7}; obstacles from {map_name}{hidden}; OBSTACLE_DISTANCE at 10 Hz, range {} m",
+         {}× real time, home lat {:.7}, lon {:.7}{ground}; obstacles from {map_name}{hidden}; OBSTACLE_DISTANCE at 10 Hz, range {} m",
         config.speedup, config.home.lat_deg, config.home.lon_deg, config.sensor_range_m
     )
 }
@@ -243,4 +250,60 @@ pub fn reached_index(note: &Note) -> Option<usize> {
         Note::Reached(r) => Some(r.index),
         _ => None,
     }
+}
+
+/// The lowest a flight flew above the ground over terrain, once on its way.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LowPoint {
+    /// Height above the ground there, metres.
+    pub above_ground_m: f64,
+    /// When, seconds of the log.
+    pub time_s: f64,
+    /// Where, metres north and east of the map's home.
+    pub ne_m: [f64; 2],
+}
+
+/// The lowest height above `terrain`'s ground of the logged positions flying the route (state
+/// WAYPOINT, the first waypoint reached: the climb from the ground and the descent to it are
+/// not counted); `None` without such rows or where the DEM does not reach any of them.
+///
+/// ```
+/// use skyplan_flight::executor::{FlightState, Target};
+/// use skyplan_flyer::flight::lowest_over_ground;
+/// use skyplan_link::ground::LogRow;
+/// use skyplan_map::terrain::{Dem, Terrain};
+/// use skyplan_frames::{Lla, LocalFrame};
+/// // Ground rising 1 m per ~100 m east (3 × 3 samples, 0.001° apart).
+/// let dem = Dem::geographic(3, 3, vec![0.0, 1.0, 2.0, 0.0, 1.0, 2.0, 0.0, 1.0, 2.0], [-84.001, 36.001], [0.001, 0.001])?;
+/// let t = Terrain::new(dem, LocalFrame::new(Lla { lat_deg: 36.0, lon_deg: -84.0, alt_m: 0.0 })?)?;
+/// let target = Target { north_m: 0.0, east_m: 80.0, alt_m: 30.0, heading_rad: 0.0 };
+/// let row = |time_s: f64, east_m: f64, alt_m: f64, to: usize| LogRow {
+///     time_s, state: FlightState::Waypoint, lat_deg: 36.0, lon_deg: -84.0, north_m: 0.0,
+///     east_m, alt_m, yaw_rad: 0.0, speed_m_s: 5.0, target: Some((to, target)),
+/// };
+/// // The first row still climbs to the first waypoint: not counted.
+/// let log = [row(0.0, 0.0, 20.0, 0), row(1.0, 0.0, 30.0, 1), row(2.0, 80.0, 30.0, 1)];
+/// let low = lowest_over_ground(&log, &t).unwrap();
+/// assert_eq!(low.time_s, 2.0);
+/// assert!((low.above_ground_m - (30.0 - 80.0 / 89.9)).abs() < 0.05, "{low:?}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn lowest_over_ground(
+    log: &[LogRow],
+    terrain: &skyplan_map::terrain::Terrain,
+) -> Option<LowPoint> {
+    use skyplan_flight::executor::FlightState;
+    log.iter()
+        .filter(|r| {
+            r.state == FlightState::Waypoint && r.target.is_some_and(|(index, _)| index >= 1)
+        })
+        .filter_map(|r| {
+            let ground_m = terrain.ground_m(r.north_m, r.east_m).ok()?;
+            Some(LowPoint {
+                above_ground_m: r.alt_m - ground_m,
+                time_s: r.time_s,
+                ne_m: [r.north_m, r.east_m],
+            })
+        })
+        .min_by(|a, b| a.above_ground_m.total_cmp(&b.above_ground_m))
 }

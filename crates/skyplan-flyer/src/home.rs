@@ -151,6 +151,84 @@ pub fn rtl_clearance(
     best
 }
 
+/// Spacing of the points of the route whose straight way home [`rtl_ground_clearance`] bounds,
+/// metres; the bounds are grown by half of it.
+const RTL_ROUTE_STEP_M: f64 = 10.0;
+/// Longest piece of a straight way home one ground bound covers, metres.
+const RTL_PIECE_M: f64 = 20.0;
+
+/// Over terrain: an altitude above the map's home that keeps `margin_m` above the ground under
+/// the autopilot's straight way home (RTL, to the route's first point) from anywhere on
+/// `route_ne`. The ground is bounded exactly over rectangles along each way home from a point
+/// every [`RTL_ROUTE_STEP_M`] of the route, each piece's rectangle grown by the margin and half
+/// that step, so the answer is never below the truth (at most a little above it on slopes).
+/// Errors where the DEM does not reach.
+///
+/// ```
+/// use skyplan_flyer::home::rtl_ground_clearance;
+/// use skyplan_map::terrain::{Dem, Terrain};
+/// use skyplan_frames::{Lla, LocalFrame};
+/// // Ground 100 m above sea level with a ridge 30 m higher from 200 to 300 m north of home, on
+/// // a grid of about 10 m (row 0 northernmost; home at row 60, column 40).
+/// let step = 10.0 / 111_000.0;
+/// let (rows, cols) = (100, 80);
+/// let heights: Vec<f32> = (0..rows * cols)
+///     .map(|k| if (30..=40).contains(&(k / cols)) { 130.0 } else { 100.0 })
+///     .collect();
+/// let dem = Dem::geographic(rows, cols, heights, [-84.0 - 40.0 * step, 36.0 + 60.0 * step], [step, step])?;
+/// let home = Lla { lat_deg: 36.0, lon_deg: -84.0, alt_m: 0.0 };
+/// let t = Terrain::new(dem, LocalFrame::new(home)?)?;
+/// // A route that stays south of the ridge clears it by the margin only.
+/// let south = rtl_ground_clearance(&t, &[[0.0, 0.0], [50.0, 100.0]], 5.0)?;
+/// assert!((south - 5.0).abs() < 0.05, "{south}");
+/// // Beyond it, the way home crosses the ridge.
+/// let beyond = rtl_ground_clearance(&t, &[[0.0, 0.0], [400.0, 0.0]], 5.0)?;
+/// assert!((beyond - 35.0).abs() < 0.05, "{beyond}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn rtl_ground_clearance(
+    terrain: &skyplan_map::terrain::Terrain,
+    route_ne: &[[f64; 2]],
+    margin_m: f64,
+) -> Result<f64, skyplan_map::terrain::TerrainError> {
+    let Some(&launch) = route_ne.first() else {
+        return Ok(margin_m);
+    };
+    let grow_m = margin_m + RTL_ROUTE_STEP_M / 2.0;
+    let mut points = vec![launch];
+    for w in route_ne.windows(2) {
+        let len_m = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        let n = (len_m / RTL_ROUTE_STEP_M).ceil().max(1.0) as usize;
+        points.extend((1..=n).map(|k| {
+            let f = k as f64 / n as f64;
+            [
+                w[0][0] + f * (w[1][0] - w[0][0]),
+                w[0][1] + f * (w[1][1] - w[0][1]),
+            ]
+        }));
+    }
+    let mut top_m = f64::NEG_INFINITY;
+    for p in points {
+        let len_m = (p[0] - launch[0]).hypot(p[1] - launch[1]);
+        let n = (len_m / RTL_PIECE_M).ceil().max(1.0) as usize;
+        let at = |k: usize| {
+            let f = k as f64 / n as f64;
+            [
+                launch[0] + f * (p[0] - launch[0]),
+                launch[1] + f * (p[1] - launch[1]),
+            ]
+        };
+        for k in 0..n {
+            let (a, b) = (at(k), at(k + 1));
+            let north = [a[0].min(b[0]) - grow_m, a[0].max(b[0]) + grow_m];
+            let east = [a[1].min(b[1]) - grow_m, a[1].max(b[1]) + grow_m];
+            let [_, hi] = terrain.ground_extremes_m_in(north, east)?;
+            top_m = top_m.max(hi);
+        }
+    }
+    Ok(top_m + margin_m)
+}
+
 /// Whether the (closed) triangle `t` meets the polygon `rings` grown by `margin_m`: an edge of
 /// the triangle comes within the margin of the polygon, or the polygon lies inside the
 /// triangle (then its first vertex does).

@@ -15,7 +15,7 @@ use skyplan_flight::executor::{
 use skyplan_flight::fence::{RouteForFence, fence_from_zones, fence_items};
 use skyplan_flight::reference::Reference;
 use skyplan_flight::sim::DEFAULT_RTL_ALT_M;
-use skyplan_flight::upload::{LegPace, MissionPlan, UploadConfig};
+use skyplan_flight::upload::{ItemCommand, LegPace, MissionPlan, UploadConfig};
 use skyplan_frames::{Lla, LocalFrame, Ned};
 use skyplan_link::ground::{
     Autopilot, GroundConfig, GroundError, GroundStation, LogRow, Update, VehicleInfo, Waiting,
@@ -78,13 +78,15 @@ pub trait RunObserver: Observer {
 }
 
 /// The map's obstacles as the simulator and the flight checks see them (no margin): a colliders
-/// map's boxes or a footprint map's buildings; `None` for a grid map.
-pub fn map_obstacles(world: &World) -> Option<BoxWorld> {
-    match (world.colliders(), world.footprints()) {
-        (Some(map), _) => Some(BoxWorld::new(&map.boxes)),
-        (None, Some(f)) => Some(BoxWorld::with_footprints(&f.footprints, &[])),
-        (None, None) => None,
+/// map's boxes or a footprint map's buildings, standing on the terrain if the world has one
+/// ([`World::standing_obstacles`]); `None` for a grid map. Errors: a DEM that does not reach
+/// under an obstacle.
+pub fn map_obstacles(world: &World) -> Result<Option<BoxWorld>, PlanFailure> {
+    if world.colliders().is_none() && world.footprints().is_none() {
+        return Ok(None);
     }
+    let (boxes, footprints) = world.standing_obstacles()?;
+    Ok(Some(BoxWorld::with_footprints(&footprints, &boxes)))
 }
 
 /// Starts the simulator in-process on a free loopback port at the request's start (its
@@ -110,6 +112,21 @@ pub fn start_sim(
             })
             .map_err(|e| bad(format!("start: {e}")))?,
         (None, None) => frame.home(),
+    };
+    // Over terrain the vehicle stands on the ground where it starts.
+    let home = match &config.terrain {
+        Some(t) => {
+            let at = frame
+                .ned_from_lla(home)
+                .map_err(|e| bad(format!("start: {e}")))?;
+            let ground_m = (t.ground_m(at.north_m, at.east_m))
+                .map_err(|e| bad(format!("start: the terrain under it: {e}")))?;
+            Lla {
+                alt_m: t.amsl_m(ground_m),
+                ..home
+            }
+        }
+        None => home,
     };
     let config = SimServerConfig {
         home,
@@ -302,9 +319,20 @@ pub fn fly_mission_with<O: RunObserver>(
     }
     let t_plan = Instant::now();
     let home_world = returns.then(|| world.clone());
-    let map_boxes = map_obstacles(&world);
+    let map_boxes = map_obstacles(&world).map_err(RunError::from)?;
+    let terrain = world.terrain_shared();
+    let home_up_m = match &terrain {
+        Some(t) => vehicle_home_up_m(t, frame, &info, observer)?,
+        None => 0.0,
+    };
+    gcs.set_home_up_m(home_up_m);
     let session = Session::new(world).with_limits(limits);
     let replanner = match o.mode {
+        // The replanner keeps one altitude: over terrain the route's profile is flown as planned.
+        Mode::Guided(Some(_)) if terrain.is_some() => {
+            observer.say("replan     off over terrain: the replanner keeps one altitude, so the planned route's terrain profile is flown as planned");
+            None
+        }
         Mode::Guided(replanner) => replanner,
         Mode::Upload { .. } => None,
     };
@@ -339,8 +367,28 @@ pub fn fly_mission_with<O: RunObserver>(
     }
     let mut config = o.executor;
     if let Some(boxes) = &map_boxes {
-        let clearance = mission_rtl_clearance(boxes, mission, plan.spec.safety_m);
+        let margin_m = plan.spec.safety_m;
+        // RTL altitudes are above the vehicle's home (over terrain, not the map's).
+        let mut clearance = mission_rtl_clearance(boxes, mission, margin_m).map(|c| RtlClearance {
+            alt_m: c.alt_m - home_up_m,
+            ..c
+        });
         observer.say(&rtl_line(clearance, boxes));
+        if let Some(t) = &terrain {
+            let ground_m = crate::home::rtl_ground_clearance(t, &route_ne(mission), margin_m)
+                .map_err(|e| bad(format!("the terrain under a straight way home: {e}")))?
+                - home_up_m;
+            observer.say(&format!(
+                "rtl        the ground under a straight way home rises to {:.1} m above the vehicle's home: only an RTL altitude of at least {ground_m:.2} m clears it with the margin",
+                ground_m - margin_m
+            ));
+            if clearance.is_none_or(|c| c.alt_m < ground_m) {
+                clearance = Some(RtlClearance {
+                    alt_m: ground_m,
+                    obstacle: usize::MAX,
+                });
+            }
+        }
         // The ceiling: the request's climbing limit, else the 120 m most rules set for drones.
         let ceiling_m = request.max_alt_m.unwrap_or(RTL_CEILING_M);
         config.rtl_alt_m = set_rtl_alt(&mut gcs, info.autopilot, clearance, ceiling_m, observer);
@@ -410,7 +458,7 @@ pub fn fly_mission_with<O: RunObserver>(
         &mut gcs,
         (frame, &info),
         (mission, pace.as_deref()),
-        alt_m,
+        (alt_m, home_up_m),
         observer,
     )?;
     let (log, ended) = if !fly {
@@ -454,10 +502,16 @@ fn upload<O: RunObserver>(
     gcs: &mut GroundStation,
     (frame, info): (&LocalFrame, &VehicleInfo),
     (mission, pace): (&skyplan_mission::Mission, Option<&[LegPace]>),
-    alt_m: f64,
+    (alt_m, home_up_m): (f64, f64),
     observer: &mut O,
 ) -> Result<MissionPlan, RunError> {
-    let items = crate::mission::items_for(mission, frame, info, pace).map_err(bad)?;
+    let mut items = crate::mission::items_for(mission, frame, info, pace).map_err(bad)?;
+    // The items' altitudes are above the vehicle's home (over terrain, not the map's).
+    for item in &mut items.items {
+        if matches!(item.command, ItemCommand::Waypoint | ItemCommand::Takeoff) {
+            item.alt_m -= home_up_m as f32;
+        }
+    }
     let before = match (info.autopilot == Autopilot::ArduPilot, pace.is_some()) {
         (true, true) => {
             " (each after a CONDITION_YAW to its heading and a DO_CHANGE_SPEED to its leg's speed)"
@@ -612,12 +666,38 @@ fn mission_rtl_clearance(
     mission: &skyplan_mission::Mission,
     margin_m: f64,
 ) -> Option<RtlClearance> {
-    let route: Vec<[f64; 2]> = mission
-        .waypoints
-        .iter()
-        .map(|w| [w.north_m, w.east_m])
-        .collect();
+    let route = route_ne(mission);
     rtl_clearance(obstacles, &route, *route.first()?, margin_m)
+}
+
+/// A mission's waypoints, north and east.
+fn route_ne(mission: &skyplan_mission::Mission) -> Vec<[f64; 2]> {
+    (mission.waypoints.iter())
+        .map(|w| [w.north_m, w.east_m])
+        .collect()
+}
+
+/// Over terrain: how high the vehicle's home (where it stands before take-off) is above the
+/// map's home, from the DEM; said in a line.
+fn vehicle_home_up_m<O: RunObserver>(
+    terrain: &skyplan_map::terrain::Terrain,
+    frame: &LocalFrame,
+    info: &VehicleInfo,
+    observer: &mut O,
+) -> Result<f64, RunError> {
+    let at = frame
+        .ned_from_lla(Lla {
+            alt_m: 0.0,
+            ..info.position
+        })
+        .map_err(|e| bad(format!("the vehicle's position: {e}")))?;
+    let up_m = (terrain.ground_m(at.north_m, at.east_m))
+        .map_err(|e| bad(format!("the terrain under the vehicle: {e}")))?;
+    observer.say(&format!(
+        "terrain    the vehicle stands on ground {up_m:+.1} m above the map's home ground (DEM, N {:.1} m, E {:.1} m): its relative altitudes are above that ground, this run's above the map's home",
+        at.north_m, at.east_m
+    ));
+    Ok(up_m)
 }
 
 /// Sets the autopilot's RTL altitude (ArduPilot `RTL_ALT` in centimetres with `RTL_CONE_SLOPE`
@@ -792,6 +872,20 @@ pub fn hidden_random(
 /// Why a flown mission does not count as done ([`verdict`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Unfinished {
+    /// The simulated vehicle flew into the ground (over terrain) outside a landing.
+    #[error(
+        "the simulated vehicle flew into the ground at {time_s:.1} s (N {north_m:.1} m, E {east_m:.1} m, {alt_m:.1} m above home)"
+    )]
+    StruckGround {
+        /// When, simulated seconds.
+        time_s: f64,
+        /// Where, metres north of the map's home.
+        north_m: f64,
+        /// Where, metres east of the map's home.
+        east_m: f64,
+        /// Its altitude above the map's home, metres.
+        alt_m: f64,
+    },
     /// Every waypoint was reached, but the simulated vehicle hit an obstacle on the way.
     #[error(
         "the flight completed but the simulated vehicle hit obstacle #{box_index} at {time_s:.1} s"
@@ -964,6 +1058,15 @@ pub fn verdict(
     zone: Option<&crate::zones::ZonePass>,
 ) -> Result<(), Unfinished> {
     use skyplan_flight::executor::Failure;
+    if let Some(g) = report.and_then(|r| r.ground_strike) {
+        let [north_m, east_m, down_m] = g.position_ned_m;
+        return Err(Unfinished::StruckGround {
+            time_s: g.time_s,
+            north_m,
+            east_m,
+            alt_m: -down_m,
+        });
+    }
     match outcome {
         Some(Outcome::Completed) => {
             if let (Some(z), Some(margin_m)) = (zone, margin_m)
@@ -1204,6 +1307,7 @@ mod tests {
             map_boxes: 1,
             map_features: Vec::new(),
             hidden_boxes: 0,
+            ground_strike: None,
         }
     }
 

@@ -161,6 +161,10 @@ pub fn sim_note_line(n: &SimNote) -> Option<String> {
             "COLLISION at {:.1} s: N {:.2} E {:.2} alt {:.2} m inside obstacle #{}",
             c.time_s, c.point_ned_m[0], c.point_ned_m[1], -c.point_ned_m[2], c.box_index
         ),
+        SimNote::GroundStrike(g) => format!(
+            "GROUND STRIKE at {:.1} s: N {:.2} E {:.2} alt {:.2} m, flown into the ground",
+            g.time_s, g.position_ned_m[0], g.position_ned_m[1], -g.position_ned_m[2]
+        ),
         SimNote::Failsafe(why) => format!("failsafe: {why}"),
         SimNote::LinkDropped => "injected fault: the vehicle stops talking".into(),
         SimNote::LinkRestored => "injected fault over: the vehicle talks again".into(),

@@ -46,7 +46,7 @@ fn a_run_flies_the_reference_made_from_its_plan_and_tells_the_tracking() {
         ..SimServerConfig::at(frame.home())
     };
     let (sim, _) = runner::start_sim(
-        runner::map_obstacles(&world).unwrap(),
+        runner::map_obstacles(&world).unwrap().unwrap(),
         &frame,
         &request,
         config,

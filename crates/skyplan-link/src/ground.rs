@@ -310,6 +310,13 @@ impl GroundStation {
         })
     }
 
+    /// Over terrain: the vehicle's home (where it armed) stands `up_m` above the map's home,
+    /// and every altitude the station takes or gives is above the map's home from then on
+    /// ([`GroundProtocol::set_home_up_m`]).
+    pub fn set_home_up_m(&mut self, up_m: f64) {
+        self.protocol.set_home_up_m(up_m);
+    }
+
     /// Hands every reading taken while the vehicle flies its waypoints to `watcher`, which may
     /// replace the route or hold (see the module documentation). GUIDED flights only:
     /// [`GroundStation::fly`] refuses it with an uploaded mission.

@@ -38,6 +38,13 @@
 //! `MAV_FRAME_LOCAL_NED` (sector 0 centred on true north), ranges up to
 //! [`SimServerConfig::sensor_range_m`], each a ray cast at the vehicle's altitude against the
 //! true world ([`skyplan_flight::sensor`]; see [`crate::obstacle`] for the encoding).
+//!
+//! **Terrain.** With [`SimServerConfig::terrain`] the ground under the vehicle follows the DEM:
+//! the vehicle's home stands on it (its relative altitudes are above that ground, as a real
+//! autopilot's are above where it armed), a landing stops on the ground where it is, and flying
+//! into the ground anywhere else is a [`GroundStrike`]. Positions told in the map's frame
+//! ([`SimStatus`], the track's check) are above the map's home, so over terrain they differ
+//! from the vehicle's own by the height of its home's ground above the map home's.
 
 use crate::streams::{STREAMS, in_group};
 use crate::{Address, Link, LinkError};
@@ -49,7 +56,9 @@ use skyplan_flight::flat_earth::FlatEarth;
 use skyplan_flight::sim::{SimConfig, SimMissionItem, SimMode, SimState, SimTarget, SimVehicle};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_map::colliders::ObstacleBox;
+use skyplan_map::terrain::Terrain;
 use std::net::{SocketAddr, TcpListener};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -97,6 +106,10 @@ pub struct SimServerConfig {
     pub sensor_range_m: f64,
     /// How the sensor's sweeps reach the ground station.
     pub proximity: Proximity,
+    /// The map's terrain (`None`: flat ground at the map's home): the ground under the
+    /// vehicle, which stops it and which it may strike; the vehicle's home stands on it, and
+    /// `home.alt_m` should be the ground's height above mean sea level there.
+    pub terrain: Option<Arc<Terrain>>,
 }
 
 /// How the simulated vehicle reports its proximity sensor.
@@ -153,6 +166,7 @@ impl SimServerConfig {
             hidden: Vec::new(),
             sensor_range_m: DEFAULT_SENSOR_RANGE_M,
             proximity: Proximity::default(),
+            terrain: None,
         }
     }
 }
@@ -182,6 +196,8 @@ pub enum SimNote {
     MissionItemReached(u16),
     /// The flown track hit an obstacle.
     Collision(Collision),
+    /// The vehicle flew into the ground outside a landing.
+    GroundStrike(GroundStrike),
     /// The GCS failsafe triggered a landing.
     Failsafe(String),
     /// The injected link fault: the vehicle stopped talking.
@@ -213,6 +229,17 @@ pub struct SimReport {
     pub map_features: Vec<usize>,
     /// Hidden boxes (obstacle numbers from `map_boxes` on), absent from the planner's map.
     pub hidden_boxes: usize,
+    /// The first time the vehicle flew into the ground outside a landing (over terrain).
+    pub ground_strike: Option<GroundStrike>,
+}
+
+/// Where and when the vehicle flew into the ground.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundStrike {
+    /// Simulated seconds since boot.
+    pub time_s: f64,
+    /// Where, metres north, east, down of the map's home.
+    pub position_ned_m: [f64; 3],
 }
 
 enum Listener {

@@ -155,6 +155,9 @@ pub struct Geometry {
     /// The obstacles that count at the altitude (2D planners on colliders maps).
     #[serde(skip)]
     pub active_boxes: Vec<skyplan_map::colliders::ObstacleBox>,
+    /// The building footprints that count at the altitude (2D planners on footprint maps).
+    #[serde(skip)]
+    pub active_footprints: Vec<skyplan_map::footprints::Footprint>,
 }
 
 /// The request as it was planned: every default applied and every value checked, so that

@@ -1096,16 +1096,21 @@ fn assemble(
     if let Some(g) = grid_path.as_mut() {
         g.waypoint_counts.mission = waypoints.len();
     }
-    if r.geometry
-        && info.dims == 2
-        && let Some(map) = world.colliders()
-    {
-        {
+    if r.geometry && info.dims == 2 {
+        if let Some(map) = world.colliders() {
             route.geometry.active_boxes = map
                 .boxes
                 .iter()
                 .filter(|b| b.meets_altitude(r.alt_m, r.safety_m))
                 .copied()
+                .collect();
+        }
+        if let Some(map) = world.footprints() {
+            route.geometry.active_footprints = map
+                .footprints
+                .iter()
+                .filter(|f| f.meets_altitude(r.alt_m, r.safety_m))
+                .cloned()
                 .collect();
         }
     }
@@ -1219,25 +1224,7 @@ fn boxes_over_terrain(
     b: &crate::world::BoundsNe,
 ) -> Result<Vec<skyplan_map::colliders::ObstacleBox>, PlanFailure> {
     use skyplan_map::colliders::ObstacleBox;
-    let mut out = Vec::with_capacity(boxes.len());
-    for (k, o) in boxes.iter().enumerate() {
-        let north = [o.north_m - o.half_north_m, o.north_m + o.half_north_m];
-        let east = [o.east_m - o.half_east_m, o.east_m + o.half_east_m];
-        let [lo, hi] = t.ground_extremes_m_in(north, east).map_err(|e| {
-            PlanFailure::bad_request(format!(
-                "terrain: under obstacle {} (N {:.1} m, E {:.1} m): {e}",
-                k + 1,
-                o.north_m,
-                o.east_m
-            ))
-        })?;
-        let (floor, top) = (o.up_m - o.half_up_m + lo, o.up_m + o.half_up_m + hi);
-        out.push(ObstacleBox {
-            up_m: (floor + top) / 2.0,
-            half_up_m: (top - floor) / 2.0,
-            ..*o
-        });
-    }
+    let mut out = standing_boxes(t, boxes)?;
     let columns = t
         .columns(
             [b.north_min_m, b.north_max_m],
@@ -1261,6 +1248,69 @@ fn boxes_over_terrain(
         });
     }
     Ok(out)
+}
+
+/// Boxes standing on the ground: each reaches from its floor above the lowest ground under it
+/// to its top above the highest.
+fn standing_boxes(
+    t: &skyplan_map::terrain::Terrain,
+    boxes: &[skyplan_map::colliders::ObstacleBox],
+) -> Result<Vec<skyplan_map::colliders::ObstacleBox>, PlanFailure> {
+    (boxes.iter().enumerate())
+        .map(|(k, o)| {
+            let north = [o.north_m - o.half_north_m, o.north_m + o.half_north_m];
+            let east = [o.east_m - o.half_east_m, o.east_m + o.half_east_m];
+            let [lo, hi] = t.ground_extremes_m_in(north, east).map_err(|e| {
+                PlanFailure::bad_request(format!(
+                    "terrain: under obstacle {} (N {:.1} m, E {:.1} m): {e}",
+                    k + 1,
+                    o.north_m,
+                    o.east_m
+                ))
+            })?;
+            let (floor, top) = (o.up_m - o.half_up_m + lo, o.up_m + o.half_up_m + hi);
+            Ok(skyplan_map::colliders::ObstacleBox {
+                up_m: (floor + top) / 2.0,
+                half_up_m: (top - floor) / 2.0,
+                ..*o
+            })
+        })
+        .collect()
+}
+
+impl World {
+    /// The map's boxes and building footprints as they stand: over terrain each is raised by
+    /// the ground under it, from its floor above the lowest ground under it to its top above
+    /// the highest (as the planners see them); without terrain, as loaded. Errors name the
+    /// obstacle the DEM does not cover.
+    ///
+    /// ```
+    /// use skyplan_plan::World;
+    /// let world = World::from_colliders_csv("colliders.csv", "lat0 37.79, lon0 -122.39\nposX,posY,posZ,halfSizeX,halfSizeY,halfSizeZ\n10,0,5,2,2,5\n")?;
+    /// let (boxes, footprints) = world.standing_obstacles()?;
+    /// assert_eq!((boxes.len(), footprints.len()), (1, 0));
+    /// assert_eq!(boxes[0].up_m + boxes[0].half_up_m, 10.0);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn standing_obstacles(
+        &self,
+    ) -> Result<
+        (
+            Vec<skyplan_map::colliders::ObstacleBox>,
+            Vec<skyplan_map::footprints::Footprint>,
+        ),
+        PlanFailure,
+    > {
+        let boxes = self.colliders().map_or(&[][..], |m| &m.boxes[..]);
+        let footprints = self.footprints().map_or(&[][..], |m| &m.footprints[..]);
+        match self.terrain() {
+            Some(t) => Ok((
+                standing_boxes(t, boxes)?,
+                footprints_over_terrain(t, footprints)?,
+            )),
+            None => Ok((boxes.to_vec(), footprints.to_vec())),
+        }
+    }
 }
 
 /// The footprints of a 3D plan over terrain, standing on the ground: each reaches from its

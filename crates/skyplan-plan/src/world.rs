@@ -570,6 +570,11 @@ impl World {
         self.terrain.as_deref()
     }
 
+    /// The terrain, shared (for a simulator that keeps it while it runs).
+    pub fn terrain_shared(&self) -> Option<Arc<Terrain>> {
+        self.terrain.clone()
+    }
+
     /// Replaces the default start and goal (metres north,east of the map's origin).
     pub fn with_defaults(mut self, start_ne: Option<[f64; 2]>, goal_ne: Option<[f64; 2]>) -> Self {
         self.default_start_ne = start_ne;

@@ -66,6 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         grid: &grid,
         obstacles: &obstacles,
+        footprints: &[],
         raw_path_ne: &raw,
         pruned_path_ne: &pruned,
         start_ne: Some(start),

@@ -165,7 +165,50 @@ fn draw_obstacles<DB: DrawingBackend>(
     chart
         .draw_series(scene.obstacles.iter().map(|o| footprint(o, OBSTACLE_COLOR)))
         .map_err(err)?;
+    chart
+        .draw_series(
+            (scene.footprints.iter())
+                .map(|f| Polygon::new(keyhole_ring(&f.rings), OBSTACLE_COLOR.filled())),
+        )
+        .map_err(err)?;
     Ok(())
+}
+
+/// Twice the signed area of a ring of `[north, east]` points (positive counter-clockwise
+/// with east right and north up).
+fn signed_area2(ring: &[[f64; 2]]) -> f64 {
+    (0..ring.len())
+        .map(|i| {
+            let ([n0, e0], [n1, e1]) = (ring[i], ring[(i + 1) % ring.len()]);
+            e0 * n1 - e1 * n0
+        })
+        .sum()
+}
+
+/// A polygon with holes as one closed `(east, north)` outline that fills right under both fill
+/// rules (even-odd in the bitmap backend, non-zero in SVG): the outer ring, then each hole
+/// reached from the outer ring's first point and walked the other way round, back to that point.
+/// Each bridge is walked once each way, so it adds nothing to either rule's count.
+fn keyhole_ring(rings: &[Vec<[f64; 2]>]) -> Vec<(f64, f64)> {
+    let Some(outer) = rings.first().filter(|r| !r.is_empty()) else {
+        return Vec::new();
+    };
+    let en = |p: &[f64; 2]| (p[1], p[0]);
+    let outer_sign = signed_area2(outer).signum();
+    let mut out: Vec<(f64, f64)> = outer.iter().map(en).collect();
+    out.push(en(&outer[0]));
+    for hole in rings[1..].iter().filter(|h| !h.is_empty()) {
+        let against = signed_area2(hole).signum() != outer_sign;
+        let walk: Vec<(f64, f64)> = if against {
+            hole.iter().map(en).collect()
+        } else {
+            hole.iter().rev().map(en).collect()
+        };
+        out.extend_from_slice(&walk);
+        out.push(walk[0]);
+        out.push(en(&outer[0]));
+    }
+    out
 }
 
 /// The rings of a zone as `(east, north)` points (a circle as a 96-gon).
@@ -655,4 +698,72 @@ fn goal_marker<C, DB: DrawingBackend>(at: C, r: u32) -> Star<C, DB> {
     EmptyElement::at(at)
         + Polygon::new(points, GOAL_COLOR.filled())
         + PathElement::new(outline, FRAME_COLOR.stroke_width(1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Winding number of the closed outline `ring` (`(east, north)`) about `p`.
+    fn winding((e, n): (f64, f64), ring: &[(f64, f64)]) -> i32 {
+        let mut w = 0;
+        for i in 0..ring.len() {
+            let ((e0, n0), (e1, n1)) = (ring[i], ring[(i + 1) % ring.len()]);
+            let cross = (e1 - e0) * (n - n0) - (e - e0) * (n1 - n0);
+            if n0 <= n && n1 > n && cross > 0.0 {
+                w += 1;
+            } else if n0 > n && n1 <= n && cross < 0.0 {
+                w -= 1;
+            }
+        }
+        w
+    }
+
+    /// Crossings of a ray going east from `p` (the even-odd rule's count).
+    fn crossings((e, n): (f64, f64), ring: &[(f64, f64)]) -> usize {
+        (0..ring.len())
+            .filter(|&i| {
+                let ((e0, n0), (e1, n1)) = (ring[i], ring[(i + 1) % ring.len()]);
+                (n0 <= n) != (n1 <= n) && e0 + (n - n0) / (n1 - n0) * (e1 - e0) > e
+            })
+            .count()
+    }
+
+    #[test]
+    fn a_keyhole_outline_fills_the_ring_and_leaves_the_holes_under_both_rules() {
+        let square = |n0: f64, e0: f64, n1: f64, e1: f64, ccw: bool| {
+            let mut r = vec![[n0, e0], [n0, e1], [n1, e1], [n1, e0]];
+            if !ccw {
+                r.reverse();
+            }
+            r
+        };
+        // Holes in both orientations, the outer ring in both.
+        for outer_ccw in [true, false] {
+            let rings = vec![
+                square(-15.0, -25.0, 15.0, 25.0, outer_ccw),
+                square(-5.0, -10.0, 5.0, 10.0, true),
+                square(8.0, 15.0, 12.0, 20.0, false),
+            ];
+            let outline = keyhole_ring(&rings);
+            // (north, east) probes: in the ring, in each hole, outside.
+            for ((n, e), inside) in [
+                ((-10.0, 0.3), true),
+                ((13.1, 17.3), true),
+                ((0.1, 0.3), false),
+                ((10.1, 17.3), false),
+                ((18.0, 0.3), false),
+                ((0.1, 30.3), false),
+            ] {
+                let p = (e, n);
+                assert_eq!(winding(p, &outline) != 0, inside, "non-zero at {n}, {e}");
+                assert_eq!(
+                    crossings(p, &outline) % 2 == 1,
+                    inside,
+                    "even-odd at {n}, {e}"
+                );
+            }
+        }
+        assert!(keyhole_ring(&[]).is_empty());
+    }
 }

@@ -131,7 +131,7 @@ impl PlotLayout {
     /// use skyplan_plot::{Scene, layout};
     /// let grid = Grid2::from_ascii("....\n....")?;
     /// let scene = Scene {
-    ///     title: String::new(), grid: &grid, obstacles: &[], raw_path_ne: &[],
+    ///     title: String::new(), grid: &grid, obstacles: &[], footprints: &[], raw_path_ne: &[],
     ///     pruned_path_ne: &[], start_ne: None, goal_ne: None, graph_ne: &[], connectors_ne: &[], flight: None, zones: &[], fleet: &[],
     /// };
     /// let l = layout(&scene, 800, 600)?;
@@ -249,6 +249,18 @@ fn world_bounds(scene: &Scene) -> Result<(f64, f64, f64, f64), PlotError> {
             add(&mut b, o.north_m + o.half_north_m, o.east_m + o.half_east_m);
         }
     }
+    for f in scene.footprints {
+        if !f.rings.iter().flatten().flatten().all(|x| x.is_finite()) {
+            return Err(PlotError::BadScene {
+                what: "a footprint's vertex is not finite",
+            });
+        }
+        if scene.grid.is_empty() {
+            let (lo, hi) = f.bbox_ne();
+            add(&mut b, lo[0], lo[1]);
+            add(&mut b, hi[0], hi[1]);
+        }
+    }
     if !b.0.is_finite() {
         b = (0.0, 1.0, 0.0, 1.0);
     }
@@ -280,7 +292,7 @@ fn legend_entries(scene: &Scene) -> Vec<LegendEntry> {
         LegendKind::CSpace,
         "obstacle + safety margin".into(),
     );
-    let obstacles = !scene.obstacles.is_empty();
+    let obstacles = !scene.obstacles.is_empty() || !scene.footprints.is_empty();
     push(obstacles, LegendKind::Obstacle, "obstacle".into());
     let points = |n: usize| {
         if n == 1 {

@@ -27,6 +27,7 @@
 //!     title: "example".into(),
 //!     grid: &grid,
 //!     obstacles: &[],
+//!     footprints: &[],
 //!     raw_path_ne: &path,
 //!     pruned_path_ne: &[path[0], path[2]],
 //!     start_ne: Some(path[0]),
@@ -61,6 +62,7 @@ use plotters::backend::RGBPixel;
 use plotters::prelude::*;
 use skyplan_cspace::Grid2;
 use skyplan_map::colliders::ObstacleBox;
+use skyplan_map::footprints::Footprint;
 
 use crate::draw::draw;
 pub use crate::heatmap::{Heatmap, normalise_0_255, render_heatmap_png};
@@ -85,6 +87,9 @@ pub struct Scene<'a> {
     pub grid: &'a Grid2,
     /// Footprints of the obstacles that count at this altitude, drawn darker over the grid.
     pub obstacles: &'a [ObstacleBox],
+    /// Building footprints that count at this altitude, drawn as their polygons (holes
+    /// open), dark grey like the boxes.
+    pub footprints: &'a [Footprint],
     /// The raw grid path, as (north, east) points.
     pub raw_path_ne: &'a [(f64, f64)],
     /// The pruned (shortcut) waypoints, as (north, east) points.
@@ -142,6 +147,7 @@ impl<'a> Scene<'a> {
             title: String::new(),
             grid,
             obstacles: &[],
+            footprints: &[],
             raw_path_ne: &[],
             pruned_path_ne: &[],
             start_ne: None,

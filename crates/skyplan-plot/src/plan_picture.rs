@@ -206,6 +206,7 @@ impl MapPicture<'_> {
             title,
             grid: self.grid,
             obstacles: &geometry.active_boxes,
+            footprints: &geometry.active_footprints,
             raw_path_ne: &raw,
             pruned_path_ne: &waypoints,
             start_ne: Some((plan.start.north_m, plan.start.east_m)),

@@ -71,6 +71,7 @@ fn scene(f: &Fixture) -> Scene<'_> {
         title: "synthetic at 5 m, margin 3 m".into(),
         grid: &f.grid,
         obstacles: &f.obstacles,
+        footprints: &[],
         raw_path_ne: &f.raw,
         pruned_path_ne: &f.pruned,
         start_ne: f.pruned.first().copied(),
@@ -560,4 +561,47 @@ fn zones_are_hatched_outlined_and_labelled_with_their_bands() {
     let plain = Image::decode(&render_png(&plain_scene, w, h).unwrap());
     let ((x0, y1), (x1, y0)) = (px(-3.5, 6.0), px(-2.5, 9.0));
     assert!((y0..=y1).all(|y| (x0..=x1).all(|x| !is_red(plain.at((x, y))))));
+}
+
+#[test]
+fn footprints_are_drawn_as_polygons_with_their_courtyards_open() {
+    use skyplan_map::footprints::Footprint;
+    let grid = Grid2::new(ROWS, COLS, vec![false; (ROWS * COLS) as usize], FRAME).unwrap();
+    // A square building with a courtyard, and a triangle (north, east).
+    let building = Footprint {
+        feature: 0,
+        rings: vec![
+            vec![[-15.0, -25.0], [-15.0, 5.0], [15.0, 5.0], [15.0, -25.0]],
+            vec![[-5.0, -15.0], [5.0, -15.0], [5.0, -5.0], [-5.0, -5.0]],
+        ],
+        min_height_m: 0.0,
+        height_m: 30.0,
+    };
+    let triangle = Footprint {
+        feature: 1,
+        rings: vec![vec![[-10.0, 10.0], [-10.0, 25.0], [10.0, 10.0]]],
+        min_height_m: 0.0,
+        height_m: 30.0,
+    };
+    let footprints = [building, triangle];
+    let scene = Scene {
+        footprints: &footprints,
+        ..Scene::of_grid(&grid)
+    };
+    let (w, h) = (600, 420);
+    let img = Image::decode(&render_png(&scene, w, h).unwrap());
+    let l = layout(&scene, w, h).unwrap();
+    let dark = |n: f64, e: f64| is_grey(img.at(l.pixel_of_ne(n, e)), 80, 110);
+    let white = |n: f64, e: f64| is_white(img.at(l.pixel_of_ne(n, e)));
+    // Probes off the tick lines (multiples of 5 m).
+    assert!(dark(-11.3, -11.3) && dark(12.3, 1.3), "the building's ring");
+    assert!(
+        white(1.3, -11.3) && white(-3.7, -6.3),
+        "the courtyard stays open"
+    );
+    assert!(dark(-8.3, 12.3), "inside the triangle");
+    assert!(white(8.3, 23.3), "beyond the triangle's long side");
+    assert!(white(18.3, 1.3) && white(1.3, 28.3), "outside");
+    let svg = render_svg(&scene, w, h).unwrap();
+    assert!(svg.contains("obstacle"), "the legend names the buildings");
 }

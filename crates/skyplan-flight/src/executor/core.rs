@@ -89,6 +89,9 @@ pub struct Core {
     ending: Option<Failure>,
     /// Altitude when LANDING began, metres.
     landing_alt_m: f64,
+    /// The altitude the vehicle took off from (its telemetry when the climb began): 0 on flat
+    /// ground, the takeoff ground's height above home over terrain.
+    takeoff_ground_alt_m: f64,
     outcome: Option<Outcome>,
     started: bool,
     faults: Faults,
@@ -168,6 +171,7 @@ impl Core {
             last_text: None,
             ending: None,
             landing_alt_m: 0.0,
+            takeoff_ground_alt_m: 0.0,
             outcome: None,
             started: false,
             faults: Faults::default(),
@@ -190,9 +194,25 @@ impl Core {
         self.last_send_s = None;
         self.acked = false;
         self.last_refusal = None;
-        if to == FlightState::Landing {
-            self.landing_alt_m = self.last.map_or(0.0, |t| t.alt_m().max(0.0));
+        if to == FlightState::Takeoff {
+            self.takeoff_ground_alt_m = self.last.map_or(0.0, |t| t.alt_m());
         }
+        if to == FlightState::Landing {
+            // The descent ahead: from here to the ground, which over terrain may be lower
+            // than home or than where the vehicle took off; the route's first height above its
+            // takeoff ground stands for the height it keeps above the ground.
+            let here_m = self.last.map_or(0.0, |t| t.alt_m());
+            let above_takeoff_m = here_m - self.takeoff_ground_alt_m;
+            let route_m = self.targets.first().map_or(0.0, |t| t.alt_m) - self.takeoff_ground_alt_m;
+            self.landing_alt_m = here_m.max(above_takeoff_m).max(route_m).max(0.0);
+        }
+    }
+
+    /// Whether the climb to a first altitude of `alt_m` is far enough along to go on
+    /// (`takeoff_fraction` of the way up from where it began, whatever the ground's height).
+    pub(crate) fn climbed(&self, t: &Telemetry, alt_m: f64) -> bool {
+        let ground_m = self.takeoff_ground_alt_m;
+        t.alt_m() - ground_m >= self.config.takeoff_fraction * (alt_m - ground_m)
     }
 
     pub(crate) fn finish(&mut self, outcome: Outcome, out: &mut Output) {

@@ -121,7 +121,7 @@ pub(super) fn takeoff_to_first(
         core.fail(Failure::DisarmedInFlight { state: core.state }, out);
     } else if !t.guided {
         core.fail(Failure::ControlLost { state: core.state }, out);
-    } else if t.alt_m() >= c.takeoff_fraction * alt_m {
+    } else if core.climbed(t, alt_m) {
         core.enter(FlightState::Waypoint, now_s, out);
         core.leg_since_s = now_s;
         return true;

@@ -64,6 +64,9 @@ pub struct GroundProtocol {
     on_ground: Option<bool>,
     last_arm_request: CommandKind,
     last_mode_request: CommandKind,
+    /// How high the vehicle's home stands above the map's home, metres (0 on flat ground):
+    /// the station's altitudes are above the map's home, the vehicle's above its own.
+    home_up_m: f64,
 }
 
 impl Default for GroundProtocol {
@@ -94,7 +97,30 @@ impl GroundProtocol {
             on_ground: None,
             last_arm_request: CommandKind::Arm,
             last_mode_request: CommandKind::TakeControl,
+            home_up_m: 0.0,
         }
+    }
+
+    /// Over terrain: the vehicle's home (where it armed) stands `up_m` above the map's home.
+    /// From then on every altitude the station takes or gives (telemetry, targets, take-off)
+    /// is above the map's home, converted to and from the vehicle's relative altitudes.
+    ///
+    /// ```
+    /// use skyplan_link::ground::protocol::GroundProtocol;
+    /// let mut p = GroundProtocol::new();
+    /// p.set_home_up_m(12.5);
+    /// assert_eq!(p.vehicle_alt_m(42.5), 30.0);
+    /// ```
+    pub fn set_home_up_m(&mut self, up_m: f64) {
+        if up_m.is_finite() {
+            self.home_up_m = up_m;
+        }
+    }
+
+    /// The vehicle's relative altitude (above where it armed) of a point `alt_m` above the
+    /// map's home.
+    pub fn vehicle_alt_m(&self, alt_m: f64) -> f64 {
+        alt_m - self.home_up_m
     }
 
     /// The vehicle's mode from its last heartbeat.
@@ -323,7 +349,15 @@ impl GroundProtocol {
             }
             Command::Takeoff { alt_m } => vec![self.command_long(
                 MavCmd::MAV_CMD_NAV_TAKEOFF,
-                [0.0, 0.0, 0.0, nan, 0.0, 0.0, alt_m as f32],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    nan,
+                    0.0,
+                    0.0,
+                    self.vehicle_alt_m(alt_m) as f32,
+                ],
             )],
             Command::Land => vec![self.command_long(
                 MavCmd::MAV_CMD_NAV_LAND,
@@ -385,7 +419,8 @@ impl GroundProtocol {
                         down_m: 0.0,
                     })
                     .map_err(|e| format!("the target has no latitude/longitude: {e}"))?;
-                if let Some(local) = self.in_vehicle_frame(t, [lla.lat_deg, lla.lon_deg], -d) {
+                let alt_m = self.vehicle_alt_m(-d);
+                if let Some(local) = self.in_vehicle_frame(t, [lla.lat_deg, lla.lon_deg], alt_m) {
                     return Ok(local);
                 }
             }
@@ -458,7 +493,7 @@ impl GroundProtocol {
             SET_POSITION_TARGET_GLOBAL_INT_DATA {
                 lat_int: (lla.lat_deg * 1e7).round() as i32,
                 lon_int: (lla.lon_deg * 1e7).round() as i32,
-                alt: (-down_m) as f32,
+                alt: self.vehicle_alt_m(-down_m) as f32,
                 yaw: yaw_rad as f32,
                 type_mask: PositionTargetTypemask::from_bits_truncate(POSITION_AND_YAW),
                 target_system: sys,
@@ -527,7 +562,7 @@ impl GroundProtocol {
         Some(Telemetry {
             north_m: ned.north_m,
             east_m: ned.east_m,
-            down_m: -f64::from(g.relative_alt) * 1e-3,
+            down_m: -(f64::from(g.relative_alt) * 1e-3 + self.home_up_m),
             velocity_ned_m_s: [vn * c + ve * s, ve * c - vn * s, f64::from(g.vz) * 0.01],
             yaw_rad: wrap_angle_rad(self.yaw_rad - convergence_rad),
             armed: self.armed,

@@ -4,8 +4,8 @@
 //! moves the messages; the fuzz harness drives this as it is.
 
 use super::{
-    Proximity, SENSOR_PERIOD_S, Side, SimNote, SimReport, SimServerConfig, SimStatus, Streams,
-    Upload, handle_message, heartbeat_of, request_int,
+    GroundStrike, Proximity, SENSOR_PERIOD_S, Side, SimNote, SimReport, SimServerConfig, SimStatus,
+    Streams, Upload, handle_message, heartbeat_of, request_int,
 };
 use crate::obstacle::{distance_sensors, obstacle_distance};
 use mavlink::dialects::common::*;
@@ -49,6 +49,9 @@ pub struct SimProtocol {
     last_mode: SimMode,
     last_armed: bool,
     notes: Vec<SimNote>,
+    /// The vehicle's home ground above the map home's, metres (0 without terrain).
+    home_up_m: f64,
+    ground_strike: Option<GroundStrike>,
 }
 
 impl SimProtocol {
@@ -78,6 +81,16 @@ impl SimProtocol {
             fence: Vec::new(),
         };
         let last_mode = vehicle.state().mode;
+        // Where the vehicle starts in the map's frame, and its ground's height there.
+        let start_ne = map_frame
+            .ned_from_lla(Lla {
+                alt_m: 0.0,
+                ..cfg.home
+            })
+            .map_or([0.0; 2], |n| [n.north_m, n.east_m]);
+        let home_up_m = (cfg.terrain.as_ref())
+            .and_then(|t| t.ground_m(start_ne[0], start_ne[1]).ok())
+            .unwrap_or(0.0);
         Self {
             truth: true_world(world, &cfg.hidden),
             map_boxes: world.map_or(0, BoxWorld::len),
@@ -98,7 +111,7 @@ impl SimProtocol {
             next_sweep_s: 0.0,
             status: SimStatus {
                 time_s: 0.0,
-                position_ned: [0.0; 3],
+                position_ned: [start_ne[0], start_ne[1], -home_up_m],
                 heading_rad: 0.0,
                 ground_speed_m_s: 0.0,
                 mode: SimMode::Stabilize,
@@ -117,6 +130,8 @@ impl SimProtocol {
             last_mode,
             last_armed: false,
             notes: Vec::new(),
+            home_up_m,
+            ground_strike: None,
             cfg,
         }
     }
@@ -184,6 +199,14 @@ impl SimProtocol {
     /// One physics step: events, distance, the sensor's sweep when due, the track's check.
     fn physics_step(&mut self, out: &mut Vec<MavMessage>) {
         let before = self.vehicle.state();
+        if let Some(t) = &self.cfg.terrain {
+            // The ground under the last position told (one step behind: 20 ms).
+            let [n, e, _] = self.status.position_ned;
+            if let Ok(up_m) = t.ground_m(n, e) {
+                self.vehicle.set_ground_up_m(up_m - self.home_up_m);
+            }
+        }
+        let mut struck = false;
         for e in self.vehicle.step(self.step_s) {
             match e {
                 SimEvent::MissionItemReached(seq) => {
@@ -197,10 +220,12 @@ impl SimProtocol {
                 }
                 SimEvent::Landed => self.notes.push(SimNote::Landed),
                 SimEvent::AutoDisarmed => {}
+                SimEvent::GroundStrike => struck = true,
             }
         }
         let s = self.vehicle.state();
-        self.max_alt_m = self.max_alt_m.max(-s.position_ned_m[2]);
+        let down_m = s.position_ned_m[2] - self.home_up_m;
+        self.max_alt_m = self.max_alt_m.max(-down_m);
         self.distance_m += (s.position_ned_m[0] - before.position_ned_m[0])
             .hypot(s.position_ned_m[1] - before.position_ned_m[1]);
         let (lat_deg, lon_deg) = self
@@ -212,7 +237,15 @@ impl SimProtocol {
             alt_m: 0.0,
         });
         if let Ok(ned) = &map_ned {
-            self.status.position_ned = [ned.north_m, ned.east_m, s.position_ned_m[2]];
+            self.status.position_ned = [ned.north_m, ned.east_m, down_m];
+        }
+        if struck && self.ground_strike.is_none() {
+            let strike = GroundStrike {
+                time_s: s.time_s,
+                position_ned_m: self.status.position_ned,
+            };
+            self.ground_strike = Some(strike);
+            self.notes.push(SimNote::GroundStrike(strike));
         }
         if s.time_s >= self.next_sweep_s {
             self.next_sweep_s = s.time_s + SENSOR_PERIOD_S - 0.5 * self.step_s;
@@ -392,6 +425,7 @@ impl SimProtocol {
             map_boxes: self.map_boxes,
             map_features: self.map_features,
             hidden_boxes: self.cfg.hidden.len(),
+            ground_strike: self.ground_strike,
         }
     }
 }
