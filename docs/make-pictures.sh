@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the pictures of README.md and docs/*.md from the bundled data, with the release
 # binary (built first if missing): docs/plan.png, plan3d.png, voronoi.png, heatmap.png,
-# trajectory.png, terrain.png, flight.png.
+# trajectory.png, terrain.png, helsinki.png, flight.png.
 # The server's screenshots (docs/serve.png, serve-flight.png) come from its browser test:
 #   SKYPLAN_PYTHON=.ci-venv/bin/python SKYPLAN_SCREENSHOT=1 bash crates/skyplan-server/ci.sh
 # Usage, from anywhere in the clone: bash docs/make-pictures.sh   (about 10 s once built)
@@ -25,6 +25,8 @@ trap 'rm -rf "$tmp"' EXIT
 # README: a route 30 m above the hills of a real DEM (contours in the top view), with its side profile.
 "$skyplan" plan --random 3000x3000 --density 0.0002 --home 36.56,-84.28 --terrain data/terrain/jacksboro.tif \
     --alt-agl-m 30 --start-ne 100,100 --goal-ne 2900,2800 --out "$tmp/w.json" --plot docs/terrain.png
+# README: OpenStreetMap buildings as their polygons (courtyards open), each ringed by the margin.
+"$skyplan" plan --map data/osm/helsinki-buildings.osm.pbf --goal-ne 500,250 --out "$tmp/w.json" --plot docs/helsinki.png
 # docs/FLYING.md: a flight around three seeded buildings the map does not have.
 "$skyplan" fly --sim --speedup 50 --hidden-random 3 --seed 1 --plot docs/flight.png
-echo "pictures written: docs/plan.png docs/plan3d.png docs/voronoi.png docs/heatmap.png docs/trajectory.png docs/terrain.png docs/flight.png"
+echo "pictures written: docs/plan.png docs/plan3d.png docs/voronoi.png docs/heatmap.png docs/trajectory.png docs/terrain.png docs/helsinki.png docs/flight.png"
