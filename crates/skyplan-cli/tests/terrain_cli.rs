@@ -787,3 +787,34 @@ fn a_separate_simulator_stands_its_vehicle_on_the_terrain() {
         "landed at {end} m above the map's home"
     );
 }
+
+/// `fly --upload` over terrain: the mission's items are above the vehicle's home (it takes off
+/// 134 m above the map's home, so its first waypoint, 167 m above the map's home, is a take-off
+/// to 32.7 m), and the AUTO flight keeps the route's height above the ground.
+#[test]
+fn an_uploaded_mission_over_terrain_is_above_the_vehicles_home() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = common::succeed(
+        dir.path(),
+        &format!(
+            "fly --sim --upload --speedup 40 --timeout-s 300 --map {} --terrain {} --alt-agl-m 30 --start-ne 400,100 --goal-ne -50,450",
+            data("terrain/blocks.csv").display(),
+            data("terrain/jacksboro.tif").display()
+        ),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let takeoff_m: f64 = (stdout.split("take-off to ").nth(1))
+        .and_then(|rest| rest.split(" m,").next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no take-off altitude:\n{stdout}"));
+    assert!((takeoff_m - 32.7).abs() < 0.2, "take-off to {takeoff_m} m");
+    let low: f64 = (stdout.split("terrain    lowest ").nth(1))
+        .and_then(|rest| rest.split(" m above").next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no lowest height:\n{stdout}"));
+    assert!(low >= 28.5, "lowest {low} m above the ground");
+    assert!(
+        stdout.contains("result     landed and disarmed after reaching all 8 waypoints"),
+        "{stdout}"
+    );
+}

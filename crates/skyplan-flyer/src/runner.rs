@@ -506,12 +506,17 @@ fn upload<O: RunObserver>(
     observer: &mut O,
 ) -> Result<MissionPlan, RunError> {
     let mut items = crate::mission::items_for(mission, frame, info, pace).map_err(bad)?;
-    // The items' altitudes are above the vehicle's home (over terrain, not the map's).
-    for item in &mut items.items {
+    // The items' altitudes are above the vehicle's home (over terrain, not the map's); an
+    // ArduPilot mission's item 0 is that home.
+    let home_item = usize::from(info.autopilot != Autopilot::Px4);
+    for item in items.items.iter_mut().skip(home_item) {
         if matches!(item.command, ItemCommand::Waypoint | ItemCommand::Takeoff) {
             item.alt_m -= home_up_m as f32;
         }
     }
+    let takeoff_m = (items.items.iter())
+        .find(|i| i.command == ItemCommand::Takeoff)
+        .map_or(alt_m, |i| f64::from(i.alt_m));
     let before = match (info.autopilot == Autopilot::ArduPilot, pace.is_some()) {
         (true, true) => {
             " (each after a CONDITION_YAW to its heading and a DO_CHANGE_SPEED to its leg's speed)"
@@ -524,7 +529,7 @@ fn upload<O: RunObserver>(
         "mission    {} items: {}take-off to {} m, {} waypoints with headings{before}, land (MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)",
         items.items.len(),
         if info.autopilot == Autopilot::Px4 { "" } else { "home, " },
-        alt_m,
+        (takeoff_m * 100.0).round() / 100.0,
         mission.waypoints.len(),
     ));
     let report = gcs
