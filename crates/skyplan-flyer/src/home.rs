@@ -153,9 +153,9 @@ pub fn rtl_clearance(
 
 /// Spacing of the points of the route whose straight way home [`rtl_ground_clearance`] bounds,
 /// metres; the bounds are grown by half of it.
-const RTL_ROUTE_STEP_M: f64 = 10.0;
+pub const RTL_ROUTE_STEP_M: f64 = 10.0;
 /// Longest piece of a straight way home one ground bound covers, metres.
-const RTL_PIECE_M: f64 = 20.0;
+pub const RTL_PIECE_M: f64 = 20.0;
 
 /// Over terrain: an altitude above the map's home that keeps `margin_m` above the ground under
 /// the autopilot's straight way home (RTL, to the route's first point) from anywhere on

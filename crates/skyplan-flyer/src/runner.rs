@@ -162,7 +162,7 @@ pub struct FlyOptions {
     /// The request gives the start; otherwise the plan starts where the vehicle is.
     pub user_start: bool,
     /// Before take-off, upload the request's no-fly zones as the vehicle's fence and read it
-    /// back ([`upload_fence`]); a refusal or a difference stops the run before arming.
+    /// back (`upload_fence`); a refusal or a difference stops the run before arming.
     pub fence: bool,
 }
 

@@ -315,7 +315,7 @@ pub struct TrackingReport {
     /// reference time while streaming, metres (0 before any sample).
     pub max_tracking_error_m: f64,
     /// The largest distance between the vehicle and the reference's path near its own time
-    /// (the closest setpoint within [`super::tracking::PATH_WINDOW_S`]): how far off the
+    /// (the closest setpoint within `tracking::PATH_WINDOW_S`): how far off the
     /// proven trajectory the vehicle flew, early or late aside, metres.
     pub max_path_error_m: f64,
     /// Telemetry samples compared with the reference.
