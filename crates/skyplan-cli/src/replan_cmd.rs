@@ -59,11 +59,13 @@ pub fn flight_picture(
     zones: &[skyplan_map::nofly::Zone],
 ) -> Result<Vec<u8>> {
     let (learned, track) = (flight.learned_ne(), flight.track_ne());
+    let track_alt_m: Vec<f64> = flight.log.iter().map(|r| r.alt_m).collect();
     let layers = skyplan_plot::FlightLayers {
         hidden,
         learned_ne: &learned,
         replanned_ne: &flight.replanned,
         track_ne: &track,
+        track_alt_m: &track_alt_m,
     };
     crate::picture::render(world, &flight.plan, kind, Some(&layers), zones)
 }

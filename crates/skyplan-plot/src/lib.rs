@@ -135,6 +135,9 @@ pub struct FlightLayers<'a> {
     pub replanned_ne: &'a [Vec<(f64, f64)>],
     /// The flown track, (north, east).
     pub track_ne: &'a [(f64, f64)],
+    /// The flown track's altitudes above home, one per point of `track_ne` (the 3D picture's
+    /// side profile draws them); empty if unknown.
+    pub track_alt_m: &'a [f64],
 }
 
 /// A segment between two (north, east) points, metres.

@@ -97,7 +97,9 @@ pub fn plan_picture_with_zones(
             };
             picture.render(*format)
         }
-        (PictureKind::Scene(format), _) => picture3d(world, plan, &geometry, map, *format),
+        (PictureKind::Scene(format), _) => {
+            picture3d(world, plan, &geometry, (map, flight), *format)
+        }
         (PictureKind::Heatmap, None) => Err(PlotError::BadScene {
             what: "a heat map needs a grid planner",
         }),
@@ -224,14 +226,22 @@ impl MapPicture<'_> {
     }
 }
 
-/// The 3D top view and side profile of a plan on the world's buildings.
+/// The 3D top view and side profile of a plan on the world's buildings (and of a flight's
+/// track, when the flight layers carry its altitudes).
 fn picture3d(
     world: &World,
     plan: &Plan,
     geometry: &Geometry,
-    map: &str,
+    (map, flight): (&str, Option<&FlightLayers>),
     format: PlotFormat,
 ) -> Result<Vec<u8>, PlotError> {
+    let flown: Vec<[f64; 3]> = match flight {
+        Some(f) if f.track_alt_m.len() == f.track_ne.len() => (f.track_ne.iter())
+            .zip(f.track_alt_m)
+            .map(|(&(n, e), &a)| [n, e, a])
+            .collect(),
+        _ => Vec::new(),
+    };
     let boxes = world
         .colliders()
         .map(|m| m.boxes.as_slice())
@@ -267,6 +277,7 @@ fn picture3d(
         edges_label: &geometry.edges_label,
         ground: &ground,
         ground_grid: ground_grid.as_ref(),
+        flown: &flown,
     };
     crate::profile::render_plan3d_traced(&scene, trace.as_ref(), format, 1500, 900)
 }

@@ -13,6 +13,7 @@ use crate::{MAX_SIZE_PX, MIN_SIZE_PX, PlotError, PlotFormat};
 
 const ROUTE_COLOR: RGBColor = RGBColor(31, 96, 196);
 const RAW_COLOR: RGBColor = RGBColor(255, 127, 14);
+const FLOWN_COLOR: RGBColor = RGBColor(20, 20, 20);
 const EDGE_COLOR: RGBColor = RGBColor(170, 200, 235);
 const MARGIN_COLOR: RGBColor = RGBColor(222, 224, 228);
 const START_COLOR: RGBColor = RGBColor(0, 170, 60);
@@ -49,6 +50,10 @@ pub struct Scene3d<'a> {
     /// The ground around the route (over terrain), drawn as contours in the top view; `None`
     /// for flat ground.
     pub ground_grid: Option<&'a skyplan_map::contour::GroundGrid>,
+    /// A flight's track, `[north_m, east_m, alt_m]` (`fly --plot`): drawn thin and dark over
+    /// the route in the top view, and in the side profile at the distance along the route of
+    /// its nearest point; empty for a plan.
+    pub flown: &'a [[f64; 3]],
 }
 
 /// The ground's altitude at distance `d_m` along the route (0 without a ground profile).
@@ -172,7 +177,7 @@ pub fn profile_columns(
 /// let path = [[0.0, 0.0, 5.0], [40.0, 0.0, 25.0], [60.0, 0.0, 25.0], [100.0, 0.0, 5.0]];
 /// let scene = Scene3d { title: "over the roof".into(), obstacles: &[b], safety_m: 2.0, path: &path,
 ///                       raw_path: &[], raw_label: "", edges: &[], edges_label: "", ground: &[],
-///                       ground_grid: None };
+///                       ground_grid: None, flown: &[] };
 /// let png = render_plan3d(&scene, PlotFormat::Png, 1000, 600)?;
 /// assert_eq!(&png[1..4], b"PNG");
 /// let svg = String::from_utf8(render_plan3d(&scene, PlotFormat::Svg, 1000, 600)?)?;
@@ -567,6 +572,14 @@ fn draw_top_view<DB: DrawingBackend>(
                 ROUTE_COLOR.stroke_width(look.stroke(3.5)),
             ))
             .map_err(err)?;
+        if scene.flown.len() > 1 {
+            chart
+                .draw_series(LineSeries::new(
+                    scene.flown.iter().map(en),
+                    FLOWN_COLOR.stroke_width(look.stroke(1.5)),
+                ))
+                .map_err(err)?;
+        }
         if let Some(trace) = trace {
             crate::trajectory::draw_on_map(&mut chart, trace, look.stroke(3.0))?;
         }
@@ -628,6 +641,16 @@ fn draw_side_profile<DB: DrawingBackend>(
     draw_ground(root, &prof, scene.ground)?;
     draw_columns(root, &prof, &cols, tallest, scene.ground)?;
     draw_profile_route(root, &prof, scene.path, look)?;
+    if scene.flown.len() > 1 {
+        let pts: Vec<(i32, i32)> = (scene.flown.iter())
+            .map(|p| prof.px(along_route_m(scene.path, [p[0], p[1]]), p[2]))
+            .collect();
+        root.draw(&PathElement::new(
+            pts,
+            FLOWN_COLOR.stroke_width(look.stroke(1.5)),
+        ))
+        .map_err(err)?;
+    }
     prof.axes(
         root,
         look.mode,
@@ -635,6 +658,28 @@ fn draw_side_profile<DB: DrawingBackend>(
         ("DISTANCE ALONG THE ROUTE (m)", "ALTITUDE (m)"),
     )?;
     Ok(prof)
+}
+
+/// The horizontal distance along `path` of its point nearest to `ne` (north, east).
+pub(crate) fn along_route_m(path: &[[f64; 3]], ne: [f64; 2]) -> f64 {
+    let (mut best, mut best_d2, mut at) = (0.0, f64::INFINITY, 0.0);
+    for w in path.windows(2) {
+        let (a, b) = ([w[0][0], w[0][1]], [w[1][0], w[1][1]]);
+        let (dn, de) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = dn * dn + de * de;
+        let t = if len2 > 0.0 {
+            (((ne[0] - a[0]) * dn + (ne[1] - a[1]) * de) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (pn, pe) = (a[0] + t * dn - ne[0], a[1] + t * de - ne[1]);
+        let d2 = pn * pn + pe * pe;
+        if d2 < best_d2 {
+            (best_d2, best) = (d2, at + t * len2.sqrt());
+        }
+        at += len2.sqrt();
+    }
+    best
 }
 
 /// The ground under the route, filled down to the panel's floor.
@@ -747,6 +792,9 @@ fn draw_legend3d<DB: DrawingBackend>(
         ("start", Swatch::Dot(START_COLOR)),
         ("goal", Swatch::Dot(GOAL_COLOR)),
     ];
+    if scene.flown.len() > 1 {
+        entries.push(("flown track", Swatch::Line(FLOWN_COLOR, 1.5)));
+    }
     let heights: Vec<(String, f64)> = [0.1, 0.35, 1.0]
         .iter()
         .map(|f| {
@@ -853,4 +901,63 @@ fn marker<DB: DrawingBackend>(
         .map_err(err)?;
     root.draw(&Circle::new(at, r.saturating_sub(2).max(1), color.filled()))
         .map_err(err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn along_route_is_the_distance_to_the_nearest_point_of_the_route() {
+        let path = [[0.0, 0.0, 5.0], [100.0, 0.0, 5.0], [100.0, 50.0, 5.0]];
+        assert_eq!(along_route_m(&path, [40.0, 7.0]), 40.0);
+        assert_eq!(along_route_m(&path, [90.0, 30.0]), 130.0);
+        assert_eq!(along_route_m(&path, [-20.0, 0.0]), 0.0);
+        assert_eq!(along_route_m(&path, [130.0, 80.0]), 150.0);
+    }
+
+    /// The flown track is drawn where it was flown: a track 20 m east of the route is dark in
+    /// the top view where the route's picture alone is not.
+    #[test]
+    fn a_flown_track_is_drawn_beside_the_route_in_the_top_view() {
+        let path = [[0.0, 0.0, 10.0], [100.0, 0.0, 10.0]];
+        let flown = [[0.0, 20.0, 10.0], [100.0, 20.0, 10.0]];
+        let scene = |flown: &'static [[f64; 3]]| Scene3d {
+            title: "t".into(),
+            obstacles: &[],
+            safety_m: 2.0,
+            path: Box::leak(Box::new(path)),
+            raw_path: &[],
+            raw_label: "",
+            edges: &[],
+            edges_label: "",
+            ground: &[],
+            ground_grid: None,
+            flown,
+        };
+        let (w, h) = (1000u32, 600u32);
+        let pixel = |s: &Scene3d| {
+            let png = render_plan3d_traced(s, None, PlotFormat::Png, w, h).unwrap();
+            let mut reader = png::Decoder::new(std::io::Cursor::new(png))
+                .read_info()
+                .unwrap();
+            let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+            reader.next_frame(&mut buf).unwrap();
+            let font = (f64::from(h.min(w)) / 50.0).clamp(10.0, 28.0);
+            let top = top_panel(s, (w as i32, h as i32), font);
+            // The darkest of the pixels within 2 of where the track's middle is.
+            let (x, y) = top.px(20.0, 50.3);
+            (x - 2..=x + 2)
+                .map(|x| {
+                    let i = (y as usize * w as usize + x as usize) * 3;
+                    u16::from(buf[i]) + u16::from(buf[i + 1]) + u16::from(buf[i + 2])
+                })
+                .min()
+                .unwrap()
+        };
+        let with = pixel(&scene(Box::leak(Box::new(flown))));
+        let without = pixel(&scene(&[]));
+        assert!(with < 3 * 80, "{with}");
+        assert!(without > 3 * 200, "{without}");
+    }
 }

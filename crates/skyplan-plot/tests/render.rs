@@ -427,6 +427,7 @@ fn flight_layers_are_drawn_where_they_are_and_named_in_the_legend() {
         learned_ne: &learned,
         replanned_ne: &replanned,
         track_ne: &track,
+        track_alt_m: &[],
     };
     let mut s = scene(&f);
     s.flight = Some(&layers);
