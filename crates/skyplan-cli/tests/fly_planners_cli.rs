@@ -66,6 +66,28 @@ fn a_3d_route_is_flown_at_its_altitudes() {
     assert!((24.0..=26.0).contains(&max_alt), "{max_alt} in {text}");
 }
 
+/// A goal on a 60 m roof (README's voxel route): the vehicle lands on the roof, not through
+/// the building to the street, with no collision; the roof it stands on is not a near miss.
+#[test]
+fn a_goal_on_a_roof_is_landed_on_the_roof() {
+    let (code, text) = fly("--planner voxel --goal-ne 200,330 --goal-alt-m 66");
+    assert_eq!(code, Some(0), "{text}");
+    let end_alt: f64 = (text.lines())
+        .find_map(|l| l.strip_prefix("vehicle    at N "))
+        .and_then(|l| l.split(", ").nth(2))
+        .and_then(|a| a.strip_suffix(" m above home"))
+        .and_then(|a| a.parse().ok())
+        .unwrap_or_else(|| panic!("no final altitude in {text}"));
+    assert!(
+        (60.0..60.2).contains(&end_alt),
+        "landed at {end_alt} m: {text}"
+    );
+    assert!(
+        text.contains("no collision with the map's obstacles"),
+        "{text}"
+    );
+}
+
 #[test]
 fn fly_refuses_maps_without_boxes() {
     let (code, text) = fly("--random 20x20 --planner jps");

@@ -16,8 +16,8 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
 }
 
 /// `fly --sim` at 50× from home to N 60, E 30 with one hidden box (a colliders line) in the
-/// simulated world; the exit code must be `code`.
-fn fly_to_60_30(dir: &Path, hidden_box: &str, code: i32) -> Run {
+/// simulated world, and `extra` arguments; the exit code must be `code`.
+fn fly_to_60_30(dir: &Path, hidden_box: &str, extra: &[&str], code: i32) -> Run {
     let hidden = &write(dir, "hidden.csv", &format!("{HEADER}{hidden_box}\n"));
     let line = [
         "fly",
@@ -31,6 +31,7 @@ fn fly_to_60_30(dir: &Path, hidden_box: &str, code: i32) -> Run {
     let args: Vec<&str> = line
         .into_iter()
         .chain([hidden, "--timeout-s", "60"])
+        .chain(extra.iter().copied())
         .collect();
     let r = run(dir, &args);
     r.expect_code(code);
@@ -41,17 +42,27 @@ fn fly_to_60_30(dir: &Path, hidden_box: &str, code: i32) -> Run {
 fn fly_sim_lands_past_a_hidden_box_off_the_route() {
     let dir = tempfile::tempdir().unwrap();
     // 60 m south-west of home: the route to (60, 30) goes north-east.
-    let r = fly_to_60_30(dir.path(), "-40,-40,10,3,3,10", 0);
+    let r = fly_to_60_30(dir.path(), "-40,-40,10,3,3,10", &[], 0);
     assert!(r.stdout.contains("no collision"), "{}", r.stdout);
 }
 
 #[test]
 fn a_hidden_box_on_the_route_without_a_watcher_is_a_collision_in_the_true_world() {
     let dir = tempfile::tempdir().unwrap();
-    // A 20 m tower on the goal itself: the vehicle flies into it at 5 m.
-    let r = fly_to_60_30(dir.path(), "60,30,10,3,3,10", 1);
+    // A 20 m tower on the goal itself, and no replanner watching: the vehicle flies into it at
+    // 5 m.
+    let r = fly_to_60_30(dir.path(), "60,30,10,3,3,10", &["--replanner", "off"], 1);
     assert!(r.stdout.contains("track      COLLISION"), "{}", r.stdout);
     assert!(r.stderr.contains("hit obstacle"), "{}", r.stderr);
+    // With the replanner (the default) it climbs over the tower and lands on its roof.
+    let r = fly_to_60_30(dir.path(), "60,30,10,3,3,10", &[], 0);
+    assert!(r.stdout.contains("climbing to 20.0 m"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains(", 20.05 m above home, disarmed"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("no collision"), "{}", r.stdout);
 }
 
 #[test]

@@ -23,6 +23,9 @@ use std::collections::HashMap;
 
 /// Size of the buckets of the spatial index, metres.
 const BUCKET_M: f64 = 20.0;
+/// How far below a roof a point may be and still stand on it ([`BoxWorld::roof_under`]),
+/// metres: a vehicle stopped on a roof is a few centimetres above it, never this far inside.
+pub const ROOF_REACH_M: f64 = 0.5;
 
 /// The obstacles — building footprints (prisms) and boxes — with a coarse horizontal bucket
 /// index.
@@ -151,6 +154,42 @@ impl BoxWorld {
         out
     }
 
+    /// The roof the vehicle would stand on at a NED point: the highest top, at most
+    /// [`ROOF_REACH_M`] above the point, among the obstacles whose footprint holds it
+    /// (`None`: nothing under it but the ground). Returns the obstacle and its top, metres up.
+    ///
+    /// ```
+    /// use skyplan_flight::collision::BoxWorld;
+    /// use skyplan_map::colliders::ObstacleBox;
+    /// let tower = ObstacleBox::from_row([10.0, 0.0, 30.0, 5.0, 5.0, 30.0]); // 60 m tall
+    /// let world = BoxWorld::new(&[tower]);
+    /// assert_eq!(world.roof_under([10.0, 1.0, -66.0]), Some((0, 60.0)));
+    /// assert_eq!(world.roof_under([10.0, 1.0, -50.0]), None); // beside its wall, not over it
+    /// assert_eq!(world.roof_under([30.0, 1.0, -66.0]), None);
+    /// ```
+    pub fn roof_under(&self, point_ned_m: [f64; 3]) -> Option<(usize, f64)> {
+        let [n, e, d] = point_ned_m;
+        let up = -d;
+        let mut best: Option<(usize, f64)> = None;
+        for &i in self.buckets.get(&(bucket(n), bucket(e)))? {
+            let i = i as usize;
+            let (holds, top_m) = match self.obstacle(i) {
+                Obstacle::Footprint(f) => {
+                    (skyplan_map::planar::inside(&f.rings, [n, e]), f.height_m)
+                }
+                Obstacle::Box(b) => (
+                    (n - b.north_m).abs() <= b.half_north_m
+                        && (e - b.east_m).abs() <= b.half_east_m,
+                    b.up_m + b.half_up_m,
+                ),
+            };
+            if holds && top_m <= up + ROOF_REACH_M && best.is_none_or(|(_, t)| top_m > t) {
+                best = Some((i, top_m));
+            }
+        }
+        best
+    }
+
     /// The first obstacle containing a NED point (faces included), if any.
     pub fn hit(&self, point_ned_m: [f64; 3]) -> Option<usize> {
         let [n, e, _] = point_ned_m;
@@ -170,9 +209,22 @@ impl BoxWorld {
     /// The nearest obstacle to a NED point and its distance, metres, if one is within `max_m`
     /// (`max_m` ≤ 20 m; farther obstacles may be missed); the lower index on a tie.
     pub fn nearest(&self, point_ned_m: [f64; 3], max_m: f64) -> Option<(usize, f64)> {
+        self.nearest_except(point_ned_m, max_m, None)
+    }
+
+    /// [`BoxWorld::nearest`] leaving out obstacle `except` (the roof a vehicle stands on).
+    pub fn nearest_except(
+        &self,
+        point_ned_m: [f64; 3],
+        max_m: f64,
+        except: Option<usize>,
+    ) -> Option<(usize, f64)> {
         let [n, e, _] = point_ned_m;
         let mut best: Option<(usize, f64)> = None;
         for i in self.boxes_within(n, e, max_m) {
+            if Some(i) == except {
+                continue;
+            }
             let dist = self.distance_m(i, point_ned_m);
             if dist <= max_m && best.is_none_or(|(_, x)| dist < x) {
                 best = Some((i, dist));
@@ -247,6 +299,19 @@ impl TrackCheck {
     /// Adds the next point of the track; the segment from the previous point is sampled every
     /// 0.25 m.
     pub fn add(&mut self, world: &BoxWorld, time_s: f64, point_ned_m: [f64; 3]) {
+        self.add_on(world, time_s, point_ned_m, None);
+    }
+
+    /// [`TrackCheck::add`] for a vehicle landing on, or standing on, the roof of obstacle
+    /// `roof`: that roof counts for collisions but not for the closest approach (a vehicle
+    /// on a roof touches it).
+    pub fn add_on(
+        &mut self,
+        world: &BoxWorld,
+        time_s: f64,
+        point_ned_m: [f64; 3],
+        roof: Option<usize>,
+    ) {
         if point_ned_m.iter().any(|x| !x.is_finite()) {
             return;
         }
@@ -280,7 +345,8 @@ impl TrackCheck {
             }
         }
         if -point_ned_m[2] >= 0.05
-            && let Some((box_index, clearance_m)) = world.nearest(point_ned_m, CLEARANCE_MAX_M)
+            && let Some((box_index, clearance_m)) =
+                world.nearest_except(point_ned_m, CLEARANCE_MAX_M, roof)
             && self.closest.is_none_or(|c| clearance_m < c.clearance_m)
         {
             self.closest = Some(Closest {

@@ -365,6 +365,16 @@ impl SimVehicle {
         }
     }
 
+    /// Whether it is landing now: LAND, RTL's descent at home, or a mission's land item.
+    pub fn landing(&self) -> bool {
+        match self.mode {
+            SimMode::Land => true,
+            SimMode::Rtl => self.rtl_descending,
+            SimMode::Auto => self.mission_landing,
+            _ => false,
+        }
+    }
+
     /// The current state.
     pub fn state(&self) -> SimState {
         SimState {
@@ -752,12 +762,7 @@ impl SimVehicle {
     fn ground_contact(&mut self, v_cmd: [f64; 3], events: &mut Vec<SimEvent>) {
         let was_on_ground = self.on_ground;
         let ground_down_m = -self.ground_up_m;
-        let landing = match self.mode {
-            SimMode::Land => true,
-            SimMode::Rtl => self.rtl_descending,
-            SimMode::Auto => self.mission_landing,
-            _ => false,
-        };
+        let landing = self.landing();
         if self.armed && !was_on_ground && !landing && self.position[2] >= ground_down_m {
             events.push(SimEvent::GroundStrike);
         }

@@ -39,6 +39,9 @@
 //! [`SimServerConfig::sensor_range_m`], each a ray cast at the vehicle's altitude against the
 //! true world ([`skyplan_flight::sensor`]; see [`crate::obstacle`] for the encoding).
 //!
+//! **Roofs.** Over a building, its roof is the ground: a goal on a roof is landed on (a few
+//! centimetres above it), and the roof it stands on is left out of the closest approach.
+//!
 //! **Terrain.** With [`SimServerConfig::terrain`] the ground under the vehicle follows the DEM:
 //! the vehicle's home stands on it (its relative altitudes are above that ground, as a real
 //! autopilot's are above where it armed), a landing stops on the ground where it is, and flying

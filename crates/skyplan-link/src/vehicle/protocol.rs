@@ -16,6 +16,10 @@ use skyplan_flight::sensor::{RangeSensor, SECTORS};
 use skyplan_flight::sim::{SimEvent, SimMode, SimState, SimVehicle};
 use skyplan_frames::{Lla, LocalFrame};
 
+/// How high above a roof a vehicle stands on it, metres (its skids: a touch of the roof is not
+/// a collision).
+const ROOF_STAND_M: f64 = 0.05;
+
 /// The simulated multicopter behind MAVLink, without a socket or a clock.
 pub struct SimProtocol {
     cfg: SimServerConfig,
@@ -199,13 +203,17 @@ impl SimProtocol {
     /// One physics step: events, distance, the sensor's sweep when due, the track's check.
     fn physics_step(&mut self, out: &mut Vec<MavMessage>) {
         let before = self.vehicle.state();
-        if let Some(t) = &self.cfg.terrain {
-            // The ground under the last position told (one step behind: 20 ms).
-            let [n, e, _] = self.status.position_ned;
-            if let Ok(up_m) = t.ground_m(n, e) {
-                self.vehicle.set_ground_up_m(up_m - self.home_up_m);
-            }
-        }
+        // The ground under the last position told (one step behind: 20 ms): the DEM's, or a
+        // roof the vehicle is over.
+        let [n, e, _] = self.status.position_ned;
+        let terrain_up_m = (self.cfg.terrain.as_ref())
+            .and_then(|t| t.ground_m(n, e).ok())
+            .unwrap_or(0.0);
+        let roof = (self.truth.as_ref()).and_then(|w| w.roof_under(self.status.position_ned));
+        let roof_up_m = roof.map_or(f64::NEG_INFINITY, |(_, top_m)| top_m + ROOF_STAND_M);
+        self.vehicle
+            .set_ground_up_m(terrain_up_m.max(roof_up_m) - self.home_up_m);
+        let on_roof = roof.filter(|_| roof_up_m > terrain_up_m).map(|(i, _)| i);
         let mut struck = false;
         for e in self.vehicle.step(self.step_s) {
             match e {
@@ -253,7 +261,10 @@ impl SimProtocol {
         }
         if let Some(w) = &self.truth {
             if map_ned.is_ok() {
-                self.track.add(w, s.time_s, self.status.position_ned);
+                // Landing on a roof, or standing on it, is not coming close to it.
+                let roof = on_roof.filter(|_| s.on_ground || self.vehicle.landing());
+                self.track
+                    .add_on(w, s.time_s, self.status.position_ned, roof);
             }
             if !self.collided
                 && let Some(c) = self.track.collision()
