@@ -15,7 +15,7 @@ use skyplan_cspace::{Cell, Grid2};
 use skyplan_sampling::PlannerKind;
 use skyplan_search::{
     ChQuery, ContractionHierarchy, GridPath, GridSearch, JpsPlusTable, MoveModel, Planner,
-    SearchError,
+    SearchError, SubgoalGraph, SubgoalQuery,
 };
 use std::sync::Arc;
 
@@ -78,6 +78,8 @@ pub(crate) enum Engine {
     Plus(Arc<JpsPlusTable>),
     /// Queries of a contraction hierarchy.
     Hierarchy(Arc<ContractionHierarchy>),
+    /// Queries of a subgoal graph.
+    Subgoal(Arc<SubgoalGraph>),
     /// A plain function.
     Function(SearchFn),
 }
@@ -87,6 +89,7 @@ pub(crate) enum Engine {
 pub(crate) struct Workspace {
     pub search: GridSearch,
     pub ch: ChQuery,
+    pub subgoal: SubgoalQuery,
 }
 
 impl Engine {
@@ -102,6 +105,7 @@ impl Engine {
             Engine::Online(planner) => ws.search.search(grid, start, goal, model, *planner),
             Engine::Plus(table) => table.search(&mut ws.search, start, goal),
             Engine::Hierarchy(ch) => ch.search(&mut ws.ch, start, goal),
+            Engine::Subgoal(graph) => graph.search(&mut ws.subgoal, start, goal),
             Engine::Function(f) => f(grid, start, goal, model),
         }
     }
@@ -261,6 +265,47 @@ impl CellPlanner for HierarchyCells {
     }
 }
 
+/// The simple subgoal graph with its contraction hierarchy, kept per grid. It is defined for
+/// the 8-connected model without corner cutting; under the other two every free cell is a
+/// subgoal, so the graph is the grid's own and its hierarchy is `ch`'s (built, kept and
+/// reported as `ch`'s).
+pub(crate) struct SubgoalCells;
+
+impl CellPlanner for SubgoalCells {
+    /// One byte and one node number per cell, plus the graph (a few percent of the cells on
+    /// the maps it is for).
+    fn bytes_per_cell(&self) -> u64 {
+        40
+    }
+
+    fn prepare(
+        &self,
+        session: &mut Session,
+        grid: &Arc<Grid2>,
+        r: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        if r.model != MoveModel::Octile {
+            return HierarchyCells.prepare(session, grid, r);
+        }
+        let (graph, built_us) = session.subgoal_graph(grid, r.preprocess_limit)?;
+        Ok(Prepared {
+            engine: Engine::Subgoal(graph),
+            built_us,
+            detail: Some("subgoal_graph"),
+            auto: None,
+        })
+    }
+
+    fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
+        if model != MoveModel::Octile {
+            return HierarchyCells.prepare_alone(grid, model);
+        }
+        let graph = SubgoalGraph::build(Arc::new(grid.clone()), model)
+            .map_err(|e| PlanFailure::bad_request(format!("planner subgoal: {e}")))?;
+        Ok(Engine::Subgoal(Arc::new(graph)))
+    }
+}
+
 /// `auto`: JPS, JPS+ or CH, picked per grid from its statistics and the queries on it
 /// ([`crate::auto::pick`]); in a session the count is the session's `auto` queries on the grid
 /// so far, and kept preprocessing (built or loaded) is used when the rule would take it.
@@ -292,8 +337,8 @@ impl CellPlanner for AutoCells {
         let mut pick = session.auto_pick(grid, r.model);
         let mut prepared = match Self::cells(pick.planner).prepare(session, grid, r) {
             Ok(p) => p,
-            // A hierarchy past its time limit: JPS+ answers at once.
-            Err(e) if pick.planner == PlannerId::Ch => {
+            // A hierarchy or subgoal graph past its time limit: JPS+ answers at once.
+            Err(e) if matches!(pick.planner, PlannerId::Ch | PlannerId::Subgoal) => {
                 pick.planner = PlannerId::JpsPlus;
                 pick.why = format!("{}, but {}: JPS+ instead", pick.why, e.message);
                 JpsPlusCells.prepare(session, grid, r)?
@@ -306,7 +351,7 @@ impl CellPlanner for AutoCells {
 
     /// Prepared for one query: JPS ([`crate::CellSearch::for_queries`] picks for a batch).
     fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
-        let pick = crate::auto::pick(&crate::auto::MapStats::of(grid), 1);
+        let pick = crate::auto::pick_for(&crate::auto::MapStats::of(grid), 1, model);
         Self::cells(pick.planner).prepare_alone(grid, model)
     }
 }

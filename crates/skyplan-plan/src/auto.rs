@@ -1,10 +1,13 @@
-//! `--planner auto`: the fastest exact grid planner (JPS, JPS+ or CH) for a grid and a number of
-//! queries, chosen from measured map statistics ([`MapStats`]) by [`pick`]; the rule follows
-//! `skyplan scen` on the bundled MovingAI maps (README "Speed", ARCHITECTURE "How auto decides").
+//! `--planner auto`: the fastest exact grid planner (JPS, JPS+, CH or the subgoal graph) for a
+//! grid and a number of queries, chosen from measured map statistics ([`MapStats`]) by [`pick`]
+//! (and [`pick_for`], which knows the move model); the rule follows `skyplan scen` and `skyplan
+//! bench` on the bundled MovingAI maps and generated mazes (docs/BENCHMARKS.md, ARCHITECTURE
+//! "How auto decides").
 
 use crate::planner_id::PlannerId;
 use serde::Serialize;
 use skyplan_cspace::Grid2;
+use skyplan_search::MoveModel;
 
 /// Queries on one grid from which a JPS+ table pays for itself: building it costs ≈ 40 ns per
 /// cell and it saves ≈ 0.3–0.5 ns per cell on every query against JPS (`skyplan scen`, release:
@@ -24,6 +27,29 @@ pub const CH_MAX_RUN: f64 = 5.0;
 /// random512-40-5 it builds in 0.47–0.51 s and saves ≈ 2.3 ms per query against JPS+, so it
 /// pays after ≈ 220 queries.
 pub const CH_QUERIES: u64 = 250;
+
+/// The mean free run (cells) above [`CH_MAX_RUN`] and at most this where, on large maps, the
+/// subgoal graph answers fastest: corridors a few cells wide keep few convex corners (the
+/// generated 4-cell maze, mean run 7.7: 7,234 subgoals among 209,242 free cells) and each
+/// sees only the corners near it, so the graph builds in ≈ 50 ms and a query is two small
+/// floods, a hierarchy search and the walk (≈ 50–70 µs against JPS+'s 0.3–0.4 ms there). On
+/// open ground (den312d 9.1 is small; Paris 19.6, Boston 39.7, the 32-cell maze 48.2) the
+/// corners see far, the graph is dense and JPS+ is faster. Wider corridors (the 8-cell maze,
+/// 15.9) gain less than the build costs over a thousand queries.
+pub const SUBGOAL_MAX_RUN: f64 = 12.0;
+
+/// Free cells from which the subgoal graph is worth building on such a map: on small maps
+/// (den312d, 2,445 free cells) every query is short and JPS+ answers it in a few µs, less than
+/// a subgoal query's floods at both ends.
+pub const SUBGOAL_MIN_FREE: u64 = 65_536;
+
+/// Whether a map is one where the subgoal graph answers fastest ([`SUBGOAL_MAX_RUN`],
+/// [`SUBGOAL_MIN_FREE`]).
+pub fn subgoal_map(stats: &MapStats) -> bool {
+    stats.mean_run > CH_MAX_RUN
+        && stats.mean_run <= SUBGOAL_MAX_RUN
+        && stats.free >= SUBGOAL_MIN_FREE
+}
 
 /// What `auto` measures of a grid before it picks.
 ///
@@ -103,7 +129,11 @@ pub struct AutoPick {
 /// - fewer than [`JPS_PLUS_QUERIES`]: **JPS** — no preprocessing would pay for itself;
 /// - a mean free run ≤ [`CH_MAX_RUN`] (corridors, scattered obstacles) and at least
 ///   [`CH_QUERIES`] queries: **CH**;
+/// - a large map of corridors a few cells wide ([`subgoal_map`]): the **subgoal graph**;
 /// - otherwise **JPS+**.
+///
+/// The subgoal graph is for the 8-connected model without corner cutting: [`pick_for`] gives
+/// JPS+ instead under the others.
 ///
 /// ```
 /// use skyplan_plan::{PlannerId, auto::{MapStats, pick}};
@@ -113,6 +143,8 @@ pub struct AutoPick {
 /// assert_eq!(pick(&scattered, 5_240).planner, PlannerId::Ch);
 /// let city = MapStats { free: 196_725, mean_run: 39.7, ..scattered };
 /// assert_eq!(pick(&city, 5_240).planner, PlannerId::JpsPlus);
+/// let maze = MapStats { free: 209_242, mean_run: 7.7, ..scattered };
+/// assert_eq!(pick(&maze, 1_000).planner, PlannerId::Subgoal);
 /// ```
 pub fn pick(stats: &MapStats, queries: u64) -> AutoPick {
     let corridors = stats.mean_run <= CH_MAX_RUN;
@@ -137,6 +169,14 @@ pub fn pick(stats: &MapStats, queries: u64) -> AutoPick {
                 stats.mean_run
             ),
         )
+    } else if subgoal_map(stats) {
+        (
+            PlannerId::Subgoal,
+            format!(
+                "corridors a few cells wide (mean free run {:.1} cells, in ({CH_MAX_RUN}, {SUBGOAL_MAX_RUN}]) on a large map ({} free cells ≥ {SUBGOAL_MIN_FREE}) and {queries} queries ≥ {JPS_PLUS_QUERIES}: the subgoal graph pays for itself",
+                stats.mean_run, stats.free
+            ),
+        )
     } else {
         let also = if corridors {
             format!(", < {CH_QUERIES} for a contraction hierarchy")
@@ -157,6 +197,30 @@ pub fn pick(stats: &MapStats, queries: u64) -> AutoPick {
         queries,
         why,
     }
+}
+
+/// [`pick`] for the move model `model`: the subgoal graph is defined for the 8-connected model
+/// without corner cutting, so under the other two its pick becomes JPS+ (said in `why`).
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick_for}};
+/// use skyplan_search::MoveModel;
+/// let maze = MapStats { cells: 262_144, free: 209_242, mean_run: 7.7 };
+/// assert_eq!(pick_for(&maze, 1_000, MoveModel::Octile).planner, PlannerId::Subgoal);
+/// let cutting = pick_for(&maze, 1_000, MoveModel::OctileCornerCutting);
+/// assert_eq!(cutting.planner, PlannerId::JpsPlus);
+/// assert!(cutting.why.ends_with("JPS+ instead"));
+/// ```
+pub fn pick_for(stats: &MapStats, queries: u64, model: MoveModel) -> AutoPick {
+    let mut rule = pick(stats, queries);
+    if rule.planner == PlannerId::Subgoal && model != MoveModel::Octile {
+        rule.planner = PlannerId::JpsPlus;
+        rule.why = format!(
+            "{}, but it needs 8-connected moves without corner cutting: JPS+ instead",
+            rule.why
+        );
+    }
+    rule
 }
 
 /// The pick when a contraction hierarchy is at hand with no build to pay (loaded from a file):
@@ -240,15 +304,15 @@ mod tests {
 
     /// The generated MovingAI-shaped mazes (`skyplan map maze`, 512 × 512, seed 1) and what
     /// `auto` picks for 1,000 queries there: measured fastest including preprocessing
-    /// (docs/BENCHMARKS.md, "Generated mazes"): CH on 1- and 2-cell corridors, JPS+ on 4 and 8
-    /// (where CH's 4–12 s build pays only after ≈ 13,000 queries or never).
+    /// (docs/BENCHMARKS.md, "Generated mazes"): CH on 1- and 2-cell corridors, the subgoal graph
+    /// on 4, JPS+ on 8 (where CH's 4–12 s build pays only after ≈ 13,000 queries or never).
     #[test]
     fn on_generated_mazes_auto_picks_what_was_measured_fastest_for_1000_queries() {
         use skyplan_map::maze::{MazeSpec, generate};
         for (corridor_cells, expected) in [
             (1, PlannerId::Ch),
             (2, PlannerId::Ch),
-            (4, PlannerId::JpsPlus),
+            (4, PlannerId::Subgoal),
             (8, PlannerId::JpsPlus),
         ] {
             let spec = MazeSpec {

@@ -64,7 +64,7 @@ impl<'g> CellSearch<'g> {
     ) -> Result<Self, PlanFailure> {
         let t = std::time::Instant::now();
         let auto = (planner == PlannerId::Auto)
-            .then(|| crate::auto::pick(&crate::auto::MapStats::of(grid), queries));
+            .then(|| crate::auto::pick_for(&crate::auto::MapStats::of(grid), queries, model));
         let planner = auto.as_ref().map_or(planner, |p| p.planner);
         let Some(cells) = planner.algorithm().cells() else {
             return Err(PlanFailure::bad_request(format!(

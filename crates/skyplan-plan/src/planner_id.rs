@@ -153,10 +153,14 @@ planners! {
         "JPS+: JPS with every scan precomputed per grid; pays off over many queries";
     /// Contraction hierarchy over the grid graph.
     Ch => "ch", "CH", 2, Exact, AnyGrid, [GridPath, TimeLimit], "the contraction hierarchy per grid and move model", &a::HierarchyCells,
-        "contraction hierarchy: exact, shortcuts precomputed per grid; fastest on random obstacles and mazes";
-    /// The fastest exact grid planner for the map and the number of queries (JPS, JPS+ or CH).
-    Auto => "auto", "auto", 2, Exact, AnyGrid, [GridPath, TimeLimit], "what the planner it picks keeps (the JPS+ table, the contraction hierarchy), and the map's statistics", &a::AutoCells,
-        "the fastest exact grid planner for the map and the number of queries: JPS, JPS+ or CH, from measured map statistics";
+        "contraction hierarchy: exact, shortcuts precomputed per grid; fastest on random obstacles and 1–2-cell mazes";
+    /// Simple subgoal graph with a contraction hierarchy over it.
+    Subgoal => "subgoal", "subgoal graph", 2, Exact, AnyGrid, [GridPath, TimeLimit], "the subgoal graph and its hierarchy per grid", &a::SubgoalCells,
+        "subgoal graph: exact, a hierarchy over the obstacles' convex corners per grid; fastest on mazes with corridors a few cells wide";
+    /// The fastest exact grid planner for the map and the number of queries (JPS, JPS+, CH or
+    /// the subgoal graph).
+    Auto => "auto", "auto", 2, Exact, AnyGrid, [GridPath, TimeLimit], "what the planner it picks keeps (the JPS+ table, the contraction hierarchy, the subgoal graph), and the map's statistics", &a::AutoCells,
+        "the fastest exact grid planner for the map and the number of queries: JPS, JPS+, CH or the subgoal graph, from measured map statistics";
     /// A\* with the octile (or Manhattan) heuristic.
     Astar => "astar", "A*", 2, Exact, AnyGrid, [GridPath], "", &OnlineCells(G::AStar),
         "A* with the octile (8-connected) or Manhattan (4-connected) heuristic";

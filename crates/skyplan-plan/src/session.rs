@@ -19,7 +19,7 @@ use skyplan_map::nofly::{Zone, ZoneShape};
 use skyplan_mission::Mission;
 use skyplan_search::ch_file::ChFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
-use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel};
+use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel, SubgoalError, SubgoalGraph};
 use skyplan_world3::{Aabb, BoxWorld3, Prism, WorldSpec};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -166,6 +166,8 @@ pub struct Session {
     jps_plus: Vec<Arc<JpsPlusTable>>,
     /// Contraction hierarchies kept across requests (built on first use per grid and model).
     ch: Vec<Arc<ContractionHierarchy>>,
+    /// Subgoal graphs kept across requests (built on first use per grid).
+    subgoal: Vec<Arc<SubgoalGraph>>,
     /// When long preprocessing (a contraction hierarchy) must give up, if ever.
     deadline: Option<Instant>,
     /// `auto`'s statistics per grid and the `auto` queries on it so far.
@@ -186,6 +188,7 @@ impl Session {
             workspace: Workspace::default(),
             jps_plus: Vec::new(),
             ch: Vec::new(),
+            subgoal: Vec::new(),
             deadline: None,
             auto: Vec::new(),
         }
@@ -389,6 +392,39 @@ impl Session {
         Ok((ch, Some(us)))
     }
 
+    /// The subgoal graph of `grid` (8-connected, no corner cutting): kept from an earlier
+    /// request, or built now within `limit` and the session's deadline (then also the build
+    /// time in microseconds).
+    pub(crate) fn subgoal_graph(
+        &mut self,
+        grid: &Arc<Grid2>,
+        limit: Option<Duration>,
+    ) -> Result<(Arc<SubgoalGraph>, Option<u64>), PlanFailure> {
+        if let Some(g) = self.subgoal.iter().find(|g| Arc::ptr_eq(g.grid(), grid)) {
+            return Ok((Arc::clone(g), None));
+        }
+        let t0 = Instant::now();
+        let deadline = match (self.deadline, limit.map(|l| t0 + l)) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let graph = SubgoalGraph::build_until(Arc::clone(grid), MoveModel::Octile, deadline)
+            .map_err(|e| match e {
+                SubgoalError::Deadline { .. } => PlanFailure::new(
+                    crate::FailureKind::Timeout,
+                    format!("planner subgoal: {e}: its preprocessing takes long on open maps; jps-plus or jps answer at once"),
+                ),
+                other => PlanFailure::bad_request(format!("planner subgoal: {other}")),
+            })?;
+        let graph = Arc::new(graph);
+        let us = micros(t0.elapsed());
+        if self.subgoal.len() >= CACHE_ENTRIES {
+            self.subgoal.remove(0);
+        }
+        self.subgoal.push(Arc::clone(&graph));
+        Ok((graph, Some(us)))
+    }
+
     /// Writes the contraction hierarchy for `request`'s grid and move model (built unless the
     /// session has it, within the request's `time_limit_ms` and the session's deadline) to
     /// `out` as a hierarchy file ([`skyplan_search::ch_file`]), for [`Session::load_ch`] in a
@@ -454,7 +490,7 @@ impl Session {
         let (_, stats, queries) = &mut self.auto[at];
         *queries += 1;
         let (stats, queries) = (*stats, *queries);
-        let mut rule = crate::auto::pick(&stats, queries);
+        let mut rule = crate::auto::pick_for(&stats, queries, model);
         // A hierarchy the memory limit would refuse: JPS+ (8 bytes per cell) instead.
         let ch_bytes = stats.cells.saturating_mul(
             PlannerId::Ch
@@ -478,12 +514,18 @@ impl Session {
         // What the rule picks (kept preprocessing is reused by it), unless something faster is
         // kept already: a contraction hierarchy on corridors, else a JPS+ table.
         let corridors = stats.mean_run <= crate::auto::CH_MAX_RUN;
-        if rule.planner == PlannerId::Ch {
+        if matches!(rule.planner, PlannerId::Ch | PlannerId::Subgoal) {
             return rule;
         }
         if corridors && (self.ch.iter()).any(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid))
         {
             return kept(PlannerId::Ch, "the contraction hierarchy");
+        }
+        if crate::auto::subgoal_map(&stats)
+            && model == MoveModel::Octile
+            && (self.subgoal.iter()).any(|g| Arc::ptr_eq(g.grid(), grid))
+        {
+            return kept(PlannerId::Subgoal, "the subgoal graph");
         }
         if rule.planner == PlannerId::JpsPlus {
             return rule;

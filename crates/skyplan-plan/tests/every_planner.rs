@@ -351,6 +351,20 @@ fn ch_preprocessing_stops_at_its_time_limit_and_only_ch_and_3d_planners_take_one
         "{}",
         failure.message
     );
+    // The subgoal graph's floods cover the open city for seconds: 1 ms stops them too.
+    let failure = Session::new(World::fcnd_city())
+        .plan(&PlanRequest {
+            planner: Some(PlannerId::Subgoal),
+            time_limit_ms: Some(1),
+            ..PlanRequest::default()
+        })
+        .unwrap_err();
+    assert_eq!(failure.kind, FailureKind::Timeout, "{}", failure.message);
+    assert!(
+        failure.message.starts_with("planner subgoal: "),
+        "{}",
+        failure.message
+    );
     // A small random map contracts well within a generous limit.
     let small = World::random_within(40, 40, 0.2, 3, &Default::default()).unwrap();
     let (start, goal) = small.default_endpoints_ne();
@@ -376,7 +390,7 @@ fn ch_preprocessing_stops_at_its_time_limit_and_only_ch_and_3d_planners_take_one
         refused
             .message
             .starts_with("time_limit_ms is not used by planner jps")
-            && refused.message.contains("(ch, auto, prm, "),
+            && refused.message.contains("(ch, subgoal, auto, prm, "),
         "{}",
         refused.message
     );

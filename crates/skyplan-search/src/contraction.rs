@@ -235,6 +235,38 @@ impl ContractionHierarchy {
         Ok(b.finish(grid, model))
     }
 
+    /// A hierarchy over an undirected graph whose nodes stand on cells of `grid`
+    /// (`node_cells`, grid cell indices, increasing) with `edges` `(a, b, cost)` between node
+    /// numbers, each pair once: the subgoal graph's. Its unpacked paths are chains of nodes, not
+    /// of neighbouring cells, so it is searched through [`Self::meet`] and [`Self::chain`], not
+    /// [`Self::search`].
+    pub(crate) fn build_graph(
+        grid: Arc<Grid2>,
+        model: MoveModel,
+        node_cells: Vec<u32>,
+        edges: &[(u32, u32, u64)],
+        deadline: Option<std::time::Instant>,
+    ) -> Result<Self, ContractionError> {
+        let mut b = Builder::with_nodes(grid.len(), node_cells);
+        for &(u, w, cost) in edges {
+            b.add_edge(u, w, cost, NONE, NONE, NONE);
+        }
+        b.contract_all(CORE_DEGREE, deadline)?;
+        Ok(b.finish(grid, model))
+    }
+
+    /// The rank of a grid cell index (`NONE` when the cell is no node).
+    #[inline]
+    pub(crate) fn rank_of(&self, cell_index: usize) -> u32 {
+        self.rank_of_cell[cell_index]
+    }
+
+    /// The grid cell index of a rank.
+    #[inline]
+    pub(crate) fn cell_of(&self, rank: u32) -> u32 {
+        self.cell_of_rank[rank as usize]
+    }
+
     /// [`ContractionHierarchy::build`] with another core threshold (tests force large cores).
     #[cfg(test)]
     fn build_with_core(grid: Arc<Grid2>, model: MoveModel, core_degree: usize) -> Self {
@@ -286,29 +318,11 @@ impl ContractionHierarchy {
                 any_angle_cells: None,
             });
         }
-        let (meet, expansions) = self.meet(query, s, t);
+        let (meet, expansions) = self.meet(query, &[(s, 0)], &[(t, 0)]);
         let Some(meet) = meet else {
             return Err(SearchError::Unreachable { expansions });
         };
-        // Edges start → meet (reversed walk from meet), then meet → goal.
-        let mut up: Vec<u32> = Vec::new();
-        let mut v = meet;
-        while v != s {
-            let e = query.parent[0][v as usize];
-            up.push(e);
-            v = other(&self.edges[e as usize], v);
-        }
-        let mut ranks = Vec::with_capacity(64);
-        ranks.push(s);
-        let mut at = s;
-        for &e in up.iter().rev() {
-            at = self.unpack(query, at, e, &mut ranks);
-        }
-        let mut v = meet;
-        while v != t {
-            let e = query.parent[1][v as usize];
-            v = self.unpack(query, v, e, &mut ranks);
-        }
+        let ranks = self.chain(query, meet);
         let cols = grid.cols();
         let mut cells = Vec::with_capacity(ranks.len());
         let (mut straight, mut diagonal) = (0u64, 0u64);
@@ -380,9 +394,46 @@ impl ContractionHierarchy {
         end
     }
 
-    /// Bidirectional upward Dijkstra: the meeting rank of a shortest path (if any) and the
-    /// nodes settled.
-    fn meet(&self, q: &mut ChQuery, s: u32, t: u32) -> (Option<u32>, u64) {
+    /// The ranks of the shortest path through `meet` found by the last [`Self::meet`] with
+    /// `q`: from the forward search's root to the backward search's, shortcuts unpacked.
+    pub(crate) fn chain(&self, q: &mut ChQuery, meet: u32) -> Vec<u32> {
+        // Edges root → meet (a reversed walk from meet), then meet → root.
+        let mut up: Vec<u32> = Vec::new();
+        let mut v = meet;
+        loop {
+            let e = q.parent[0][v as usize];
+            if e == NONE {
+                break;
+            }
+            up.push(e);
+            v = other(&self.edges[e as usize], v);
+        }
+        let mut ranks = Vec::with_capacity(64);
+        ranks.push(v);
+        let mut at = v;
+        for &e in up.iter().rev() {
+            at = self.unpack(q, at, e, &mut ranks);
+        }
+        let mut v = meet;
+        loop {
+            let e = q.parent[1][v as usize];
+            if e == NONE {
+                break;
+            }
+            v = self.unpack(q, v, e, &mut ranks);
+        }
+        ranks
+    }
+
+    /// Bidirectional upward Dijkstra from several `sources` and `targets` (ranks with their
+    /// initial distances, as if a super-source and a super-target were joined to them): the
+    /// meeting rank of a shortest path (if any) and the nodes settled.
+    pub(crate) fn meet(
+        &self,
+        q: &mut ChQuery,
+        sources: &[(u32, u64)],
+        targets: &[(u32, u64)],
+    ) -> (Option<u32>, u64) {
         let n = self.cell_of_rank.len();
         for d in 0..2 {
             if q.dist[d].len() != n {
@@ -399,11 +450,16 @@ impl ContractionHierarchy {
         }
         q.now += 1;
         let now = q.now;
-        for (d, root) in [(0, s), (1, t)] {
-            q.dist[d][root as usize] = 0;
-            q.parent[d][root as usize] = NONE;
-            q.stamp[d][root as usize] = now;
-            q.heap[d].push(Reverse((0, root)));
+        for (d, roots) in [(0, sources), (1, targets)] {
+            for &(root, d0) in roots {
+                let r = root as usize;
+                if q.stamp[d][r] != now || d0 < q.dist[d][r] {
+                    q.dist[d][r] = d0;
+                    q.parent[d][r] = NONE;
+                    q.stamp[d][r] = now;
+                    q.heap[d].push(Reverse((d0, root)));
+                }
+            }
         }
         let mut best = u64::MAX;
         let mut meet = None;
@@ -490,18 +546,14 @@ struct Witness {
 }
 
 impl Builder {
-    fn new(grid: &Grid2, model: MoveModel) -> Self {
-        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
-        let mut node_of_cell = vec![NONE; grid.len()];
-        let mut cell_of_node = Vec::new();
-        for (i, node) in node_of_cell.iter_mut().enumerate() {
-            if !grid.is_blocked(grid.cell(i)) {
-                *node = cell_of_node.len() as u32;
-                cell_of_node.push(i as u32);
-            }
+    /// No edges yet: one node per entry of `cell_of_node` (grid cell indices, increasing).
+    fn with_nodes(cells: usize, cell_of_node: Vec<u32>) -> Self {
+        let mut node_of_cell = vec![NONE; cells];
+        for (node, &i) in cell_of_node.iter().enumerate() {
+            node_of_cell[i as usize] = node as u32;
         }
         let n = cell_of_node.len();
-        let mut b = Self {
+        Self {
             adj: vec![Vec::with_capacity(8); n],
             edges: Vec::with_capacity(n * 8),
             cost: Vec::with_capacity(n * 8),
@@ -519,7 +571,14 @@ impl Builder {
                 heap: BinaryHeap::new(),
             },
             shortcuts: Vec::new(),
-        };
+        }
+    }
+
+    fn new(grid: &Grid2, model: MoveModel) -> Self {
+        let (rows, cols) = (i64::from(grid.rows()), i64::from(grid.cols()));
+        let free = (0..grid.len()).filter(|&i| !grid.is_blocked(grid.cell(i)));
+        let mut b = Self::with_nodes(grid.len(), free.map(|i| i as u32).collect());
+        let n = b.cell_of_node.len();
         let moves: &[(i64, i64)] = if model.has_diagonals() {
             &[(0, 1), (1, 0), (1, 1), (1, -1)]
         } else {

@@ -38,6 +38,7 @@ mod nodes;
 mod open;
 pub mod oracle;
 mod queue;
+mod subgoal;
 pub mod table_file;
 mod theta;
 
@@ -51,6 +52,7 @@ pub use contraction::{
 pub use jps::BlockJps;
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 pub use open::{OpenEntry, OpenList};
+pub use subgoal::{SubgoalError, SubgoalGraph, SubgoalQuery};
 
 use skyplan_cspace::{Cell, Grid2, OutsideGrid};
 use std::f64::consts::SQRT_2;
