@@ -72,12 +72,7 @@ fn a_3d_route_is_flown_at_its_altitudes() {
 fn a_goal_on_a_roof_is_landed_on_the_roof() {
     let (code, text) = fly("--planner voxel --goal-ne 200,330 --goal-alt-m 66");
     assert_eq!(code, Some(0), "{text}");
-    let end_alt: f64 = (text.lines())
-        .find_map(|l| l.strip_prefix("vehicle    at N "))
-        .and_then(|l| l.split(", ").nth(2))
-        .and_then(|a| a.strip_suffix(" m above home"))
-        .and_then(|a| a.parse().ok())
-        .unwrap_or_else(|| panic!("no final altitude in {text}"));
+    let end_alt = common::final_alt_m(&text);
     assert!(
         (60.0..60.2).contains(&end_alt),
         "landed at {end_alt} m: {text}"

@@ -776,12 +776,7 @@ fn a_separate_simulator_stands_its_vehicle_on_the_terrain() {
         assert!(stdout.contains(needle), "{needle:?} in:\n{stdout}");
     }
     // It landed on the ground at the goal, 105 m below where it took off.
-    let end: f64 = (stdout.lines())
-        .find_map(|l| l.strip_prefix("vehicle    at N "))
-        .and_then(|l| l.split(", ").nth(2))
-        .and_then(|a| a.strip_suffix(" m above home"))
-        .and_then(|a| a.parse().ok())
-        .unwrap_or_else(|| panic!("no final altitude:\n{stdout}"));
+    let end = common::final_alt_m(&stdout);
     assert!(
         (end - 29.1).abs() < 1.0,
         "landed at {end} m above the map's home"

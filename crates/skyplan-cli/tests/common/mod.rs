@@ -105,6 +105,17 @@ pub fn checked_path_3d(
     path
 }
 
+/// The altitude above home, metres, where `fly` says the vehicle ended: its summary line
+/// `vehicle    at N …, E …, A m above home`.
+pub fn final_alt_m(text: &str) -> f64 {
+    (text.lines())
+        .find_map(|l| l.strip_prefix("vehicle    at N "))
+        .and_then(|l| l.split(", ").nth(2))
+        .and_then(|a| a.strip_suffix(" m above home"))
+        .and_then(|a| a.parse().ok())
+        .unwrap_or_else(|| panic!("no final altitude in:\n{text}"))
+}
+
 /// The words of a command line, split at white space (no argument in these tests holds a space).
 pub fn words(line: &str) -> Vec<&str> {
     line.split_whitespace().collect()
