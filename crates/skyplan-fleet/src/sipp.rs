@@ -15,7 +15,10 @@
 use skyplan_cspace::{Cell, Grid2};
 // The open list's entries: smallest f first, then the later arrival (deeper), then the older state.
 use skyplan_search::OpenEntry;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::BinaryHeap;
+// foldhash: the states and cells are looked up for every move the search tries; SipHash made
+// the lookups a tenth of a crowded fleet's time.
+use foldhash::{HashMap, HashMapExt};
 
 /// Safe intervals start this long after a blocked one ends and end this long before the next
 /// begins, seconds: blocked intervals are closed, safe ones closed too, and never touch.

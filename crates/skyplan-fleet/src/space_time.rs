@@ -20,6 +20,7 @@
 
 use crate::flight::FlightRequest;
 use crate::sipp::{Interval, SippError, SippQuery, TimedCell, sipp};
+use foldhash::{HashMap, HashMapExt};
 use skyplan_airspace::{
     AirspaceError, FlightVolumes, IntentRef, IntentState, OperationalIntent, Timestamp, Timing,
     Volume4D, volumes_from_plan, volumes_hugging_path,
@@ -29,7 +30,6 @@ use skyplan_cspace::{Cell, Grid2};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_map::nofly::Zone;
 use skyplan_plan::Plan;
-use std::collections::HashMap;
 
 /// Longest stretch of time in one volume of a space-time route, seconds.
 pub const STRETCH_S: f64 = 5.0;
@@ -402,9 +402,9 @@ impl Obstacles {
     }
 }
 
-/// Most stored intents a [`SpaceTimeCache::new`] keeps (about 40 kB each on the bundled city);
+/// Most stored intents a [`SpaceTimeCache::new`] keeps (about 100 kB each on the bundled city);
 /// past it, those named longest ago go, down to half.
-pub const CACHE_INTENTS: usize = 4096;
+pub const CACHE_INTENTS: usize = 2048;
 
 /// A stored volume as the cache keeps it: its band (W84 metres) and window (Unix ms).
 #[derive(Debug, Clone, Copy)]
@@ -451,11 +451,13 @@ pub struct SpaceTimeCache {
     by_row: HashMap<StoredRow, u32>,
     slots: Vec<Option<CachedIntent>>,
     free: Vec<u32>,
-    /// Per slot: the request that last named it, and the last in which it binds.
+    /// Per slot: the request that last named it, the last in which it binds, and whether
+    /// then every volume of it met the flight's band.
     named: Vec<u64>,
     binding: Vec<u64>,
-    /// Per grid cell (row-major index): the (slot, volume) pairs that block it.
-    cells: HashMap<u32, Vec<(u32, u32)>>,
+    in_band: Vec<bool>,
+    /// Per grid cell (row-major index): the volumes that block it, in order of their starts.
+    cells: HashMap<u32, Vec<CellEntry>>,
     request: u64,
 }
 
@@ -482,6 +484,7 @@ impl SpaceTimeCache {
             free: Vec::new(),
             named: Vec::new(),
             binding: Vec::new(),
+            in_band: Vec::new(),
             cells: HashMap::new(),
             request: 0,
         }
@@ -568,13 +571,14 @@ impl SpaceTimeCache {
                 self.slots.push(None);
                 self.named.push(0);
                 self.binding.push(0);
+                self.in_band.push(false);
                 (self.slots.len() - 1) as u32
             }
         };
         let volumes = std::mem::take(&mut intent.volumes);
         let mut kept = Vec::with_capacity(volumes.len());
-        let mut raster: Vec<(u32, u32)> = Vec::new();
-        for (k, v) in volumes.iter().enumerate() {
+        let mut footprints = Vec::with_capacity(volumes.len());
+        for v in &volumes {
             let mut points = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
             for p in &v.volume.outline_polygon.vertices {
                 let ned = frame.ned_from_lla(Lla {
@@ -590,26 +594,57 @@ impl SpaceTimeCache {
                 start_ms: v.time_start.value.unix_ms(),
                 end_ms: v.time_end.value.unix_ms(),
             });
-            let o = Obstacle::new(
+            footprints.push(Obstacle::new(
                 &points,
                 Interval {
                     start_s: 0.0,
                     end_s: 0.0,
                 },
-            );
-            raster.clear();
-            rasterise(&o, self.reach_m, grid, |index| {
-                raster.push((index, k as u32))
-            });
-            for &(index, k) in &raster {
-                self.cells.entry(index).or_default().push((slot, k));
-            }
+            ));
         }
         self.slots[slot as usize] = Some(CachedIntent {
             row: row.clone(),
             head: intent,
             volumes: kept,
         });
+        // In each cell, the intent's volumes of one band whose windows overlap make one
+        // entry over their windows' union: the union of their grown windows, the same blocked
+        // times (consecutive volumes overlap by the time buffer; a cell near the route is in
+        // two or three of them).
+        let volumes = self.slots[slot as usize]
+            .as_ref()
+            .map_or(&[][..], |c| &c.volumes);
+        let mut open: HashMap<u32, CellEntry> = HashMap::new();
+        let mut done: Vec<(u32, CellEntry)> = Vec::new();
+        for (k, (o, v)) in footprints.iter().zip(volumes).enumerate() {
+            let entry = CellEntry {
+                start_ms: v.start_ms,
+                end_ms: v.end_ms,
+                slot,
+                volume: k as u32,
+            };
+            rasterise(o, self.reach_m, grid, |index| match open.get_mut(&index) {
+                Some(e)
+                    if same_band(&volumes[e.volume as usize], v)
+                        && e.start_ms.max(v.start_ms) <= e.end_ms.min(v.end_ms) =>
+                {
+                    e.start_ms = e.start_ms.min(v.start_ms);
+                    e.end_ms = e.end_ms.max(v.end_ms);
+                }
+                Some(e) => done.push((index, std::mem::replace(e, entry))),
+                None => {
+                    open.insert(index, entry);
+                }
+            });
+        }
+        done.extend(open);
+        // Each cell's list kept in order of the entries' starts: the search's timelines then
+        // come sorted (and merging them costs no sort).
+        for (index, entry) in done {
+            let list = self.cells.entry(index).or_default();
+            let at = list.partition_point(|e| e.start_ms <= entry.start_ms);
+            list.insert(at, entry);
+        }
         self.named[slot as usize] = self.request;
         self.binding[slot as usize] = 0;
         self.by_row.insert(row, slot);
@@ -618,7 +653,7 @@ impl SpaceTimeCache {
 
     /// Drops the intents not named in `rows`, longest unnamed first, down to `keep`.
     fn evict(&mut self, rows: &[StoredRow], keep: usize) {
-        let current: std::collections::HashSet<&StoredRow> = rows.iter().collect();
+        let current: foldhash::HashSet<&StoredRow> = rows.iter().collect();
         let mut old: Vec<(u64, u32)> = self
             .by_row
             .iter()
@@ -636,13 +671,19 @@ impl SpaceTimeCache {
             self.free.push(s);
         }
         self.cells.retain(|_, list| {
-            list.retain(|(s, _)| !dead[*s as usize]);
+            list.retain(|e| !dead[e.slot as usize]);
             !list.is_empty()
         });
     }
 
-    /// Marks the intents of `rows` this request; those `binds` accepts block the search.
-    fn select(&mut self, rows: &[StoredRow], mut binds: impl FnMut(&OperationalIntent) -> bool) {
+    /// Marks the intents of `rows` this request; those `binds` accepts block the search, with
+    /// their volumes that meet `band` (W84 metres).
+    fn select(
+        &mut self,
+        rows: &[StoredRow],
+        band: (f64, f64),
+        mut binds: impl FnMut(&OperationalIntent) -> bool,
+    ) {
         for r in rows {
             // A row deleted between the two reads is not kept: nothing to block.
             let Some(&slot) = self.by_row.get(r) else {
@@ -654,6 +695,7 @@ impl SpaceTimeCache {
             self.named[slot as usize] = self.request;
             if binds(&c.head) {
                 self.binding[slot as usize] = self.request;
+                self.in_band[slot as usize] = c.volumes.iter().all(|v| meets(v, band));
             }
         }
     }
@@ -672,23 +714,45 @@ impl SpaceTimeCache {
         let Some(list) = self.cells.get(&index) else {
             return;
         };
-        for &(slot, k) in list {
-            if self.binding[slot as usize] != self.request {
+        for e in list {
+            let slot = e.slot as usize;
+            if self.binding[slot] != self.request {
                 continue;
             }
-            let Some(c) = &self.slots[slot as usize] else {
-                continue;
-            };
-            let v = &c.volumes[k as usize];
-            if v.upper_m < band.0 || v.lower_m > band.1 {
-                continue;
+            if !self.in_band[slot] {
+                let Some(c) = &self.slots[slot] else {
+                    continue;
+                };
+                if !meets(&c.volumes[e.volume as usize], band) {
+                    continue;
+                }
             }
             out.push(Interval {
-                start_s: (v.start_ms - t0_ms) as f64 / 1000.0 - pad_s,
-                end_s: (v.end_ms - t0_ms) as f64 / 1000.0 + pad_s,
+                start_s: (e.start_ms - t0_ms) as f64 / 1000.0 - pad_s,
+                end_s: (e.end_ms - t0_ms) as f64 / 1000.0 + pad_s,
             });
         }
     }
+}
+
+/// Whether two cached volumes have the same band.
+fn same_band(a: &CachedVolume, b: &CachedVolume) -> bool {
+    a.lower_m.to_bits() == b.lower_m.to_bits() && a.upper_m.to_bits() == b.upper_m.to_bits()
+}
+
+/// Whether a cached volume's band meets `band` (W84 metres).
+fn meets(v: &CachedVolume, band: (f64, f64)) -> bool {
+    !(v.upper_m < band.0 || v.lower_m > band.1)
+}
+
+/// A stored volume that blocks a cell: its window (Unix ms), its intent's slot and its index
+/// among the intent's volumes.
+#[derive(Debug, Clone, Copy)]
+struct CellEntry {
+    start_ms: i64,
+    end_ms: i64,
+    slot: u32,
+    volume: u32,
 }
 
 /// Calls `blocks` with the row-major index of every cell of `grid` whose centre is within
@@ -1006,7 +1070,7 @@ fn space_time_inner(
                 let rows = store.nearby_rows(&read_volumes, later_ms)?;
                 *nearby_count = rows.len();
                 cache.refresh(store, &rows, &frame, grid)?;
-                cache.select(&rows, |head| {
+                cache.select(&rows, band, |head| {
                     let binds = request.rule.binds(request.priority, head);
                     if binds {
                         binding.push(head.reference());
