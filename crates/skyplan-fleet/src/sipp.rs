@@ -184,15 +184,70 @@ struct Node {
 
 const NONE: u32 = u32::MAX;
 
-/// Each reached cell's safe intervals, asked of the timeline once.
-#[derive(Default)]
-struct SafeCache(HashMap<Cell, Vec<Interval>>);
+/// Grids of up to this many cells index the reached cells in an array (4 bytes a cell,
+/// zeroed lazily by the allocator); larger ones in a hash map.
+const DENSE_CELLS: usize = 1 << 22;
+
+/// Each reached cell's safe intervals, asked of the timeline once, one after another in one
+/// arena, with the search's best state of each (cell, safe interval) beside them.
+struct SafeCache {
+    /// Per cell (row-major index): where its intervals start in `intervals`, plus one (0:
+    /// not asked yet).
+    dense: Vec<u32>,
+    sparse: HashMap<u32, u32>,
+    intervals: Vec<Interval>,
+    /// The best state of each interval, or [`NONE`].
+    best: Vec<u32>,
+    /// Per cell, the number of its intervals: at `intervals[start - 1]`'s slot of `counts`.
+    counts: Vec<u32>,
+}
 
 impl SafeCache {
-    fn of(&mut self, cell: Cell, timeline: &mut dyn Timeline) -> &[Interval] {
-        self.0
-            .entry(cell)
-            .or_insert_with(|| safe_intervals(&merge_intervals(timeline.blocked(cell))))
+    fn new(grid: &Grid2) -> Self {
+        Self {
+            dense: if grid.len() <= DENSE_CELLS {
+                vec![0; grid.len()]
+            } else {
+                Vec::new()
+            },
+            sparse: HashMap::new(),
+            intervals: Vec::new(),
+            best: Vec::new(),
+            counts: Vec::new(),
+        }
+    }
+
+    /// Where the safe intervals of `cell` are in the arena: `(start, count)`.
+    fn span(&mut self, grid: &Grid2, cell: Cell, timeline: &mut dyn Timeline) -> (usize, usize) {
+        let index = grid.index(cell);
+        let known = if self.dense.is_empty() {
+            self.sparse.get(&(index as u32)).copied().unwrap_or(0)
+        } else {
+            self.dense[index]
+        };
+        if known != 0 {
+            let start = known as usize - 1;
+            return (start, self.counts[start] as usize);
+        }
+        let safe = safe_intervals(&merge_intervals(timeline.blocked(cell)));
+        let start = self.intervals.len();
+        self.intervals.extend_from_slice(&safe);
+        self.best.resize(self.intervals.len(), NONE);
+        self.counts.resize(self.intervals.len(), 0);
+        self.counts[start] = safe.len() as u32;
+        let at = start as u32 + 1;
+        if self.dense.is_empty() {
+            self.sparse.insert(index as u32, at);
+        } else {
+            self.dense[index] = at;
+        }
+        (start, safe.len())
+    }
+
+    /// The safe intervals of `cell`.
+    fn of(&mut self, grid: &Grid2, cell: Cell, timeline: &mut dyn Timeline) -> &[Interval] {
+        let (start, count) = self.span(grid, cell, timeline);
+        &self.intervals[start..start + count]
     }
 }
 
@@ -227,7 +282,7 @@ pub fn sipp(
             return Err(SippError::Endpoint { which, cell });
         }
     }
-    let mut safe = SafeCache::default();
+    let mut safe = SafeCache::new(grid);
     let h = |c: Cell| {
         let dr = f64::from(c.row.abs_diff(q.goal.row));
         let dc = f64::from(c.col.abs_diff(q.goal.col));
@@ -239,9 +294,10 @@ pub fn sipp(
         octile * q.cell_s
     };
     let mut nodes: Vec<Node> = Vec::new();
-    let mut best: HashMap<(Cell, u32), u32> = HashMap::new();
     let mut open = BinaryHeap::new();
-    for (k, iv) in safe.of(q.start, timeline).iter().enumerate() {
+    let (first, count) = safe.span(grid, q.start, timeline);
+    for k in 0..count {
+        let iv = safe.intervals[first + k];
         if iv.end_s < 0.0 || iv.start_s > q.latest_departure_s {
             continue;
         }
@@ -255,7 +311,7 @@ pub fn sipp(
             parent: NONE,
             stale: false,
         });
-        best.insert((q.start, k as u32), id);
+        safe.best[first + k] = id;
         open.push(OpenEntry {
             f: g + h(q.start),
             g,
@@ -287,14 +343,14 @@ pub fn sipp(
         if cell == q.goal {
             let mut cells = walk_back(&nodes, node);
             ground_waits(&mut cells, q.latest_departure_s, &mut |c| {
-                safe.of(c, timeline).to_vec()
+                safe.of(grid, c, timeline).to_vec()
             });
             return Ok(SippPath { cells, expansions });
         }
         if expansions > q.max_expansions {
             return Err(SippError::Budget(q.max_expansions));
         }
-        let here_end = safe.of(cell, timeline)[interval as usize].end_s;
+        let here_end = safe.of(grid, cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
         for &(dr, dc, len) in moves {
             let (nr, nc) = (r + i64::from(dr), c + i64::from(dc));
@@ -306,7 +362,9 @@ pub fn sipp(
                 continue;
             };
             let tau = len * q.cell_s;
-            for (k, iv) in safe.of(next, timeline).iter().enumerate() {
+            let (first, count) = safe.span(grid, next, timeline);
+            for k in 0..count {
+                let iv = safe.intervals[first + k];
                 let leave = g.max(iv.start_s);
                 let arrive = leave + tau;
                 if iv.start_s > here_end {
@@ -315,10 +373,8 @@ pub fn sipp(
                 if arrive > here_end.min(iv.end_s) || arrive > q.horizon_s {
                     continue;
                 }
-                let key = (next, k as u32);
-                if let Some(&id) = best.get(&key)
-                    && nodes[id as usize].arrive_s <= arrive
-                {
+                let known = safe.best[first + k];
+                if known != NONE && nodes[known as usize].arrive_s <= arrive {
                     continue;
                 }
                 let id = nodes.len() as u32;
@@ -330,9 +386,10 @@ pub fn sipp(
                     parent: node,
                     stale: false,
                 });
-                if let Some(old) = best.insert(key, id) {
-                    nodes[old as usize].stale = true;
+                if known != NONE {
+                    nodes[known as usize].stale = true;
                 }
+                safe.best[first + k] = id;
                 open.push(OpenEntry {
                     f: arrive + h(next),
                     g: arrive,
