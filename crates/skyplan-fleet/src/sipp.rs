@@ -13,8 +13,7 @@
 //! arrival over all routes on the grid's moves and all waits.
 
 use skyplan_cspace::{Cell, Grid2};
-// The open list's entries: smallest f first, then the later arrival (deeper), then the older state.
-use skyplan_search::OpenEntry;
+use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 // foldhash: the states and cells are looked up for every move the search tries; SipHash made
 // the lookups a tenth of a crowded fleet's time.
@@ -184,6 +183,33 @@ struct Node {
 
 const NONE: u32 = u32::MAX;
 
+/// An open list's entry in the order of [`skyplan_search::OpenEntry`] — smallest `f` first,
+/// then the later arrival (deeper), then the older state — as integers (in a
+/// [`Reverse`]): each time as [`f64::total_cmp`] orders it, the arrival's complemented.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Queued {
+    f: u64,
+    later_first: u64,
+    node: u32,
+}
+
+impl Queued {
+    fn new(f: f64, g: f64, node: u32) -> Reverse<Self> {
+        Reverse(Self {
+            f: total_key(f),
+            later_first: !total_key(g),
+            node,
+        })
+    }
+}
+
+/// `x` as an unsigned integer in [`f64::total_cmp`]'s order.
+fn total_key(x: f64) -> u64 {
+    let bits = x.to_bits() as i64;
+    let key = bits ^ ((((bits >> 63) as u64) >> 1) as i64);
+    (key as u64) ^ (1 << 63)
+}
+
 /// Grids of up to this many cells index the reached cells in an array (4 bytes a cell,
 /// zeroed lazily by the allocator); larger ones in a hash map.
 const DENSE_CELLS: usize = 1 << 22;
@@ -312,11 +338,7 @@ pub fn sipp(
             stale: false,
         });
         safe.best[first + k] = id;
-        open.push(OpenEntry {
-            f: g + h(q.start),
-            g,
-            node: id,
-        });
+        open.push(Queued::new(g + h(q.start), g, id));
     }
     let moves: &[(i32, i32, f64)] = if q.diagonals {
         &[
@@ -334,7 +356,9 @@ pub fn sipp(
     };
     let free = |r: i64, c: i64| grid.is_free_at(r, c);
     let mut expansions = 0;
-    while let Some(OpenEntry { g, node, .. }) = open.pop() {
+    while let Some(Reverse(Queued { node, .. })) = open.pop() {
+        // The entry's arrival, as pushed.
+        let g = nodes[node as usize].arrive_s;
         let (cell, interval) = (nodes[node as usize].cell, nodes[node as usize].interval);
         if nodes[node as usize].stale {
             continue;
@@ -390,11 +414,7 @@ pub fn sipp(
                     nodes[known as usize].stale = true;
                 }
                 safe.best[first + k] = id;
-                open.push(OpenEntry {
-                    f: arrive + h(next),
-                    g: arrive,
-                    node: id,
-                });
+                open.push(Queued::new(arrive + h(next), arrive, id));
             }
         }
     }
@@ -474,6 +494,36 @@ fn walk_back(nodes: &[Node], goal: u32) -> Vec<TimedCell> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The integer keys order entries exactly as the search crate's open list does.
+    #[test]
+    fn the_queue_keys_order_as_the_open_entries() {
+        use rand::{RngExt, SeedableRng};
+        use skyplan_search::OpenEntry;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let values = [0.0, -0.0, 1.0, 2.5, 1e-300, 1e300, -1.0, f64::INFINITY];
+        let pick = |rng: &mut rand_chacha::ChaCha8Rng| {
+            if rng.random_range(0..3) == 0 {
+                values[rng.random_range(0..values.len())]
+            } else {
+                f64::from(rng.random_range(0..20u32)) * 0.25
+            }
+        };
+        for _ in 0..20_000 {
+            let a = OpenEntry {
+                f: pick(&mut rng),
+                g: pick(&mut rng),
+                node: rng.random_range(0..4),
+            };
+            let b = OpenEntry {
+                f: pick(&mut rng),
+                g: pick(&mut rng),
+                node: rng.random_range(0..4),
+            };
+            let (ka, kb) = (Queued::new(a.f, a.g, a.node), Queued::new(b.f, b.g, b.node));
+            assert_eq!(ka.cmp(&kb), a.cmp(&b), "{a:?} {b:?}");
+        }
+    }
 
     #[test]
     fn waits_move_to_the_ground_when_the_window_allows() {
