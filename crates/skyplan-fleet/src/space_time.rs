@@ -457,7 +457,7 @@ pub struct SpaceTimeCache {
     binding: Vec<u64>,
     in_band: Vec<bool>,
     /// Per grid cell (row-major index): the volumes that block it, in order of their starts.
-    cells: HashMap<u32, Vec<CellEntry>>,
+    cells: CellLists,
     request: u64,
 }
 
@@ -485,7 +485,7 @@ impl SpaceTimeCache {
             named: Vec::new(),
             binding: Vec::new(),
             in_band: Vec::new(),
-            cells: HashMap::new(),
+            cells: CellLists::default(),
             request: 0,
         }
     }
@@ -518,6 +518,7 @@ impl SpaceTimeCache {
                 key: Some(key),
                 reach_m,
                 request: self.request,
+                cells: CellLists::for_grid(grid.len()),
                 ..Self::with_capacity(self.capacity)
             };
         }
@@ -641,7 +642,7 @@ impl SpaceTimeCache {
         // Each cell's list kept in order of the entries' starts: the search's timelines then
         // come sorted (and merging them costs no sort).
         for (index, entry) in done {
-            let list = self.cells.entry(index).or_default();
+            let list = self.cells.list_mut(index);
             let at = list.partition_point(|e| e.start_ms <= entry.start_ms);
             list.insert(at, entry);
         }
@@ -670,10 +671,7 @@ impl SpaceTimeCache {
             }
             self.free.push(s);
         }
-        self.cells.retain(|_, list| {
-            list.retain(|e| !dead[e.slot as usize]);
-            !list.is_empty()
-        });
+        self.cells.retain(|e| !dead[e.slot as usize]);
     }
 
     /// Marks the intents of `rows` this request; those `binds` accepts block the search, with
@@ -711,9 +709,7 @@ impl SpaceTimeCache {
         pad_s: f64,
         out: &mut Vec<Interval>,
     ) {
-        let Some(list) = self.cells.get(&index) else {
-            return;
-        };
+        let list = self.cells.list(index);
         for e in list {
             let slot = e.slot as usize;
             if self.binding[slot] != self.request {
@@ -732,6 +728,60 @@ impl SpaceTimeCache {
                 end_s: (e.end_ms - t0_ms) as f64 / 1000.0 + pad_s,
             });
         }
+    }
+}
+
+/// Grids of up to this many cells keep the cache's lists in an array over the grid (24 bytes
+/// a cell); larger ones in a hash map.
+const DENSE_LIST_CELLS: usize = 1 << 20;
+
+/// The cache's entries per grid cell (row-major index).
+#[derive(Debug, Default)]
+struct CellLists {
+    dense: bool,
+    array: Vec<Vec<CellEntry>>,
+    map: HashMap<u32, Vec<CellEntry>>,
+}
+
+impl CellLists {
+    fn for_grid(cells: usize) -> Self {
+        let dense = cells <= DENSE_LIST_CELLS;
+        Self {
+            dense,
+            array: if dense {
+                vec![Vec::new(); cells]
+            } else {
+                Vec::new()
+            },
+            map: HashMap::new(),
+        }
+    }
+
+    fn list(&self, index: u32) -> &[CellEntry] {
+        if self.dense {
+            self.array.get(index as usize).map_or(&[], Vec::as_slice)
+        } else {
+            self.map.get(&index).map_or(&[], Vec::as_slice)
+        }
+    }
+
+    fn list_mut(&mut self, index: u32) -> &mut Vec<CellEntry> {
+        let index = index as usize;
+        if self.dense && index < self.array.len() {
+            &mut self.array[index]
+        } else {
+            self.map.entry(index as u32).or_default()
+        }
+    }
+
+    fn retain(&mut self, keep: impl Fn(&CellEntry) -> bool) {
+        for list in &mut self.array {
+            list.retain(&keep);
+        }
+        self.map.retain(|_, list| {
+            list.retain(&keep);
+            !list.is_empty()
+        });
     }
 }
 
