@@ -402,8 +402,8 @@ impl Obstacles {
     }
 }
 
-/// Most stored intents a [`SpaceTimeCache::new`] keeps (about 100 kB each on the bundled city);
-/// past it, those named longest ago go, down to half.
+/// Most stored intents a [`SpaceTimeCache::new`] keeps (about 100 to 150 kB each on the
+/// bundled city); past it, those named longest ago go, down to half.
 pub const CACHE_INTENTS: usize = 2048;
 
 /// A stored volume as the cache keeps it: its band (W84 metres) and window (Unix ms).
