@@ -134,6 +134,28 @@ pub fn open_url(url: &str) -> Result<Box<dyn IntentStore>, StoreError> {
     }
 }
 
+/// A stored intent's row, named without reading the intent: what a reader caching decoded
+/// intents keys them by. A row is never rewritten (intents are inserted and deleted, never
+/// updated in place) and its number is never given to another, so a row's intent, once read,
+/// stays what it is.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct StoredRow {
+    /// The row's number in the store (SQLite's `seq`, PostgreSQL's `BIGSERIAL`).
+    pub row: i64,
+    /// The intent's id.
+    pub id: String,
+    /// The intent's version.
+    pub version: u64,
+}
+
+/// A stored version column as the intent's `u64`.
+fn version_of(id: &str, version: i64) -> Result<u64, StoreError> {
+    u64::try_from(version).map_err(|_| StoreError::Corrupt {
+        id: id.into(),
+        why: format!("version {version} is negative"),
+    })
+}
+
 /// A store of operational intents. Implementations make [`IntentStore::insert_if_clear`]
 /// atomic across every process that shares the store.
 pub trait IntentStore: Send + Sync {
@@ -160,6 +182,18 @@ pub trait IntentStore: Send + Sync {
         volumes: &[Volume4D],
         later_ms: i64,
     ) -> Result<Vec<OperationalIntent>, StoreError>;
+
+    /// The rows of the intents [`IntentStore::nearby`] would read, in the order they were
+    /// stored, without reading the intents themselves (their ids and versions only).
+    fn nearby_rows(
+        &self,
+        volumes: &[Volume4D],
+        later_ms: i64,
+    ) -> Result<Vec<StoredRow>, StoreError>;
+
+    /// The intents stored in `rows` ([`StoredRow::row`]), each with its row, in the order
+    /// they were stored; a row deleted meanwhile is left out.
+    fn get_rows(&self, rows: &[i64]) -> Result<Vec<(i64, OperationalIntent)>, StoreError>;
 
     /// The intent with this id.
     fn get(&self, id: &str) -> Result<Option<OperationalIntent>, StoreError>;

@@ -8,7 +8,7 @@
 //! (no advisory locks, no `ON CONFLICT`, no PL/pgSQL): `BIGSERIAL`, `unnest` of several
 //! arrays and `= ANY` are understood by CockroachDB as well.
 
-use crate::{Insert, IntentStore, SCHEMA_VERSION, StoreError, index_keys};
+use crate::{Insert, IntentStore, SCHEMA_VERSION, StoreError, StoredRow, index_keys, version_of};
 use postgres::error::SqlState;
 use postgres::{Client, IsolationLevel, NoTls, Statement};
 use skyplan_airspace::{Conflict, OperationalIntent, PriorityRule, Volume4D, conflicts};
@@ -54,6 +54,14 @@ const CANDIDATES: &str = "SELECT i.id, i.body FROM airspace_intents i WHERE i.se
       ON k.cell = q.cell AND k.bucket >= q.b0 AND k.bucket <= q.b1
 ) ORDER BY i.seq";
 
+/// The rows under any of the keys, as [`CANDIDATES`], without their bodies.
+const CANDIDATE_ROWS: &str =
+    "SELECT i.seq, i.id, i.version FROM airspace_intents i WHERE i.seq IN (
+    SELECT k.seq FROM airspace_intent_keys k
+    JOIN unnest($1::BIGINT[], $2::BIGINT[], $3::BIGINT[]) AS q(cell, b0, b1)
+      ON k.cell = q.cell AND k.bucket >= q.b0 AND k.bucket <= q.b1
+) ORDER BY i.seq";
+
 /// Operational intents in a PostgreSQL database (or CockroachDB), shared by every process
 /// that opens the same database. Holds up to [`MAX_CONNECTIONS`] connections; each call takes
 /// one for its duration, and a connection that broke is replaced on the next call.
@@ -80,6 +88,8 @@ struct Conn {
     committing: bool,
     exists: Statement,
     candidates: Statement,
+    candidate_rows: Statement,
+    rows: Statement,
     insert: Statement,
     insert_keys: Statement,
     get: Statement,
@@ -421,6 +431,10 @@ fn prepare(mut client: Client) -> Result<Conn, postgres::Error> {
     Ok(Conn {
         exists: client.prepare("SELECT 1 FROM airspace_intents WHERE id = $1")?,
         candidates: client.prepare(CANDIDATES)?,
+        candidate_rows: client.prepare(CANDIDATE_ROWS)?,
+        rows: client.prepare(
+            "SELECT seq, id, body FROM airspace_intents WHERE seq = ANY($1::BIGINT[]) ORDER BY seq",
+        )?,
         insert: client.prepare(
             "INSERT INTO airspace_intents \
              (id, version, state, priority, owner, time_start_ms, time_end_ms, body) \
@@ -617,6 +631,44 @@ impl IntentStore for PostgresStore {
         self.with_conn(|c| {
             let rows = c.client.query(&c.candidates, &[&cells, &b0, &b1])?;
             Ok(rows_to_intents(rows)?)
+        })
+    }
+
+    fn nearby_rows(
+        &self,
+        volumes: &[Volume4D],
+        later_ms: i64,
+    ) -> Result<Vec<StoredRow>, StoreError> {
+        let keys = index_keys(volumes, later_ms)?;
+        let (cells, b0, b1) = key_arrays(&keys);
+        self.with_conn(|c| {
+            let rows = c.client.query(&c.candidate_rows, &[&cells, &b0, &b1])?;
+            let mut out = Vec::with_capacity(rows.len());
+            for r in &rows {
+                let id: String = r.get(1);
+                let version = version_of(&id, r.get(2))?;
+                out.push(StoredRow {
+                    row: r.get(0),
+                    id,
+                    version,
+                });
+            }
+            Ok(out)
+        })
+    }
+
+    fn get_rows(&self, rows: &[i64]) -> Result<Vec<(i64, OperationalIntent)>, StoreError> {
+        let rows = rows.to_vec();
+        self.with_conn(|c| {
+            let found = c.client.query(&c.rows, &[&rows])?;
+            let mut out = Vec::with_capacity(found.len());
+            for r in &found {
+                out.push((
+                    r.get(0),
+                    read_body(r.get::<_, &str>(1), r.get::<_, &str>(2))?,
+                ));
+            }
+            Ok(out)
         })
     }
 

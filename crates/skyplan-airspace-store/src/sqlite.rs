@@ -1,6 +1,6 @@
 //! [`SqliteStore`]: the store in SQLite.
 
-use crate::{Insert, IntentStore, SCHEMA_VERSION, StoreError, index_keys};
+use crate::{Insert, IntentStore, SCHEMA_VERSION, StoreError, StoredRow, index_keys, version_of};
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
 use skyplan_airspace::{Conflict, OperationalIntent, PriorityRule, Volume4D, conflicts};
 use std::collections::BTreeSet;
@@ -153,6 +153,25 @@ fn read_body(id: &str, body: &str) -> Result<OperationalIntent, StoreError> {
     })
 }
 
+/// The rows of the stored intents whose keys meet `volumes`' (windows widened by
+/// `later_ms`), in the order they were stored.
+fn candidate_rows(
+    conn: &Connection,
+    volumes: &[Volume4D],
+    later_ms: i64,
+) -> Result<BTreeSet<i64>, StoreError> {
+    let keys = index_keys(volumes, later_ms)?;
+    let mut seqs = BTreeSet::new();
+    let mut q =
+        conn.prepare("SELECT seq FROM intent_keys WHERE cell = ?1 AND bucket BETWEEN ?2 AND ?3")?;
+    for (cell, b0, b1) in keys {
+        for seq in q.query_map(params![cell, b0, b1], |r| r.get::<_, i64>(0))? {
+            seqs.insert(seq?);
+        }
+    }
+    Ok(seqs)
+}
+
 /// The stored intents whose keys meet `volumes`' (windows widened by `later_ms`), in the
 /// order they were stored.
 fn candidates(
@@ -160,17 +179,7 @@ fn candidates(
     volumes: &[Volume4D],
     later_ms: i64,
 ) -> Result<Vec<OperationalIntent>, StoreError> {
-    let keys = index_keys(volumes, later_ms)?;
-    let mut seqs = BTreeSet::new();
-    {
-        let mut q = conn
-            .prepare("SELECT seq FROM intent_keys WHERE cell = ?1 AND bucket BETWEEN ?2 AND ?3")?;
-        for (cell, b0, b1) in keys {
-            for seq in q.query_map(params![cell, b0, b1], |r| r.get::<_, i64>(0))? {
-                seqs.insert(seq?);
-            }
-        }
-    }
+    let seqs = candidate_rows(conn, volumes, later_ms)?;
     let mut q = conn.prepare("SELECT id, body FROM intents WHERE seq = ?1")?;
     let mut out = Vec::with_capacity(seqs.len());
     for seq in seqs {
@@ -261,6 +270,50 @@ impl IntentStore for SqliteStore {
     ) -> Result<Vec<OperationalIntent>, StoreError> {
         let conn = self.lock();
         candidates(&conn, volumes, later_ms)
+    }
+
+    fn nearby_rows(
+        &self,
+        volumes: &[Volume4D],
+        later_ms: i64,
+    ) -> Result<Vec<StoredRow>, StoreError> {
+        let mut conn = self.lock();
+        // One read transaction: the keys and the rows they name seen at one moment.
+        let tx = conn.transaction_with_behavior(TransactionBehavior::Deferred)?;
+        let seqs = candidate_rows(&tx, volumes, later_ms)?;
+        let mut out = Vec::with_capacity(seqs.len());
+        {
+            let mut q = tx.prepare("SELECT id, version FROM intents WHERE seq = ?1")?;
+            for row in seqs {
+                let found: Option<(String, i64)> = q
+                    .query_row(params![row], |r| Ok((r.get(0)?, r.get(1)?)))
+                    .optional()?;
+                if let Some((id, version)) = found {
+                    let version = version_of(&id, version)?;
+                    out.push(StoredRow { row, id, version });
+                }
+            }
+        }
+        tx.commit()?;
+        Ok(out)
+    }
+
+    fn get_rows(&self, rows: &[i64]) -> Result<Vec<(i64, OperationalIntent)>, StoreError> {
+        let conn = self.lock();
+        let mut sorted = rows.to_vec();
+        sorted.sort_unstable();
+        sorted.dedup();
+        let mut q = conn.prepare("SELECT id, body FROM intents WHERE seq = ?1")?;
+        let mut out = Vec::with_capacity(sorted.len());
+        for row in sorted {
+            let found: Option<(String, String)> = q
+                .query_row(params![row], |r| Ok((r.get(0)?, r.get(1)?)))
+                .optional()?;
+            if let Some((id, body)) = found {
+                out.push((row, read_body(&id, &body)?));
+            }
+        }
+        Ok(out)
     }
 
     fn get(&self, id: &str) -> Result<Option<OperationalIntent>, StoreError> {

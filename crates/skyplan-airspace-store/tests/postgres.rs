@@ -32,6 +32,12 @@ fn the_index_finds_what_a_full_scan_finds() {
 
 #[test]
 #[ignore = "needs PostgreSQL (.ci/run starts one)"]
+fn rows_name_what_nearby_reads() {
+    common::rows_name_what_nearby_reads(&fresh_store("rows").1);
+}
+
+#[test]
+#[ignore = "needs PostgreSQL (.ci/run starts one)"]
 fn a_reservation_leaves_at_the_earliest_free_departure_or_names_its_blockers() {
     common::a_reservation_leaves_at_the_earliest_free_departure_or_names_its_blockers(
         &fresh_store("reserve").1,

@@ -24,6 +24,11 @@ fn the_index_finds_what_a_full_scan_finds() {
 }
 
 #[test]
+fn rows_name_what_nearby_reads() {
+    common::rows_name_what_nearby_reads(&SqliteStore::memory().expect("a store"));
+}
+
+#[test]
 fn a_reservation_leaves_at_the_earliest_free_departure_or_names_its_blockers() {
     common::a_reservation_leaves_at_the_earliest_free_departure_or_names_its_blockers(
         &SqliteStore::memory().expect("a store"),

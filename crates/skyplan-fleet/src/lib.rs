@@ -53,6 +53,7 @@ pub use run::{
     fly_fleet, fly_mission, percentile,
 };
 pub use space_time::{
-    BULGE_CELLS, MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M, STRETCH_S,
-    SearchSpace, SpaceTimeFlight, reserve_space_time, search_grid,
+    BULGE_CELLS, CACHE_INTENTS, MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M,
+    STRETCH_S, SearchSpace, SpaceTimeCache, SpaceTimeFlight, reserve_space_time,
+    reserve_space_time_cached, search_grid,
 };

@@ -185,6 +185,20 @@ pub fn fly_mission(
     options: &RunOptions,
     stored_before: usize,
 ) -> Result<FlightRecord, FleetError> {
+    fly_mission_in(session, store, base, mission, options, stored_before, None)
+}
+
+/// [`fly_mission`], in [`Mode::SpaceTime`] with the stored intents kept in `cache` (one per
+/// run: [`fly_fleet`]).
+fn fly_mission_in(
+    session: &mut Session,
+    store: &dyn IntentStore,
+    base: &PlanRequest,
+    mission: &Mission,
+    options: &RunOptions,
+    stored_before: usize,
+    cache: Option<&mut crate::SpaceTimeCache>,
+) -> Result<FlightRecord, FleetError> {
     crate::refuse_plan_departure(base).map_err(|error| FleetError::Flight {
         mission: mission.id.clone(),
         error,
@@ -246,6 +260,7 @@ pub fn fly_mission(
             record,
             (t0, t1),
             &mission.request(base),
+            cache,
             fail,
         );
     }
@@ -304,6 +319,7 @@ fn space_time(
     mut record: FlightRecord,
     (t0, t1): (Instant, Instant),
     planned_for: &PlanRequest,
+    cache: Option<&mut crate::SpaceTimeCache>,
     fail: impl Fn(String) -> FleetError,
 ) -> Result<FlightRecord, FleetError> {
     let Some(grid) = crate::search_grid(session, planned_for, plan).map_err(|f| fail(f.message))?
@@ -313,7 +329,10 @@ fn space_time(
             plan.planner.name()
         )));
     };
-    let (result, nearby) = crate::reserve_space_time(store, &grid, plan, request);
+    let (result, nearby) = match cache {
+        Some(cache) => crate::reserve_space_time_cached(store, &grid, plan, request, cache),
+        None => crate::reserve_space_time(store, &grid, plan, request),
+    };
     record.reserve_ms = t1.elapsed().as_secs_f64() * 1e3;
     record.latency_ms = t0.elapsed().as_secs_f64() * 1e3;
     record.checked = nearby;
@@ -338,8 +357,10 @@ pub fn fly_fleet(
 ) -> Result<Vec<FlightRecord>, FleetError> {
     let mut records = Vec::with_capacity(missions.len());
     let mut stored = 0;
+    // The stored intents as the space-time search sees them, kept from flight to flight.
+    let mut cache = crate::SpaceTimeCache::new();
     for (k, m) in missions.iter().enumerate() {
-        let record = fly_mission(session, store, base, m, options, stored)?;
+        let record = fly_mission_in(session, store, base, m, options, stored, Some(&mut cache))?;
         stored += usize::from(record.status == Status::Accepted);
         progress(k, &record);
         records.push(record);

@@ -13,9 +13,11 @@
 //! arrival over all routes on the grid's moves and all waits.
 
 use skyplan_cspace::{Cell, Grid2};
-// The open list's entries: smallest f first, then the later arrival (deeper), then the older state.
-use skyplan_search::OpenEntry;
-use std::collections::{BinaryHeap, HashMap};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+// foldhash: the states and cells are looked up for every move the search tries; SipHash made
+// the lookups a tenth of a crowded fleet's time.
+use foldhash::{HashMap, HashMapExt};
 
 /// Safe intervals start this long after a blocked one ends and end this long before the next
 /// begins, seconds: blocked intervals are closed, safe ones closed too, and never touch.
@@ -181,15 +183,97 @@ struct Node {
 
 const NONE: u32 = u32::MAX;
 
-/// Each reached cell's safe intervals, asked of the timeline once.
-#[derive(Default)]
-struct SafeCache(HashMap<Cell, Vec<Interval>>);
+/// An open list's entry in the order of [`skyplan_search::OpenEntry`] — smallest `f` first,
+/// then the later arrival (deeper), then the older state — as integers (in a
+/// [`Reverse`]): each time as [`f64::total_cmp`] orders it, the arrival's complemented.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Queued {
+    f: u64,
+    later_first: u64,
+    node: u32,
+}
+
+impl Queued {
+    fn new(f: f64, g: f64, node: u32) -> Reverse<Self> {
+        Reverse(Self {
+            f: total_key(f),
+            later_first: !total_key(g),
+            node,
+        })
+    }
+}
+
+/// `x` as an unsigned integer in [`f64::total_cmp`]'s order.
+fn total_key(x: f64) -> u64 {
+    let bits = x.to_bits() as i64;
+    let key = bits ^ ((((bits >> 63) as u64) >> 1) as i64);
+    (key as u64) ^ (1 << 63)
+}
+
+/// Grids of up to this many cells index the reached cells in an array (4 bytes a cell,
+/// zeroed lazily by the allocator); larger ones in a hash map.
+const DENSE_CELLS: usize = 1 << 22;
+
+/// Each reached cell's safe intervals, asked of the timeline once, one after another in one
+/// arena, with the search's best state of each (cell, safe interval) beside them.
+struct SafeCache {
+    /// Per cell (row-major index): where its intervals start in `intervals`, plus one (0:
+    /// not asked yet).
+    dense: Vec<u32>,
+    sparse: HashMap<u32, u32>,
+    intervals: Vec<Interval>,
+    /// The best state of each interval, or [`NONE`].
+    best: Vec<u32>,
+    /// Per cell, the number of its intervals: at `intervals[start - 1]`'s slot of `counts`.
+    counts: Vec<u32>,
+}
 
 impl SafeCache {
-    fn of(&mut self, cell: Cell, timeline: &mut dyn Timeline) -> &[Interval] {
-        self.0
-            .entry(cell)
-            .or_insert_with(|| safe_intervals(&merge_intervals(timeline.blocked(cell))))
+    fn new(grid: &Grid2) -> Self {
+        Self {
+            dense: if grid.len() <= DENSE_CELLS {
+                vec![0; grid.len()]
+            } else {
+                Vec::new()
+            },
+            sparse: HashMap::new(),
+            intervals: Vec::new(),
+            best: Vec::new(),
+            counts: Vec::new(),
+        }
+    }
+
+    /// Where the safe intervals of `cell` are in the arena: `(start, count)`.
+    fn span(&mut self, grid: &Grid2, cell: Cell, timeline: &mut dyn Timeline) -> (usize, usize) {
+        let index = grid.index(cell);
+        let known = if self.dense.is_empty() {
+            self.sparse.get(&(index as u32)).copied().unwrap_or(0)
+        } else {
+            self.dense[index]
+        };
+        if known != 0 {
+            let start = known as usize - 1;
+            return (start, self.counts[start] as usize);
+        }
+        let safe = safe_intervals(&merge_intervals(timeline.blocked(cell)));
+        let start = self.intervals.len();
+        self.intervals.extend_from_slice(&safe);
+        self.best.resize(self.intervals.len(), NONE);
+        self.counts.resize(self.intervals.len(), 0);
+        self.counts[start] = safe.len() as u32;
+        let at = start as u32 + 1;
+        if self.dense.is_empty() {
+            self.sparse.insert(index as u32, at);
+        } else {
+            self.dense[index] = at;
+        }
+        (start, safe.len())
+    }
+
+    /// The safe intervals of `cell`.
+    fn of(&mut self, grid: &Grid2, cell: Cell, timeline: &mut dyn Timeline) -> &[Interval] {
+        let (start, count) = self.span(grid, cell, timeline);
+        &self.intervals[start..start + count]
     }
 }
 
@@ -224,7 +308,7 @@ pub fn sipp(
             return Err(SippError::Endpoint { which, cell });
         }
     }
-    let mut safe = SafeCache::default();
+    let mut safe = SafeCache::new(grid);
     let h = |c: Cell| {
         let dr = f64::from(c.row.abs_diff(q.goal.row));
         let dc = f64::from(c.col.abs_diff(q.goal.col));
@@ -236,9 +320,10 @@ pub fn sipp(
         octile * q.cell_s
     };
     let mut nodes: Vec<Node> = Vec::new();
-    let mut best: HashMap<(Cell, u32), u32> = HashMap::new();
     let mut open = BinaryHeap::new();
-    for (k, iv) in safe.of(q.start, timeline).iter().enumerate() {
+    let (first, count) = safe.span(grid, q.start, timeline);
+    for k in 0..count {
+        let iv = safe.intervals[first + k];
         if iv.end_s < 0.0 || iv.start_s > q.latest_departure_s {
             continue;
         }
@@ -252,12 +337,8 @@ pub fn sipp(
             parent: NONE,
             stale: false,
         });
-        best.insert((q.start, k as u32), id);
-        open.push(OpenEntry {
-            f: g + h(q.start),
-            g,
-            node: id,
-        });
+        safe.best[first + k] = id;
+        open.push(Queued::new(g + h(q.start), g, id));
     }
     let moves: &[(i32, i32, f64)] = if q.diagonals {
         &[
@@ -275,7 +356,9 @@ pub fn sipp(
     };
     let free = |r: i64, c: i64| grid.is_free_at(r, c);
     let mut expansions = 0;
-    while let Some(OpenEntry { g, node, .. }) = open.pop() {
+    while let Some(Reverse(Queued { node, .. })) = open.pop() {
+        // The entry's arrival, as pushed.
+        let g = nodes[node as usize].arrive_s;
         let (cell, interval) = (nodes[node as usize].cell, nodes[node as usize].interval);
         if nodes[node as usize].stale {
             continue;
@@ -284,14 +367,14 @@ pub fn sipp(
         if cell == q.goal {
             let mut cells = walk_back(&nodes, node);
             ground_waits(&mut cells, q.latest_departure_s, &mut |c| {
-                safe.of(c, timeline).to_vec()
+                safe.of(grid, c, timeline).to_vec()
             });
             return Ok(SippPath { cells, expansions });
         }
         if expansions > q.max_expansions {
             return Err(SippError::Budget(q.max_expansions));
         }
-        let here_end = safe.of(cell, timeline)[interval as usize].end_s;
+        let here_end = safe.of(grid, cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
         for &(dr, dc, len) in moves {
             let (nr, nc) = (r + i64::from(dr), c + i64::from(dc));
@@ -303,7 +386,9 @@ pub fn sipp(
                 continue;
             };
             let tau = len * q.cell_s;
-            for (k, iv) in safe.of(next, timeline).iter().enumerate() {
+            let (first, count) = safe.span(grid, next, timeline);
+            for k in 0..count {
+                let iv = safe.intervals[first + k];
                 let leave = g.max(iv.start_s);
                 let arrive = leave + tau;
                 if iv.start_s > here_end {
@@ -312,10 +397,8 @@ pub fn sipp(
                 if arrive > here_end.min(iv.end_s) || arrive > q.horizon_s {
                     continue;
                 }
-                let key = (next, k as u32);
-                if let Some(&id) = best.get(&key)
-                    && nodes[id as usize].arrive_s <= arrive
-                {
+                let known = safe.best[first + k];
+                if known != NONE && nodes[known as usize].arrive_s <= arrive {
                     continue;
                 }
                 let id = nodes.len() as u32;
@@ -327,14 +410,11 @@ pub fn sipp(
                     parent: node,
                     stale: false,
                 });
-                if let Some(old) = best.insert(key, id) {
-                    nodes[old as usize].stale = true;
+                if known != NONE {
+                    nodes[known as usize].stale = true;
                 }
-                open.push(OpenEntry {
-                    f: arrive + h(next),
-                    g: arrive,
-                    node: id,
-                });
+                safe.best[first + k] = id;
+                open.push(Queued::new(arrive + h(next), arrive, id));
             }
         }
     }
@@ -414,6 +494,36 @@ fn walk_back(nodes: &[Node], goal: u32) -> Vec<TimedCell> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The integer keys order entries exactly as the search crate's open list does.
+    #[test]
+    fn the_queue_keys_order_as_the_open_entries() {
+        use rand::{RngExt, SeedableRng};
+        use skyplan_search::OpenEntry;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let values = [0.0, -0.0, 1.0, 2.5, 1e-300, 1e300, -1.0, f64::INFINITY];
+        let pick = |rng: &mut rand_chacha::ChaCha8Rng| {
+            if rng.random_range(0..3) == 0 {
+                values[rng.random_range(0..values.len())]
+            } else {
+                f64::from(rng.random_range(0..20u32)) * 0.25
+            }
+        };
+        for _ in 0..20_000 {
+            let a = OpenEntry {
+                f: pick(&mut rng),
+                g: pick(&mut rng),
+                node: rng.random_range(0..4),
+            };
+            let b = OpenEntry {
+                f: pick(&mut rng),
+                g: pick(&mut rng),
+                node: rng.random_range(0..4),
+            };
+            let (ka, kb) = (Queued::new(a.f, a.g, a.node), Queued::new(b.f, b.g, b.node));
+            assert_eq!(ka.cmp(&kb), a.cmp(&b), "{a:?} {b:?}");
+        }
+    }
 
     #[test]
     fn waits_move_to_the_ground_when_the_window_allows() {

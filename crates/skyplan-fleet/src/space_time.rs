@@ -20,16 +20,16 @@
 
 use crate::flight::FlightRequest;
 use crate::sipp::{Interval, SippError, SippQuery, TimedCell, sipp};
+use foldhash::{HashMap, HashMapExt};
 use skyplan_airspace::{
     AirspaceError, FlightVolumes, IntentRef, IntentState, OperationalIntent, Timestamp, Timing,
     Volume4D, volumes_from_plan, volumes_hugging_path,
 };
-use skyplan_airspace_store::{Insert, IntentStore, RESERVE_TRIES, ReserveError, new_id};
+use skyplan_airspace_store::{Insert, IntentStore, RESERVE_TRIES, ReserveError, StoredRow, new_id};
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_frames::{Lla, LocalFrame};
 use skyplan_map::nofly::Zone;
 use skyplan_plan::Plan;
-use std::collections::HashMap;
 
 /// Longest stretch of time in one volume of a space-time route, seconds.
 pub const STRETCH_S: f64 = 5.0;
@@ -274,6 +274,15 @@ impl Obstacle {
         }
     }
 
+    /// Whether a cell centred at `(n, e)` is within `r` of the footprint: its box first.
+    fn blocks(&self, n: f64, e: f64, r: f64) -> bool {
+        n >= self.bbox_ne[0] - r
+            && n <= self.bbox_ne[2] + r
+            && e >= self.bbox_ne[1] - r
+            && e <= self.bbox_ne[3] + r
+            && self.near([n, e], r)
+    }
+
     /// Whether `p` is within `r` of the footprint. Squared distances (no square roots: this
     /// runs for every candidate volume of every cell the search reaches).
     fn near(&self, p: [f64; 2], r: f64) -> bool {
@@ -387,15 +396,441 @@ impl Obstacles {
         };
         ids.iter()
             .map(|&k| &self.list[k as usize])
-            .filter(|o| {
-                n >= o.bbox_ne[0] - r
-                    && n <= o.bbox_ne[2] + r
-                    && e >= o.bbox_ne[1] - r
-                    && e <= o.bbox_ne[3] + r
-                    && o.near([n, e], r)
-            })
+            .filter(|o| o.blocks(n, e, r))
             .map(|o| o.blocked)
             .collect()
+    }
+}
+
+/// Most stored intents a [`SpaceTimeCache::new`] keeps (about 100 to 150 kB each on the
+/// bundled city); past it, those named longest ago go, down to half.
+pub const CACHE_INTENTS: usize = 2048;
+
+/// A stored volume as the cache keeps it: its band (W84 metres) and window (Unix ms).
+#[derive(Debug, Clone, Copy)]
+struct CachedVolume {
+    lower_m: f64,
+    upper_m: f64,
+    start_ms: i64,
+    end_ms: i64,
+}
+
+/// A cached intent: what decides whether it binds (its volumes left out), and its volumes.
+#[derive(Debug)]
+struct CachedIntent {
+    row: StoredRow,
+    head: OperationalIntent,
+    volumes: Vec<CachedVolume>,
+}
+
+/// What a cache's rasters were made for: the map's home, the grid's frame and size and the
+/// distance at which a footprint blocks a cell (bit patterns: any change starts afresh).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct CacheKey {
+    home: [u64; 2],
+    frame: [u64; 3],
+    size: [u32; 2],
+    reach: u64,
+}
+
+/// Stored intents decoded, converted to the map's frame and rasterised on the space-time
+/// search's grid, kept between the searches of [`reserve_space_time_cached`] (a fleet run
+/// keeps one): each cell lists the stored volumes whose footprint is within the search's
+/// reach of its centre (the exact test of the uncached search, made once per volume), so the
+/// search looks a cell's blocked times up instead of testing geometry.
+///
+/// Keyed by the store's rows ([`StoredRow`]: never rewritten nor reused), so a cached intent
+/// is never stale; an intent no longer stored is simply never named by the store again (and
+/// goes when the cache is full, [`CACHE_INTENTS`]). It only saves time: what is reserved is
+/// still checked exactly against the store in its check-and-insert.
+#[derive(Debug)]
+pub struct SpaceTimeCache {
+    capacity: usize,
+    key: Option<CacheKey>,
+    reach_m: f64,
+    by_row: HashMap<StoredRow, u32>,
+    slots: Vec<Option<CachedIntent>>,
+    free: Vec<u32>,
+    /// Per slot: the request that last named it, the last in which it binds, and whether
+    /// then every volume of it met the flight's band.
+    named: Vec<u64>,
+    binding: Vec<u64>,
+    in_band: Vec<bool>,
+    /// Per grid cell (row-major index): the volumes that block it, in order of their starts.
+    cells: CellLists,
+    request: u64,
+}
+
+impl Default for SpaceTimeCache {
+    fn default() -> Self {
+        Self::with_capacity(CACHE_INTENTS)
+    }
+}
+
+impl SpaceTimeCache {
+    /// An empty cache of up to [`CACHE_INTENTS`] intents.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// An empty cache of up to `capacity` intents (more while one search needs them).
+    pub fn with_capacity(capacity: usize) -> Self {
+        Self {
+            capacity,
+            key: None,
+            reach_m: 0.0,
+            by_row: HashMap::new(),
+            slots: Vec::new(),
+            free: Vec::new(),
+            named: Vec::new(),
+            binding: Vec::new(),
+            in_band: Vec::new(),
+            cells: CellLists::default(),
+            request: 0,
+        }
+    }
+
+    /// Stored intents kept.
+    pub fn len(&self) -> usize {
+        self.by_row.len()
+    }
+
+    /// Whether it keeps none.
+    pub fn is_empty(&self) -> bool {
+        self.by_row.is_empty()
+    }
+
+    /// Made for this map's `home`, `grid` and `reach_m`: emptied if it was for others.
+    fn bind(&mut self, home: &skyplan_plan::Home, grid: &Grid2, reach_m: f64) {
+        let f = grid.frame();
+        let key = CacheKey {
+            home: [home.lat_deg.to_bits(), home.lon_deg.to_bits()],
+            frame: [
+                f.origin_north_m.to_bits(),
+                f.origin_east_m.to_bits(),
+                f.cell_m.to_bits(),
+            ],
+            size: [grid.rows(), grid.cols()],
+            reach: reach_m.to_bits(),
+        };
+        if self.key != Some(key) {
+            *self = Self {
+                key: Some(key),
+                reach_m,
+                request: self.request,
+                cells: CellLists::for_grid(grid.len()),
+                ..Self::with_capacity(self.capacity)
+            };
+        }
+    }
+
+    /// Reads, converts and rasterises the intents of `rows` not kept yet; makes room first.
+    fn refresh(
+        &mut self,
+        store: &dyn IntentStore,
+        rows: &[StoredRow],
+        frame: &LocalFrame,
+        grid: &Grid2,
+    ) -> Result<(), ReserveError> {
+        self.request += 1;
+        let missing: Vec<i64> = rows
+            .iter()
+            .filter(|r| !self.by_row.contains_key(*r))
+            .map(|r| r.row)
+            .collect();
+        if self.by_row.len() + missing.len() > self.capacity {
+            self.evict(rows, self.capacity / 2);
+        }
+        if missing.is_empty() {
+            return Ok(());
+        }
+        let named: HashMap<i64, &StoredRow> = rows.iter().map(|r| (r.row, r)).collect();
+        for (row, intent) in store.get_rows(&missing)? {
+            // The row read is the one named (rows are never rewritten; checked all the same).
+            let Some(&stored) = named.get(&row) else {
+                continue;
+            };
+            if stored.id != intent.id || stored.version != intent.version {
+                continue;
+            }
+            self.insert(stored.clone(), intent, frame, grid)
+                .map_err(ReserveError::Invalid)?;
+        }
+        Ok(())
+    }
+
+    fn insert(
+        &mut self,
+        row: StoredRow,
+        mut intent: OperationalIntent,
+        frame: &LocalFrame,
+        grid: &Grid2,
+    ) -> Result<(), AirspaceError> {
+        let slot = match self.free.pop() {
+            Some(s) => s,
+            None => {
+                self.slots.push(None);
+                self.named.push(0);
+                self.binding.push(0);
+                self.in_band.push(false);
+                (self.slots.len() - 1) as u32
+            }
+        };
+        let volumes = std::mem::take(&mut intent.volumes);
+        let mut kept = Vec::with_capacity(volumes.len());
+        let mut footprints = Vec::with_capacity(volumes.len());
+        for v in &volumes {
+            let mut points = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
+            for p in &v.volume.outline_polygon.vertices {
+                let ned = frame.ned_from_lla(Lla {
+                    lat_deg: p.lat,
+                    lon_deg: p.lng,
+                    alt_m: 0.0,
+                })?;
+                points.push([ned.north_m, ned.east_m]);
+            }
+            kept.push(CachedVolume {
+                lower_m: v.volume.altitude_lower.value,
+                upper_m: v.volume.altitude_upper.value,
+                start_ms: v.time_start.value.unix_ms(),
+                end_ms: v.time_end.value.unix_ms(),
+            });
+            footprints.push(Obstacle::new(
+                &points,
+                Interval {
+                    start_s: 0.0,
+                    end_s: 0.0,
+                },
+            ));
+        }
+        self.slots[slot as usize] = Some(CachedIntent {
+            row: row.clone(),
+            head: intent,
+            volumes: kept,
+        });
+        // In each cell, the intent's volumes of one band whose windows overlap make one
+        // entry over their windows' union: the union of their grown windows, the same blocked
+        // times (consecutive volumes overlap by the time buffer; a cell near the route is in
+        // two or three of them).
+        let volumes = self.slots[slot as usize]
+            .as_ref()
+            .map_or(&[][..], |c| &c.volumes);
+        let mut open: HashMap<u32, CellEntry> = HashMap::new();
+        let mut done: Vec<(u32, CellEntry)> = Vec::new();
+        for (k, (o, v)) in footprints.iter().zip(volumes).enumerate() {
+            let entry = CellEntry {
+                start_ms: v.start_ms,
+                end_ms: v.end_ms,
+                slot,
+                volume: k as u32,
+            };
+            rasterise(o, self.reach_m, grid, |index| match open.get_mut(&index) {
+                Some(e)
+                    if same_band(&volumes[e.volume as usize], v)
+                        && e.start_ms.max(v.start_ms) <= e.end_ms.min(v.end_ms) =>
+                {
+                    e.start_ms = e.start_ms.min(v.start_ms);
+                    e.end_ms = e.end_ms.max(v.end_ms);
+                }
+                Some(e) => done.push((index, std::mem::replace(e, entry))),
+                None => {
+                    open.insert(index, entry);
+                }
+            });
+        }
+        done.extend(open);
+        // Each cell's list kept in order of the entries' starts: the search's timelines then
+        // come sorted (and merging them costs no sort).
+        for (index, entry) in done {
+            let list = self.cells.list_mut(index);
+            let at = list.partition_point(|e| e.start_ms <= entry.start_ms);
+            list.insert(at, entry);
+        }
+        self.named[slot as usize] = self.request;
+        self.binding[slot as usize] = 0;
+        self.by_row.insert(row, slot);
+        Ok(())
+    }
+
+    /// Drops the intents not named in `rows`, longest unnamed first, down to `keep`.
+    fn evict(&mut self, rows: &[StoredRow], keep: usize) {
+        let current: foldhash::HashSet<&StoredRow> = rows.iter().collect();
+        let mut old: Vec<(u64, u32)> = self
+            .by_row
+            .iter()
+            .filter(|(r, _)| !current.contains(r))
+            .map(|(_, &s)| (self.named[s as usize], s))
+            .collect();
+        old.sort_unstable();
+        let excess = self.by_row.len().saturating_sub(keep);
+        let mut dead = vec![false; self.slots.len()];
+        for &(_, s) in old.iter().take(excess) {
+            dead[s as usize] = true;
+            if let Some(c) = self.slots[s as usize].take() {
+                self.by_row.remove(&c.row);
+            }
+            self.free.push(s);
+        }
+        self.cells.retain(|e| !dead[e.slot as usize]);
+    }
+
+    /// Marks the intents of `rows` this request; those `binds` accepts block the search, with
+    /// their volumes that meet `band` (W84 metres).
+    fn select(
+        &mut self,
+        rows: &[StoredRow],
+        band: (f64, f64),
+        mut binds: impl FnMut(&OperationalIntent) -> bool,
+    ) {
+        for r in rows {
+            // A row deleted between the two reads is not kept: nothing to block.
+            let Some(&slot) = self.by_row.get(r) else {
+                continue;
+            };
+            let Some(c) = &self.slots[slot as usize] else {
+                continue;
+            };
+            self.named[slot as usize] = self.request;
+            if binds(&c.head) {
+                self.binding[slot as usize] = self.request;
+                self.in_band[slot as usize] = c.volumes.iter().all(|v| meets(v, band));
+            }
+        }
+    }
+
+    /// Adds to `out` when the cell of row-major `index` is blocked by this request's binding
+    /// intents' volumes that meet `band` (W84 metres): their windows in seconds after `t0_ms`,
+    /// grown by `pad_s`.
+    fn blocked(
+        &self,
+        index: u32,
+        band: (f64, f64),
+        t0_ms: i64,
+        pad_s: f64,
+        out: &mut Vec<Interval>,
+    ) {
+        let list = self.cells.list(index);
+        for e in list {
+            let slot = e.slot as usize;
+            if self.binding[slot] != self.request {
+                continue;
+            }
+            if !self.in_band[slot] {
+                let Some(c) = &self.slots[slot] else {
+                    continue;
+                };
+                if !meets(&c.volumes[e.volume as usize], band) {
+                    continue;
+                }
+            }
+            out.push(Interval {
+                start_s: (e.start_ms - t0_ms) as f64 / 1000.0 - pad_s,
+                end_s: (e.end_ms - t0_ms) as f64 / 1000.0 + pad_s,
+            });
+        }
+    }
+}
+
+/// Grids of up to this many cells keep the cache's lists in an array over the grid (24 bytes
+/// a cell); larger ones in a hash map.
+const DENSE_LIST_CELLS: usize = 1 << 20;
+
+/// The cache's entries per grid cell (row-major index).
+#[derive(Debug, Default)]
+struct CellLists {
+    dense: bool,
+    array: Vec<Vec<CellEntry>>,
+    map: HashMap<u32, Vec<CellEntry>>,
+}
+
+impl CellLists {
+    fn for_grid(cells: usize) -> Self {
+        let dense = cells <= DENSE_LIST_CELLS;
+        Self {
+            dense,
+            array: if dense {
+                vec![Vec::new(); cells]
+            } else {
+                Vec::new()
+            },
+            map: HashMap::new(),
+        }
+    }
+
+    fn list(&self, index: u32) -> &[CellEntry] {
+        if self.dense {
+            self.array.get(index as usize).map_or(&[], Vec::as_slice)
+        } else {
+            self.map.get(&index).map_or(&[], Vec::as_slice)
+        }
+    }
+
+    fn list_mut(&mut self, index: u32) -> &mut Vec<CellEntry> {
+        let index = index as usize;
+        if self.dense && index < self.array.len() {
+            &mut self.array[index]
+        } else {
+            self.map.entry(index as u32).or_default()
+        }
+    }
+
+    fn retain(&mut self, keep: impl Fn(&CellEntry) -> bool) {
+        for list in &mut self.array {
+            list.retain(&keep);
+        }
+        self.map.retain(|_, list| {
+            list.retain(&keep);
+            !list.is_empty()
+        });
+    }
+}
+
+/// Whether two cached volumes have the same band.
+fn same_band(a: &CachedVolume, b: &CachedVolume) -> bool {
+    a.lower_m.to_bits() == b.lower_m.to_bits() && a.upper_m.to_bits() == b.upper_m.to_bits()
+}
+
+/// Whether a cached volume's band meets `band` (W84 metres).
+fn meets(v: &CachedVolume, band: (f64, f64)) -> bool {
+    !(v.upper_m < band.0 || v.lower_m > band.1)
+}
+
+/// A stored volume that blocks a cell: its window (Unix ms), its intent's slot and its index
+/// among the intent's volumes.
+#[derive(Debug, Clone, Copy)]
+struct CellEntry {
+    start_ms: i64,
+    end_ms: i64,
+    slot: u32,
+    volume: u32,
+}
+
+/// Calls `blocks` with the row-major index of every cell of `grid` whose centre is within
+/// `reach_m` of `o`'s footprint: the same test as [`Obstacles::blocked_at`]'s, cell by cell
+/// over the footprint's box grown by the reach.
+fn rasterise(o: &Obstacle, reach_m: f64, grid: &Grid2, mut blocks: impl FnMut(u32)) {
+    let f = grid.frame();
+    let r = reach_m;
+    if !(o.bbox_ne.iter().all(|x| x.is_finite()) && r.is_finite()) {
+        return;
+    }
+    // Rows and columns whose centres may pass the box test, a cell more each side for the
+    // rounding; the box test itself decides.
+    let span = |lo: f64, hi: f64, origin: f64, count: u32| {
+        let a = ((lo - r - origin) / f.cell_m - 0.5).floor() as i64 - 1;
+        let b = ((hi + r - origin) / f.cell_m - 0.5).ceil() as i64 + 1;
+        (a.max(0), b.min(i64::from(count) - 1))
+    };
+    let (r0, r1) = span(o.bbox_ne[0], o.bbox_ne[2], f.origin_north_m, grid.rows());
+    let (c0, c1) = span(o.bbox_ne[1], o.bbox_ne[3], f.origin_east_m, grid.cols());
+    for row in r0..=r1 {
+        for col in c0..=c1 {
+            let c = Cell::new(row as u32, col as u32);
+            let (n, e) = grid.center_ne(c);
+            if o.blocks(n, e, r) {
+                blocks(grid.index(c) as u32);
+            }
+        }
     }
 }
 
@@ -522,7 +957,26 @@ pub fn reserve_space_time(
     request: &FlightRequest,
 ) -> (Result<SpaceTimeFlight, ReserveError>, usize) {
     let mut nearby = 0;
-    let result = space_time_inner(store, space, plan, request, &mut nearby);
+    let result = space_time_inner(store, space, plan, request, None, &mut nearby);
+    (result, nearby)
+}
+
+/// [`reserve_space_time`] with the stored intents kept in `cache` between calls: only the
+/// rows of the intents near the flight are read from the store ([`IntentStore::nearby_rows`]),
+/// and only those not seen before are read, decoded, converted to the map's frame and
+/// rasterised on the search's grid. The answer is the same as [`reserve_space_time`]'s (the
+/// cells a stored volume blocks are those the exact test blocks, found once per volume
+/// instead of once per search), and the store's exact check-and-insert still decides.
+/// Use one cache with one store.
+pub fn reserve_space_time_cached(
+    store: &dyn IntentStore,
+    space: &SearchSpace,
+    plan: &Plan,
+    request: &FlightRequest,
+    cache: &mut SpaceTimeCache,
+) -> (Result<SpaceTimeFlight, ReserveError>, usize) {
+    let mut nearby = 0;
+    let result = space_time_inner(store, space, plan, request, Some(cache), &mut nearby);
     (result, nearby)
 }
 
@@ -538,6 +992,7 @@ fn space_time_inner(
     space: &SearchSpace,
     plan: &Plan,
     request: &FlightRequest,
+    mut cache: Option<&mut SpaceTimeCache>,
     nearby_count: &mut usize,
 ) -> Result<SpaceTimeFlight, ReserveError> {
     let grid = space.grid.as_ref();
@@ -602,6 +1057,9 @@ fn space_time_inner(
         + SLACK_M;
     let pad_s = o.time_buffer_s + STRETCH_S + 0.002;
     let mut obstacles = Obstacles::new(reach_m);
+    if let Some(cache) = cache.as_deref_mut() {
+        cache.bind(&home, grid, reach_m);
+    }
     // When each cell a timed no-fly zone blocks is blocked, on the search's clock (seconds
     // after the window's start), grown by the same pad as the others' volumes.
     let mut zone_times: HashMap<u32, Vec<Interval>> = HashMap::new();
@@ -652,12 +1110,32 @@ fn space_time_inner(
         )
         .map_err(|e| invalid("route", e.to_string()))?
         .cost_cells();
+    let t0_ms = window.earliest.unix_ms();
     for tries in 1..=RESERVE_TRIES {
-        let mut near = store.nearby(&read_volumes, later_ms)?;
-        *nearby_count = near.len();
-        near.extend(extra.iter().cloned());
         obstacles.clear();
         let mut binding = Vec::new();
+        let mut near = match cache.as_deref_mut() {
+            Some(cache) => {
+                // The rows near the flight; the intents not cached yet read and rasterised.
+                let rows = store.nearby_rows(&read_volumes, later_ms)?;
+                *nearby_count = rows.len();
+                cache.refresh(store, &rows, &frame, grid)?;
+                cache.select(&rows, band, |head| {
+                    let binds = request.rule.binds(request.priority, head);
+                    if binds {
+                        binding.push(head.reference());
+                    }
+                    binds
+                });
+                Vec::new()
+            }
+            None => {
+                let near = store.nearby(&read_volumes, later_ms)?;
+                *nearby_count = near.len();
+                near
+            }
+        };
+        near.extend(extra.iter().cloned());
         for intent in &near {
             if request.rule.binds(request.priority, intent) {
                 obstacles
@@ -666,10 +1144,19 @@ fn space_time_inner(
                 binding.push(intent.reference());
             }
         }
+        let cached = cache.as_deref();
         let mut timeline = |c: Cell| {
-            let (n, e) = grid.center_ne(c);
-            let mut blocked = obstacles.blocked_at(n, e);
-            if let Some(zoned) = zone_times.get(&(grid.index(c) as u32)) {
+            let index = grid.index(c) as u32;
+            let mut blocked = if obstacles.list.is_empty() {
+                Vec::new()
+            } else {
+                let (n, e) = grid.center_ne(c);
+                obstacles.blocked_at(n, e)
+            };
+            if let Some(cache) = cached {
+                cache.blocked(index, band, t0_ms, pad_s, &mut blocked);
+            }
+            if let Some(zoned) = zone_times.get(&index) {
                 blocked.extend_from_slice(zoned);
             }
             blocked
@@ -813,5 +1300,68 @@ mod tests {
             }
         }
         assert!(near > 2000, "{near}");
+    }
+
+    /// The cache's raster blocks exactly the cells the uncached search's exact test blocks
+    /// (bucket lookup, box test, distance to the hull), volume by volume, on a grid whose
+    /// origin and cell size are not round numbers.
+    #[test]
+    fn the_raster_blocks_exactly_the_cells_the_exact_test_blocks() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let frame = skyplan_cspace::GridFrame {
+            origin_north_m: -37.3,
+            origin_east_m: 12.9,
+            cell_m: 3.7,
+        };
+        let (rows, cols) = (60u32, 70u32);
+        let grid =
+            Grid2::new(rows, cols, vec![false; (rows * cols) as usize], frame).expect("grid");
+        let (mut blocked_cells, mut volumes) = (0, 0);
+        for _ in 0..40 {
+            let reach_m = rng.random_range(0.5..12.0);
+            let mut exact = Obstacles::new(reach_m);
+            let mut raster: HashMap<u32, Vec<u32>> = HashMap::new();
+            for k in 0..rng.random_range(1..12) {
+                // Footprints inside, across the edge of and outside the grid.
+                let c = [
+                    rng.random_range(-80.0..260.0),
+                    rng.random_range(-60.0..300.0),
+                ];
+                let points: Vec<[f64; 2]> = (0..rng.random_range(1..9))
+                    .map(|_| {
+                        [
+                            c[0] + rng.random_range(-30.0..30.0),
+                            c[1] + rng.random_range(-30.0..30.0),
+                        ]
+                    })
+                    .collect();
+                let mark = Interval {
+                    start_s: f64::from(k),
+                    end_s: f64::from(k),
+                };
+                let o = Obstacle::new(&points, mark);
+                rasterise(&o, reach_m, &grid, |i| raster.entry(i).or_default().push(k));
+                exact.file(o);
+                volumes += 1;
+            }
+            for i in 0..grid.len() {
+                let (n, e) = grid.center_ne(grid.cell(i));
+                let mut want: Vec<u32> = exact
+                    .blocked_at(n, e)
+                    .iter()
+                    .map(|b| b.start_s as u32)
+                    .collect();
+                want.sort_unstable();
+                let mut got = raster.get(&(i as u32)).cloned().unwrap_or_default();
+                got.sort_unstable();
+                assert_eq!(got, want, "cell {i} at N {n:.2}, E {e:.2}, reach {reach_m}");
+                blocked_cells += usize::from(!want.is_empty());
+            }
+        }
+        // The footprints blocked a good share of the cells, and many volumes.
+        assert!(
+            volumes > 150 && blocked_cells > 10_000,
+            "{volumes} {blocked_cells}"
+        );
     }
 }

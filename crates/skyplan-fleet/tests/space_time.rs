@@ -179,6 +179,103 @@ fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
     );
 }
 
+/// The cached search (stored intents kept between flights, decoded once and rasterised on the
+/// grid) answers exactly as the uncached one (every intent read, decoded and converted per
+/// flight, cells tested against the footprints one by one): the same routes, times, volumes
+/// and counts, flight by flight, on a crowded seeded fleet — with a cache large enough, and
+/// with one of 8 intents that evicts on nearly every flight — while some accepted intents are
+/// deleted again along the way (a deleted intent, still cached, must no longer block).
+#[test]
+fn the_cached_search_answers_exactly_as_the_uncached_one() {
+    use skyplan_airspace::DepartureWindow;
+    use skyplan_airspace_store::ReserveError;
+    use skyplan_fleet::{
+        FlightRequest, SpaceTimeCache, reserve_space_time, reserve_space_time_cached, search_grid,
+    };
+    let base = PlanRequest::default();
+    let (mut session, missions) = crowd(48, 7, 240.0, 300.0);
+    let exact = SqliteStore::open_url("sqlite::memory:").expect("store");
+    let stores = [
+        SqliteStore::open_url("sqlite::memory:").expect("store"),
+        SqliteStore::open_url("sqlite::memory:").expect("store"),
+    ];
+    let mut caches = [SpaceTimeCache::new(), SpaceTimeCache::with_capacity(8)];
+    let (mut accepted, mut refused, mut waited, mut deleted) = (0, 0, 0, 0);
+    // The ids each store accepted, in order: the exact store's first.
+    let mut ids: [Vec<String>; 3] = Default::default();
+    for (k, m) in missions.iter().enumerate() {
+        let plan = session.plan(&m.request(&base)).expect("a route");
+        let search = search_grid(&mut session, &m.request(&base), &plan)
+            .expect("grid")
+            .expect("a grid plan");
+        let request = FlightRequest::new(
+            DepartureWindow {
+                earliest: m.window.earliest,
+                latest: m.window.latest,
+            },
+            0,
+            "test".into(),
+        );
+        let (want, want_nearby) = reserve_space_time(&exact, &search, &plan, &request);
+        for (i, (store, cache)) in stores.iter().zip(caches.iter_mut()).enumerate() {
+            let (got, nearby) = reserve_space_time_cached(store, &search, &plan, &request, cache);
+            assert_eq!(nearby, want_nearby, "{}: intents read", m.id);
+            match (&want, &got) {
+                (Ok(w), Ok(g)) => {
+                    assert_eq!(
+                        (w.delay_ms, w.departure, w.tries, w.expansions),
+                        (g.delay_ms, g.departure, g.tries, g.expansions),
+                        "{}",
+                        m.id
+                    );
+                    assert_eq!(
+                        (w.hover_s, w.detour_m, w.arrival_delay_s),
+                        (g.hover_s, g.detour_m, g.arrival_delay_s),
+                        "{}",
+                        m.id
+                    );
+                    assert_eq!(w.route_nea, g.route_nea, "{}", m.id);
+                    assert_eq!(w.intent.volumes, g.intent.volumes, "{}", m.id);
+                    ids[i + 1].push(g.intent.id.clone());
+                }
+                (Err(ReserveError::Blocked(w)), Err(ReserveError::Blocked(g))) => {
+                    assert_eq!(w.blocking.len(), g.blocking.len(), "{}", m.id);
+                }
+                (w, g) => panic!("{}: uncached {w:?}, cached {g:?}", m.id),
+            }
+        }
+        match want {
+            Ok(w) => {
+                accepted += 1;
+                waited += usize::from(w.arrival_delay_s > 0.0);
+                ids[0].push(w.intent.id);
+                // Now and then the flight accepted three before is cancelled, in all three
+                // stores: read (and cached) by the flights since, it must block no more.
+                if k % 5 == 4 && ids[0].len() >= 3 {
+                    let at = ids[0].len() - 3;
+                    let gone = exact.delete(&ids[0][at]).expect("delete");
+                    assert!(gone.is_some());
+                    for (store, ids) in stores.iter().zip(&ids[1..]) {
+                        assert!(store.delete(&ids[at]).expect("delete").is_some());
+                    }
+                    deleted += 1;
+                }
+            }
+            Err(ReserveError::Blocked(_)) => refused += 1,
+            Err(e) => panic!("{}: {e}", m.id),
+        }
+    }
+    assert_eq!(
+        exact.list().expect("list").len(),
+        stores[0].list().expect("list").len()
+    );
+    assert!(caches[0].len() > 20, "{}", caches[0].len());
+    assert!(
+        accepted >= 30 && waited >= 10 && deleted >= 3,
+        "{accepted} accepted, {refused} refused, {waited} later than alone, {deleted} deleted"
+    );
+}
+
 /// A timed no-fly zone blocks the space-time search only while it is active: the sample's
 /// helipad (feature 1) across the default route, closed from the window's start for an hour,
 /// is kept out of by the margin (exactly, segment by segment); opening only half an hour after

@@ -147,6 +147,9 @@ pub(crate) struct Shared {
     pub next_request_id: AtomicU64,
     /// The airspace store, or why it could not be opened (the intents endpoints answer 503).
     pub airspace: Result<Arc<dyn IntentStore>, String>,
+    /// The stored intents as the space-time search saw them, kept between requests (one
+    /// search at a time uses it; another meanwhile reads the store afresh).
+    pub space_time_cache: std::sync::Mutex<skyplan_fleet::SpaceTimeCache>,
 }
 
 /// The server's state: cheap to clone.
@@ -177,6 +180,7 @@ pub fn app(world: World, config: ServerConfig) -> App {
         config,
         events: events.clone(),
         next_request_id: AtomicU64::new(1),
+        space_time_cache: std::sync::Mutex::new(skyplan_fleet::SpaceTimeCache::new()),
     });
     let router = Router::new()
         .route("/", get(handlers::page))

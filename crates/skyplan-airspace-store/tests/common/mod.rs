@@ -207,6 +207,60 @@ pub fn the_index_finds_what_a_full_scan_finds(store: &dyn IntentStore) {
     assert_deconflicted(&store.list().expect("listed"));
 }
 
+/// On an empty `store`: `nearby_rows` names exactly the intents `nearby` reads (ids, versions,
+/// order), by rows that `get_rows` reads back as those intents; a deleted intent's row is
+/// named and read no more, and a row number is never given again.
+pub fn rows_name_what_nearby_reads(store: &dyn IntentStore) {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for _ in 0..80 {
+        let i = random_intent(&mut rng, 1_800_000, 3, "crowd");
+        store
+            .insert_if_clear(&i, PriorityRule::EqualOrHigher)
+            .expect("checked");
+    }
+    let mut named = 0;
+    let mut last_probe = None;
+    for _ in 0..60 {
+        let probe = random_intent(&mut rng, 1_800_000, 3, "probe");
+        let read = store.nearby(&probe.volumes, 300_000).expect("read");
+        let rows = store.nearby_rows(&probe.volumes, 300_000).expect("rows");
+        let refs: Vec<(String, u64)> = rows.iter().map(|r| (r.id.clone(), r.version)).collect();
+        let want: Vec<(String, u64)> = read.iter().map(|i| (i.id.clone(), i.version)).collect();
+        assert_eq!(refs, want);
+        assert!(rows.windows(2).all(|w| w[0].row < w[1].row), "store order");
+        let numbers: Vec<i64> = rows.iter().rev().map(|r| r.row).collect();
+        let back = store.get_rows(&numbers).expect("read back");
+        assert_eq!(back.iter().map(|b| b.0).collect::<Vec<_>>(), {
+            let mut n = numbers.clone();
+            n.reverse();
+            n
+        });
+        assert_eq!(back.into_iter().map(|b| b.1).collect::<Vec<_>>(), read);
+        named += rows.len();
+        if !rows.is_empty() {
+            last_probe = Some((probe, rows));
+        }
+    }
+    assert!(named > 100, "{named} named");
+    let (probe, rows) = last_probe.expect("some probe met the crowd");
+    let gone = &rows[0];
+    assert!(store.delete(&gone.id).expect("deleted").is_some());
+    let after = store.nearby_rows(&probe.volumes, 300_000).expect("rows");
+    assert!(!after.contains(gone));
+    assert_eq!(after.len(), rows.len() - 1);
+    assert!(store.get_rows(&[gone.row]).expect("read").is_empty());
+    // A new intent takes a new row, above every row given before (the deleted one's too).
+    let fresh = random_intent(&mut rng, 1_800_000, 3, "late");
+    if let Insert::Accepted { .. } = store
+        .insert_if_clear(&fresh, PriorityRule::Every)
+        .expect("checked")
+    {
+        let r = store.nearby_rows(&fresh.volumes, 0).expect("rows");
+        let mine = r.iter().find(|r| r.id == fresh.id).expect("named");
+        assert!(rows.iter().all(|o| o.row < mine.row), "a row number reused");
+    }
+}
+
 /// On an empty `store`: a reservation leaves at the earliest free departure or names its
 /// blockers.
 pub fn a_reservation_leaves_at_the_earliest_free_departure_or_names_its_blockers(
