@@ -56,6 +56,9 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
             out.display()
         )));
     }
+    if let Some(out) = &args.out {
+        crate::files::output_target("--out", out)?;
+    }
     let spec = PlanRequest {
         corner_cutting: args.corner_cutting.then_some(true),
         ..args.slice.request()

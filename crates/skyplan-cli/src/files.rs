@@ -52,17 +52,11 @@ pub fn output_target(option: &str, path: &Path) -> Result<Target> {
     };
     match std::fs::metadata(&resolved) {
         Ok(m) if m.is_file() => Ok(Target::File(resolved)),
-        Ok(m) => {
-            let what = if m.is_dir() {
-                "a directory"
-            } else {
-                "not a regular file (a device, FIFO or socket)"
-            };
-            Err(bad_input(format!(
-                "{option} {}: {what}; skyplan writes only regular files (or - for standard output)",
-                path.display()
-            )))
-        }
+        Ok(m) => Err(bad_input(format!(
+            "{option} {}: {}; skyplan writes only regular files (or - for standard output)",
+            path.display(),
+            not_a_file(&m)
+        ))),
         Err(_) => {
             let dir = match resolved.parent() {
                 Some(p) if !p.as_os_str().is_empty() => p,
@@ -78,6 +72,15 @@ pub fn output_target(option: &str, path: &Path) -> Result<Target> {
                 )))
             }
         }
+    }
+}
+
+/// What a path that is not a regular file is, for a refusal.
+fn not_a_file(m: &std::fs::Metadata) -> &'static str {
+    if m.is_dir() {
+        "a directory"
+    } else {
+        "not a regular file (a device, FIFO or socket)"
     }
 }
 
@@ -106,6 +109,17 @@ pub fn write_atomic_with(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
+    // The rename would put a regular file in place of a device, FIFO, socket or directory
+    // (as root, even /dev/null): refused whatever the caller checked before.
+    if let Ok(m) = std::fs::metadata(path)
+        && !m.is_file()
+    {
+        return Err(bad_input(format!(
+            "{}: {}; skyplan writes only regular files (or - for standard output)",
+            path.display(),
+            not_a_file(&m)
+        )));
+    }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -110,6 +110,13 @@ fn conflicts_in(store: &dyn IntentStore) -> Result<usize> {
 
 /// `skyplan fleet`.
 pub fn run(args: FleetArgs) -> Result<()> {
+    // Outputs are checked before any flight is planned.
+    if let Some(path) = &args.plot {
+        crate::files::output_target("--plot", path)?;
+    }
+    if let Some(path) = &args.json {
+        crate::files::output_target("--json", path)?;
+    }
     let world = world_of(args.map.as_deref())?;
     let start = match &args.start {
         Some(text) => text

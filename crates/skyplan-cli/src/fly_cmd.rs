@@ -124,6 +124,9 @@ pub fn run(args: FlyArgs) -> Result<()> {
             Ok::<_, Failure>((crate::files::output_target("--plot", path)?, kind))
         })
         .transpose()?;
+    if let Some(path) = &args.log {
+        crate::files::output_target("--log", path)?;
+    }
     if args.sim {
         check_ends(&world, &limits, &request)?;
     }

@@ -29,6 +29,9 @@ pub fn run(args: ScenArgs) -> Result<()> {
     if let Some(why) = first_off_map(&map, &scenarios) {
         return Err(bad_input(format!("{scen_name}: {why}")));
     }
+    if let Some(path) = &args.save_preprocess {
+        crate::files::output_target("--save-preprocess", path)?;
+    }
     let progress = indicatif::ProgressBar::new(scenarios.len() as u64);
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());

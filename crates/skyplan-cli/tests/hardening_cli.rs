@@ -200,6 +200,61 @@ fn outputs_that_are_not_regular_files_survive() {
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("not a regular file"), "{err}");
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    // Every command's outputs, refused before any work (a FIFO would block a write; a rename
+    // over it would replace it): fleet's report and picture, bench's records, fly's log,
+    // scen's saved hierarchy.
+    for name in ["fifo.png", "fifo.csv", "fifo.ch"] {
+        let made = std::process::Command::new("mkfifo")
+            .arg(dir.path().join(name))
+            .status()
+            .unwrap();
+        assert!(made.success());
+    }
+    std::fs::write(
+        dir.path().join("m.map"),
+        "type octile\nheight 2\nwidth 3\nmap\n...\n...\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("m.map.scen"),
+        "version 1\n0\tm.map\t3\t2\t0\t0\t2\t1\t2.41421356\n",
+    )
+    .unwrap();
+    for args in [
+        &["fleet", "--random", "2", "--json", "fifo.json"][..],
+        &["fleet", "--random", "2", "--plot", "fifo.png"],
+        &[
+            "bench",
+            "--random",
+            "1",
+            "--planners",
+            "jps",
+            "--out",
+            "fifo.json",
+        ],
+        &["fly", "--sim", "--log", "fifo.csv"],
+        &[
+            "scen",
+            "m.map",
+            "m.map.scen",
+            "--planner",
+            "ch",
+            "--save-preprocess",
+            "fifo.ch",
+        ],
+    ] {
+        let t = std::time::Instant::now();
+        let (code, _, err) = skyplan(dir.path(), args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(err.contains("not a regular file"), "{args:?}: {err}");
+        assert!(t.elapsed().as_secs() < 20, "{args:?} ran before refusing");
+    }
+    for name in ["fifo.json", "fifo.png", "fifo.csv", "fifo.ch"] {
+        let kind = std::fs::metadata(dir.path().join(name))
+            .unwrap()
+            .file_type();
+        assert!(kind.is_fifo(), "{name}");
+    }
     if Path::new("/dev/full").exists() {
         let (code, _, err) = skyplan(
             dir.path(),
