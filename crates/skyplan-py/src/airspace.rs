@@ -99,6 +99,9 @@ fn departure_value(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
 pub struct Airspace {
     url: String,
     store: Box<dyn IntentStore>,
+    /// The stored intents a `space_time` reservation read, kept for the next ones (as the
+    /// server keeps them): read, decoded and rasterised once.
+    space_time_cache: std::sync::Mutex<skyplan_fleet::SpaceTimeCache>,
 }
 
 #[pymethods]
@@ -110,6 +113,7 @@ impl Airspace {
         Ok(Self {
             url: url.to_string(),
             store,
+            space_time_cache: std::sync::Mutex::new(skyplan_fleet::SpaceTimeCache::new()),
         })
     }
 
@@ -195,9 +199,24 @@ impl Airspace {
                     plan.planner.name()
                 )));
             };
+            let cache = &self.space_time_cache;
             let r = py
                 .detach(|| {
-                    skyplan_fleet::reserve_space_time(store, &grid, &plan, &flight_request).0
+                    match cache.try_lock() {
+                        Ok(mut cache) => skyplan_fleet::reserve_space_time_cached(
+                            store,
+                            &grid,
+                            &plan,
+                            &flight_request,
+                            &mut cache,
+                        ),
+                        // Another thread's search holds it (or one panicked holding it): this
+                        // one reads the store afresh, with the same answer.
+                        Err(_) => {
+                            skyplan_fleet::reserve_space_time(store, &grid, &plan, &flight_request)
+                        }
+                    }
+                    .0
                 })
                 .map_err(reserve_error)?;
             json!({
