@@ -55,5 +55,5 @@ pub use run::{
 pub use space_time::{
     BULGE_CELLS, CACHE_INTENTS, MAX_EXPANSIONS, READ_REACH_M, SEARCH_CELL_M, SLACK_M, STRETCH_M,
     STRETCH_S, SearchSpace, SpaceTimeCache, SpaceTimeFlight, reserve_space_time,
-    reserve_space_time_cached, search_grid,
+    reserve_space_time_cached, reserve_space_time_shared, search_grid,
 };

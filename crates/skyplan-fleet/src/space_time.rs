@@ -367,15 +367,7 @@ impl Obstacles {
             if v.volume.altitude_upper.value < band.0 || v.volume.altitude_lower.value > band.1 {
                 continue;
             }
-            let mut points = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
-            for p in &v.volume.outline_polygon.vertices {
-                let ned = frame.ned_from_lla(Lla {
-                    lat_deg: p.lat,
-                    lon_deg: p.lng,
-                    alt_m: 0.0,
-                })?;
-                points.push([ned.north_m, ned.east_m]);
-            }
+            let points = outline_ne(frame, v)?;
             let s = |t: &skyplan_airspace::Time| t.value.ms_since(t0) as f64 / 1000.0;
             self.file(Obstacle::new(
                 &points,
@@ -580,15 +572,7 @@ impl SpaceTimeCache {
         let mut kept = Vec::with_capacity(volumes.len());
         let mut footprints = Vec::with_capacity(volumes.len());
         for v in &volumes {
-            let mut points = Vec::with_capacity(v.volume.outline_polygon.vertices.len());
-            for p in &v.volume.outline_polygon.vertices {
-                let ned = frame.ned_from_lla(Lla {
-                    lat_deg: p.lat,
-                    lon_deg: p.lng,
-                    alt_m: 0.0,
-                })?;
-                points.push([ned.north_m, ned.east_m]);
-            }
+            let points = outline_ne(frame, v)?;
             kept.push(CachedVolume {
                 lower_m: v.volume.altitude_lower.value,
                 upper_m: v.volume.altitude_upper.value,
@@ -978,6 +962,36 @@ pub fn reserve_space_time_cached(
     let mut nearby = 0;
     let result = space_time_inner(store, space, plan, request, Some(cache), &mut nearby);
     (result, nearby)
+}
+
+/// [`reserve_space_time_cached`] with a cache several threads share (a server's, a Python
+/// `Airspace`'s): the cache when it is free, else — another search holds it, or one panicked
+/// holding it — [`reserve_space_time`], which reads the store afresh and gives the same answer.
+pub fn reserve_space_time_shared(
+    store: &dyn IntentStore,
+    space: &SearchSpace,
+    plan: &Plan,
+    request: &FlightRequest,
+    cache: &std::sync::Mutex<SpaceTimeCache>,
+) -> (Result<SpaceTimeFlight, ReserveError>, usize) {
+    match cache.try_lock() {
+        Ok(mut cache) => reserve_space_time_cached(store, space, plan, request, &mut cache),
+        Err(_) => reserve_space_time(store, space, plan, request),
+    }
+}
+
+/// A volume's outline in the map's frame: north and east of its vertices, metres.
+fn outline_ne(frame: &LocalFrame, v: &Volume4D) -> Result<Vec<[f64; 2]>, AirspaceError> {
+    (v.volume.outline_polygon.vertices.iter())
+        .map(|p| {
+            let ned = frame.ned_from_lla(Lla {
+                lat_deg: p.lat,
+                lon_deg: p.lng,
+                alt_m: 0.0,
+            })?;
+            Ok([ned.north_m, ned.east_m])
+        })
+        .collect()
 }
 
 fn invalid(field: &str, why: impl Into<String>) -> ReserveError {

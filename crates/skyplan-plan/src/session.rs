@@ -371,10 +371,7 @@ impl Session {
             return Ok((Arc::clone(ch), None));
         }
         let t0 = Instant::now();
-        let deadline = match (self.deadline, limit.map(|l| t0 + l)) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
+        let deadline = self.preprocessing_deadline(t0, limit);
         let ch = ContractionHierarchy::build_until(Arc::clone(grid), model, deadline)
             .map_err(|e| match e {
                 skyplan_search::ContractionError::Deadline { .. } => PlanFailure::new(
@@ -392,6 +389,15 @@ impl Session {
         Ok((ch, Some(us)))
     }
 
+    /// When preprocessing started at `t0` must give up: the sooner of the session's deadline and
+    /// `t0` + `limit` (the request's time limit), if either.
+    fn preprocessing_deadline(&self, t0: Instant, limit: Option<Duration>) -> Option<Instant> {
+        match (self.deadline, limit.map(|l| t0 + l)) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// The subgoal graph of `grid` (8-connected, no corner cutting): kept from an earlier
     /// request, or built now within `limit` and the session's deadline (then also the build
     /// time in microseconds).
@@ -404,10 +410,7 @@ impl Session {
             return Ok((Arc::clone(g), None));
         }
         let t0 = Instant::now();
-        let deadline = match (self.deadline, limit.map(|l| t0 + l)) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
+        let deadline = self.preprocessing_deadline(t0, limit);
         let graph = SubgoalGraph::build_until(Arc::clone(grid), MoveModel::Octile, deadline)
             .map_err(|e| match e {
                 SubgoalError::Deadline { .. } => PlanFailure::new(

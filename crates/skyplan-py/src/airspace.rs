@@ -202,20 +202,13 @@ impl Airspace {
             let cache = &self.space_time_cache;
             let r = py
                 .detach(|| {
-                    match cache.try_lock() {
-                        Ok(mut cache) => skyplan_fleet::reserve_space_time_cached(
-                            store,
-                            &grid,
-                            &plan,
-                            &flight_request,
-                            &mut cache,
-                        ),
-                        // Another thread's search holds it (or one panicked holding it): this
-                        // one reads the store afresh, with the same answer.
-                        Err(_) => {
-                            skyplan_fleet::reserve_space_time(store, &grid, &plan, &flight_request)
-                        }
-                    }
+                    skyplan_fleet::reserve_space_time_shared(
+                        store,
+                        &grid,
+                        &plan,
+                        &flight_request,
+                        cache,
+                    )
                     .0
                 })
                 .map_err(reserve_error)?;

@@ -145,18 +145,13 @@ pub(crate) async fn create(
         let shared = s.clone();
         blocking(move || {
             let store = store.as_ref();
-            let r = match shared.space_time_cache.try_lock() {
-                Ok(mut cache) => skyplan_fleet::reserve_space_time_cached(
-                    store,
-                    &grid,
-                    &plan,
-                    &flight_request,
-                    &mut cache,
-                ),
-                // Another request's search holds it (or one panicked holding it): this one
-                // reads the store afresh, with the same answer.
-                Err(_) => skyplan_fleet::reserve_space_time(store, &grid, &plan, &flight_request),
-            }
+            let r = skyplan_fleet::reserve_space_time_shared(
+                store,
+                &grid,
+                &plan,
+                &flight_request,
+                &shared.space_time_cache,
+            )
             .0
             .map_err(reserve_error)?;
             let search = r.search_json();
