@@ -306,7 +306,7 @@ impl CellPlanner for SubgoalCells {
     }
 }
 
-/// `auto`: JPS, JPS+ or CH, picked per grid from its statistics and the queries on it
+/// `auto`: JPS, JPS+, CH or the subgoal graph, picked per grid from its statistics and the queries on it
 /// ([`crate::auto::pick`]); in a session the count is the session's `auto` queries on the grid
 /// so far, and kept preprocessing (built or loaded) is used when the rule would take it.
 pub(crate) struct AutoCells;

@@ -114,7 +114,7 @@ impl MapStats {
 /// and why, in words.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AutoPick {
-    /// The planner that answers (jps, jps-plus or ch).
+    /// The planner that answers (jps, jps-plus, ch or subgoal).
     pub planner: PlannerId,
     /// The grid's statistics.
     pub stats: MapStats,
