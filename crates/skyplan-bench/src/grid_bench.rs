@@ -142,20 +142,21 @@ pub fn contender_names() -> String {
 /// [`run_prepared`] with the process's peak resident set measured around it (Linux), from
 /// before the planner is prepared: `prepare` gives an engine (e.g. JPS+ from a table file), or
 /// `None` to build the contender's own.
-pub fn run_measured<'g, E>(
+pub fn run_measured<'g>(
     grid: &'g Grid2,
     model: MoveModel,
     contender: Contender,
-    prepare: impl FnOnce() -> Result<Option<CellSearch<'g>>, E>,
+    prepare: impl FnOnce() -> Result<Option<CellSearch<'g>>, RunAllError>,
     queries: &[(Cell, Cell)],
     progress: impl FnMut(usize),
-) -> Result<Run, E> {
+) -> Result<Run, RunAllError> {
     let measured = reset_peak_rss();
     let engine = match (prepare()?, contender) {
         (Some(e), _) => Some(e),
-        (None, Contender::Skyplan(p)) => {
-            CellSearch::for_queries(grid, p, model, queries.len() as u64).ok()
-        }
+        (None, Contender::Skyplan(p)) => Some(
+            CellSearch::for_queries(grid, p, model, queries.len() as u64)
+                .map_err(|e| RunAllError::Refused(format!("{p}: {}", e.message)))?,
+        ),
         (None, Contender::PathfindingCrateAStar) => None,
     };
     let mut r = run_prepared(grid, model, contender, engine, queries, progress);
@@ -277,12 +278,17 @@ pub enum RunAllError {
     Table(String),
     /// JPS+ could not use a table that was fine.
     Engine(String),
+    /// A planner cannot run on this grid (e.g. a first-move table too large for it): the
+    /// request is wrong.
+    Refused(String),
 }
 
 impl std::fmt::Display for RunAllError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            RunAllError::Table(m) | RunAllError::Engine(m) => f.write_str(m),
+            RunAllError::Table(m) | RunAllError::Engine(m) | RunAllError::Refused(m) => {
+                f.write_str(m)
+            }
         }
     }
 }

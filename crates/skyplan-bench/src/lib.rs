@@ -9,12 +9,12 @@
 //! let grid = Grid2::from_ascii(&"..........\n".repeat(10))?;
 //! let queries = random_far_queries(&grid, MoveModel::Octile, 5, 42, 6.0);
 //! assert_eq!(queries.len(), 5);
-//! let jps = run(&grid, MoveModel::Octile, Contender::Skyplan(PlannerId::JpsPlus), &queries, |_| {});
-//! let astar = run(&grid, MoveModel::Octile, Contender::Skyplan(PlannerId::Astar), &queries, |_| {});
+//! let jps = run(&grid, MoveModel::Octile, Contender::Skyplan(PlannerId::JpsPlus), &queries, |_| {})?;
+//! let astar = run(&grid, MoveModel::Octile, Contender::Skyplan(PlannerId::Astar), &queries, |_| {})?;
 //! for (a, b) in jps.records.iter().zip(&astar.records) {
 //!     assert_eq!(a.cost, b.cost);
 //! }
-//! # Ok::<(), skyplan_cspace::GridError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -171,23 +171,32 @@ pub fn random_far_queries(
 }
 
 /// Runs one planner on every query (after one untimed warm-up query), calling `progress(k)`
-/// after query `k`.
+/// after query `k`; refused when a skyplan planner cannot be prepared on the grid (e.g. a
+/// first-move table too large for it).
 pub fn run(
     grid: &Grid2,
     model: MoveModel,
     contender: Contender,
     queries: &[(Cell, Cell)],
     progress: impl FnMut(usize),
-) -> Run {
+) -> Result<Run, skyplan_plan::PlanFailure> {
     let engine = match contender {
-        Contender::Skyplan(p) => CellSearch::for_queries(grid, p, model, queries.len() as u64).ok(),
+        Contender::Skyplan(p) => Some(CellSearch::for_queries(
+            grid,
+            p,
+            model,
+            queries.len() as u64,
+        )?),
         Contender::PathfindingCrateAStar => None,
     };
-    run_prepared(grid, model, contender, engine, queries, progress)
+    Ok(run_prepared(
+        grid, model, contender, engine, queries, progress,
+    ))
 }
 
 /// [`run`] with the skyplan planner already prepared (e.g. JPS+ with a table loaded from a
-/// file: [`CellSearch::with_jps_plus_table`]); `engine` is `None` for the peer.
+/// file: [`CellSearch::with_jps_plus_table`]); `engine` is `None` for the peer (and only for
+/// it: a skyplan contender without an engine would be timed as the peer).
 pub fn run_prepared(
     grid: &Grid2,
     model: MoveModel,

@@ -79,6 +79,7 @@ impl Replay {
             PlannerId::JpsPlus => format!(" (JPS+ table built in {:.1} ms)", self.table_ms),
             PlannerId::Ch => format!(" (hierarchy built in {:.1} ms)", self.table_ms),
             PlannerId::Subgoal => format!(" (subgoal graph built in {:.1} ms)", self.table_ms),
+            PlannerId::FirstMove => format!(" (first-move table ready in {:.1} ms)", self.table_ms),
             _ => String::new(),
         };
         let mut s = format!(

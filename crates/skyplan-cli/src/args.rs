@@ -293,13 +293,14 @@ pub struct PlanArgs {
     /// prm, lazy-prm: start from a saved roadmap (refused if built for another map, margin or volume).
     #[arg(long, value_name = "FILE")]
     pub load_roadmap: Option<PathBuf>,
-    /// jps-plus, ch: plan with the JPS+ table or contraction hierarchy saved in FILE (by
-    /// --save-preprocess) instead of building one; refused unless FILE was built for this map's
-    /// grid (altitude, margin, cell size) and corner rule.
+    /// jps-plus, ch, first-move: plan with the JPS+ table, contraction hierarchy or first-move
+    /// table saved in FILE (by --save-preprocess) instead of building one; refused unless FILE
+    /// was built for this map's grid (altitude, margin, cell size) and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// jps-plus, ch: save the JPS+ table or contraction hierarchy this plan used to FILE (for
-    /// --preprocess in later runs: a far query on a large map then needs no preprocessing).
+    /// jps-plus, ch, first-move: save the JPS+ table, contraction hierarchy or first-move table
+    /// this plan used to FILE (for --preprocess in later runs: a far query on a large map then
+    /// needs no preprocessing).
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
 }
@@ -316,13 +317,14 @@ pub struct ScenArgs {
     /// Grid-search planner.
     #[arg(long, value_name = "PLANNER", default_value = "auto", value_parser = grid_search_planner())]
     pub planner: PlannerId,
-    /// Use the contraction hierarchy saved in FILE (by --save-preprocess) instead of building
-    /// one: with --planner ch, or auto on maps where a hierarchy is the fastest; refused unless
-    /// FILE was built for this map.
+    /// Use the preprocessing saved in FILE (by --save-preprocess) instead of building it: a
+    /// contraction hierarchy (with --planner ch, or auto on maps where a hierarchy is the
+    /// fastest) or a first-move table (with --planner first-move or auto, on any map); refused
+    /// unless FILE was built for this map.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// Save the contraction hierarchy this run builds (--planner ch, or auto when it picks ch)
-    /// to FILE, for --preprocess in later runs.
+    /// Save the contraction hierarchy or first-move table this run builds (--planner ch or
+    /// first-move, or auto when it picks one) to FILE, for --preprocess in later runs.
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
 }

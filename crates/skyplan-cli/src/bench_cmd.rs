@@ -92,6 +92,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         (RunAllError::Table(e), Some(path)) => {
             bad_input(format!("--preprocess {}: {e}", path.display()))
         }
+        (RunAllError::Refused(e), _) => bad_input(format!("--planners: {e}")),
         (e, _) => runtime(e),
     })?;
     progress.finish_and_clear();

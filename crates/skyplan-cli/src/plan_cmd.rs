@@ -282,7 +282,11 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     };
     if let Some(path) = &args.preprocess {
         // A table for another grid loads, but this plan's grid then builds its own.
-        let what = ["jps_plus_table", "contraction_hierarchy"];
+        let what = [
+            "jps_plus_table",
+            "contraction_hierarchy",
+            "first_move_table",
+        ];
         if what
             .iter()
             .any(|k| plan.details.get(*k).and_then(|v| v.as_str()) == Some("built"))
@@ -302,6 +306,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         crate::files::write_atomic_with(path, |out| {
             match planner {
                 PlannerId::Ch => session.save_ch(&request, out),
+                PlannerId::FirstMove => session.save_first_move(&request, out),
                 _ => session.save_jps_plus(&request, out),
             }
             .map(|_| ())
@@ -338,7 +343,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
 
 /// `--preprocess` (loaded into the session before planning) and `--save-preprocess` (its target,
 /// checked before planning so that a failing run writes nothing): for `jps-plus` a JPS+ table,
-/// for `ch` a contraction hierarchy; other planners build nothing to keep.
+/// for `ch` a contraction hierarchy, for `first-move` a first-move table; other planners build
+/// nothing to keep.
 fn preprocess_files(
     args: &PlanArgs,
     planner: PlannerId,
@@ -350,9 +356,12 @@ fn preprocess_files(
         (None, Some(p)) => ("--save-preprocess", p),
         (None, None) => return Ok(None),
     };
-    if !matches!(planner, PlannerId::JpsPlus | PlannerId::Ch) {
+    if !matches!(
+        planner,
+        PlannerId::JpsPlus | PlannerId::Ch | PlannerId::FirstMove
+    ) {
         return Err(bad_input(format!(
-            "{option} {}: only jps-plus (a JPS+ table) and ch (a contraction hierarchy) keep preprocessing; the planner is {planner}",
+            "{option} {}: only jps-plus (a JPS+ table), ch (a contraction hierarchy) and first-move (a first-move table) keep preprocessing; the planner is {planner}",
             path.display()
         )));
     }
@@ -370,6 +379,7 @@ fn preprocess_files(
     let input = std::io::BufReader::new(file);
     match planner {
         PlannerId::Ch => session.load_ch(request, input),
+        PlannerId::FirstMove => session.load_first_move(request, input),
         _ => session.load_jps_plus(input),
     }
     .map_err(|f| bad_input(format!("--preprocess {shown}: {}", f.message)))?;

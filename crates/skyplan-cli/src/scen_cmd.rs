@@ -8,9 +8,9 @@ use serde_json::json;
 use skyplan_bench::replay::{file_order_grid, first_off_map, replay_prepared};
 use skyplan_bench::replay_report::ReplayOf;
 use skyplan_cspace::Grid2;
-use skyplan_plan::auto::{MapStats, pick, pick_with_hierarchy};
+use skyplan_plan::auto::{MapStats, pick, pick_with_first_move_table, pick_with_hierarchy};
 use skyplan_plan::{CellSearch, PlannerId};
-use skyplan_search::{ContractionHierarchy, MoveModel};
+use skyplan_search::{ContractionHierarchy, FirstMoveTable, MoveModel};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -38,7 +38,7 @@ pub fn run(args: ScenArgs) -> Result<()> {
     }
     let search = prepare(&args, &grid, scenarios.len() as u64)?;
     if let Some(path) = &args.save_preprocess {
-        save_hierarchy(path, &search, args.json)?;
+        save_preprocessing(path, &search, args.json)?;
     }
     let replayed = replay_prepared(&grid, search, &scenarios, |o| {
         if args.json {
@@ -64,8 +64,9 @@ pub fn run(args: ScenArgs) -> Result<()> {
     }
 }
 
-/// The search for `queries` scenarios: the planner (auto picking for that many), or a saved
-/// contraction hierarchy (`--preprocess`).
+/// The search for `queries` scenarios: the planner (auto picking for that many), or saved
+/// preprocessing (`--preprocess`: a contraction hierarchy or a first-move table, told apart by
+/// the file's header).
 fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSearch<'g>> {
     let planner_error = |e: skyplan_plan::PlanFailure| {
         bad_input(format!("--planner {}: {}", args.planner, e.message))
@@ -75,10 +76,17 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
             .map_err(planner_error);
     };
     let shown = path.display();
-    let auto = match args.planner {
-        PlannerId::Ch => None,
-        PlannerId::Auto => {
-            let stats = MapStats::of(grid);
+    let t = Instant::now();
+    let file = std::fs::File::open(path)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
+    let mut input = std::io::BufReader::new(file);
+    let head = std::io::BufRead::fill_buf(&mut input)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
+    let first_move = head.starts_with(skyplan_search::first_move_file::MAGIC);
+    let stats = MapStats::of(grid);
+    let auto = match (args.planner, first_move) {
+        (PlannerId::Auto, true) => Some(pick_with_first_move_table(&stats, queries)),
+        (PlannerId::Auto, false) => {
             let Some(p) = pick_with_hierarchy(&stats, queries) else {
                 return Err(bad_input(format!(
                     "--preprocess {shown}: auto does not use a contraction hierarchy on this map ({}: it picks {})",
@@ -88,44 +96,58 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
             };
             Some(p)
         }
-        other => {
+        (PlannerId::FirstMove, true) | (PlannerId::Ch, false) => None,
+        (other, _) => {
+            let what = if first_move {
+                "a saved first-move table is for --planner first-move or auto"
+            } else {
+                "a saved contraction hierarchy is for --planner ch or auto"
+            };
             return Err(bad_input(format!(
-                "--preprocess {shown}: a saved contraction hierarchy is for --planner ch or auto, not {other}"
+                "--preprocess {shown}: {what}, not {other}"
             )));
         }
     };
-    let t = Instant::now();
-    let file = std::fs::File::open(path)
-        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
-    let ch = ContractionHierarchy::read_from(
-        std::io::BufReader::new(file),
-        Arc::new(grid.clone()),
-        MoveModel::Octile,
-    )
-    .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
-    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
-    CellSearch::with_hierarchy(grid, Arc::new(ch), us, auto).map_err(planner_error)
+    let grid_arc = Arc::new(grid.clone());
+    let us = |t: Instant| u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    if first_move {
+        let table = FirstMoveTable::read_from(input, grid_arc, MoveModel::Octile)
+            .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
+        return CellSearch::with_first_move_table(grid, Arc::new(table), us(t), auto)
+            .map_err(planner_error);
+    }
+    let ch = ContractionHierarchy::read_from(input, grid_arc, MoveModel::Octile)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
+    CellSearch::with_hierarchy(grid, Arc::new(ch), us(t), auto).map_err(planner_error)
 }
 
-/// Writes the search's contraction hierarchy to `path` atomically (a failed save leaves no
-/// partial file); refused when the search has none.
-fn save_hierarchy(path: &Path, search: &CellSearch<'_>, json: bool) -> Result<()> {
-    let Some(ch) = search.hierarchy() else {
+/// Writes the search's preprocessing (a contraction hierarchy or a first-move table) to `path`
+/// atomically (a failed save leaves no partial file); refused when the search has none.
+fn save_preprocessing(path: &Path, search: &CellSearch<'_>, json: bool) -> Result<()> {
+    let built_ms = search.precompute_us() as f64 / 1e3;
+    let (what, mb) = if let Some(ch) = search.hierarchy() {
+        crate::files::write_atomic_with(path, |out| {
+            ch.write_to(out).map_err(std::io::Error::other)
+        })?;
+        ("contraction hierarchy", ch.file_bytes() as f64 / 1e6)
+    } else if let Some(table) = search.first_move_table() {
+        crate::files::write_atomic_with(path, |out| {
+            table.write_to(out).map_err(std::io::Error::other)
+        })?;
+        ("first-move table", table.file_bytes() as f64 / 1e6)
+    } else {
         let what = match search.auto_pick() {
             Some(p) => format!("auto picked {} ({})", p.planner, p.why),
             None => "the planner builds none".to_string(),
         };
         return Err(bad_input(format!(
-            "--save-preprocess {}: no contraction hierarchy to save: {what}; use --planner ch",
+            "--save-preprocess {}: no contraction hierarchy or first-move table to save: {what}; use --planner ch or first-move",
             path.display()
         )));
     };
-    crate::files::write_atomic_with(path, |out| ch.write_to(out).map_err(std::io::Error::other))?;
     if !json {
         eprintln!(
-            "saved    contraction hierarchy ({:.1} MB, built in {:.0} ms) to {}",
-            ch.file_bytes() as f64 / 1e6,
-            search.precompute_us() as f64 / 1e3,
+            "saved    {what} ({mb:.1} MB, built in {built_ms:.0} ms) to {}",
             path.display()
         );
     }

@@ -28,6 +28,8 @@ fn fly(line: &str) -> (Option<i32>, String) {
 fn takes_colliders(planner: PlannerId) -> bool {
     match planner.info().maps {
         MapKinds::AnyGrid | MapKinds::Obstacles => true,
+        // Its table does not fit the city's grid (refused, tested in skyplan-plan).
+        MapKinds::SmallGrid => false,
     }
 }
 

@@ -123,6 +123,18 @@ fn a_wrong_optimal_length_is_caught() {
         .stderr(predicates::str::contains("1 of 2 scenarios do not match"));
 }
 
+/// `scen … --preprocess PATH` refused: exit 2, the file and `why` named, nothing on stdout.
+fn refused(mut scen: assert_cmd::Command, path: &std::path::Path, why: &str) {
+    let out = scen.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("--preprocess {}: ", path.display())) && err.contains(why),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
 /// The summary line of `scen --json`'s output.
 fn summary(out: &std::process::Output) -> Value {
     let text = String::from_utf8(out.stdout.clone()).unwrap();
@@ -176,16 +188,11 @@ fn a_saved_hierarchy_is_reused_by_auto_and_damaged_or_foreign_files_are_refused(
     for (name, content, why) in cases {
         let path = tmp.path().join(name);
         std::fs::write(&path, content).unwrap();
-        let out = run(&["--preprocess".as_ref(), path.as_os_str()])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{err}");
-        assert!(
-            err.contains(&format!("--preprocess {}: ", path.display())) && err.contains(why),
-            "{err}"
+        refused(
+            run(&["--preprocess".as_ref(), path.as_os_str()]),
+            &path,
+            why,
         );
-        assert!(out.stdout.is_empty());
     }
     let out = skyplan(tmp.path())
         .args(["scen", "--planner", "ch", "--preprocess"])
@@ -200,4 +207,87 @@ fn a_saved_hierarchy_is_reused_by_auto_and_damaged_or_foreign_files_are_refused(
         err.contains("built for a 512 × 512 grid") && err.contains("this grid is 81 × 65"),
         "{err}"
     );
+}
+
+#[test]
+fn a_saved_first_move_table_is_used_by_auto_and_refused_when_damaged_or_misused() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let map = data.join("den312d.map");
+    let scen = data.join("den312d.map.scen");
+    let file = tmp.path().join("den312d.fm");
+    let run = |extra: &[&std::ffi::OsStr]| {
+        let mut c = skyplan(tmp.path());
+        c.arg("scen").arg(&map).arg(&scen).arg("--json").args(extra);
+        c
+    };
+    // Built and saved by --planner first-move: every scenario matches its published length.
+    let saved = summary(&ok(&mut run(&[
+        "--planner".as_ref(),
+        "first-move".as_ref(),
+        "--save-preprocess".as_ref(),
+        file.as_os_str(),
+    ])));
+    assert_eq!(saved["matched"].as_u64(), Some(290));
+    // 290 queries do not pay for building a table, but auto uses one at hand.
+    let plain = summary(&ok(&mut run(&[])));
+    assert_eq!(plain["auto"]["planner"], "jps-plus");
+    let loaded = summary(&ok(&mut run(&["--preprocess".as_ref(), file.as_os_str()])));
+    assert_eq!(loaded["auto"]["planner"], "first-move");
+    assert_eq!(loaded["matched"].as_u64(), Some(290));
+    // Damaged, cut short, for another planner or map: exit 2, the file and what is wrong named.
+    let bytes = std::fs::read(&file).unwrap();
+    let mut damaged = bytes.clone();
+    damaged[bytes.len() / 2] ^= 0x10;
+    let cases: [(&str, Vec<u8>, &[&str], &str); 3] = [
+        (
+            "damaged.fm",
+            damaged,
+            &[],
+            "first-move table is damaged (its checksum does not match its contents)",
+        ),
+        (
+            "short.fm",
+            bytes[..bytes.len() / 3].to_vec(),
+            &[],
+            "(truncated or damaged)",
+        ),
+        (
+            "for-jps.fm",
+            bytes.clone(),
+            &["--planner", "jps"],
+            "a saved first-move table is for --planner first-move or auto, not jps",
+        ),
+    ];
+    for (name, content, args, why) in cases {
+        let path = tmp.path().join(name);
+        std::fs::write(&path, content).unwrap();
+        let mut c = run(&["--preprocess".as_ref(), path.as_os_str()]);
+        c.args(args);
+        refused(c, &path, why);
+    }
+    let out = skyplan(tmp.path())
+        .args(["scen", "--preprocess"])
+        .arg(&file)
+        .arg(data.join("random512-40-5.map"))
+        .arg(data.join("random512-40-5.map.scen"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("first-move table was built for a 81 × 65 grid")
+            && err.contains("this grid is 512 × 512"),
+        "{err}"
+    );
+    // Too large a map for a table: refused at once, saying why.
+    let out = skyplan(tmp.path())
+        .args(["scen", "--planner", "first-move"])
+        .arg(data.join("random512-40-5.map"))
+        .arg(data.join("random512-40-5.map.scen"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("it is for small maps"), "{err}");
 }

@@ -408,41 +408,49 @@ fn a_saved_jps_plus_table_plans_the_same_route_without_building() {
     );
 }
 
-/// The same for a contraction hierarchy on a MovingAI map; a hierarchy of the octile grid is
-/// refused for the corner-cutting one.
+/// The same for a contraction hierarchy and a first-move table on a MovingAI map; one built for
+/// the octile grid is refused for the corner-cutting one.
 #[test]
-fn a_saved_contraction_hierarchy_plans_the_same_route_without_building() {
+fn a_saved_hierarchy_or_first_move_table_plans_the_same_route_without_building() {
     let map = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../data/movingai/den312d.map"
     );
     let ends = "--start-ne 3.5,10.5 --goal-ne 70.5,40.5";
     let dir = tempfile::tempdir().unwrap();
-    let saved = run_json(
-        dir.path(),
-        &format!("--map {map} {ends} --planner ch --save-preprocess den.ch"),
-    );
-    assert_eq!(saved["contraction_hierarchy"], "built");
-    let loaded = run_json(
-        dir.path(),
-        &format!("--map {map} {ends} --planner ch --preprocess den.ch"),
-    );
-    assert_eq!(loaded["contraction_hierarchy"], "reused");
-    assert_eq!(loaded["cost_m"], saved["cost_m"]);
     // An independent oracle: Dijkstra over the same grid.
-    let jps = run_json(
+    let dijkstra = run_json(
         dir.path(),
         &format!("--map {map} {ends} --planner dijkstra"),
     );
-    let (a, b) = (
-        loaded["cost_m"].as_f64().unwrap(),
-        jps["cost_m"].as_f64().unwrap(),
-    );
-    assert!((a - b).abs() < 1e-9, "ch {a} against dijkstra {b}");
-    fails_with(
-        dir.path(),
-        &format!("plan --map {map} {ends} --planner ch --corner-cutting --preprocess den.ch"),
-        2,
-        &["--preprocess den.ch", "corner cutting"],
-    );
+    let truth = dijkstra["cost_m"].as_f64().unwrap();
+    for (planner, detail, file) in [
+        ("ch", "contraction_hierarchy", "den.ch"),
+        ("first-move", "first_move_table", "den.fm"),
+    ] {
+        let saved = run_json(
+            dir.path(),
+            &format!("--map {map} {ends} --planner {planner} --save-preprocess {file}"),
+        );
+        assert_eq!(saved[detail], "built");
+        let loaded = run_json(
+            dir.path(),
+            &format!("--map {map} {ends} --planner {planner} --preprocess {file}"),
+        );
+        assert_eq!(loaded[detail], "reused");
+        assert_eq!(loaded["cost_m"], saved["cost_m"]);
+        let cost = loaded["cost_m"].as_f64().unwrap();
+        assert!(
+            (cost - truth).abs() < 1e-9,
+            "{planner} {cost} against dijkstra {truth}"
+        );
+        fails_with(
+            dir.path(),
+            &format!(
+                "plan --map {map} {ends} --planner {planner} --corner-cutting --preprocess {file}"
+            ),
+            2,
+            &[&format!("--preprocess {file}"), "corner cutting"],
+        );
+    }
 }

@@ -14,8 +14,8 @@ use crate::world::World;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_sampling::PlannerKind;
 use skyplan_search::{
-    ChQuery, ContractionHierarchy, GridPath, GridSearch, JpsPlusTable, MoveModel, Planner,
-    SearchError, SubgoalGraph, SubgoalQuery,
+    ChQuery, ContractionHierarchy, FirstMoveTable, GridPath, GridSearch, JpsPlusTable, MoveModel,
+    Planner, SearchError, SubgoalGraph, SubgoalQuery,
 };
 use std::sync::Arc;
 
@@ -80,6 +80,8 @@ pub(crate) enum Engine {
     Hierarchy(Arc<ContractionHierarchy>),
     /// Queries of a subgoal graph.
     Subgoal(Arc<SubgoalGraph>),
+    /// Lookups in a first-move table.
+    FirstMove(Arc<FirstMoveTable>),
     /// A plain function.
     Function(SearchFn),
 }
@@ -106,6 +108,7 @@ impl Engine {
             Engine::Plus(table) => table.search(&mut ws.search, start, goal),
             Engine::Hierarchy(ch) => ch.search(&mut ws.ch, start, goal),
             Engine::Subgoal(graph) => graph.search(&mut ws.subgoal, start, goal),
+            Engine::FirstMove(table) => table.search(start, goal),
             Engine::Function(f) => f(grid, start, goal, model),
         }
     }
@@ -122,6 +125,17 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
+    /// An engine over preprocessing the session keeps: `built_us` if built now, `detail` its
+    /// name in the plan's details.
+    fn kept(engine: Engine, built_us: Option<u64>, detail: &'static str) -> Self {
+        Prepared {
+            engine,
+            built_us,
+            detail: Some(detail),
+            auto: None,
+        }
+    }
+
     fn plain(engine: Engine) -> Self {
         Prepared {
             engine,
@@ -214,12 +228,11 @@ impl CellPlanner for JpsPlusCells {
             return Ok(Prepared::plain(Engine::Online(Planner::JpsPlus)));
         }
         let (table, built_us) = session.jps_plus_table(grid, r.model);
-        Ok(Prepared {
-            engine: Engine::Plus(table),
+        Ok(Prepared::kept(
+            Engine::Plus(table),
             built_us,
-            detail: Some("jps_plus_table"),
-            auto: None,
-        })
+            "jps_plus_table",
+        ))
     }
 
     fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
@@ -250,12 +263,11 @@ impl CellPlanner for HierarchyCells {
         r: &Resolved,
     ) -> Result<Prepared, PlanFailure> {
         let (ch, built_us) = session.contraction_hierarchy(grid, r.model, r.preprocess_limit)?;
-        Ok(Prepared {
-            engine: Engine::Hierarchy(ch),
+        Ok(Prepared::kept(
+            Engine::Hierarchy(ch),
             built_us,
-            detail: Some("contraction_hierarchy"),
-            auto: None,
-        })
+            "contraction_hierarchy",
+        ))
     }
 
     fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
@@ -288,12 +300,11 @@ impl CellPlanner for SubgoalCells {
             return HierarchyCells.prepare(session, grid, r);
         }
         let (graph, built_us) = session.subgoal_graph(grid, r.preprocess_limit)?;
-        Ok(Prepared {
-            engine: Engine::Subgoal(graph),
+        Ok(Prepared::kept(
+            Engine::Subgoal(graph),
             built_us,
-            detail: Some("subgoal_graph"),
-            auto: None,
-        })
+            "subgoal_graph",
+        ))
     }
 
     fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
@@ -306,7 +317,38 @@ impl CellPlanner for SubgoalCells {
     }
 }
 
-/// `auto`: JPS, JPS+, CH or the subgoal graph, picked per grid from its statistics and the queries on it
+/// The first-move table, kept per grid and move model; for small maps (its size grows with the
+/// square of the free cells: refused past [`crate::auto::FIRST_MOVE_MAX_BYTES`] and the
+/// session's memory limit).
+pub(crate) struct FirstMoveCells;
+
+impl CellPlanner for FirstMoveCells {
+    fn prepare(
+        &self,
+        session: &mut Session,
+        grid: &Arc<Grid2>,
+        r: &Resolved,
+    ) -> Result<Prepared, PlanFailure> {
+        let (table, built_us) = session.first_move_table(grid, r.model, r.preprocess_limit)?;
+        Ok(Prepared::kept(
+            Engine::FirstMove(table),
+            built_us,
+            "first_move_table",
+        ))
+    }
+
+    fn prepare_alone(&self, grid: &Grid2, model: MoveModel) -> Result<Engine, PlanFailure> {
+        let table = FirstMoveTable::build(
+            Arc::new(grid.clone()),
+            model,
+            crate::auto::FIRST_MOVE_MAX_BYTES,
+        )
+        .map_err(|e| PlanFailure::bad_request(format!("planner first-move: {e}")))?;
+        Ok(Engine::FirstMove(Arc::new(table)))
+    }
+}
+
+/// `auto`: JPS, JPS+, CH, the subgoal graph or the first-move table, picked per grid from its statistics and the queries on it
 /// ([`crate::auto::pick`]); in a session the count is the session's `auto` queries on the grid
 /// so far, and kept preprocessing (built or loaded) is used when the rule would take it.
 pub(crate) struct AutoCells;
@@ -337,8 +379,14 @@ impl CellPlanner for AutoCells {
         let mut pick = session.auto_pick(grid, r.model);
         let mut prepared = match Self::cells(pick.planner).prepare(session, grid, r) {
             Ok(p) => p,
-            // A hierarchy or subgoal graph past its time limit: JPS+ answers at once.
-            Err(e) if matches!(pick.planner, PlannerId::Ch | PlannerId::Subgoal) => {
+            // A hierarchy, subgoal graph or first-move table past its time limit: JPS+ answers
+            // at once.
+            Err(e)
+                if matches!(
+                    pick.planner,
+                    PlannerId::Ch | PlannerId::Subgoal | PlannerId::FirstMove
+                ) =>
+            {
                 pick.planner = PlannerId::JpsPlus;
                 pick.why = format!("{}, but {}: JPS+ instead", pick.why, e.message);
                 JpsPlusCells.prepare(session, grid, r)?

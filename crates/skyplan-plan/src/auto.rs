@@ -1,4 +1,5 @@
-//! `--planner auto`: the fastest exact grid planner (JPS, JPS+, CH or the subgoal graph) for a
+//! `--planner auto`: the fastest exact grid planner (JPS, JPS+, CH, the subgoal graph or the
+//! first-move table) for a
 //! grid and a number of queries, chosen from measured map statistics ([`MapStats`]) by [`pick`]
 //! (and [`pick_for`], which knows the move model); the rule follows `skyplan scen` and `skyplan
 //! bench` on the bundled MovingAI maps and generated mazes (docs/BENCHMARKS.md, ARCHITECTURE
@@ -42,6 +43,37 @@ pub const SUBGOAL_MAX_RUN: f64 = 12.0;
 /// (den312d, 2,445 free cells) every query is short and JPS+ answers it in a few µs, less than
 /// a subgoal query's floods at both ends.
 pub const SUBGOAL_MIN_FREE: u64 = 65_536;
+
+/// The largest first-move table `auto` (and `--planner first-move`) builds: 64 MiB, half a byte
+/// per cell for every free cell (den312d's is 6.4 MB; a 128 × 128 map with 8,000 free cells
+/// reaches 66 MB; the city at 5 m would take 192 MB and is refused). A server keeps one per
+/// grid in each of its sessions, so the cap is per table, kept small.
+pub const FIRST_MOVE_MAX_BYTES: u64 = 64 << 20;
+
+/// Queries per (free cell)² from which a first-move table pays for itself: building it costs
+/// ≈ 8–16 ns per pair of free cells on this project's 2-core machine (den312d: 2,445 free
+/// cells, 50–100 ms) and it saves ≈ 1 µs per query against JPS+ there (≈ 0.5 µs against
+/// ≈ 1.5 µs), so it pays after ≈ free² / 100 queries (60,000 on den312d). A table at hand
+/// (loaded from a file, or built for earlier queries) is used whatever the count.
+pub const FIRST_MOVE_PAIRS_PER_QUERY: u64 = 100;
+
+/// Whether `queries` queries pay for a first-move table of a map with `stats`
+/// ([`FIRST_MOVE_MAX_BYTES`], [`FIRST_MOVE_PAIRS_PER_QUERY`]).
+///
+/// ```
+/// use skyplan_plan::auto::{MapStats, first_move_pays};
+/// let den312d = MapStats { cells: 5_265, free: 2_445, mean_run: 9.1 };
+/// assert!(!first_move_pays(&den312d, 290));
+/// assert!(first_move_pays(&den312d, 100_000));
+/// let boston = MapStats { cells: 262_144, free: 196_725, mean_run: 39.7 };
+/// assert!(!first_move_pays(&boston, u64::MAX)); // 26 GB
+/// ```
+pub fn first_move_pays(stats: &MapStats, queries: u64) -> bool {
+    let bytes =
+        skyplan_search::FirstMoveTable::bytes_for(stats.cells as usize, stats.free as usize);
+    bytes <= FIRST_MOVE_MAX_BYTES
+        && queries >= stats.free.saturating_mul(stats.free) / FIRST_MOVE_PAIRS_PER_QUERY
+}
 
 /// Whether a map is one where the subgoal graph answers fastest ([`SUBGOAL_MAX_RUN`],
 /// [`SUBGOAL_MIN_FREE`]).
@@ -127,6 +159,8 @@ pub struct AutoPick {
 /// The pick for `queries` queries on a grid with `stats`:
 ///
 /// - fewer than [`JPS_PLUS_QUERIES`]: **JPS** — no preprocessing would pay for itself;
+/// - a small map and enough queries to pay for its table ([`first_move_pays`]): the
+///   **first-move table**;
 /// - a mean free run ≤ [`CH_MAX_RUN`] (corridors, scattered obstacles) and at least
 ///   [`CH_QUERIES`] queries: **CH**;
 /// - a large map of corridors a few cells wide ([`subgoal_map`]): the **subgoal graph**;
@@ -159,6 +193,18 @@ pub fn pick(stats: &MapStats, queries: u64) -> AutoPick {
             format!(
                 "{queries} {} < {JPS_PLUS_QUERIES}: no preprocessing pays for itself",
                 plural(queries)
+            ),
+        )
+    } else if first_move_pays(stats, queries) {
+        (
+            PlannerId::FirstMove,
+            format!(
+                "a small map ({} free cells: a {} table) and {queries} queries ≥ free² / {FIRST_MOVE_PAIRS_PER_QUERY}: the first-move table pays for itself",
+                stats.free,
+                crate::human_bytes(skyplan_search::FirstMoveTable::bytes_for(
+                    stats.cells as usize,
+                    stats.free as usize
+                )),
             ),
         )
     } else if corridors && queries >= CH_QUERIES {
@@ -221,6 +267,23 @@ pub fn pick_for(stats: &MapStats, queries: u64, model: MoveModel) -> AutoPick {
         );
     }
     rule
+}
+
+/// The pick when a first-move table is at hand with no build to pay (loaded from a file, or
+/// kept from earlier queries): the table, on any map, since its queries search nothing.
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick_with_first_move_table}};
+/// let den312d = MapStats { cells: 5_265, free: 2_445, mean_run: 9.1 };
+/// assert_eq!(pick_with_first_move_table(&den312d, 290).planner, PlannerId::FirstMove);
+/// ```
+pub fn pick_with_first_move_table(stats: &MapStats, queries: u64) -> AutoPick {
+    AutoPick {
+        planner: PlannerId::FirstMove,
+        stats: *stats,
+        queries,
+        why: "a first-move table at hand (built or loaded): one lookup per cell of the path, no search".to_string(),
+    }
 }
 
 /// The pick when a contraction hierarchy is at hand with no build to pay (loaded from a file):

@@ -7,7 +7,7 @@ use crate::failure::PlanFailure;
 use crate::planner_id::PlannerId;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::{
-    BlockJps, ContractionHierarchy, GridPath, JpsPlusTable, MoveModel, SearchError,
+    BlockJps, ContractionHierarchy, FirstMoveTable, GridPath, JpsPlusTable, MoveModel, SearchError,
 };
 use std::sync::Arc;
 
@@ -48,12 +48,16 @@ impl<'g> CellSearch<'g> {
     /// ```
     /// use skyplan_plan::{CellSearch, PlannerId};
     /// use skyplan_search::MoveModel;
-    /// let grid = skyplan_cspace::Grid2::from_ascii("....\n.##.\n....")?;
+    /// // 100 rows of `..#.`: 300 free cells in runs of 1.5 along the rows.
+    /// let grid = skyplan_cspace::Grid2::from_ascii(&"..#.\n".repeat(100))?;
     /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 200)?;
     /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::JpsPlus));
-    /// // Free runs of 1.7 cells: from 250 queries a contraction hierarchy pays for itself.
-    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 1_000)?;
+    /// // Short free runs: from 250 queries a contraction hierarchy pays for itself…
+    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 500)?;
     /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::Ch));
+    /// // …and from 300² / 100 = 900 a first-move table (60 kB) does.
+    /// let s = CellSearch::for_queries(&grid, PlannerId::Auto, MoveModel::Octile, 1_000)?;
+    /// assert_eq!(s.auto_pick().map(|p| p.planner), Some(PlannerId::FirstMove));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn for_queries(
@@ -140,6 +144,40 @@ impl<'g> CellSearch<'g> {
     pub fn hierarchy(&self) -> Option<&Arc<ContractionHierarchy>> {
         match &self.engine {
             Engine::Hierarchy(ch) => Some(ch),
+            _ => None,
+        }
+    }
+
+    /// The first-move table `table` built or loaded before (e.g. from a file, see
+    /// [`skyplan_search::first_move_file`]); refused unless it was built for exactly `grid`.
+    /// `precompute_us` is what preparing it cost; `auto` is the pick to report, if `auto` chose
+    /// it ([`crate::auto::pick_with_first_move_table`]).
+    pub fn with_first_move_table(
+        grid: &'g Grid2,
+        table: Arc<FirstMoveTable>,
+        precompute_us: u64,
+        auto: Option<AutoPick>,
+    ) -> Result<Self, PlanFailure> {
+        if !std::ptr::eq(&**table.grid(), grid) && **table.grid() != *grid {
+            return Err(PlanFailure::bad_request(
+                "the first-move table was built for another grid",
+            ));
+        }
+        Ok(Self {
+            grid,
+            model: table.model(),
+            engine: Engine::FirstMove(table),
+            workspace: Box::default(),
+            block_jps: None,
+            precompute_us,
+            auto,
+        })
+    }
+
+    /// The first-move table it reads, if it does (`first-move`, or `auto` picking it): to save.
+    pub fn first_move_table(&self) -> Option<&Arc<FirstMoveTable>> {
+        match &self.engine {
+            Engine::FirstMove(t) => Some(t),
             _ => None,
         }
     }

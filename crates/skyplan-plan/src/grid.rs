@@ -253,6 +253,7 @@ pub(crate) fn plan<P: CellPlanner + ?Sized>(
         Err(SearchError::Unreachable { expansions }) => {
             return Err(unreachable(&grid, q, r.model, start, goal, expansions));
         }
+        Err(e @ SearchError::Damaged(_)) => return Err(PlanFailure::internal(e.to_string())),
         Err(other) => {
             return Err(PlanFailure::internal(format!(
                 "search refused checked endpoints: {other}"

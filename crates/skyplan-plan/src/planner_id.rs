@@ -39,6 +39,10 @@ pub enum MapKinds {
     /// Only maps of obstacles: FCND colliders, GeoJSON or OpenStreetMap footprints (it needs
     /// the boxes or the footprint prisms, not a fixed grid).
     Obstacles,
+    /// Every map, as [`MapKinds::AnyGrid`], when its grid is small enough for the planner's
+    /// per-grid table (the first-move table's size grows with the square of the free cells:
+    /// [`crate::auto::FIRST_MOVE_MAX_BYTES`]); a larger one is refused, saying so.
+    SmallGrid,
 }
 
 /// A group of request options that only some planners use. A request that gives an option of
@@ -157,10 +161,13 @@ planners! {
     /// Simple subgoal graph with a contraction hierarchy over it.
     Subgoal => "subgoal", "subgoal graph", 2, Exact, AnyGrid, [GridPath, TimeLimit], "the subgoal graph and its hierarchy per grid", &a::SubgoalCells,
         "subgoal graph: exact, a hierarchy over the obstacles' convex corners per grid; fastest on mazes with corridors a few cells wide";
-    /// The fastest exact grid planner for the map and the number of queries (JPS, JPS+, CH or
-    /// the subgoal graph).
-    Auto => "auto", "auto", 2, Exact, AnyGrid, [GridPath, TimeLimit], "what the planner it picks keeps (the JPS+ table, the contraction hierarchy, the subgoal graph), and the map's statistics", &a::AutoCells,
-        "the fastest exact grid planner for the map and the number of queries: JPS, JPS+, CH or the subgoal graph, from measured map statistics";
+    /// First-move table: the first move of a shortest path between every pair of free cells.
+    FirstMove => "first-move", "first-move table", 2, Exact, SmallGrid, [GridPath, TimeLimit], "the first-move table per grid and move model", &a::FirstMoveCells,
+        "first-move table: exact, one lookup per cell of the path, no search; for small maps (its size grows with the square of the free cells)";
+    /// The fastest exact grid planner for the map and the number of queries (JPS, JPS+, CH, the
+    /// subgoal graph or the first-move table).
+    Auto => "auto", "auto", 2, Exact, AnyGrid, [GridPath, TimeLimit], "what the planner it picks keeps (the JPS+ table, the contraction hierarchy, the subgoal graph, the first-move table), and the map's statistics", &a::AutoCells,
+        "the fastest exact grid planner for the map and the number of queries: JPS, JPS+, CH, the subgoal graph or the first-move table, from measured map statistics";
     /// A\* with the octile (or Manhattan) heuristic.
     Astar => "astar", "A*", 2, Exact, AnyGrid, [GridPath], "", &OnlineCells(G::AStar),
         "A* with the octile (8-connected) or Manhattan (4-connected) heuristic";
@@ -259,7 +266,7 @@ impl PlannerId {
         Self::ALL
             .iter()
             .copied()
-            .filter(move |p| obstacles || p.info().maps == MapKinds::AnyGrid)
+            .filter(move |p| obstacles || p.info().maps != MapKinds::Obstacles)
     }
 
     /// Every name, comma-separated (for messages).

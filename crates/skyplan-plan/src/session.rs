@@ -18,8 +18,12 @@ use skyplan_frames::{Lla, Ned};
 use skyplan_map::nofly::{Zone, ZoneShape};
 use skyplan_mission::Mission;
 use skyplan_search::ch_file::ChFileError;
+use skyplan_search::first_move_file::FirstMoveFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
-use skyplan_search::{ContractionHierarchy, JpsPlusTable, MoveModel, SubgoalError, SubgoalGraph};
+use skyplan_search::{
+    ContractionHierarchy, FirstMoveError, FirstMoveTable, JpsPlusTable, MoveModel, SubgoalError,
+    SubgoalGraph,
+};
 use skyplan_world3::{Aabb, BoxWorld3, Prism, WorldSpec};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -46,8 +50,75 @@ fn put<V: Clone>(cache: &mut HashMap<Key, V>, k: Key, v: V) -> V {
     v
 }
 
+/// Preprocessing kept across requests (a JPS+ table, a hierarchy, a graph, a table of first
+/// moves): the most recent [`CACHE_ENTRIES`], each found by what it was built for.
+pub(crate) struct Kept<T>(Vec<Arc<T>>);
+
+impl<T> Default for Kept<T> {
+    fn default() -> Self {
+        Self(Vec::new())
+    }
+}
+
+impl<T> Kept<T> {
+    /// The kept one `hit` matches.
+    pub(crate) fn find(&self, hit: impl Fn(&T) -> bool) -> Option<&Arc<T>> {
+        self.0.iter().find(|t| hit(t))
+    }
+
+    /// Whether one is kept that `hit` matches.
+    pub(crate) fn any(&self, hit: impl Fn(&T) -> bool) -> bool {
+        self.find(hit).is_some()
+    }
+
+    /// Drops the ones `hit` matches (before one replacing them is read, so the two are never
+    /// held at once).
+    pub(crate) fn drop_where(&mut self, hit: impl Fn(&T) -> bool) {
+        self.0.retain(|t| !hit(t));
+    }
+
+    /// Keeps `item`, dropping the oldest past [`CACHE_ENTRIES`].
+    pub(crate) fn keep(&mut self, item: Arc<T>) {
+        if self.0.len() >= CACHE_ENTRIES {
+            self.0.remove(0);
+        }
+        self.0.push(item);
+    }
+
+    /// The kept one `hit` matches, or else `build`'s, kept, with its build time in µs.
+    pub(crate) fn get_or_build<E>(
+        &mut self,
+        hit: impl Fn(&T) -> bool,
+        build: impl FnOnce() -> Result<T, E>,
+    ) -> Result<(Arc<T>, Option<u64>), E> {
+        if let Some(t) = self.find(hit) {
+            return Ok((Arc::clone(t), None));
+        }
+        let t0 = Instant::now();
+        let item = Arc::new(build()?);
+        let us = micros(t0.elapsed());
+        self.keep(Arc::clone(&item));
+        Ok((item, Some(us)))
+    }
+}
+
 pub(crate) fn micros(d: Duration) -> u64 {
     u64::try_from(d.as_micros()).unwrap_or(u64::MAX)
+}
+
+/// A preprocessing build that failed: past its time limit (a timeout, naming the planners that
+/// answer at once), or refused (a bad request).
+fn preprocessing_failure(planner: &str, late: bool, e: impl std::fmt::Display) -> PlanFailure {
+    if late {
+        PlanFailure::new(
+            crate::FailureKind::Timeout,
+            format!(
+                "planner {planner}: {e}: its preprocessing takes long on this map; jps-plus or jps answer at once"
+            ),
+        )
+    } else {
+        PlanFailure::bad_request(format!("planner {planner}: {e}"))
+    }
 }
 
 /// How the final re-check runs.
@@ -163,11 +234,13 @@ pub struct Session {
     /// The cell searches' buffers, reused between queries.
     pub(crate) workspace: Workspace,
     /// JPS+ preprocessing kept across requests (built on first use or loaded from a file).
-    jps_plus: Vec<Arc<JpsPlusTable>>,
+    jps_plus: Kept<JpsPlusTable>,
     /// Contraction hierarchies kept across requests (built on first use per grid and model).
-    ch: Vec<Arc<ContractionHierarchy>>,
+    ch: Kept<ContractionHierarchy>,
     /// Subgoal graphs kept across requests (built on first use per grid).
-    subgoal: Vec<Arc<SubgoalGraph>>,
+    subgoal: Kept<SubgoalGraph>,
+    /// First-move tables kept across requests (built on first use per grid and model).
+    first_move: Kept<FirstMoveTable>,
     /// When long preprocessing (a contraction hierarchy) must give up, if ever.
     deadline: Option<Instant>,
     /// `auto`'s statistics per grid and the `auto` queries on it so far.
@@ -186,9 +259,10 @@ impl Session {
             prm: HashMap::new(),
             any_angle: HashMap::new(),
             workspace: Workspace::default(),
-            jps_plus: Vec::new(),
-            ch: Vec::new(),
-            subgoal: Vec::new(),
+            jps_plus: Kept::default(),
+            ch: Kept::default(),
+            subgoal: Kept::default(),
+            first_move: Kept::default(),
             deadline: None,
             auto: Vec::new(),
         }
@@ -274,25 +348,11 @@ impl Session {
         } else {
             MoveModel::Octile
         };
-        if let Some(t) = self
-            .jps_plus
-            .iter()
-            .find(|t| t.model() == model && Arc::ptr_eq(t.grid(), grid))
-        {
-            return (Arc::clone(t), None);
-        }
-        let t0 = Instant::now();
-        let table = Arc::new(JpsPlusTable::build(Arc::clone(grid), model));
-        let us = micros(t0.elapsed());
-        self.keep_jps_plus(Arc::clone(&table));
-        (table, Some(us))
-    }
-
-    fn keep_jps_plus(&mut self, table: Arc<JpsPlusTable>) {
-        if self.jps_plus.len() >= CACHE_ENTRIES {
-            self.jps_plus.remove(0);
-        }
-        self.jps_plus.push(table);
+        let Ok(kept) = self.jps_plus.get_or_build(
+            |t| t.model() == model && Arc::ptr_eq(t.grid(), grid),
+            || Ok::<_, std::convert::Infallible>(JpsPlusTable::build(Arc::clone(grid), model)),
+        );
+        kept
     }
 
     /// Writes the JPS+ table for `request`'s grid and corner rule (built unless the session
@@ -346,10 +406,10 @@ impl Session {
         let grid = self.grid(alt_m, safety_m, cell_m)?;
         // Drop a table this one replaces before reading: the two are never held at once.
         self.jps_plus
-            .retain(|t| !(t.model() == header.model && Arc::ptr_eq(t.grid(), &grid)));
+            .drop_where(|t| t.model() == header.model && Arc::ptr_eq(t.grid(), &grid));
         let table = JpsPlusTable::read_after_header(&header, input, grid)
             .map_err(|e| refuse(e, self.world.name()))?;
-        self.keep_jps_plus(Arc::new(table));
+        self.jps_plus.keep(Arc::new(table));
         Ok(())
     }
 
@@ -363,30 +423,16 @@ impl Session {
         model: MoveModel,
         limit: Option<Duration>,
     ) -> Result<(Arc<ContractionHierarchy>, Option<u64>), PlanFailure> {
-        if let Some(ch) = self
-            .ch
-            .iter()
-            .find(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid))
-        {
-            return Ok((Arc::clone(ch), None));
-        }
-        let t0 = Instant::now();
-        let deadline = self.preprocessing_deadline(t0, limit);
-        let ch = ContractionHierarchy::build_until(Arc::clone(grid), model, deadline)
-            .map_err(|e| match e {
-                skyplan_search::ContractionError::Deadline { .. } => PlanFailure::new(
-                    crate::FailureKind::Timeout,
-                    format!("planner ch: {e}: its preprocessing takes long on open maps; jps-plus or jps answer at once"),
-                ),
-                other => PlanFailure::bad_request(format!("planner ch: {other}")),
-            })?;
-        let ch = Arc::new(ch);
-        let us = micros(t0.elapsed());
-        if self.ch.len() >= CACHE_ENTRIES {
-            self.ch.remove(0);
-        }
-        self.ch.push(Arc::clone(&ch));
-        Ok((ch, Some(us)))
+        let deadline = self.preprocessing_deadline(Instant::now(), limit);
+        self.ch.get_or_build(
+            |c| c.model() == model && Arc::ptr_eq(c.grid(), grid),
+            || {
+                ContractionHierarchy::build_until(Arc::clone(grid), model, deadline).map_err(|e| {
+                    let late = matches!(e, skyplan_search::ContractionError::Deadline { .. });
+                    preprocessing_failure("ch", late, e)
+                })
+            },
+        )
     }
 
     /// When preprocessing started at `t0` must give up: the sooner of the session's deadline and
@@ -406,26 +452,45 @@ impl Session {
         grid: &Arc<Grid2>,
         limit: Option<Duration>,
     ) -> Result<(Arc<SubgoalGraph>, Option<u64>), PlanFailure> {
-        if let Some(g) = self.subgoal.iter().find(|g| Arc::ptr_eq(g.grid(), grid)) {
-            return Ok((Arc::clone(g), None));
-        }
-        let t0 = Instant::now();
-        let deadline = self.preprocessing_deadline(t0, limit);
-        let graph = SubgoalGraph::build_until(Arc::clone(grid), MoveModel::Octile, deadline)
-            .map_err(|e| match e {
-                SubgoalError::Deadline { .. } => PlanFailure::new(
-                    crate::FailureKind::Timeout,
-                    format!("planner subgoal: {e}: its preprocessing takes long on open maps; jps-plus or jps answer at once"),
-                ),
-                other => PlanFailure::bad_request(format!("planner subgoal: {other}")),
-            })?;
-        let graph = Arc::new(graph);
-        let us = micros(t0.elapsed());
-        if self.subgoal.len() >= CACHE_ENTRIES {
-            self.subgoal.remove(0);
-        }
-        self.subgoal.push(Arc::clone(&graph));
-        Ok((graph, Some(us)))
+        let deadline = self.preprocessing_deadline(Instant::now(), limit);
+        self.subgoal.get_or_build(
+            |g| Arc::ptr_eq(g.grid(), grid),
+            || {
+                SubgoalGraph::build_until(Arc::clone(grid), MoveModel::Octile, deadline).map_err(
+                    |e| {
+                        let late = matches!(e, SubgoalError::Deadline { .. });
+                        preprocessing_failure("subgoal", late, e)
+                    },
+                )
+            },
+        )
+    }
+
+    /// The first-move table of `grid` under `model`: kept from an earlier request (built or
+    /// loaded), or built now within `limit`, the session's deadline and its memory limit (then
+    /// also the build time in microseconds).
+    pub(crate) fn first_move_table(
+        &mut self,
+        grid: &Arc<Grid2>,
+        model: MoveModel,
+        limit: Option<Duration>,
+    ) -> Result<(Arc<FirstMoveTable>, Option<u64>), PlanFailure> {
+        let deadline = self.preprocessing_deadline(Instant::now(), limit);
+        let max_bytes = self
+            .limits
+            .max_memory_bytes
+            .min(crate::auto::FIRST_MOVE_MAX_BYTES);
+        self.first_move.get_or_build(
+            |t| t.model() == model && Arc::ptr_eq(t.grid(), grid),
+            || {
+                FirstMoveTable::build_until(Arc::clone(grid), model, max_bytes, deadline).map_err(
+                    |e| {
+                        let late = matches!(e, FirstMoveError::Deadline { .. });
+                        preprocessing_failure("first-move", late, e)
+                    },
+                )
+            },
+        )
     }
 
     /// Writes the contraction hierarchy for `request`'s grid and move model (built unless the
@@ -433,17 +498,37 @@ impl Session {
     /// `out` as a hierarchy file ([`skyplan_search::ch_file`]), for [`Session::load_ch`] in a
     /// later run; the bytes written.
     pub fn save_ch(&mut self, request: &PlanRequest, out: impl Write) -> Result<u64, PlanFailure> {
-        let r = Resolved::new(&PlanRequest {
-            planner: Some(PlannerId::Ch),
-            ..request.clone()
-        })?;
+        let (r, grid) = self.preprocessing_grid(request, PlannerId::Ch)?;
         self.check_request_memory(&r)?;
-        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
         let (ch, _) = self.contraction_hierarchy(&grid, r.model, r.preprocess_limit)?;
         ch.write_to(out).map_err(|e| {
             PlanFailure::internal(format!("writing the contraction hierarchy: {e}"))
         })?;
         Ok(ch.file_bytes())
+    }
+
+    /// The request as `planner` resolves it, and its grid: what saved preprocessing is for.
+    fn preprocessing_grid(
+        &mut self,
+        request: &PlanRequest,
+        planner: PlannerId,
+    ) -> Result<(Resolved, Arc<Grid2>), PlanFailure> {
+        let r = Resolved::new(&PlanRequest {
+            planner: Some(planner),
+            ..request.clone()
+        })?;
+        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        Ok((r, grid))
+    }
+
+    /// A file's error: the reader's failure is internal, anything else a bad request naming this
+    /// session's map.
+    fn file_failure(&self, e: impl std::fmt::Display, io: bool) -> PlanFailure {
+        if io {
+            PlanFailure::internal(e.to_string())
+        } else {
+            PlanFailure::bad_request(format!("{e}; this session's map is {}", self.world.name()))
+        }
     }
 
     /// Loads a hierarchy file saved by [`Session::save_ch`] for `request`'s grid and move
@@ -452,26 +537,48 @@ impl Session {
     /// (bad request, naming what is wrong: not a hierarchy, another version, truncated,
     /// damaged, another grid or move model) otherwise.
     pub fn load_ch(&mut self, request: &PlanRequest, input: impl Read) -> Result<(), PlanFailure> {
-        let r = Resolved::new(&PlanRequest {
-            planner: Some(PlannerId::Ch),
-            ..request.clone()
-        })?;
-        let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
-        let ch = ContractionHierarchy::read_from(input, Arc::clone(&grid), r.model).map_err(
-            |e| match e {
-                ChFileError::Io(_) => PlanFailure::internal(e.to_string()),
-                _ => PlanFailure::bad_request(format!(
-                    "{e}; this session's map is {}",
-                    self.world.name()
-                )),
-            },
-        )?;
+        let (r, grid) = self.preprocessing_grid(request, PlannerId::Ch)?;
+        let ch = ContractionHierarchy::read_from(input, Arc::clone(&grid), r.model)
+            .map_err(|e| self.file_failure(&e, matches!(e, ChFileError::Io(_))))?;
         self.ch
-            .retain(|c| !(c.model() == r.model && Arc::ptr_eq(c.grid(), &grid)));
-        if self.ch.len() >= CACHE_ENTRIES {
-            self.ch.remove(0);
-        }
-        self.ch.push(Arc::new(ch));
+            .drop_where(|c| c.model() == r.model && Arc::ptr_eq(c.grid(), &grid));
+        self.ch.keep(Arc::new(ch));
+        Ok(())
+    }
+
+    /// Writes the first-move table for `request`'s grid and move model (built unless the
+    /// session has it, within the request's `time_limit_ms`, the session's deadline and memory
+    /// limit) to `out` as a table file ([`skyplan_search::first_move_file`]), for
+    /// [`Session::load_first_move`] in a later run; the bytes written.
+    pub fn save_first_move(
+        &mut self,
+        request: &PlanRequest,
+        out: impl Write,
+    ) -> Result<u64, PlanFailure> {
+        let (r, grid) = self.preprocessing_grid(request, PlannerId::FirstMove)?;
+        let (table, _) = self.first_move_table(&grid, r.model, r.preprocess_limit)?;
+        table
+            .write_to(out)
+            .map_err(|e| PlanFailure::internal(format!("writing the first-move table: {e}")))?;
+        Ok(table.file_bytes())
+    }
+
+    /// Loads a table file saved by [`Session::save_first_move`] for `request`'s grid and move
+    /// model: later `first-move` and `auto` requests on that grid use it from the first query.
+    /// Refused (bad request, naming what is wrong: not a table, another version, truncated,
+    /// damaged, another grid or move model) otherwise.
+    pub fn load_first_move(
+        &mut self,
+        request: &PlanRequest,
+        input: impl Read,
+    ) -> Result<(), PlanFailure> {
+        let (r, grid) = self.preprocessing_grid(request, PlannerId::FirstMove)?;
+        // Drop a table this one replaces before reading: the two are never held at once.
+        self.first_move
+            .drop_where(|t| t.model() == r.model && Arc::ptr_eq(t.grid(), &grid));
+        let table = FirstMoveTable::read_from(input, Arc::clone(&grid), r.model)
+            .map_err(|e| self.file_failure(&e, matches!(e, FirstMoveFileError::Io(_))))?;
+        self.first_move.keep(Arc::new(table));
         Ok(())
     }
 
@@ -508,6 +615,20 @@ impl Session {
                 rule.why
             );
         }
+        if rule.planner == PlannerId::FirstMove
+            && FirstMoveTable::bytes_for(stats.cells as usize, stats.free as usize)
+                > self.limits.max_memory_bytes
+        {
+            rule.planner = PlannerId::JpsPlus;
+            rule.why = format!(
+                "{}, but the table would need more memory than the limit: JPS+ instead",
+                rule.why
+            );
+        }
+        // A first-move table at hand answers fastest of all, whatever the rule.
+        if (self.first_move).any(|t| t.model() == model && Arc::ptr_eq(t.grid(), grid)) {
+            return crate::auto::pick_with_first_move_table(&stats, queries);
+        }
         let kept = |planner: PlannerId, what: &str| AutoPick {
             planner,
             stats,
@@ -517,16 +638,18 @@ impl Session {
         // What the rule picks (kept preprocessing is reused by it), unless something faster is
         // kept already: a contraction hierarchy on corridors, else a JPS+ table.
         let corridors = stats.mean_run <= crate::auto::CH_MAX_RUN;
-        if matches!(rule.planner, PlannerId::Ch | PlannerId::Subgoal) {
+        if matches!(
+            rule.planner,
+            PlannerId::Ch | PlannerId::Subgoal | PlannerId::FirstMove
+        ) {
             return rule;
         }
-        if corridors && (self.ch.iter()).any(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid))
-        {
+        if corridors && (self.ch).any(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid)) {
             return kept(PlannerId::Ch, "the contraction hierarchy");
         }
         if crate::auto::subgoal_map(&stats)
             && model == MoveModel::Octile
-            && (self.subgoal.iter()).any(|g| Arc::ptr_eq(g.grid(), grid))
+            && (self.subgoal).any(|g| Arc::ptr_eq(g.grid(), grid))
         {
             return kept(PlannerId::Subgoal, "the subgoal graph");
         }
@@ -539,8 +662,7 @@ impl Session {
             MoveModel::Octile
         };
         if model.has_diagonals()
-            && (self.jps_plus.iter())
-                .any(|t| t.model() == table_model && Arc::ptr_eq(t.grid(), grid))
+            && (self.jps_plus).any(|t| t.model() == table_model && Arc::ptr_eq(t.grid(), grid))
         {
             return kept(PlannerId::JpsPlus, "the JPS+ table");
         }

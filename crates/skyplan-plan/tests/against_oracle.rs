@@ -11,7 +11,7 @@ use skyplan_search::{MoveModel, oracle::dijkstra_exact};
 fn exact_grid_planners() -> Vec<PlannerId> {
     (PlannerId::ALL.iter().copied())
         .filter(|p| p.info().optimality == Optimality::Exact)
-        .filter(|p| p.is_cell_planner() || p.info().maps == MapKinds::AnyGrid)
+        .filter(|p| p.is_cell_planner() || p.info().maps != MapKinds::Obstacles)
         .collect()
 }
 

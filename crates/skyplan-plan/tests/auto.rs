@@ -141,6 +141,45 @@ fn a_session_reuses_a_kept_table_for_a_single_query() {
 }
 
 #[test]
+fn a_kept_first_move_table_answers_auto_from_then_on_and_its_pick_pays_on_small_maps() {
+    let (grid, start, goal) = maze();
+    let stats = MapStats::of(&grid);
+    // 24 × 24 with 400 free cells: a 115 kB table pays after 400² / 100 = 1,600 queries.
+    assert_eq!(stats.free, 400);
+    let pays = stats.free * stats.free / skyplan_plan::auto::FIRST_MOVE_PAIRS_PER_QUERY;
+    assert_eq!(pick(&stats, pays - 1).planner, PlannerId::Ch);
+    assert_eq!(pick(&stats, pays).planner, PlannerId::FirstMove);
+    let truth = dijkstra_exact(&grid, start, goal, MoveModel::Octile)
+        .unwrap()
+        .to_f64();
+    let (sn, se) = grid.center_ne(start);
+    let (gn, ge) = grid.center_ne(goal);
+    let mut session = Session::new(World::from_grid("maze", grid));
+    let named = PlanRequest {
+        planner: Some(PlannerId::FirstMove),
+        start_ne: Some([sn, se]),
+        goal_ne: Some([gn, ge]),
+        ..Default::default()
+    };
+    let first = session.plan(&named).unwrap();
+    assert!((first.cost_m - truth).abs() < 1e-9);
+    assert_eq!(first.details["first_move_table"], "built");
+    let auto = session
+        .plan(&PlanRequest {
+            planner: Some(PlannerId::Auto),
+            ..named
+        })
+        .unwrap();
+    assert_eq!(auto.cost_m, first.cost_m);
+    assert_eq!(auto.details["auto"]["planner"], "first-move");
+    assert_eq!(auto.details["first_move_table"], "reused");
+    assert_eq!(
+        auto.details["auto"]["why"],
+        "a first-move table at hand (built or loaded): one lookup per cell of the path, no search"
+    );
+}
+
+#[test]
 fn a_saved_hierarchy_is_loaded_by_a_later_session_and_auto_uses_it_from_the_first_query() {
     let (grid, start, goal) = maze();
     let truth = dijkstra_exact(&grid, start, goal, MoveModel::Octile)

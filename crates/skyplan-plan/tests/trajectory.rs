@@ -2,7 +2,9 @@
 //! of travel and checked against every box grown by the margin (brute force, independent of the
 //! corridor); limits respected at the samples; refusals and the corridor failure named.
 
-use skyplan_plan::{FailureKind, PlanRequest, PlannerId, Session, TrajectoryReport, World};
+use skyplan_plan::{
+    FailureKind, MapKinds, PlanRequest, PlannerId, Session, TrajectoryReport, World,
+};
 use skyplan_world3::{BoxWorld3, CollisionChecker, WorldSpec};
 
 fn norm(v: [f64; 3]) -> f64 {
@@ -104,7 +106,10 @@ fn the_default_route_gets_a_minimum_jerk_trajectory_faster_than_stopping_at_each
 fn every_planners_route_on_the_city_gets_a_trajectory_inside_free_space() {
     let mut session = Session::new(World::fcnd_city());
     let boxes = brute_city(5.0);
-    for &planner in PlannerId::ALL {
+    // Not the planners for small grids: the city is too large for their tables (tested in
+    // every_planner.rs).
+    let planners = (PlannerId::ALL.iter()).filter(|p| p.info().maps != MapKinds::SmallGrid);
+    for &planner in planners {
         let three_d = planner.info().dims == 3;
         let request = PlanRequest {
             planner: Some(planner),

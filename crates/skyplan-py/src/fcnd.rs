@@ -177,6 +177,7 @@ fn search_failure(e: SearchError) -> PlanFailure {
         }
         SearchError::GoalOutside { .. } | SearchError::GoalBlocked(_) => FailureKind::InvalidGoal,
         SearchError::Unreachable { .. } => FailureKind::NoPath,
+        SearchError::Damaged(_) => FailureKind::Internal,
     };
     PlanFailure::new(kind, e.to_string())
 }

@@ -116,8 +116,9 @@ fn planner_row(py: Python<'_>, planner: PlannerId) -> PyResult<Bound<'_, PyDict>
 ///
 /// Each dict: `name` (the `planner=` value), `label`, `dims` (2: routes at one altitude, 3:
 /// routes that climb), `optimality` (`exact`, `exact_for_objective`, `any_angle`,
-/// `exact_any_angle`, `feasible`, `asymptotically_optimal`), `maps` (`any_grid` or
-/// `obstacles`), `summary` (one line), and three predicates: `exact` (the shortest grid
+/// `exact_any_angle`, `feasible`, `asymptotically_optimal`), `maps` (`any_grid`,
+/// `obstacles`, or `small_grid`: any grid small enough for the planner's per-grid table),
+/// `summary` (one line), and three predicates: `exact` (the shortest grid
 /// path under the move model: its cost equals Dijkstra's), `grid_path` (it searches grid cells
 /// and takes the grid-path options `connectivity`, `corner_cutting`, `prune`, `epsilon`,
 /// `shortcut`; its route is that cell path unless its optimality is `any_angle`),

@@ -1,8 +1,12 @@
-//! Times the subgoal graph against JPS+ on a MovingAI map and its scenarios, checking every
-//! length: `cargo run --release -p skyplan-search --example subgoal_scen -- MAP SCEN`.
+//! Times the subgoal graph (or the first-move table) against JPS+ on a MovingAI map and its
+//! scenarios, checking every length:
+//! `cargo run --release -p skyplan-search --example subgoal_scen -- MAP SCEN [first-move]`.
 
 use skyplan_cspace::{Cell, Grid2, GridFrame};
-use skyplan_search::{GridSearch, JpsPlusTable, MoveModel, SubgoalGraph, SubgoalQuery};
+use skyplan_search::{
+    FirstMoveTable, GridPath, GridSearch, JpsPlusTable, MoveModel, SearchError, SubgoalGraph,
+    SubgoalQuery,
+};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -44,17 +48,53 @@ fn main() {
         .unwrap(),
     );
     let t = Instant::now();
-    let sg = SubgoalGraph::build(Arc::clone(&grid), MoveModel::Octile).unwrap();
-    println!(
-        "subgoal graph: {} subgoals, {} edges, {:.1} ms",
-        sg.subgoals(),
-        sg.edges(),
-        t.elapsed().as_secs_f64() * 1e3
-    );
+    let first_move = args.get(3).is_some_and(|a| a == "first-move");
+    let name = if first_move { "first-move" } else { "subgoal" };
+    let mut q = SubgoalQuery::new();
+    let mut search: Box<dyn FnMut(Cell, Cell) -> Result<GridPath, SearchError>> = if first_move {
+        let fm = FirstMoveTable::build(Arc::clone(&grid), MoveModel::Octile, 1 << 30).unwrap();
+        println!(
+            "first-move table: {} free cells, {:.1} MB, {:.1} ms",
+            fm.free_cells(),
+            fm.table_bytes() as f64 / 1e6,
+            t.elapsed().as_secs_f64() * 1e3
+        );
+        // Throughput: every scenario 200 times, no timer per query.
+        let pairs: Vec<(Cell, Cell)> = (scen.iter())
+            .map(|s| {
+                (
+                    Cell::new(s.start_y as u32, s.start_x as u32),
+                    Cell::new(s.goal_y as u32, s.goal_x as u32),
+                )
+            })
+            .collect();
+        let t = Instant::now();
+        let mut cells = 0usize;
+        for _ in 0..200 {
+            for &(a, b) in &pairs {
+                cells += fm.search(a, b).map_or(0, |p| p.cells.len());
+            }
+        }
+        let ns = t.elapsed().as_secs_f64() * 1e9;
+        println!(
+            "first-move throughput: {:.0} ns per query, {:.2} ns per path cell",
+            ns / (200 * pairs.len()) as f64,
+            ns / cells as f64
+        );
+        Box::new(move |a, b| fm.search(a, b))
+    } else {
+        let sg = SubgoalGraph::build(Arc::clone(&grid), MoveModel::Octile).unwrap();
+        println!(
+            "subgoal graph: {} subgoals, {} edges, {:.1} ms",
+            sg.subgoals(),
+            sg.edges(),
+            t.elapsed().as_secs_f64() * 1e3
+        );
+        Box::new(move |a, b| sg.search(&mut q, a, b))
+    };
     let t = Instant::now();
     let table = JpsPlusTable::build(Arc::clone(&grid), MoveModel::Octile);
     println!("jps+ table: {:.1} ms", t.elapsed().as_secs_f64() * 1e3);
-    let mut q = SubgoalQuery::new();
     let mut ws = GridSearch::new();
     let (mut ts, mut tj, mut exp) = (Vec::new(), Vec::new(), Vec::new());
     let mut bad = 0;
@@ -62,7 +102,7 @@ fn main() {
         let a = Cell::new(s.start_y as u32, s.start_x as u32);
         let b = Cell::new(s.goal_y as u32, s.goal_x as u32);
         let t = Instant::now();
-        let p = sg.search(&mut q, a, b).unwrap();
+        let p = search(a, b).unwrap();
         ts.push(t.elapsed().as_secs_f64() * 1e6);
         exp.push(p.expansions as f64);
         let t = Instant::now();
@@ -78,7 +118,7 @@ fn main() {
             bad += 1;
             if bad < 5 {
                 println!(
-                    "line {}: subgoal {} (valid {ok}) jps+ {} published {}",
+                    "line {}: {name} {} (valid {ok}) jps+ {} published {}",
                     s.line,
                     p.cost_cells(),
                     j.cost_cells(),
@@ -88,7 +128,7 @@ fn main() {
         }
     }
     println!(
-        "{} scenarios, {bad} wrong; median µs subgoal {:.1} (expansions {:.0}), jps+ {:.1}",
+        "{} scenarios, {bad} wrong; median µs {name} {:.2} (expansions {:.0}), jps+ {:.2}",
         scen.len(),
         median(ts),
         median(exp),

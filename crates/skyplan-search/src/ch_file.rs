@@ -67,28 +67,8 @@ pub enum ChFileError {
     #[error("contraction hierarchy is damaged (its checksum does not match its contents)")]
     Checksum,
     /// Built for another grid or move model.
-    #[error(
-        "contraction hierarchy was built for a {file_rows} × {file_cols} grid with checksum {file_sum:016x} ({file_model}); \
-         this grid is {rows} × {cols} with checksum {sum:016x} ({model}) (another map, altitude, margin, cell size or move model)"
-    )]
-    OtherGrid {
-        /// Rows in the file.
-        file_rows: u32,
-        /// Columns in the file.
-        file_cols: u32,
-        /// Grid checksum in the file.
-        file_sum: u64,
-        /// The file's move model, in words.
-        file_model: &'static str,
-        /// Rows of the grid given.
-        rows: u32,
-        /// Columns of the grid given.
-        cols: u32,
-        /// Checksum of the grid given.
-        sum: u64,
-        /// The move model asked for, in words.
-        model: &'static str,
-    },
+    #[error("contraction hierarchy was built for {0}")]
+    OtherGrid(GridMismatch),
     /// The structure is inconsistent although the checksum matches.
     #[error("contraction hierarchy is damaged: {0}")]
     Damaged(String),
@@ -103,7 +83,136 @@ impl From<io::Error> for ChFileError {
     }
 }
 
-fn model_code(model: MoveModel) -> u32 {
+/// What a preprocessing file was built for, against the grid and move model given: the
+/// `OtherGrid` of [`ChFileError`] and of the first-move table's file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GridMismatch {
+    /// Rows in the file.
+    pub file_rows: u32,
+    /// Columns in the file.
+    pub file_cols: u32,
+    /// Grid checksum in the file.
+    pub file_sum: u64,
+    /// The file's move model, in words.
+    pub file_model: &'static str,
+    /// Rows of the grid given.
+    pub rows: u32,
+    /// Columns of the grid given.
+    pub cols: u32,
+    /// Checksum of the grid given.
+    pub sum: u64,
+    /// The move model asked for, in words.
+    pub model: &'static str,
+}
+
+impl std::fmt::Display for GridMismatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "a {} × {} grid with checksum {:016x} ({}); this grid is {} × {} with checksum {:016x} ({}) \
+             (another map, altitude, margin, cell size or move model)",
+            self.file_rows,
+            self.file_cols,
+            self.file_sum,
+            self.file_model,
+            self.rows,
+            self.cols,
+            self.sum,
+            self.model
+        )
+    }
+}
+
+/// Why the common start of a preprocessing file — magic (16 bytes), version, move model, grid
+/// rows and columns (4 bytes each), grid checksum (8) — does not fit, before each format's own
+/// fields.
+pub(crate) enum HeadError {
+    /// Another magic: not this kind of file.
+    Foreign,
+    /// Shorter than its header.
+    Short { expected: u64, found: u64 },
+    /// Another version.
+    Version(u32),
+    /// Another grid or move model.
+    OtherGrid(GridMismatch),
+    /// The reader failed.
+    Io(io::Error),
+}
+
+/// Reads the `N`-byte header of a preprocessing file with `magic` and `version` built for `grid`
+/// under `model`, checking the common start ([`HeadError`]).
+pub(crate) fn read_head<const N: usize>(
+    input: &mut impl Read,
+    magic: &[u8; 16],
+    version: u32,
+    grid: &Grid2,
+    model: MoveModel,
+) -> Result<[u8; N], HeadError> {
+    let mut header = [0u8; N];
+    let got = read_up_to(input, &mut header).map_err(HeadError::Io)?;
+    if got < magic.len() || header[..16] != magic[..] {
+        return Err(HeadError::Foreign);
+    }
+    if got < N {
+        return Err(HeadError::Short {
+            expected: N as u64,
+            found: got as u64,
+        });
+    }
+    if u32_at(&header, 16) != version {
+        return Err(HeadError::Version(u32_at(&header, 16)));
+    }
+    let (file_model, rows, cols) = (
+        u32_at(&header, 20),
+        u32_at(&header, 24),
+        u32_at(&header, 28),
+    );
+    let (file_sum, sum) = (u64_at(&header, 32), grid_checksum(grid));
+    if file_model != model_code(model)
+        || rows != grid.rows()
+        || cols != grid.cols()
+        || file_sum != sum
+    {
+        return Err(HeadError::OtherGrid(GridMismatch {
+            file_rows: rows,
+            file_cols: cols,
+            file_sum,
+            file_model: model_words(file_model),
+            rows: grid.rows(),
+            cols: grid.cols(),
+            sum,
+            model: model_words(model_code(model)),
+        }));
+    }
+    Ok(header)
+}
+
+/// The little-endian `u32` at byte `at`.
+pub(crate) fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+/// The little-endian `u64` at byte `at`.
+pub(crate) fn u64_at(b: &[u8], at: usize) -> u64 {
+    u64::from(u32_at(b, at)) | u64::from(u32_at(b, at + 4)) << 32
+}
+
+/// The common start of a preprocessing file: magic, version, move model, grid size and checksum.
+pub(crate) fn write_head(
+    out: &mut Vec<u8>,
+    magic: &[u8; 16],
+    version: u32,
+    grid: &Grid2,
+    model: MoveModel,
+) {
+    out.extend_from_slice(magic);
+    for w in [version, model_code(model), grid.rows(), grid.cols()] {
+        out.extend_from_slice(&w.to_le_bytes());
+    }
+    out.extend_from_slice(&grid_checksum(grid).to_le_bytes());
+}
+
+pub(crate) fn model_code(model: MoveModel) -> u32 {
     match model {
         MoveModel::Octile => 1,
         MoveModel::OctileCornerCutting => 2,
@@ -111,7 +220,7 @@ fn model_code(model: MoveModel) -> u32 {
     }
 }
 
-fn model_words(code: u32) -> &'static str {
+pub(crate) fn model_words(code: u32) -> &'static str {
     match code {
         1 => "octile",
         2 => "octile with corner cutting",
@@ -120,7 +229,7 @@ fn model_words(code: u32) -> &'static str {
     }
 }
 
-fn body_sum(body: &[u8]) -> u64 {
+pub(crate) fn body_sum(body: &[u8]) -> u64 {
     let mut h = Hasher::new();
     h.word(body.len() as u64);
     let mut chunks = body.chunks_exact(8);
@@ -166,16 +275,7 @@ impl ContractionHierarchy {
     pub fn write_to(&self, mut out: impl Write) -> Result<(), ChFileError> {
         let body = self.body();
         let mut header = Vec::with_capacity(HEADER_BYTES);
-        header.extend_from_slice(MAGIC);
-        for w in [
-            VERSION,
-            model_code(self.model),
-            self.grid.rows(),
-            self.grid.cols(),
-        ] {
-            header.extend_from_slice(&w.to_le_bytes());
-        }
-        header.extend_from_slice(&grid_checksum(&self.grid).to_le_bytes());
+        write_head(&mut header, MAGIC, VERSION, &self.grid, self.model);
         for w in [self.cell_of_rank.len(), self.head.len(), self.edges.len()] {
             header.extend_from_slice(&(w as u32).to_le_bytes());
         }
@@ -214,46 +314,20 @@ impl ContractionHierarchy {
         grid: Arc<Grid2>,
         model: MoveModel,
     ) -> Result<Self, ChFileError> {
-        let mut header = [0u8; HEADER_BYTES];
-        let got = read_up_to(&mut input, &mut header)?;
-        if got < MAGIC.len() || header[..16] != MAGIC[..] {
-            return Err(ChFileError::NotAHierarchy);
-        }
-        if got < HEADER_BYTES {
-            return Err(ChFileError::Length {
-                expected: HEADER_BYTES as u64,
-                found: got as u64,
-            });
-        }
-        let u32_at = |at: usize| {
-            u32::from_le_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]])
-        };
-        let u64_at = |at: usize| u64::from(u32_at(at)) | u64::from(u32_at(at + 4)) << 32;
-        let version = u32_at(16);
-        if version != VERSION {
-            return Err(ChFileError::Version {
-                found: version,
-                expected: VERSION,
-            });
-        }
-        let (file_model, rows, cols, file_sum) = (u32_at(20), u32_at(24), u32_at(28), u64_at(32));
-        let sum = grid_checksum(&grid);
-        if file_model != model_code(model)
-            || rows != grid.rows()
-            || cols != grid.cols()
-            || file_sum != sum
-        {
-            return Err(ChFileError::OtherGrid {
-                file_rows: rows,
-                file_cols: cols,
-                file_sum,
-                file_model: model_words(file_model),
-                rows: grid.rows(),
-                cols: grid.cols(),
-                sum,
-                model: model_words(model_code(model)),
-            });
-        }
+        let header = read_head::<HEADER_BYTES>(&mut input, MAGIC, VERSION, &grid, model).map_err(
+            |e| match e {
+                HeadError::Foreign => ChFileError::NotAHierarchy,
+                HeadError::Short { expected, found } => ChFileError::Length { expected, found },
+                HeadError::Version(found) => ChFileError::Version {
+                    found,
+                    expected: VERSION,
+                },
+                HeadError::OtherGrid(m) => ChFileError::OtherGrid(m),
+                HeadError::Io(e) => e.into(),
+            },
+        )?;
+        let u32_at = |at: usize| u32_at(&header, at);
+        let u64_at = |at: usize| u64_at(&header, at);
         let (n, m, e) = (
             u64::from(u32_at(40)),
             u64::from(u32_at(44)),
@@ -328,7 +402,7 @@ impl ContractionHierarchy {
 }
 
 /// Reads until `buf` is full or the input ends; the bytes read.
-fn read_up_to(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+pub(crate) fn read_up_to(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
     let mut got = 0;
     while got < buf.len() {
         match input.read(&mut buf[got..]) {
@@ -526,7 +600,7 @@ mod tests {
                 .unwrap(),
         );
         let e = ContractionHierarchy::read_from(&bytes[..], other, MoveModel::Octile).unwrap_err();
-        assert!(matches!(e, ChFileError::OtherGrid { .. }), "{e}");
+        assert!(matches!(e, ChFileError::OtherGrid(_)), "{e}");
         let e = ContractionHierarchy::read_from(&bytes[..], grid(), MoveModel::FourConnected)
             .unwrap_err();
         assert!(

@@ -32,6 +32,8 @@ mod bits;
 pub mod ch_file;
 mod components;
 mod contraction;
+mod first_move;
+pub mod first_move_file;
 mod jps;
 mod jps_plus;
 mod nodes;
@@ -49,6 +51,7 @@ pub use contraction::{
     ChQuery, ContractionError, ContractionHierarchy, DIAGONAL as CH_DIAGONAL_COST,
     MAX_CELLS as CH_MAX_CELLS, STRAIGHT as CH_STRAIGHT_COST,
 };
+pub use first_move::{AT_TARGET, FirstMoveError, FirstMoveTable, UNREACHABLE};
 pub use jps::BlockJps;
 pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
 pub use open::{OpenEntry, OpenList};
@@ -184,6 +187,10 @@ pub enum SearchError {
         /// Cells expanded before giving up.
         expansions: u64,
     },
+    /// Preprocessing loaded from a file led off the free cells or round in a cycle (a file
+    /// that passed its checksum but was written wrong): no path is given.
+    #[error("the loaded preprocessing is damaged: {0}")]
+    Damaged(String),
 }
 
 /// A defect found by [`check_path`].

@@ -27,6 +27,7 @@
 
 use crate::astar::check_endpoints;
 use crate::contraction::{DIAGONAL, NONE, STRAIGHT};
+use crate::first_move::MOVES;
 use crate::{ChQuery, ContractionError, ContractionHierarchy, GridPath, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::sync::Arc;
@@ -54,18 +55,6 @@ pub enum SubgoalError {
         subgoals: usize,
     },
 }
-
-/// The eight moves: (row step, column step), straight ones first.
-const MOVES: [(i32, i32); 8] = [
-    (-1, 0),
-    (1, 0),
-    (0, -1),
-    (0, 1),
-    (-1, -1),
-    (-1, 1),
-    (1, -1),
-    (1, 1),
-];
 
 /// Exact integer octile distance of a displacement.
 #[inline]

@@ -39,7 +39,8 @@ try {
   // budget on this map (ch at 1 m on the city), which leaves it out of the load; anything else
   // fails.
   const registry = await (await fetch(`${server.url}api/planners`)).json();
-  const candidates = registry.planners.filter((p) => p.available && p.dims === 2).map((p) => p.name);
+  // Not the planners for small grids: the city at 1 m is too large for their tables.
+  const candidates = registry.planners.filter((p) => p.available && p.dims === 2 && p.maps !== "small_grid").map((p) => p.name);
   check("the registry lists 2D planners for this map", candidates.length > 0, JSON.stringify(registry));
   const planners = [];
   for (const planner of candidates) {

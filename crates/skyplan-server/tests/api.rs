@@ -5,7 +5,7 @@ use axum::Router;
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
 use serde_json::{Value, json};
-use skyplan_plan::{Optimality, PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{MapKinds, Optimality, PlanRequest, PlannerId, Session, World};
 use skyplan_server::{FlightEvent, RouteEvent, ServerConfig, ViewEvent, ViewServer, app, router};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
@@ -97,8 +97,10 @@ async fn plans_equal_the_planning_api_for_the_same_request() {
 #[tokio::test]
 async fn every_planners_plan_equals_the_planning_api_for_the_same_request() {
     let mut session = Session::new(World::fcnd_city());
+    // Not the planners for small grids: the city is too large for their tables.
     let timeless_planners = (PlannerId::ALL.iter())
-        .filter(|p| p.info().optimality != Optimality::AsymptoticallyOptimal);
+        .filter(|p| p.info().optimality != Optimality::AsymptoticallyOptimal)
+        .filter(|p| p.info().maps != MapKinds::SmallGrid);
     for p in timeless_planners {
         let body =
             json!({ "planner": p.name(), "goal_ne": [60.0, 40.0], "cell_m": 5.0, "seed": 3 });

@@ -15,7 +15,7 @@ use axum::body::Body;
 use axum::http::{Request, StatusCode};
 use serde::Serialize;
 use serde_json::{Map, Value, json};
-use skyplan_plan::{PlanRequest, PlannerId, Session, World};
+use skyplan_plan::{MapKinds, PlanRequest, PlannerId, Session, World};
 use skyplan_server::{ErrorKind, OPENAPI_JSON, ServerConfig, router};
 use std::collections::BTreeSet;
 use tower::ServiceExt;
@@ -447,9 +447,15 @@ fn answer_schema<'a>(doc: &'a Value, path: &str, method: &str, status: StatusCod
 }
 
 /// A request for every planner that each plans on the city quickly (a 5 m grid: `ch`'s
-/// preprocessing at 1 m takes minutes), with the pictures' geometry and a trajectory.
+/// preprocessing at 1 m takes minutes; 10 m for the planners of small grids, whose tables the
+/// city at 5 m would outgrow), with the pictures' geometry and a trajectory.
 fn quick_request(p: PlannerId) -> Value {
-    json!({ "planner": p.name(), "goal_ne": [60.0, 40.0], "cell_m": 5.0, "geometry": true, "trajectory": true })
+    let cell_m = if p.info().maps == MapKinds::SmallGrid {
+        10.0
+    } else {
+        5.0
+    };
+    json!({ "planner": p.name(), "goal_ne": [60.0, 40.0], "cell_m": cell_m, "geometry": true, "trajectory": true })
 }
 
 #[tokio::test]
