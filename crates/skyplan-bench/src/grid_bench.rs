@@ -6,7 +6,7 @@ use crate::{Contender, Record, Run, random_far_queries, run_prepared};
 use serde_json::json;
 use skyplan_cspace::{Cell, Grid2, GridSpec};
 use skyplan_plan::{CellSearch, PlannerId, Session, World};
-use skyplan_search::{JpsPlusTable, MoveModel};
+use skyplan_search::{FirstMoveTable, JpsPlusTable, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -257,6 +257,25 @@ pub fn jps_plus_engine(
     CellSearch::with_jps_plus_table(grid, Arc::new(table), us).map_err(|e| e.to_string())
 }
 
+/// What [`run_all`]'s planners start from: JPS+'s table, and a loaded first-move table.
+pub struct Preprocessing<R> {
+    /// Where JPS+ gets its table.
+    pub jps_plus: JpsPlusPrep<R>,
+    /// A first-move table (loaded from a file) and its load time, µs: `first-move` and `auto`
+    /// use it.
+    pub first_move: Option<(Arc<FirstMoveTable>, u64)>,
+}
+
+impl<R> From<JpsPlusPrep<R>> for Preprocessing<R> {
+    /// JPS+'s table, no first-move table.
+    fn from(jps_plus: JpsPlusPrep<R>) -> Self {
+        Self {
+            jps_plus,
+            first_move: None,
+        }
+    }
+}
+
 /// Where [`run_all`]'s JPS+ gets its table.
 pub enum JpsPlusPrep<R> {
     /// JPS+ builds its own table (timed as its preparation).
@@ -296,7 +315,7 @@ impl std::fmt::Display for RunAllError {
 impl std::error::Error for RunAllError {}
 
 /// Every contender on the same queries, one after the other, each measured by
-/// [`run_measured`] from its preparation; JPS+ prepared as `jps_plus` says. `started` is told
+/// [`run_measured`] from its preparation, as `prep` says ([`Preprocessing`]). `started` is told
 /// each contender before its queries, `answered` after each query.
 ///
 /// ```
@@ -307,7 +326,7 @@ impl std::error::Error for RunAllError {}
 /// let grid = std::sync::Arc::new(Grid2::from_ascii("....\n....\n....").unwrap());
 /// let contenders = [Contender::from_name("jps-plus").unwrap(), Contender::from_name("astar").unwrap()];
 /// let queries = [(Cell::new(0, 0), Cell::new(2, 3))];
-/// let none: JpsPlusPrep<&[u8]> = JpsPlusPrep::Build;
+/// let none: JpsPlusPrep<&[u8]> = JpsPlusPrep::Build; // as `Preprocessing` without a first-move table
 /// let runs = grid_bench::run_all(&grid, MoveModel::Octile, &contenders, &queries, none, |_| {}, || {})
 ///     .unwrap();
 /// assert_eq!(runs.len(), 2);
@@ -318,10 +337,14 @@ pub fn run_all<R: std::io::Read>(
     model: MoveModel,
     contenders: &[Contender],
     queries: &[(Cell, Cell)],
-    jps_plus: JpsPlusPrep<R>,
+    prep: impl Into<Preprocessing<R>>,
     mut started: impl FnMut(Contender),
     mut answered: impl FnMut(),
 ) -> Result<Vec<Run>, RunAllError> {
+    let Preprocessing {
+        jps_plus,
+        first_move,
+    } = prep.into();
     let jps_plus_id = Contender::Skyplan(skyplan_plan::PlannerId::JpsPlus);
     let mut prep = match jps_plus {
         JpsPlusPrep::Built(..) if contenders.first() != Some(&jps_plus_id) => JpsPlusPrep::Build,
@@ -335,16 +358,31 @@ pub fn run_all<R: std::io::Read>(
         } else {
             JpsPlusPrep::Build
         };
-        let prepare = || match own {
-            JpsPlusPrep::Build => Ok(None),
-            JpsPlusPrep::Built(table, us) => jps_plus_engine(grid, table, us)
-                .map(Some)
-                .map_err(RunAllError::Engine),
-            JpsPlusPrep::File(input) => {
-                jps_plus_from_table(std::io::BufReader::new(input), grid, model, Instant::now())
+        let prepare = || match (own, contender, &first_move) {
+            (
+                _,
+                Contender::Skyplan(p @ (PlannerId::FirstMove | PlannerId::Auto)),
+                Some((t, us)),
+            ) => {
+                let auto = (p == PlannerId::Auto).then(|| {
+                    let stats = skyplan_plan::auto::MapStats::of(grid);
+                    skyplan_plan::auto::pick_with_first_move_table(&stats, queries.len() as u64)
+                });
+                CellSearch::with_first_move_table(grid, Arc::clone(t), *us, auto)
                     .map(Some)
-                    .map_err(RunAllError::Table)
+                    .map_err(|e| RunAllError::Table(e.message))
             }
+            (own, ..) => match own {
+                JpsPlusPrep::Build => Ok(None),
+                JpsPlusPrep::Built(table, us) => jps_plus_engine(grid, table, us)
+                    .map(Some)
+                    .map_err(RunAllError::Engine),
+                JpsPlusPrep::File(input) => {
+                    jps_plus_from_table(std::io::BufReader::new(input), grid, model, Instant::now())
+                        .map(Some)
+                        .map_err(RunAllError::Table)
+                }
+            },
         };
         runs.push(run_measured(
             grid,

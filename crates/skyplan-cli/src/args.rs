@@ -428,8 +428,9 @@ pub struct BenchArgs {
     /// Print the table as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// JPS+ uses the table saved in FILE (by --save-preprocess) instead of building one; refused
-    /// unless FILE was built for this map, altitude, margin, cell size and corner rule.
+    /// JPS+ uses the table saved in FILE (by --save-preprocess) instead of building one; or, for a
+    /// first-move table (saved by scen or plan --save-preprocess), first-move and auto use it;
+    /// refused unless FILE was built for this map, altitude, margin, cell size and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
     /// Build the JPS+ table of this grid and save it to FILE (for --preprocess in later runs).

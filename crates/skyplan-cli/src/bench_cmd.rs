@@ -78,13 +78,20 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     };
     let steps = Some((planners.len() * queries.len()) as u64);
     let progress = crate::show::progress("{msg:>24} [{bar:40}] {pos}/{len} queries", steps, target);
-    let jps_plus = jps_plus_prep(&args, grid, model, &planners)?;
+    let first_move = first_move_table(&args, grid, model)?;
+    let jps_plus = match first_move {
+        Some(_) => JpsPlusPrep::Build,
+        None => jps_plus_prep(&args, grid, model, &planners)?,
+    };
     let mut runs = grid_bench::run_all(
         grid,
         model,
         &planners,
         &queries,
-        jps_plus,
+        grid_bench::Preprocessing {
+            jps_plus,
+            first_move,
+        },
         |planner| progress.set_message(planner.name()),
         || progress.inc(1),
     )
@@ -145,6 +152,33 @@ fn queries(
         },
     };
     grid_bench::queries(grid, model, from).map_err(bad_input)
+}
+
+/// A first-move table given by `--preprocess` (told apart from a JPS+ table by its header) and
+/// its load time, µs: `first-move` and `auto` use it.
+fn first_move_table(
+    args: &BenchArgs,
+    grid: &std::sync::Arc<skyplan_cspace::Grid2>,
+    model: MoveModel,
+) -> Result<Option<(std::sync::Arc<skyplan_search::FirstMoveTable>, u64)>> {
+    let Some(path) = &args.preprocess else {
+        return Ok(None);
+    };
+    let shown = path.display();
+    let t = Instant::now();
+    let file = std::fs::File::open(path)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
+    let mut input = std::io::BufReader::new(file);
+    let head = std::io::BufRead::fill_buf(&mut input)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
+    if !head.starts_with(skyplan_search::first_move_file::MAGIC) {
+        return Ok(None);
+    }
+    let table =
+        skyplan_search::FirstMoveTable::read_from(input, std::sync::Arc::clone(grid), model)
+            .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
+    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    Ok(Some((std::sync::Arc::new(table), us)))
 }
 
 /// How JPS+ gets its table: built here and saved (`--save-preprocess`), streamed from a file

@@ -139,3 +139,36 @@ fn contraction_hierarchy_matches_astar_on_every_den312d_scenario() {
     let ch = rows.iter().find(|r| r["planner"] == "ch").unwrap();
     assert!(ch["precompute_ms"].as_f64().unwrap() > 0.0, "{ch}");
 }
+
+/// A first-move table saved by `scen` serves `first-move` and `auto` in `bench --preprocess`:
+/// `auto` reports it picked the table, both find every scenario's A* cost, and the
+/// preparation is the load.
+#[test]
+fn a_saved_first_move_table_serves_first_move_and_auto_in_bench() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/movingai/den312d.map"
+    );
+    ok(&mut cmd(
+        dir.path(),
+        &format!("scen {map} {map}.scen --planner first-move --save-preprocess den.fm"),
+    ));
+    let v = bench(
+        dir.path(),
+        &format!(
+            "--map {map} --scen {map}.scen --planners auto,first-move,astar --preprocess den.fm"
+        ),
+        &[],
+    );
+    let rows = v["rows"].as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["planner"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["auto (first-move)", "first-move", "astar"]);
+    for r in rows {
+        assert_eq!(r["queries"], 290, "{r}");
+        assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
+    }
+}
