@@ -166,12 +166,8 @@ fn first_move_table(
     };
     let shown = path.display();
     let t = Instant::now();
-    let file = std::fs::File::open(path)
-        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
-    let mut input = std::io::BufReader::new(file);
-    let head = std::io::BufRead::fill_buf(&mut input)
-        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
-    if !head.starts_with(skyplan_search::first_move_file::MAGIC) {
+    let (input, first_move) = crate::files::open_preprocess(path)?;
+    if !first_move {
         return Ok(None);
     }
     let table =

@@ -21,6 +21,20 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 }
 
 /// A map's name and text: the file, or the bundled FCND city map, named `bundled_name`.
+/// Opens the `--preprocess` file `path` (a contraction hierarchy, JPS+ table or first-move
+/// table) and tells whether it is a first-move table, by its header; errors name the option and
+/// the file.
+pub fn open_preprocess(path: &Path) -> Result<(std::io::BufReader<std::fs::File>, bool)> {
+    let shown = path.display();
+    let file = std::fs::File::open(path)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
+    let mut input = std::io::BufReader::new(file);
+    let head = std::io::BufRead::fill_buf(&mut input)
+        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
+    let first_move = head.starts_with(skyplan_search::first_move_file::MAGIC);
+    Ok((input, first_move))
+}
+
 pub fn map_text(map: Option<&Path>, bundled_name: &str) -> Result<(String, String)> {
     Ok(match map {
         Some(path) => (path.display().to_string(), read_text(path)?),

@@ -77,12 +77,7 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
     };
     let shown = path.display();
     let t = Instant::now();
-    let file = std::fs::File::open(path)
-        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
-    let mut input = std::io::BufReader::new(file);
-    let head = std::io::BufRead::fill_buf(&mut input)
-        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
-    let first_move = head.starts_with(skyplan_search::first_move_file::MAGIC);
+    let (input, first_move) = crate::files::open_preprocess(path)?;
     let stats = MapStats::of(grid);
     let auto = match (args.planner, first_move) {
         (PlannerId::Auto, true) => Some(pick_with_first_move_table(&stats, queries)),
