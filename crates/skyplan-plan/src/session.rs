@@ -51,16 +51,22 @@ fn put<V: Clone>(cache: &mut HashMap<Key, V>, k: Key, v: V) -> V {
 }
 
 /// Preprocessing kept across requests (a JPS+ table, a hierarchy, a graph, a table of first
-/// moves): the most recent [`CACHE_ENTRIES`], each found by what it was built for.
-pub(crate) struct Kept<T>(Vec<Arc<T>>);
+/// moves): the most recent few ([`CACHE_ENTRIES`] by default), each found by what it was built
+/// for.
+pub(crate) struct Kept<T>(Vec<Arc<T>>, usize);
 
 impl<T> Default for Kept<T> {
     fn default() -> Self {
-        Self(Vec::new())
+        Self(Vec::new(), CACHE_ENTRIES)
     }
 }
 
 impl<T> Kept<T> {
+    /// Keeping at most `most` (at least one).
+    pub(crate) fn at_most(most: usize) -> Self {
+        Self(Vec::new(), most.max(1))
+    }
+
     /// The kept one `hit` matches.
     pub(crate) fn find(&self, hit: impl Fn(&T) -> bool) -> Option<&Arc<T>> {
         self.0.iter().find(|t| hit(t))
@@ -77,9 +83,9 @@ impl<T> Kept<T> {
         self.0.retain(|t| !hit(t));
     }
 
-    /// Keeps `item`, dropping the oldest past [`CACHE_ENTRIES`].
+    /// Keeps `item`, dropping the oldest past the most it keeps.
     pub(crate) fn keep(&mut self, item: Arc<T>) {
-        if self.0.len() >= CACHE_ENTRIES {
+        if self.0.len() >= self.1 {
             self.0.remove(0);
         }
         self.0.push(item);
@@ -239,7 +245,8 @@ pub struct Session {
     ch: Kept<ContractionHierarchy>,
     /// Subgoal graphs kept across requests (built on first use per grid).
     subgoal: Kept<SubgoalGraph>,
-    /// First-move tables kept across requests (built on first use per grid and model).
+    /// First-move tables kept across requests (built on first use per grid and model): two at
+    /// most, each up to [`crate::auto::FIRST_MOVE_MAX_BYTES`].
     first_move: Kept<FirstMoveTable>,
     /// When long preprocessing (a contraction hierarchy) must give up, if ever.
     deadline: Option<Instant>,
@@ -262,7 +269,7 @@ impl Session {
             jps_plus: Kept::default(),
             ch: Kept::default(),
             subgoal: Kept::default(),
-            first_move: Kept::default(),
+            first_move: Kept::at_most(2),
             deadline: None,
             auto: Vec::new(),
         }
@@ -1761,5 +1768,24 @@ fn verdict(p: &[[f64; 3]], bad: Option<usize>) -> Result<(), PlanFailure> {
             p[k + 1][1],
             p[k + 1][2]
         ))),
+    }
+}
+
+#[cfg(test)]
+mod kept_tests {
+    use super::Kept;
+
+    #[test]
+    fn kept_builds_what_is_missing_and_holds_the_most_recent_few() {
+        let mut kept: Kept<u32> = Kept::at_most(2);
+        // Two at most, the oldest kept dropped first: 1 goes when 3 comes, then 2 when 1 does.
+        let mut built = Vec::new();
+        for k in [1, 2, 1, 3, 1, 2] {
+            let (got, us) = kept.get_or_build(|&x| x == k, || Ok::<_, ()>(k)).unwrap();
+            assert_eq!(*got, k);
+            built.push(us.is_some());
+        }
+        assert_eq!(built, [true, true, false, true, true, true]);
+        assert!(kept.any(|&x| x == 1) && kept.any(|&x| x == 2) && !kept.any(|&x| x == 3));
     }
 }
