@@ -154,8 +154,12 @@ pub fn run_measured<'g>(
     let engine = match (prepare()?, contender) {
         (Some(e), _) => Some(e),
         (None, Contender::Skyplan(p)) => Some(
-            CellSearch::for_queries(grid, p, model, queries.len() as u64)
-                .map_err(|e| RunAllError::Refused(format!("{p}: {}", e.message)))?,
+            CellSearch::for_queries(grid, p, model, queries.len() as u64).map_err(|e| {
+                // "planner first-move: …" names the planner already.
+                let own = format!("planner {p}: ");
+                let why = e.message.strip_prefix(&own).unwrap_or(&e.message);
+                RunAllError::Refused(format!("{p}: {why}"))
+            })?,
         ),
         (None, Contender::PathfindingCrateAStar) => None,
     };

@@ -69,7 +69,10 @@ pub fn run(args: ScenArgs) -> Result<()> {
 /// the file's header).
 fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSearch<'g>> {
     let planner_error = |e: skyplan_plan::PlanFailure| {
-        bad_input(format!("--planner {}: {}", args.planner, e.message))
+        // Messages that name the planner already ("planner ch: …") are not prefixed twice.
+        let own = format!("planner {}: ", args.planner);
+        let why = e.message.strip_prefix(&own).unwrap_or(&e.message);
+        bad_input(format!("--planner {}: {why}", args.planner))
     };
     let Some(path) = &args.preprocess else {
         return CellSearch::for_queries(grid, args.planner, MoveModel::Octile, queries)
