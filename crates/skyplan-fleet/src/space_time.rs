@@ -14,9 +14,14 @@
 //! moment, at a time within `B + STRETCH_S` of the stored window. So each cell is blocked, for
 //! the search, over each stored window grown by `B + STRETCH_S` (and a millisecond for
 //! rounding) when its centre is within `L / cos 22.5° + half a diagonal + 2δ` (and [`SLACK_M`]
-//! for the projections) of the stored footprint, and the altitude bands overlap. The
-//! check-and-insert is still the judge; an intent it names that the read missed (stored
-//! meanwhile) is added and the search run again.
+//! for the projections) of the stored footprint, and the altitude bands overlap.
+//!
+//! **Why the search knows every intent in its way.** The store is read around the planned
+//! route, grown by [`READ_REACH_M`]; the search keeps to the cells whose centres are within
+//! that distance less the reach above, so any stored volume that could block one of them
+//! reaches into the footprint read. The check-and-insert is still the judge; an intent it
+//! names that the read missed (stored meanwhile, by another request or server) is added and the
+//! search run again.
 
 use crate::flight::FlightRequest;
 use crate::sipp::{Interval, SippError, SippQuery, TimedCell, sipp};
@@ -43,8 +48,13 @@ pub const SLACK_M: f64 = 0.5;
 /// cell gave 13 % fewer volumes (the 5 s cut makes most of them) but 24 % more arrival delay
 /// (twice the bulge is kept from the others as well).
 pub const BULGE_CELLS: f64 = 0.0;
-/// How far around the planned route stored intents are read, metres.
-pub const READ_REACH_M: f64 = 300.0;
+/// How far around the planned route stored intents are read, metres; the search keeps within
+/// it (less the reach of a blocked cell), so it never routes through sky it has not read. On
+/// 1,000 random flights over the 3 × 3 tiled city (`fleet --random 1000 --space-time`), 600 m
+/// planned 97.3 % of them at p99 384 ms where an unbounded search planned 98.1 % at p99 3.3 s
+/// (its tail: searches across the whole map, then retries because their routes ran through
+/// intents never read); 300 m planned 93.5 % at p99 210 ms.
+pub const READ_REACH_M: f64 = 600.0;
 /// The cell size the fleet searches in space and time on (or the plan's, if coarser), metres:
 /// far coarser than the lateral margin would not pay, finer costs time for nothing.
 pub const SEARCH_CELL_M: f64 = 4.0;
@@ -451,6 +461,8 @@ pub struct SpaceTimeCache {
     /// Per grid cell (row-major index): the volumes that block it, in order of their starts.
     cells: CellLists,
     request: u64,
+    /// The empty sky's search, kept so its tables of the grid are built once.
+    alone: skyplan_search::GridSearch,
 }
 
 impl Default for SpaceTimeCache {
@@ -477,6 +489,7 @@ impl SpaceTimeCache {
             named: Vec::new(),
             binding: Vec::new(),
             in_band: Vec::new(),
+            alone: skyplan_search::GridSearch::new(),
             cells: CellLists::default(),
             request: 0,
         }
@@ -825,6 +838,104 @@ fn cell_for(grid: &Grid2, north_m: f64, east_m: f64) -> Option<Cell> {
         .or_else(|| grid.nearest_free_ne(north_m, east_m))
 }
 
+/// `grid` with every cell whose centre is farther than `within_m` from the route (local
+/// north, east; at least one point) blocked: where the space-time search may go. Row by row,
+/// each segment's capsule meets the row's centre line in one stretch of columns.
+fn corridor(grid: &Grid2, route: &[[f64; 3]], within_m: f64) -> Grid2 {
+    let f = grid.frame();
+    let cols = grid.cols() as usize;
+    let was = grid.blocked_cells();
+    let mut blocked = vec![true; grid.len()];
+    let segments: Vec<([f64; 2], [f64; 2])> = match route {
+        [one] => vec![([one[0], one[1]], [one[0], one[1]])],
+        _ => route
+            .windows(2)
+            .map(|w| ([w[0][0], w[0][1]], [w[1][0], w[1][1]]))
+            .collect(),
+    };
+    for (a, b) in segments {
+        let rows = centres_within(
+            a[0].min(b[0]) - within_m,
+            a[0].max(b[0]) + within_m,
+            f.origin_north_m,
+            f.cell_m,
+            grid.rows(),
+        );
+        for row in rows {
+            let north_m = f.origin_north_m + (row as f64 + 0.5) * f.cell_m;
+            let Some((lo, hi)) = capsule_on_row(a, b, within_m, north_m) else {
+                continue;
+            };
+            for col in centres_within(lo, hi, f.origin_east_m, f.cell_m, grid.cols()) {
+                let i = row * cols + col;
+                blocked[i] &= was[i];
+            }
+        }
+    }
+    // Same size and frame as `grid`, so this cannot fail; the whole grid if it did.
+    Grid2::new(grid.rows(), grid.cols(), blocked, f).unwrap_or_else(|_| grid.clone())
+}
+
+/// The rows (or columns) of a grid axis whose centres lie in `[lo, hi]` metres.
+fn centres_within(
+    lo: f64,
+    hi: f64,
+    origin_m: f64,
+    cell_m: f64,
+    count: u32,
+) -> std::ops::Range<usize> {
+    let first = ((lo - origin_m) / cell_m - 0.5).ceil().max(0.0);
+    let end = (((hi - origin_m) / cell_m - 0.5).floor() + 1.0).min(f64::from(count));
+    if first < end {
+        first as usize..end as usize
+    } else {
+        0..0
+    }
+}
+
+/// The east extent of the points on the line `north = north_m` within `r` of the segment
+/// `a`–`b` (north, east): the union of the two end discs' chords and the band beside the
+/// segment, one interval since the capsule is convex.
+fn capsule_on_row(a: [f64; 2], b: [f64; 2], r: f64, north_m: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in [a, b] {
+        let h2 = r * r - (north_m - p[0]).powi(2);
+        if h2 >= 0.0 {
+            let h = h2.sqrt();
+            lo = lo.min(p[1] - h);
+            hi = hi.max(p[1] + h);
+        }
+    }
+    let (dn, de) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dn * dn + de * de;
+    if len2 > 0.0 {
+        // With x = east − a's east: the projection (p − a)·d = (north − a's north)·dn + x·de
+        // in [0, |d|²], and the cross product x·dn − (north − a's north)·de in ±r|d|.
+        let up = north_m - a[0];
+        let side = r * len2.sqrt();
+        if let (Some(along), Some(across)) = (
+            linear_range(up * dn, de, 0.0, len2),
+            linear_range(-up * de, dn, -side, side),
+        ) {
+            let (x0, x1) = (along.0.max(across.0), along.1.min(across.1));
+            if x0 <= x1 {
+                lo = lo.min(a[1] + x0);
+                hi = hi.max(a[1] + x1);
+            }
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// The `x` where `lo ≤ c0 + c1·x ≤ hi`.
+fn linear_range(c0: f64, c1: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
+    if c1 == 0.0 {
+        return (lo <= c0 && c0 <= hi).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let (p, q) = ((lo - c0) / c1, (hi - c0) / c1);
+    Some((p.min(q), p.max(q)))
+}
+
 fn route_length(points: &[[f64; 3]]) -> f64 {
     points
         .windows(2)
@@ -1070,6 +1181,11 @@ fn space_time_inner(
         + 2.0 * bulge_m
         + SLACK_M;
     let pad_s = o.time_buffer_s + STRETCH_S + 0.002;
+    // The search keeps to where the store was read: a cell whose centre lies within
+    // `lateral margin + READ_REACH_M − reach` of the planned route can only be blocked by
+    // volumes that reach into the read footprint (the route grown by that margin + reach).
+    let within_m = o.lateral_margin_m + READ_REACH_M - reach_m - SLACK_M;
+    let searched = corridor(grid, &planned, within_m);
     let mut obstacles = Obstacles::new(reach_m);
     if let Some(cache) = cache.as_deref_mut() {
         cache.bind(&home, grid, reach_m);
@@ -1114,7 +1230,12 @@ fn space_time_inner(
     };
     // The shortest route on the same grid in an empty sky (JPS): what the delay and the
     // detour are measured against.
-    let alone_cells = skyplan_search::GridSearch::new()
+    let mut fresh = None;
+    let alone_search = match cache.as_deref_mut() {
+        Some(cache) => &mut cache.alone,
+        None => fresh.insert(skyplan_search::GridSearch::new()),
+    };
+    let alone_cells = alone_search
         .search(
             grid,
             start,
@@ -1175,7 +1296,7 @@ fn space_time_inner(
             }
             blocked
         };
-        let found = match sipp(grid, &query, &mut timeline) {
+        let found = match sipp(&searched, &query, &mut timeline) {
             Ok(found) => found,
             Err(SippError::Endpoint { which, cell }) => {
                 return Err(invalid(
@@ -1249,7 +1370,7 @@ fn space_time_inner(
                 });
             }
             Insert::Conflicts(c) => {
-                // Stored since the read, or beyond it: read them and search again.
+                // Stored since the read (by another request or server): read them and search again.
                 last_conflicts = c
                     .iter()
                     .map(skyplan_airspace::Conflict::reference)
@@ -1273,6 +1394,69 @@ fn space_time_inner(
 mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
+
+    /// The corridor keeps exactly the free cells whose centres are within the distance of the
+    /// route, against a brute-force distance to each segment.
+    #[test]
+    fn the_corridor_keeps_the_free_cells_near_the_route() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut kept, mut cut) = (0, 0);
+        for _ in 0..60 {
+            let (rows, cols) = (rng.random_range(1..40u32), rng.random_range(1..40u32));
+            let frame = skyplan_cspace::GridFrame {
+                origin_north_m: rng.random_range(-60.0..0.0),
+                origin_east_m: rng.random_range(-60.0..0.0),
+                cell_m: rng.random_range(0.5..5.0),
+            };
+            let cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.2)).collect();
+            let grid = Grid2::new(rows, cols, cells, frame).expect("grid");
+            let route: Vec<[f64; 3]> = (0..rng.random_range(1..6))
+                .map(|_| {
+                    [
+                        rng.random_range(-80.0..80.0),
+                        rng.random_range(-80.0..80.0),
+                        20.0,
+                    ]
+                })
+                .collect();
+            let within_m = rng.random_range(0.0..40.0);
+            let searched = corridor(&grid, &route, within_m);
+            let ends: Vec<([f64; 3], [f64; 3])> = if route.len() == 1 {
+                vec![(route[0], route[0])]
+            } else {
+                route.windows(2).map(|w| (w[0], w[1])).collect()
+            };
+            for i in 0..grid.len() {
+                let cell = grid.cell(i);
+                let (n, e) = grid.center_ne(cell);
+                let d_m = ends
+                    .iter()
+                    .map(|(a, b)| {
+                        let (dn, de) = (b[0] - a[0], b[1] - a[1]);
+                        let len2 = dn * dn + de * de;
+                        let t = if len2 > 0.0 {
+                            (((n - a[0]) * dn + (e - a[1]) * de) / len2).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        };
+                        (n - a[0] - t * dn).hypot(e - a[1] - t * de)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                if (d_m - within_m).abs() < 1e-6 {
+                    continue;
+                }
+                let free = !grid.is_blocked(cell) && d_m < within_m;
+                assert_eq!(
+                    !searched.is_blocked(cell),
+                    free,
+                    "cell {i}: {d_m} m, within {within_m} m"
+                );
+                kept += usize::from(free);
+                cut += usize::from(!grid.is_blocked(cell) && !free);
+            }
+        }
+        assert!(kept > 1000 && cut > 1000, "{kept} kept, {cut} cut");
+    }
 
     #[test]
     fn the_edge_test_agrees_with_the_exact_distance() {
