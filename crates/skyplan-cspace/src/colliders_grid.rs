@@ -94,6 +94,7 @@ impl Grid2 {
                 grid.blocked[start + c0..=start + c1].fill(true);
             }
         }
+        grid.forget_count();
         Ok(grid)
     }
 

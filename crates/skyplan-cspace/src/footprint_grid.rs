@@ -49,6 +49,7 @@ impl Grid2 {
                 fill_inside(&mut grid, &f.rings, f.bbox_ne(), &mut crossings);
             }
         }
+        grid.forget_count();
         Ok(grid)
     }
 }
@@ -68,6 +69,7 @@ fn row_range(grid: &Grid2, lo: f64, hi: f64) -> (i64, i64) {
 /// Blocks the cells of `grid` closer than `margin_m` to an edge of `rings` (with no margin:
 /// the cells whose interior an edge crosses); see [`Grid2::from_footprints`].
 pub(crate) fn block_near_edges(grid: &mut Grid2, rings: &[Vec<[f64; 2]>], margin_m: f64) {
+    grid.forget_count();
     let GridFrame {
         origin_north_m: n0,
         origin_east_m: e0,
@@ -129,6 +131,7 @@ pub(crate) fn fill_inside(
     (lo, hi): ([f64; 2], [f64; 2]),
     crossings: &mut Vec<f64>,
 ) {
+    grid.forget_count();
     let GridFrame {
         origin_north_m: n0,
         origin_east_m: e0,

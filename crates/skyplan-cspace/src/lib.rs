@@ -142,12 +142,22 @@ pub struct OutsideGrid {
 }
 
 /// A 2D occupancy grid (row-major, `true` = blocked).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Grid2 {
     rows: u32,
     cols: u32,
     blocked: Vec<bool>,
     frame: GridFrame,
+    /// The number of blocked cells, counted on first asking (every plan reports it, and a
+    /// city of 86 M cells takes tens of milliseconds to count); emptied by every change.
+    count: std::sync::OnceLock<usize>,
+}
+
+impl PartialEq for Grid2 {
+    fn eq(&self, other: &Self) -> bool {
+        (self.rows, self.cols, self.frame) == (other.rows, other.cols, other.frame)
+            && self.blocked == other.blocked
+    }
 }
 
 impl Grid2 {
@@ -171,6 +181,7 @@ impl Grid2 {
             cols,
             blocked,
             frame,
+            count: std::sync::OnceLock::new(),
         })
     }
 
@@ -224,9 +235,22 @@ impl Grid2 {
     pub fn blocked_cells(&self) -> &[bool] {
         &self.blocked
     }
-    /// Number of blocked cells.
+    /// Number of blocked cells (counted once, kept until the grid changes).
     pub fn blocked_count(&self) -> usize {
-        self.blocked.iter().filter(|&&b| b).count()
+        let count = *self
+            .count
+            .get_or_init(|| self.blocked.iter().filter(|&&b| b).count());
+        debug_assert_eq!(
+            count,
+            self.blocked.iter().filter(|&&b| b).count(),
+            "a change to the grid kept a stale count"
+        );
+        count
+    }
+
+    /// Forgets the kept count: every change to `blocked` calls this.
+    pub(crate) fn forget_count(&mut self) {
+        self.count.take();
     }
     /// Row-major index of an in-bounds cell.
     #[inline]
@@ -279,6 +303,7 @@ impl Grid2 {
         if self.contains(cell) {
             let i = self.index(cell);
             self.blocked[i] = blocked;
+            self.forget_count();
         }
     }
 
@@ -382,6 +407,27 @@ fn check_size(rows: u64, cols: u64) -> Result<(), GridError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The kept count follows every change, a clone's changes leave the original's alone, and
+    /// equality is the cells' (asked or not).
+    #[test]
+    fn the_kept_count_follows_the_changes() {
+        let mut grid = Grid2::from_ascii("#..\n.#.\n...").unwrap();
+        let brute = |g: &Grid2| g.blocked_cells().iter().filter(|&&b| b).count();
+        assert_eq!(grid.blocked_count(), 2);
+        let mut copy = grid.clone();
+        copy.set_blocked(Cell::new(2, 2), true);
+        assert_eq!((copy.blocked_count(), grid.blocked_count()), (3, 2));
+        assert_ne!(copy, grid);
+        grid.set_blocked(Cell::new(2, 2), true);
+        assert_eq!(copy, grid);
+        grid.set_blocked(Cell::new(0, 0), false);
+        grid.set_blocked(Cell::new(1, 1), false);
+        assert_eq!(grid.blocked_count(), 1);
+        assert_eq!(grid.blocked_count(), brute(&grid));
+        let fresh = Grid2::from_ascii("...\n...\n..#").unwrap();
+        assert_eq!(fresh, grid, "equal cells, one grid counted and one not");
+    }
 
     #[test]
     fn nearest_free_matches_brute_force() {

@@ -46,6 +46,7 @@ impl Grid2 {
             if z.inclusion {
                 if !z.holds_altitude(alt_m, margin_m) {
                     self.blocked.fill(true);
+                    self.forget_count();
                     continue;
                 }
                 match &z.shape {
@@ -92,6 +93,7 @@ impl Grid2 {
                 }
             }
         }
+        self.forget_count();
         Ok(self.blocked_count() - before)
     }
 
@@ -102,6 +104,7 @@ impl Grid2 {
             origin_east_m: e0,
             cell_m: c,
         } = self.frame;
+        self.forget_count();
         let cols = self.cols as usize;
         for (i, b) in self.blocked.iter_mut().enumerate() {
             if !*b {
@@ -118,6 +121,7 @@ impl Grid2 {
         radius_m: f64,
         hit: impl Fn([f64; 2], [f64; 2]) -> bool,
     ) {
+        self.forget_count();
         let GridFrame {
             origin_north_m: n0,
             origin_east_m: e0,
