@@ -1432,14 +1432,7 @@ mod tests {
                 let d_m = ends
                     .iter()
                     .map(|(a, b)| {
-                        let (dn, de) = (b[0] - a[0], b[1] - a[1]);
-                        let len2 = dn * dn + de * de;
-                        let t = if len2 > 0.0 {
-                            (((n - a[0]) * dn + (e - a[1]) * de) / len2).clamp(0.0, 1.0)
-                        } else {
-                            0.0
-                        };
-                        (n - a[0] - t * dn).hypot(e - a[1] - t * de)
+                        skyplan_testkit::distance_to_segment([n, e], [a[0], a[1]], [b[0], b[1]])
                     })
                     .fold(f64::INFINITY, f64::min);
                 if (d_m - within_m).abs() < 1e-6 {

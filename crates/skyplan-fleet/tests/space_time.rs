@@ -138,18 +138,6 @@ fn a_crowded_fleet_is_rerouted_in_space_and_time_without_a_conflict() {
 /// The search's model of the others is conservative enough that the store's exact check never
 /// refuses what it found: with one writer, every reservation succeeds on its first try (a
 /// refusal there would be searched again, and show as a second try).
-/// Distance from `p` (north, east) to the segment `a`–`b` (`[north, east, alt]`), metres.
-fn segment_distance_m(p: [f64; 2], a: [f64; 3], b: [f64; 3]) -> f64 {
-    let (dn, de) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dn * dn + de * de;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dn + (p[1] - a[1]) * de) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - t * dn).hypot(p[1] - a[1] - t * de)
-}
-
 #[test]
 fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
     use skyplan_airspace::DepartureWindow;
@@ -184,7 +172,13 @@ fn the_exact_check_accepts_every_route_the_search_finds_at_once() {
                 for p in &r.path {
                     let d_m = planned
                         .windows(2)
-                        .map(|w| segment_distance_m([p.nea[0], p.nea[1]], w[0], w[1]))
+                        .map(|w| {
+                            skyplan_testkit::distance_to_segment(
+                                [p.nea[0], p.nea[1]],
+                                [w[0][0], w[0][1]],
+                                [w[1][0], w[1][1]],
+                            )
+                        })
                         .fold(f64::INFINITY, f64::min);
                     assert!(
                         d_m <= within_m,
