@@ -9,6 +9,12 @@ mod common;
 use common::{cmd, json_of, ok};
 
 /// `skyplan bench --json LINE EXTRA` in `dir`, which must succeed: its JSON.
+/// The MovingAI game map the tests replay (its scenarios beside it, `.scen`).
+const DEN312D: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../data/movingai/den312d.map"
+);
+
 fn bench(dir: &Path, line: &str, extra: &[&str]) -> Value {
     json_of(&ok(cmd(dir, &format!("bench --json {line}")).args(extra)))
 }
@@ -46,10 +52,7 @@ fn all_optimal_planners_agree_on_the_city_map() {
 #[test]
 #[ignore = "needs python3 (SKYPLAN_PYTHON: .ci/run sets its virtual environment)"]
 fn python_textbook_astar_agrees_with_the_optimum() {
-    let map = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../data/movingai/den312d.map"
-    );
+    let map = DEN312D;
     let scen = format!("{map}.scen");
     let dir = tempfile::tempdir().unwrap();
     let v = bench(
@@ -121,10 +124,7 @@ fn saved_preprocessing_is_reloaded_and_refused_for_another_grid() {
 #[test]
 fn contraction_hierarchy_matches_astar_on_every_den312d_scenario() {
     let dir = tempfile::tempdir().unwrap();
-    let map = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../data/movingai/den312d.map"
-    );
+    let map = DEN312D;
     let v = bench(
         dir.path(),
         &format!("--map {map} --scen {map}.scen --planners ch,astar"),
@@ -146,10 +146,7 @@ fn contraction_hierarchy_matches_astar_on_every_den312d_scenario() {
 #[test]
 fn a_saved_first_move_table_serves_first_move_and_auto_in_bench() {
     let dir = tempfile::tempdir().unwrap();
-    let map = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../data/movingai/den312d.map"
-    );
+    let map = DEN312D;
     ok(&mut cmd(
         dir.path(),
         &format!("scen {map} {map}.scen --planner first-move --save-preprocess den.fm"),
