@@ -233,6 +233,17 @@ pub fn jps_plus_from_table<'g>(
     model: MoveModel,
     started: Instant,
 ) -> Result<CellSearch<'g>, String> {
+    let table = load_jps_plus_table(input, grid, model)?;
+    jps_plus_engine(grid, table, micros_since(started))
+}
+
+/// Reads a JPS+ table file for `grid` and `model`; refused (saying why) if built for another
+/// grid or corner rule, or damaged.
+pub fn load_jps_plus_table(
+    input: impl std::io::Read,
+    grid: &Arc<Grid2>,
+    model: MoveModel,
+) -> Result<JpsPlusTable, String> {
     let table = JpsPlusTable::read_from(input, Arc::clone(grid))
         .map_err(|e| format!("{e}; rebuild it with --save-preprocess"))?;
     let rule = |m: MoveModel| {
@@ -249,7 +260,7 @@ pub fn jps_plus_from_table<'g>(
             rule(model)
         ));
     }
-    jps_plus_engine(grid, table, micros_since(started))
+    Ok(table)
 }
 
 /// JPS+ over a table already built or loaded (`us`: what preparing it took).
@@ -258,7 +269,7 @@ pub fn jps_plus_engine(
     table: JpsPlusTable,
     us: u64,
 ) -> Result<CellSearch<'_>, String> {
-    CellSearch::with_jps_plus_table(grid, Arc::new(table), us).map_err(|e| e.to_string())
+    CellSearch::with_jps_plus_table(grid, Arc::new(table), us, None).map_err(|e| e.to_string())
 }
 
 /// What [`run_all`]'s planners start from: JPS+'s table, and a loaded first-move table.
@@ -291,6 +302,11 @@ pub enum JpsPlusPrep<R> {
     /// A table file (written by [`JpsPlusTable::write_to`]) to stream in, timed as the
     /// preparation.
     File(R),
+    /// A table loaded before (e.g. from a file with landmarks) and what loading took, µs:
+    /// `jps-plus` uses it, and so does `auto` where its rule picks JPS or JPS+
+    /// ([`skyplan_plan::auto::pick_with_jps_plus_table`]); each reports the load as its
+    /// preparation.
+    Loaded(Arc<JpsPlusTable>, u64),
 }
 
 /// Why [`run_all`] stopped before running every contender.
@@ -354,6 +370,10 @@ pub fn run_all<R: std::io::Read>(
         JpsPlusPrep::Built(..) if contenders.first() != Some(&jps_plus_id) => JpsPlusPrep::Build,
         prep => prep,
     };
+    let loaded = match &prep {
+        JpsPlusPrep::Loaded(table, us) => Some((Arc::clone(table), *us)),
+        _ => None,
+    };
     let mut runs = Vec::with_capacity(contenders.len());
     for &contender in contenders {
         started(contender);
@@ -363,6 +383,20 @@ pub fn run_all<R: std::io::Read>(
             JpsPlusPrep::Build
         };
         let prepare = || match (own, contender, &first_move) {
+            (_, Contender::Skyplan(PlannerId::Auto), None) if loaded.is_some() => {
+                let Some((table, us)) = loaded.clone() else {
+                    return Ok(None);
+                };
+                let stats = skyplan_plan::auto::MapStats::of(grid);
+                let landmarks = table.landmarks().is_some();
+                let n = queries.len() as u64;
+                match skyplan_plan::auto::pick_with_jps_plus_table(&stats, n, model, landmarks) {
+                    Some(pick) => CellSearch::with_jps_plus_table(grid, table, us, Some(pick))
+                        .map(Some)
+                        .map_err(|e| RunAllError::Engine(e.message)),
+                    None => Ok(None),
+                }
+            }
             (
                 _,
                 Contender::Skyplan(p @ (PlannerId::FirstMove | PlannerId::Auto)),
@@ -381,6 +415,11 @@ pub fn run_all<R: std::io::Read>(
                 JpsPlusPrep::Built(table, us) => jps_plus_engine(grid, table, us)
                     .map(Some)
                     .map_err(RunAllError::Engine),
+                JpsPlusPrep::Loaded(table, us) => {
+                    CellSearch::with_jps_plus_table(grid, table, us, None)
+                        .map(Some)
+                        .map_err(|e| RunAllError::Engine(e.message))
+                }
                 JpsPlusPrep::File(input) => {
                     jps_plus_from_table(std::io::BufReader::new(input), grid, model, Instant::now())
                         .map(Some)

@@ -343,8 +343,9 @@ fn run_inner(args: PlanArgs) -> Result<()> {
 
 /// `--preprocess` (loaded into the session before planning) and `--save-preprocess` (its target,
 /// checked before planning so that a failing run writes nothing): for `jps-plus` a JPS+ table,
-/// for `ch` a contraction hierarchy, for `first-move` a first-move table; other planners build
-/// nothing to keep.
+/// for `ch` a contraction hierarchy, for `first-move` a first-move table; `auto` loads any of
+/// the three (told apart by its header) and uses it where it answers fastest; other planners
+/// build nothing to keep.
 fn preprocess_files(
     args: &PlanArgs,
     planner: PlannerId,
@@ -356,12 +357,15 @@ fn preprocess_files(
         (None, Some(p)) => ("--save-preprocess", p),
         (None, None) => return Ok(None),
     };
-    if !matches!(
-        planner,
-        PlannerId::JpsPlus | PlannerId::Ch | PlannerId::FirstMove
-    ) {
+    let loads_any = planner == PlannerId::Auto && args.preprocess.is_some();
+    if !loads_any
+        && !matches!(
+            planner,
+            PlannerId::JpsPlus | PlannerId::Ch | PlannerId::FirstMove
+        )
+    {
         return Err(bad_input(format!(
-            "{option} {}: only jps-plus (a JPS+ table), ch (a contraction hierarchy) and first-move (a first-move table) keep preprocessing; the planner is {planner}",
+            "{option} {}: only jps-plus (a JPS+ table), ch (a contraction hierarchy) and first-move (a first-move table) keep preprocessing, and auto loads any of them; the planner is {planner}",
             path.display()
         )));
     }
@@ -376,8 +380,25 @@ fn preprocess_files(
     let shown = path.display();
     let file = std::fs::File::open(path)
         .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
-    let input = std::io::BufReader::new(file);
-    match planner {
+    let mut input = std::io::BufReader::new(file);
+    let kind = if loads_any {
+        let head = std::io::BufRead::fill_buf(&mut input)
+            .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
+        if head.starts_with(skyplan_search::ch_file::MAGIC) {
+            PlannerId::Ch
+        } else if head.starts_with(skyplan_search::first_move_file::MAGIC) {
+            PlannerId::FirstMove
+        } else if head.starts_with(skyplan_search::table_file::MAGIC) {
+            PlannerId::JpsPlus
+        } else {
+            return Err(bad_input(format!(
+                "--preprocess {shown}: not a saved JPS+ table, contraction hierarchy or first-move table (save one with --save-preprocess)"
+            )));
+        }
+    } else {
+        planner
+    };
+    match kind {
         PlannerId::Ch => session.load_ch(request, input),
         PlannerId::FirstMove => session.load_first_move(request, input),
         _ => session.load_jps_plus(input),

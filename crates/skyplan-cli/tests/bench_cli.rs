@@ -88,13 +88,23 @@ fn saved_preprocessing_is_reloaded_and_refused_for_another_grid() {
         "--random 3 --planners jps-plus,astar --save-preprocess",
         &[t],
     );
-    // An 80-byte header and one byte per cell and direction (format version 2).
-    assert_eq!(std::fs::metadata(&table).unwrap().len(), 80 + 921 * 921 * 8);
+    // An 88-byte header, one byte per cell and direction, and 8 landmarks: their cells, 4
+    // bytes per cell each, a checksum (format version 3).
+    let landmarks = 8 * 8 + 921 * 921 * 8 * 4 + 8;
+    assert_eq!(
+        std::fs::metadata(&table).unwrap().len(),
+        88 + 921 * 921 * 8 + landmarks
+    );
     let loaded = bench(
         dir.path(),
-        "--random 3 --planners jps-plus,astar --preprocess",
+        "--random 3 --planners auto,jps-plus,astar --preprocess",
         &[t],
     );
+    // `auto` uses the loaded table (its rule picks JPS for 3 queries: the table is faster).
+    let names: Vec<&str> = (loaded["rows"].as_array().unwrap().iter())
+        .map(|r| r["planner"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["auto (jps-plus)", "jps-plus", "astar"]);
     for v in [&saved, &loaded] {
         for r in v["rows"].as_array().unwrap() {
             assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");

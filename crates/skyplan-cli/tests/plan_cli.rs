@@ -378,6 +378,28 @@ fn a_saved_jps_plus_table_plans_the_same_route_without_building() {
         loaded["cost_m"], plain["cost_m"],
         "JPS+ and JPS are both exact"
     );
+    // `auto` loads it too (one query: its rule says JPS, the table at hand is faster), and its
+    // landmarks (kept in saved tables) leave the cost optimal with fewer expansions than JPS.
+    let auto = run_json(dir.path(), "--planner auto --preprocess city.jpsplus");
+    assert_eq!(auto["auto"]["planner"], "jps-plus", "{}", auto["auto"]);
+    assert_eq!(auto["jps_plus_table"], "reused");
+    assert_eq!(auto["cost_m"], plain["cost_m"]);
+    assert!(
+        auto["expansions"].as_u64().unwrap() < plain["expansions"].as_u64().unwrap(),
+        "landmarks: {} expansions, JPS {}",
+        auto["expansions"],
+        plain["expansions"]
+    );
+    std::fs::write(dir.path().join("noise.bin"), b"not a table at all").unwrap();
+    fails_with(
+        dir.path(),
+        "plan --planner auto --preprocess noise.bin",
+        2,
+        &[
+            "--preprocess noise.bin",
+            "not a saved JPS+ table, contraction hierarchy",
+        ],
+    );
 
     std::fs::write(dir.path().join("cut.jpsplus"), &bytes[..bytes.len() / 2]).unwrap();
     std::fs::remove_file(dir.path().join("waypoints.json")).ok();
@@ -389,7 +411,7 @@ fn a_saved_jps_plus_table_plans_the_same_route_without_building() {
     );
     fails_with(
         dir.path(),
-        "plan --preprocess city.jpsplus",
+        "plan --planner astar --preprocess city.jpsplus",
         2,
         &["--preprocess city.jpsplus", "only jps-plus", "ch"],
     );

@@ -308,6 +308,40 @@ pub fn pick_with_hierarchy(stats: &MapStats, queries: u64) -> Option<AutoPick> {
     })
 }
 
+/// The pick when a JPS+ table is at hand with no build to pay (loaded from a file): JPS+ with
+/// it where [`pick_for`] would answer with JPS or JPS+ (its queries are never slower than
+/// JPS's, and with landmarks kept in the table, faster still); `None` where the rule picks a
+/// hierarchy, a subgoal graph or a first-move table.
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick_with_jps_plus_table}};
+/// use skyplan_search::MoveModel;
+/// let paris = MapStats { cells: 65_536, free: 47_240, mean_run: 19.6 };
+/// let pick = pick_with_jps_plus_table(&paris, 1, MoveModel::Octile, true).unwrap();
+/// assert_eq!(pick.planner, PlannerId::JpsPlus);
+/// assert!(pick.why.contains("landmarks"));
+/// let scattered = MapStats { cells: 262_144, free: 104_350, mean_run: 2.7 };
+/// assert_eq!(pick_with_jps_plus_table(&scattered, 5_240, MoveModel::Octile, false), None);
+/// ```
+pub fn pick_with_jps_plus_table(
+    stats: &MapStats,
+    queries: u64,
+    model: MoveModel,
+    landmarks: bool,
+) -> Option<AutoPick> {
+    let rule = pick_for(stats, queries, model);
+    matches!(rule.planner, PlannerId::Jps | PlannerId::JpsPlus).then(|| AutoPick {
+        planner: PlannerId::JpsPlus,
+        stats: *stats,
+        queries,
+        why: format!(
+            "a JPS+ table at hand{} (built or loaded): nothing to build, and {} otherwise",
+            if landmarks { " with landmarks" } else { "" },
+            rule.planner
+        ),
+    })
+}
+
 fn plural(n: u64) -> &'static str {
     if n == 1 { "query" } else { "queries" }
 }

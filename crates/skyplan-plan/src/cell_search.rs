@@ -91,11 +91,13 @@ impl<'g> CellSearch<'g> {
 
     /// JPS+ with a table built or loaded before (e.g. from a file, see
     /// [`skyplan_search::table_file`]); refused unless it was built for exactly `grid`.
-    /// `precompute_us` is what preparing it cost (building or loading).
+    /// `precompute_us` is what preparing it cost (building or loading); `auto` is the pick to
+    /// report, if `auto` chose it ([`crate::auto::pick_with_jps_plus_table`]).
     pub fn with_jps_plus_table(
         grid: &'g Grid2,
         table: Arc<JpsPlusTable>,
         precompute_us: u64,
+        auto: Option<AutoPick>,
     ) -> Result<Self, PlanFailure> {
         // The same grid (shared, as a session or the bench shares it) or an equal one.
         if !std::ptr::eq(&**table.grid(), grid) && **table.grid() != *grid {
@@ -110,7 +112,7 @@ impl<'g> CellSearch<'g> {
             workspace: Box::default(),
             block_jps: None,
             precompute_us,
-            auto: None,
+            auto,
         })
     }
 

@@ -376,7 +376,21 @@ impl Session {
         })?;
         self.check_request_memory(&r)?;
         let grid = self.grid(r.alt_m, r.safety_m, r.cell_m)?;
+        // A saved table serves many later queries: it keeps landmarks for them (built once;
+        // this session's later queries use them too): 4 bytes per cell and landmark more.
+        let landmarks = skyplan_search::landmarks_for(grid.len());
+        check_memory(
+            (grid.len() as u64).saturating_mul(8 + 4 * landmarks as u64),
+            &self.limits,
+            &format!(
+                "a saved JPS+ table with {landmarks} landmarks on {} ({} cells)",
+                self.world.name(),
+                grid.len()
+            ),
+            "use a larger cell_m",
+        )?;
         let (table, _) = self.jps_plus_table(&grid, r.model);
+        table.add_landmarks(landmarks);
         let spec = match self.world.source {
             Source::Grid(_) => [f64::NAN; 3],
             Source::Colliders(_) | Source::Footprints(_) => [r.alt_m, r.safety_m, r.cell_m],

@@ -386,28 +386,32 @@ impl GridSearch {
         let view = View::new(grid, goal, model);
         self.jump_point_search(
             grid,
-            start,
-            goal,
+            (start, goal),
             &view,
             |r, c, _| view.neighbour_mask(r, c),
             |r, c, a, b| view.jump_blocks(block, r + a, c + b, a, b),
+            |_| 0.0,
         )
     }
 
     /// The best-first loop shared by JPS and JPS+: `jump(r, c, dr, dc)` returns the next jump
-    /// point from the expanded cell `(r, c)` along `(dr, dc)`. Endpoints are already checked.
+    /// point from the expanded cell `(r, c)` along `(dr, dc)`; `lower(i)` is a lower bound on
+    /// the distance from cell `i` to the goal, consistent (landmarks), or 0: the heuristic is
+    /// its maximum with the octile distance. Endpoints are already checked.
     pub(crate) fn jump_point_search(
         &mut self,
         grid: &Grid2,
-        start: Cell,
-        goal: Cell,
+        (start, goal): (Cell, Cell),
         view: &View<'_>,
         neighbour_mask: impl Fn(i64, i64, usize) -> u8,
         mut jump: impl FnMut(i64, i64, i64, i64) -> Option<(i64, i64)>,
+        lower: impl Fn(usize) -> f64,
     ) -> Result<GridPath, SearchError> {
         self.reset(grid, false);
         let cols = view.cols;
-        let h = |r: i64, c: i64| octile(r - view.goal.0, c - view.goal.1);
+        let h = |r: i64, c: i64| {
+            octile(r - view.goal.0, c - view.goal.1).max(lower((r * cols + c) as usize))
+        };
         let start_i = grid.index(start) as u32;
         let goal_i = grid.index(goal) as u32;
         self.offer(

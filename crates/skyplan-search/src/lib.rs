@@ -36,6 +36,7 @@ mod first_move;
 pub mod first_move_file;
 mod jps;
 mod jps_plus;
+pub mod landmarks;
 mod nodes;
 mod open;
 pub mod oracle;
@@ -53,7 +54,8 @@ pub use contraction::{
 };
 pub use first_move::{AT_TARGET, FirstMoveError, FirstMoveTable, UNREACHABLE};
 pub use jps::BlockJps;
-pub use jps_plus::{ESCAPE_CELLS, JpsPlus, JpsPlusTable};
+pub use jps_plus::{ACTIVE_LANDMARKS, ESCAPE_CELLS, JpsPlus, JpsPlusTable, landmarks_for};
+pub use landmarks::Landmarks;
 pub use open::{OpenEntry, OpenList};
 pub use subgoal::{SubgoalError, SubgoalGraph, SubgoalQuery};
 

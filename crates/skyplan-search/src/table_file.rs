@@ -1,7 +1,7 @@
 //! The JPS+ table on disk: a versioned header, the checksum of the grid it was built for, the
 //! table, and a checksum of the table.
 //!
-//! Layout (little-endian), version 2:
+//! Layout (little-endian), version 3:
 //!
 //! | bytes | field |
 //! |---|---|
@@ -15,7 +15,14 @@
 //! | 4 | escape length in cells (1 ..= [`crate::ESCAPE_CELLS`]) |
 //! | 4 | bytes per cell (8) |
 //! | 8 | checksum of the corner rule, the escape length and the table bytes |
+//! | 4 | landmarks `k` (0 ..= [`crate::landmarks::MAX_LANDMARKS`]) |
+//! | 4 | landmark units per cell ([`crate::landmarks::UNITS_PER_CELL`]) |
 //! | rows × cols × 8 | per cell, per direction ([`crate::jps`]'s order), the one-byte code of [`crate::JpsPlusTable`] |
+//! | k × 8 | when `k > 0`: each landmark's row and column (u32) |
+//! | rows × cols × k × 4 | when `k > 0`: per cell, each landmark's distance in fixed point ([`crate::Landmarks`]) |
+//! | 8 | when `k > 0`: checksum of the landmark cells and distances |
+//!
+//! Version 2 was the same without the landmark fields and section; it is refused (rebuild).
 //!
 //! Tables are written and read as streams ([`JpsPlusTable::write_to`],
 //! [`JpsPlusTable::read_from`]): the writer sends the table's own memory, the reader reads
@@ -24,10 +31,14 @@
 //! files: callers hand it any [`std::io::Read`] / [`std::io::Write`].
 //!
 //! Loading checks all of it against the grid it is given, and every code against the grid's
-//! borders, so a damaged or foreign file is an error, never a wrong path or a panic.
+//! borders, so a damaged or foreign file is an error, never a wrong path or a panic. Landmark
+//! distances are checked to bound distances on the grid ([`crate::Landmarks::check`]), so they
+//! can never make a path longer.
 
 use crate::jps_plus::{ESCAPE_CELLS, Entry, decode};
+use crate::landmarks::{Landmarks, MAX_LANDMARKS, UNITS_PER_CELL};
 use crate::{JpsPlusTable, MoveModel};
+use skyplan_cspace::Cell;
 use skyplan_cspace::Grid2;
 use std::io::{self, Read, Write};
 use std::sync::Arc;
@@ -35,9 +46,9 @@ use std::sync::Arc;
 /// The first 16 bytes of a table file.
 pub const MAGIC: &[u8; 16] = b"SKYPLAN-JPSPLUS\n";
 /// The version this build writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// Bytes before the table.
-pub const HEADER_BYTES: usize = 16 + 4 + 4 + 4 + 4 + 8 + 24 + 4 + 4 + 8;
+pub const HEADER_BYTES: usize = 16 + 4 + 4 + 4 + 4 + 8 + 24 + 4 + 4 + 8 + 4 + 4;
 /// Bytes per cell in the table.
 const CELL_BYTES: u32 = 8;
 /// Cells per streamed chunk (1 MiB).
@@ -108,6 +119,9 @@ pub enum TableFileError {
         /// Column of the entry.
         col: u32,
     },
+    /// The landmark section does not bound distances on the grid.
+    #[error("JPS+ table landmarks: {0}")]
+    Landmarks(String),
     /// The reader or writer failed.
     #[error("JPS+ table input/output: {0}")]
     Io(String),
@@ -136,12 +150,45 @@ pub struct TableHeader {
     pub escape_cells: u8,
     /// Checksum of the corner rule, the escape length and the table bytes.
     pub table_checksum: u64,
+    /// Landmarks stored after the table.
+    pub landmarks: u32,
 }
 
 impl TableHeader {
     /// Bytes of the whole file this header describes.
     pub fn file_bytes(&self) -> u64 {
-        HEADER_BYTES as u64 + u64::from(self.rows) * u64::from(self.cols) * u64::from(CELL_BYTES)
+        let cells = u64::from(self.rows) * u64::from(self.cols);
+        HEADER_BYTES as u64 + cells * u64::from(CELL_BYTES) + landmark_bytes(cells, self.landmarks)
+    }
+}
+
+/// Bytes of a landmark section: `k` cells, `k` values per grid cell and a checksum (none
+/// without landmarks).
+fn landmark_bytes(cells: u64, k: u32) -> u64 {
+    if k == 0 {
+        0
+    } else {
+        8 * u64::from(k) + 4 * cells * u64::from(k) + 8
+    }
+}
+
+/// The checksum of a landmark section, fed as it streams.
+struct LandmarkSum(Hasher);
+
+impl LandmarkSum {
+    fn new(cells: &[Cell]) -> Self {
+        let mut h = Hasher::new();
+        h.word(cells.len() as u64);
+        for c in cells {
+            h.word(u64::from(c.row) << 32 | u64::from(c.col));
+        }
+        Self(h)
+    }
+    fn values(&mut self, values: &[u32]) {
+        for pair in values.chunks(2) {
+            let hi = pair.get(1).map_or(u64::MAX, |&v| u64::from(v));
+            self.0.word(hi << 32 | u64::from(pair[0]));
+        }
     }
 }
 
@@ -267,6 +314,18 @@ pub fn read_header(bytes: &[u8]) -> Result<TableHeader, TableFileError> {
             "{cell_bytes} bytes per cell (expected {CELL_BYTES})"
         )));
     }
+    let landmarks = u32_at(80);
+    if landmarks as usize > MAX_LANDMARKS {
+        return Err(TableFileError::Header(format!(
+            "{landmarks} landmarks (expected at most {MAX_LANDMARKS})"
+        )));
+    }
+    if u32_at(84) != UNITS_PER_CELL {
+        return Err(TableFileError::Header(format!(
+            "landmark units of 1/{} cell (expected 1/{UNITS_PER_CELL})",
+            u32_at(84)
+        )));
+    }
     Ok(TableHeader {
         model,
         rows,
@@ -275,6 +334,7 @@ pub fn read_header(bytes: &[u8]) -> Result<TableHeader, TableFileError> {
         spec,
         escape_cells,
         table_checksum: u64_at(72),
+        landmarks,
     })
 }
 
@@ -320,7 +380,41 @@ impl JpsPlusTable {
         put(&u32::from(self.escape).to_le_bytes());
         put(&CELL_BYTES.to_le_bytes());
         put(&table_checksum.to_le_bytes());
+        put(&(self.landmarks().map_or(0, |l| l.cells().len()) as u32).to_le_bytes());
+        put(&UNITS_PER_CELL.to_le_bytes());
         out
+    }
+
+    /// The landmark section's cell list and checksum (nothing without landmarks).
+    fn landmark_head(&self) -> Option<(Vec<u8>, u64)> {
+        let l = self.landmarks().filter(|l| !l.cells().is_empty())?;
+        let mut head = Vec::with_capacity(8 * l.cells().len());
+        for c in l.cells() {
+            head.extend_from_slice(&c.row.to_le_bytes());
+            head.extend_from_slice(&c.col.to_le_bytes());
+        }
+        let mut sum = LandmarkSum::new(l.cells());
+        for chunk in l.units().chunks(CHUNK_CELLS) {
+            sum.values(chunk);
+        }
+        Some((head, sum.0.finish()))
+    }
+
+    /// Streams the landmark section (if any) to `out`.
+    fn write_landmarks(&self, out: &mut impl Write) -> io::Result<()> {
+        let (Some((head, sum)), Some(l)) = (self.landmark_head(), self.landmarks()) else {
+            return Ok(());
+        };
+        out.write_all(&head)?;
+        let mut bytes = Vec::with_capacity(4 * CHUNK_CELLS);
+        for chunk in l.units().chunks(CHUNK_CELLS) {
+            bytes.clear();
+            for v in chunk {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+            out.write_all(&bytes)?;
+        }
+        out.write_all(&sum.to_le_bytes())
     }
 
     fn checksum(&self) -> u64 {
@@ -329,9 +423,12 @@ impl JpsPlusTable {
         sum.finish()
     }
 
-    /// Bytes of the table as a file ([`HEADER_BYTES`] + 8 per cell).
+    /// Bytes of the table as a file ([`HEADER_BYTES`] + 8 per cell, and 4 per cell and
+    /// landmark when it has landmarks).
     pub fn file_bytes(&self) -> u64 {
-        HEADER_BYTES as u64 + self.table.len() as u64 * u64::from(CELL_BYTES)
+        let cells = self.table.len() as u64;
+        let k = self.landmarks().map_or(0, |l| l.cells().len() as u32);
+        HEADER_BYTES as u64 + cells * u64::from(CELL_BYTES) + landmark_bytes(cells, k)
     }
 
     /// Writes the table as a file (module [`crate::table_file`]) to `out`, straight from the
@@ -342,6 +439,7 @@ impl JpsPlusTable {
         for chunk in self.table.chunks(CHUNK_CELLS) {
             out.write_all(chunk.as_flattened())?;
         }
+        self.write_landmarks(&mut out)?;
         out.flush()
     }
 
@@ -350,6 +448,8 @@ impl JpsPlusTable {
         let mut out = Vec::with_capacity(usize::try_from(self.file_bytes()).unwrap_or(0));
         out.extend_from_slice(&self.header_bytes(spec, self.checksum()));
         out.extend_from_slice(self.table.as_flattened());
+        // Writing to a vector cannot fail.
+        let _ = self.write_landmarks(&mut out);
         out
     }
 
@@ -408,6 +508,7 @@ impl JpsPlusTable {
             }
             done += chunk.len();
         }
+        let landmarks = read_landmarks(header, &mut input, grid.len(), done)?;
         let extra = io::copy(&mut input, &mut io::sink())?;
         if extra > 0 {
             return Err(TableFileError::Length {
@@ -421,8 +522,70 @@ impl JpsPlusTable {
         if let Some(e) = first_bad {
             return Err(e);
         }
-        Ok(Self::from_parts(grid, header.model, escape, table))
+        let me = Self::from_parts(Arc::clone(&grid), header.model, escape, table);
+        if let Some((cells, units)) = landmarks {
+            let l = Landmarks::from_parts(&grid, header.model, cells, units)
+                .map_err(|e| TableFileError::Landmarks(e.to_string()))?;
+            let _ = me.landmarks.set(l);
+        }
+        Ok(me)
     }
+}
+
+/// Reads the landmark section the header announces (after `cells` table cells): the landmark
+/// cells and values, their checksum checked.
+#[allow(clippy::type_complexity)]
+fn read_landmarks(
+    header: &TableHeader,
+    input: &mut impl Read,
+    cells: usize,
+    table_cells: usize,
+) -> Result<Option<(Vec<Cell>, Vec<u32>)>, TableFileError> {
+    let k = header.landmarks as usize;
+    if k == 0 {
+        return Ok(None);
+    }
+    let expected = header.file_bytes();
+    let mut at = (HEADER_BYTES + table_cells * CELL_BYTES as usize) as u64;
+    let short = |at: u64| TableFileError::Length {
+        expected,
+        found: at,
+    };
+    let mut head = vec![0u8; 8 * k];
+    let got = read_full(input, &mut head)?;
+    if got < head.len() {
+        return Err(short(at + got as u64));
+    }
+    at += head.len() as u64;
+    let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    let landmarks: Vec<Cell> = head
+        .chunks(8)
+        .map(|b| Cell::new(word(&b[..4]), word(&b[4..])))
+        .collect();
+    let mut sum = LandmarkSum::new(&landmarks);
+    let mut units = vec![0u32; cells * k];
+    let mut bytes = vec![0u8; 4 * CHUNK_CELLS];
+    for chunk in units.chunks_mut(CHUNK_CELLS) {
+        let want = &mut bytes[..4 * chunk.len()];
+        let got = read_full(input, want)?;
+        if got < want.len() {
+            return Err(short(at + got as u64));
+        }
+        at += got as u64;
+        for (v, b) in chunk.iter_mut().zip(want.chunks(4)) {
+            *v = word(b);
+        }
+        sum.values(chunk);
+    }
+    let mut tail = [0u8; 8];
+    let got = read_full(input, &mut tail)?;
+    if got < 8 {
+        return Err(short(at + got as u64));
+    }
+    if u64::from_le_bytes(tail) != sum.0.finish() {
+        return Err(TableFileError::Checksum);
+    }
+    Ok(Some((landmarks, units)))
 }
 
 /// Reach of an impossible code: more than any grid has room for.
@@ -541,12 +704,33 @@ mod tests {
     fn reseal(file: &mut [u8]) {
         let header = read_header(file).expect("header");
         let mut sum = TableSum::new(header.model, header.escape_cells);
-        let cells: Vec<[u8; 8]> = file[HEADER_BYTES..]
+        let n = (header.rows * header.cols) as usize;
+        let cells: Vec<[u8; 8]> = file[HEADER_BYTES..HEADER_BYTES + 8 * n]
             .chunks_exact(8)
             .map(|c| c.try_into().expect("8 bytes"))
             .collect();
         sum.cells(&cells);
-        file[HEADER_BYTES - 8..HEADER_BYTES].copy_from_slice(&sum.finish().to_le_bytes());
+        file[72..80].copy_from_slice(&sum.finish().to_le_bytes());
+        if header.landmarks > 0 {
+            // The landmark section's checksum, over its (changed) cells and values.
+            let at = HEADER_BYTES + 8 * n;
+            let k = header.landmarks as usize;
+            let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            let marks: Vec<Cell> = file[at..at + 8 * k]
+                .chunks(8)
+                .map(|b| Cell::new(word(&b[..4]), word(&b[4..])))
+                .collect();
+            let values: Vec<u32> = file[at + 8 * k..at + 8 * k + 4 * n * k]
+                .chunks(4)
+                .map(word)
+                .collect();
+            let mut sum = LandmarkSum::new(&marks);
+            for chunk in values.chunks(CHUNK_CELLS) {
+                sum.values(chunk);
+            }
+            let end = at + 8 * k + 4 * n * k;
+            file[end..end + 8].copy_from_slice(&sum.0.finish().to_le_bytes());
+        }
     }
 
     fn city_block() -> Arc<Grid2> {
@@ -568,6 +752,9 @@ mod tests {
             let g = grid(rows, cols, cells[..(rows * cols) as usize].to_vec());
             for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
                 let built = JpsPlusTable::build_with_escape(Arc::clone(&g), model, escape);
+                if escape % 2 == 0 {
+                    built.add_landmarks(usize::from(escape));
+                }
                 let spec = [5.0, 5.0, 1.0];
                 let bytes = built.to_bytes(spec);
                 let mut streamed = Vec::new();
@@ -582,12 +769,16 @@ mod tests {
                 let loaded = JpsPlusTable::read_from(Trickle { bytes: &bytes, piece }, Arc::clone(&g))
                     .expect("loads");
                 prop_assert_eq!(&loaded.table, &built.table);
+                prop_assert_eq!(loaded.landmarks(), built.landmarks());
                 let mut plus = JpsPlus::new(&g, model);
                 let mut search = GridSearch::new();
                 for &(a, b, c, d) in &ends {
                     let (s, t) = (Cell::new(a % rows, b % cols), Cell::new(c % rows, d % cols));
                     let got = loaded.search(&mut search, s, t);
-                    prop_assert_eq!(&got, &plus.search(s, t));
+                    prop_assert_eq!(&got, &built.search(&mut GridSearch::new(), s, t));
+                    if built.landmarks().is_none() {
+                        prop_assert_eq!(&got, &plus.search(s, t));
+                    }
                     let truth = dijkstra_exact(&g, s, t, model);
                     prop_assert_eq!(got.ok().map(|p| p.cost_cells()), truth.map(|c| c.to_f64()));
                 }
@@ -603,7 +794,9 @@ mod tests {
         ) {
             let g = city_block();
             let _ = JpsPlusTable::from_bytes(&noise, Arc::clone(&g));
-            let good = JpsPlusTable::build(Arc::clone(&g), MoveModel::Octile).to_bytes([f64::NAN; 3]);
+            let table = JpsPlusTable::build(Arc::clone(&g), MoveModel::Octile);
+            table.add_landmarks(2);
+            let good = table.to_bytes([f64::NAN; 3]);
             let mut bad = good.clone();
             let i = at % bad.len();
             bad[i] ^= value | 1;
@@ -616,6 +809,7 @@ mod tests {
                 ));
             }
             if i >= HEADER_BYTES {
+                // A table byte, a landmark cell or distance, or a checksum.
                 prop_assert_eq!(
                     JpsPlusTable::from_bytes(&bad, Arc::clone(&g)).err(),
                     Some(TableFileError::Checksum)
@@ -635,16 +829,18 @@ mod tests {
             JpsPlusTable::from_bytes(b"P5 not a table", Arc::clone(&g)).err(),
             Some(TableFileError::NotATable)
         );
-        // A version 1 file (32 bytes per cell) is refused by its version.
-        let mut v1 = good.clone();
-        v1[16] = 1;
-        assert_eq!(
-            JpsPlusTable::from_bytes(&v1, Arc::clone(&g)).err(),
-            Some(TableFileError::Version {
-                found: 1,
-                expected: 2
-            })
-        );
+        // Version 1 (32 bytes per cell) and 2 (no landmarks) files are refused by version.
+        for old in [1, 2] {
+            let mut v = good.clone();
+            v[16] = old;
+            assert_eq!(
+                JpsPlusTable::from_bytes(&v, Arc::clone(&g)).err(),
+                Some(TableFileError::Version {
+                    found: u32::from(old),
+                    expected: 3
+                })
+            );
+        }
         let mut escape = good.clone();
         escape[64] = 200;
         assert!(matches!(
@@ -703,8 +899,59 @@ mod tests {
         crafted[HEADER_BYTES + 8 + 2] = 254;
         reseal(&mut crafted);
         assert_eq!(
-            JpsPlusTable::from_bytes(&crafted, g).err(),
+            JpsPlusTable::from_bytes(&crafted, Arc::clone(&g)).err(),
             Some(TableFileError::Code { row: 0, col: 1 })
         );
+    }
+
+    #[test]
+    fn landmark_sections_are_checked() {
+        let g = city_block();
+        let table = JpsPlusTable::build(Arc::clone(&g), MoveModel::Octile);
+        table.add_landmarks(3);
+        let good = table.to_bytes([f64::NAN; 3]);
+        assert_eq!(read_header(&good).expect("header").landmarks, 3);
+        let loaded = JpsPlusTable::from_bytes(&good, Arc::clone(&g)).expect("loads");
+        assert_eq!(loaded.landmarks(), table.landmarks());
+        let values = HEADER_BYTES + 8 * g.len() + 8 * 3;
+        // A changed distance is damage (checksum) ...
+        let mut bad = good.clone();
+        bad[values + 4 * 5] ^= 0x40;
+        assert_eq!(
+            JpsPlusTable::from_bytes(&bad, Arc::clone(&g)).err(),
+            Some(TableFileError::Checksum)
+        );
+        // ... and with the checksum re-sealed, a distance that no longer bounds distances
+        // (cell (0, 1) raised by 3 cells for landmark 0) is refused by the check.
+        let mut crafted = good.clone();
+        let at = values + 4 * 3; // cell 1, landmark 0
+        let raised = u32::from_le_bytes(crafted[at..at + 4].try_into().expect("4 bytes"))
+            + 3 * UNITS_PER_CELL;
+        crafted[at..at + 4].copy_from_slice(&raised.to_le_bytes());
+        reseal(&mut crafted);
+        let e = JpsPlusTable::from_bytes(&crafted, Arc::clone(&g)).expect_err("refused");
+        assert!(
+            matches!(&e, TableFileError::Landmarks(m) if m.contains("landmark 0 at row 0")),
+            "{e}"
+        );
+        // A landmark on a blocked cell (row 1, column 1), re-sealed.
+        let mut crafted = good.clone();
+        let at = HEADER_BYTES + 8 * g.len();
+        crafted[at..at + 8].copy_from_slice(&[1, 0, 0, 0, 1, 0, 0, 0]);
+        reseal(&mut crafted);
+        let e = JpsPlusTable::from_bytes(&crafted, Arc::clone(&g)).expect_err("refused");
+        assert!(e.to_string().contains("not a free cell"), "{e}");
+        // Too many landmarks in the header.
+        let mut many = good.clone();
+        many[80] = 200;
+        assert!(matches!(
+            JpsPlusTable::from_bytes(&many, Arc::clone(&g)).err(),
+            Some(TableFileError::Header(m)) if m.contains("200 landmarks")
+        ));
+        // Cut inside the landmark section.
+        assert!(matches!(
+            JpsPlusTable::from_bytes(&good[..values + 10], g).err(),
+            Some(TableFileError::Length { found, .. }) if found == values as u64 + 10
+        ));
     }
 }
