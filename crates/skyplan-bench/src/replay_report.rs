@@ -76,7 +76,7 @@ impl Replay {
         } = self.totals();
         let ran = self.auto.as_ref().map_or(of.planner, |p| p.planner);
         let table = match ran {
-            PlannerId::JpsPlus => format!(" (JPS+ table built in {:.1} ms)", self.table_ms),
+            PlannerId::JpsPlus => format!(" (JPS+ table ready in {:.1} ms)", self.table_ms),
             PlannerId::Ch => format!(" (hierarchy built in {:.1} ms)", self.table_ms),
             PlannerId::Subgoal => format!(" (subgoal graph built in {:.1} ms)", self.table_ms),
             PlannerId::FirstMove => format!(" (first-move table ready in {:.1} ms)", self.table_ms),
@@ -160,7 +160,7 @@ mod tests {
         };
         let table = replay.table(&of);
         assert!(table.starts_with(
-            "m.map: 3 × 2 grid, 4 scenarios, planner jps-plus (JPS+ table built in 1.3 ms)\n"
+            "m.map: 3 × 2 grid, 4 scenarios, planner jps-plus (JPS+ table ready in 1.3 ms)\n"
         ));
         assert_eq!(table.lines().count(), 5);
         let json = replay.json_summary(&of);

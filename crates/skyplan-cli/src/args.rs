@@ -294,13 +294,14 @@ pub struct PlanArgs {
     #[arg(long, value_name = "FILE")]
     pub load_roadmap: Option<PathBuf>,
     /// jps-plus, ch, first-move: plan with the JPS+ table, contraction hierarchy or first-move
-    /// table saved in FILE (by --save-preprocess) instead of building one; refused unless FILE
-    /// was built for this map's grid (altitude, margin, cell size) and corner rule.
+    /// table saved in FILE (by --save-preprocess) instead of building one (auto: any of them,
+    /// where it answers fastest); refused unless FILE was built for this map's grid (altitude,
+    /// margin, cell size) and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// jps-plus, ch, first-move: save the JPS+ table, contraction hierarchy or first-move table
-    /// this plan used to FILE (for --preprocess in later runs: a far query on a large map then
-    /// needs no preprocessing).
+    /// jps-plus, ch, first-move: save the JPS+ table (with landmarks), contraction hierarchy or
+    /// first-move table this plan used to FILE (for --preprocess in later runs: a far query on a
+    /// large map then needs no preprocessing).
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
 }
@@ -319,12 +320,14 @@ pub struct ScenArgs {
     pub planner: PlannerId,
     /// Use the preprocessing saved in FILE (by --save-preprocess) instead of building it: a
     /// contraction hierarchy (with --planner ch, or auto on maps where a hierarchy is the
-    /// fastest) or a first-move table (with --planner first-move or auto, on any map); refused
-    /// unless FILE was built for this map.
+    /// fastest), a first-move table (with --planner first-move or auto, on any map) or a JPS+
+    /// table with landmarks (with --planner jps-plus, or auto where it picks JPS or JPS+);
+    /// refused unless FILE was built for this map.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// Save the contraction hierarchy or first-move table this run builds (--planner ch or
-    /// first-move, or auto when it picks one) to FILE, for --preprocess in later runs.
+    /// Save the contraction hierarchy, first-move table or JPS+ table (with landmarks) this run
+    /// builds (--planner ch, first-move or jps-plus, or auto when it picks one) to FILE, for
+    /// --preprocess in later runs.
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
 }
@@ -428,12 +431,14 @@ pub struct BenchArgs {
     /// Print the table as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// JPS+ uses the table saved in FILE (by --save-preprocess) instead of building one; or, for a
-    /// first-move table (saved by scen or plan --save-preprocess), first-move and auto use it;
-    /// refused unless FILE was built for this map, altitude, margin, cell size and corner rule.
+    /// JPS+ (and auto, where it picks JPS or JPS+) uses the table saved in FILE (by
+    /// --save-preprocess, with its landmarks) instead of building one; or, for a first-move
+    /// table (saved by scen or plan --save-preprocess), first-move and auto use it; refused
+    /// unless FILE was built for this map, altitude, margin, cell size and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// Build the JPS+ table of this grid and save it to FILE (for --preprocess in later runs).
+    /// Build the JPS+ table of this grid, with landmarks, and save it to FILE (for --preprocess
+    /// in later runs).
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
     /// Replanning mode: fly N seeded flights per replanner (dstar-lite, scratch) on the in-process simulator into hidden buildings, one row each: success, collisions, replans, latency, expansions, flown length over the full-knowledge optimum.

@@ -166,8 +166,8 @@ fn first_move_table(
     };
     let shown = path.display();
     let t = Instant::now();
-    let (input, first_move) = crate::files::open_preprocess(path)?;
-    if !first_move {
+    let (input, kind) = crate::files::open_preprocess(path)?;
+    if kind != crate::files::Saved::FirstMove {
         return Ok(None);
     }
     let table =

@@ -20,21 +20,57 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
         .or_exit(Kind::BadInput)
 }
 
-/// A map's name and text: the file, or the bundled FCND city map, named `bundled_name`.
+/// What a `--preprocess` file holds, told by its header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Saved {
+    /// A JPS+ table (with landmarks when saved by this version).
+    JpsPlus,
+    /// A contraction hierarchy.
+    Hierarchy,
+    /// A first-move table.
+    FirstMove,
+    /// None of them.
+    Unknown,
+}
+
+impl Saved {
+    /// The planner that keeps this kind of preprocessing.
+    pub fn planner(self) -> Option<skyplan_plan::PlannerId> {
+        use skyplan_plan::PlannerId;
+        match self {
+            Saved::JpsPlus => Some(PlannerId::JpsPlus),
+            Saved::Hierarchy => Some(PlannerId::Ch),
+            Saved::FirstMove => Some(PlannerId::FirstMove),
+            Saved::Unknown => None,
+        }
+    }
+}
+
+/// What `--preprocess FILE` names when the file is none of the kinds (for error messages).
+pub const NOT_SAVED: &str = "not a saved JPS+ table, contraction hierarchy or first-move table (save one with --save-preprocess)";
+
 /// Opens the `--preprocess` file `path` (a contraction hierarchy, JPS+ table or first-move
-/// table) and tells whether it is a first-move table, by its header; errors name the option and
-/// the file.
-pub fn open_preprocess(path: &Path) -> Result<(std::io::BufReader<std::fs::File>, bool)> {
+/// table) and tells which it is, by its header; errors name the option and the file.
+pub fn open_preprocess(path: &Path) -> Result<(std::io::BufReader<std::fs::File>, Saved)> {
     let shown = path.display();
     let file = std::fs::File::open(path)
         .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
     let mut input = std::io::BufReader::new(file);
     let head = std::io::BufRead::fill_buf(&mut input)
         .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
-    let first_move = head.starts_with(skyplan_search::first_move_file::MAGIC);
-    Ok((input, first_move))
+    let kind = if head.starts_with(skyplan_search::first_move_file::MAGIC) {
+        Saved::FirstMove
+    } else if head.starts_with(skyplan_search::ch_file::MAGIC) {
+        Saved::Hierarchy
+    } else if head.starts_with(skyplan_search::table_file::MAGIC) {
+        Saved::JpsPlus
+    } else {
+        Saved::Unknown
+    };
+    Ok((input, kind))
 }
 
+/// A map's name and text: the file, or the bundled FCND city map, named `bundled_name`.
 pub fn map_text(map: Option<&Path>, bundled_name: &str) -> Result<(String, String)> {
     Ok(match map {
         Some(path) => (path.display().to_string(), read_text(path)?),

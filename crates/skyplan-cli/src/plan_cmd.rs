@@ -378,25 +378,16 @@ fn preprocess_files(
         return Ok(Some(path.clone()));
     };
     let shown = path.display();
-    let file = std::fs::File::open(path)
-        .map_err(|e| bad_input(format!("--preprocess {shown}: cannot open: {e}")))?;
-    let mut input = std::io::BufReader::new(file);
-    let kind = if loads_any {
-        let head = std::io::BufRead::fill_buf(&mut input)
-            .map_err(|e| bad_input(format!("--preprocess {shown}: cannot read: {e}")))?;
-        if head.starts_with(skyplan_search::ch_file::MAGIC) {
-            PlannerId::Ch
-        } else if head.starts_with(skyplan_search::first_move_file::MAGIC) {
-            PlannerId::FirstMove
-        } else if head.starts_with(skyplan_search::table_file::MAGIC) {
-            PlannerId::JpsPlus
-        } else {
+    let (input, saved) = crate::files::open_preprocess(path)?;
+    let kind = match (loads_any, saved.planner()) {
+        (false, _) => planner,
+        (true, Some(kind)) => kind,
+        (true, None) => {
             return Err(bad_input(format!(
-                "--preprocess {shown}: not a saved JPS+ table, contraction hierarchy or first-move table (save one with --save-preprocess)"
+                "--preprocess {shown}: {}",
+                crate::files::NOT_SAVED
             )));
         }
-    } else {
-        planner
     };
     match kind {
         PlannerId::Ch => session.load_ch(request, input),

@@ -3,14 +3,17 @@
 
 use crate::args::ScenArgs;
 use crate::exit::{Result, bad_input};
+use crate::files::Saved;
 use crate::files::read_text;
 use serde_json::json;
 use skyplan_bench::replay::{file_order_grid, first_off_map, replay_prepared};
 use skyplan_bench::replay_report::ReplayOf;
 use skyplan_cspace::Grid2;
-use skyplan_plan::auto::{MapStats, pick, pick_with_first_move_table, pick_with_hierarchy};
+use skyplan_plan::auto::{
+    MapStats, pick, pick_with_first_move_table, pick_with_hierarchy, pick_with_jps_plus_table,
+};
 use skyplan_plan::{CellSearch, PlannerId};
-use skyplan_search::{ContractionHierarchy, FirstMoveTable, MoveModel};
+use skyplan_search::{ContractionHierarchy, FirstMoveTable, JpsPlusTable, MoveModel};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -65,8 +68,8 @@ pub fn run(args: ScenArgs) -> Result<()> {
 }
 
 /// The search for `queries` scenarios: the planner (auto picking for that many), or saved
-/// preprocessing (`--preprocess`: a contraction hierarchy or a first-move table, told apart by
-/// the file's header).
+/// preprocessing (`--preprocess`: a contraction hierarchy, a first-move table or a JPS+ table,
+/// told apart by the file's header).
 fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSearch<'g>> {
     let planner_error = |e: skyplan_plan::PlanFailure| {
         // Messages that name the planner already ("planner ch: …") are not prefixed twice.
@@ -80,11 +83,31 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
     };
     let shown = path.display();
     let t = Instant::now();
-    let (input, first_move) = crate::files::open_preprocess(path)?;
+    let (input, saved) = crate::files::open_preprocess(path)?;
+    let Some(kind) = saved.planner() else {
+        return Err(bad_input(format!(
+            "--preprocess {shown}: {}",
+            crate::files::NOT_SAVED
+        )));
+    };
+    let first_move = saved == Saved::FirstMove;
     let stats = MapStats::of(grid);
-    let auto = match (args.planner, first_move) {
-        (PlannerId::Auto, true) => Some(pick_with_first_move_table(&stats, queries)),
-        (PlannerId::Auto, false) => {
+    let auto = match (args.planner, kind) {
+        (PlannerId::Auto, PlannerId::FirstMove) => {
+            Some(pick_with_first_move_table(&stats, queries))
+        }
+        (PlannerId::Auto, PlannerId::JpsPlus) => {
+            let with_table = pick_with_jps_plus_table(&stats, queries, MoveModel::Octile, true);
+            let Some(p) = with_table else {
+                let rule = pick(&stats, queries);
+                return Err(bad_input(format!(
+                    "--preprocess {shown}: auto does not use a JPS+ table on this map ({}: it picks {})",
+                    rule.why, rule.planner
+                )));
+            };
+            Some(p)
+        }
+        (PlannerId::Auto, _) => {
             let Some(p) = pick_with_hierarchy(&stats, queries) else {
                 return Err(bad_input(format!(
                     "--preprocess {shown}: auto does not use a contraction hierarchy on this map ({}: it picks {})",
@@ -94,12 +117,14 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
             };
             Some(p)
         }
-        (PlannerId::FirstMove, true) | (PlannerId::Ch, false) => None,
-        (other, _) => {
-            let what = if first_move {
-                "a saved first-move table is for --planner first-move or auto"
-            } else {
-                "a saved contraction hierarchy is for --planner ch or auto"
+        (planner, kind) if planner == kind => None,
+        (other, kind) => {
+            let what = match kind {
+                PlannerId::FirstMove => {
+                    "a saved first-move table is for --planner first-move or auto"
+                }
+                PlannerId::JpsPlus => "a saved JPS+ table is for --planner jps-plus or auto",
+                _ => "a saved contraction hierarchy is for --planner ch or auto",
             };
             return Err(bad_input(format!(
                 "--preprocess {shown}: {what}, not {other}"
@@ -114,15 +139,28 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
         return CellSearch::with_first_move_table(grid, Arc::new(table), us(t), auto)
             .map_err(planner_error);
     }
+    if kind == PlannerId::JpsPlus {
+        let table = JpsPlusTable::read_from(input, grid_arc)
+            .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
+        if table.model() != MoveModel::Octile {
+            return Err(bad_input(format!(
+                "--preprocess {shown}: the JPS+ table was built with corner cutting; MovingAI scenarios are without"
+            )));
+        }
+        return CellSearch::with_jps_plus_table(grid, Arc::new(table), us(t), auto)
+            .map_err(planner_error);
+    }
     let ch = ContractionHierarchy::read_from(input, grid_arc, MoveModel::Octile)
         .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
     CellSearch::with_hierarchy(grid, Arc::new(ch), us(t), auto).map_err(planner_error)
 }
 
-/// Writes the search's preprocessing (a contraction hierarchy or a first-move table) to `path`
-/// atomically (a failed save leaves no partial file); refused when the search has none.
+/// Writes the search's preprocessing (a contraction hierarchy, a first-move table, or a JPS+
+/// table with landmarks added for the later runs) to `path` atomically (a failed save leaves
+/// no partial file); refused when the search has none.
 fn save_preprocessing(path: &Path, search: &CellSearch<'_>, json: bool) -> Result<()> {
     let built_ms = search.precompute_us() as f64 / 1e3;
+    let mut landmarks = String::new();
     let (what, mb) = if let Some(ch) = search.hierarchy() {
         crate::files::write_atomic_with(path, |out| {
             ch.write_to(out).map_err(std::io::Error::other)
@@ -133,19 +171,29 @@ fn save_preprocessing(path: &Path, search: &CellSearch<'_>, json: bool) -> Resul
             table.write_to(out).map_err(std::io::Error::other)
         })?;
         ("first-move table", table.file_bytes() as f64 / 1e6)
+    } else if let Some(table) = search.jps_plus_table() {
+        let t = std::time::Instant::now();
+        let count = table
+            .add_landmarks(skyplan_search::landmarks_for(table.grid().len()))
+            .cells()
+            .len();
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        crate::files::write_atomic_with(path, |out| table.write_to(out, [f64::NAN; 3]))?;
+        landmarks = format!(", {count} landmarks in {ms:.0} ms");
+        ("JPS+ table with landmarks", table.file_bytes() as f64 / 1e6)
     } else {
         let what = match search.auto_pick() {
             Some(p) => format!("auto picked {} ({})", p.planner, p.why),
             None => "the planner builds none".to_string(),
         };
         return Err(bad_input(format!(
-            "--save-preprocess {}: no contraction hierarchy or first-move table to save: {what}; use --planner ch or first-move",
+            "--save-preprocess {}: no contraction hierarchy, first-move or JPS+ table to save: {what}; use --planner ch, first-move or jps-plus",
             path.display()
         )));
     };
     if !json {
         eprintln!(
-            "saved    {what} ({mb:.1} MB, built in {built_ms:.0} ms) to {}",
+            "saved    {what} ({mb:.1} MB, built in {built_ms:.0} ms{landmarks}) to {}",
             path.display()
         );
     }

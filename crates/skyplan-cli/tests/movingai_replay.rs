@@ -92,7 +92,7 @@ fn the_table_says_what_auto_picked_and_why() {
         lines
             .next()
             .unwrap()
-            .contains(", 290 scenarios, planner auto (JPS+ table built in ")
+            .contains(", 290 scenarios, planner auto (JPS+ table ready in ")
     );
     assert_eq!(
         lines.next(),
@@ -290,4 +290,62 @@ fn a_saved_first_move_table_is_used_by_auto_and_refused_when_damaged_or_misused(
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("it is for small maps"), "{err}");
+}
+
+/// A JPS+ table saved by `scen` keeps landmarks; `auto` (whose rule picks JPS+ on Paris) uses
+/// the loaded table from the first scenario, and every scenario still matches its published
+/// length; a table given to another planner, or a file of no known kind, is refused.
+#[test]
+fn a_saved_jps_plus_table_with_landmarks_serves_auto() {
+    let Some(data) = movingai_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let map = data.join("Paris_1_256.map");
+    let scen = data.join("Paris_1_256.map.scen");
+    let file = tmp.path().join("paris.jpsplus");
+    let run = |extra: &[&std::ffi::OsStr]| {
+        let mut c = skyplan(tmp.path());
+        c.arg("scen").arg(&map).arg(&scen).arg("--json").args(extra);
+        c
+    };
+    let saved = summary(&ok(&mut run(&[
+        "--planner".as_ref(),
+        "jps-plus".as_ref(),
+        "--save-preprocess".as_ref(),
+        file.as_os_str(),
+    ])));
+    assert_eq!(saved["matched"].as_u64(), Some(1090));
+    // 88-byte header, 8 bytes per cell, 8 landmarks: 4 bytes per cell each, cells, checksum.
+    let cells = 256 * 256;
+    assert_eq!(
+        std::fs::metadata(&file).unwrap().len(),
+        88 + 8 * cells + 8 * 8 + 4 * 8 * cells + 8
+    );
+    let loaded = summary(&ok(&mut run(&["--preprocess".as_ref(), file.as_os_str()])));
+    assert_eq!(loaded["auto"]["planner"], "jps-plus");
+    assert!(
+        loaded["auto"]["why"]
+            .as_str()
+            .unwrap()
+            .starts_with("a JPS+ table at hand with landmarks"),
+        "{}",
+        loaded["auto"]
+    );
+    assert_eq!(loaded["matched"].as_u64(), Some(1090));
+    refused(
+        run(&[
+            "--planner".as_ref(),
+            "ch".as_ref(),
+            "--preprocess".as_ref(),
+            file.as_os_str(),
+        ]),
+        &file,
+        "a saved JPS+ table is for --planner jps-plus or auto, not ch",
+    );
+    let noise = tmp.path().join("noise.bin");
+    std::fs::write(&noise, b"SKYPLAN-NOTHING\nmore bytes").unwrap();
+    refused(
+        run(&["--preprocess".as_ref(), noise.as_os_str()]),
+        &noise,
+        "not a saved JPS+ table, contraction hierarchy or first-move table",
+    );
 }

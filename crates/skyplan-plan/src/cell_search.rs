@@ -176,6 +176,14 @@ impl<'g> CellSearch<'g> {
         })
     }
 
+    /// The JPS+ table it reads, if it does (`jps-plus`, or `auto` picking it): to save.
+    pub fn jps_plus_table(&self) -> Option<&Arc<JpsPlusTable>> {
+        match &self.engine {
+            Engine::Plus(t) => Some(t),
+            _ => None,
+        }
+    }
+
     /// The first-move table it reads, if it does (`first-move`, or `auto` picking it): to save.
     pub fn first_move_table(&self) -> Option<&Arc<FirstMoveTable>> {
         match &self.engine {

@@ -73,7 +73,11 @@ fn main() {
         let mut bad = 0;
         for &(a, b) in &pairs {
             let t = Instant::now();
-            let p = table.search(&mut ws, a, b).unwrap();
+            let p = if std::env::var_os("GUIDED_ONLY").is_some() {
+                guided.search(&mut ws, a, b).unwrap()
+            } else {
+                table.search(&mut ws, a, b).unwrap()
+            };
             t0.push(t.elapsed().as_secs_f64() * 1e6);
             e0.push(p.expansions as f64);
             let t = Instant::now();
