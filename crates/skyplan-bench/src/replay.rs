@@ -1,7 +1,7 @@
 //! MovingAI scenario replay: every scenario's cost against its published `optimal_length`.
 
 use serde::Serialize;
-use skyplan_cspace::{Cell, Grid2, GridFrame};
+use skyplan_cspace::{Cell, Grid2};
 use skyplan_map::movingai::{MovingAiMap, Scenario};
 use skyplan_plan::auto::AutoPick;
 use skyplan_plan::{CellSearch, PlanFailure, PlannerId};
@@ -61,13 +61,7 @@ pub struct Replay {
 
 /// A MovingAI map as a grid in file row order (row = y, column = x, as the scenarios count).
 pub fn file_order_grid(map: &MovingAiMap) -> Result<Grid2, skyplan_cspace::GridError> {
-    let blocked: Vec<bool> = map.passable.iter().map(|&p| !p).collect();
-    Grid2::new(
-        map.height as u32,
-        map.width as u32,
-        blocked,
-        GridFrame::default(),
-    )
+    Grid2::from_passable(map.height as u32, map.width as u32, &map.passable)
 }
 
 /// The first scenario whose start or goal is off the map, as a message.

@@ -185,6 +185,19 @@ impl Grid2 {
         })
     }
 
+    /// A fixed grid (default frame) from row-major *passable* flags, as map formats such as
+    /// MovingAI's store them (row = y, column = x, in file order).
+    ///
+    /// ```
+    /// let grid = skyplan_cspace::Grid2::from_passable(1, 3, &[true, false, true])?;
+    /// assert_eq!(grid.blocked_cells(), &[false, true, false]);
+    /// # Ok::<(), skyplan_cspace::GridError>(())
+    /// ```
+    pub fn from_passable(rows: u32, cols: u32, passable: &[bool]) -> Result<Self, GridError> {
+        let blocked = passable.iter().map(|&p| !p).collect();
+        Self::new(rows, cols, blocked, GridFrame::default())
+    }
+
     /// A grid from text: `#` blocked, anything else `.` free; the first line is row 0.
     pub fn from_ascii(text: &str) -> Result<Self, GridError> {
         let lines: Vec<&str> = text

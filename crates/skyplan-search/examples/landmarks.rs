@@ -4,7 +4,7 @@
 //! and its scenarios) or `… -- MAP.csv N K` (a colliders map, N far-apart queries); K landmarks.
 //! `ROUNDS=R` repeats the queries R times (default 2).
 
-use skyplan_cspace::{Cell, Grid2, GridFrame, GridSpec};
+use skyplan_cspace::{Cell, Grid2, GridSpec};
 use skyplan_search::{Components, GridSearch, JpsPlusTable, Landmarks, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
@@ -33,15 +33,8 @@ fn main() {
             skyplan_map::movingai::parse_map(&std::fs::read_to_string(&args[1]).unwrap()).unwrap();
         let scen =
             skyplan_map::movingai::parse_scen(&std::fs::read_to_string(&args[2]).unwrap()).unwrap();
-        let blocked: Vec<bool> = map.passable.iter().map(|&p| !p).collect();
         let grid = Arc::new(
-            Grid2::new(
-                map.height as u32,
-                map.width as u32,
-                blocked,
-                GridFrame::default(),
-            )
-            .unwrap(),
+            Grid2::from_passable(map.height as u32, map.width as u32, &map.passable).unwrap(),
         );
         let pairs = scen
             .iter()

@@ -2,7 +2,7 @@
 //! scenarios, checking every length:
 //! `cargo run --release -p skyplan-search --example subgoal_scen -- MAP SCEN [first-move]`.
 
-use skyplan_cspace::{Cell, Grid2, GridFrame};
+use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::{
     FirstMoveTable, GridPath, GridSearch, JpsPlusTable, MoveModel, SearchError, SubgoalGraph,
     SubgoalQuery,
@@ -37,16 +37,8 @@ fn main() {
         skyplan_map::movingai::parse_map(&std::fs::read_to_string(&args[1]).unwrap()).unwrap();
     let scen =
         skyplan_map::movingai::parse_scen(&std::fs::read_to_string(&args[2]).unwrap()).unwrap();
-    let blocked: Vec<bool> = map.passable.iter().map(|&p| !p).collect();
-    let grid = Arc::new(
-        Grid2::new(
-            map.height as u32,
-            map.width as u32,
-            blocked,
-            GridFrame::default(),
-        )
-        .unwrap(),
-    );
+    let grid =
+        Arc::new(Grid2::from_passable(map.height as u32, map.width as u32, &map.passable).unwrap());
     let t = Instant::now();
     let first_move = args.get(3).is_some_and(|a| a == "first-move");
     let name = if first_move { "first-move" } else { "subgoal" };

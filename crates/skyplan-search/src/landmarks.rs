@@ -433,16 +433,6 @@ mod tests {
     use super::*;
     use crate::oracle::dijkstra_exact;
     use proptest::prelude::*;
-    use skyplan_cspace::GridFrame;
-
-    fn grid_strategy() -> impl Strategy<Value = Grid2> {
-        (1u32..40, 1u32..40, 0.0f64..0.5).prop_flat_map(|(rows, cols, density)| {
-            proptest::collection::vec(proptest::bool::weighted(density), (rows * cols) as usize)
-                .prop_map(move |blocked| {
-                    Grid2::new(rows, cols, blocked, GridFrame::default()).unwrap()
-                })
-        })
-    }
 
     const MODELS: [MoveModel; 3] = [
         MoveModel::Octile,
@@ -456,7 +446,7 @@ mod tests {
         /// Stored distances are the oracle's; bounds are at most the oracle's distance and
         /// consistent across every move.
         #[test]
-        fn distances_are_exact_and_bounds_admissible_and_consistent(grid in grid_strategy(), k in 1usize..5, m in 0usize..3) {
+        fn distances_are_exact_and_bounds_admissible_and_consistent(grid in skyplan_testkit::arb_grid(40, 0.0..0.5), k in 1usize..5, m in 0usize..3) {
             let model = MODELS[m];
             let lm = Landmarks::build(&grid, model, k);
             prop_assert!(lm.check(&grid).is_ok());

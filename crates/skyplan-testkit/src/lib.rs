@@ -156,6 +156,24 @@ pub fn arb_grid_and_ends(max_side: u32) -> impl Strategy<Value = (Grid2, Cell, C
     })
 }
 
+/// Random grids of 1 to `max_side − 1` rows and columns, each cell blocked with a probability
+/// drawn from `density`.
+///
+/// ```
+/// use proptest::strategy::{Strategy, ValueTree};
+/// let mut runner = proptest::test_runner::TestRunner::deterministic();
+/// let grid = skyplan_testkit::arb_grid(8, 0.0..0.5).new_tree(&mut runner).unwrap().current();
+/// assert!(grid.rows() < 8 && grid.cols() < 8);
+/// ```
+pub fn arb_grid(max_side: u32, density: Range<f64>) -> impl Strategy<Value = Grid2> {
+    (1..max_side, 1..max_side, density).prop_flat_map(|(rows, cols, density)| {
+        proptest::collection::vec(proptest::bool::weighted(density), (rows * cols) as usize)
+            .prop_map(move |blocked| {
+                Grid2::new(rows, cols, blocked, GridFrame::default()).expect("a valid random grid")
+            })
+    })
+}
+
 /// A tiny deterministic generator for tests that need plain random numbers without proptest's
 /// shrinking (xorshift64; a zero seed is made odd).
 ///
