@@ -147,6 +147,10 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
                 "--preprocess {shown}: the JPS+ table was built with corner cutting; MovingAI scenarios are without"
             )));
         }
+        // Said with or without landmarks, as the file holds them.
+        let landmarks = table.landmarks().is_some();
+        let auto = auto
+            .and_then(|_| pick_with_jps_plus_table(&stats, queries, MoveModel::Octile, landmarks));
         return CellSearch::with_jps_plus_table(grid, Arc::new(table), us(t), auto)
             .map_err(planner_error);
     }

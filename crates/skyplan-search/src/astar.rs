@@ -230,11 +230,19 @@ impl GridSearch {
         }
     }
 
-    /// Like [`GridSearch::offer`] for the cell at row `r`, column `c` (index `i`).
+    /// Like [`GridSearch::offer`] for the cell at row `r`, column `c` (index `i`), with the
+    /// heuristic computed only when the cell is improved (not for cells already closed or
+    /// reached as cheaply).
     #[inline(always)]
-    pub(crate) fn offer_rc(&mut self, i: usize, r: usize, c: usize, g: f64, h: f64, parent: u32) {
+    pub(crate) fn offer_rc(
+        &mut self,
+        (i, r, c): (usize, usize, usize),
+        g: f64,
+        h: impl FnOnce() -> f64,
+        parent: u32,
+    ) {
         if self.nodes.relax(r, c, g, parent) {
-            self.queue.push(key(g + h, g, i as u32));
+            self.queue.push(key(g + h(), g, i as u32));
         }
     }
 

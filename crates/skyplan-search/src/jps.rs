@@ -445,7 +445,7 @@ impl GridSearch {
                 };
                 let ji = (jr * cols + jc) as usize;
                 let step = g + octile(jr - r, jc - c);
-                self.offer_rc(ji, jr as usize, jc as usize, step, h(jr, jc), index);
+                self.offer_rc((ji, jr as usize, jc as usize), step, || h(jr, jc), index);
             }
         }
         Err(SearchError::Unreachable { expansions })

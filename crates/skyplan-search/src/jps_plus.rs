@@ -264,7 +264,7 @@ impl JpsPlusTable {
     }
 
     /// The landmarks the table holds, if any ([`JpsPlusTable::add_landmarks`]; none when the
-    /// grid had no two distinct free cells to pick).
+    /// largest connected region of the grid is a single cell).
     pub fn landmarks(&self) -> Option<&Landmarks> {
         self.landmarks.get().filter(|l| !l.cells().is_empty())
     }

@@ -13,14 +13,16 @@
 //!   `h(u) ≤ h(v) + λ · (w + Q) ≤ h(v) + w`.
 //!
 //! Both hold for *any* stored values whose differences across every single move are at most the
-//! move's cost plus `Q` (a path's cost bounds the difference at its ends), whether or not they
-//! are the true distances: [`Landmarks::check`] verifies exactly that, so a table read from a
-//! file can make a search slower but never its answer longer. The maximum of such bounds and
+//! move's cost plus `Q` (along a path of `m` moves the difference at its ends is then at most
+//! its cost plus `m · Q`, and every move costs at least 1), whether or not they are the true
+//! distances: [`Landmarks::check`] verifies exactly that, so a table read from a file can make a
+//! search slower but never its answer longer. The maximum of such bounds and
 //! the octile distance is consistent too, so A\* and JPS stay exact without reopening cells.
 //!
 //! A cell a landmark cannot reach holds [`UNKNOWN`] for it, and that landmark gives no bound
 //! there (nor anywhere in that cell's component: the check requires every move to join two
-//! known or two unknown values).
+//! known or two unknown values). A landmark with a reachable cell farther than the fixed point
+//! holds (a million cells of path) is not kept.
 
 use crate::MoveModel;
 use crate::queue::{BucketQueue, key, key_f, key_index};
@@ -39,14 +41,6 @@ const CELLS_PER_UNIT: f64 = 1.0 / (UNITS_PER_CELL as f64 + 1.0);
 /// Why landmarks cannot be built or used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LandmarkError {
-    /// A distance does not fit the fixed point (a grid over a million cells across).
-    #[error("a landmark distance of {cells:.0} cells does not fit (at most {max} cells)")]
-    TooFar {
-        /// The distance, cells.
-        cells: f64,
-        /// The largest distance kept, cells.
-        max: u32,
-    },
     /// Stored distances that would make the bound inadmissible.
     #[error(
         "landmark {landmark} at row {row}, column {col}: its distances there and at a neighbour differ by more than the move between them (not distances on this grid)"
@@ -91,9 +85,9 @@ pub struct Landmarks {
 
 impl Landmarks {
     /// Picks up to `count` (at most [`MAX_LANDMARKS`]) landmarks by farthest selection — the
-    /// first the free cell farthest from the grid's first free cell, each next the one
-    /// farthest from all before — and keeps their exact distances to every cell. Fewer are
-    /// kept on a grid with fewer distinct cells to pick; none on a grid without free cells.
+    /// first the free cell farthest from a cell of the largest connected region, each next the
+    /// one farthest from all before — and keeps their exact distances to every cell. Fewer are
+    /// kept when that region has fewer distinct cells to pick (none when it is one cell).
     ///
     /// Time: one Dijkstra over the component per landmark (plus one to start).
     pub fn build(grid: &Grid2, model: MoveModel, count: usize) -> Self {
@@ -105,18 +99,27 @@ impl Landmarks {
             cells: Vec::new(),
             units: Vec::new(),
         };
-        let Some(seed) = grid.blocked_cells().iter().position(|&b| !b) else {
+        // The seed: a cell of the largest connected region, so that the landmarks serve most
+        // of the map (a small pocket first in row order would hold them all).
+        let components = crate::Components::new(grid, model);
+        let biggest = (0..grid.len())
+            .filter_map(|i| components.label(grid.cell(i)).map(|l| (l, i)))
+            .max_by_key(|&(l, i)| (components.size(l), std::cmp::Reverse(i)));
+        let Some((_, seed)) = biggest else {
             return out;
         };
         if count == 0 {
             return out;
         }
+        let n = grid.len();
         let mut field = Field::new(grid, model);
         field.run(seed);
         // Each cell's distance to the nearest landmark so far (to the seed before the first).
-        let mut nearest: Vec<f32> = (0..grid.len()).map(|i| field.dist(i) as f32).collect();
-        let mut fields: Vec<Vec<u32>> = Vec::new();
-        for _ in 0..count {
+        let mut nearest: Vec<f32> = (0..n).map(|i| field.dist(i) as f32).collect();
+        // Written straight into the interleaved layout (`count` per cell), compacted at the end
+        // if fewer are kept.
+        let mut units = vec![UNKNOWN; n * count];
+        for j in 0..count {
             let mut best = (0.0f32, None);
             for (i, &m) in nearest.iter().enumerate() {
                 if m.is_finite() && m > best.0 {
@@ -125,17 +128,26 @@ impl Landmarks {
             }
             let Some(at) = best.1 else { break };
             field.run(at);
-            let first = fields.is_empty();
-            let mut units = Vec::with_capacity(grid.len());
+            // A distance the fixed point cannot hold would make the landmark's bound fall to
+            // nothing inside a connected region (not consistent): keep only landmarks whose
+            // every distance fits.
+            if (0..n).any(|i| field.dist(i).is_finite() && to_units(field.dist(i)) == UNKNOWN) {
+                break;
+            }
             for (i, m) in nearest.iter_mut().enumerate() {
                 let d = field.dist(i);
-                *m = if first { d as f32 } else { m.min(d as f32) };
-                units.push(to_units(d));
+                *m = if j == 0 { d as f32 } else { m.min(d as f32) };
+                units[i * count + j] = to_units(d);
             }
-            out.cells.push(grid_cell(grid, at));
-            fields.push(units);
+            out.cells.push(grid.cell(at));
         }
-        out.units = interleave(&fields, grid.len());
+        let kept = out.cells.len();
+        if kept < count {
+            units = (0..n)
+                .flat_map(|i| units[i * count..i * count + kept].to_vec())
+                .collect();
+        }
+        out.units = units;
         out
     }
 
@@ -332,23 +344,6 @@ fn to_units(d: f64) -> u32 {
     }
 }
 
-fn grid_cell(grid: &Grid2, i: usize) -> Cell {
-    let cols = grid.cols() as usize;
-    Cell::new((i / cols) as u32, (i % cols) as u32)
-}
-
-/// `fields[j][i]` laid out as `out[i * fields.len() + j]`.
-fn interleave(fields: &[Vec<u32>], cells: usize) -> Vec<u32> {
-    let k = fields.len();
-    let mut out = vec![UNKNOWN; cells * k];
-    for (j, field) in fields.iter().enumerate() {
-        for (i, &u) in field.iter().enumerate() {
-            out[i * k + j] = u;
-        }
-    }
-    out
-}
-
 /// One grid's Dijkstra workspace: the free cells with a blocked border (no edge tests) and
 /// the distances of the last run, both on the padded grid.
 struct Field {
@@ -460,7 +455,7 @@ mod tests {
             let sample = |step: usize| free.iter().copied().step_by((free.len() / step).max(1));
             for (j, &l) in lm.cells().iter().enumerate() {
                 for i in sample(15) {
-                    let truth = dijkstra_exact(&grid, l, grid_cell(&grid, i), model).map(|c| c.to_f64());
+                    let truth = dijkstra_exact(&grid, l, grid.cell(i), model).map(|c| c.to_f64());
                     let stored = lm.units()[i * kk + j];
                     match truth {
                         None => prop_assert_eq!(stored, UNKNOWN),
@@ -470,14 +465,14 @@ mod tests {
             }
             for g in sample(3) {
                 let bound = lm.to_goal(free[0], g, 2);
-                let goal = grid_cell(&grid, g);
+                let goal = grid.cell(g);
                 for i in sample(12) {
-                    if let Some(d) = dijkstra_exact(&grid, grid_cell(&grid, i), goal, model) {
+                    if let Some(d) = dijkstra_exact(&grid, grid.cell(i), goal, model) {
                         prop_assert!(bound.at(i) <= d.to_f64() + 1e-12, "bound {} > {}", bound.at(i), d.to_f64());
                     }
                 }
                 for &i in &free {
-                    let cell = grid_cell(&grid, i);
+                    let cell = grid.cell(i);
                     for (dr, dc) in [(0i64, 1i64), (1, 0), (1, 1), (1, -1)] {
                         let (r, c) = (i64::from(cell.row) + dr, i64::from(cell.col) + dc);
                         let Some(next) = grid.checked_cell(r, c) else { continue };
@@ -538,6 +533,20 @@ mod tests {
             )
             .is_ok()
         );
+    }
+
+    /// The first free cell in row order is a pocket of one cell: the landmarks still go to the
+    /// large region, where the queries are.
+    #[test]
+    fn landmarks_serve_the_largest_region() {
+        let grid = Grid2::from_ascii(".#......\n##......\n........").unwrap();
+        let lm = Landmarks::build(&grid, MoveModel::Octile, 2);
+        assert_eq!(lm.cells().len(), 2);
+        assert!(!lm.cells().contains(&Cell::new(0, 0)), "{:?}", lm.cells());
+        assert!(lm.check(&grid).is_ok());
+        // The pocket is unknown to both; the region's cells are known.
+        assert_eq!(&lm.units()[..2], &[UNKNOWN, UNKNOWN]);
+        assert!(lm.units()[2 * 2..2 * 3].iter().all(|&u| u != UNKNOWN));
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 16 | magic `SKYPLAN-JPSPLUS\n` |
-//! | 4 | version (2) |
+//! | 4 | version (3) |
 //! | 4 | corner rule: 1 = octile, no corner cutting; 2 = octile with corner cutting |
 //! | 4, 4 | grid rows, columns |
 //! | 8 | [`grid_checksum`] of the grid |
@@ -158,7 +158,9 @@ impl TableHeader {
     /// Bytes of the whole file this header describes.
     pub fn file_bytes(&self) -> u64 {
         let cells = u64::from(self.rows) * u64::from(self.cols);
-        HEADER_BYTES as u64 + cells * u64::from(CELL_BYTES) + landmark_bytes(cells, self.landmarks)
+        (HEADER_BYTES as u64)
+            .saturating_add(cells * u64::from(CELL_BYTES))
+            .saturating_add(landmark_bytes(cells, self.landmarks))
     }
 }
 
@@ -168,7 +170,9 @@ fn landmark_bytes(cells: u64, k: u32) -> u64 {
     if k == 0 {
         0
     } else {
-        8 * u64::from(k) + 4 * cells * u64::from(k) + 8
+        (4 * u64::from(k))
+            .saturating_mul(cells + 2)
+            .saturating_add(8)
     }
 }
 
@@ -360,7 +364,12 @@ fn read_full(input: &mut impl Read, buf: &mut [u8]) -> Result<usize, TableFileEr
 }
 
 impl JpsPlusTable {
-    fn header_bytes(&self, spec: [f64; 3], table_checksum: u64) -> [u8; HEADER_BYTES] {
+    fn header_bytes(
+        &self,
+        spec: [f64; 3],
+        table_checksum: u64,
+        landmarks: Option<&Landmarks>,
+    ) -> [u8; HEADER_BYTES] {
         let grid = self.grid();
         let mut out = [0u8; HEADER_BYTES];
         let mut at = 0;
@@ -380,41 +389,32 @@ impl JpsPlusTable {
         put(&u32::from(self.escape).to_le_bytes());
         put(&CELL_BYTES.to_le_bytes());
         put(&table_checksum.to_le_bytes());
-        put(&(self.landmarks().map_or(0, |l| l.cells().len()) as u32).to_le_bytes());
+        put(&(landmarks.map_or(0, |l| l.cells().len()) as u32).to_le_bytes());
         put(&UNITS_PER_CELL.to_le_bytes());
         out
     }
 
-    /// The landmark section's cell list and checksum (nothing without landmarks).
-    fn landmark_head(&self) -> Option<(Vec<u8>, u64)> {
-        let l = self.landmarks().filter(|l| !l.cells().is_empty())?;
-        let mut head = Vec::with_capacity(8 * l.cells().len());
-        for c in l.cells() {
-            head.extend_from_slice(&c.row.to_le_bytes());
-            head.extend_from_slice(&c.col.to_le_bytes());
-        }
-        let mut sum = LandmarkSum::new(l.cells());
-        for chunk in l.units().chunks(CHUNK_CELLS) {
-            sum.values(chunk);
-        }
-        Some((head, sum.0.finish()))
-    }
-
-    /// Streams the landmark section (if any) to `out`.
-    fn write_landmarks(&self, out: &mut impl Write) -> io::Result<()> {
-        let (Some((head, sum)), Some(l)) = (self.landmark_head(), self.landmarks()) else {
+    /// Streams the landmark section of `landmarks` (if any) to `out`: the cells, the values,
+    /// and their checksum, computed as they go.
+    fn write_landmarks(landmarks: Option<&Landmarks>, out: &mut impl Write) -> io::Result<()> {
+        let Some(l) = landmarks else {
             return Ok(());
         };
-        out.write_all(&head)?;
+        for c in l.cells() {
+            out.write_all(&c.row.to_le_bytes())?;
+            out.write_all(&c.col.to_le_bytes())?;
+        }
+        let mut sum = LandmarkSum::new(l.cells());
         let mut bytes = Vec::with_capacity(4 * CHUNK_CELLS);
         for chunk in l.units().chunks(CHUNK_CELLS) {
+            sum.values(chunk);
             bytes.clear();
             for v in chunk {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
             out.write_all(&bytes)?;
         }
-        out.write_all(&sum.to_le_bytes())
+        out.write_all(&sum.0.finish().to_le_bytes())
     }
 
     fn checksum(&self) -> u64 {
@@ -435,21 +435,24 @@ impl JpsPlusTable {
     /// table's memory (no copy); `spec` is stored for the reader: the grid's altitude, margin
     /// and cell size in metres (`NaN` for a fixed grid).
     pub fn write_to(&self, mut out: impl Write, spec: [f64; 3]) -> io::Result<()> {
-        out.write_all(&self.header_bytes(spec, self.checksum()))?;
+        // Read once: another holder of the table may add landmarks while it is written.
+        let landmarks = self.landmarks();
+        out.write_all(&self.header_bytes(spec, self.checksum(), landmarks))?;
         for chunk in self.table.chunks(CHUNK_CELLS) {
             out.write_all(chunk.as_flattened())?;
         }
-        self.write_landmarks(&mut out)?;
+        Self::write_landmarks(landmarks, &mut out)?;
         out.flush()
     }
 
     /// The table as file bytes in memory ([`JpsPlusTable::write_to`] into a `Vec`).
     pub fn to_bytes(&self, spec: [f64; 3]) -> Vec<u8> {
         let mut out = Vec::with_capacity(usize::try_from(self.file_bytes()).unwrap_or(0));
-        out.extend_from_slice(&self.header_bytes(spec, self.checksum()));
+        let landmarks = self.landmarks();
+        out.extend_from_slice(&self.header_bytes(spec, self.checksum(), landmarks));
         out.extend_from_slice(self.table.as_flattened());
         // Writing to a vector cannot fail.
-        let _ = self.write_landmarks(&mut out);
+        let _ = Self::write_landmarks(landmarks, &mut out);
         out
     }
 
@@ -563,19 +566,22 @@ fn read_landmarks(
         .map(|b| Cell::new(word(&b[..4]), word(&b[4..])))
         .collect();
     let mut sum = LandmarkSum::new(&landmarks);
-    let mut units = vec![0u32; cells * k];
+    // Grown chunk by chunk as the values arrive: a header announcing more than the file holds
+    // costs no memory.
+    let values = cells * k;
+    let mut units: Vec<u32> = Vec::new();
     let mut bytes = vec![0u8; 4 * CHUNK_CELLS];
-    for chunk in units.chunks_mut(CHUNK_CELLS) {
-        let want = &mut bytes[..4 * chunk.len()];
+    while units.len() < values {
+        let n = CHUNK_CELLS.min(values - units.len());
+        let want = &mut bytes[..4 * n];
         let got = read_full(input, want)?;
         if got < want.len() {
             return Err(short(at + got as u64));
         }
         at += got as u64;
-        for (v, b) in chunk.iter_mut().zip(want.chunks(4)) {
-            *v = word(b);
-        }
-        sum.values(chunk);
+        let from = units.len();
+        units.extend(want.chunks(4).map(word));
+        sum.values(&units[from..]);
     }
     let mut tail = [0u8; 8];
     let got = read_full(input, &mut tail)?;
