@@ -10,34 +10,44 @@ use skyplan_cspace::Grid2;
 /// Each line has a zero word before it and one after it, and there is a zero line before the
 /// first and after the last, so that the lines beside a scan and the 64 cells past either end
 /// read as blocked without a bounds test.
+///
+/// Words are stored block-major: the words of all lines for the same 64 cells are adjacent
+/// (word `b` of line `l` at `b × (lines + 2) + l + 1`). A scan reads its line and the two
+/// beside it from one cache line, and a diagonal scan, which moves to the next line at every
+/// step, finds the next line's word beside the last; a straight scan pays one cache line per
+/// 64 cells either way.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
 pub(crate) struct BitLines {
     /// Number of lines.
     lines: usize,
     /// Cells per line.
     len: usize,
-    /// Words per line, padding included: `len.div_ceil(64) + 2`.
-    stride: usize,
-    /// `(lines + 2) × stride` words; line `l` starts at word `(l + 1) × stride`.
+    /// `(lines + 2) × (len.div_ceil(64) + 2)` words (padding included), block-major.
     words: Vec<u64>,
 }
 
 impl BitLines {
     /// An all-blocked set of `lines` lines of `len` cells.
     fn blocked(lines: usize, len: usize) -> Self {
-        let stride = len.div_ceil(64) + 2;
         BitLines {
             lines,
             len,
-            stride,
-            words: vec![0; (lines + 2) * stride],
+            words: vec![0; (lines + 2) * (len.div_ceil(64) + 2)],
         }
     }
 
+    /// Index in `words` of word `block` (padding included: block 0 is the zero word before
+    /// the line) of `line` (`-1 ..= lines`).
     #[inline(always)]
-    fn set(&mut self, line: usize, pos: usize) {
-        let w = (line + 1) * self.stride + 1 + pos / 64;
-        self.words[w] |= 1 << (pos % 64);
+    fn at(&self, line: i64, block: usize) -> usize {
+        block * (self.lines + 2) + (line + 1) as usize
+    }
+
+    /// The 3 cells `pos - 1 ..= pos + 1` of `line` as bits 0, 1, 2, for `line` in
+    /// `-1 ..= lines` and `pos` in `-63 ..= len + 62`.
+    #[inline(always)]
+    fn three(&self, line: i64, pos: i64) -> u64 {
+        self.ahead(line, pos - 1) & 0b111
     }
 
     /// The 64 cells `pos .. pos + 64` of `line` (bit `k` is cell `pos + k`), for `line` in
@@ -47,12 +57,12 @@ impl BitLines {
         debug_assert!((-1..=self.lines as i64).contains(&line));
         debug_assert!((-64..=self.len as i64).contains(&pos));
         let p = (pos + 64) as usize;
-        let w = (line + 1) as usize * self.stride + p / 64;
+        let w = self.at(line, p / 64);
         let s = p % 64;
         if s == 0 {
             self.words[w]
         } else {
-            (self.words[w] >> s) | (self.words[w + 1] << (64 - s))
+            (self.words[w] >> s) | (self.words[w + self.lines + 2] << (64 - s))
         }
     }
 
@@ -92,9 +102,42 @@ fn pack_free(blocked: &[bool]) -> u64 {
     !word & valid
 }
 
+/// Transposes a 64 × 64 bit matrix in place: bit `j` of word `k` becomes bit `k` of word `j`
+/// (Warren, "Hacker's Delight", 7–3: swap ever smaller blocks, 6 rounds of 32 word pairs).
+fn transpose64(a: &mut [u64; 64]) {
+    let mut width = 32;
+    let mut mask: u64 = 0x0000_0000_FFFF_FFFF;
+    while width != 0 {
+        let mut k = 0;
+        while k < 64 {
+            // Words k and k + width exchange the high `width` bits of each low block of k with
+            // the low `width` bits of k + width.
+            let t = ((a[k] >> width) ^ a[k + width]) & mask;
+            a[k] ^= t << width;
+            a[k + width] ^= t;
+            k = (k + width + 1) & !width;
+        }
+        width >>= 1;
+        mask ^= mask << width;
+    }
+}
+
 /// Side of the square tiles the bits are checked against the grid by: one word of a row and
 /// one word of a column.
 const TILE: usize = 64;
+
+/// The free cells among a cell and its 8 neighbours: bit `(a + 1) × 3 + (b + 1)` is set iff the
+/// cell at offset `(a, b)` (each in `-1 ..= 1`) is free.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Around(pub(crate) u16);
+
+impl Around {
+    /// True iff the cell at offset `(a, b)` is free.
+    #[inline(always)]
+    pub(crate) fn free(self, a: i64, b: i64) -> bool {
+        (self.0 >> ((a + 1) * 3 + (b + 1))) & 1 != 0
+    }
+}
 
 /// A grid's free cells as bit rows and bit columns, built once per grid shape and kept between
 /// queries. The grid may change between queries (the caller owns it), so the bits are checked
@@ -136,22 +179,19 @@ impl BlockGrid {
         let (rows, cols) = (grid.rows() as usize, grid.cols() as usize);
         self.rows = BitLines::blocked(rows, cols);
         for (r, row) in grid.blocked_cells().chunks_exact(cols).enumerate() {
-            let at = (r + 1) * self.rows.stride + 1;
             for (w, cells) in row.chunks(64).enumerate() {
-                self.rows.words[at + w] = pack_free(cells);
+                let at = self.rows.at(r as i64, 1 + w);
+                self.rows.words[at] = pack_free(cells);
             }
         }
         self.cols = BitLines::blocked(cols, rows);
-        // Row by row: the words written for 64 consecutive rows (one per column) stay in cache.
-        for (r, row) in grid.blocked_cells().chunks_exact(cols).enumerate() {
-            for (c, &b) in row.iter().enumerate() {
-                if !b {
-                    self.cols.set(c, r);
-                }
+        self.tiles_across = cols.div_ceil(TILE);
+        for tr in 0..rows.div_ceil(TILE) {
+            for tc in 0..self.tiles_across {
+                self.transpose_tile(tr, tc);
             }
         }
         self.shape = Some((grid.rows(), grid.cols()));
-        self.tiles_across = cols.div_ceil(TILE);
         self.checked = vec![1; rows.div_ceil(TILE) * self.tiles_across];
         self.epoch = 1;
     }
@@ -189,20 +229,40 @@ impl BlockGrid {
         let mut changed = false;
         for r in r0..r1 {
             let word = pack_free(&blocked[r * cols + c0..r * cols + c1]);
-            let at = (r + 1) * self.rows.stride + 1 + tc;
+            let at = self.rows.at(r as i64, 1 + tc);
             changed |= self.rows.words[at] != word;
             self.rows.words[at] = word;
         }
         if changed {
-            for c in c0..c1 {
-                let mut word = 0u64;
-                for r in r0..r1 {
-                    word |= u64::from(!blocked[r * cols + c]) << (r - r0);
-                }
-                self.cols.words[(c + 1) * self.cols.stride + 1 + tr] = word;
-            }
+            self.transpose_tile(tr, tc);
         }
         self.checked[tr * self.tiles_across + tc] = self.epoch;
+    }
+
+    /// Writes tile `(tr, tc)`'s column words from its row words: one 64 × 64 bit transpose.
+    #[inline]
+    fn transpose_tile(&mut self, tr: usize, tc: usize) {
+        let (rows, cols) = (self.rows.lines, self.rows.len);
+        let (r0, r1) = (tr * TILE, ((tr + 1) * TILE).min(rows));
+        let (c0, c1) = (tc * TILE, ((tc + 1) * TILE).min(cols));
+        let mut tile = [0u64; 64];
+        // Block-major: the tile's row words are consecutive, and so are its column words.
+        let at = self.rows.at(r0 as i64, 1 + tc);
+        tile[..r1 - r0].copy_from_slice(&self.rows.words[at..at + (r1 - r0)]);
+        transpose64(&mut tile);
+        let at = self.cols.at(c0 as i64, 1 + tr);
+        self.cols.words[at..at + (c1 - c0)].copy_from_slice(&tile[..c1 - c0]);
+    }
+
+    /// The 3 × 3 neighbourhood of the cell `(r, c)` inside the grid `blocked` this query began
+    /// on (cells past the grid's edge read as blocked), its tiles checked in this epoch.
+    #[inline(always)]
+    pub(crate) fn around(&mut self, blocked: &[bool], r: i64, c: i64) -> Around {
+        debug_assert!((0..self.rows.lines as i64).contains(&r));
+        debug_assert!((0..self.rows.len as i64).contains(&c));
+        self.check(blocked, (r - 1, r + 1), (c - 1, c + 1));
+        let rows = &self.rows;
+        Around((rows.three(r - 1, c) | rows.three(r, c) << 3 | rows.three(r + 1, c) << 6) as u16)
     }
 
     /// The scan of straight JPS along row `line` (`vertical` false) or column `line` (true)
@@ -334,6 +394,26 @@ mod tests {
     }
 
     #[test]
+    fn transpose64_moves_bit_j_of_word_k_to_bit_k_of_word_j() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..20 {
+            let words: [u64; 64] = std::array::from_fn(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                state
+            });
+            let mut t = words;
+            transpose64(&mut t);
+            for (k, word) in words.iter().enumerate() {
+                for (j, out) in t.iter().enumerate() {
+                    assert_eq!((word >> j) & 1, (out >> k) & 1, "word {k} bit {j}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn pack8_gathers_low_bits() {
         for v in 0u32..256 {
             let bytes = u64::from_le_bytes(std::array::from_fn(|k| ((v >> k) & 1) as u8));
@@ -341,8 +421,9 @@ mod tests {
         }
     }
 
-    /// Every straight scan from every cell of `grid`, in all four directions and both corner
-    /// rules, against the cell-by-cell scan, on bits that began a query on `grid`.
+    /// Every cell's 3 × 3 neighbourhood, and every straight scan from every cell of `grid` in
+    /// all four directions and both corner rules against the cell-by-cell scan, on bits that
+    /// began a query on `grid`.
     fn scans_agree(bits: &mut BlockGrid, grid: &Grid2, goal: Cell) -> Result<(), TestCaseError> {
         for model in [MoveModel::Octile, MoveModel::OctileCornerCutting] {
             bits.begin(grid);
@@ -351,6 +432,20 @@ mod tests {
             let (gr, gc) = view.goal;
             for r in 0..view.rows {
                 for c in 0..view.cols {
+                    let around = bits.around(grid.blocked_cells(), r, c);
+                    for a in -1..=1 {
+                        for b in -1..=1 {
+                            prop_assert_eq!(
+                                around.free(a, b),
+                                view.free(r + a, c + b),
+                                "({}, {}) + ({}, {})",
+                                r,
+                                c,
+                                a,
+                                b
+                            );
+                        }
+                    }
                     for (dr, dc) in [(0, 1), (0, -1), (1, 0), (-1, 0)] {
                         let want = cell_scan(&view, r, c, dr, dc);
                         let blocked = grid.blocked_cells();

@@ -66,27 +66,19 @@ impl<'a> View<'a> {
     /// (never without corner cutting, where only the straight sub-scans stop it).
     #[inline]
     pub(crate) fn forced_diagonal(&self, r: i64, c: i64, dr: i64, dc: i64) -> bool {
-        self.corner_cutting
-            && ((self.free(r - dr, c + dc) && !self.free(r - dr, c))
-                || (self.free(r + dr, c - dc) && !self.free(r, c - dc)))
+        self.corner_cutting && forced_diagonal_at(|a, b| self.free(r + a, c + b), dr, dc)
     }
 
     /// True if a diagonal scan standing on `(r, c)` may take its next step.
     #[inline]
     pub(crate) fn diagonal_continues(&self, r: i64, c: i64, dr: i64, dc: i64) -> bool {
-        self.corner_cutting || (self.free(r + dr, c) && self.free(r, c + dc))
+        self.corner_cutting || diagonal_continues_at(|a, b| self.free(r + a, c + b), dr, dc)
     }
 
     /// Bit `k` set iff the neighbour `DIRS[k]` of `(r, c)` is free.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn neighbour_mask(&self, r: i64, c: i64) -> u8 {
-        DIRS.iter().enumerate().fold(0u8, |m, (k, &(a, b))| {
-            if self.free(r + a, c + b) {
-                m | (1 << k)
-            } else {
-                m
-            }
-        })
+        neighbour_mask_at(|a, b| self.free(r + a, c + b))
     }
 
     /// Scans straight from `(r, c)` (the first cell past the expanded node) along `(dr, dc)`,
@@ -162,8 +154,9 @@ impl<'a> View<'a> {
         }
     }
 
-    /// [`View::jump`] with its straight scans (and those a diagonal scan makes at each step)
-    /// done on the grid's bits: the same jump point, 64 cells per step along a straight line.
+    /// [`View::jump`] on the grid's bits: its straight scans (and those a diagonal scan makes
+    /// at each step) 64 cells per step, and a diagonal scan's own tests on the bit rows (the
+    /// rows of a 3 × 3 neighbourhood are one cache line there, not three rows of the grid).
     #[inline]
     fn jump_blocks(
         &self,
@@ -177,19 +170,23 @@ impl<'a> View<'a> {
             return self.jump_straight_blocks(block, r, c, dr, dc);
         }
         loop {
-            if !self.free(r, c) {
+            if r < 0 || c < 0 || r >= self.rows || c >= self.cols {
+                return None;
+            }
+            let around = block.around(self.blocked, r, c);
+            if !around.free(0, 0) {
                 return None;
             }
             if (r, c) == self.goal {
                 return Some((r, c));
             }
-            if self.forced_diagonal(r, c, dr, dc)
+            if (self.corner_cutting && forced_diagonal_at(|a, b| around.free(a, b), dr, dc))
                 || self.jump_straight_blocks(block, r + dr, c, dr, 0).is_some()
                 || self.jump_straight_blocks(block, r, c + dc, 0, dc).is_some()
             {
                 return Some((r, c));
             }
-            if !self.diagonal_continues(r, c, dr, dc) {
+            if !self.corner_cutting && !diagonal_continues_at(|a, b| around.free(a, b), dr, dc) {
                 return None;
             }
             r += dr;
@@ -283,6 +280,30 @@ impl<'a> View<'a> {
             }
         }
     }
+}
+
+/// With corner cutting, true if a diagonal scan along `(dr, dc)` must stop at a cell whose
+/// neighbour at offset `(a, b)` is free iff `free(a, b)`.
+#[inline(always)]
+fn forced_diagonal_at(free: impl Fn(i64, i64) -> bool, dr: i64, dc: i64) -> bool {
+    (free(-dr, dc) && !free(-dr, 0)) || (free(dr, -dc) && !free(0, -dc))
+}
+
+/// Without corner cutting, true if a diagonal scan along `(dr, dc)` may step on from a cell
+/// whose neighbour at offset `(a, b)` is free iff `free(a, b)`.
+#[inline(always)]
+fn diagonal_continues_at(free: impl Fn(i64, i64) -> bool, dr: i64, dc: i64) -> bool {
+    free(dr, 0) && free(0, dc)
+}
+
+/// Bit `k` set iff the neighbour `DIRS[k]` is free, given `free(a, b)` for the neighbour at
+/// offset `(a, b)`.
+#[inline(always)]
+fn neighbour_mask_at(free: impl Fn(i64, i64) -> bool) -> u8 {
+    DIRS.iter().enumerate().fold(
+        0u8,
+        |m, (k, &(a, b))| if free(a, b) { m | (1 << k) } else { m },
+    )
 }
 
 /// The 8 directions as `(dr, dc)`, straight first; bit `k` of a direction set is `DIRS[k]`.
@@ -384,12 +405,17 @@ impl GridSearch {
         model: MoveModel,
     ) -> Result<GridPath, SearchError> {
         let view = View::new(grid, goal, model);
+        // Both the expanded cell's neighbourhood and the jumps read the bits (one at a time).
+        let block = std::cell::RefCell::new(block);
         self.jump_point_search(
             grid,
             (start, goal),
             &view,
-            |r, c, _| view.neighbour_mask(r, c),
-            |r, c, a, b| view.jump_blocks(block, r + a, c + b, a, b),
+            |r, c, _| {
+                let around = block.borrow_mut().around(view.blocked, r, c);
+                neighbour_mask_at(|a, b| around.free(a, b))
+            },
+            |r, c, a, b| view.jump_blocks(&mut block.borrow_mut(), r + a, c + b, a, b),
             |_| 0.0,
         )
     }
