@@ -34,6 +34,7 @@
 mod pg;
 mod reserve;
 mod sqlite;
+mod tls;
 
 pub use pg::{MAX_CONNECTIONS, PostgresStore, SERIALIZABLE_TRIES};
 pub use reserve::{

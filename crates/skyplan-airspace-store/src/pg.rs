@@ -8,6 +8,7 @@
 //! (no advisory locks, no `ON CONFLICT`, no PL/pgSQL): `BIGSERIAL`, `unnest` of several
 //! arrays and `= ANY` are understood by CockroachDB as well.
 
+use crate::tls::Transport;
 use crate::{Insert, IntentStore, SCHEMA_VERSION, StoreError, StoredRow, index_keys, version_of};
 use postgres::error::SqlState;
 use postgres::{Client, IsolationLevel, NoTls, Statement};
@@ -70,6 +71,9 @@ const CANDIDATE_ROWS: &str =
 /// not from async code.
 pub struct PostgresStore {
     config: postgres::Config,
+    transport: Transport,
+    /// Where the server's certificate is checked against, with TLS.
+    roots: Option<String>,
     place: String,
     pool: Mutex<PoolState>,
     freed: Condvar,
@@ -145,7 +149,12 @@ impl PostgresStore {
     /// Connects to the database at `url` (`postgres://…` or `postgresql://…`, libpq's URL
     /// form), creates the tables if they are missing and checks the schema version.
     ///
-    /// Errors: [`StoreError::Address`] for a URL that does not parse,
+    /// TLS: `sslmode=require`, `verify-ca` or `verify-full`, or `sslrootcert=FILE` (PEM CA
+    /// certificates), make every connection TLS, the server's certificate and host name checked
+    /// against `FILE` or the public web CAs; without them connections are plain.
+    ///
+    /// Errors: [`StoreError::Address`] for a URL that does not parse (or an unreadable
+    /// `sslrootcert`),
     /// [`StoreError::Down`] when the server cannot be reached (within 5 s unless the URL
     /// sets `connect_timeout`), [`StoreError::Schema`] for a database of another schema
     /// version.
@@ -153,7 +162,9 @@ impl PostgresStore {
         if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
             return Err(StoreError::Address(url.into()));
         }
-        let mut config: postgres::Config = url
+        let tls = crate::tls::split(url, |file| std::fs::read(file))?;
+        let mut config: postgres::Config = tls
+            .url
             .parse()
             .map_err(|e| StoreError::Address(format!("{} ({e})", redact(url))))?;
         if config.get_connect_timeout().is_none() {
@@ -162,6 +173,8 @@ impl PostgresStore {
         let place = place_of(&config);
         let store = Self {
             config,
+            transport: tls.transport,
+            roots: tls.roots,
             place,
             pool: Mutex::new(PoolState {
                 idle: Vec::new(),
@@ -194,10 +207,22 @@ impl PostgresStore {
         &self.place
     }
 
+    /// True when connections are TLS.
+    pub fn is_tls(&self) -> bool {
+        matches!(self.transport, Transport::Tls(_))
+    }
+
     fn down(&self, e: &postgres::Error) -> StoreError {
+        let why = match &self.roots {
+            Some(roots) => format!(
+                "{} (TLS: the server's certificate is checked against {roots})",
+                describe(e)
+            ),
+            None => describe(e),
+        };
         StoreError::Down {
             place: self.place.clone(),
-            why: describe(e),
+            why,
         }
     }
 
@@ -216,7 +241,7 @@ impl PostgresStore {
     /// A new connection with the schema checked (created if missing) and the statements
     /// prepared.
     fn connect_and_setup(&self) -> Result<Conn, StoreError> {
-        let mut client = self.config.connect(NoTls).map_err(|e| self.down(&e))?;
+        let mut client = connect(&self.config, &self.transport).map_err(|e| self.down(&e))?;
         let mut tries = 0;
         loop {
             tries += 1;
@@ -347,16 +372,19 @@ impl PostgresStore {
                 "database name {name}: expected letters, digits and _"
             )));
         }
-        let config: postgres::Config = url
+        let tls = crate::tls::split(url, |file| std::fs::read(file))?;
+        let config: postgres::Config = tls
+            .url
             .parse()
             .map_err(|e| StoreError::Address(format!("{} ({e})", redact(url))))?;
         let place = place_of(&config);
         std::thread::scope(|s| {
             s.spawn(|| {
-                let mut client = config.connect(NoTls).map_err(|e| StoreError::Down {
-                    place: place.clone(),
-                    why: describe(&e),
-                })?;
+                let mut client =
+                    connect(&config, &tls.transport).map_err(|e| StoreError::Down {
+                        place: place.clone(),
+                        why: describe(&e),
+                    })?;
                 let done = client
                     .batch_execute(&format!("CREATE DATABASE {name}"))
                     .map_err(|e| StoreError::Postgres(describe(&e)));
@@ -385,6 +413,14 @@ impl Drop for PostgresStore {
     fn drop(&mut self) {
         let idle = std::mem::take(&mut self.lock_pool().idle);
         discard(idle);
+    }
+}
+
+/// A new client of `config` over `transport`.
+fn connect(config: &postgres::Config, transport: &Transport) -> Result<Client, postgres::Error> {
+    match transport {
+        Transport::Plain => config.connect(NoTls),
+        Transport::Tls(tls) => config.connect(tls.clone()),
     }
 }
 

@@ -114,10 +114,11 @@ fn a_database_keeps_its_intents_and_refuses_another_schema() {
     }
 }
 
-/// Runs `sql` on the database at `url` through `psql` (PostgreSQL's own client).
-fn psql(url: &str, sql: &str) {
+/// Runs `sql` on the database at `url` through `psql` (PostgreSQL's own client): its output,
+/// unaligned, without headers.
+fn psql(url: &str, sql: &str) -> String {
     let out = std::process::Command::new("psql")
-        .args([url, "-v", "ON_ERROR_STOP=1", "-c", sql])
+        .args([url, "-v", "ON_ERROR_STOP=1", "-tA", "-c", sql])
         .output()
         .expect("psql runs");
     assert!(
@@ -125,6 +126,56 @@ fn psql(url: &str, sql: &str) {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+#[test]
+#[ignore = "needs PostgreSQL with TLS (.ci/run starts one)"]
+fn tls_connections_are_encrypted_and_check_the_servers_certificate() {
+    let ca = std::env::var("SKYPLAN_TEST_POSTGRES_CA")
+        .expect("SKYPLAN_TEST_POSTGRES_CA: the test server's CA certificate (.ci/run sets it)");
+    let url = fresh_database("tls");
+    let app = format!("skyplan_tls_{}", std::process::id());
+    let store = PostgresStore::open_url(&format!(
+        "{url}?sslmode=verify-full&sslrootcert={ca}&application_name={app}"
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(store.is_tls());
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let a = random_intent(&mut rng, 1, 1, "a");
+    assert!(matches!(
+        store.insert_if_clear(&a, PriorityRule::Every),
+        Ok(Insert::Accepted { .. })
+    ));
+    assert_eq!(store.list().expect("listed"), [a]);
+    // The server's own view (asked over a plain connection): the store's session is TLS.
+    assert_eq!(
+        psql(
+            &url,
+            &format!(
+                "SELECT count(*) || ' ' || bool_and(s.ssl) FROM pg_stat_ssl s \
+                 JOIN pg_stat_activity a USING (pid) WHERE a.application_name = '{app}'"
+            )
+        ),
+        "1 true"
+    );
+    // Checked against the public web CAs instead, the test CA's certificate is refused.
+    let e = PostgresStore::open_url(&format!("{url}?sslmode=require")).expect_err("unknown CA");
+    assert!(matches!(e, StoreError::Down { .. }), "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("certificate") && text.contains("checked against the public web CAs"),
+        "{text}"
+    );
+    // A CA file that is not there is named.
+    let e = PostgresStore::open_url(&format!("{url}?sslrootcert=/nonexistent/ca.pem"))
+        .expect_err("no file");
+    assert!(
+        matches!(&e, StoreError::Address(why) if why.starts_with("sslrootcert /nonexistent/ca.pem: cannot read it")),
+        "{e}"
+    );
+    // The plain URL still connects, unencrypted.
+    assert!(!PostgresStore::open_url(&url).expect("plain").is_tls());
 }
 
 #[test]

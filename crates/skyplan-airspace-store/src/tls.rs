@@ -1,0 +1,263 @@
+//! TLS for [`crate::PostgresStore`]: which connections are encrypted, and against which
+//! certificate authorities the server is checked, read from libpq's URL parameters.
+//!
+//! - `sslmode=require`, `verify-ca` or `verify-full`, or an `sslrootcert=FILE`: every
+//!   connection is TLS (rustls), and the server's certificate chain **and host name** are
+//!   always checked (as libpq's `verify-full`: a certificate is never accepted unchecked),
+//!   against the PEM certificates in `sslrootcert` or, without it, the public web CAs
+//!   (`webpki-roots`: managed PostgreSQL and CockroachDB Cloud use those).
+//! - `sslmode=disable` or `prefer`, or none: plain connections (as before).
+//!
+//! `sslrootcert` and the `verify-*` modes are libpq's, not the client's: they are taken out of
+//! the URL before it is parsed. Client certificates (`sslcert`, `sslkey`) are not supported:
+//! such a URL is refused, saying so.
+
+use crate::StoreError;
+use rustls::RootCertStore;
+use rustls::pki_types::CertificateDer;
+use rustls::pki_types::pem::PemObject;
+use std::sync::Arc;
+use tokio_postgres_rustls::MakeRustlsConnect;
+
+/// How a store's connections are made.
+#[derive(Clone)]
+pub(crate) enum Transport {
+    /// Unencrypted (`sslmode` absent, `disable` or `prefer`).
+    Plain,
+    /// TLS, the server checked against the roots the URL asked for.
+    Tls(MakeRustlsConnect),
+}
+
+/// A URL's TLS settings, taken out of it: the URL the client parses, and the transport.
+pub(crate) struct Split {
+    /// The URL without `sslrootcert`, its `verify-*` modes as `require`.
+    pub(crate) url: String,
+    /// How to connect.
+    pub(crate) transport: Transport,
+    /// Where the roots come from, for messages: `the CA in FILE` or `the public web CAs`.
+    pub(crate) roots: Option<String>,
+}
+
+/// Splits `url`'s TLS parameters off (module docs); `read` reads the `sslrootcert` file (the
+/// store passes `std::fs::read`, tests a fake).
+pub(crate) fn split(
+    url: &str,
+    read: impl FnOnce(&str) -> std::io::Result<Vec<u8>>,
+) -> Result<Split, StoreError> {
+    let (base, query) = match url.split_once('?') {
+        Some((base, query)) => (base, query),
+        None => (url, ""),
+    };
+    let mut kept: Vec<String> = Vec::new();
+    let mut root_file: Option<String> = None;
+    let mut tls = false;
+    for pair in query.split('&').filter(|p| !p.is_empty()) {
+        let (key, value) = pair.split_once('=').unwrap_or((pair, ""));
+        match key {
+            "sslrootcert" => {
+                if value.is_empty() {
+                    return Err(StoreError::Address(
+                        "sslrootcert: expected the path of a PEM file of CA certificates".into(),
+                    ));
+                }
+                root_file = Some(value.to_string());
+                tls = true;
+            }
+            "sslmode" => match value {
+                "require" | "verify-ca" | "verify-full" => {
+                    tls = true;
+                    kept.push("sslmode=require".into());
+                }
+                "disable" | "prefer" => kept.push(pair.to_string()),
+                other => {
+                    return Err(StoreError::Address(format!(
+                        "sslmode={other}: expected disable, prefer, require, verify-ca or verify-full"
+                    )));
+                }
+            },
+            "sslcert" | "sslkey" => {
+                return Err(StoreError::Address(format!(
+                    "{key}: client certificates are not supported; use a password over TLS \
+                     (sslmode=require)"
+                )));
+            }
+            _ => kept.push(pair.to_string()),
+        }
+    }
+    if tls
+        && kept
+            .iter()
+            .any(|p| p == "sslmode=disable" || p == "sslmode=prefer")
+    {
+        return Err(StoreError::Address(
+            "sslrootcert with sslmode=disable or prefer: expected sslmode=require (or none)".into(),
+        ));
+    }
+    if tls && !kept.iter().any(|p| p.starts_with("sslmode=")) {
+        kept.push("sslmode=require".into());
+    }
+    let url = if kept.is_empty() {
+        base.to_string()
+    } else {
+        format!("{base}?{}", kept.join("&"))
+    };
+    if !tls {
+        return Ok(Split {
+            url,
+            transport: Transport::Plain,
+            roots: None,
+        });
+    }
+    let (roots, from) = match &root_file {
+        Some(file) => (roots_from_file(file, read)?, format!("the CA in {file}")),
+        None => (
+            RootCertStore {
+                roots: webpki_roots::TLS_SERVER_ROOTS.to_vec(),
+            },
+            "the public web CAs".to_string(),
+        ),
+    };
+    // ring, not rustls's newer default aws-lc-rs (post-quantum key exchange): ring builds in
+    // seconds with the C compiler SQLite's build already needs, aws-lc-rs in minutes.
+    #[allow(deprecated)]
+    let provider = Arc::new(rustls::crypto::ring::default_provider());
+    let config = rustls::ClientConfig::builder_with_provider(provider)
+        .with_safe_default_protocol_versions()
+        .map_err(|e| StoreError::Address(format!("TLS: {e}")))?
+        .with_root_certificates(roots)
+        .with_no_client_auth();
+    Ok(Split {
+        url,
+        transport: Transport::Tls(MakeRustlsConnect::new(config)),
+        roots: Some(from),
+    })
+}
+
+/// The CA certificates of the PEM file `file`.
+fn roots_from_file(
+    file: &str,
+    read: impl FnOnce(&str) -> std::io::Result<Vec<u8>>,
+) -> Result<RootCertStore, StoreError> {
+    let pem = read(file)
+        .map_err(|e| StoreError::Address(format!("sslrootcert {file}: cannot read it ({e})")))?;
+    let mut roots = RootCertStore::empty();
+    for (k, cert) in CertificateDer::pem_slice_iter(&pem).enumerate() {
+        let cert = cert.map_err(|e| {
+            StoreError::Address(format!(
+                "sslrootcert {file}: certificate {} is not valid PEM ({e})",
+                k + 1
+            ))
+        })?;
+        roots.add(cert).map_err(|e| {
+            StoreError::Address(format!(
+                "sslrootcert {file}: certificate {} is not a usable CA certificate ({e})",
+                k + 1
+            ))
+        })?;
+    }
+    if roots.is_empty() {
+        return Err(StoreError::Address(format!(
+            "sslrootcert {file}: no certificate in it (expected PEM: -----BEGIN CERTIFICATE-----)"
+        )));
+    }
+    Ok(roots)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn no_file(_: &str) -> std::io::Result<Vec<u8>> {
+        Err(std::io::Error::from(std::io::ErrorKind::NotFound))
+    }
+
+    fn address(r: Result<Split, StoreError>) -> String {
+        match r {
+            Err(StoreError::Address(why)) => why,
+            Err(e) => panic!("not an address error: {e}"),
+            Ok(s) => panic!("accepted: {}", s.url),
+        }
+    }
+
+    #[test]
+    fn plain_urls_pass_unchanged() {
+        for url in [
+            "postgres://u@h:5432/db",
+            "postgres://u@h/db?connect_timeout=3",
+            "postgres://u@h/db?sslmode=disable",
+            "postgres://u@h/db?sslmode=prefer&application_name=x",
+        ] {
+            let s = split(url, no_file).unwrap();
+            assert_eq!(s.url, url);
+            assert!(matches!(s.transport, Transport::Plain));
+            assert_eq!(s.roots, None);
+        }
+    }
+
+    #[test]
+    fn tls_modes_become_require_and_the_root_file_is_taken_out() {
+        for (url, want) in [
+            (
+                "postgres://u@h/db?sslmode=require",
+                "postgres://u@h/db?sslmode=require",
+            ),
+            (
+                "postgres://u@h/db?sslmode=verify-full&connect_timeout=2",
+                "postgres://u@h/db?sslmode=require&connect_timeout=2",
+            ),
+            (
+                "postgres://u@h/db?sslmode=verify-ca",
+                "postgres://u@h/db?sslmode=require",
+            ),
+        ] {
+            let s = split(url, no_file).unwrap();
+            assert_eq!(s.url, want);
+            assert!(matches!(s.transport, Transport::Tls(_)));
+            assert_eq!(s.roots.as_deref(), Some("the public web CAs"));
+        }
+    }
+
+    #[test]
+    fn a_root_file_is_read_and_names_itself() {
+        // Not a CA the test checks against a server: only that PEM is read and kept.
+        let pem = include_bytes!("../tests/data/test-ca.pem");
+        let s = split(
+            "postgres://u@h/db?sslrootcert=/etc/ca.pem&connect_timeout=2",
+            |path| {
+                assert_eq!(path, "/etc/ca.pem");
+                Ok(pem.to_vec())
+            },
+        )
+        .unwrap();
+        assert_eq!(s.url, "postgres://u@h/db?connect_timeout=2&sslmode=require");
+        assert_eq!(s.roots.as_deref(), Some("the CA in /etc/ca.pem"));
+    }
+
+    #[test]
+    fn bad_tls_parameters_are_named() {
+        let e = address(split("postgres://u@h/db?sslrootcert=/no/ca.pem", no_file));
+        assert!(
+            e.starts_with("sslrootcert /no/ca.pem: cannot read it"),
+            "{e}"
+        );
+        let e = address(split("postgres://u@h/db?sslrootcert=/x.pem", |_| {
+            Ok(b"not a certificate".to_vec())
+        }));
+        assert!(e.contains("/x.pem: no certificate in it"), "{e}");
+        let e = address(split("postgres://u@h/db?sslrootcert=/x.pem", |_| {
+            Ok(b"-----BEGIN CERTIFICATE-----\nAAAA\n-----END CERTIFICATE-----\n".to_vec())
+        }));
+        assert!(e.contains("/x.pem: certificate 1 is not"), "{e}");
+        let e = address(split("postgres://u@h/db?sslmode=allow", no_file));
+        assert!(e.starts_with("sslmode=allow: expected disable"), "{e}");
+        let e = address(split("postgres://u@h/db?sslrootcert=", no_file));
+        assert!(e.starts_with("sslrootcert: expected"), "{e}");
+        let e = address(split("postgres://u@h/db?sslcert=/c.pem", no_file));
+        assert!(e.contains("client certificates are not supported"), "{e}");
+        let e = address(split(
+            "postgres://u@h/db?sslmode=disable&sslrootcert=/ca.pem",
+            |_| Ok(Vec::new()),
+        ));
+        assert!(e.contains("expected sslmode=require"), "{e}");
+    }
+}
