@@ -6,7 +6,7 @@ use crate::{Contender, Record, Run, random_far_queries, run_prepared};
 use serde_json::json;
 use skyplan_cspace::{Cell, Grid2, GridSpec};
 use skyplan_plan::{CellSearch, PlannerId, Session, World};
-use skyplan_search::{FirstMoveTable, JpsPlusTable, MoveModel};
+use skyplan_search::{ContractionHierarchy, FirstMoveTable, JpsPlusTable, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -272,21 +272,26 @@ pub fn jps_plus_engine(
     CellSearch::with_jps_plus_table(grid, Arc::new(table), us, None).map_err(|e| e.to_string())
 }
 
-/// What [`run_all`]'s planners start from: JPS+'s table, and a loaded first-move table.
+/// What [`run_all`]'s planners start from: JPS+'s table, and a loaded first-move table or
+/// contraction hierarchy.
 pub struct Preprocessing<R> {
     /// Where JPS+ gets its table.
     pub jps_plus: JpsPlusPrep<R>,
     /// A first-move table (loaded from a file) and its load time, µs: `first-move` and `auto`
     /// use it.
     pub first_move: Option<(Arc<FirstMoveTable>, u64)>,
+    /// A contraction hierarchy (loaded from a file) and its load time, µs: `ch` uses it, and
+    /// `auto` where its rule is the hierarchy's ([`skyplan_plan::auto::pick_with_hierarchy`]).
+    pub hierarchy: Option<(Arc<ContractionHierarchy>, u64)>,
 }
 
 impl<R> From<JpsPlusPrep<R>> for Preprocessing<R> {
-    /// JPS+'s table, no first-move table.
+    /// JPS+'s table, no first-move table or hierarchy.
     fn from(jps_plus: JpsPlusPrep<R>) -> Self {
         Self {
             jps_plus,
             first_move: None,
+            hierarchy: None,
         }
     }
 }
@@ -364,6 +369,7 @@ pub fn run_all<R: std::io::Read>(
     let Preprocessing {
         jps_plus,
         first_move,
+        hierarchy,
     } = prep.into();
     let jps_plus_id = Contender::Skyplan(skyplan_plan::PlannerId::JpsPlus);
     let mut prep = match jps_plus {
@@ -382,6 +388,36 @@ pub fn run_all<R: std::io::Read>(
         } else {
             JpsPlusPrep::Build
         };
+        let hierarchy_pick = || {
+            let (ch, us) = hierarchy.as_ref()?;
+            let auto = match contender {
+                Contender::Skyplan(PlannerId::Ch) => None,
+                Contender::Skyplan(PlannerId::Auto) => {
+                    Some(skyplan_plan::auto::pick_with_hierarchy(
+                        &skyplan_plan::auto::MapStats::of(grid),
+                        queries.len() as u64,
+                    )?)
+                }
+                _ => return None,
+            };
+            Some((Arc::clone(ch), *us, auto))
+        };
+        if let Some((ch, us, auto)) = hierarchy_pick() {
+            let prepare = || {
+                CellSearch::with_hierarchy(grid, ch, us, auto)
+                    .map(Some)
+                    .map_err(|e| RunAllError::Table(e.message))
+            };
+            runs.push(run_measured(
+                grid,
+                model,
+                contender,
+                prepare,
+                queries,
+                |_| answered(),
+            )?);
+            continue;
+        }
         let prepare = || match (own, contender, &first_move) {
             (_, Contender::Skyplan(PlannerId::Auto), None) if loaded.is_some() => {
                 let Some((table, us)) = loaded.clone() else {

@@ -433,8 +433,10 @@ pub struct BenchArgs {
     pub json: bool,
     /// JPS+ (and auto, where it picks JPS or JPS+) uses the table saved in FILE (by
     /// --save-preprocess, with its landmarks) instead of building one; or, for a first-move
-    /// table (saved by scen or plan --save-preprocess), first-move and auto use it; refused
-    /// unless FILE was built for this map, altitude, margin, cell size and corner rule.
+    /// table (saved by scen or plan --save-preprocess), first-move and auto use it; for a
+    /// contraction hierarchy (saved by scen or plan --save-preprocess), ch and auto (on maps
+    /// where it picks the hierarchy) use it; refused unless FILE was built for this map,
+    /// altitude, margin, cell size and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
     /// Build the JPS+ table of this grid, with landmarks, and save it to FILE (for --preprocess

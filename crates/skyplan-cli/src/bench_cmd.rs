@@ -79,9 +79,11 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     let steps = Some((planners.len() * queries.len()) as u64);
     let progress = crate::show::progress("{msg:>24} [{bar:40}] {pos}/{len} queries", steps, target);
     let first_move = first_move_table(&args, grid, model)?;
-    let jps_plus = match first_move {
-        Some(_) => JpsPlusPrep::Build,
-        None => jps_plus_prep(&args, grid, model, &planners)?,
+    let hierarchy = hierarchy(&args, grid, model)?;
+    let jps_plus = if first_move.is_some() || hierarchy.is_some() {
+        JpsPlusPrep::Build
+    } else {
+        jps_plus_prep(&args, grid, model, &planners)?
     };
     let mut runs = grid_bench::run_all(
         grid,
@@ -91,6 +93,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         grid_bench::Preprocessing {
             jps_plus,
             first_move,
+            hierarchy,
         },
         |planner| progress.set_message(planner.name()),
         || progress.inc(1),
@@ -175,6 +178,28 @@ fn first_move_table(
             .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
     let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
     Ok(Some((std::sync::Arc::new(table), us)))
+}
+
+/// A contraction hierarchy given by `--preprocess` (saved by `scen` or `plan
+/// --save-preprocess`; told apart by its header) and its load time, µs: `ch` and `auto` use it.
+fn hierarchy(
+    args: &BenchArgs,
+    grid: &std::sync::Arc<skyplan_cspace::Grid2>,
+    model: MoveModel,
+) -> Result<Option<(std::sync::Arc<skyplan_search::ContractionHierarchy>, u64)>> {
+    let Some(path) = &args.preprocess else {
+        return Ok(None);
+    };
+    let t = Instant::now();
+    let (input, kind) = crate::files::open_preprocess(path)?;
+    if kind != crate::files::Saved::Hierarchy {
+        return Ok(None);
+    }
+    let ch =
+        skyplan_search::ContractionHierarchy::read_from(input, std::sync::Arc::clone(grid), model)
+            .map_err(|e| bad_input(format!("--preprocess {}: {e}", path.display())))?;
+    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    Ok(Some((std::sync::Arc::new(ch), us)))
 }
 
 /// How JPS+ gets its table: built here and saved (`--save-preprocess`), streamed from a file

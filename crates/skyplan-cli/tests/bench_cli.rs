@@ -179,3 +179,51 @@ fn a_saved_first_move_table_serves_first_move_and_auto_in_bench() {
         assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
     }
 }
+
+/// A contraction hierarchy saved by `scen` serves `ch` and `auto` in `bench --preprocess` on a
+/// map of scattered obstacles: `auto` reports it picked the hierarchy, both find the A* cost of
+/// every scenario, and both report the one load as their preparation (nothing built again).
+#[test]
+fn a_saved_hierarchy_serves_ch_and_auto_in_bench() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/movingai/random512-40-5.map"
+    );
+    ok(&mut cmd(
+        dir.path(),
+        &format!("scen {map} {map}.scen --planner ch --save-preprocess r.ch"),
+    ));
+    let v = bench(
+        dir.path(),
+        &format!(
+            "--map {map} --scen {map}.scen --random 150 --planners auto,ch,astar --preprocess r.ch"
+        ),
+        &[],
+    );
+    let rows = v["rows"].as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["planner"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["auto (ch)", "ch", "astar"]);
+    for r in rows {
+        assert_eq!(r["queries"], 150, "{r}");
+        assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
+    }
+    assert_eq!(rows[0]["precompute_ms"], rows[1]["precompute_ms"]);
+    // Given to another map, the hierarchy is refused, naming the file.
+    let den = DEN312D;
+    let out = cmd(
+        dir.path(),
+        &format!("bench --map {den} --scen {den}.scen --planners ch --preprocess r.ch"),
+    )
+    .output()
+    .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--preprocess r.ch: contraction hierarchy was built for a 512 × 512 grid"),
+        "{err}"
+    );
+}

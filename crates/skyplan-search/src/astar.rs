@@ -102,7 +102,7 @@ impl MoveMasks {
 /// Montgomery, 1994, theorem 4.2: with `2^(l-1) < d ≤ 2^l` and `m = ⌈2^(bits+l) / d⌉`,
 /// `⌊n·m / 2^(bits+l)⌋ = ⌊n / d⌋` for every `n < 2^bits`). A hardware divide takes 20–40 cycles.
 #[derive(Debug, Clone, Copy)]
-struct DivBy {
+pub(crate) struct DivBy {
     d: usize,
     m: u64,
     shift: u32,
@@ -110,7 +110,7 @@ struct DivBy {
 
 impl DivBy {
     /// Division by `d` of numbers below `below` (at most 2³¹, so that `n·m` fits in 64 bits).
-    fn new(d: usize, below: usize) -> Self {
+    pub(crate) fn new(d: usize, below: usize) -> Self {
         assert!(d > 0 && below <= 1 << 31);
         let bits = usize::BITS - below.saturating_sub(1).leading_zeros();
         let l = usize::BITS - (d - 1).leading_zeros();
@@ -121,7 +121,7 @@ impl DivBy {
 
     /// `(n / d, n % d)`.
     #[inline(always)]
-    fn div_rem(self, n: usize) -> (usize, usize) {
+    pub(crate) fn div_rem(self, n: usize) -> (usize, usize) {
         let q = ((n as u64 * self.m) >> self.shift) as usize;
         debug_assert_eq!(q, n / self.d);
         (q, n - q * self.d)

@@ -323,13 +323,14 @@ impl ContractionHierarchy {
             return Err(SearchError::Unreachable { expansions });
         };
         let ranks = self.chain(query, meet);
-        let cols = grid.cols();
+        // Row and column by a multiply, not a divide (one per cell of the path).
+        let by_cols = crate::astar::DivBy::new(grid.cols() as usize, grid.len());
         let mut cells = Vec::with_capacity(ranks.len());
         let (mut straight, mut diagonal) = (0u64, 0u64);
         let mut prev: Option<Cell> = None;
         for r in ranks {
-            let i = self.cell_of_rank[r as usize];
-            let c = Cell::new(i / cols, i % cols);
+            let (row, col) = by_cols.div_rem(self.cell_of_rank[r as usize] as usize);
+            let c = Cell::new(row as u32, col as u32);
             if let Some(p) = prev {
                 if p.row != c.row && p.col != c.col {
                     diagonal += 1;

@@ -99,6 +99,9 @@ impl Landmarks {
             cells: Vec::new(),
             units: Vec::new(),
         };
+        if count == 0 {
+            return out;
+        }
         // The seed: a cell of the largest connected region, so that the landmarks serve most
         // of the map (a small pocket first in row order would hold them all).
         let components = crate::Components::new(grid, model);
@@ -108,9 +111,6 @@ impl Landmarks {
         let Some((_, seed)) = biggest else {
             return out;
         };
-        if count == 0 {
-            return out;
-        }
         let n = grid.len();
         let mut field = Field::new(grid, model);
         field.run(seed);
