@@ -1,6 +1,6 @@
 //! A\* and Dijkstra on a 2D grid with flat arrays and reusable buffers.
 
-use crate::nodes::{Node, PagedNodes, counts_cost};
+use crate::nodes::{PagedNodes, counts_cost};
 use crate::queue::{BucketQueue, key, key_index};
 use crate::{GridPath, MoveModel, Planner, SearchError};
 use skyplan_cspace::{Cell, Grid2};
@@ -367,22 +367,19 @@ impl GridSearch {
         let bits = |s: u32, d: u32| f64::from_bits((u64::from(d) << 32) | u64::from(s));
         let start_p = (start.row as usize + 1) * w + start.col as usize + 1;
         let goal_p = goal_r * w + goal_c;
-        pool[start_p] = Node {
-            g: bits(0, 0),
-            parent: NO_PARENT,
-            stamp: open,
-        };
+        pool[start_p] = (bits(0, 0), NO_PARENT, open);
         let (hs, hd) = h(start.row as usize + 1, start.col as usize + 1);
         queue.push(key(counts_cost(hs, hd), 0.0, start_p as u32));
         let mut expansions = 0u64;
         while let Some(k) = queue.pop() {
             let p = key_index(k) as usize;
+            // (g, parent, stamp): `crate::nodes::Slot`.
             let node = &mut pool[p];
-            if node.stamp == closed {
+            if node.2 == closed {
                 continue;
             }
-            node.stamp = closed;
-            let g_bits = node.g.to_bits();
+            node.2 = closed;
+            let g_bits = node.0.to_bits();
             let (s, d) = (g_bits as u32, (g_bits >> 32) as u32);
             expansions += 1;
             if p == goal_p {
@@ -400,17 +397,13 @@ impl GridSearch {
                         let q: usize = $q;
                         let (ns, nd, g): (u32, u32, f64) = ($ns, $nd, $g);
                         let next = &mut pool[q];
-                        let better = next.stamp != closed
-                            && (next.stamp != open || {
-                                let old = next.g.to_bits();
+                        let better = next.2 != closed
+                            && (next.2 != open || {
+                                let old = next.0.to_bits();
                                 g < counts_cost(old as u32, (old >> 32) as u32)
                             });
                         if better {
-                            *next = Node {
-                                g: $g_bits,
-                                parent,
-                                stamp: open,
-                            };
+                            *next = ($g_bits, parent, open);
                             let (hs, hd) = h($nr, $nc);
                             queue.push(key(counts_cost(ns + hs, nd + hd), g, q as u32));
                         }
