@@ -254,10 +254,11 @@ impl Landmarks {
             }
         }
         let value = |i: usize, j: usize| self.units[i * k + j];
-        // Moves to the right, down, down-right and down-left cover every move once.
-        let diagonal_ok = |r: usize, c: usize, r2: usize, c2: usize| {
-            self.model == MoveModel::OctileCornerCutting
-                || (!blocked[r * cols + c2] && !blocked[r2 * cols + c])
+        // Moves to the right, down, down-right and down-left cover every move once; a diagonal
+        // one under the model's corner rule.
+        let diagonal_ok = |r: usize, c: usize, dc: i64| {
+            self.model
+                .corner_ok(grid, Cell::new(r as u32, c as u32), 1, dc)
         };
         for r in 0..rows {
             for c in 0..cols {
@@ -278,10 +279,10 @@ impl Landmarks {
                 if r + 1 < rows {
                     next[1] = (i + cols, straight);
                     if self.model.has_diagonals() {
-                        if c + 1 < cols && diagonal_ok(r, c, r + 1, c + 1) {
+                        if c + 1 < cols && diagonal_ok(r, c, 1) {
                             next[2] = (i + cols + 1, diagonal);
                         }
-                        if c > 0 && diagonal_ok(r, c, r + 1, c - 1) {
+                        if c > 0 && diagonal_ok(r, c, -1) {
                             next[3] = (i + cols - 1, diagonal);
                         }
                     }
