@@ -1,21 +1,23 @@
 //! TLS for [`crate::PostgresStore`]: which connections are encrypted, and against which
 //! certificate authorities the server is checked, read from libpq's URL parameters.
 //!
-//! - `sslmode=require`, `verify-ca` or `verify-full`, or an `sslrootcert=FILE`: every
-//!   connection is TLS (rustls), and the server's certificate chain **and host name** are
-//!   always checked (as libpq's `verify-full`: a certificate is never accepted unchecked),
-//!   against the PEM certificates in `sslrootcert` or, without it, the public web CAs
-//!   (`webpki-roots`: managed PostgreSQL and CockroachDB Cloud use those).
-//! - `sslmode=disable` or `prefer`, or none: plain connections (as before).
+//! - `sslmode=require`, `verify-ca` or `verify-full`, or `sslrootcert=FILE`, or a client
+//!   certificate: every connection is TLS (rustls), and the server's certificate chain **and
+//!   host name** are always checked (as libpq's `verify-full`: a certificate is never accepted
+//!   unchecked), against the PEM certificates in `sslrootcert` or, without it, the public web
+//!   CAs (`webpki-roots`: managed PostgreSQL and CockroachDB Cloud use those).
+//! - `sslcert=FILE&sslkey=FILE` (PEM; both or neither): the client's certificate chain and
+//!   private key, for servers that authenticate clients by certificate (PostgreSQL's `cert`
+//!   method, CockroachDB's `client.USER.crt`).
+//! - `sslmode=disable` or `prefer`, or none of the above: plain connections (as before).
 //!
-//! `sslrootcert` and the `verify-*` modes are libpq's, not the client's: they are taken out of
-//! the URL before it is parsed. Client certificates (`sslcert`, `sslkey`) are not supported:
-//! such a URL is refused, saying so.
+//! `sslrootcert`, `sslcert`, `sslkey` and the `verify-*` modes are libpq's, not the client's:
+//! they are taken out of the URL before it is parsed.
 
 use crate::StoreError;
 use rustls::RootCertStore;
-use rustls::pki_types::CertificateDer;
 use rustls::pki_types::pem::PemObject;
+use rustls::pki_types::{CertificateDer, PrivateKeyDer};
 use std::sync::Arc;
 use tokio_postgres_rustls::MakeRustlsConnect;
 
@@ -38,11 +40,11 @@ pub(crate) struct Split {
     pub(crate) roots: Option<String>,
 }
 
-/// Splits `url`'s TLS parameters off (module docs); `read` reads the `sslrootcert` file (the
+/// Splits `url`'s TLS parameters off (module docs); `read` reads the files they name (the
 /// store passes `std::fs::read`, tests a fake).
 pub(crate) fn split(
     url: &str,
-    read: impl FnOnce(&str) -> std::io::Result<Vec<u8>>,
+    mut read: impl FnMut(&str) -> std::io::Result<Vec<u8>>,
 ) -> Result<Split, StoreError> {
     let (base, query) = match url.split_once('?') {
         Some((base, query)) => (base, query),
@@ -50,6 +52,7 @@ pub(crate) fn split(
     };
     let mut kept: Vec<String> = Vec::new();
     let mut root_file: Option<String> = None;
+    let (mut cert_file, mut key_file): (Option<String>, Option<String>) = (None, None);
     let mut tls = false;
     for pair in query.split('&').filter(|p| !p.is_empty()) {
         let (key, value) = pair.split_once('=').unwrap_or((pair, ""));
@@ -76,10 +79,18 @@ pub(crate) fn split(
                 }
             },
             "sslcert" | "sslkey" => {
-                return Err(StoreError::Address(format!(
-                    "{key}: client certificates are not supported; use a password over TLS \
-                     (sslmode=require)"
-                )));
+                if value.is_empty() {
+                    return Err(StoreError::Address(format!(
+                        "{key}: expected the path of a PEM file"
+                    )));
+                }
+                let slot = if key == "sslcert" {
+                    &mut cert_file
+                } else {
+                    &mut key_file
+                };
+                *slot = Some(value.to_string());
+                tls = true;
             }
             _ => kept.push(pair.to_string()),
         }
@@ -90,9 +101,27 @@ pub(crate) fn split(
             .any(|p| p == "sslmode=disable" || p == "sslmode=prefer")
     {
         return Err(StoreError::Address(
-            "sslrootcert with sslmode=disable or prefer: expected sslmode=require (or none)".into(),
+            "sslrootcert, sslcert or sslkey with sslmode=disable or prefer: expected \
+             sslmode=require (or none)"
+                .into(),
         ));
     }
+    let client = match (cert_file, key_file) {
+        (None, None) => None,
+        (Some(cert), Some(key)) => Some((cert, key)),
+        (Some(_), None) => {
+            return Err(StoreError::Address(
+                "sslcert without sslkey: expected both (the client's certificate and its key)"
+                    .into(),
+            ));
+        }
+        (None, Some(_)) => {
+            return Err(StoreError::Address(
+                "sslkey without sslcert: expected both (the client's certificate and its key)"
+                    .into(),
+            ));
+        }
+    };
     if tls && !kept.iter().any(|p| p.starts_with("sslmode=")) {
         kept.push("sslmode=require".into());
     }
@@ -109,7 +138,10 @@ pub(crate) fn split(
         });
     }
     let (roots, from) = match &root_file {
-        Some(file) => (roots_from_file(file, read)?, format!("the CA in {file}")),
+        Some(file) => (
+            roots_from_file(file, &mut read)?,
+            format!("the CA in {file}"),
+        ),
         None => (
             RootCertStore {
                 roots: webpki_roots::TLS_SERVER_ROOTS.to_vec(),
@@ -121,11 +153,28 @@ pub(crate) fn split(
     // seconds with the C compiler SQLite's build already needs, aws-lc-rs in minutes.
     #[allow(deprecated)]
     let provider = Arc::new(rustls::crypto::ring::default_provider());
-    let config = rustls::ClientConfig::builder_with_provider(provider)
+    let builder = rustls::ClientConfig::builder_with_provider(provider)
         .with_safe_default_protocol_versions()
         .map_err(|e| StoreError::Address(format!("TLS: {e}")))?
-        .with_root_certificates(roots)
-        .with_no_client_auth();
+        .with_root_certificates(roots);
+    let config = match client {
+        None => builder.with_no_client_auth(),
+        Some((cert, key)) => {
+            let chain = certificates(&cert, "sslcert", &mut read)?;
+            let pem = read(&key)
+                .map_err(|e| StoreError::Address(format!("sslkey {key}: cannot read it ({e})")))?;
+            let private = PrivateKeyDer::from_pem_slice(&pem).map_err(|e| {
+                StoreError::Address(format!(
+                    "sslkey {key}: no private key in it (expected PEM: -----BEGIN PRIVATE KEY-----; {e})"
+                ))
+            })?;
+            builder.with_client_auth_cert(chain, private).map_err(|e| {
+                StoreError::Address(format!(
+                    "sslcert {cert} with sslkey {key}: not a usable certificate and key ({e})"
+                ))
+            })?
+        }
+    };
     Ok(Split {
         url,
         transport: Transport::Tls(MakeRustlsConnect::new(config)),
@@ -133,32 +182,49 @@ pub(crate) fn split(
     })
 }
 
+/// The certificates of the PEM file `file`, named by the URL's parameter `what`; at least one.
+fn certificates(
+    file: &str,
+    what: &str,
+    read: &mut impl FnMut(&str) -> std::io::Result<Vec<u8>>,
+) -> Result<Vec<CertificateDer<'static>>, StoreError> {
+    let pem = read(file)
+        .map_err(|e| StoreError::Address(format!("{what} {file}: cannot read it ({e})")))?;
+    let certs = CertificateDer::pem_slice_iter(&pem)
+        .enumerate()
+        .map(|(k, cert)| {
+            cert.map_err(|e| {
+                StoreError::Address(format!(
+                    "{what} {file}: certificate {} is not valid PEM ({e})",
+                    k + 1
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if certs.is_empty() {
+        return Err(StoreError::Address(format!(
+            "{what} {file}: no certificate in it (expected PEM: -----BEGIN CERTIFICATE-----)"
+        )));
+    }
+    Ok(certs)
+}
+
 /// The CA certificates of the PEM file `file`.
 fn roots_from_file(
     file: &str,
-    read: impl FnOnce(&str) -> std::io::Result<Vec<u8>>,
+    read: &mut impl FnMut(&str) -> std::io::Result<Vec<u8>>,
 ) -> Result<RootCertStore, StoreError> {
-    let pem = read(file)
-        .map_err(|e| StoreError::Address(format!("sslrootcert {file}: cannot read it ({e})")))?;
     let mut roots = RootCertStore::empty();
-    for (k, cert) in CertificateDer::pem_slice_iter(&pem).enumerate() {
-        let cert = cert.map_err(|e| {
-            StoreError::Address(format!(
-                "sslrootcert {file}: certificate {} is not valid PEM ({e})",
-                k + 1
-            ))
-        })?;
+    for (k, cert) in certificates(file, "sslrootcert", read)?
+        .into_iter()
+        .enumerate()
+    {
         roots.add(cert).map_err(|e| {
             StoreError::Address(format!(
                 "sslrootcert {file}: certificate {} is not a usable CA certificate ({e})",
                 k + 1
             ))
         })?;
-    }
-    if roots.is_empty() {
-        return Err(StoreError::Address(format!(
-            "sslrootcert {file}: no certificate in it (expected PEM: -----BEGIN CERTIFICATE-----)"
-        )));
     }
     Ok(roots)
 }
@@ -253,7 +319,23 @@ mod tests {
         let e = address(split("postgres://u@h/db?sslrootcert=", no_file));
         assert!(e.starts_with("sslrootcert: expected"), "{e}");
         let e = address(split("postgres://u@h/db?sslcert=/c.pem", no_file));
-        assert!(e.contains("client certificates are not supported"), "{e}");
+        assert!(e.starts_with("sslcert without sslkey"), "{e}");
+        let e = address(split("postgres://u@h/db?sslkey=/k.pem", no_file));
+        assert!(e.starts_with("sslkey without sslcert"), "{e}");
+        let e = address(split(
+            "postgres://u@h/db?sslcert=/c.pem&sslkey=/k.pem",
+            no_file,
+        ));
+        assert!(e.starts_with("sslcert /c.pem: cannot read it"), "{e}");
+        let cert = include_bytes!("../tests/data/test-ca.pem");
+        let e = address(split(
+            "postgres://u@h/db?sslcert=/c.pem&sslkey=/k.pem",
+            |path| match path {
+                "/c.pem" => Ok(cert.to_vec()),
+                _ => Ok(b"not a key".to_vec()),
+            },
+        ));
+        assert!(e.starts_with("sslkey /k.pem: no private key in it"), "{e}");
         let e = address(split(
             "postgres://u@h/db?sslmode=disable&sslrootcert=/ca.pem",
             |_| Ok(Vec::new()),

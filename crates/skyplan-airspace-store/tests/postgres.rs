@@ -176,6 +176,31 @@ fn tls_connections_are_encrypted_and_check_the_servers_certificate() {
     );
     // The plain URL still connects, unencrypted.
     assert!(!PostgresStore::open_url(&url).expect("plain").is_tls());
+    // The user skyplan_cert, whom the server authenticates by certificate only (`.ci/run`:
+    // `hostssl … skyplan_cert … cert`; client.pem and client.key lie beside the CA): in with
+    // its certificate, the same intents; refused without it.
+    let dir = std::path::Path::new(&ca)
+        .parent()
+        .expect("the CA's folder")
+        .display()
+        .to_string();
+    let as_cert_user = url.replacen("postgres@", "skyplan_cert@", 1);
+    let by_cert = PostgresStore::open_url(&format!(
+        "{as_cert_user}?sslmode=verify-full&sslrootcert={ca}&sslcert={dir}/client.pem&sslkey={dir}/client.key"
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        by_cert.list().expect("listed"),
+        store.list().expect("listed")
+    );
+    let e = PostgresStore::open_url(&format!(
+        "{as_cert_user}?sslmode=verify-full&sslrootcert={ca}"
+    ))
+    .expect_err("no client certificate");
+    assert!(
+        matches!(e, StoreError::Down { .. }) && e.to_string().contains("certificate"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -76,7 +76,7 @@ pub struct FleetArgs {
     /// What departures given in seconds count from (RFC 3339) [default: now, rounded up to the next minute].
     #[arg(long, value_name = "TIME")]
     pub start: Option<String>,
-    /// The airspace store: sqlite:FILE, postgres://USER@HOST:PORT/DATABASE (TLS with ?sslmode=require or verify-full, &sslrootcert=CA.pem for your own CA) or sqlite::memory:
+    /// The airspace store: sqlite:FILE, postgres://USER@HOST:PORT/DATABASE (TLS with ?sslmode=require or verify-full, &sslrootcert=CA.pem for your own CA, &sslcert=C.pem&sslkey=K.pem for a client certificate) or sqlite::memory:
     /// [default: a fresh SQLite file in the temporary directory, named on stderr].
     #[arg(long, value_name = "URL")]
     pub airspace: Option<String>,
@@ -620,7 +620,7 @@ pub struct ServeArgs {
     /// Time budget of one request from its arrival, queue included, milliseconds; past it the answer is 504.
     #[arg(long, value_name = "MS", default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
     pub timeout_ms: u64,
-    /// Where the shared airspace's operational intents are kept: sqlite:FILE (a SQLite file in WAL mode; servers on the same file share one airspace), postgres://USER@HOST:PORT/DATABASE (PostgreSQL; servers on the same database, on any machines, share one airspace; TLS with ?sslmode=require or verify-full, the server's certificate always checked, against &sslrootcert=CA.pem or the public web CAs) or sqlite::memory: (this server's memory, gone when it stops).
+    /// Where the shared airspace's operational intents are kept: sqlite:FILE (a SQLite file in WAL mode; servers on the same file share one airspace), postgres://USER@HOST:PORT/DATABASE (PostgreSQL; servers on the same database, on any machines, share one airspace; TLS with ?sslmode=require or verify-full, the server's certificate always checked, against &sslrootcert=CA.pem or the public web CAs; &sslcert=C.pem&sslkey=K.pem for a client certificate) or sqlite::memory: (this server's memory, gone when it stops).
     #[arg(long, value_name = "URL", default_value = skyplan_server::DEFAULT_AIRSPACE)]
     pub airspace: String,
 }
