@@ -402,23 +402,16 @@ pub fn run_all<R: std::io::Read>(
             };
             Some((Arc::clone(ch), *us, auto))
         };
-        if let Some((ch, us, auto)) = hierarchy_pick() {
-            let prepare = || {
+        let with_hierarchy = hierarchy_pick();
+        let prepare = || match (own, contender, &first_move) {
+            _ if with_hierarchy.is_some() => {
+                let Some((ch, us, auto)) = with_hierarchy else {
+                    return Ok(None);
+                };
                 CellSearch::with_hierarchy(grid, ch, us, auto)
                     .map(Some)
                     .map_err(|e| RunAllError::Table(e.message))
-            };
-            runs.push(run_measured(
-                grid,
-                model,
-                contender,
-                prepare,
-                queries,
-                |_| answered(),
-            )?);
-            continue;
-        }
-        let prepare = || match (own, contender, &first_move) {
+            }
             (_, Contender::Skyplan(PlannerId::Auto), None) if loaded.is_some() => {
                 let Some((table, us)) = loaded.clone() else {
                     return Ok(None);

@@ -157,27 +157,47 @@ fn contraction_hierarchy_matches_astar_on_every_den312d_scenario() {
 fn a_saved_first_move_table_serves_first_move_and_auto_in_bench() {
     let dir = tempfile::tempdir().unwrap();
     let map = DEN312D;
-    ok(&mut cmd(
+    saved_then_benched(
         dir.path(),
-        &format!("scen {map} {map}.scen --planner first-move --save-preprocess den.fm"),
+        (map, "first-move", "den.fm"),
+        "auto,first-move,astar",
+        &["auto (first-move)", "first-move", "astar"],
+        290,
+    );
+}
+
+/// `scen MAP --planner PLANNER --save-preprocess FILE` in `dir`, then `bench` on MAP's
+/// scenarios (the first `queries`) with `planners` and `--preprocess FILE`: its rows, checked
+/// to be `names`, each of `queries` queries at the best cost.
+fn saved_then_benched(
+    dir: &Path,
+    (map, planner, file): (&str, &str, &str),
+    planners: &str,
+    names: &[&str],
+    queries: u64,
+) -> Vec<Value> {
+    ok(&mut cmd(
+        dir,
+        &format!("scen {map} {map}.scen --planner {planner} --save-preprocess {file}"),
     ));
     let v = bench(
-        dir.path(),
+        dir,
         &format!(
-            "--map {map} --scen {map}.scen --planners auto,first-move,astar --preprocess den.fm"
+            "--map {map} --scen {map}.scen --random {queries} --planners {planners} --preprocess {file}"
         ),
         &[],
     );
-    let rows = v["rows"].as_array().unwrap();
-    let names: Vec<&str> = rows
+    let rows = v["rows"].as_array().unwrap().clone();
+    let found: Vec<&str> = rows
         .iter()
         .map(|r| r["planner"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["auto (first-move)", "first-move", "astar"]);
-    for r in rows {
-        assert_eq!(r["queries"], 290, "{r}");
+    assert_eq!(found, names);
+    for r in &rows {
+        assert_eq!(r["queries"], queries, "{r}");
         assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
     }
+    rows
 }
 
 /// A contraction hierarchy saved by `scen` serves `ch` and `auto` in `bench --preprocess` on a
@@ -190,27 +210,13 @@ fn a_saved_hierarchy_serves_ch_and_auto_in_bench() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../data/movingai/random512-40-5.map"
     );
-    ok(&mut cmd(
+    let rows = saved_then_benched(
         dir.path(),
-        &format!("scen {map} {map}.scen --planner ch --save-preprocess r.ch"),
-    ));
-    let v = bench(
-        dir.path(),
-        &format!(
-            "--map {map} --scen {map}.scen --random 150 --planners auto,ch,astar --preprocess r.ch"
-        ),
-        &[],
+        (map, "ch", "r.ch"),
+        "auto,ch,astar",
+        &["auto (ch)", "ch", "astar"],
+        150,
     );
-    let rows = v["rows"].as_array().unwrap();
-    let names: Vec<&str> = rows
-        .iter()
-        .map(|r| r["planner"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["auto (ch)", "ch", "astar"]);
-    for r in rows {
-        assert_eq!(r["queries"], 150, "{r}");
-        assert_eq!(r["cost_over_best"].as_f64(), Some(1.0), "{r}");
-    }
     assert_eq!(rows[0]["precompute_ms"], rows[1]["precompute_ms"]);
     // Given to another map, the hierarchy is refused, naming the file.
     let den = DEN312D;

@@ -3,19 +3,15 @@
 //! SCEN [HIERARCHY]` (a hierarchy saved by `skyplan scen --planner ch --save-preprocess`, else
 //! built). `ROUNDS=R` repeats the scenarios R times (default 5); each round's median is printed.
 
-use skyplan_cspace::{Cell, Grid2};
+use skyplan_cspace::Cell;
 use skyplan_search::{ChQuery, ContractionHierarchy, MoveModel};
 use std::sync::Arc;
 use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let map =
-        skyplan_map::movingai::parse_map(&std::fs::read_to_string(&args[1]).unwrap()).unwrap();
-    let scen =
-        skyplan_map::movingai::parse_scen(&std::fs::read_to_string(&args[2]).unwrap()).unwrap();
-    let grid =
-        Arc::new(Grid2::from_passable(map.height as u32, map.width as u32, &map.passable).unwrap());
+    let (grid, scen) = skyplan_testkit::movingai(&args[1], &args[2]);
+    let grid = Arc::new(grid);
     let t = Instant::now();
     let ch = match args.get(3) {
         Some(file) => ContractionHierarchy::read_from(

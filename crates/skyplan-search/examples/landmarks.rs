@@ -29,13 +29,8 @@ fn main() {
         });
         (grid, pairs)
     } else {
-        let map =
-            skyplan_map::movingai::parse_map(&std::fs::read_to_string(&args[1]).unwrap()).unwrap();
-        let scen =
-            skyplan_map::movingai::parse_scen(&std::fs::read_to_string(&args[2]).unwrap()).unwrap();
-        let grid = Arc::new(
-            Grid2::from_passable(map.height as u32, map.width as u32, &map.passable).unwrap(),
-        );
+        let (grid, scen) = skyplan_testkit::movingai(&args[1], &args[2]);
+        let grid = Arc::new(grid);
         let pairs = scen
             .iter()
             .map(|s| {

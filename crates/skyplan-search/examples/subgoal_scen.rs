@@ -33,12 +33,8 @@ fn main() {
         );
         return;
     }
-    let map =
-        skyplan_map::movingai::parse_map(&std::fs::read_to_string(&args[1]).unwrap()).unwrap();
-    let scen =
-        skyplan_map::movingai::parse_scen(&std::fs::read_to_string(&args[2]).unwrap()).unwrap();
-    let grid =
-        Arc::new(Grid2::from_passable(map.height as u32, map.width as u32, &map.passable).unwrap());
+    let (grid, scen) = skyplan_testkit::movingai(&args[1], &args[2]);
+    let grid = Arc::new(grid);
     let t = Instant::now();
     let first_move = args.get(3).is_some_and(|a| a == "first-move");
     let name = if first_move { "first-move" } else { "subgoal" };

@@ -11,6 +11,21 @@ use std::ops::Range;
 /// The bundled FCND city map's text (`data/colliders.csv`).
 pub const CITY_CSV: &str = include_str!("../../../data/colliders.csv");
 
+/// A MovingAI map and its scenarios read from the files `map` and `scen` (for examples and
+/// benchmarks: a file that cannot be read or parsed panics, naming it).
+pub fn movingai(map: &str, scen: &str) -> (Grid2, Vec<skyplan_map::movingai::Scenario>) {
+    let read = |path: &str| {
+        std::fs::read_to_string(path).unwrap_or_else(|e| panic!("cannot read {path}: {e}"))
+    };
+    let parsed =
+        skyplan_map::movingai::parse_map(&read(map)).unwrap_or_else(|e| panic!("{map}: {e}"));
+    let scenarios =
+        skyplan_map::movingai::parse_scen(&read(scen)).unwrap_or_else(|e| panic!("{scen}: {e}"));
+    let grid = Grid2::from_passable(parsed.height as u32, parsed.width as u32, &parsed.passable)
+        .unwrap_or_else(|e| panic!("{map}: {e}"));
+    (grid, scenarios)
+}
+
 /// Far-apart cell pairs from a fixed 64-bit LCG (the same pairs on every machine): pairs drawn
 /// over the whole grid, kept when they are at least half the grid's diagonal apart and `accept`
 /// takes them (say, both free and connected), until there are `count`.
