@@ -93,8 +93,9 @@ fn departure_value(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
 /// several programs and `skyplan serve` processes may share.
 ///
 /// `url`: `"sqlite:FILE"`, `"sqlite::memory:"` (this object's own) or
-/// `"postgres://USER@HOST:PORT/DATABASE"`. Raises `BadInput` for an address it does not know and
-/// `AirspaceUnavailable` when the store cannot be opened.
+/// `"postgres://USER@HOST:PORT/DATABASE"` (TLS with libpq's `?sslmode=verify-full`,
+/// `&sslrootcert=CA.pem`, `&sslcert=…&sslkey=…`; docs/FLEET.md). Raises `BadInput` for an
+/// address it does not know and `AirspaceUnavailable` when the store cannot be opened.
 #[pyclass(module = "skyplan", frozen)]
 pub struct Airspace {
     url: String,

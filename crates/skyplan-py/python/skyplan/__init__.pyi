@@ -220,7 +220,8 @@ class Planner:
 @final
 class Airspace:
     """A shared airspace store of operational intents: ``"sqlite:FILE"``, ``"sqlite::memory:"``
-    or ``"postgres://USER@HOST:PORT/DATABASE"``."""
+    or ``"postgres://USER@HOST:PORT/DATABASE"`` (TLS with ``?sslmode=verify-full&sslrootcert=CA.pem``,
+    a client certificate with ``&sslcert=…&sslkey=…``)."""
 
     def __new__(cls, url: str) -> "Airspace": ...
     @property
