@@ -149,12 +149,15 @@ impl PostgresStore {
     /// Connects to the database at `url` (`postgres://…` or `postgresql://…`, libpq's URL
     /// form), creates the tables if they are missing and checks the schema version.
     ///
-    /// TLS: `sslmode=require`, `verify-ca` or `verify-full`, or `sslrootcert=FILE` (PEM CA
-    /// certificates), make every connection TLS, the server's certificate and host name checked
-    /// against `FILE` or the public web CAs; without them connections are plain.
+    /// TLS: `sslmode=require`, `verify-ca` or `verify-full`, `sslrootcert=FILE` (PEM CA
+    /// certificates) or a client certificate (`sslcert=FILE&sslkey=FILE`, PEM) make every
+    /// connection TLS, the server's certificate and host name checked against `FILE` or the
+    /// public web CAs; without any of them (or with `sslmode=disable` or `prefer`) connections
+    /// are plain.
     ///
-    /// Errors: [`StoreError::Address`] for a URL that does not parse (or an unreadable
-    /// `sslrootcert`),
+    /// Errors: [`StoreError::Address`] for a URL that does not parse, a TLS parameter of an
+    /// unknown value, given twice or in conflict, or a certificate or key file that cannot be
+    /// read or holds none,
     /// [`StoreError::Down`] when the server cannot be reached (within 5 s unless the URL
     /// sets `connect_timeout`), [`StoreError::Schema`] for a database of another schema
     /// version.
@@ -162,11 +165,7 @@ impl PostgresStore {
         if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
             return Err(StoreError::Address(url.into()));
         }
-        let tls = crate::tls::split(url, |file| std::fs::read(file))?;
-        let mut config: postgres::Config = tls
-            .url
-            .parse()
-            .map_err(|e| StoreError::Address(format!("{} ({e})", redact(url))))?;
+        let (mut config, tls) = parse_url(url)?;
         if config.get_connect_timeout().is_none() {
             config.connect_timeout(Duration::from_secs(CONNECT_TIMEOUT_S));
         }
@@ -213,17 +212,7 @@ impl PostgresStore {
     }
 
     fn down(&self, e: &postgres::Error) -> StoreError {
-        let why = match &self.roots {
-            Some(roots) => format!(
-                "{} (TLS: the server's certificate is checked against {roots})",
-                describe(e)
-            ),
-            None => describe(e),
-        };
-        StoreError::Down {
-            place: self.place.clone(),
-            why,
-        }
+        down(&self.place, self.roots.as_deref(), e)
     }
 
     fn error(&self, e: postgres::Error) -> StoreError {
@@ -372,19 +361,12 @@ impl PostgresStore {
                 "database name {name}: expected letters, digits and _"
             )));
         }
-        let tls = crate::tls::split(url, |file| std::fs::read(file))?;
-        let config: postgres::Config = tls
-            .url
-            .parse()
-            .map_err(|e| StoreError::Address(format!("{} ({e})", redact(url))))?;
+        let (config, tls) = parse_url(url)?;
         let place = place_of(&config);
         std::thread::scope(|s| {
             s.spawn(|| {
-                let mut client =
-                    connect(&config, &tls.transport).map_err(|e| StoreError::Down {
-                        place: place.clone(),
-                        why: describe(&e),
-                    })?;
+                let mut client = connect(&config, &tls.transport)
+                    .map_err(|e| down(&place, tls.roots.as_deref(), &e))?;
                 let done = client
                     .batch_execute(&format!("CREATE DATABASE {name}"))
                     .map_err(|e| StoreError::Postgres(describe(&e)));
@@ -413,6 +395,32 @@ impl Drop for PostgresStore {
     fn drop(&mut self) {
         let idle = std::mem::take(&mut self.lock_pool().idle);
         discard(idle);
+    }
+}
+
+/// The client's configuration of `url` and its TLS settings (`crate::tls`).
+fn parse_url(url: &str) -> Result<(postgres::Config, crate::tls::Split), StoreError> {
+    let tls = crate::tls::split(url, |file| std::fs::read(file))?;
+    let config = tls
+        .url
+        .parse()
+        .map_err(|e| StoreError::Address(format!("{} ({e})", redact(url))))?;
+    Ok((config, tls))
+}
+
+/// The store at `place` is down: the client's error `e`, and with TLS which CAs the server's
+/// certificate was checked against (`roots`).
+fn down(place: &str, roots: Option<&str>, e: &postgres::Error) -> StoreError {
+    let why = match roots {
+        Some(roots) => format!(
+            "{} (TLS: the server's certificate is checked against {roots})",
+            describe(e)
+        ),
+        None => describe(e),
+    };
+    StoreError::Down {
+        place: place.to_string(),
+        why,
     }
 }
 

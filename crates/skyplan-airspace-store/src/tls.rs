@@ -32,7 +32,9 @@ pub(crate) enum Transport {
 
 /// A URL's TLS settings, taken out of it: the URL the client parses, and the transport.
 pub(crate) struct Split {
-    /// The URL without `sslrootcert`, its `verify-*` modes as `require`.
+    /// The URL the client parses: without `sslrootcert`, `sslcert` and `sslkey`, and with
+    /// `sslmode=require` first when TLS is on (the `verify-*` modes become `require`: the
+    /// check is rustls's, always).
     pub(crate) url: String,
     /// How to connect.
     pub(crate) transport: Transport,
@@ -46,65 +48,85 @@ pub(crate) fn split(
     url: &str,
     mut read: impl FnMut(&str) -> std::io::Result<Vec<u8>>,
 ) -> Result<Split, StoreError> {
-    let (base, query) = match url.split_once('?') {
-        Some((base, query)) => (base, query),
+    // The query starts at the first `?` after the user and password (which may hold one).
+    let after_user = url.rfind('@').map_or(0, |at| at + 1);
+    let (base, query) = match url[after_user..].find('?') {
+        Some(q) => (&url[..after_user + q], &url[after_user + q + 1..]),
         None => (url, ""),
     };
     let mut kept: Vec<String> = Vec::new();
-    let mut root_file: Option<String> = None;
-    let (mut cert_file, mut key_file): (Option<String>, Option<String>) = (None, None);
-    let mut tls = false;
+    let mut sslmode: Option<String> = None;
+    let (mut root_file, mut cert_file, mut key_file): (Option<String>, _, _) = (None, None, None);
     for pair in query.split('&').filter(|p| !p.is_empty()) {
-        let (key, value) = pair.split_once('=').unwrap_or((pair, ""));
-        match key {
-            "sslrootcert" => {
-                if value.is_empty() {
+        let (raw_key, raw_value) = pair.split_once('=').unwrap_or((pair, ""));
+        // Decoded as the client decodes the parameters it keeps (`%20` a space, `%26` an `&`).
+        let decode = |text: &str| {
+            percent_encoding::percent_decode_str(text)
+                .decode_utf8()
+                .map(|t| t.into_owned())
+                .map_err(|_| {
+                    StoreError::Address(format!("{raw_key}: not UTF-8 once percent-decoded"))
+                })
+        };
+        let key = decode(raw_key)?;
+        let file_slot = match key.as_str() {
+            "sslrootcert" => &mut root_file,
+            "sslcert" => &mut cert_file,
+            "sslkey" => &mut key_file,
+            "sslmode" => {
+                let value = decode(raw_value)?;
+                if !matches!(
+                    value.as_str(),
+                    "disable" | "prefer" | "require" | "verify-ca" | "verify-full"
+                ) {
+                    return Err(StoreError::Address(format!(
+                        "sslmode={value}: expected disable, prefer, require, verify-ca or verify-full"
+                    )));
+                }
+                if sslmode.replace(value).is_some() {
                     return Err(StoreError::Address(
-                        "sslrootcert: expected the path of a PEM file of CA certificates".into(),
+                        "sslmode: given twice; expected it once".into(),
                     ));
                 }
-                root_file = Some(value.to_string());
-                tls = true;
+                // Its place, rewritten below.
+                kept.push(pair.to_string());
+                continue;
             }
-            "sslmode" => match value {
-                "require" | "verify-ca" | "verify-full" => {
-                    tls = true;
-                    kept.push("sslmode=require".into());
-                }
-                "disable" | "prefer" => kept.push(pair.to_string()),
-                other => {
-                    return Err(StoreError::Address(format!(
-                        "sslmode={other}: expected disable, prefer, require, verify-ca or verify-full"
-                    )));
-                }
-            },
-            "sslcert" | "sslkey" => {
-                if value.is_empty() {
-                    return Err(StoreError::Address(format!(
-                        "{key}: expected the path of a PEM file"
-                    )));
-                }
-                let slot = if key == "sslcert" {
-                    &mut cert_file
-                } else {
-                    &mut key_file
-                };
-                *slot = Some(value.to_string());
-                tls = true;
+            _ => {
+                kept.push(pair.to_string());
+                continue;
             }
-            _ => kept.push(pair.to_string()),
+        };
+        let value = decode(raw_value)?;
+        if value.is_empty() {
+            return Err(StoreError::Address(format!(
+                "{key}: expected the path of a PEM file"
+            )));
+        }
+        if file_slot.replace(value).is_some() {
+            return Err(StoreError::Address(format!(
+                "{key}: given twice; expected it once"
+            )));
         }
     }
-    if tls
-        && kept
-            .iter()
-            .any(|p| p == "sslmode=disable" || p == "sslmode=prefer")
-    {
-        return Err(StoreError::Address(
-            "sslrootcert, sslcert or sslkey with sslmode=disable or prefer: expected \
-             sslmode=require (or none)"
-                .into(),
-        ));
+    let files = root_file.is_some() || cert_file.is_some() || key_file.is_some();
+    let tls = match sslmode.as_deref() {
+        Some("require" | "verify-ca" | "verify-full") => true,
+        Some(mode) if files => {
+            return Err(StoreError::Address(format!(
+                "sslmode={mode} with sslrootcert, sslcert or sslkey: expected sslmode=require \
+                 (or none)"
+            )));
+        }
+        Some(_) => false,
+        None => files,
+    };
+    if tls {
+        let mode = "sslmode=require".to_string();
+        match kept.iter().position(|p| p.starts_with("sslmode=")) {
+            Some(at) => kept[at] = mode,
+            None => kept.push(mode),
+        }
     }
     let client = match (cert_file, key_file) {
         (None, None) => None,
@@ -122,9 +144,6 @@ pub(crate) fn split(
             ));
         }
     };
-    if tls && !kept.iter().any(|p| p.starts_with("sslmode=")) {
-        kept.push("sslmode=require".into());
-    }
     let url = if kept.is_empty() {
         base.to_string()
     } else {
@@ -297,6 +316,17 @@ mod tests {
         .unwrap();
         assert_eq!(s.url, "postgres://u@h/db?connect_timeout=2&sslmode=require");
         assert_eq!(s.roots.as_deref(), Some("the CA in /etc/ca.pem"));
+        // Decoded as the client decodes what it keeps; a `?` in the password is not the query.
+        let s = split(
+            "postgres://u:p?w@h/db?sslrootcert=%2Fmy%20certs%2Fca%26.pem",
+            |path| {
+                assert_eq!(path, "/my certs/ca&.pem");
+                Ok(pem.to_vec())
+            },
+        )
+        .unwrap();
+        assert_eq!(s.url, "postgres://u:p?w@h/db?sslmode=require");
+        assert_eq!(s.roots.as_deref(), Some("the CA in /my certs/ca&.pem"));
     }
 
     #[test]
@@ -314,10 +344,20 @@ mod tests {
             Ok(b"-----BEGIN CERTIFICATE-----\nAAAA\n-----END CERTIFICATE-----\n".to_vec())
         }));
         assert!(e.contains("/x.pem: certificate 1 is not"), "{e}");
+        let e = address(split(
+            "postgres://u@h/db?sslmode=require&sslmode=disable",
+            no_file,
+        ));
+        assert!(e.starts_with("sslmode: given twice"), "{e}");
+        let e = address(split(
+            "postgres://u@h/db?sslrootcert=/a.pem&sslrootcert=/b.pem",
+            no_file,
+        ));
+        assert!(e.starts_with("sslrootcert: given twice"), "{e}");
         let e = address(split("postgres://u@h/db?sslmode=allow", no_file));
         assert!(e.starts_with("sslmode=allow: expected disable"), "{e}");
         let e = address(split("postgres://u@h/db?sslrootcert=", no_file));
-        assert!(e.starts_with("sslrootcert: expected"), "{e}");
+        assert!(e.starts_with("sslrootcert: expected the path"), "{e}");
         let e = address(split("postgres://u@h/db?sslcert=/c.pem", no_file));
         assert!(e.starts_with("sslcert without sslkey"), "{e}");
         let e = address(split("postgres://u@h/db?sslkey=/k.pem", no_file));
@@ -340,6 +380,10 @@ mod tests {
             "postgres://u@h/db?sslmode=disable&sslrootcert=/ca.pem",
             |_| Ok(Vec::new()),
         ));
-        assert!(e.contains("expected sslmode=require"), "{e}");
+        assert!(
+            e.starts_with("sslmode=disable with sslrootcert")
+                && e.contains("expected sslmode=require"),
+            "{e}"
+        );
     }
 }

@@ -151,7 +151,7 @@ fn tls_connections_are_encrypted_and_check_the_servers_certificate() {
     // The server's own view (asked over a plain connection): the store's session is TLS.
     assert_eq!(
         psql(
-            &url,
+            &format!("{url}?sslmode=disable"),
             &format!(
                 "SELECT count(*) || ' ' || bool_and(s.ssl) FROM pg_stat_ssl s \
                  JOIN pg_stat_activity a USING (pid) WHERE a.application_name = '{app}'"

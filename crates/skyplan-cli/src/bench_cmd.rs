@@ -78,8 +78,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     };
     let steps = Some((planners.len() * queries.len()) as u64);
     let progress = crate::show::progress("{msg:>24} [{bar:40}] {pos}/{len} queries", steps, target);
-    let first_move = first_move_table(&args, grid, model)?;
-    let hierarchy = hierarchy(&args, grid, model)?;
+    let (first_move, hierarchy) = loaded_preprocessing(&args, grid, model)?;
     let jps_plus = if first_move.is_some() || hierarchy.is_some() {
         JpsPlusPrep::Build
     } else {
@@ -157,49 +156,43 @@ fn queries(
     grid_bench::queries(grid, model, from).map_err(bad_input)
 }
 
-/// A first-move table given by `--preprocess` (told apart from a JPS+ table by its header) and
-/// its load time, µs: `first-move` and `auto` use it.
-fn first_move_table(
-    args: &BenchArgs,
-    grid: &std::sync::Arc<skyplan_cspace::Grid2>,
-    model: MoveModel,
-) -> Result<Option<(std::sync::Arc<skyplan_search::FirstMoveTable>, u64)>> {
-    let Some(path) = &args.preprocess else {
-        return Ok(None);
-    };
-    let shown = path.display();
-    let t = Instant::now();
-    let (input, kind) = crate::files::open_preprocess(path)?;
-    if kind != crate::files::Saved::FirstMove {
-        return Ok(None);
-    }
-    let table =
-        skyplan_search::FirstMoveTable::read_from(input, std::sync::Arc::clone(grid), model)
-            .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
-    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
-    Ok(Some((std::sync::Arc::new(table), us)))
-}
+/// Preprocessing loaded from a file, and the load's time, µs.
+type Loaded<T> = Option<(std::sync::Arc<T>, u64)>;
 
-/// A contraction hierarchy given by `--preprocess` (saved by `scen` or `plan
-/// --save-preprocess`; told apart by its header) and its load time, µs: `ch` and `auto` use it.
-fn hierarchy(
+/// A first-move table and its load time (µs), for `first-move` and `auto`, or a contraction
+/// hierarchy and its load time, for `ch` and `auto`, given by `--preprocess` (saved by `scen`
+/// or `plan --save-preprocess`; told apart from each other and from a JPS+ table by the
+/// header). Neither for a JPS+ table, which [`jps_plus_prep`] streams when JPS+ runs.
+fn loaded_preprocessing(
     args: &BenchArgs,
     grid: &std::sync::Arc<skyplan_cspace::Grid2>,
     model: MoveModel,
-) -> Result<Option<(std::sync::Arc<skyplan_search::ContractionHierarchy>, u64)>> {
+) -> Result<(
+    Loaded<skyplan_search::FirstMoveTable>,
+    Loaded<skyplan_search::ContractionHierarchy>,
+)> {
     let Some(path) = &args.preprocess else {
-        return Ok(None);
+        return Ok((None, None));
     };
     let t = Instant::now();
     let (input, kind) = crate::files::open_preprocess(path)?;
-    if kind != crate::files::Saved::Hierarchy {
-        return Ok(None);
-    }
-    let ch =
-        skyplan_search::ContractionHierarchy::read_from(input, std::sync::Arc::clone(grid), model)
-            .map_err(|e| bad_input(format!("--preprocess {}: {e}", path.display())))?;
-    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
-    Ok(Some((std::sync::Arc::new(ch), us)))
+    let damaged =
+        |e: &dyn std::fmt::Display| bad_input(format!("--preprocess {}: {e}", path.display()));
+    let grid = std::sync::Arc::clone(grid);
+    let us = || u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    Ok(match kind {
+        crate::files::Saved::FirstMove => {
+            let table = skyplan_search::FirstMoveTable::read_from(input, grid, model)
+                .map_err(|e| damaged(&e))?;
+            (Some((std::sync::Arc::new(table), us())), None)
+        }
+        crate::files::Saved::Hierarchy => {
+            let ch = skyplan_search::ContractionHierarchy::read_from(input, grid, model)
+                .map_err(|e| damaged(&e))?;
+            (None, Some((std::sync::Arc::new(ch), us())))
+        }
+        crate::files::Saved::JpsPlus | crate::files::Saved::Unknown => (None, None),
+    })
 }
 
 /// How JPS+ gets its table: built here and saved (`--save-preprocess`), streamed from a file

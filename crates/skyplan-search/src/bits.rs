@@ -13,9 +13,9 @@ use skyplan_cspace::Grid2;
 ///
 /// Words are stored block-major: the words of all lines for the same 64 cells are adjacent
 /// (word `b` of line `l` at `b × (lines + 2) + l + 1`). A scan reads its line and the two
-/// beside it from one cache line, and a diagonal scan, which moves to the next line at every
-/// step, finds the next line's word beside the last; a straight scan pays one cache line per
-/// 64 cells either way.
+/// beside it from adjacent words (usually one cache line, sometimes two), and a diagonal scan,
+/// which moves to the next line at every step, finds the next line's word beside the last; a
+/// straight scan pays about one new cache line per 64 cells either way.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
 pub(crate) struct BitLines {
     /// Number of lines.
@@ -44,10 +44,18 @@ impl BitLines {
     }
 
     /// The 3 cells `pos - 1 ..= pos + 1` of `line` as bits 0, 1, 2, for `line` in
-    /// `-1 ..= lines` and `pos` in `-63 ..= len + 62`.
+    /// `-1 ..= lines` and `pos` in `-63 ..= len + 1`. Reads the next block's word only when
+    /// the three cells straddle two words (2 positions in 64).
     #[inline(always)]
     fn three(&self, line: i64, pos: i64) -> u64 {
-        self.ahead(line, pos - 1) & 0b111
+        debug_assert!((-63..=self.len as i64 + 1).contains(&pos));
+        let p = (pos - 1 + 64) as usize;
+        let s = p % 64;
+        if s <= 61 {
+            (self.words[self.at(line, p / 64)] >> s) & 0b111
+        } else {
+            self.ahead(line, pos - 1) & 0b111
+        }
     }
 
     /// The 64 cells `pos .. pos + 64` of `line` (bit `k` is cell `pos + k`), for `line` in

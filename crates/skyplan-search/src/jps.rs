@@ -156,7 +156,8 @@ impl<'a> View<'a> {
 
     /// [`View::jump`] on the grid's bits: its straight scans (and those a diagonal scan makes
     /// at each step) 64 cells per step, and a diagonal scan's own tests on the bit rows (the
-    /// rows of a 3 × 3 neighbourhood are one cache line there, not three rows of the grid).
+    /// rows of a 3 × 3 neighbourhood are adjacent words there, usually one cache line, not three
+    /// rows of the grid).
     #[inline]
     fn jump_blocks(
         &self,

@@ -3,8 +3,9 @@
 //! Grids of at most [`FLAT_MAX_CELLS`] cells get one row-major node array (16 bytes per cell;
 //! the fastest layout), allocated zeroed by the system: its pages are mapped when a search first
 //! touches them, so a single query on a large grid pays for the area it searches, not for the
-//! whole array ([`Slot`]). On bigger grids the grid is cut into 8 × 8-cell tiles; a tile's 64 nodes (1 KiB) are allocated the first time
-//! a search touches one of its cells, back to back in one pool. Memory therefore grows with the
+//! whole array ([`Slot`]). On bigger grids the grid is cut into 8 × 8-cell tiles; a tile's 64
+//! nodes (1 KiB) are allocated the first time a search touches one of its cells, back to back
+//! in one pool. Memory therefore grows with the
 //! area searches visit (plus a 4-byte page entry per tile, 1/16 byte per cell), not with the
 //! map's area, and neighbouring cells share a page. Pages stay between queries (a node's stamp
 //! says whether it belongs to the current query, so nothing is cleared per query) until the pool
@@ -202,12 +203,8 @@ impl PagedNodes {
     /// Best cost to cell (r, c) in this query (infinite if unseen).
     #[inline(always)]
     pub(crate) fn g(&self, r: usize, c: usize) -> f64 {
-        let n = self.node(r, c);
-        if n.stamp >= self.open_stamp {
-            n.g
-        } else {
-            f64::INFINITY
-        }
+        // An unseen node reads as `FRESH`, whose cost is infinite.
+        self.node(r, c).g
     }
 
     /// Parent of cell (r, c) on its best path.
