@@ -23,7 +23,7 @@
 //! [`ChFileError`] naming what is wrong, never a wrong path or a panic. The library opens no
 //! files: callers hand it any [`Read`] / [`Write`].
 
-use crate::contraction::{DIAGONAL, Edge, NONE, STRAIGHT};
+use crate::contraction::{DIAGONAL, Edge, NONE, STRAIGHT, UpArc};
 use crate::table_file::{Hasher, grid_checksum};
 use crate::{ContractionHierarchy, MoveModel};
 use skyplan_cspace::{Cell, Grid2};
@@ -249,7 +249,7 @@ impl ContractionHierarchy {
     pub fn file_bytes(&self) -> u64 {
         let (n, m, e) = (
             self.cell_of_rank.len() as u64,
-            self.head.len() as u64,
+            self.arcs.len() as u64,
             self.edges.len() as u64,
         );
         HEADER_BYTES as u64 + 4 * n + 4 * (n + 1) + 16 * m + 20 * e
@@ -276,7 +276,7 @@ impl ContractionHierarchy {
         let body = self.body();
         let mut header = Vec::with_capacity(HEADER_BYTES);
         write_head(&mut header, MAGIC, VERSION, &self.grid, self.model);
-        for w in [self.cell_of_rank.len(), self.head.len(), self.edges.len()] {
+        for w in [self.cell_of_rank.len(), self.arcs.len(), self.edges.len()] {
             header.extend_from_slice(&(w as u32).to_le_bytes());
         }
         header.extend_from_slice(&body_sum(&body).to_le_bytes());
@@ -295,11 +295,15 @@ impl ContractionHierarchy {
         };
         u32s(&mut b, &self.cell_of_rank);
         u32s(&mut b, &self.first_out);
-        u32s(&mut b, &self.head);
-        for x in &self.cost {
-            b.extend_from_slice(&x.to_le_bytes());
+        for a in &self.arcs {
+            b.extend_from_slice(&a.head.to_le_bytes());
         }
-        u32s(&mut b, &self.edge_id);
+        for a in &self.arcs {
+            b.extend_from_slice(&a.cost.to_le_bytes());
+        }
+        for a in &self.arcs {
+            b.extend_from_slice(&a.edge.to_le_bytes());
+        }
         for e in &self.edges {
             u32s(&mut b, &[e.a, e.b, e.mid, e.first, e.second]);
         }
@@ -392,9 +396,9 @@ impl ContractionHierarchy {
             rank_of_cell,
             cell_of_rank,
             first_out,
-            head,
-            cost,
-            edge_id,
+            arcs: (head.iter().zip(&cost).zip(&edge_id))
+                .map(|((&head, &cost), &edge)| UpArc { cost, head, edge })
+                .collect(),
             edges,
             id: crate::contraction::next_id(),
         })
@@ -625,7 +629,7 @@ mod tests {
             bytes
         };
         let n = ch.cell_of_rank.len();
-        let m = ch.head.len();
+        let m = ch.arcs.len();
         // An arc pointing past the nodes.
         let mut body = ch.body();
         let head_at = 4 * n + 4 * (n + 1);

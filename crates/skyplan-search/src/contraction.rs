@@ -73,6 +73,15 @@ pub(crate) struct Edge {
     pub(crate) second: u32,
 }
 
+/// An upward arc: its head's rank, its cost and the edge it follows, side by side so that a
+/// query reads one cache line for them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct UpArc {
+    pub(crate) cost: u64,
+    pub(crate) head: u32,
+    pub(crate) edge: u32,
+}
+
 /// The contraction hierarchy of one grid under one move model, owning its grid (`Arc`) so a
 /// planning session can keep it across requests. Queries need a [`ChQuery`] workspace.
 ///
@@ -96,11 +105,9 @@ pub struct ContractionHierarchy {
     pub(crate) rank_of_cell: Vec<u32>,
     /// Cell index of every rank.
     pub(crate) cell_of_rank: Vec<u32>,
-    /// Upward edges in CSR form, by rank: `first_out[r]..first_out[r + 1]`.
+    /// Upward edges in CSR form, by rank: `arcs[first_out[r]..first_out[r + 1]]`.
     pub(crate) first_out: Vec<u32>,
-    pub(crate) head: Vec<u32>,
-    pub(crate) cost: Vec<u64>,
-    pub(crate) edge_id: Vec<u32>,
+    pub(crate) arcs: Vec<UpArc>,
     /// Every edge ever created (for unpacking), endpoints as ranks.
     pub(crate) edges: Vec<Edge>,
     /// Tells this hierarchy's unpacked shortcuts in a [`ChQuery`] from another's.
@@ -113,68 +120,88 @@ pub(crate) fn next_id() -> u64 {
     NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
-/// Shortcuts unpacked into at least this many ranks are kept for the next queries…
-pub const MEMO_MIN_RANKS: usize = 16;
-/// …until this many ranks are kept (16 MiB), per [`ChQuery`].
+/// Shortcuts unpacked into at least this many nodes are kept for the next queries…
+pub const MEMO_MIN_RANKS: usize = 3;
+/// …until this many nodes are kept, per [`ChQuery`] and kind (16 MiB of ranks for the subgoal
+/// graph's hierarchy, 32 MiB of cells for the grid's).
 pub const MEMO_MAX_RANKS: usize = 4 << 20;
 
-/// Shortcuts already unpacked, for the queries after: each as its ranks from `a` to `b`.
-#[derive(Debug, Default)]
-struct Memo {
+/// Shortcuts already unpacked, for the queries after: each as its nodes from `a` to `b` — ranks
+/// (`T = u32`), or for the grid's own hierarchy the cells themselves (`T = Cell`), so that a
+/// kept stretch of path is copied out with no lookup per cell.
+#[derive(Debug)]
+struct Memo<T> {
     /// The hierarchy they are of.
     of: u64,
-    /// Per edge id: its span in `ranks`, or `NONE`.
+    /// Per edge id: its span in `items`, or `NONE`.
     slot: Vec<u32>,
-    spans: Vec<(u32, u32)>,
-    ranks: Vec<u32>,
+    /// Per span: its start in `items`, its length, and the edge's ends `a` and `b` (so a kept
+    /// edge is walked without reading the edge).
+    spans: Vec<(u32, u32, u32, u32)>,
+    items: Vec<T>,
 }
 
-impl Memo {
+impl<T> Default for Memo<T> {
+    fn default() -> Self {
+        Self {
+            of: 0,
+            slot: Vec::new(),
+            spans: Vec::new(),
+            items: Vec::new(),
+        }
+    }
+}
+
+impl<T: Copy> Memo<T> {
     fn for_hierarchy(&mut self, ch: &ContractionHierarchy) {
         if self.of != ch.id || self.slot.len() != ch.edges.len() {
             self.of = ch.id;
             self.slot.clear();
             self.slot.resize(ch.edges.len(), NONE);
             self.spans.clear();
-            self.ranks.clear();
+            self.items.clear();
         }
     }
 
-    /// Appends edge `e` walked from its `a` end (`forward`) or its `b` end, if kept.
+    /// Appends edge `e` walked from its end `x`, if kept, and returns its other end.
     #[inline]
-    fn extend(&self, e: u32, forward: bool, out: &mut Vec<u32>) -> bool {
+    fn extend(&self, e: u32, x: u32, out: &mut Vec<T>) -> Option<u32> {
         let k = self.slot[e as usize];
         if k == NONE {
-            return false;
+            return None;
         }
-        let (start, len) = self.spans[k as usize];
-        let kept = &self.ranks[start as usize..(start + len) as usize];
-        if forward {
+        let (start, len, a, b) = self.spans[k as usize];
+        let kept = &self.items[start as usize..(start + len) as usize];
+        if x == a {
             out.extend_from_slice(&kept[1..]);
+            Some(b)
         } else {
             out.extend(kept[..kept.len() - 1].iter().rev());
+            Some(a)
         }
-        true
     }
 
-    /// Keeps `walked`: edge `e` (from `a` to `b`) walked from `from`, without `from`.
-    fn keep(&mut self, edge: &Edge, e: u32, from: u32, walked: &[u32]) {
+    /// Keeps `walked`: edge `e` (from `a` to `b`) walked from `from` (whose node is `start`),
+    /// without `from`.
+    fn keep(&mut self, edge: &Edge, e: u32, from: u32, start: T, walked: &[T]) {
         if walked.len() < MEMO_MIN_RANKS
-            || self.ranks.len() + walked.len() + 1 > MEMO_MAX_RANKS
+            || self.items.len() + walked.len() + 1 > MEMO_MAX_RANKS
             || self.slot[e as usize] != NONE
         {
             return;
         }
-        let start = self.ranks.len() as u32;
+        let at = self.items.len() as u32;
         if from == edge.a {
-            self.ranks.push(edge.a);
-            self.ranks.extend_from_slice(walked);
+            self.items.push(start);
+            self.items.extend_from_slice(walked);
         } else {
-            self.ranks.extend(walked.iter().rev());
-            self.ranks.push(edge.b);
+            // Walked from b: the items run b → a; kept a → b, with b (`start`) last.
+            self.items.extend(walked.iter().rev());
+            self.items.push(start);
         }
         self.slot[e as usize] = self.spans.len() as u32;
-        self.spans.push((start, walked.len() as u32 + 1));
+        self.spans
+            .push((at, walked.len() as u32 + 1, edge.a, edge.b));
     }
 }
 
@@ -186,16 +213,25 @@ enum Step {
     Keep { x: u32, e: u32, at: u32 },
 }
 
+/// A rank's state in one direction of a query: valid when `stamp` is the query's.
+#[derive(Debug, Clone, Copy, Default)]
+struct Label {
+    dist: u64,
+    /// The edge it was reached by, or `NONE` for a root.
+    parent: u32,
+    stamp: u32,
+}
+
 /// Reusable buffers of [`ContractionHierarchy::search`] (one per thread).
 #[derive(Debug, Default)]
 pub struct ChQuery {
-    dist: [Vec<u64>; 2],
-    parent: [Vec<u32>; 2],
-    stamp: [Vec<u32>; 2],
+    /// Per direction, per rank: what the search knows of it (one cache line holds four).
+    label: [Vec<Label>; 2],
     now: u32,
     heap: [BinaryHeap<Reverse<(u64, u32)>>; 2],
     stack: Vec<Step>,
-    memo: Memo,
+    memo: Memo<u32>,
+    cell_memo: Memo<Cell>,
 }
 
 impl ContractionHierarchy {
@@ -288,13 +324,13 @@ impl ContractionHierarchy {
 
     /// Upward edges (original moves and shortcuts kept for queries).
     pub fn upward_edges(&self) -> usize {
-        self.head.len()
+        self.arcs.len()
     }
 
     /// Bytes held by the hierarchy (not counting the grid).
     pub fn table_bytes(&self) -> usize {
         (self.rank_of_cell.len() + self.cell_of_rank.len() + self.first_out.len()) * 4
-            + self.head.len() * (4 + 8 + 4)
+            + self.arcs.len() * std::mem::size_of::<UpArc>()
             + self.edges.len() * std::mem::size_of::<Edge>()
     }
 
@@ -322,25 +358,12 @@ impl ContractionHierarchy {
         let Some(meet) = meet else {
             return Err(SearchError::Unreachable { expansions });
         };
-        let ranks = self.chain(query, meet);
-        // Row and column by a multiply, not a divide (one per cell of the path).
-        let by_cols = crate::astar::DivBy::new(grid.cols() as usize, grid.len());
-        let mut cells = Vec::with_capacity(ranks.len());
-        let (mut straight, mut diagonal) = (0u64, 0u64);
-        let mut prev: Option<Cell> = None;
-        for r in ranks {
-            let (row, col) = by_cols.div_rem(self.cell_of_rank[r as usize] as usize);
-            let c = Cell::new(row as u32, col as u32);
-            if let Some(p) = prev {
-                if p.row != c.row && p.col != c.col {
-                    diagonal += 1;
-                } else {
-                    straight += 1;
-                }
-            }
-            prev = Some(c);
-            cells.push(c);
-        }
+        let cells = self.chain_cells(query, meet);
+        // Without a branch per move: random maps mix the two kinds unpredictably.
+        let diagonal = (cells.windows(2))
+            .map(|w| u64::from((w[0].row != w[1].row) & (w[0].col != w[1].col)))
+            .sum::<u64>();
+        let straight = cells.len() as u64 - 1 - diagonal;
         Ok(GridPath {
             cells,
             straight_moves: straight,
@@ -350,27 +373,35 @@ impl ContractionHierarchy {
         })
     }
 
-    /// Appends the ranks of edge `e` walked from `from` (excluding `from`); returns its far end.
-    /// Shortcuts unpacked before with the same `query` are copied, and long ones unpacked now
-    /// are kept for the next queries (up to [`MEMO_MAX_RANKS`]).
-    fn unpack(&self, query: &mut ChQuery, from: u32, e: u32, out: &mut Vec<u32>) -> u32 {
-        let ChQuery { stack, memo, .. } = query;
+    /// Appends the nodes (`item` of each rank) of edge `e` walked from `from` (excluding
+    /// `from`); returns its far end. Shortcuts unpacked before with the same `memo` are copied,
+    /// and those unpacked now are kept for the next queries (up to [`MEMO_MAX_RANKS`]).
+    fn unpack<T: Copy>(
+        &self,
+        (stack, memo): (&mut Vec<Step>, &mut Memo<T>),
+        (from, e): (u32, u32),
+        out: &mut Vec<T>,
+        item: &impl Fn(u32) -> T,
+    ) -> u32 {
         memo.for_hierarchy(self);
+        if let Some(end) = memo.extend(e, from, out) {
+            return end;
+        }
         stack.clear();
         stack.push(Step::Walk { x: from, e });
         let end = other(&self.edges[e as usize], from);
         while let Some(step) = stack.pop() {
             match step {
                 Step::Keep { x, e, at } => {
-                    memo.keep(&self.edges[e as usize], e, x, &out[at as usize..]);
+                    memo.keep(&self.edges[e as usize], e, x, item(x), &out[at as usize..]);
                 }
                 Step::Walk { x, e } => {
-                    let edge = self.edges[e as usize];
-                    if edge.mid == NONE {
-                        out.push(other(&edge, x));
+                    if memo.extend(e, x, out).is_some() {
                         continue;
                     }
-                    if memo.extend(e, x == edge.a, out) {
+                    let edge = self.edges[e as usize];
+                    if edge.mid == NONE {
+                        out.push(item(other(&edge, x)));
                         continue;
                     }
                     // Walk x → mid → far end: push the second half first.
@@ -398,32 +429,62 @@ impl ContractionHierarchy {
     /// The ranks of the shortest path through `meet` found by the last [`Self::meet`] with
     /// `q`: from the forward search's root to the backward search's, shortcuts unpacked.
     pub(crate) fn chain(&self, q: &mut ChQuery, meet: u32) -> Vec<u32> {
+        let ChQuery {
+            label, stack, memo, ..
+        } = q;
+        self.chain_of(label, (stack, memo), meet, &|r| r)
+    }
+
+    /// [`Self::chain`] as the cells of the grid (this hierarchy's nodes are its free cells).
+    fn chain_cells(&self, q: &mut ChQuery, meet: u32) -> Vec<Cell> {
+        // Row and column by a multiply, not a divide (one per cell not kept yet).
+        let by_cols = crate::astar::DivBy::new(self.grid.cols() as usize, self.grid.len());
+        let cell = |r: u32| {
+            let (row, col) = by_cols.div_rem(self.cell_of_rank[r as usize] as usize);
+            Cell::new(row as u32, col as u32)
+        };
+        let ChQuery {
+            label,
+            stack,
+            cell_memo,
+            ..
+        } = q;
+        self.chain_of(label, (stack, cell_memo), meet, &cell)
+    }
+
+    fn chain_of<T: Copy>(
+        &self,
+        label: &[Vec<Label>; 2],
+        (stack, memo): (&mut Vec<Step>, &mut Memo<T>),
+        meet: u32,
+        item: &impl Fn(u32) -> T,
+    ) -> Vec<T> {
         // Edges root → meet (a reversed walk from meet), then meet → root.
         let mut up: Vec<u32> = Vec::new();
         let mut v = meet;
         loop {
-            let e = q.parent[0][v as usize];
+            let e = label[0][v as usize].parent;
             if e == NONE {
                 break;
             }
             up.push(e);
             v = other(&self.edges[e as usize], v);
         }
-        let mut ranks = Vec::with_capacity(64);
-        ranks.push(v);
+        let mut out = Vec::with_capacity(256);
+        out.push(item(v));
         let mut at = v;
         for &e in up.iter().rev() {
-            at = self.unpack(q, at, e, &mut ranks);
+            at = self.unpack((&mut *stack, &mut *memo), (at, e), &mut out, item);
         }
         let mut v = meet;
         loop {
-            let e = q.parent[1][v as usize];
+            let e = label[1][v as usize].parent;
             if e == NONE {
                 break;
             }
-            v = self.unpack(q, v, e, &mut ranks);
+            v = self.unpack((&mut *stack, &mut *memo), (v, e), &mut out, item);
         }
-        ranks
+        out
     }
 
     /// Bidirectional upward Dijkstra from several `sources` and `targets` (ranks with their
@@ -437,27 +498,26 @@ impl ContractionHierarchy {
     ) -> (Option<u32>, u64) {
         let n = self.cell_of_rank.len();
         for d in 0..2 {
-            if q.dist[d].len() != n {
-                q.dist[d] = vec![0; n];
-                q.parent[d] = vec![NONE; n];
-                q.stamp[d] = vec![0; n];
+            if q.label[d].len() != n {
+                q.label[d] = vec![Label::default(); n];
             }
             q.heap[d].clear();
         }
         if q.now == u32::MAX {
-            q.stamp[0].iter_mut().for_each(|x| *x = 0);
-            q.stamp[1].iter_mut().for_each(|x| *x = 0);
+            q.label.iter_mut().flatten().for_each(|l| l.stamp = 0);
             q.now = 0;
         }
         q.now += 1;
         let now = q.now;
         for (d, roots) in [(0, sources), (1, targets)] {
             for &(root, d0) in roots {
-                let r = root as usize;
-                if q.stamp[d][r] != now || d0 < q.dist[d][r] {
-                    q.dist[d][r] = d0;
-                    q.parent[d][r] = NONE;
-                    q.stamp[d][r] = now;
+                let l = &mut q.label[d][root as usize];
+                if l.stamp != now || d0 < l.dist {
+                    *l = Label {
+                        dist: d0,
+                        parent: NONE,
+                        stamp: now,
+                    };
                     q.heap[d].push(Reverse((d0, root)));
                 }
             }
@@ -476,13 +536,19 @@ impl ContractionHierarchy {
                 break;
             };
             let ui = u as usize;
-            if du > q.dist[d][ui] {
+            let [forward, backward] = &mut q.label;
+            let (mine, theirs) = if d == 0 {
+                (forward, &*backward)
+            } else {
+                (backward, &*forward)
+            };
+            if du > mine[ui].dist {
                 continue; // stale entry
             }
             settled += 1;
-            let o = 1 - d;
-            if q.stamp[o][ui] == now {
-                let total = du.saturating_add(q.dist[o][ui]);
+            let there = theirs[ui];
+            if there.stamp == now {
+                let total = du.saturating_add(there.dist);
                 if total < best {
                     best = total;
                     meet = Some(u);
@@ -491,20 +557,24 @@ impl ContractionHierarchy {
             let range = self.first_out[ui] as usize..self.first_out[ui + 1] as usize;
             // Stall on demand: a higher node reached more cheaply proves u is not on a shortest
             // upward path of this direction.
-            let stalled = range.clone().any(|k| {
-                let v = self.head[k] as usize;
-                q.stamp[d][v] == now && q.dist[d][v].saturating_add(self.cost[k]) < du
+            let arcs = &self.arcs[range];
+            let stalled = arcs.iter().any(|a| {
+                let l = mine[a.head as usize];
+                l.stamp == now && l.dist.saturating_add(a.cost) < du
             });
             if stalled {
                 continue;
             }
-            for k in range {
-                let v = self.head[k] as usize;
-                let dv = du.saturating_add(self.cost[k]);
-                if q.stamp[d][v] != now || dv < q.dist[d][v] {
-                    q.stamp[d][v] = now;
-                    q.dist[d][v] = dv;
-                    q.parent[d][v] = self.edge_id[k];
+            for a in arcs {
+                let v = a.head as usize;
+                let dv = du.saturating_add(a.cost);
+                let l = &mut mine[v];
+                if l.stamp != now || dv < l.dist {
+                    *l = Label {
+                        dist: dv,
+                        parent: a.edge,
+                        stamp: now,
+                    };
                     q.heap[d].push(Reverse((dv, v as u32)));
                 }
             }
@@ -818,22 +888,22 @@ impl Builder {
             rank_of_cell[self.cell_of_node[v] as usize] = r;
         }
         let mut first_out = Vec::with_capacity(n + 1);
-        let mut head = Vec::new();
-        let mut cost = Vec::new();
-        let mut edge_id = Vec::new();
+        let mut arcs = Vec::new();
         let mut node_of_rank = vec![0u32; n];
         for v in 0..n {
             node_of_rank[self.rank[v] as usize] = v as u32;
         }
         for &v in &node_of_rank {
-            first_out.push(head.len() as u32);
+            first_out.push(arcs.len() as u32);
             for &(w, e) in &self.up[v as usize] {
-                head.push(self.rank[w as usize]);
-                cost.push(self.cost[e as usize]);
-                edge_id.push(e);
+                arcs.push(UpArc {
+                    cost: self.cost[e as usize],
+                    head: self.rank[w as usize],
+                    edge: e,
+                });
             }
         }
-        first_out.push(head.len() as u32);
+        first_out.push(arcs.len() as u32);
         let rank = &self.rank;
         let edges = self
             .edges
@@ -856,9 +926,7 @@ impl Builder {
             rank_of_cell,
             cell_of_rank,
             first_out,
-            head,
-            cost,
-            edge_id,
+            arcs,
             edges,
             id: next_id(),
         }
@@ -942,7 +1010,7 @@ mod tests {
                 let t = free[(next() % free.len() as u64) as usize];
                 let fresh = ch.search(&mut ChQuery::default(), s, t).ok();
                 let again = ch.search(&mut shared, s, t).ok();
-                kept_max = kept_max.max(shared.memo.spans.len());
+                kept_max = kept_max.max(shared.cell_memo.spans.len());
                 assert_eq!(
                     fresh.as_ref().map(|p| &p.cells),
                     again.as_ref().map(|p| &p.cells),
