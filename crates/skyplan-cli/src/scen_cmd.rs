@@ -77,6 +77,9 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
         let why = e.message.strip_prefix(&own).unwrap_or(&e.message);
         bad_input(format!("--planner {}: {why}", args.planner))
     };
+    if let Some(max_bytes) = args.max_table {
+        return first_move_up_to(args, grid, max_bytes);
+    }
     let Some(path) = &args.preprocess else {
         return CellSearch::for_queries(grid, args.planner, MoveModel::Octile, queries)
             .map_err(planner_error);
@@ -157,6 +160,35 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
     let ch = ContractionHierarchy::read_from(input, grid_arc, MoveModel::Octile)
         .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
     CellSearch::with_hierarchy(grid, Arc::new(ch), us(t), auto).map_err(planner_error)
+}
+
+/// `--planner first-move --max-table SIZE`: a first-move table of up to `max_bytes`, built
+/// here (the planner's own cap is 64 MiB), saying beforehand how large and how many searches.
+fn first_move_up_to<'g>(
+    args: &ScenArgs,
+    grid: &'g Grid2,
+    max_bytes: u64,
+) -> Result<CellSearch<'g>> {
+    if args.planner != PlannerId::FirstMove {
+        return Err(bad_input(format!(
+            "--max-table is the largest first-move table to build; it needs --planner first-move, not {}",
+            args.planner
+        )));
+    }
+    let free = grid.len() - grid.blocked_count();
+    let bytes = FirstMoveTable::bytes_for(grid.len(), free);
+    if !args.json && bytes <= max_bytes {
+        eprintln!(
+            "building a first-move table of {} ({free} exact searches, one per free cell)…",
+            skyplan_plan::human_bytes(bytes)
+        );
+    }
+    let t = Instant::now();
+    let table = FirstMoveTable::build(Arc::new(grid.clone()), MoveModel::Octile, max_bytes)
+        .map_err(|e| bad_input(format!("--planner first-move --max-table: {e}")))?;
+    let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
+    CellSearch::with_first_move_table(grid, Arc::new(table), us, None)
+        .map_err(|e| bad_input(format!("--planner first-move: {}", e.message)))
 }
 
 /// Writes the search's preprocessing (a contraction hierarchy, a first-move table, or a JPS+

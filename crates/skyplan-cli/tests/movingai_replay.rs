@@ -290,6 +290,44 @@ fn a_saved_first_move_table_is_used_by_auto_and_refused_when_damaged_or_misused(
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("it is for small maps"), "{err}");
+    // --max-table moves that cap: den312d's 6.4 MB table is refused under 1M and built under
+    // 10M (every scenario matching); the option is for first-move only.
+    let small = run(&[
+        "--planner".as_ref(),
+        "first-move".as_ref(),
+        "--max-table".as_ref(),
+        "1M".as_ref(),
+    ])
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&small.stderr);
+    assert_eq!(small.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--max-table: a first-move table")
+            && err.contains("takes 6.4 MB, more than the 1.0 MB allowed"),
+        "{err}"
+    );
+    let built = summary(&ok(&mut run(&[
+        "--planner".as_ref(),
+        "first-move".as_ref(),
+        "--max-table".as_ref(),
+        "10M".as_ref(),
+    ])));
+    assert_eq!(built["matched"].as_u64(), Some(290));
+    let other = run(&[
+        "--planner".as_ref(),
+        "jps".as_ref(),
+        "--max-table".as_ref(),
+        "10M".as_ref(),
+    ])
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("it needs --planner first-move, not jps"),
+        "{err}"
+    );
 }
 
 /// A JPS+ table saved by `scen` keeps landmarks; `auto` (whose rule picks JPS+ on Paris) uses
