@@ -111,6 +111,9 @@ pub enum MapCommand {
     /// A seeded perfect maze in MovingAI's format (corridors C cells wide, walls 1 cell, as in
     /// maze512-C-k), and optionally scenarios with exact optimal lengths.
     Maze(crate::map_cmd::MazeArgs),
+    /// Seeded rooms in MovingAI's format (square rooms R cells wide, walls 1 cell, doors D
+    /// cells wide, as in the Rroom_k maps), and optionally scenarios with exact optimal lengths.
+    Rooms(crate::map_cmd::RoomsArgs),
 }
 
 #[derive(Debug, Args)]

@@ -82,6 +82,7 @@ fn main() -> ExitCode {
         args::Command::Sim(a) => sim_cmd::run(a),
         args::Command::Map(args::MapCommand::Tile(a)) => map_cmd::tile(a),
         args::Command::Map(args::MapCommand::Maze(a)) => map_cmd::maze(a),
+        args::Command::Map(args::MapCommand::Rooms(a)) => map_cmd::rooms(a),
         args::Command::Serve(a) => serve_cmd::run(a),
         args::Command::Fleet(a) => fleet_cmd::run(*a),
     };

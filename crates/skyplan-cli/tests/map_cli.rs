@@ -122,8 +122,56 @@ fn bad_maze_options_are_refused_and_nothing_is_written() {
             "map maze --size 64 64 --corridor-cells 2 --out nowhere/m.map",
             "does not exist",
         ),
+        (
+            "map rooms --size 64 64 --room-cells 8 --door-cells 9 --out r.map",
+            "--size/--room-cells/--door-cells: door width 9: expected 1 to the room width, 8 cells",
+        ),
+        (
+            "map rooms --size 64 64 --room-cells 0 --out r.map",
+            "0 is not in 1..=64",
+        ),
     ] {
         common::fails_with(dir.path(), line, 2, &[needle]);
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn generated_rooms_replay_with_every_scenario_optimal_under_every_exact_planner() {
+    let dir = tempfile::tempdir().unwrap();
+    // 6 × 4 rooms of 10 cells, doors of 3; 60 rows cut the last row of rooms short.
+    let out = succeed(
+        dir.path(),
+        "map rooms --size 67 60 --room-cells 10 --door-cells 3 --seed 2 --out r.map --scen r.map.scen --queries 200",
+    );
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("67 × 60 rooms of 10 cells, doors of 3 cells, seed 2"),
+        "{said}"
+    );
+    let map_text = std::fs::read_to_string(dir.path().join("r.map")).unwrap();
+    let map = skyplan_map::movingai::parse_map(&map_text).unwrap();
+    assert_eq!((map.width, map.height), (67, 60));
+    // The default door is a quarter of the room: another map from the same seed.
+    succeed(
+        dir.path(),
+        "map rooms --size 67 60 --room-cells 10 --seed 2 --out q.map",
+    );
+    assert_ne!(
+        std::fs::read_to_string(dir.path().join("q.map")).unwrap(),
+        map_text
+    );
+    for planner in ["auto", "astar", "jps", "jps-plus", "ch", "subgoal"] {
+        let out = succeed(
+            dir.path(),
+            &format!("scen r.map r.map.scen --json --planner {planner}"),
+        );
+        let (summary, records) = scen_summary(&out);
+        assert_eq!(records, 200, "{planner}");
+        assert_eq!(
+            summary["matched"].as_u64(),
+            Some(200),
+            "{planner}: {summary}"
+        );
+    }
 }

@@ -9,6 +9,13 @@
 //! any two cells): a recursive backtracker on the coarse grid of maze cells, opening one wall
 //! segment (`C` cells) between neighbours; the crossings of wall lines always stay blocked.
 //!
+//! [`generate_rooms`] makes maps in the shape of MovingAI's *room* maps (`8room_000` …
+//! `64room_009`): square rooms `R` cells wide on the same pitch, joined by *doors* — gaps of `D`
+//! cells at a seeded place in the wall between two neighbouring rooms. The rooms of a spanning
+//! tree (the same backtracker) always get a door, so every room is reachable; every other pair of
+//! neighbours gets one with probability ½, so there are many ways between two rooms, as in the
+//! published maps.
+//!
 //! Scenario lengths use the move model of `skyplan scen`: 8-connected, diagonals cost √2 and need
 //! both orthogonally adjacent cells free (no corner cutting).
 //!
@@ -66,6 +73,14 @@ pub enum MazeError {
         /// The corridor width asked for.
         corridor: usize,
     },
+    /// The door width is out of range.
+    #[error("door width {door}: expected 1 to the room width, {room} cells")]
+    DoorWidth {
+        /// The door width asked for.
+        door: usize,
+        /// The room width.
+        room: usize,
+    },
     /// The map has fewer than two free cells connected to each other.
     #[error("the map has no two connected free cells to draw scenarios from")]
     NoScenarios,
@@ -94,6 +109,59 @@ impl SplitMix64 {
 /// Errors: a corridor width outside 1..=[`MAX_CORRIDOR_CELLS`], or a side shorter than
 /// `corridor_cells + 1` (one wall and one corridor) or longer than [`MAX_SIDE`].
 pub fn generate(spec: &MazeSpec) -> Result<MovingAiMap, MazeError> {
+    layout(spec, None)
+}
+
+/// What room map to make ([`generate_rooms`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RoomsSpec {
+    /// Columns of the map.
+    pub width: usize,
+    /// Rows of the map.
+    pub height: usize,
+    /// Room width, cells (walls are one cell thick).
+    pub room_cells: usize,
+    /// Door width, cells (1 ..= `room_cells`; a door in a wall cut short by the map's edge is
+    /// at most as wide as that wall).
+    pub door_cells: usize,
+    /// Seed of the generator.
+    pub seed: u64,
+}
+
+/// The room map of `spec` (module docs).
+///
+/// ```
+/// use skyplan_map::maze::{RoomsSpec, generate_rooms};
+/// let spec = RoomsSpec { width: 25, height: 25, room_cells: 7, door_cells: 2, seed: 1 };
+/// let map = generate_rooms(&spec)?;
+/// let free = map.passable.iter().filter(|&&p| p).count();
+/// // 9 rooms of 7 × 7, and a door of 2 cells in at least the 8 walls of a spanning tree.
+/// assert!(free >= 9 * 49 + 8 * 2 && free <= 9 * 49 + 12 * 2);
+/// # Ok::<(), skyplan_map::maze::MazeError>(())
+/// ```
+///
+/// Errors: as [`generate`] for the room width and the sides, and a door width outside
+/// 1..=`room_cells`.
+pub fn generate_rooms(spec: &RoomsSpec) -> Result<MovingAiMap, MazeError> {
+    if spec.door_cells == 0 || spec.door_cells > spec.room_cells {
+        return Err(MazeError::DoorWidth {
+            door: spec.door_cells,
+            room: spec.room_cells,
+        });
+    }
+    let maze = MazeSpec {
+        width: spec.width,
+        height: spec.height,
+        corridor_cells: spec.room_cells,
+        seed: spec.seed,
+    };
+    layout(&maze, Some(spec.door_cells))
+}
+
+/// Cells of width `c` on a pitch of `c + 1`, joined along a seeded spanning tree: by whole wall
+/// segments (a maze, `door` = `None`), or by doors of `door` cells, with every other
+/// neighbouring pair joined with probability ½ (rooms).
+fn layout(spec: &MazeSpec, door: Option<usize>) -> Result<MovingAiMap, MazeError> {
     let c = spec.corridor_cells;
     if !(1..=MAX_CORRIDOR_CELLS).contains(&c) {
         return Err(MazeError::CorridorWidth(c));
@@ -127,9 +195,36 @@ pub fn generate(spec: &MazeSpec) -> Result<MovingAiMap, MazeError> {
             );
         }
     }
-    // Recursive backtracker (iterative) from a seeded cell.
     let mut rng = SplitMix64(spec.seed);
+    // Opens the wall between cell `a` and its neighbour to the right (`right`) or below: the
+    // wall line x = (i + 1) · pitch or y = (j + 1) · pitch, over the cells' span (cut by the
+    // map's edge), whole or a door of `door` cells at a seeded place.
+    let mut open = |a: usize, right: bool, rng: &mut SplitMix64| {
+        let (i, j) = (a % cols, a / cols);
+        let (lo, hi) = if right {
+            (j * pitch + 1, ((j + 1) * pitch).min(h))
+        } else {
+            (i * pitch + 1, ((i + 1) * pitch).min(w))
+        };
+        let (from, to) = match door {
+            None => (lo, hi),
+            Some(d) => {
+                let d = d.min(hi - lo);
+                let at = lo + rng.below(hi - lo - d + 1);
+                (at, at + d)
+            }
+        };
+        if right {
+            let x = (i + 1) * pitch;
+            carve(x, from, x + 1, to);
+        } else {
+            let y = (j + 1) * pitch;
+            carve(from, y, to, y + 1);
+        }
+    };
+    // Recursive backtracker (iterative) from a seeded cell.
     let mut seen = vec![false; cols * rows];
+    let mut joined = vec![[false; 2]; cols * rows]; // per cell: to its right, below
     let first = rng.below(cols * rows);
     seen[first] = true;
     let mut stack = vec![first];
@@ -154,18 +249,22 @@ pub fn generate(spec: &MazeSpec) -> Result<MovingAiMap, MazeError> {
             continue;
         }
         let next = options[rng.below(options.len())];
-        let (ni, nj) = (next % cols, next / cols);
-        // The wall segment between the two cells: a column of the wall line x = max(i) · pitch,
-        // or a row of the wall line y = max(j) · pitch, over the cells' span.
-        if ni != i {
-            let x = i.max(ni) * pitch;
-            carve(x, j * pitch + 1, x + 1, (j + 1) * pitch);
-        } else {
-            let y = j.max(nj) * pitch;
-            carve(i * pitch + 1, y, (i + 1) * pitch, y + 1);
-        }
+        let right = next % cols != i;
+        let a = here.min(next);
+        open(a, right, &mut rng);
+        joined[a][usize::from(!right)] = true;
         seen[next] = true;
         stack.push(next);
+    }
+    if door.is_some() {
+        for a in 0..cols * rows {
+            let (i, j) = (a % cols, a / cols);
+            for (k, exists) in [(0, i + 1 < cols), (1, j + 1 < rows)] {
+                if exists && !joined[a][k] && rng.next() & 1 == 1 {
+                    open(a, k == 0, &mut rng);
+                }
+            }
+        }
     }
     Ok(MovingAiMap {
         width: w,
@@ -525,6 +624,106 @@ mod tests {
                 return d;
             }
         }
+    }
+
+    fn rooms(w: usize, h: usize, room: usize, door: usize, seed: u64) -> MovingAiMap {
+        generate_rooms(&RoomsSpec {
+            width: w,
+            height: h,
+            room_cells: room,
+            door_cells: door,
+            seed,
+        })
+        .unwrap()
+    }
+
+    /// Every room is whole and reachable; every opening in a wall is one door of exactly the
+    /// asked width (or the whole of a wall cut shorter by the map's edge); the spanning tree's
+    /// walls and about half of the others have one; scenario lengths are an independent
+    /// relaxation's.
+    #[test]
+    fn room_maps_are_connected_rooms_joined_by_doors_of_the_asked_width() {
+        for (w, h, r, d, seed) in [
+            (1 + 9 * 9, 1 + 7 * 9, 8, 2, 1),
+            (100, 61, 16, 4, 2),
+            (1 + 6 * 33, 1 + 4 * 33, 32, 8, 3),
+            (3, 40, 1, 1, 4),
+        ] {
+            let m = rooms(w, h, r, d, seed);
+            let (reached, all) = reached_and_free(&m);
+            assert_eq!(reached, all, "{w} × {h}, r {r}: not connected");
+            let pitch = r + 1;
+            let (cols, rows) = ((w - 1).div_ceil(pitch), (h - 1).div_ceil(pitch));
+            for j in 0..rows {
+                for i in 0..cols {
+                    let (x0, y0) = (i * pitch + 1, j * pitch + 1);
+                    let (x1, y1) = (((i + 1) * pitch).min(w), ((j + 1) * pitch).min(h));
+                    assert!(
+                        (y0..y1).all(|y| (x0..x1).all(|x| free(&m, x, y))),
+                        "room {i},{j}"
+                    );
+                }
+            }
+            // Doors: runs of free cells on wall lines, away from the crossings.
+            let mut doors = 0;
+            for j in 0..rows {
+                for i in 0..cols {
+                    let walls = [
+                        (i + 1 < cols).then(|| {
+                            let x = (i + 1) * pitch;
+                            let y1 = ((j + 1) * pitch).min(h);
+                            (j * pitch + 1..y1)
+                                .map(|y| free(&m, x, y))
+                                .collect::<Vec<_>>()
+                        }),
+                        (j + 1 < rows).then(|| {
+                            let y = (j + 1) * pitch;
+                            let x1 = ((i + 1) * pitch).min(w);
+                            (i * pitch + 1..x1)
+                                .map(|x| free(&m, x, y))
+                                .collect::<Vec<_>>()
+                        }),
+                    ];
+                    for wall in walls.into_iter().flatten() {
+                        let open = wall.iter().filter(|&&f| f).count();
+                        if open == 0 {
+                            continue;
+                        }
+                        doors += 1;
+                        assert_eq!(open, d.min(wall.len()), "{w} × {h}: door width");
+                        let first = wall.iter().position(|&f| f).unwrap();
+                        assert!(wall[first..first + open].iter().all(|&f| f), "one gap");
+                    }
+                }
+            }
+            let neighbours = (cols - 1) * rows + cols * (rows - 1);
+            let tree = cols * rows - 1;
+            assert!(doors >= tree && doors <= neighbours, "{doors} doors");
+            if neighbours - tree >= 20 {
+                let extra = (doors - tree) as f64 / (neighbours - tree) as f64;
+                assert!(
+                    (0.25..0.75).contains(&extra),
+                    "{extra}: about half the others"
+                );
+            }
+            for s in scenarios(&m, "r.map", 6, seed).unwrap() {
+                let truth = bellman_ford(&m, s.start_y * m.width + s.start_x);
+                let t = truth[s.goal_y * m.width + s.goal_x];
+                assert!((s.optimal_length - t).abs() < 1e-9, "{s:?} vs {t}");
+            }
+        }
+        let e = generate_rooms(&RoomsSpec {
+            width: 64,
+            height: 64,
+            room_cells: 8,
+            door_cells: 9,
+            seed: 1,
+        })
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "door width 9: expected 1 to the room width, 8 cells"
+        );
     }
 
     #[test]
