@@ -257,10 +257,10 @@ fn layout(spec: &MazeSpec, door: Option<usize>) -> Result<MovingAiMap, MazeError
         stack.push(next);
     }
     if door.is_some() {
-        for a in 0..cols * rows {
+        for (a, sides) in joined.iter().enumerate() {
             let (i, j) = (a % cols, a / cols);
             for (k, exists) in [(0, i + 1 < cols), (1, j + 1 < rows)] {
-                if exists && !joined[a][k] && rng.next() & 1 == 1 {
+                if exists && !sides[k] && rng.next() & 1 == 1 {
                     open(a, k == 0, &mut rng);
                 }
             }
