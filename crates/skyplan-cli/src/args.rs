@@ -333,9 +333,10 @@ pub struct ScenArgs {
     /// --preprocess in later runs.
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
-    /// --planner first-move: build a table of up to SIZE (bytes, or with a suffix K, M, G)
-    /// instead of refusing one over 64M. Half a byte per cell for every free cell: Paris_1_256
-    /// takes 1.6G (36 s on 2 cores); with --save-preprocess, the file is as large.
+    /// --planner first-move: build a table of up to SIZE (bytes, or with a suffix K, M, G;
+    /// at most half the machine's memory) instead of refusing one over 64M. Half a byte per
+    /// cell for every free cell: Paris_1_256's is 1.5 GB (--max-table 1.5G; 36–41 s on 2
+    /// cores); with --save-preprocess, the file is as large.
     #[arg(long, value_name = "SIZE", value_parser = parse_size_bytes, conflicts_with = "preprocess")]
     pub max_table: Option<u64>,
 }

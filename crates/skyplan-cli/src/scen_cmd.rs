@@ -77,8 +77,10 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
         let why = e.message.strip_prefix(&own).unwrap_or(&e.message);
         bad_input(format!("--planner {}: {why}", args.planner))
     };
-    if let Some(max_bytes) = args.max_table {
-        return first_move_up_to(args, grid, max_bytes);
+    if args.max_table.is_some()
+        || (args.planner == PlannerId::FirstMove && args.preprocess.is_none())
+    {
+        return first_move_up_to(args, grid);
     }
     let Some(path) = &args.preprocess else {
         return CellSearch::for_queries(grid, args.planner, MoveModel::Octile, queries)
@@ -162,13 +164,10 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
     CellSearch::with_hierarchy(grid, Arc::new(ch), us(t), auto).map_err(planner_error)
 }
 
-/// `--planner first-move --max-table SIZE`: a first-move table of up to `max_bytes`, built
-/// here (the planner's own cap is 64 MiB), saying beforehand how large and how many searches.
-fn first_move_up_to<'g>(
-    args: &ScenArgs,
-    grid: &'g Grid2,
-    max_bytes: u64,
-) -> Result<CellSearch<'g>> {
+/// `--planner first-move [--max-table SIZE]`: a first-move table of up to SIZE (by default the
+/// planner's own cap, 64 MiB) and at most half the machine's memory, built here; a large one is
+/// announced (its size and searches) before the build.
+fn first_move_up_to<'g>(args: &ScenArgs, grid: &'g Grid2) -> Result<CellSearch<'g>> {
     if args.planner != PlannerId::FirstMove {
         return Err(bad_input(format!(
             "--max-table is the largest first-move table to build; it needs --planner first-move, not {}",
@@ -177,15 +176,36 @@ fn first_move_up_to<'g>(
     }
     let free = grid.len() - grid.blocked_count();
     let bytes = FirstMoveTable::bytes_for(grid.len(), free);
-    if !args.json && bytes <= max_bytes {
+    let memory = crate::args::limits(None).max_memory_bytes;
+    let human = skyplan_plan::human_bytes;
+    let max_bytes = match args.max_table {
+        Some(max) if bytes <= max && bytes > memory => {
+            return Err(bad_input(format!(
+                "--max-table {}: this grid's first-move table takes {}, more than half this machine's memory ({})",
+                human(max),
+                human(bytes),
+                human(memory)
+            )));
+        }
+        Some(max) => max,
+        None => skyplan_plan::auto::FIRST_MOVE_MAX_BYTES,
+    };
+    if !args.json && bytes <= max_bytes && bytes > skyplan_plan::auto::FIRST_MOVE_MAX_BYTES {
         eprintln!(
             "building a first-move table of {} ({free} exact searches, one per free cell)…",
-            skyplan_plan::human_bytes(bytes)
+            human(bytes)
         );
     }
     let t = Instant::now();
     let table = FirstMoveTable::build(Arc::new(grid.clone()), MoveModel::Octile, max_bytes)
-        .map_err(|e| bad_input(format!("--planner first-move --max-table: {e}")))?;
+        .map_err(|e| match args.max_table {
+            Some(_) => bad_input(format!("--planner first-move --max-table: {e}")),
+            None if bytes <= memory => bad_input(format!(
+                "--planner first-move: {e}; --max-table {}M builds it where memory allows",
+                bytes.div_ceil(1 << 20)
+            )),
+            None => bad_input(format!("--planner first-move: {e}")),
+        })?;
     let us = u64::try_from(t.elapsed().as_micros()).unwrap_or(u64::MAX);
     CellSearch::with_first_move_table(grid, Arc::new(table), us, None)
         .map_err(|e| bad_input(format!("--planner first-move: {}", e.message)))

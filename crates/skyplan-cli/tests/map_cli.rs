@@ -71,18 +71,24 @@ fn a_generated_maze_replays_with_every_scenario_optimal_under_every_exact_planne
     );
     // Lengths found by skyplan's planners (A*, JPS, JPS+, CH and auto, none of them the
     // generator's Dijkstra) equal the written ones on every scenario.
-    for planner in ["auto", "astar", "jps", "jps-plus", "ch"] {
+    all_match(
+        dir.path(),
+        "m.map",
+        300,
+        &["auto", "astar", "jps", "jps-plus", "ch"],
+    );
+}
+
+/// `scen MAP MAP.scen` with each planner: all `n` scenarios reported, every one matching.
+fn all_match(dir: &std::path::Path, map: &str, n: u64, planners: &[&str]) {
+    for planner in planners {
         let out = succeed(
-            dir.path(),
-            &format!("scen m.map m.map.scen --json --planner {planner}"),
+            dir,
+            &format!("scen {map} {map}.scen --json --planner {planner}"),
         );
         let (summary, records) = scen_summary(&out);
-        assert_eq!(records, 300, "{planner}");
-        assert_eq!(
-            summary["matched"].as_u64(),
-            Some(300),
-            "{planner}: {summary}"
-        );
+        assert_eq!(records as u64, n, "{planner}");
+        assert_eq!(summary["matched"].as_u64(), Some(n), "{planner}: {summary}");
     }
 }
 
@@ -139,7 +145,7 @@ fn bad_maze_options_are_refused_and_nothing_is_written() {
 #[test]
 fn generated_rooms_replay_with_every_scenario_optimal_under_every_exact_planner() {
     let dir = tempfile::tempdir().unwrap();
-    // 6 × 4 rooms of 10 cells, doors of 3; 60 rows cut the last row of rooms short.
+    // 6 × 6 rooms of 10 cells, doors of 3; 60 rows cut the last row of rooms short.
     let out = succeed(
         dir.path(),
         "map rooms --size 67 60 --room-cells 10 --door-cells 3 --seed 2 --out r.map --scen r.map.scen --queries 200",
@@ -161,17 +167,6 @@ fn generated_rooms_replay_with_every_scenario_optimal_under_every_exact_planner(
         std::fs::read_to_string(dir.path().join("q.map")).unwrap(),
         map_text
     );
-    for planner in ["auto", "astar", "jps", "jps-plus", "ch", "subgoal"] {
-        let out = succeed(
-            dir.path(),
-            &format!("scen r.map r.map.scen --json --planner {planner}"),
-        );
-        let (summary, records) = scen_summary(&out);
-        assert_eq!(records, 200, "{planner}");
-        assert_eq!(
-            summary["matched"].as_u64(),
-            Some(200),
-            "{planner}: {summary}"
-        );
-    }
+    let planners = ["auto", "astar", "jps", "jps-plus", "ch", "subgoal"];
+    all_match(dir.path(), "r.map", 200, &planners);
 }

@@ -61,7 +61,7 @@ pub enum MazeError {
     CorridorWidth(usize),
     /// A side is too small to hold one corridor or too large for a MovingAI map.
     #[error(
-        "{what} {value}: expected {min} to {MAX_SIDE} cells (a wall, a corridor of {corridor} cells)"
+        "{what} {value}: expected {min} to {MAX_SIDE} cells (a wall and a corridor or room of {corridor} cells)"
     )]
     Side {
         /// `width` or `height`.
@@ -73,6 +73,9 @@ pub enum MazeError {
         /// The corridor width asked for.
         corridor: usize,
     },
+    /// The room width is out of range.
+    #[error("room width {0}: expected 1 to {MAX_CORRIDOR_CELLS} cells")]
+    RoomWidth(usize),
     /// The door width is out of range.
     #[error("door width {door}: expected 1 to the room width, {room} cells")]
     DoorWidth {
@@ -140,9 +143,12 @@ pub struct RoomsSpec {
 /// # Ok::<(), skyplan_map::maze::MazeError>(())
 /// ```
 ///
-/// Errors: as [`generate`] for the room width and the sides, and a door width outside
-/// 1..=`room_cells`.
+/// Errors: a room width outside 1..=[`MAX_CORRIDOR_CELLS`], a door width outside
+/// 1..=`room_cells`, and sides as [`generate`]'s.
 pub fn generate_rooms(spec: &RoomsSpec) -> Result<MovingAiMap, MazeError> {
+    if !(1..=MAX_CORRIDOR_CELLS).contains(&spec.room_cells) {
+        return Err(MazeError::RoomWidth(spec.room_cells));
+    }
     if spec.door_cells == 0 || spec.door_cells > spec.room_cells {
         return Err(MazeError::DoorWidth {
             door: spec.door_cells,
@@ -554,6 +560,28 @@ mod tests {
         }
     }
 
+    /// FNV-1a of bytes: a fixed hash, the same in every Rust version.
+    fn fnv(b: &[u8]) -> u64 {
+        b.iter().fold(0xcbf2_9ce4_8422_2325, |h, &x| {
+            (h ^ u64::from(x)).wrapping_mul(0x100_0000_01b3)
+        })
+    }
+
+    /// The mazes written before rooms shared their layout (values taken from that build), so
+    /// the seeds in the docs still make the same mazes.
+    #[test]
+    fn mazes_are_the_ones_earlier_versions_made() {
+        for (w, h, c, seed, hash) in [
+            (64, 50, 3, 7, 0x3c7f_b520_5732_61cf_u64),
+            (101, 77, 1, 2, 0x7375_30c5_7d66_3020),
+            (512, 512, 8, 1, 0xb26c_c056_f018_9ad0),
+        ] {
+            let m = generate(&spec(w, h, c, seed)).unwrap();
+            let text = crate::movingai::to_map_text(&m);
+            assert_eq!(fnv(text.as_bytes()), hash, "{w} × {h}, c {c}, seed {seed}");
+        }
+    }
+
     #[test]
     fn the_same_seed_gives_the_same_maze_and_another_seed_another() {
         let a = generate(&spec(64, 64, 2, 42)).unwrap();
@@ -571,7 +599,7 @@ mod tests {
         let e = generate(&spec(4, 64, 4, 1)).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "width 4: expected 5 to 32768 cells (a wall, a corridor of 4 cells)"
+            "width 4: expected 5 to 32768 cells (a wall and a corridor or room of 4 cells)"
         );
         assert!(generate(&spec(64, MAX_SIDE + 1, 1, 1)).is_err());
         let walls = MovingAiMap {

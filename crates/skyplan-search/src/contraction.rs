@@ -120,11 +120,12 @@ pub(crate) fn next_id() -> u64 {
     NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
-/// Shortcuts unpacked into at least this many nodes are kept for the next queries…
-pub const MEMO_MIN_RANKS: usize = 3;
-/// …until this many nodes are kept, per [`ChQuery`] and kind (16 MiB of ranks for the subgoal
-/// graph's hierarchy, 32 MiB of cells for the grid's).
-pub const MEMO_MAX_RANKS: usize = 4 << 20;
+/// Shortcuts unpacked into at least this many nodes (both ends counted) are kept for the next
+/// queries…
+pub const MEMO_MIN_NODES: usize = 4;
+/// …until the kept nodes and their spans take this many bytes, per [`ChQuery`] and kind
+/// (ranks for the subgoal graph's hierarchy, cells for the grid's).
+pub const MEMO_MAX_BYTES: usize = 32 << 20;
 
 /// Shortcuts already unpacked, for the queries after: each as its nodes from `a` to `b` — ranks
 /// (`T = u32`), or for the grid's own hierarchy the cells themselves (`T = Cell`), so that a
@@ -184,8 +185,10 @@ impl<T: Copy> Memo<T> {
     /// Keeps `walked`: edge `e` (from `a` to `b`) walked from `from` (whose node is `start`),
     /// without `from`.
     fn keep(&mut self, edge: &Edge, e: u32, from: u32, start: T, walked: &[T]) {
-        if walked.len() < MEMO_MIN_RANKS
-            || self.items.len() + walked.len() + 1 > MEMO_MAX_RANKS
+        let bytes = (self.items.len() + walked.len() + 1) * std::mem::size_of::<T>()
+            + (self.spans.len() + 1) * std::mem::size_of::<(u32, u32, u32, u32)>();
+        if walked.len() + 1 < MEMO_MIN_NODES
+            || bytes > MEMO_MAX_BYTES
             || self.slot[e as usize] != NONE
         {
             return;
@@ -375,7 +378,7 @@ impl ContractionHierarchy {
 
     /// Appends the nodes (`item` of each rank) of edge `e` walked from `from` (excluding
     /// `from`); returns its far end. Shortcuts unpacked before with the same `memo` are copied,
-    /// and those unpacked now are kept for the next queries (up to [`MEMO_MAX_RANKS`]).
+    /// and those unpacked now are kept for the next queries (up to [`MEMO_MAX_BYTES`]).
     fn unpack<T: Copy>(
         &self,
         (stack, memo): (&mut Vec<Step>, &mut Memo<T>),
