@@ -268,7 +268,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
     prompt_missing(&world, &mut request)?;
     let mut session = Session::new(world).with_limits(limits);
     let save_preprocess = preprocess_files(&args, planner, &mut session, &request)?;
-    let working = spinner(planner);
+    let working = crate::show::spinner(format!("planning with {planner}"));
     let planned = session.plan(&request);
     working.finish_and_clear();
     let plan = match planned {
@@ -396,19 +396,6 @@ fn preprocess_files(
     }
     .map_err(|f| bad_input(format!("--preprocess {shown}: {}", f.message)))?;
     Ok(None)
-}
-
-/// A spinner with the elapsed time on a terminal's stderr while the planner works: a contraction
-/// hierarchy or a JPS+ table on a large open map, or RRT* spending its time limit, takes a while.
-fn spinner(planner: PlannerId) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let target = indicatif::ProgressDrawTarget::stderr();
-    let bar = crate::show::progress("{spinner} {msg} ({elapsed})", None, target)
-        .with_message(format!("planning with {planner}"));
-    bar.enable_steady_tick(std::time::Duration::from_millis(150));
-    bar
 }
 
 fn write_outputs(

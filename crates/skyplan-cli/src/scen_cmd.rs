@@ -39,7 +39,15 @@ pub fn run(args: ScenArgs) -> Result<()> {
     if args.json {
         progress.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let search = prepare(&args, &grid, scenarios.len() as u64)?;
+    // Preparing can take minutes (a contraction hierarchy of an open map, a large first-move
+    // table): a spinner with the elapsed time until the scenarios start.
+    let preparing = match args.json {
+        true => indicatif::ProgressBar::hidden(),
+        false => crate::show::spinner(format!("preparing {}", args.planner)),
+    };
+    let search = prepare(&args, &grid, scenarios.len() as u64);
+    preparing.finish_and_clear();
+    let search = search?;
     if let Some(path) = &args.save_preprocess {
         save_preprocessing(path, &search, args.json)?;
     }

@@ -43,6 +43,23 @@ pub fn progress(template: &str, len: Option<u64>, target: ProgressDrawTarget) ->
     ProgressBar::with_draw_target(len, target).with_style(style.progress_chars("=> "))
 }
 
+/// A spinner with `message` and the elapsed time on a terminal's stderr (hidden elsewhere),
+/// for work that takes a while without steps to count: a contraction hierarchy or a table
+/// being built, RRT* spending its time limit.
+pub fn spinner(message: String) -> ProgressBar {
+    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        return ProgressBar::hidden();
+    }
+    let bar = progress(
+        "{spinner} {msg} ({elapsed})",
+        None,
+        ProgressDrawTarget::stderr(),
+    )
+    .with_message(message);
+    bar.enable_steady_tick(std::time::Duration::from_millis(150));
+    bar
+}
+
 /// Asks on the terminal until the answer is a free cell on the map.
 pub fn ask_position(grid: &Grid2, which: &str) -> Result<[f64; 2]> {
     let extent = {
