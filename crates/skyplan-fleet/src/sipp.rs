@@ -23,6 +23,10 @@ use foldhash::{HashMap, HashMapExt};
 /// begins, seconds: blocked intervals are closed, safe ones closed too, and never touch.
 pub const GAP_S: f64 = 1e-3;
 
+/// How far past the horizon a state's lower bound on its arrival at the goal may lie before the
+/// search drops it, seconds: rounding in the sums of move times, never a real arrival.
+const HORIZON_TOLERANCE_S: f64 = 1e-6;
+
 /// A closed interval of time, seconds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Interval {
@@ -41,21 +45,37 @@ pub struct Interval {
 /// assert_eq!(merged, vec![iv(0.0, 3.0), iv(5.0, 8.0)]);
 /// ```
 pub fn merge_intervals(mut blocked: Vec<Interval>) -> Vec<Interval> {
+    merge_in_place(&mut blocked);
+    blocked
+}
+
+/// Sorts and merges `blocked` in place, as [`merge_intervals`] does, without allocating.
+fn merge_in_place(blocked: &mut Vec<Interval>) {
     blocked.retain(|b| b.start_s <= b.end_s);
-    blocked.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
-    let mut out: Vec<Interval> = Vec::with_capacity(blocked.len());
-    for b in blocked {
-        match out.last_mut() {
-            Some(last) if b.start_s <= last.end_s => last.end_s = last.end_s.max(b.end_s),
-            _ => out.push(b),
+    blocked.sort_unstable_by(|a, b| a.start_s.total_cmp(&b.start_s));
+    let mut kept = 0;
+    for k in 0..blocked.len() {
+        let b = blocked[k];
+        if kept > 0 && b.start_s <= blocked[kept - 1].end_s {
+            blocked[kept - 1].end_s = blocked[kept - 1].end_s.max(b.end_s);
+        } else {
+            blocked[kept] = b;
+            kept += 1;
         }
     }
-    out
+    blocked.truncate(kept);
 }
 
 /// The safe intervals between merged blocked ones, from −∞ to +∞.
+#[cfg(test)]
 fn safe_intervals(blocked: &[Interval]) -> Vec<Interval> {
     let mut out = Vec::with_capacity(blocked.len() + 1);
+    push_safe_intervals(blocked, &mut out);
+    out
+}
+
+/// Appends the safe intervals between merged blocked ones, from −∞ to +∞, to `out`.
+fn push_safe_intervals(blocked: &[Interval], out: &mut Vec<Interval>) {
     let mut from = f64::NEG_INFINITY;
     for b in blocked {
         let end = b.start_s - GAP_S;
@@ -71,13 +91,18 @@ fn safe_intervals(blocked: &[Interval]) -> Vec<Interval> {
         start_s: from,
         end_s: f64::INFINITY,
     });
-    out
 }
 
 /// Where and when each cell is blocked, asked once per cell the search reaches.
 pub trait Timeline {
     /// The times `cell` is blocked (any order; they are merged).
     fn blocked(&mut self, cell: Cell) -> Vec<Interval>;
+
+    /// Appends the times `cell` is blocked to `out` (any order): what the search calls, so
+    /// that a timeline can fill one buffer the search reuses. By default, [`Self::blocked`].
+    fn blocked_into(&mut self, cell: Cell, out: &mut Vec<Interval>) {
+        out.extend(self.blocked(cell));
+    }
 }
 
 impl<F: FnMut(Cell) -> Vec<Interval>> Timeline for F {
@@ -226,6 +251,8 @@ struct SafeCache {
     best: Vec<u32>,
     /// Per cell, the number of its intervals: at `intervals[start - 1]`'s slot of `counts`.
     counts: Vec<u32>,
+    /// The blocked times of the cell being asked, reused.
+    scratch: Vec<Interval>,
 }
 
 impl SafeCache {
@@ -240,6 +267,7 @@ impl SafeCache {
             intervals: Vec::new(),
             best: Vec::new(),
             counts: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
@@ -255,19 +283,22 @@ impl SafeCache {
             let start = known as usize - 1;
             return (start, self.counts[start] as usize);
         }
-        let safe = safe_intervals(&merge_intervals(timeline.blocked(cell)));
+        self.scratch.clear();
+        timeline.blocked_into(cell, &mut self.scratch);
+        merge_in_place(&mut self.scratch);
         let start = self.intervals.len();
-        self.intervals.extend_from_slice(&safe);
+        push_safe_intervals(&self.scratch, &mut self.intervals);
+        let count = self.intervals.len() - start;
         self.best.resize(self.intervals.len(), NONE);
         self.counts.resize(self.intervals.len(), 0);
-        self.counts[start] = safe.len() as u32;
+        self.counts[start] = count as u32;
         let at = start as u32 + 1;
         if self.dense.is_empty() {
             self.sparse.insert(index as u32, at);
         } else {
             self.dense[index] = at;
         }
-        (start, safe.len())
+        (start, count)
     }
 
     /// The safe intervals of `cell`.
@@ -386,6 +417,10 @@ pub fn sipp(
                 continue;
             };
             let tau = len * q.cell_s;
+            let h_next = h(next);
+            if g + tau + h_next > q.horizon_s + HORIZON_TOLERANCE_S {
+                continue;
+            }
             let (first, count) = safe.span(grid, next, timeline);
             for k in 0..count {
                 let iv = safe.intervals[first + k];
@@ -394,7 +429,9 @@ pub fn sipp(
                 if iv.start_s > here_end {
                     break;
                 }
-                if arrive > here_end.min(iv.end_s) || arrive > q.horizon_s {
+                if arrive > here_end.min(iv.end_s)
+                    || arrive + h_next > q.horizon_s + HORIZON_TOLERANCE_S
+                {
                     continue;
                 }
                 let known = safe.best[first + k];
@@ -414,7 +451,7 @@ pub fn sipp(
                     nodes[known as usize].stale = true;
                 }
                 safe.best[first + k] = id;
-                open.push(Queued::new(arrive + h(next), arrive, id));
+                open.push(Queued::new(arrive + h_next, arrive, id));
             }
         }
     }

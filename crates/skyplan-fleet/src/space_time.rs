@@ -404,6 +404,51 @@ impl Obstacles {
     }
 }
 
+/// The search's clock and the stretch of time it can use.
+#[derive(Debug, Clone, Copy)]
+struct SearchWindow {
+    /// Time 0 of the search, Unix milliseconds.
+    t0_ms: i64,
+    /// How much each stored window is grown, seconds.
+    pad_s: f64,
+    /// The first and last moment the search can use, Unix milliseconds.
+    from_ms: i64,
+    to_ms: i64,
+}
+
+/// When each cell is blocked for one search: the stored intents (cached, and those read
+/// since) and the timed no-fly zones.
+struct SkyTimeline<'a> {
+    grid: &'a Grid2,
+    obstacles: &'a Obstacles,
+    cache: Option<&'a SpaceTimeCache>,
+    band: (f64, f64),
+    window: &'a SearchWindow,
+    zone_times: &'a HashMap<u32, Vec<Interval>>,
+}
+
+impl crate::sipp::Timeline for SkyTimeline<'_> {
+    fn blocked(&mut self, cell: Cell) -> Vec<Interval> {
+        let mut out = Vec::new();
+        self.blocked_into(cell, &mut out);
+        out
+    }
+
+    fn blocked_into(&mut self, cell: Cell, out: &mut Vec<Interval>) {
+        let index = self.grid.index(cell) as u32;
+        if !self.obstacles.list.is_empty() {
+            let (n, e) = self.grid.center_ne(cell);
+            out.extend(self.obstacles.blocked_at(n, e));
+        }
+        if let Some(cache) = self.cache {
+            cache.blocked(index, self.band, self.window, out);
+        }
+        if let Some(zoned) = self.zone_times.get(&index) {
+            out.extend_from_slice(zoned);
+        }
+    }
+}
+
 /// Most stored intents a [`SpaceTimeCache::new`] keeps (about 100 to 150 kB each on the
 /// bundled city); past it, those named longest ago go, down to half.
 pub const CACHE_INTENTS: usize = 2048;
@@ -639,6 +684,10 @@ impl SpaceTimeCache {
         // Each cell's list kept in order of the entries' starts: the search's timelines then
         // come sorted (and merging them costs no sort).
         for (index, entry) in done {
+            self.cells.longest_ms = self
+                .cells
+                .longest_ms
+                .max(entry.end_ms.saturating_sub(entry.start_ms));
             let list = self.cells.list_mut(index);
             let at = list.partition_point(|e| e.start_ms <= entry.start_ms);
             list.insert(at, entry);
@@ -702,12 +751,22 @@ impl SpaceTimeCache {
         &self,
         index: u32,
         band: (f64, f64),
-        t0_ms: i64,
-        pad_s: f64,
+        window: &SearchWindow,
         out: &mut Vec<Interval>,
     ) {
+        let (t0_ms, pad_s) = (window.t0_ms, window.pad_s);
         let list = self.cells.list(index);
-        for e in list {
+        // The list is in order of starts: only the entries starting in the search's window
+        // (grown by the pad), or up to the longest entry before it, can reach into it.
+        let pad_ms = (pad_s * 1000.0).ceil() as i64;
+        let from_ms = window.from_ms.saturating_sub(pad_ms);
+        let to_ms = window.to_ms.saturating_add(pad_ms);
+        let first = list.partition_point(|e| e.start_ms < from_ms - self.cells.longest_ms);
+        let last = list.partition_point(|e| e.start_ms <= to_ms);
+        for e in &list[first..last.max(first)] {
+            if e.end_ms < from_ms {
+                continue;
+            }
             let slot = e.slot as usize;
             if self.binding[slot] != self.request {
                 continue;
@@ -738,6 +797,9 @@ struct CellLists {
     dense: bool,
     array: Vec<Vec<CellEntry>>,
     map: HashMap<u32, Vec<CellEntry>>,
+    /// No entry ever listed is longer than this, milliseconds: how far before a window's
+    /// start the entries that reach into it can start.
+    longest_ms: i64,
 }
 
 impl CellLists {
@@ -751,6 +813,7 @@ impl CellLists {
                 Vec::new()
             },
             map: HashMap::new(),
+            longest_ms: 0,
         }
     }
 
@@ -1246,6 +1309,14 @@ fn space_time_inner(
         .map_err(|e| invalid("route", e.to_string()))?
         .cost_cells();
     let t0_ms = window.earliest.unix_ms();
+    // The times the search can use: from its earliest departure to its horizon (a second
+    // more each side); blocked times wholly outside change none of its answers.
+    let window_ms = SearchWindow {
+        t0_ms,
+        pad_s,
+        from_ms: t0_ms.saturating_sub(1000),
+        to_ms: t0_ms.saturating_add(((horizon_s + 1.0) * 1000.0).ceil() as i64),
+    };
     for tries in 1..=RESERVE_TRIES {
         obstacles.clear();
         let mut binding = Vec::new();
@@ -1279,22 +1350,13 @@ fn space_time_inner(
                 binding.push(intent.reference());
             }
         }
-        let cached = cache.as_deref();
-        let mut timeline = |c: Cell| {
-            let index = grid.index(c) as u32;
-            let mut blocked = if obstacles.list.is_empty() {
-                Vec::new()
-            } else {
-                let (n, e) = grid.center_ne(c);
-                obstacles.blocked_at(n, e)
-            };
-            if let Some(cache) = cached {
-                cache.blocked(index, band, t0_ms, pad_s, &mut blocked);
-            }
-            if let Some(zoned) = zone_times.get(&index) {
-                blocked.extend_from_slice(zoned);
-            }
-            blocked
+        let mut timeline = SkyTimeline {
+            grid,
+            obstacles: &obstacles,
+            cache: cache.as_deref(),
+            band,
+            window: &window_ms,
+            zone_times: &zone_times,
         };
         let found = match sipp(&searched, &query, &mut timeline) {
             Ok(found) => found,

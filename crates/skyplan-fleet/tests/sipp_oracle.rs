@@ -146,6 +146,36 @@ fn earliest_arrival_equals_a_time_expanded_sweep() {
                     }
                 }
                 assert!(path.departure_s() <= latest_s as f64 + 1e-9);
+                // The horizon is a hard bound, and a tight one: at the earliest arrival the
+                // same route is found, half a second earlier none.
+                let t_s = t_ms as f64 / 1000.0;
+                let tight = sipp(
+                    &grid,
+                    &SippQuery {
+                        horizon_s: t_s,
+                        ..q
+                    },
+                    &mut timeline,
+                );
+                assert!(
+                    tight
+                        .as_ref()
+                        .is_ok_and(|p| (p.arrival_s() - t_s).abs() < 1e-6),
+                    "case {case}: horizon {t_s} s: {tight:?}"
+                );
+                let short = sipp(
+                    &grid,
+                    &SippQuery {
+                        horizon_s: t_s - 0.5,
+                        ..q
+                    },
+                    &mut timeline,
+                );
+                assert!(
+                    matches!(short, Err(SippError::NoRoute { .. })),
+                    "case {case}: horizon {} s: {short:?}",
+                    t_s - 0.5
+                );
                 waited += usize::from(path.hover_s() > 0.0 || path.departure_s() > 0.0);
                 compared += 1;
             }
