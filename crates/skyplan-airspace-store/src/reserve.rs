@@ -37,6 +37,15 @@ pub enum ReserveError {
     /// The store failed.
     #[error(transparent)]
     Store(StoreError),
+    /// The request's deadline passed while its route around the others was searched for:
+    /// nothing was reserved.
+    #[error(
+        "the search for a route around the other flights reached the deadline after {states} states; nothing was reserved"
+    )]
+    Deadline {
+        /// States the search took from its queue.
+        states: usize,
+    },
 }
 
 impl From<StoreError> for ReserveError {

@@ -81,11 +81,13 @@ fn fly(
     base: &PlanRequest,
     missions: &[Mission],
     mode: Mode,
+    deadline_ms: Option<u64>,
     label: &str,
 ) -> Result<Vec<FlightRecord>> {
     let mut session = Session::new(world);
     let options = RunOptions {
         mode,
+        search_deadline: deadline_ms.map(std::time::Duration::from_millis),
         ..RunOptions::default()
     };
     // One untimed plan first: the grid and the planner's tables are built once per session,
@@ -196,6 +198,7 @@ pub fn run(args: FleetArgs) -> Result<()> {
         &base,
         &missions,
         mode,
+        args.deadline_ms,
         mode.name(),
     )?;
     let summary = Summary::of(&records);
@@ -260,7 +263,7 @@ fn table(records: &[FlightRecord], s: &Summary, conflicts: usize, url: &str, mod
         let arrive = r.arrival_delay_s.map_or("-".into(), |d| format!("{d:.1}"));
         let departure = r.departure.map_or("-".into(), |d| d.to_string());
         let blocking = match (r.status, &r.message) {
-            (Status::NoRoute, Some(m)) => m.clone(),
+            (Status::NoRoute | Status::TimedOut, Some(m)) => m.clone(),
             _ => r
                 .blocking
                 .iter()
@@ -289,7 +292,7 @@ fn table(records: &[FlightRecord], s: &Summary, conflicts: usize, url: &str, mod
 
 fn totals(s: &Summary, conflicts: usize) -> String {
     format!(
-        "flights:   {} missions, {} accepted ({:.1} %), {} refused, {} without a route\n\
+        "flights:   {} missions, {} accepted ({:.1} %), {} refused, {} without a route, {} timed out\n\
          delay:     mean {:.1} s, p95 {:.0} s (accepted flights' departures)\n\
          arrival:   mean {:.1} s, p95 {:.0} s later than alone; {} hovering, {} detoured\n\
          latency:   plan and reserve p50 {:.1} ms, p99 {:.1} ms\n\
@@ -300,6 +303,7 @@ fn totals(s: &Summary, conflicts: usize) -> String {
         100.0 * s.share_planned,
         s.refused,
         s.no_route,
+        s.timed_out,
         s.delay_mean_s,
         s.delay_p95_s,
         s.arrival_delay_mean_s,
@@ -317,8 +321,20 @@ fn totals(s: &Summary, conflicts: usize) -> String {
 struct BenchRun {
     store: &'static str,
     mode: Mode,
+    /// The space-time search's deadline per flight, if any.
+    deadline_ms: Option<u64>,
     summary: Summary,
     conflicts: usize,
+}
+
+impl BenchRun {
+    /// The mode as the table names it, with the search's deadline if any.
+    fn label(&self) -> String {
+        match self.deadline_ms {
+            Some(ms) => format!("{}, {ms} ms", self.mode.name()),
+            None => self.mode.name().to_string(),
+        }
+    }
 }
 
 /// `skyplan bench --fleet N`.
@@ -354,6 +370,7 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
     }
     // One fleet on one fresh store: its summary and the intersecting pairs it holds.
     let run_on = |url: &str, store: &'static str, mode: Mode| {
+        let deadline_ms = args.deadline_ms.filter(|_| mode == Mode::SpaceTime);
         let opened = open_store(url)?;
         let label = format!("{store}, {}", mode.name());
         let records = fly(
@@ -362,12 +379,14 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
             &base,
             &missions,
             mode,
+            deadline_ms,
             &label,
         )?;
         let conflicts = conflicts_in(opened.as_ref())?;
         Ok::<_, crate::exit::Failure>(BenchRun {
             store,
             mode,
+            deadline_ms,
             summary: Summary::of(&records),
             conflicts,
         })
@@ -392,7 +411,7 @@ pub fn bench(args: &BenchArgs, flights: usize) -> Result<()> {
     if args.json {
         let rows: Vec<_> = runs
             .iter()
-            .map(|r| json!({"store": r.store, "mode": r.mode, "summary": r.summary, "conflicts": r.conflicts}))
+            .map(|r| json!({"store": r.store, "mode": r.mode, "deadline_ms": r.deadline_ms, "summary": r.summary, "conflicts": r.conflicts}))
             .collect();
         println!(
             "{}",
@@ -418,10 +437,11 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
     );
     let _ = writeln!(
         out,
-        "{:<9} {:<19} {:>8} {:>10} {:>9} {:>11} {:>11} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9}",
+        "{:<9} {:<26} {:>8} {:>9} {:>10} {:>9} {:>11} {:>11} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "store",
         "mode",
         "planned",
+        "timed out",
         "delay avg",
         "delay p95",
         "arrive +avg",
@@ -437,10 +457,11 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
         let s = &r.summary;
         let _ = writeln!(
             out,
-            "{:<9} {:<19} {:>7.1}% {:>8.1} s {:>7.0} s {:>9.1} s {:>9.0} s {:>8} {:>8} {:>8.1} {:>8.1} {:>8.1} {:>9}",
+            "{:<9} {:<26} {:>7.1}% {:>9} {:>8.1} s {:>7.0} s {:>9.1} s {:>9.0} s {:>8} {:>8} {:>8.1} {:>8.1} {:>8.1} {:>9}",
             r.store,
-            r.mode.name(),
+            r.label(),
             100.0 * s.share_planned,
+            s.timed_out,
             s.delay_mean_s,
             s.delay_p95_s,
             s.arrival_delay_mean_s,
@@ -464,13 +485,7 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
             .iter()
             .map(|d| format!("{}: {:.1}/{:.1}", d.stored_at_start, d.p50_ms, d.p99_ms))
             .collect();
-        let _ = writeln!(
-            out,
-            "{:<9} {:<19} {}",
-            r.store,
-            r.mode.name(),
-            cells.join("  ")
-        );
+        let _ = writeln!(out, "{:<9} {:<26} {}", r.store, r.label(), cells.join("  "));
     }
     out
 }

@@ -172,6 +172,30 @@ fn the_space_time_search_hovers_and_goes_around_and_accepts_more() {
         assert!(f["arrival_delay_s"].as_f64().expect("arrival delay") >= -1e-6);
         assert!(f["delay_s"].as_f64().expect("delay") <= 900.0);
     }
+    // A deadline of a millisecond from each flight's start: searches longer than that stop,
+    // their flights `timed_out` with nothing stored.
+    let (hurried, stored) = run(&["--space-time", "--deadline-ms", "1"], "hurried");
+    let timed_out: Vec<&Value> = hurried["flights"]
+        .as_array()
+        .expect("flights")
+        .iter()
+        .filter(|f| f["status"] == "timed_out")
+        .collect();
+    assert!(!timed_out.is_empty());
+    assert_eq!(
+        hurried["summary"]["timed_out"].as_u64(),
+        Some(timed_out.len() as u64)
+    );
+    assert!(timed_out.iter().all(|f| {
+        f["intent_id"].is_null()
+            && f["message"]
+                .as_str()
+                .is_some_and(|m| m.contains("deadline"))
+    }));
+    assert_eq!(
+        Some(stored.len() as u64),
+        hurried["summary"]["accepted"].as_u64()
+    );
     let (shifted, _) = run(&[], "shift");
     let count = |r: &Value| r["summary"]["accepted"].as_u64().expect("accepted");
     assert!(
@@ -363,6 +387,14 @@ fn bad_options_fail_with_exit_2_naming_the_option() {
                 "sqlite::memory:",
             ],
             "error: --reject-on-conflict and --space-time: choose one",
+        ),
+        (
+            &["--deadline-ms", "50", "--airspace", "sqlite::memory:"],
+            "--space-time",
+        ),
+        (
+            &["--space-time", "--deadline-ms", "0"],
+            "error: invalid value '0' for '--deadline-ms <MS>'",
         ),
         (
             &["--start", "tomorrow", "--airspace", "sqlite::memory:"],

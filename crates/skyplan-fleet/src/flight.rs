@@ -163,6 +163,9 @@ pub struct FlightRequest {
     pub step_ms: i64,
     /// How its volumes are made.
     pub volumes: VolumeOptions,
+    /// When a search for its route around the others gives up
+    /// ([`ReserveError::Deadline`]); `None`: never (only its budget of states stops it).
+    pub deadline: Option<std::time::Instant>,
 }
 
 impl FlightRequest {
@@ -176,6 +179,7 @@ impl FlightRequest {
             rule: PriorityRule::EqualOrHigher,
             step_ms: DEPARTURE_STEP_MS,
             volumes: VolumeOptions::default(),
+            deadline: None,
         }
     }
 }

@@ -74,6 +74,9 @@ pub struct RunOptions {
     pub step_ms: i64,
     /// How volumes are made.
     pub volumes: VolumeOptions,
+    /// With [`Mode::SpaceTime`]: how long after a flight's start (its planning included) its
+    /// search around the others gives up ([`Status::TimedOut`]); `None`: never.
+    pub search_deadline: Option<std::time::Duration>,
 }
 
 impl Default for RunOptions {
@@ -83,6 +86,7 @@ impl Default for RunOptions {
             rule: PriorityRule::EqualOrHigher,
             step_ms: crate::DEPARTURE_STEP_MS,
             volumes: VolumeOptions::default(),
+            search_deadline: None,
         }
     }
 }
@@ -97,6 +101,9 @@ pub enum Status {
     Refused,
     /// No route (the planner's failure is the record's message).
     NoRoute,
+    /// Planned, but its search around the others passed the run's deadline (the record's
+    /// message says after how many states); nothing reserved.
+    TimedOut,
 }
 
 impl Status {
@@ -106,6 +113,7 @@ impl Status {
             Self::Accepted => "accepted",
             Self::Refused => "refused",
             Self::NoRoute => "no_route",
+            Self::TimedOut => "timed_out",
         }
     }
 }
@@ -245,6 +253,7 @@ fn fly_mission_in(
         rule: options.rule,
         step_ms: options.step_ms,
         volumes: options.volumes,
+        deadline: options.search_deadline.map(|d| t0 + d),
     };
     let t1 = Instant::now();
     let fail = |error: String| FleetError::Flight {
@@ -297,6 +306,10 @@ fn settle<T>(
         Err(ReserveError::Blocked(b)) => {
             record.status = Status::Refused;
             record.blocking = b.blocking;
+        }
+        Err(e @ ReserveError::Deadline { .. }) => {
+            record.status = Status::TimedOut;
+            record.message = Some(e.to_string());
         }
         Err(ReserveError::Invalid(e)) => return Err(fail(e.to_string())),
         Err(ReserveError::Store(error)) => {
@@ -412,6 +425,8 @@ pub struct Summary {
     pub refused: usize,
     /// Without a route.
     pub no_route: usize,
+    /// Whose search around the others passed its deadline.
+    pub timed_out: usize,
     /// Accepted over missions.
     pub share_planned: f64,
     /// Mean delay of the accepted flights, seconds.
@@ -489,6 +504,7 @@ impl Summary {
             accepted: accepted.len(),
             refused: count(Status::Refused),
             no_route: count(Status::NoRoute),
+            timed_out: count(Status::TimedOut),
             share_planned: if n == 0 {
                 0.0
             } else {

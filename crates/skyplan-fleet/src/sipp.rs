@@ -128,7 +128,14 @@ pub struct SippQuery {
     pub diagonals: bool,
     /// Most states taken from the queue before giving up.
     pub max_expansions: usize,
+    /// When to give up, if ever ([`SippError::Deadline`]): the clock is read every
+    /// [`DEADLINE_EVERY`] states.
+    pub deadline: Option<std::time::Instant>,
 }
+
+/// How many states the search takes between two looks at the clock (a look costs about as
+/// much as a state).
+pub const DEADLINE_EVERY: usize = 256;
 
 /// A cell of the route and when the flight is in it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -193,6 +200,9 @@ pub enum SippError {
     /// The search stopped at its budget of states.
     #[error("stopped after {0} states without reaching the goal")]
     Budget(usize),
+    /// The search stopped at its deadline.
+    #[error("stopped at its deadline after {0} states without reaching the goal")]
+    Deadline(usize),
 }
 
 struct Node {
@@ -322,6 +332,7 @@ impl SafeCache {
 /// let q = SippQuery {
 ///     start: Cell::new(0, 0), goal: Cell::new(0, 4), cell_s: 1.0,
 ///     latest_departure_s: 0.0, horizon_s: 100.0, diagonals: true, max_expansions: 10_000,
+///     deadline: None,
 /// };
 /// let mut timeline = |c: Cell| if c.col == 2 { vec![Interval { start_s: 0.0, end_s: 10.0 }] } else { vec![] };
 /// let path = sipp(&grid, &q, &mut timeline)?;
@@ -404,6 +415,12 @@ pub fn sipp(
         }
         if expansions > q.max_expansions {
             return Err(SippError::Budget(q.max_expansions));
+        }
+        if let Some(deadline) = q.deadline
+            && expansions % DEADLINE_EVERY == 0
+            && std::time::Instant::now() >= deadline
+        {
+            return Err(SippError::Deadline(expansions));
         }
         let here_end = safe.of(grid, cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
@@ -563,6 +580,42 @@ mod tests {
     }
 
     #[test]
+    fn a_passed_deadline_stops_the_search() {
+        let grid = Grid2::new(60, 60, vec![false; 3600], Default::default()).expect("grid");
+        let q = SippQuery {
+            start: Cell::new(0, 0),
+            goal: Cell::new(59, 59),
+            cell_s: 1.0,
+            latest_departure_s: 0.0,
+            horizon_s: 1e4,
+            diagonals: true,
+            max_expansions: 1_000_000,
+            deadline: None,
+        };
+        // The goal is blocked for a long while: the search fans out over the whole grid.
+        let mut timeline = |c: Cell| {
+            if c == Cell::new(59, 59) {
+                vec![Interval {
+                    start_s: 0.0,
+                    end_s: 500.0,
+                }]
+            } else {
+                vec![]
+            }
+        };
+        let free = sipp(&grid, &q, &mut timeline).expect("a route without a deadline");
+        assert!(free.expansions > DEADLINE_EVERY, "{}", free.expansions);
+        let passed = SippQuery {
+            deadline: Some(std::time::Instant::now()),
+            ..q
+        };
+        assert_eq!(
+            sipp(&grid, &passed, &mut timeline),
+            Err(SippError::Deadline(DEADLINE_EVERY))
+        );
+    }
+
+    #[test]
     fn waits_move_to_the_ground_when_the_window_allows() {
         let grid = Grid2::from_ascii(".....").expect("grid");
         let mut timeline = |c: Cell| {
@@ -583,6 +636,7 @@ mod tests {
             horizon_s: 100.0,
             diagonals: true,
             max_expansions: 1000,
+            deadline: None,
         };
         // No window: it hovers short of the blocked cell.
         let air = sipp(&grid, &q(0.0), &mut timeline).expect("a route");

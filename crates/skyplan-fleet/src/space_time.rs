@@ -1290,6 +1290,7 @@ fn space_time_inner(
         horizon_s,
         diagonals: true,
         max_expansions: MAX_EXPANSIONS,
+        deadline: request.deadline,
     };
     // The shortest route on the same grid in an empty sky (JPS): what the delay and the
     // detour are measured against.
@@ -1366,6 +1367,7 @@ fn space_time_inner(
                     format!("cell (row {}, col {}) is blocked", cell.row, cell.col),
                 ));
             }
+            Err(SippError::Deadline(states)) => return Err(ReserveError::Deadline { states }),
             Err(_) => {
                 binding.sort();
                 binding.dedup();

@@ -101,6 +101,7 @@ fn earliest_arrival_equals_a_time_expanded_sweep() {
             horizon_s: horizon_s as f64,
             diagonals: false,
             max_expansions: 1_000_000,
+            deadline: None,
         };
         let mut timeline = |c: Cell| {
             blocked[grid.index(c)]

@@ -382,3 +382,45 @@ fn a_timed_zone_blocks_the_space_time_search_only_while_active() {
         }
     }
 }
+
+/// A search that passes its deadline stops there: the flight is `timed_out`, says so, and
+/// nothing is stored for it; with time to spare the same missions are all decided.
+#[test]
+fn a_flight_whose_search_passes_its_deadline_times_out_and_reserves_nothing() {
+    let base = PlanRequest::default();
+    let (mut session, missions) = crowd(12, 5, 120.0, 300.0);
+    let run = |deadline: Option<std::time::Duration>, session: &mut Session| {
+        let store = SqliteStore::open_url("sqlite::memory:").expect("store");
+        let options = RunOptions {
+            mode: Mode::SpaceTime,
+            search_deadline: deadline,
+            ..RunOptions::default()
+        };
+        let records =
+            fly_fleet(session, &store, &base, &missions, &options, |_, _| {}).expect("run");
+        (records, store.list().expect("list"))
+    };
+    // A deadline already passed when the search starts: it stops at its first look at the
+    // clock, so every flight whose search needs more states than that times out.
+    let (records, stored) = run(Some(std::time::Duration::ZERO), &mut session);
+    let summary = Summary::of(&records);
+    assert!(summary.timed_out >= 1, "{summary:?}");
+    assert_eq!(stored.len(), summary.accepted);
+    for r in records.iter().filter(|r| r.status == Status::TimedOut) {
+        let message = r.message.as_deref().unwrap_or_default();
+        assert!(
+            message.contains("deadline") && message.contains("nothing was reserved"),
+            "{}: {message}",
+            r.mission
+        );
+        assert!(
+            r.intent_id.is_none() && r.departure.is_none(),
+            "{}",
+            r.mission
+        );
+    }
+    assert_eq!(Status::TimedOut.name(), "timed_out");
+    // Without a deadline (or a generous one), none times out.
+    let (records, _) = run(Some(std::time::Duration::from_secs(600)), &mut session);
+    assert_eq!(Summary::of(&records).timed_out, 0);
+}

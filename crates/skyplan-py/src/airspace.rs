@@ -59,6 +59,9 @@ fn reserve_error(e: ReserveError) -> PyErr {
         }
         ReserveError::Invalid(e) => bad_input(e.to_string()),
         ReserveError::Store(e) => store_error(e),
+        e @ ReserveError::Deadline { .. } => {
+            crate::errors::fail(skyplan_plan::FailureKind::Timeout, e.to_string())
+        }
     }
 }
 

@@ -118,6 +118,17 @@ impl Pool {
         }
     }
 
+    /// When a request that arrived at `arrived` must have its work done: the session's share
+    /// of the budget (work outside the pool, such as the space-time search, keeps to it too).
+    pub(crate) fn deadline_from(&self, arrived: Instant) -> Instant {
+        arrived + self.budget.mul_f64(SESSION_SHARE)
+    }
+
+    /// The time budget of one request, queue included.
+    pub(crate) fn budget(&self) -> Duration {
+        self.budget
+    }
+
     pub(crate) fn world(&self) -> &World {
         &self.world
     }
@@ -138,7 +149,7 @@ impl Pool {
             Err(_) => self.wait_turn(arrived).await?,
         };
         let pool = Arc::clone(self);
-        let deadline = arrived + self.budget.mul_f64(SESSION_SHARE);
+        let deadline = self.deadline_from(arrived);
         let handle = tokio::task::spawn_blocking(move || {
             let started = Instant::now();
             let mut worker = pool.take();
