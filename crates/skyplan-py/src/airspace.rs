@@ -281,11 +281,14 @@ impl Airspace {
     /// `priority`, `owner`). `mode`: `"shift"` (departures moved), `"space_time"` (routes
     /// re-planned around the others) or `"reject_on_conflict"` (the baseline). `start`: what
     /// departures in seconds count from (RFC 3339; default: now rounded up to the next minute).
+    /// `deadline_ms` (with `"space_time"`): a flight's search around the others gives up this
+    /// many milliseconds after its planning started; the flight is then `timed_out`, nothing
+    /// reserved.
     ///
     /// Returns a dict: `flights` (one record per mission, as the CLI's JSON report), `summary`
     /// (share planned, delays, latency, intents checked) and `conflicts` (pairs of stored
     /// intents that intersect, brute force: 0).
-    #[pyo3(signature = (planner, missions, *, mode = "shift", start = None))]
+    #[pyo3(signature = (planner, missions, *, mode = "shift", start = None, deadline_ms = None))]
     fn fleet<'py>(
         &self,
         py: Python<'py>,
@@ -293,6 +296,7 @@ impl Airspace {
         missions: &Bound<'py, PyAny>,
         mode: &str,
         start: Option<&str>,
+        deadline_ms: Option<u64>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let mode = Mode::of_key(mode).ok_or_else(|| {
             bad_input(format!(
@@ -312,8 +316,14 @@ impl Airspace {
         let missions = parse_missions("missions", &text, Format::Json, Clock { start, now })
             .map_err(|e| bad_input(e.to_string()))?;
         let store = self.store.as_ref();
+        if deadline_ms.is_some() && mode != Mode::SpaceTime {
+            return Err(bad_input(
+                "deadline_ms: only the space_time mode searches, so only it has a deadline",
+            ));
+        }
         let options = RunOptions {
             mode,
+            search_deadline: deadline_ms.map(std::time::Duration::from_millis),
             ..RunOptions::default()
         };
         let run = planner.with_session(py, |session| {

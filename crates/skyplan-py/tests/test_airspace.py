@@ -98,6 +98,16 @@ def test_a_fleet_in_space_and_time_accepts_at_least_as_many_and_intersects_nowhe
         reports[mode] = report["summary"]
     assert reports["space_time"]["accepted"] >= reports["shift"]["accepted"] >= reports["reject_on_conflict"]["accepted"]
     assert reports["space_time"]["hovering"] + reports["space_time"]["detoured"] > 0
+    # A deadline already passed: the searches that need more than a few hundred states stop,
+    # their flights timed out with nothing stored.
+    air = skyplan.Airspace("sqlite::memory:")
+    report = air.fleet(city, missions, mode="space_time", start=at(0), deadline_ms=0)
+    timed_out = [f for f in report["flights"] if f["status"] == "timed_out"]
+    assert report["summary"]["timed_out"] == len(timed_out) >= 1
+    assert all("deadline" in f["message"] and f["intent_id"] is None for f in timed_out)
+    assert len(air.intents()) == report["summary"]["accepted"]
+    with pytest.raises(skyplan.BadInput, match="deadline_ms"):
+        air.fleet(city, missions, mode="shift", deadline_ms=50)
 
 
 @pytest.mark.parametrize(

@@ -251,6 +251,8 @@ class Airspace:
         *,
         mode: str = "shift",
         start: Optional[str] = None,
+        deadline_ms: Optional[int] = None,
     ) -> Dict[str, Any]:
         """Plans and reserves ``missions`` in order (``mode``: ``"shift"``, ``"space_time"`` or
-        ``"reject_on_conflict"``); the report as ``skyplan fleet --json`` writes it."""
+        ``"reject_on_conflict"``; ``deadline_ms``: with ``"space_time"``, when a flight's search
+        gives up, the flight ``timed_out``); the report as ``skyplan fleet --json`` writes it."""
