@@ -761,7 +761,8 @@ impl SpaceTimeCache {
         let pad_ms = (pad_s * 1000.0).ceil() as i64;
         let from_ms = window.from_ms.saturating_sub(pad_ms);
         let to_ms = window.to_ms.saturating_add(pad_ms);
-        let first = list.partition_point(|e| e.start_ms < from_ms - self.cells.longest_ms);
+        let earliest_start_ms = from_ms.saturating_sub(self.cells.longest_ms);
+        let first = list.partition_point(|e| e.start_ms < earliest_start_ms);
         let last = list.partition_point(|e| e.start_ms <= to_ms);
         for e in &list[first..last.max(first)] {
             if e.end_ms < from_ms {

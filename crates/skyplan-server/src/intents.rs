@@ -136,7 +136,6 @@ pub(crate) async fn create(
     let mut flight_request = FlightRequest::new(window, request.priority, owner);
     // The search around the others keeps to the request's budget, as planning does.
     flight_request.deadline = Some(s.pool.deadline_from(t0));
-    let budget_ms = s.pool.budget().as_millis();
     let reserved = if space_time {
         let Some(grid) = grid else {
             return Err(bad(format!(
@@ -156,15 +155,7 @@ pub(crate) async fn create(
                 &shared.space_time_cache,
             )
             .0
-            .map_err(|e| match e {
-                ReserveError::Deadline { .. } => ApiError::new(
-                    ErrorKind::OverBudget,
-                    format!(
-                        "{e}, within the server's budget of {budget_ms} ms; \"search\": \"shift\" answers at once"
-                    ),
-                ),
-                e => reserve_error(e),
-            })?;
+            .map_err(reserve_error)?;
             let search = r.search_json();
             Ok(Reserved {
                 intent: r.intent,
@@ -239,7 +230,11 @@ fn reserve_error(e: ReserveError) -> ApiError {
         }
         ReserveError::Invalid(e) => bad(e.to_string()),
         ReserveError::Store(e) => store_error(e),
-        e @ ReserveError::Deadline { .. } => ApiError::new(ErrorKind::OverBudget, e.to_string()),
+        // Only the space-time search has a deadline: the request's time budget.
+        e @ ReserveError::Deadline { .. } => ApiError::new(
+            ErrorKind::OverBudget,
+            format!("{e} (the server's time budget); \"search\": \"shift\" answers at once"),
+        ),
     }
 }
 

@@ -124,11 +124,6 @@ impl Pool {
         arrived + self.budget.mul_f64(SESSION_SHARE)
     }
 
-    /// The time budget of one request, queue included.
-    pub(crate) fn budget(&self) -> Duration {
-        self.budget
-    }
-
     pub(crate) fn world(&self) -> &World {
         &self.world
     }
