@@ -233,7 +233,9 @@ fn reserve_error(e: ReserveError) -> ApiError {
         // Only the space-time search has a deadline: the request's time budget.
         e @ ReserveError::Deadline { .. } => ApiError::new(
             ErrorKind::OverBudget,
-            format!("{e} (the server's time budget); \"search\": \"shift\" answers at once"),
+            format!(
+                "{e} (the server's time budget); \"search\": \"departure\" (shifting the departure only) answers at once"
+            ),
         ),
     }
 }
