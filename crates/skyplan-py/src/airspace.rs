@@ -135,7 +135,8 @@ impl Airspace {
     /// the flight keeps clear of stored intents of equal or higher priority. `search`:
     /// `"departure"` moves the planned route's departure to the earliest free one of the
     /// window; `"space_time"` re-plans the route around the others (hovering, detours, a later
-    /// departure; the earliest arrival).
+    /// departure; the earliest arrival). `deadline_ms` (with `"space_time"`): that search gives
+    /// up this many milliseconds after the call, raising `Timeout` with nothing reserved.
     ///
     /// Returns a dict: `intent` (as stored), `departure`, `delay_s`, `duration_s`, `timing`,
     /// `nearby_intents`, `plan` (a `Plan`: the route in an empty sky), and with
@@ -143,7 +144,7 @@ impl Airspace {
     /// `route_ne`). Raises `Conflict` (its `conflicts`: the blocking intents' `(id, version)`)
     /// when no departure of the window is free, the planning errors as `Planner.plan` does,
     /// `BadInput` for a bad departure, priority, owner or search.
-    #[pyo3(signature = (planner, departure, *, priority = 0, owner = "python", search = "departure", start = None, goal = None, **options))]
+    #[pyo3(signature = (planner, departure, *, priority = 0, owner = "python", search = "departure", deadline_ms = None, start = None, goal = None, **options))]
     #[allow(clippy::too_many_arguments)]
     fn reserve<'py>(
         &self,
@@ -153,10 +154,12 @@ impl Airspace {
         priority: u32,
         owner: &str,
         search: &str,
+        deadline_ms: Option<u64>,
         start: Option<&Bound<'py, PyAny>>,
         goal: Option<&Bound<'py, PyAny>>,
         options: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let called = std::time::Instant::now();
         let window = skyplan_fleet::departure_window(
             &departure_value(departure)?,
             "departure",
@@ -181,6 +184,11 @@ impl Airspace {
                 )));
             }
         };
+        if deadline_ms.is_some() && !space_time {
+            return Err(bad_input(
+                "deadline_ms: only search=\"space_time\" searches, so only it has a deadline",
+            ));
+        }
         needs_home(planner)?;
         let request = request_of(start, goal, options)?;
         skyplan_fleet::refuse_plan_departure(&request).map_err(bad_input)?;
@@ -194,7 +202,9 @@ impl Airspace {
             Ok::<_, PlanFailure>((plan, grid))
         })?;
         let (plan, grid) = planned.map_err(to_py)?;
-        let flight_request = FlightRequest::new(window, priority, owner.to_string());
+        let mut flight_request = FlightRequest::new(window, priority, owner.to_string());
+        flight_request.deadline =
+            deadline_ms.map(|ms| called + std::time::Duration::from_millis(ms));
         let store = self.store.as_ref();
         let answer = if space_time {
             let Some(grid) = grid else {

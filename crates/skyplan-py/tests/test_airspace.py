@@ -66,6 +66,12 @@ def test_reserve_shifts_or_replans_and_nothing_stored_intersects(city):
     st = replanned["space_time"]
     assert replanned["timing"] == "space_time" and st["arrival_delay_s"] > 0
     assert len(st["route_ne"]) >= 2
+    # A deadline already passed: the search (hundreds of states on this route) stops at its
+    # first look at the clock, raising Timeout, and nothing is stored.
+    with pytest.raises(skyplan.Timeout, match="deadline"):
+        air.reserve(city, (at(0), at(1800)), owner="d", search="space_time", deadline_ms=0)
+    with pytest.raises(skyplan.BadInput, match="deadline_ms"):
+        air.reserve(city, at(0), owner="d", deadline_ms=50)
     stored = air.intents()
     assert [i["owner"] for i in stored] == ["a", "b", "c"]
     for x, y in itertools.combinations(stored, 2):

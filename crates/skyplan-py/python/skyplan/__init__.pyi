@@ -234,12 +234,14 @@ class Airspace:
         priority: int = 0,
         owner: str = "python",
         search: str = "departure",
+        deadline_ms: Optional[int] = None,
         start: Optional[Tuple[float, float]] = None,
         goal: Optional[Tuple[float, float]] = None,
         **options: Any,
     ) -> Dict[str, Any]:
         """Plans with ``planner`` and reserves the flight as a new intent (``search``:
-        ``"departure"`` or ``"space_time"``); raises :class:`Conflict` when no way is free."""
+        ``"departure"`` or ``"space_time"``, the latter within ``deadline_ms`` if given, else
+        :class:`Timeout`); raises :class:`Conflict` when no way is free."""
     def intents(self) -> List[Dict[str, Any]]: ...
     def get(self, id: str) -> Optional[Dict[str, Any]]: ...
     def delete(self, id: str) -> Optional[Dict[str, Any]]: ...
