@@ -9,8 +9,9 @@
 //! the speed) and is allowed at a departure `t` when both cells are safe over all of
 //! `[t, t + τ]`. Since arriving earlier in an interval never hurts (one can wait), keeping the
 //! earliest arrival per state makes the search exact: with an admissible heuristic (the
-//! octile distance at full speed) the first goal state taken from the queue is the earliest
-//! arrival over all routes on the grid's moves and all waits.
+//! shortest distance to the goal over the grid's free cells at full speed, blind to the blocked
+//! times, from a backward search resumed as needed) the first goal state taken from the queue
+//! is the earliest arrival over all routes on the grid's moves and all waits.
 
 use skyplan_cspace::{Cell, Grid2};
 use std::cmp::Reverse;
@@ -345,22 +346,33 @@ pub fn sipp(
     q: &SippQuery,
     timeline: &mut dyn Timeline,
 ) -> Result<SippPath, SippError> {
+    sipp_with(grid, q, timeline, Bound::GridDistance)
+}
+
+/// The lower bound on the time to the goal that orders [`sipp_with`]'s queue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Bound {
+    /// The shortest distance over the grid's free cells ([`StaticDistance`]).
+    GridDistance,
+    /// The octile distance, blind to obstacles (the tests' second opinion).
+    #[cfg_attr(not(test), allow(dead_code))]
+    Octile,
+}
+
+fn sipp_with(
+    grid: &Grid2,
+    q: &SippQuery,
+    timeline: &mut dyn Timeline,
+    bound: Bound,
+) -> Result<SippPath, SippError> {
     for (which, cell) in [("start", q.start), ("goal", q.goal)] {
         if !grid.contains(cell) || grid.is_blocked(cell) {
             return Err(SippError::Endpoint { which, cell });
         }
     }
     let mut safe = SafeCache::new(grid);
-    let h = |c: Cell| {
-        let dr = f64::from(c.row.abs_diff(q.goal.row));
-        let dc = f64::from(c.col.abs_diff(q.goal.col));
-        let octile = if q.diagonals {
-            dr.max(dc) + (std::f64::consts::SQRT_2 - 1.0) * dr.min(dc)
-        } else {
-            dr + dc
-        };
-        octile * q.cell_s
-    };
+    let mut to_goal = StaticDistance::new(grid, q, bound);
+    let mut h = |c: Cell| to_goal.seconds(grid, c, q);
     let mut nodes: Vec<Node> = Vec::new();
     let mut open = BinaryHeap::new();
     let (first, count) = safe.span(grid, q.start, timeline);
@@ -479,6 +491,161 @@ pub fn sipp(
     })
 }
 
+/// A lower bound on the time from a cell to the goal: its shortest distance to the goal over
+/// the grid's free cells and moves, ignoring the safe intervals, at full speed. It comes from a
+/// backward A\* from the goal towards the start, resumed whenever the search asks for a cell
+/// it has not closed yet ("Reverse Resumable A\*", Silver, "Cooperative Pathfinding", AIIDE
+/// 2005), so only the part of the grid the search needs is covered. Its move costs are integers
+/// a little under the true ones ([`STATIC_STRAIGHT`], [`STATIC_DIAGONAL`]) and its own heuristic
+/// the octile distance in the same units, so its queue is a ring of buckets and the bound stays
+/// below the true time and consistent. A cell it cannot reach is cut off from the goal: no
+/// bound (infinite). Grids over [`DENSE_CELLS`] cells use the octile distance instead (as
+/// does [`Bound::Octile`]).
+struct StaticDistance {
+    /// Per cell (row-major): the best distance found, in units of 1 / [`STATIC_STRAIGHT`] cell,
+    /// or [`UNSEEN`]; the top bit marks it closed (final). Empty: the octile distance.
+    units: Vec<u32>,
+    /// Open cells by `f` modulo the ring's length.
+    ring: Vec<Vec<u32>>,
+    /// The `f` of the bucket being taken, and the open entries in all.
+    f: u32,
+    pending: usize,
+    /// The backward search's target (the forward search's start) and the grid's width.
+    target: (i64, i64),
+    cols: usize,
+    diagonals: bool,
+}
+
+/// A straight move's cost in [`StaticDistance`]'s units.
+const STATIC_STRAIGHT: u32 = 29;
+/// A diagonal move's: 41 / 29 = 1.41379… < √2, so no distance found exceeds the true one.
+const STATIC_DIAGONAL: u32 = 41;
+/// [`StaticDistance::units`]' mark of a closed cell.
+const CLOSED: u32 = 1 << 31;
+/// [`StaticDistance::units`] of a cell not reached yet (open, above every real distance).
+const UNSEEN: u32 = CLOSED - 1;
+
+impl StaticDistance {
+    fn new(grid: &Grid2, q: &SippQuery, bound: Bound) -> Self {
+        let mut me = Self {
+            units: Vec::new(),
+            ring: Vec::new(),
+            f: 0,
+            pending: 0,
+            target: (i64::from(q.start.row), i64::from(q.start.col)),
+            cols: grid.cols() as usize,
+            diagonals: q.diagonals,
+        };
+        if grid.len() > DENSE_CELLS || bound == Bound::Octile {
+            return me;
+        }
+        me.units = vec![UNSEEN; grid.len()];
+        // A successor's f exceeds its parent's by at most two diagonal moves' cost.
+        me.ring = vec![Vec::new(); 2 * STATIC_DIAGONAL as usize + 1];
+        let goal = grid.index(q.goal);
+        me.units[goal] = 0;
+        me.f = me.octile_to_target(i64::from(q.goal.row), i64::from(q.goal.col));
+        let slot = me.f as usize % me.ring.len();
+        me.ring[slot].push(goal as u32);
+        me.pending = 1;
+        me
+    }
+
+    /// The octile distance from (r, c) to the target, in units.
+    #[inline]
+    fn octile_to_target(&self, r: i64, c: i64) -> u32 {
+        let (dr, dc) = (r.abs_diff(self.target.0), c.abs_diff(self.target.1));
+        let (lo, hi) = (dr.min(dc) as u32, dr.max(dc) as u32);
+        if self.diagonals {
+            (hi - lo) * STATIC_STRAIGHT + lo * STATIC_DIAGONAL
+        } else {
+            (hi + lo) * STATIC_STRAIGHT
+        }
+    }
+
+    /// Expands the backward search until cell `index` is closed or nothing is left open.
+    fn close(&mut self, grid: &Grid2, index: usize) {
+        let free = |r: i64, c: i64| grid.is_free_at(r, c);
+        let moves: &[(i64, i64, u32)] = if self.diagonals {
+            &[
+                (1, 0, STATIC_STRAIGHT),
+                (-1, 0, STATIC_STRAIGHT),
+                (0, 1, STATIC_STRAIGHT),
+                (0, -1, STATIC_STRAIGHT),
+                (1, 1, STATIC_DIAGONAL),
+                (1, -1, STATIC_DIAGONAL),
+                (-1, 1, STATIC_DIAGONAL),
+                (-1, -1, STATIC_DIAGONAL),
+            ]
+        } else {
+            &[
+                (1, 0, STATIC_STRAIGHT),
+                (-1, 0, STATIC_STRAIGHT),
+                (0, 1, STATIC_STRAIGHT),
+                (0, -1, STATIC_STRAIGHT),
+            ]
+        };
+        let n = self.ring.len();
+        while self.units[index] & CLOSED == 0 && self.pending > 0 {
+            let slot = self.f as usize % n;
+            let Some(i) = self.ring[slot].pop() else {
+                self.f += 1;
+                continue;
+            };
+            self.pending -= 1;
+            let d = self.units[i as usize];
+            let (r, c) = (
+                (i as usize / self.cols) as i64,
+                (i as usize % self.cols) as i64,
+            );
+            // Stale (closed already, or queued again at a lower f since).
+            if d & CLOSED != 0 || d + self.octile_to_target(r, c) != self.f {
+                continue;
+            }
+            self.units[i as usize] = d | CLOSED;
+            for &(dr, dc, cost) in moves {
+                let (nr, nc) = (r + dr, c + dc);
+                // Moves are symmetric: the corner rule asks for the same two cells both ways.
+                if !free(nr, nc) || (dr != 0 && dc != 0 && !(free(r + dr, c) && free(r, nc))) {
+                    continue;
+                }
+                let j = nr as usize * self.cols + nc as usize;
+                let nd = d + cost;
+                // A closed cell's distance is final (the heuristic is consistent).
+                let known = self.units[j];
+                if known & CLOSED == 0 && nd < known {
+                    self.units[j] = nd;
+                    let nf = nd + self.octile_to_target(nr, nc);
+                    self.ring[nf as usize % n].push(j as u32);
+                    self.pending += 1;
+                }
+            }
+        }
+    }
+
+    /// Seconds at full speed from `c` to the goal at least; infinite if `c` is cut off from it.
+    fn seconds(&mut self, grid: &Grid2, c: Cell, q: &SippQuery) -> f64 {
+        if self.units.is_empty() {
+            let dr = f64::from(c.row.abs_diff(q.goal.row));
+            let dc = f64::from(c.col.abs_diff(q.goal.col));
+            let octile = if q.diagonals {
+                dr.max(dc) + (std::f64::consts::SQRT_2 - 1.0) * dr.min(dc)
+            } else {
+                dr + dc
+            };
+            return octile * q.cell_s;
+        }
+        let index = grid.index(c);
+        if self.units[index] & CLOSED == 0 {
+            self.close(grid, index);
+        }
+        match self.units[index] {
+            u if u & CLOSED != 0 => f64::from(u & !CLOSED) * q.cell_s / f64::from(STATIC_STRAIGHT),
+            _ => f64::INFINITY,
+        }
+    }
+}
+
 /// Whether `[from, to]` lies in one of `safe`.
 fn within(safe: &[Interval], from: f64, to: f64) -> bool {
     safe.iter().any(|iv| iv.start_s <= from && to <= iv.end_s)
@@ -548,11 +715,164 @@ fn walk_back(nodes: &[Node], goal: u32) -> Vec<TimedCell> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// A random grid (a quarter blocked) with random blocked times, fractional, per cell.
+    fn random_case(rng: &mut rand_chacha::ChaCha8Rng) -> (Grid2, Vec<Vec<Interval>>) {
+        let (rows, cols) = (rng.random_range(3..12u32), rng.random_range(3..12u32));
+        let cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.25)).collect();
+        let grid =
+            Grid2::new(rows, cols, cells, skyplan_cspace::GridFrame::default()).expect("grid");
+        let blocked = (0..grid.len())
+            .map(|_| {
+                (0..rng.random_range(0..3))
+                    .map(|_| {
+                        let a = rng.random_range(0.0..15.0);
+                        Interval {
+                            start_s: a,
+                            end_s: a + rng.random_range(0.0..5.0),
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        (grid, blocked)
+    }
+
+    /// The grid-distance bound against an independent Dijkstra over the true move lengths: never
+    /// above the true distance, within 41 / (29 √2) of it, infinite exactly where the goal is
+    /// cut off.
+    #[test]
+    fn the_grid_distance_bound_is_below_the_true_distance_and_close() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut checked = (0, 0);
+        for _ in 0..200 {
+            let (grid, _) = random_case(&mut rng);
+            let diagonals = rng.random_bool(0.5);
+            let free: Vec<Cell> = (0..grid.len())
+                .map(|i| grid.cell(i))
+                .filter(|&c| !grid.is_blocked(c))
+                .collect();
+            if free.len() < 2 {
+                continue;
+            }
+            let goal = free[rng.random_range(0..free.len())];
+            let start = free[rng.random_range(0..free.len())];
+            let q = SippQuery {
+                start,
+                goal,
+                cell_s: 0.5,
+                latest_departure_s: 0.0,
+                horizon_s: 100.0,
+                diagonals,
+                max_expansions: 1_000,
+                deadline: None,
+            };
+            // Dijkstra from the goal, f64 lengths, over a sorted list (small grids).
+            let mut dist = vec![f64::INFINITY; grid.len()];
+            dist[grid.index(goal)] = 0.0;
+            let mut done = vec![false; grid.len()];
+            while let Some(u) = (0..grid.len())
+                .filter(|&i| !done[i] && dist[i].is_finite())
+                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+            {
+                done[u] = true;
+                let c = grid.cell(u);
+                let (r, k) = (i64::from(c.row), i64::from(c.col));
+                for dr in -1..=1i64 {
+                    for dk in -1..=1i64 {
+                        let diagonal = dr != 0 && dk != 0;
+                        if (dr, dk) == (0, 0) || (diagonal && !diagonals) {
+                            continue;
+                        }
+                        let ok = grid.is_free_at(r + dr, k + dk)
+                            && (!diagonal
+                                || (grid.is_free_at(r + dr, k) && grid.is_free_at(r, k + dk)));
+                        if ok {
+                            let v = grid.index(Cell::new((r + dr) as u32, (k + dk) as u32));
+                            let len = if diagonal {
+                                std::f64::consts::SQRT_2
+                            } else {
+                                1.0
+                            };
+                            dist[v] = dist[v].min(dist[u] + len);
+                        }
+                    }
+                }
+            }
+            let mut bound = StaticDistance::new(&grid, &q, Bound::GridDistance);
+            // Ask in a random order: the backward search resumes for each.
+            let mut asked: Vec<(u32, Cell)> = free
+                .iter()
+                .map(|&c| (rng.random_range(0..1000), c))
+                .collect();
+            asked.sort_by_key(|&(key, _)| key);
+            for (_, c) in asked {
+                let truth = dist[grid.index(c)] * q.cell_s;
+                let got = bound.seconds(&grid, c, &q);
+                if truth.is_infinite() {
+                    assert!(got.is_infinite(), "{c:?}: {got} for a cut-off cell");
+                    checked.1 += 1;
+                } else {
+                    assert!(got <= truth + 1e-12, "{c:?}: {got} above {truth}");
+                    let floor = truth * (41.0 / 29.0) / std::f64::consts::SQRT_2;
+                    assert!(got >= floor - 1e-12, "{c:?}: {got} below {floor}");
+                    checked.0 += 1;
+                }
+            }
+        }
+        assert!(checked.0 > 3000 && checked.1 > 50, "{checked:?}");
+    }
+
+    /// Two admissible bounds, one search: the grid-distance bound finds the same earliest
+    /// arrival as the obstacle-blind octile one, with diagonals and without, and refuses the
+    /// same queries.
+    #[test]
+    fn the_grid_distance_bound_finds_the_octile_bound_s_arrival() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        let (mut same, mut refused) = (0, 0);
+        for case in 0..300 {
+            let (grid, blocked) = random_case(&mut rng);
+            let free: Vec<Cell> = (0..grid.len())
+                .map(|i| grid.cell(i))
+                .filter(|&c| !grid.is_blocked(c))
+                .collect();
+            if free.len() < 2 {
+                continue;
+            }
+            let q = SippQuery {
+                start: free[rng.random_range(0..free.len())],
+                goal: free[rng.random_range(0..free.len())],
+                cell_s: rng.random_range(0.3..1.5),
+                latest_departure_s: rng.random_range(0.0..4.0),
+                horizon_s: rng.random_range(5.0..40.0),
+                diagonals: rng.random_bool(0.5),
+                max_expansions: 1_000_000,
+                deadline: None,
+            };
+            let mut timeline = |c: Cell| blocked[grid.index(c)].clone();
+            let a = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance);
+            let b = sipp_with(&grid, &q, &mut timeline, Bound::Octile);
+            match (&a, &b) {
+                (Ok(a), Ok(b)) => {
+                    assert!(
+                        (a.arrival_s() - b.arrival_s()).abs() < 1e-9,
+                        "case {case}: {} against {}",
+                        a.arrival_s(),
+                        b.arrival_s()
+                    );
+                    same += 1;
+                }
+                (Err(SippError::NoRoute { .. }), Err(SippError::NoRoute { .. })) => refused += 1,
+                _ => panic!("case {case}: {a:?} against {b:?}"),
+            }
+        }
+        assert!(same > 100 && refused > 20, "{same} {refused}");
+    }
 
     /// The integer keys order entries exactly as the search crate's open list does.
     #[test]
     fn the_queue_keys_order_as_the_open_entries() {
-        use rand::{RngExt, SeedableRng};
         use skyplan_search::OpenEntry;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
         let values = [0.0, -0.0, 1.0, 2.5, 1e-300, 1e300, -1.0, f64::INFINITY];
