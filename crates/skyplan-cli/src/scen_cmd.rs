@@ -45,7 +45,7 @@ pub fn run(args: ScenArgs) -> Result<()> {
         true => indicatif::ProgressBar::hidden(),
         false => crate::show::spinner(format!("preparing {}", args.planner)),
     };
-    let search = prepare(&args, &grid, scenarios.len() as u64);
+    let search = prepare(&args, &grid, scenarios.len() as u64, &preparing);
     preparing.finish_and_clear();
     let search = search?;
     if let Some(path) = &args.save_preprocess {
@@ -78,7 +78,12 @@ pub fn run(args: ScenArgs) -> Result<()> {
 /// The search for `queries` scenarios: the planner (auto picking for that many), or saved
 /// preprocessing (`--preprocess`: a contraction hierarchy, a first-move table or a JPS+ table,
 /// told apart by the file's header).
-fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSearch<'g>> {
+fn prepare<'g>(
+    args: &ScenArgs,
+    grid: &'g Grid2,
+    queries: u64,
+    preparing: &indicatif::ProgressBar,
+) -> Result<CellSearch<'g>> {
     let planner_error = |e: skyplan_plan::PlanFailure| {
         // Messages that name the planner already ("planner ch: …") are not prefixed twice.
         let own = format!("planner {}: ", args.planner);
@@ -88,7 +93,7 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
     if args.max_table.is_some()
         || (args.planner == PlannerId::FirstMove && args.preprocess.is_none())
     {
-        return first_move_up_to(args, grid);
+        return first_move_up_to(args, grid, preparing);
     }
     let Some(path) = &args.preprocess else {
         return CellSearch::for_queries(grid, args.planner, MoveModel::Octile, queries)
@@ -175,7 +180,11 @@ fn prepare<'g>(args: &ScenArgs, grid: &'g Grid2, queries: u64) -> Result<CellSea
 /// `--planner first-move [--max-table SIZE]`: a first-move table of up to SIZE (by default the
 /// planner's own cap, 64 MiB) and at most half the machine's memory, built here; a large one is
 /// announced (its size and searches) before the build.
-fn first_move_up_to<'g>(args: &ScenArgs, grid: &'g Grid2) -> Result<CellSearch<'g>> {
+fn first_move_up_to<'g>(
+    args: &ScenArgs,
+    grid: &'g Grid2,
+    preparing: &indicatif::ProgressBar,
+) -> Result<CellSearch<'g>> {
     if args.planner != PlannerId::FirstMove {
         return Err(bad_input(format!(
             "--max-table is the largest first-move table to build; it needs --planner first-move, not {}",
@@ -199,10 +208,16 @@ fn first_move_up_to<'g>(args: &ScenArgs, grid: &'g Grid2) -> Result<CellSearch<'
         None => skyplan_plan::auto::FIRST_MOVE_MAX_BYTES,
     };
     if !args.json && bytes <= max_bytes && bytes > skyplan_plan::auto::FIRST_MOVE_MAX_BYTES {
-        eprintln!(
-            "building a first-move table of {} ({free} exact searches, one per free cell)…",
+        // The spinner's message on a terminal; a line of its own in a log.
+        let building = format!(
+            "building a first-move table of {} ({free} exact searches, one per free cell)",
             human(bytes)
         );
+        if preparing.is_hidden() {
+            eprintln!("{building}…");
+        } else {
+            preparing.set_message(building);
+        }
     }
     let t = Instant::now();
     let table = FirstMoveTable::build(Arc::new(grid.clone()), MoveModel::Octile, max_bytes)

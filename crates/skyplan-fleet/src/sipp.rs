@@ -258,8 +258,9 @@ struct SafeCache {
     dense: Vec<u32>,
     sparse: HashMap<u32, u32>,
     intervals: Vec<Interval>,
-    /// The best state of each interval, or [`NONE`].
-    best: Vec<u32>,
+    /// The best state of each interval, or [`NONE`], with its arrival beside it (so a move
+    /// compares arrivals without reading the state).
+    best: Vec<(u32, f64)>,
     /// Per cell, the number of its intervals: at `intervals[start - 1]`'s slot of `counts`.
     counts: Vec<u32>,
     /// The blocked times of the cell being asked, reused.
@@ -300,7 +301,8 @@ impl SafeCache {
         let start = self.intervals.len();
         push_safe_intervals(&self.scratch, &mut self.intervals);
         let count = self.intervals.len() - start;
-        self.best.resize(self.intervals.len(), NONE);
+        self.best
+            .resize(self.intervals.len(), (NONE, f64::INFINITY));
         self.counts.resize(self.intervals.len(), 0);
         self.counts[start] = count as u32;
         let at = start as u32 + 1;
@@ -391,7 +393,7 @@ fn sipp_with(
             parent: NONE,
             stale: false,
         });
-        safe.best[first + k] = id;
+        safe.best[first + k] = (id, g);
         open.push(Queued::new(g + h(q.start), g, id));
     }
     let moves: &[(i32, i32, f64)] = if q.diagonals {
@@ -463,8 +465,8 @@ fn sipp_with(
                 {
                     continue;
                 }
-                let known = safe.best[first + k];
-                if known != NONE && nodes[known as usize].arrive_s <= arrive {
+                let (known, known_s) = safe.best[first + k];
+                if known_s <= arrive {
                     continue;
                 }
                 let id = nodes.len() as u32;
@@ -479,7 +481,7 @@ fn sipp_with(
                 if known != NONE {
                     nodes[known as usize].stale = true;
                 }
-                safe.best[first + k] = id;
+                safe.best[first + k] = (id, arrive);
                 open.push(Queued::new(arrive + h_next, arrive, id));
             }
         }
