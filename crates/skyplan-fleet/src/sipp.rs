@@ -719,8 +719,9 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
 
-    /// A random grid (a quarter blocked) with random blocked times, fractional, per cell.
-    fn random_case(rng: &mut rand_chacha::ChaCha8Rng) -> (Grid2, Vec<Vec<Interval>>) {
+    /// A random grid (a quarter blocked) with random blocked times, fractional, per cell, and
+    /// its free cells.
+    fn random_case(rng: &mut rand_chacha::ChaCha8Rng) -> (Grid2, Vec<Vec<Interval>>, Vec<Cell>) {
         let (rows, cols) = (rng.random_range(3..12u32), rng.random_range(3..12u32));
         let cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.25)).collect();
         let grid =
@@ -738,7 +739,11 @@ mod tests {
                     .collect()
             })
             .collect();
-        (grid, blocked)
+        let free = (0..grid.len())
+            .map(|i| grid.cell(i))
+            .filter(|&c| !grid.is_blocked(c))
+            .collect();
+        (grid, blocked, free)
     }
 
     /// The grid-distance bound against an independent Dijkstra over the true move lengths: never
@@ -749,12 +754,8 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let mut checked = (0, 0);
         for _ in 0..200 {
-            let (grid, _) = random_case(&mut rng);
+            let (grid, _, free) = random_case(&mut rng);
             let diagonals = rng.random_bool(0.5);
-            let free: Vec<Cell> = (0..grid.len())
-                .map(|i| grid.cell(i))
-                .filter(|&c| !grid.is_blocked(c))
-                .collect();
             if free.len() < 2 {
                 continue;
             }
@@ -834,11 +835,7 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
         let (mut same, mut refused) = (0, 0);
         for case in 0..300 {
-            let (grid, blocked) = random_case(&mut rng);
-            let free: Vec<Cell> = (0..grid.len())
-                .map(|i| grid.cell(i))
-                .filter(|&c| !grid.is_blocked(c))
-                .collect();
+            let (grid, blocked, free) = random_case(&mut rng);
             if free.len() < 2 {
                 continue;
             }
