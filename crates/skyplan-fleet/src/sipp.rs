@@ -396,20 +396,7 @@ fn sipp_with(
         safe.best[first + k] = (id, g);
         open.push(Queued::new(g + h(q.start), g, id));
     }
-    let moves: &[(i32, i32, f64)] = if q.diagonals {
-        &[
-            (1, 0, 1.0),
-            (-1, 0, 1.0),
-            (0, 1, 1.0),
-            (0, -1, 1.0),
-            (1, 1, std::f64::consts::SQRT_2),
-            (1, -1, std::f64::consts::SQRT_2),
-            (-1, 1, std::f64::consts::SQRT_2),
-            (-1, -1, std::f64::consts::SQRT_2),
-        ]
-    } else {
-        &[(1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0)]
-    };
+    let moves = moves(q.diagonals);
     let free = |r: i64, c: i64| grid.is_free_at(r, c);
     let mut expansions = 0;
     while let Some(Reverse(Queued { node, .. })) = open.pop() {
@@ -438,12 +425,17 @@ fn sipp_with(
         }
         let here_end = safe.of(grid, cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
-        for &(dr, dc, len) in moves {
-            let (nr, nc) = (r + i64::from(dr), c + i64::from(dc));
-            if !free(nr, nc) || (dr != 0 && dc != 0 && !(free(r + i64::from(dr), c) && free(r, nc)))
-            {
+        for &(dr, dc) in moves {
+            let (nr, nc) = (r + dr, c + dc);
+            let diagonal = dr != 0 && dc != 0;
+            if !free(nr, nc) || (diagonal && !(free(r + dr, c) && free(r, nc))) {
                 continue;
             }
+            let len = if diagonal {
+                std::f64::consts::SQRT_2
+            } else {
+                1.0
+            };
             let Some(next) = grid.checked_cell(nr, nc) else {
                 continue;
             };
@@ -518,6 +510,21 @@ struct StaticDistance {
     diagonals: bool,
 }
 
+/// The moves, straight ones first: four, or with `diagonals` eight.
+fn moves(diagonals: bool) -> &'static [(i64, i64)] {
+    const MOVES: [(i64, i64); 8] = [
+        (1, 0),
+        (-1, 0),
+        (0, 1),
+        (0, -1),
+        (1, 1),
+        (1, -1),
+        (-1, 1),
+        (-1, -1),
+    ];
+    if diagonals { &MOVES } else { &MOVES[..4] }
+}
+
 /// A straight move's cost in [`StaticDistance`]'s units.
 const STATIC_STRAIGHT: u32 = 29;
 /// A diagonal move's: 41 / 29 = 1.41379… < √2, so no distance found exceeds the true one.
@@ -568,25 +575,7 @@ impl StaticDistance {
     /// Expands the backward search until cell `index` is closed or nothing is left open.
     fn close(&mut self, grid: &Grid2, index: usize) {
         let free = |r: i64, c: i64| grid.is_free_at(r, c);
-        let moves: &[(i64, i64, u32)] = if self.diagonals {
-            &[
-                (1, 0, STATIC_STRAIGHT),
-                (-1, 0, STATIC_STRAIGHT),
-                (0, 1, STATIC_STRAIGHT),
-                (0, -1, STATIC_STRAIGHT),
-                (1, 1, STATIC_DIAGONAL),
-                (1, -1, STATIC_DIAGONAL),
-                (-1, 1, STATIC_DIAGONAL),
-                (-1, -1, STATIC_DIAGONAL),
-            ]
-        } else {
-            &[
-                (1, 0, STATIC_STRAIGHT),
-                (-1, 0, STATIC_STRAIGHT),
-                (0, 1, STATIC_STRAIGHT),
-                (0, -1, STATIC_STRAIGHT),
-            ]
-        };
+        let moves = moves(self.diagonals);
         let n = self.ring.len();
         while self.units[index] & CLOSED == 0 && self.pending > 0 {
             let slot = self.f as usize % n;
@@ -605,12 +594,18 @@ impl StaticDistance {
                 continue;
             }
             self.units[i as usize] = d | CLOSED;
-            for &(dr, dc, cost) in moves {
+            for &(dr, dc) in moves {
                 let (nr, nc) = (r + dr, c + dc);
+                let diagonal = dr != 0 && dc != 0;
                 // Moves are symmetric: the corner rule asks for the same two cells both ways.
-                if !free(nr, nc) || (dr != 0 && dc != 0 && !(free(r + dr, c) && free(r, nc))) {
+                if !free(nr, nc) || (diagonal && !(free(r + dr, c) && free(r, nc))) {
                     continue;
                 }
+                let cost = if diagonal {
+                    STATIC_DIAGONAL
+                } else {
+                    STATIC_STRAIGHT
+                };
                 let j = nr as usize * self.cols + nc as usize;
                 let nd = d + cost;
                 // A closed cell's distance is final (the heuristic is consistent).
