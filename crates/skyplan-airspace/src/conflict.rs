@@ -40,10 +40,16 @@ pub fn bbox_deg(v: &Volume4D) -> [f64; 4] {
 /// Whether the footprints share a point: the boxes first, then separating axes between the
 /// convex hulls on a plane about `a`'s first vertex ([`crate::geometry`]).
 pub fn footprints_intersect(a: &Volume4D, b: &Volume4D) -> bool {
-    let (ba, bb) = (bbox_deg(a), bbox_deg(b));
-    if ba[2] < bb[0] || bb[2] < ba[0] || ba[3] < bb[1] || bb[3] < ba[1] {
-        return false;
-    }
+    boxes_overlap(&bbox_deg(a), &bbox_deg(b)) && hulls_intersect(a, b)
+}
+
+/// Whether two [`bbox_deg`] boxes share a point.
+fn boxes_overlap(a: &[f64; 4], b: &[f64; 4]) -> bool {
+    !(a[2] < b[0] || b[2] < a[0] || a[3] < b[1] || b[3] < a[1])
+}
+
+/// [`footprints_intersect`] past its boxes: separating axes between the convex hulls.
+fn hulls_intersect(a: &Volume4D, b: &Volume4D) -> bool {
     let Some(&origin) = a.volume.outline_polygon.vertices.first() else {
         return false;
     };
@@ -134,13 +140,25 @@ impl Conflict {
 }
 
 /// The first pair `(new volume, stored volume)` that conflicts, if any.
+///
+/// The same test as [`volumes_conflict`] on every pair, in that order, with each footprint's
+/// box computed once, when a pair first overlaps in time and altitude.
 pub fn first_conflict(new: &[Volume4D], stored: &[Volume4D]) -> Option<(usize, usize)> {
-    new.iter().enumerate().find_map(|(i, a)| {
-        stored
-            .iter()
-            .position(|b| volumes_conflict(a, b))
-            .map(|j| (i, j))
-    })
+    let mut boxes: Vec<Option<[f64; 4]>> = vec![None; stored.len()];
+    for (i, a) in new.iter().enumerate() {
+        let mut own = None;
+        for (j, b) in stored.iter().enumerate() {
+            if !(times_overlap(a, b) && altitudes_overlap(a, b)) {
+                continue;
+            }
+            let own = own.get_or_insert_with(|| bbox_deg(a));
+            let theirs = boxes[j].get_or_insert_with(|| bbox_deg(b));
+            if boxes_overlap(own, theirs) && hulls_intersect(a, b) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
 }
 
 /// The stored intents that `new` conflicts with under `rule` (one entry per intent, in the

@@ -571,3 +571,45 @@ fn the_footprint_test_agrees_with_shapely() {
     );
     assert!(meeting > 300 && meeting < 2700 && touching > 10);
 }
+
+/// `first_conflict` (boxes computed once per call) names the same first pair as testing every
+/// pair in order with `volumes_conflict`, on random intents whose volumes overlap in time, in
+/// altitude and in footprint in every combination.
+#[test]
+fn the_first_conflict_is_the_first_pair_volumes_conflict_finds() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let random_volume = |rng: &mut ChaCha8Rng| {
+        let integer = rng.random_bool(0.5);
+        let mut v = volume_of(&random_polygon(rng, integer));
+        let start = Timestamp::from_unix_ms(t0().unix_ms() + rng.random_range(0..30) * 1000);
+        v.time_start = start.into();
+        v.time_end =
+            Timestamp::from_unix_ms(start.unix_ms() + rng.random_range(0..20) * 1000).into();
+        let lower = f64::from(rng.random_range(0..3)) * 10.0;
+        v.volume.altitude_lower = Altitude::w84_m(lower);
+        v.volume.altitude_upper = Altitude::w84_m(lower + f64::from(rng.random_range(0..3)) * 10.0);
+        v
+    };
+    let (mut found, mut clear) = (0, 0);
+    for _ in 0..400 {
+        let new: Vec<Volume4D> = (0..rng.random_range(0..6))
+            .map(|_| random_volume(&mut rng))
+            .collect();
+        let stored: Vec<Volume4D> = (0..rng.random_range(0..6))
+            .map(|_| random_volume(&mut rng))
+            .collect();
+        let every_pair = new.iter().enumerate().find_map(|(i, a)| {
+            stored
+                .iter()
+                .position(|b| volumes_conflict(a, b))
+                .map(|j| (i, j))
+        });
+        assert_eq!(first_conflict(&new, &stored), every_pair);
+        if every_pair.is_some() {
+            found += 1;
+        } else {
+            clear += 1;
+        }
+    }
+    assert!(found > 50 && clear > 50, "{found} {clear}");
+}
