@@ -510,19 +510,11 @@ struct StaticDistance {
     diagonals: bool,
 }
 
-/// The moves, straight ones first: four, or with `diagonals` eight.
+/// The moves, straight ones first ([`skyplan_cspace::NEIGHBOURS_8`]): four, or with
+/// `diagonals` eight.
 fn moves(diagonals: bool) -> &'static [(i64, i64)] {
-    const MOVES: [(i64, i64); 8] = [
-        (1, 0),
-        (-1, 0),
-        (0, 1),
-        (0, -1),
-        (1, 1),
-        (1, -1),
-        (-1, 1),
-        (-1, -1),
-    ];
-    if diagonals { &MOVES } else { &MOVES[..4] }
+    let all = &skyplan_cspace::NEIGHBOURS_8;
+    if diagonals { all } else { &all[..4] }
 }
 
 /// A straight move's cost in [`StaticDistance`]'s units.
