@@ -308,7 +308,7 @@ impl ContractionHierarchy {
 
     /// [`ContractionHierarchy::build`] with another core threshold (tests force large cores).
     #[cfg(test)]
-    fn build_with_core(grid: Arc<Grid2>, model: MoveModel, core_degree: usize) -> Self {
+    pub(crate) fn build_with_core(grid: Arc<Grid2>, model: MoveModel, core_degree: usize) -> Self {
         let mut b = Builder::new(&grid, model);
         // No deadline: cannot fail.
         let _ = b.contract_all(core_degree, None);
@@ -436,6 +436,19 @@ impl ContractionHierarchy {
             label, stack, memo, ..
         } = q;
         self.chain_of(label, (stack, memo), meet, &|r| r)
+    }
+
+    /// Appends the ranks of edge `e` walked from its end `from` (without `from`), shortcuts
+    /// unpacked (kept in `q` for later queries); returns its far end.
+    pub(crate) fn unpack_ranks(
+        &self,
+        q: &mut ChQuery,
+        from: u32,
+        e: u32,
+        out: &mut Vec<u32>,
+    ) -> u32 {
+        let ChQuery { stack, memo, .. } = q;
+        self.unpack((stack, memo), (from, e), out, &|r| r)
     }
 
     /// [`Self::chain`] as the cells of the grid (this hierarchy's nodes are its free cells).

@@ -34,6 +34,7 @@ mod components;
 mod contraction;
 mod first_move;
 pub mod first_move_file;
+mod hub_labels;
 mod jps;
 mod jps_plus;
 pub mod landmarks;

@@ -14,20 +14,32 @@
 //!   cell reached is reached by an octile-length path) and stops at subgoals. Those pairs are
 //!   the graph's edges, weighted by the exact integer octile distance
 //!   ([`crate::CH_STRAIGHT_COST`], [`crate::CH_DIAGONAL_COST`]).
-//! * A query floods from the goal (the subgoals it reaches get their octile distance to the
-//!   goal as a tail) and from the start (its subgoals are the A\* sources; reaching the goal
-//!   means the octile line is free and optimal), then runs A\* over the graph with the octile
-//!   heuristic. The tail equals the heuristic, so the first subgoal with a tail taken off the
-//!   open list closes an optimal path. Each hop is then walked into cells: the diagonal-first or
-//!   straight-first shape when free, else a depth-first walk inside the hop's octile diamond.
+//! * A contraction hierarchy is built over that graph, and from it **hub labels**
+//!   ([`crate::hub_labels`]): each subgoal's list of hubs with exact upward distances.
+//! * The same floods tell, for every free cell, the subgoals direct-h-reachable from it (the
+//!   relation is symmetric): its **roots**, kept per cell when they average at most
+//!   [`ROOTS_PER_FREE_CELL`].
+//! * A query takes the start's roots as sources and the goal's as targets, each with its octile
+//!   distance (a subgoal end is its own root), and reads their labels: the cheapest
+//!   source–hub–target sum is the shortest path through subgoals, walked up the labels to the
+//!   hub and its shortcuts unpacked. When that is longer than the octile line, or there is none,
+//!   a depth-first walk by the two moves an octile-length path takes tells whether the line is
+//!   free without subgoals (then it is the path). Each hop is then walked into cells: the
+//!   diagonal-first or straight-first shape when free, else a depth-first walk inside the hop's
+//!   octile diamond.
+//! * Without kept roots a query floods from both ends for them (reaching the start from the
+//!   goal means the line is free); without labels (a hierarchy with a core, or more than
+//!   [`LABEL_MAX_ENTRIES`] entries) it searches the hierarchy from both sets of roots.
 //!
 //! On mazes with corridors a few cells wide the graph keeps a few percent of the free cells
 //! (7,234 of 209,242 on the generated 4-cell 512 × 512 maze), so its queries touch far fewer
-//! nodes than a cell search. On open maps the floods cover large areas, so building costs more.
+//! nodes than a cell search; on rooms a query reads a few hundred to a few thousand label
+//! entries. On open maps the floods cover large areas, so building costs more.
 
 use crate::astar::check_endpoints;
 use crate::contraction::{DIAGONAL, NONE, STRAIGHT};
 use crate::first_move::MOVES;
+use crate::hub_labels::{HubLabels, LabelQuery, LabelRefusal};
 use crate::{ChQuery, ContractionError, ContractionHierarchy, GridPath, MoveModel, SearchError};
 use skyplan_cspace::{Cell, Grid2};
 use std::sync::Arc;
@@ -56,6 +68,20 @@ pub enum SubgoalError {
     },
 }
 
+/// The moves an octile-length path from `a` to `b` is made of: the diagonal towards `b` and
+/// the straight move along the longer side (one is useless, filtered by the octile test, when
+/// `b` is on a line or a diagonal from `a`).
+#[inline]
+fn toward(a: (i32, i32), b: (i32, i32)) -> [(i32, i32); 2] {
+    let (dr, dc) = ((b.0 - a.0).signum(), (b.1 - a.1).signum());
+    let straight = if (b.0 - a.0).abs() > (b.1 - a.1).abs() {
+        (dr, 0)
+    } else {
+        (0, dc)
+    };
+    [(dr, dc), straight]
+}
+
 /// Exact integer octile distance of a displacement.
 #[inline]
 fn octile(dr: i32, dc: i32) -> u64 {
@@ -73,9 +99,37 @@ pub struct SubgoalGraph {
     rc_of_node: Vec<(i32, i32)>,
     /// Directed edges (both ways of each pair).
     edges: usize,
-    /// The contraction hierarchy over the graph: queries run on it.
+    /// The contraction hierarchy over the graph: queries run on it, or on its hub labels.
     ch: ContractionHierarchy,
+    /// Hub labels of the hierarchy, when it has no core and they fit [`LABEL_MAX_ENTRIES`].
+    labels: Option<HubLabels>,
+    /// Per grid cell index, the ranks of the subgoals direct-h-reachable from it
+    /// (`roots[roots_first[i]..roots_first[i + 1]]`; empty for subgoals, which are their own),
+    /// when they fit [`ROOTS_PER_FREE_CELL`]; else (empty vectors) queries flood.
+    roots_first: Vec<u32>,
+    roots: Vec<u32>,
 }
+
+/// What a subgoal graph keeps besides its hierarchy.
+#[derive(Debug, Clone, Copy)]
+struct Keep {
+    /// The hierarchy's hub labels.
+    labels: bool,
+    /// Each cell's direct-h-reachable subgoals.
+    roots: bool,
+}
+
+const KEEP_ALL: Keep = Keep {
+    labels: true,
+    roots: true,
+};
+
+/// Hub label entries (16 bytes each) a subgoal graph keeps at most: 256 MiB.
+pub const LABEL_MAX_ENTRIES: usize = 1 << 24;
+
+/// Direct-h-reachable subgoals kept per free cell on average, at most (4 bytes each); on open
+/// ground each cell sees many corners, and queries flood instead.
+pub const ROOTS_PER_FREE_CELL: usize = 48;
 
 /// The grid with a blocked ring round it, and the subgoals on it: what floods and hop walks
 /// read.
@@ -101,6 +155,8 @@ pub struct SubgoalQuery {
     ch: ChQuery,
     sources: Vec<(u32, u64)>,
     targets: Vec<(u32, u64)>,
+    /// The hub labels' workspace.
+    labels: LabelQuery,
 }
 
 impl SubgoalQuery {
@@ -153,6 +209,17 @@ impl SubgoalGraph {
         model: MoveModel,
         deadline: Option<std::time::Instant>,
     ) -> Result<Self, SubgoalError> {
+        Self::build_keeping(grid, model, deadline, KEEP_ALL)
+    }
+
+    /// [`Self::build_until`], keeping the hub labels and the cells' roots only where `keep`
+    /// says (tests check the searches without them too).
+    fn build_keeping(
+        grid: Arc<Grid2>,
+        model: MoveModel,
+        deadline: Option<std::time::Instant>,
+        keep: Keep,
+    ) -> Result<Self, SubgoalError> {
         if model != MoveModel::Octile {
             return Err(SubgoalError::MoveModel);
         }
@@ -204,6 +271,11 @@ impl SubgoalGraph {
         q.fit(board.free.len());
         let mut pairs: Vec<(u32, u32, u64)> = Vec::new();
         let mut reached = Vec::new();
+        // (grid cell index, node) for every non-subgoal cell a subgoal's flood reaches: the
+        // subgoals direct-h-reachable from each cell (the relation is symmetric).
+        let free_cells = grid.blocked_cells().iter().filter(|&&b| !b).count();
+        let roots_budget = free_cells.saturating_mul(ROOTS_PER_FREE_CELL);
+        let mut seen: Option<Vec<(u32, u32)>> = keep.roots.then(Vec::new);
         for (u, &(r, c)) in rc_of_node.iter().enumerate() {
             if u % 64 == 0
                 && let Some(d) = deadline
@@ -215,11 +287,16 @@ impl SubgoalGraph {
                 });
             }
             reached.clear();
-            board.flood(&mut q, r, c, |_, _, node, cost| {
+            board.flood(&mut q, r, c, |r2, c2, node, cost| {
                 if node != NONE {
                     reached.push((node, cost));
+                } else if let Some(seen) = seen.as_mut() {
+                    seen.push(((r2 as usize * cols + c2 as usize) as u32, u as u32));
                 }
             });
+            if seen.as_ref().is_some_and(|s| s.len() > roots_budget) {
+                seen = None;
+            }
             pairs.extend(
                 (reached.iter())
                     .filter(|&&(v, _)| v as usize > u)
@@ -240,12 +317,47 @@ impl SubgoalGraph {
             },
             ContractionError::TooLarge { cells, max } => SubgoalError::TooLarge { cells, max },
         })?;
+        let labels = match HubLabels::build(&ch, LABEL_MAX_ENTRIES, deadline) {
+            Ok(_) if !keep.labels => None,
+            Ok(labels) => Some(labels),
+            Err(LabelRefusal::Deadline) => {
+                return Err(SubgoalError::Deadline {
+                    done: n,
+                    subgoals: n,
+                });
+            }
+            Err(LabelRefusal::Core | LabelRefusal::TooLarge) => None,
+        };
+        let (roots_first, roots) = match seen {
+            Some(seen) => {
+                // Counting sort by cell; each cell's roots as ranks.
+                let mut first = vec![0u32; grid.len() + 1];
+                for &(cell, _) in &seen {
+                    first[cell as usize + 1] += 1;
+                }
+                for i in 0..grid.len() {
+                    first[i + 1] += first[i];
+                }
+                let mut at = first.clone();
+                let mut roots = vec![0u32; seen.len()];
+                for &(cell, node) in &seen {
+                    let (r, c) = rc_of_node[node as usize];
+                    roots[at[cell as usize] as usize] = ch.rank_of(r as usize * cols + c as usize);
+                    at[cell as usize] += 1;
+                }
+                (first, roots)
+            }
+            None => (Vec::new(), Vec::new()),
+        };
         Ok(Self {
             grid,
             board,
             rc_of_node,
             edges: 2 * pairs.len(),
             ch,
+            labels,
+            roots_first,
+            roots,
         })
     }
 
@@ -266,7 +378,21 @@ impl SubgoalGraph {
 
     /// Bytes held by the graph and its hierarchy (not counting the grid).
     pub fn table_bytes(&self) -> usize {
-        self.board.free.len() * (1 + 4) + self.rc_of_node.len() * 8 + self.ch.table_bytes()
+        self.board.free.len() * (1 + 4)
+            + self.rc_of_node.len() * 8
+            + self.ch.table_bytes()
+            + self.labels.as_ref().map_or(0, HubLabels::bytes)
+            + (self.roots_first.len() + self.roots.len()) * 4
+    }
+
+    /// Entries of the hub labels (0 when queries search the hierarchy instead).
+    pub fn label_entries(&self) -> usize {
+        self.labels.as_ref().map_or(0, |l| l.entries.len())
+    }
+
+    /// Direct-h-reachable subgoals kept for the grid's cells (0 when queries flood instead).
+    pub fn kept_roots(&self) -> usize {
+        self.roots.len()
     }
 
     /// An optimal path from `start` to `goal` under [`MoveModel::Octile`], with `query` as the
@@ -279,6 +405,114 @@ impl SubgoalGraph {
     ) -> Result<GridPath, SearchError> {
         check_endpoints(&self.grid, start, goal)?;
         query.fit(self.board.free.len());
+        if self.roots_first.is_empty() {
+            return self.search_flooding(query, start, goal);
+        }
+        let (s, t) = (
+            (start.row as i32, start.col as i32),
+            (goal.row as i32, goal.col as i32),
+        );
+        if s == t {
+            return Ok(self.board.walk(query, &[s, t]));
+        }
+        let mut roots = std::mem::take(&mut query.sources);
+        self.roots_of(s, &mut roots);
+        query.sources = roots;
+        let mut roots = std::mem::take(&mut query.targets);
+        self.roots_of(t, &mut roots);
+        query.targets = roots;
+        let (ranks, work) = self.chain(query);
+        let hops = ranks.map(|ranks| self.hops(s, &ranks, t));
+        // A path through subgoals as short as the octile line is optimal; otherwise the line
+        // may still be free (a path with no subgoal on it never bends).
+        let line = octile(t.0 - s.0, t.1 - s.1);
+        let longer = hops.as_ref().is_none_or(|h| {
+            h.windows(2)
+                .map(|w| octile(w[1].0 - w[0].0, w[1].1 - w[0].1))
+                .sum::<u64>()
+                > line
+        });
+        if longer && self.board.reaches(query, s, t) {
+            let mut path = self.board.walk(query, &[s, t]);
+            path.expansions = work;
+            return Ok(path);
+        }
+        let Some(hops) = hops else {
+            return Err(SearchError::Unreachable { expansions: work });
+        };
+        let mut path = self.board.walk(query, &hops);
+        path.expansions = work;
+        Ok(path)
+    }
+
+    /// The roots of free cell `(r, c)` from the kept lists: itself if a subgoal, else the
+    /// subgoals direct-h-reachable from it, as ranks with their octile distance.
+    fn roots_of(&self, (r, c): (i32, i32), out: &mut Vec<(u32, u64)>) {
+        out.clear();
+        let cols = self.grid.cols() as i32;
+        let i = (r * cols + c) as usize;
+        if self.board.node_of[self.board.at(r, c)] != NONE {
+            out.push((self.ch.rank_of(i), 0));
+            return;
+        }
+        let kept = &self.roots[self.roots_first[i] as usize..self.roots_first[i + 1] as usize];
+        out.extend(kept.iter().map(|&k| {
+            let cell = self.ch.cell_of(k) as i32;
+            (k, octile(cell / cols - r, cell % cols - c))
+        }));
+    }
+
+    /// The ranks of a cheapest chain of subgoals from one of the query's sources to one of its
+    /// targets (by the hub labels, else by the hierarchy's search), and the work done (label
+    /// entries read, or nodes settled).
+    fn chain(&self, q: &mut SubgoalQuery) -> (Option<Vec<u32>>, u64) {
+        if let Some(labels) = &self.labels {
+            let (meet, read) = labels.meet(&mut q.labels, &q.sources, &q.targets);
+            let Some(m) = meet else {
+                return (None, read);
+            };
+            let mut up = vec![q.sources[m.source].0];
+            let mut down = vec![q.targets[m.target].0];
+            if labels
+                .climb(&self.ch, &mut q.ch, up[0], m.hub, &mut up)
+                .is_some()
+                && labels
+                    .climb(&self.ch, &mut q.ch, down[0], m.hub, &mut down)
+                    .is_some()
+            {
+                down.pop();
+                up.extend(down.iter().rev());
+                return (Some(up), read);
+            }
+            // Labels always hold the paths to their hubs; the search below is a safety net.
+            debug_assert!(false, "a hub label's path is broken");
+        }
+        let (meet, settled) = self.ch.meet(&mut q.ch, &q.sources, &q.targets);
+        (meet.map(|m| self.ch.chain(&mut q.ch, m)), settled)
+    }
+
+    /// The hops start → the chain's subgoals → goal, as rows and columns.
+    fn hops(&self, s: (i32, i32), ranks: &[u32], t: (i32, i32)) -> Vec<(i32, i32)> {
+        let cols = self.grid.cols() as i32;
+        let mut hops = Vec::with_capacity(ranks.len() + 2);
+        hops.push(s);
+        hops.extend(ranks.iter().map(|&k| {
+            let i = self.ch.cell_of(k) as i32;
+            (i / cols, i % cols)
+        }));
+        hops.push(t);
+        hops.dedup();
+        hops
+    }
+
+    /// [`Self::search`] on a graph without kept roots: the roots are found by floods from both
+    /// ends.
+    fn search_flooding(
+        &self,
+        query: &mut SubgoalQuery,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<GridPath, SearchError> {
         let cols = self.grid.cols() as i32;
         let (sr, sc) = (start.row as i32, start.col as i32);
         let (tr, tc) = (goal.row as i32, goal.col as i32);
@@ -313,19 +547,11 @@ impl SubgoalGraph {
             });
         }
         query.sources = roots;
-        let (meet, expansions) = self.ch.meet(&mut query.ch, &query.sources, &query.targets);
-        let Some(meet) = meet else {
+        let (ranks, expansions) = self.chain(query);
+        let Some(ranks) = ranks else {
             return Err(SearchError::Unreachable { expansions });
         };
-        let ranks = self.ch.chain(&mut query.ch, meet);
-        let mut hops = Vec::with_capacity(ranks.len() + 2);
-        hops.push((sr, sc));
-        hops.extend(ranks.iter().map(|&k| {
-            let i = self.ch.cell_of(k) as i32;
-            (i / cols, i % cols)
-        }));
-        hops.push((tr, tc));
-        hops.dedup();
+        let hops = self.hops((sr, sc), &ranks, (tr, tc));
         let mut path = self.board.walk(query, &hops);
         path.expansions = expansions;
         Ok(path)
@@ -387,6 +613,50 @@ impl Board {
                 }
             }
         }
+    }
+
+    /// True if free `b` is h-reachable from free `a` through no subgoal (a depth-first walk
+    /// by the only two moves an octile-length path from `a` to `b` takes: the diagonal and the
+    /// straight move towards `b`).
+    fn reaches(&self, q: &mut SubgoalQuery, a: (i32, i32), b: (i32, i32)) -> bool {
+        let moves = toward(a, b);
+        let total = octile(b.0 - a.0, b.1 - a.1);
+        let now = q.next_stamp();
+        let (origin, target) = (self.at(a.0, a.1), self.at(b.0, b.1));
+        if origin == target {
+            return true;
+        }
+        q.stamp[origin] = now;
+        q.stack.clear();
+        q.stack.push((origin as u32, a.0, a.1));
+        while let Some((_, r, c)) = q.stack.pop() {
+            let here = octile(r - a.0, c - a.1);
+            for (mr, mc) in moves {
+                let (nr, nc) = (r + mr, c + mc);
+                let step = if mr != 0 && mc != 0 {
+                    DIAGONAL
+                } else {
+                    STRAIGHT
+                };
+                let there = here + step;
+                if octile(nr - a.0, nc - a.1) != there
+                    || there + octile(b.0 - nr, b.1 - nc) != total
+                    || !self.can_move(r, c, mr, mc)
+                {
+                    continue;
+                }
+                let y = self.at(nr, nc);
+                if y == target {
+                    return true;
+                }
+                if q.stamp[y] == now || self.node_of[y] != NONE {
+                    continue;
+                }
+                q.stamp[y] = now;
+                q.stack.push((y as u32, nr, nc));
+            }
+        }
+        false
     }
 
     /// The cells of a chain of h-reachable hops. Every octile-length path of a hop has the
@@ -465,11 +735,16 @@ impl Board {
                 break;
             }
             let here = octile(r - a.0, c - a.1);
-            for (k, &(mr, mc)) in MOVES.iter().enumerate() {
+            // Straight pushed first: the diagonal is tried first.
+            for (mr, mc) in toward(a, b).into_iter().rev() {
                 let (nr, nc) = (r + mr, c + mc);
-                let step = if k < 4 { STRAIGHT } else { DIAGONAL };
-                let there = octile(nr - a.0, nc - a.1);
-                if there != here + step
+                let there = here
+                    + if mr != 0 && mc != 0 {
+                        DIAGONAL
+                    } else {
+                        STRAIGHT
+                    };
+                if octile(nr - a.0, nc - a.1) != there
                     || there + octile(b.0 - nr, b.1 - nc) != total
                     || !self.can_move(r, c, mr, mc)
                 {
@@ -512,6 +787,24 @@ mod tests {
         })
     }
 
+    /// The graph of `grid` with and without hub labels and kept roots (searched by the
+    /// hierarchy, and with floods from both ends, instead).
+    fn every_kind(grid: &Arc<Grid2>) -> Vec<SubgoalGraph> {
+        let kinds = [(true, true), (true, false), (false, true), (false, false)];
+        kinds
+            .into_iter()
+            .map(|(labels, roots)| {
+                let keep = Keep { labels, roots };
+                let graph =
+                    SubgoalGraph::build_keeping(Arc::clone(grid), MoveModel::Octile, None, keep)
+                        .unwrap();
+                assert_eq!(graph.labels.is_some(), labels);
+                assert_eq!(graph.roots_first.is_empty(), !roots);
+                graph
+            })
+            .collect()
+    }
+
     /// The path's moves and ends against the exact Dijkstra oracle's, and the path re-checked
     /// cell by cell.
     fn agrees(
@@ -545,17 +838,18 @@ mod tests {
             grid in grid_strategy(),
             ends in proptest::collection::vec((0u32..24, 0u32..24, 0u32..24, 0u32..24), 1..8),
         ) {
-            let graph = SubgoalGraph::build(Arc::new(grid), MoveModel::Octile).unwrap();
-            let mut q = SubgoalQuery::new();
-            for &(a, b, c, d) in &ends {
-                let grid = graph.grid();
-                let s = Cell::new(a % grid.rows(), b % grid.cols());
-                let t = Cell::new(c % grid.rows(), d % grid.cols());
-                if grid.is_blocked(s) || grid.is_blocked(t) {
-                    prop_assert!(graph.search(&mut q, s, t).is_err());
-                    continue;
+            let grid = Arc::new(grid);
+            for graph in every_kind(&grid) {
+                let mut q = SubgoalQuery::new();
+                for &(a, b, c, d) in &ends {
+                    let s = Cell::new(a % grid.rows(), b % grid.cols());
+                    let t = Cell::new(c % grid.rows(), d % grid.cols());
+                    if grid.is_blocked(s) || grid.is_blocked(t) {
+                        prop_assert!(graph.search(&mut q, s, t).is_err());
+                        continue;
+                    }
+                    agrees(&graph, &mut q, s, t)?;
                 }
-                agrees(&graph, &mut q, s, t)?;
             }
         }
     }
@@ -577,11 +871,12 @@ mod tests {
             let blocked = maze.passable.iter().map(|&p| !p).collect();
             let grid = Grid2::new(37, 41, blocked, GridFrame::default()).unwrap();
             let free: Vec<Cell> = (0..grid.len()).map(|i| grid.cell(i)).filter(|&c| !grid.is_blocked(c)).collect();
-            let graph = SubgoalGraph::build(Arc::new(grid), MoveModel::Octile).unwrap();
-            let mut q = SubgoalQuery::new();
-            for &s in free.iter().step_by(151) {
-                for &t in free.iter().step_by(11) {
-                    agrees(&graph, &mut q, s, t)?;
+            for graph in every_kind(&Arc::new(grid)) {
+                let mut q = SubgoalQuery::new();
+                for &s in free.iter().step_by(151) {
+                    for &t in free.iter().step_by(11) {
+                        agrees(&graph, &mut q, s, t)?;
+                    }
                 }
             }
         }
