@@ -272,8 +272,8 @@ pub fn jps_plus_engine(
     CellSearch::with_jps_plus_table(grid, Arc::new(table), us, None).map_err(|e| e.to_string())
 }
 
-/// What [`run_all`]'s planners start from: JPS+'s table, and a loaded first-move table or
-/// contraction hierarchy.
+/// What [`run_all`]'s planners start from: JPS+'s table, and a loaded first-move table,
+/// contraction hierarchy or subgoal graph.
 pub struct Preprocessing<R> {
     /// Where JPS+ gets its table.
     pub jps_plus: JpsPlusPrep<R>,
@@ -283,6 +283,10 @@ pub struct Preprocessing<R> {
     /// A contraction hierarchy (loaded from a file) and its load time, µs: `ch` uses it, and
     /// `auto` where its rule is the hierarchy's ([`skyplan_plan::auto::pick_with_hierarchy`]).
     pub hierarchy: Option<(Arc<ContractionHierarchy>, u64)>,
+    /// A subgoal graph (loaded from a file) and its load time, µs: `subgoal` uses it, and
+    /// `auto` where a graph at hand is the fastest
+    /// ([`skyplan_plan::auto::pick_with_subgoal_graph`]).
+    pub subgoal: Option<(Arc<skyplan_search::SubgoalGraph>, u64)>,
 }
 
 impl<R> From<JpsPlusPrep<R>> for Preprocessing<R> {
@@ -292,6 +296,7 @@ impl<R> From<JpsPlusPrep<R>> for Preprocessing<R> {
             jps_plus,
             first_move: None,
             hierarchy: None,
+            subgoal: None,
         }
     }
 }
@@ -370,6 +375,7 @@ pub fn run_all<R: std::io::Read>(
         jps_plus,
         first_move,
         hierarchy,
+        subgoal,
     } = prep.into();
     let jps_plus_id = Contender::Skyplan(skyplan_plan::PlannerId::JpsPlus);
     let mut prep = match jps_plus {
@@ -403,7 +409,31 @@ pub fn run_all<R: std::io::Read>(
             Some((Arc::clone(ch), *us, auto))
         };
         let with_hierarchy = hierarchy_pick();
+        let subgoal_pick = || {
+            let (graph, us) = subgoal.as_ref()?;
+            let auto = match contender {
+                Contender::Skyplan(PlannerId::Subgoal) => None,
+                Contender::Skyplan(PlannerId::Auto) => {
+                    Some(skyplan_plan::auto::pick_with_subgoal_graph(
+                        &skyplan_plan::auto::MapStats::of(grid),
+                        queries.len() as u64,
+                        graph.labelled(),
+                    )?)
+                }
+                _ => return None,
+            };
+            Some((Arc::clone(graph), *us, auto))
+        };
+        let with_subgoal = subgoal_pick();
         let prepare = || match (own, contender, &first_move) {
+            _ if with_subgoal.is_some() => {
+                let Some((graph, us, auto)) = with_subgoal else {
+                    return Ok(None);
+                };
+                CellSearch::with_subgoal_graph(grid, graph, us, auto)
+                    .map(Some)
+                    .map_err(|e| RunAllError::Table(e.message))
+            }
             _ if with_hierarchy.is_some() => {
                 let Some((ch, us, auto)) = with_hierarchy else {
                     return Ok(None);

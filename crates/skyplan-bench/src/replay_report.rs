@@ -77,8 +77,8 @@ impl Replay {
         let ran = self.auto.as_ref().map_or(of.planner, |p| p.planner);
         let table = match ran {
             PlannerId::JpsPlus => format!(" (JPS+ table ready in {:.1} ms)", self.table_ms),
-            PlannerId::Ch => format!(" (hierarchy built in {:.1} ms)", self.table_ms),
-            PlannerId::Subgoal => format!(" (subgoal graph built in {:.1} ms)", self.table_ms),
+            PlannerId::Ch => format!(" (hierarchy ready in {:.1} ms)", self.table_ms),
+            PlannerId::Subgoal => format!(" (subgoal graph ready in {:.1} ms)", self.table_ms),
             PlannerId::FirstMove => format!(" (first-move table ready in {:.1} ms)", self.table_ms),
             _ => String::new(),
         };

@@ -301,15 +301,15 @@ pub struct PlanArgs {
     /// prm, lazy-prm: start from a saved roadmap (refused if built for another map, margin or volume).
     #[arg(long, value_name = "FILE")]
     pub load_roadmap: Option<PathBuf>,
-    /// jps-plus, ch, first-move: plan with the JPS+ table, contraction hierarchy or first-move
-    /// table saved in FILE (by --save-preprocess) instead of building one (auto: any of them,
-    /// where it answers fastest); refused unless FILE was built for this map's grid (altitude,
-    /// margin, cell size) and corner rule.
+    /// jps-plus, ch, subgoal, first-move: plan with the JPS+ table, contraction hierarchy,
+    /// subgoal graph or first-move table saved in FILE (by --save-preprocess) instead of
+    /// building one (auto: any of them, where it answers fastest); refused unless FILE was built
+    /// for this map's grid (altitude, margin, cell size) and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// jps-plus, ch, first-move: save the JPS+ table (with landmarks), contraction hierarchy or
-    /// first-move table this plan used to FILE (for --preprocess in later runs: a far query on a
-    /// large map then needs no preprocessing).
+    /// jps-plus, ch, subgoal, first-move: save the JPS+ table (with landmarks), contraction
+    /// hierarchy, subgoal graph or first-move table this plan used to FILE (for --preprocess in
+    /// later runs: a far query on a large map then needs no preprocessing).
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
 }
@@ -328,14 +328,15 @@ pub struct ScenArgs {
     pub planner: PlannerId,
     /// Use the preprocessing saved in FILE (by --save-preprocess) instead of building it: a
     /// contraction hierarchy (with --planner ch, or auto on maps where a hierarchy is the
-    /// fastest), a first-move table (with --planner first-move or auto, on any map) or a JPS+
-    /// table with landmarks (with --planner jps-plus, or auto where it picks JPS or JPS+);
-    /// refused unless FILE was built for this map.
+    /// fastest), a subgoal graph (with --planner subgoal, or auto on maps with a mean free run
+    /// of at most 24 cells), a first-move table (with --planner first-move or auto, on any map)
+    /// or a JPS+ table with landmarks (with --planner jps-plus, or auto where it picks JPS or
+    /// JPS+); refused unless FILE was built for this map.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
-    /// Save the contraction hierarchy, first-move table or JPS+ table (with landmarks) this run
-    /// builds (--planner ch, first-move or jps-plus, or auto when it picks one) to FILE, for
-    /// --preprocess in later runs.
+    /// Save the contraction hierarchy, subgoal graph, first-move table or JPS+ table (with
+    /// landmarks) this run builds (--planner ch, subgoal, first-move or jps-plus, or auto when
+    /// it picks one) to FILE, for --preprocess in later runs.
     #[arg(long, value_name = "FILE")]
     pub save_preprocess: Option<PathBuf>,
     /// --planner first-move: build a table of up to SIZE (bytes, or with a suffix K, M, G;
@@ -449,8 +450,9 @@ pub struct BenchArgs {
     /// --save-preprocess, with its landmarks) instead of building one; or, for a first-move
     /// table (saved by scen or plan --save-preprocess), first-move and auto use it; for a
     /// contraction hierarchy (saved by scen or plan --save-preprocess), ch and auto (on maps
-    /// where it picks the hierarchy) use it; refused unless FILE was built for this map,
-    /// altitude, margin, cell size and corner rule.
+    /// where it picks the hierarchy) use it; for a subgoal graph (saved likewise), subgoal and
+    /// auto (on maps with a mean free run of at most 24 cells) use it; refused unless FILE was
+    /// built for this map, altitude, margin, cell size and corner rule.
     #[arg(long, value_name = "FILE", conflicts_with = "save_preprocess")]
     pub preprocess: Option<PathBuf>,
     /// Build the JPS+ table of this grid, with landmarks, and save it to FILE (for --preprocess

@@ -78,8 +78,8 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
     };
     let steps = Some((planners.len() * queries.len()) as u64);
     let progress = crate::show::progress("{msg:>24} [{bar:40}] {pos}/{len} queries", steps, target);
-    let (first_move, hierarchy) = loaded_preprocessing(&args, grid, model)?;
-    let jps_plus = if first_move.is_some() || hierarchy.is_some() {
+    let (first_move, hierarchy, subgoal) = loaded_preprocessing(&args, grid, model)?;
+    let jps_plus = if first_move.is_some() || hierarchy.is_some() || subgoal.is_some() {
         JpsPlusPrep::Build
     } else {
         jps_plus_prep(&args, grid, model, &planners)?
@@ -93,6 +93,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
             jps_plus,
             first_move,
             hierarchy,
+            subgoal,
         },
         |planner| progress.set_message(planner.name()),
         || progress.inc(1),
@@ -170,9 +171,10 @@ fn loaded_preprocessing(
 ) -> Result<(
     Loaded<skyplan_search::FirstMoveTable>,
     Loaded<skyplan_search::ContractionHierarchy>,
+    Loaded<skyplan_search::SubgoalGraph>,
 )> {
     let Some(path) = &args.preprocess else {
-        return Ok((None, None));
+        return Ok((None, None, None));
     };
     let t = Instant::now();
     let (input, kind) = crate::files::open_preprocess(path)?;
@@ -184,14 +186,25 @@ fn loaded_preprocessing(
         crate::files::Saved::FirstMove => {
             let table = skyplan_search::FirstMoveTable::read_from(input, grid, model)
                 .map_err(|e| damaged(&e))?;
-            (Some((std::sync::Arc::new(table), us())), None)
+            (Some((std::sync::Arc::new(table), us())), None, None)
         }
         crate::files::Saved::Hierarchy => {
             let ch = skyplan_search::ContractionHierarchy::read_from(input, grid, model)
                 .map_err(|e| damaged(&e))?;
-            (None, Some((std::sync::Arc::new(ch), us())))
+            (None, Some((std::sync::Arc::new(ch), us())), None)
         }
-        crate::files::Saved::JpsPlus | crate::files::Saved::Unknown => (None, None),
+        crate::files::Saved::Subgoal => {
+            if model != MoveModel::Octile {
+                return Err(bad_input(format!(
+                    "--preprocess {}: a subgoal graph is for 8-connected moves without corner cutting, not with --corner-cutting",
+                    path.display()
+                )));
+            }
+            let graph =
+                skyplan_search::SubgoalGraph::read_from(input, grid).map_err(|e| damaged(&e))?;
+            (None, None, Some((std::sync::Arc::new(graph), us())))
+        }
+        crate::files::Saved::JpsPlus | crate::files::Saved::Unknown => (None, None, None),
     })
 }
 

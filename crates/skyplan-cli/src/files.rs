@@ -29,6 +29,8 @@ pub enum Saved {
     Hierarchy,
     /// A first-move table.
     FirstMove,
+    /// A subgoal graph (its contraction hierarchy).
+    Subgoal,
     /// None of them.
     Unknown,
 }
@@ -41,16 +43,17 @@ impl Saved {
             Saved::JpsPlus => Some(PlannerId::JpsPlus),
             Saved::Hierarchy => Some(PlannerId::Ch),
             Saved::FirstMove => Some(PlannerId::FirstMove),
+            Saved::Subgoal => Some(PlannerId::Subgoal),
             Saved::Unknown => None,
         }
     }
 }
 
 /// What `--preprocess FILE` names when the file is none of the kinds (for error messages).
-pub const NOT_SAVED: &str = "not a saved JPS+ table, contraction hierarchy or first-move table (save one with --save-preprocess)";
+pub const NOT_SAVED: &str = "not a saved JPS+ table, contraction hierarchy, subgoal graph or first-move table (save one with --save-preprocess)";
 
-/// Opens the `--preprocess` file `path` (a contraction hierarchy, JPS+ table or first-move
-/// table) and tells which it is, by its header; errors name the option and the file.
+/// Opens the `--preprocess` file `path` (a contraction hierarchy, subgoal graph, JPS+ table or
+/// first-move table) and tells which it is, by its header; errors name the option and the file.
 pub fn open_preprocess(path: &Path) -> Result<(std::io::BufReader<std::fs::File>, Saved)> {
     let shown = path.display();
     let file = std::fs::File::open(path)
@@ -62,6 +65,8 @@ pub fn open_preprocess(path: &Path) -> Result<(std::io::BufReader<std::fs::File>
         Saved::FirstMove
     } else if head.starts_with(skyplan_search::ch_file::MAGIC) {
         Saved::Hierarchy
+    } else if head.starts_with(skyplan_search::subgoal_file::MAGIC) {
+        Saved::Subgoal
     } else if head.starts_with(skyplan_search::table_file::MAGIC) {
         Saved::JpsPlus
     } else {

@@ -285,6 +285,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         let what = [
             "jps_plus_table",
             "contraction_hierarchy",
+            "subgoal_graph",
             "first_move_table",
         ];
         if what
@@ -306,6 +307,7 @@ fn run_inner(args: PlanArgs) -> Result<()> {
         crate::files::write_atomic_with(path, |out| {
             match planner {
                 PlannerId::Ch => session.save_ch(&request, out),
+                PlannerId::Subgoal => session.save_subgoal(&request, out),
                 PlannerId::FirstMove => session.save_first_move(&request, out),
                 _ => session.save_jps_plus(&request, out),
             }
@@ -343,8 +345,8 @@ fn run_inner(args: PlanArgs) -> Result<()> {
 
 /// `--preprocess` (loaded into the session before planning) and `--save-preprocess` (its target,
 /// checked before planning so that a failing run writes nothing): for `jps-plus` a JPS+ table,
-/// for `ch` a contraction hierarchy, for `first-move` a first-move table; `auto` loads any of
-/// the three (told apart by its header) and uses it where it answers fastest; other planners
+/// for `ch` a contraction hierarchy, for `subgoal` a subgoal graph, for `first-move` a
+/// first-move table; `auto` loads any of the four (told apart by its header) and uses it where it answers fastest; other planners
 /// build nothing to keep.
 fn preprocess_files(
     args: &PlanArgs,
@@ -361,11 +363,11 @@ fn preprocess_files(
     if !loads_any
         && !matches!(
             planner,
-            PlannerId::JpsPlus | PlannerId::Ch | PlannerId::FirstMove
+            PlannerId::JpsPlus | PlannerId::Ch | PlannerId::Subgoal | PlannerId::FirstMove
         )
     {
         return Err(bad_input(format!(
-            "{option} {}: only jps-plus (a JPS+ table), ch (a contraction hierarchy) and first-move (a first-move table) keep preprocessing, and auto loads any of them; the planner is {planner}",
+            "{option} {}: only jps-plus (a JPS+ table), ch (a contraction hierarchy), subgoal (a subgoal graph) and first-move (a first-move table) keep preprocessing, and auto loads any of them; the planner is {planner}",
             path.display()
         )));
     }
@@ -391,6 +393,7 @@ fn preprocess_files(
     };
     match kind {
         PlannerId::Ch => session.load_ch(request, input),
+        PlannerId::Subgoal => session.load_subgoal(request, input),
         PlannerId::FirstMove => session.load_first_move(request, input),
         _ => session.load_jps_plus(input),
     }

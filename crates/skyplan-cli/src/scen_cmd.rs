@@ -11,9 +11,10 @@ use skyplan_bench::replay_report::ReplayOf;
 use skyplan_cspace::Grid2;
 use skyplan_plan::auto::{
     MapStats, pick, pick_with_first_move_table, pick_with_hierarchy, pick_with_jps_plus_table,
+    pick_with_subgoal_graph,
 };
 use skyplan_plan::{CellSearch, PlannerId};
-use skyplan_search::{ContractionHierarchy, FirstMoveTable, JpsPlusTable, MoveModel};
+use skyplan_search::{ContractionHierarchy, FirstMoveTable, JpsPlusTable, MoveModel, SubgoalGraph};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -109,10 +110,25 @@ fn prepare<'g>(
         )));
     };
     let first_move = saved == Saved::FirstMove;
+    let subgoal = saved == Saved::Subgoal;
     let stats = MapStats::of(grid);
     let auto = match (args.planner, kind) {
         (PlannerId::Auto, PlannerId::FirstMove) => {
             Some(pick_with_first_move_table(&stats, queries))
+        }
+        (PlannerId::Auto, PlannerId::Subgoal) => {
+            let rule = pick(&stats, queries);
+            // Whether the graph has labels is known once it is read: assumed here, checked below.
+            let Some(p) = pick_with_subgoal_graph(&stats, queries, true) else {
+                return Err(bad_input(format!(
+                    "--preprocess {shown}: auto does not use a subgoal graph on this map (mean free run {:.1} cells > {}: it picks {}, {})",
+                    stats.mean_run,
+                    skyplan_plan::auto::SUBGOAL_KEPT_MAX_RUN,
+                    rule.planner,
+                    rule.why
+                )));
+            };
+            Some(p)
         }
         (PlannerId::Auto, PlannerId::JpsPlus) => {
             let with_table = pick_with_jps_plus_table(&stats, queries, MoveModel::Octile, true);
@@ -142,6 +158,7 @@ fn prepare<'g>(
                     "a saved first-move table is for --planner first-move or auto"
                 }
                 PlannerId::JpsPlus => "a saved JPS+ table is for --planner jps-plus or auto",
+                PlannerId::Subgoal => "a saved subgoal graph is for --planner subgoal or auto",
                 _ => "a saved contraction hierarchy is for --planner ch or auto",
             };
             return Err(bad_input(format!(
@@ -155,6 +172,24 @@ fn prepare<'g>(
         let table = FirstMoveTable::read_from(input, grid_arc, MoveModel::Octile)
             .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
         return CellSearch::with_first_move_table(grid, Arc::new(table), us(t), auto)
+            .map_err(planner_error);
+    }
+    if subgoal {
+        let graph = SubgoalGraph::read_from(input, grid_arc)
+            .map_err(|e| bad_input(format!("--preprocess {shown}: {e}")))?;
+        let auto = match auto {
+            Some(_) => {
+                let labelled = graph.labelled();
+                let Some(p) = pick_with_subgoal_graph(&stats, queries, labelled) else {
+                    return Err(bad_input(format!(
+                        "--preprocess {shown}: auto does not use this subgoal graph on this map: its queries would flood and search (the corners see too far for hub labels); use --planner subgoal"
+                    )));
+                };
+                Some(p)
+            }
+            None => None,
+        };
+        return CellSearch::with_subgoal_graph(grid, Arc::new(graph), us(t), auto)
             .map_err(planner_error);
     }
     if kind == PlannerId::JpsPlus {
@@ -234,7 +269,8 @@ fn first_move_up_to<'g>(
         .map_err(|e| bad_input(format!("--planner first-move: {}", e.message)))
 }
 
-/// Writes the search's preprocessing (a contraction hierarchy, a first-move table, or a JPS+
+/// Writes the search's preprocessing (a contraction hierarchy, a subgoal graph, a first-move
+/// table, or a JPS+
 /// table with landmarks added for the later runs) to `path` atomically (a failed save leaves
 /// no partial file); refused when the search has none.
 fn save_preprocessing(path: &Path, search: &CellSearch<'_>, json: bool) -> Result<()> {
@@ -245,6 +281,11 @@ fn save_preprocessing(path: &Path, search: &CellSearch<'_>, json: bool) -> Resul
             ch.write_to(out).map_err(std::io::Error::other)
         })?;
         ("contraction hierarchy", ch.file_bytes() as f64 / 1e6)
+    } else if let Some(graph) = search.subgoal_graph() {
+        crate::files::write_atomic_with(path, |out| {
+            graph.write_to(out).map_err(std::io::Error::other)
+        })?;
+        ("subgoal graph", graph.file_bytes() as f64 / 1e6)
     } else if let Some(table) = search.first_move_table() {
         crate::files::write_atomic_with(path, |out| {
             table.write_to(out).map_err(std::io::Error::other)
@@ -266,7 +307,7 @@ fn save_preprocessing(path: &Path, search: &CellSearch<'_>, json: bool) -> Resul
             None => "the planner builds none".to_string(),
         };
         return Err(bad_input(format!(
-            "--save-preprocess {}: no contraction hierarchy, first-move or JPS+ table to save: {what}; use --planner ch, first-move or jps-plus",
+            "--save-preprocess {}: no contraction hierarchy, subgoal graph, first-move or JPS+ table to save: {what}; use --planner ch, subgoal, first-move or jps-plus",
             path.display()
         )));
     };

@@ -430,10 +430,10 @@ fn a_saved_jps_plus_table_plans_the_same_route_without_building() {
     );
 }
 
-/// The same for a contraction hierarchy and a first-move table on a MovingAI map; one built for
-/// the octile grid is refused for the corner-cutting one.
+/// The same for a contraction hierarchy, a subgoal graph and a first-move table on a MovingAI
+/// map; one built for the octile grid is refused for the corner-cutting one.
 #[test]
-fn a_saved_hierarchy_or_first_move_table_plans_the_same_route_without_building() {
+fn a_saved_hierarchy_subgoal_graph_or_first_move_table_plans_the_same_route_without_building() {
     let map = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../data/movingai/den312d.map"
@@ -448,6 +448,7 @@ fn a_saved_hierarchy_or_first_move_table_plans_the_same_route_without_building()
     let truth = dijkstra["cost_m"].as_f64().unwrap();
     for (planner, detail, file) in [
         ("ch", "contraction_hierarchy", "den.ch"),
+        ("subgoal", "subgoal_graph", "den.sg"),
         ("first-move", "first_move_table", "den.fm"),
     ] {
         let saved = run_json(

@@ -39,6 +39,14 @@ pub const CH_QUERIES: u64 = 250;
 /// 15.9) gain less than the build costs over a thousand queries.
 pub const SUBGOAL_MAX_RUN: f64 = 12.0;
 
+/// The mean free run (cells) up to which a subgoal graph at hand (loaded from a file, or kept
+/// from earlier queries) answers faster than JPS+, when it has hub labels and every cell's
+/// roots kept (`SubgoalGraph::label_entries`, `kept_roots`): rooms 16 cells wide (mean run
+/// 18.3: 19 µs a query against JPS+'s 49 µs, but 2.5 s to build), the 8-cell maze (15.9: 22
+/// against 99 µs). Not maze512-32-9 (48.2: 18 against 12 µs) nor Boston_0_512 (39.7); on
+/// Paris_1_256 (19.6) the corners see too far for kept roots (its queries flood: 1.6 ms).
+pub const SUBGOAL_KEPT_MAX_RUN: f64 = 24.0;
+
 /// Free cells from which the subgoal graph is worth building on such a map: on small maps
 /// (den312d, 2,445 free cells) every query is short and JPS+ answers it in a few µs, less than
 /// a subgoal query's floods at both ends.
@@ -303,6 +311,38 @@ pub fn pick_with_hierarchy(stats: &MapStats, queries: u64) -> Option<AutoPick> {
         queries,
         why: format!(
             "scattered obstacles or narrow corridors (mean free run {:.1} ≤ {CH_MAX_RUN} cells) and a contraction hierarchy at hand: the fastest queries, nothing to build",
+            stats.mean_run
+        ),
+    })
+}
+
+/// The pick when a subgoal graph is at hand with no build to pay (loaded from a file, or kept
+/// from earlier queries): the graph where [`pick`] builds one ([`subgoal_map`]), and, when it
+/// reads hub labels from kept roots (`labelled`), on every large map (≥ [`SUBGOAL_MIN_FREE`]
+/// free cells) whose mean free run is ≤ [`SUBGOAL_KEPT_MAX_RUN`]; `None` elsewhere (on small
+/// maps JPS+ answers in a few µs too).
+///
+/// ```
+/// use skyplan_plan::{PlannerId, auto::{MapStats, pick_with_subgoal_graph}};
+/// let rooms = MapStats { cells: 262_144, free: 216_935, mean_run: 18.3 };
+/// let pick = pick_with_subgoal_graph(&rooms, 1_000, true).unwrap();
+/// assert_eq!(pick.planner, PlannerId::Subgoal);
+/// assert_eq!(pick_with_subgoal_graph(&rooms, 1_000, false), None);
+/// let boston = MapStats { free: 196_725, mean_run: 39.7, ..rooms };
+/// assert_eq!(pick_with_subgoal_graph(&boston, 1_000, true), None);
+/// let den312d = MapStats { cells: 5_265, free: 2_445, mean_run: 9.1 };
+/// assert_eq!(pick_with_subgoal_graph(&den312d, 1_000, true), None);
+/// ```
+pub fn pick_with_subgoal_graph(stats: &MapStats, queries: u64, labelled: bool) -> Option<AutoPick> {
+    let fits = subgoal_map(stats)
+        || (labelled && stats.mean_run <= SUBGOAL_KEPT_MAX_RUN && stats.free >= SUBGOAL_MIN_FREE);
+    fits.then(|| AutoPick {
+        planner: PlannerId::Subgoal,
+        stats: *stats,
+        queries,
+        why: format!(
+            "a subgoal graph at hand (built or loaded){} and a mean free run of {:.1} cells: nothing to build, the fastest queries",
+            if labelled { " with hub labels" } else { "" },
             stats.mean_run
         ),
     })

@@ -8,6 +8,7 @@ use crate::planner_id::PlannerId;
 use skyplan_cspace::{Cell, Grid2};
 use skyplan_search::{
     BlockJps, ContractionHierarchy, FirstMoveTable, GridPath, JpsPlusTable, MoveModel, SearchError,
+    SubgoalGraph,
 };
 use std::sync::Arc;
 
@@ -146,6 +147,40 @@ impl<'g> CellSearch<'g> {
     pub fn hierarchy(&self) -> Option<&Arc<ContractionHierarchy>> {
         match &self.engine {
             Engine::Hierarchy(ch) => Some(ch),
+            _ => None,
+        }
+    }
+
+    /// The subgoal graph `graph` built or loaded before (e.g. from a file, see
+    /// [`skyplan_search::subgoal_file`]); refused unless it was built for exactly `grid`.
+    /// `precompute_us` is what preparing it cost; `auto` is the pick to report, if `auto` chose
+    /// it ([`crate::auto::pick_with_subgoal_graph`]).
+    pub fn with_subgoal_graph(
+        grid: &'g Grid2,
+        graph: Arc<SubgoalGraph>,
+        precompute_us: u64,
+        auto: Option<AutoPick>,
+    ) -> Result<Self, PlanFailure> {
+        if !std::ptr::eq(&**graph.grid(), grid) && **graph.grid() != *grid {
+            return Err(PlanFailure::bad_request(
+                "the subgoal graph was built for another grid",
+            ));
+        }
+        Ok(Self {
+            grid,
+            model: MoveModel::Octile,
+            engine: Engine::Subgoal(graph),
+            workspace: Box::default(),
+            block_jps: None,
+            precompute_us,
+            auto,
+        })
+    }
+
+    /// The subgoal graph it queries, if it does (`subgoal`, or `auto` picking it): to save.
+    pub fn subgoal_graph(&self) -> Option<&Arc<SubgoalGraph>> {
+        match &self.engine {
+            Engine::Subgoal(g) => Some(g),
             _ => None,
         }
     }

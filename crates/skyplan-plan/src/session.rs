@@ -19,6 +19,7 @@ use skyplan_map::nofly::{Zone, ZoneShape};
 use skyplan_mission::Mission;
 use skyplan_search::ch_file::ChFileError;
 use skyplan_search::first_move_file::FirstMoveFileError;
+use skyplan_search::subgoal_file::SubgoalFileError;
 use skyplan_search::table_file::{TableFileError, read_header_from};
 use skyplan_search::{
     ContractionHierarchy, FirstMoveError, FirstMoveTable, JpsPlusTable, MoveModel, SubgoalError,
@@ -106,6 +107,17 @@ impl<T> Kept<T> {
         self.keep(Arc::clone(&item));
         Ok((item, Some(us)))
     }
+}
+
+/// Subgoal graphs are for 8-connected moves without corner cutting: a request with another
+/// move model (which `subgoal` answers with a contraction hierarchy) neither saves nor loads one.
+fn octile_only(r: &Resolved) -> Result<(), PlanFailure> {
+    if r.model == MoveModel::Octile {
+        return Ok(());
+    }
+    Err(PlanFailure::bad_request(
+        "a subgoal graph is for 8-connected moves without corner cutting (connectivity 8, corner_cutting false); with this request's moves subgoal plans with a contraction hierarchy: save that with planner ch",
+    ))
 }
 
 pub(crate) fn micros(d: Duration) -> u64 {
@@ -567,6 +579,45 @@ impl Session {
         Ok(())
     }
 
+    /// Writes the subgoal graph for `request`'s grid (8-connected, no corner cutting; built
+    /// unless the session has it, within the request's `time_limit_ms` and the session's
+    /// deadline) to `out` as a subgoal graph file ([`skyplan_search::subgoal_file`]), for
+    /// [`Session::load_subgoal`] in a later run; the bytes written.
+    pub fn save_subgoal(
+        &mut self,
+        request: &PlanRequest,
+        out: impl Write,
+    ) -> Result<u64, PlanFailure> {
+        let (r, grid) = self.preprocessing_grid(request, PlannerId::Subgoal)?;
+        octile_only(&r)?;
+        self.check_request_memory(&r)?;
+        let (graph, _) = self.subgoal_graph(&grid, r.preprocess_limit)?;
+        graph
+            .write_to(out)
+            .map_err(|e| PlanFailure::internal(format!("writing the subgoal graph: {e}")))?;
+        Ok(graph.file_bytes())
+    }
+
+    /// Loads a subgoal graph file saved by [`Session::save_subgoal`] for `request`'s grid:
+    /// later `subgoal` requests on that grid, and `auto` where a subgoal graph at hand is the
+    /// fastest ([`crate::auto::pick_with_subgoal_graph`]), use it instead of building one.
+    /// Refused (bad request, naming what is wrong) otherwise.
+    pub fn load_subgoal(
+        &mut self,
+        request: &PlanRequest,
+        input: impl Read,
+    ) -> Result<(), PlanFailure> {
+        let (r, grid) = self.preprocessing_grid(request, PlannerId::Subgoal)?;
+        octile_only(&r)?;
+        let graph = SubgoalGraph::read_from(input, Arc::clone(&grid)).map_err(|e| {
+            let io = matches!(e, SubgoalFileError::Hierarchy(ChFileError::Io(_)));
+            self.file_failure(&e, io)
+        })?;
+        self.subgoal.drop_where(|g| Arc::ptr_eq(g.grid(), &grid));
+        self.subgoal.keep(Arc::new(graph));
+        Ok(())
+    }
+
     /// Writes the first-move table for `request`'s grid and move model (built unless the
     /// session has it, within the request's `time_limit_ms`, the session's deadline and memory
     /// limit) to `out` as a table file ([`skyplan_search::first_move_file`]), for
@@ -668,11 +719,11 @@ impl Session {
         if corridors && (self.ch).any(|c| c.model() == model && Arc::ptr_eq(c.grid(), grid)) {
             return kept(PlannerId::Ch, "the contraction hierarchy");
         }
-        if crate::auto::subgoal_map(&stats)
-            && model == MoveModel::Octile
-            && (self.subgoal).any(|g| Arc::ptr_eq(g.grid(), grid))
+        if model == MoveModel::Octile
+            && let Some(g) = self.subgoal.find(|g| Arc::ptr_eq(g.grid(), grid))
+            && let Some(pick) = crate::auto::pick_with_subgoal_graph(&stats, queries, g.labelled())
         {
-            return kept(PlannerId::Subgoal, "the subgoal graph");
+            return pick;
         }
         if rule.planner == PlannerId::JpsPlus {
             return rule;

@@ -272,10 +272,19 @@ impl ContractionHierarchy {
     /// assert_eq!(loaded.search(&mut q, a, b)?.cells, built.search(&mut q, a, b)?.cells);
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn write_to(&self, mut out: impl Write) -> Result<(), ChFileError> {
+    pub fn write_to(&self, out: impl Write) -> Result<(), ChFileError> {
+        self.write_with(out, MAGIC)
+    }
+
+    /// [`Self::write_to`] with another magic (the subgoal graph's file holds its hierarchy).
+    pub(crate) fn write_with(
+        &self,
+        mut out: impl Write,
+        magic: &[u8; 16],
+    ) -> Result<(), ChFileError> {
         let body = self.body();
         let mut header = Vec::with_capacity(HEADER_BYTES);
-        write_head(&mut header, MAGIC, VERSION, &self.grid, self.model);
+        write_head(&mut header, magic, VERSION, &self.grid, self.model);
         for w in [self.cell_of_rank.len(), self.arcs.len(), self.edges.len()] {
             header.extend_from_slice(&(w as u32).to_le_bytes());
         }
@@ -314,11 +323,41 @@ impl ContractionHierarchy {
     /// `model`; refused with a [`ChFileError`] if it is not one, another version, truncated,
     /// damaged, or built for another grid or move model.
     pub fn read_from(
-        mut input: impl Read,
+        input: impl Read,
         grid: Arc<Grid2>,
         model: MoveModel,
     ) -> Result<Self, ChFileError> {
-        let header = read_head::<HEADER_BYTES>(&mut input, MAGIC, VERSION, &grid, model).map_err(
+        let free = grid.len() - grid.blocked_count();
+        let nodes = Nodes {
+            count: free,
+            what: "free cells",
+            is_node: &|i| !grid.blocked_cells()[i],
+            original: &|p, q| {
+                let (dr, dc) = (
+                    i64::from(q.row) - i64::from(p.row),
+                    i64::from(q.col) - i64::from(p.col),
+                );
+                let diagonal = dr != 0 && dc != 0;
+                let legal = dr.abs() <= 1
+                    && dc.abs() <= 1
+                    && (!diagonal || (model.has_diagonals() && model.corner_ok(&grid, p, dr, dc)));
+                legal.then_some(if diagonal { DIAGONAL } else { STRAIGHT })
+            },
+            neighbours: "neighbours under the move model",
+        };
+        let parts = Self::read_parts(input, &grid, model, MAGIC, &nodes)?;
+        Ok(parts.into_hierarchy(grid, model))
+    }
+
+    /// Reads a hierarchy file with `magic` for `grid` under `model` whose nodes are `nodes`'.
+    pub(crate) fn read_parts(
+        mut input: impl Read,
+        grid: &Grid2,
+        model: MoveModel,
+        magic: &[u8; 16],
+        nodes: &Nodes<'_>,
+    ) -> Result<Parts, ChFileError> {
+        let header = read_head::<HEADER_BYTES>(&mut input, magic, VERSION, grid, model).map_err(
             |e| match e {
                 HeadError::Foreign => ChFileError::NotAHierarchy,
                 HeadError::Short { expected, found } => ChFileError::Length { expected, found },
@@ -380,8 +419,8 @@ impl ContractionHierarchy {
             })
             .collect();
         let rank_of_cell = check(
-            &grid,
-            model,
+            grid,
+            nodes,
             &cell_of_rank,
             &first_out,
             &head,
@@ -390,9 +429,7 @@ impl ContractionHierarchy {
             &edges,
         )
         .map_err(ChFileError::Damaged)?;
-        Ok(ContractionHierarchy {
-            grid,
-            model,
+        Ok(Parts {
             rank_of_cell,
             cell_of_rank,
             first_out,
@@ -400,8 +437,42 @@ impl ContractionHierarchy {
                 .map(|((&head, &cost), &edge)| UpArc { cost, head, edge })
                 .collect(),
             edges,
-            id: crate::contraction::next_id(),
         })
+    }
+}
+
+/// What a hierarchy's nodes are, for the checks of its file: how many, which grid cells
+/// (`is_node` of a cell index), and the cost of an original edge between two nodes' cells
+/// (`None` when the two are not joined; `neighbours` says what they must be, in words).
+pub(crate) struct Nodes<'a> {
+    pub(crate) count: usize,
+    pub(crate) what: &'static str,
+    pub(crate) is_node: &'a dyn Fn(usize) -> bool,
+    pub(crate) original: &'a dyn Fn(Cell, Cell) -> Option<u64>,
+    pub(crate) neighbours: &'static str,
+}
+
+/// A hierarchy's arrays read from a file and checked.
+pub(crate) struct Parts {
+    rank_of_cell: Vec<u32>,
+    cell_of_rank: Vec<u32>,
+    first_out: Vec<u32>,
+    arcs: Vec<UpArc>,
+    edges: Vec<Edge>,
+}
+
+impl Parts {
+    pub(crate) fn into_hierarchy(self, grid: Arc<Grid2>, model: MoveModel) -> ContractionHierarchy {
+        ContractionHierarchy {
+            grid,
+            model,
+            rank_of_cell: self.rank_of_cell,
+            cell_of_rank: self.cell_of_rank,
+            first_out: self.first_out,
+            arcs: self.arcs,
+            edges: self.edges,
+            id: crate::contraction::next_id(),
+        }
     }
 }
 
@@ -423,7 +494,7 @@ pub(crate) fn read_up_to(input: &mut impl Read, buf: &mut [u8]) -> io::Result<us
 #[allow(clippy::too_many_arguments)]
 fn check(
     grid: &Grid2,
-    model: MoveModel,
+    nodes: &Nodes<'_>,
     cell_of_rank: &[u32],
     first_out: &[u32],
     head: &[u32],
@@ -432,16 +503,19 @@ fn check(
     edges: &[Edge],
 ) -> Result<Vec<u32>, String> {
     let n = cell_of_rank.len();
-    let free = grid.len() - grid.blocked_count();
-    if n != free {
-        return Err(format!("{n} nodes for a grid of {free} free cells"));
+    if n != nodes.count {
+        return Err(format!(
+            "{n} nodes for a grid of {} {}",
+            nodes.count, nodes.what
+        ));
     }
     let mut rank_of_cell = vec![NONE; grid.len()];
     for (r, &c) in cell_of_rank.iter().enumerate() {
         let i = c as usize;
-        if i >= grid.len() || grid.blocked_cells()[i] || rank_of_cell[i] != NONE {
+        if i >= grid.len() || !(nodes.is_node)(i) || rank_of_cell[i] != NONE {
             return Err(format!(
-                "rank {r} names cell {c}: off the grid, blocked or named twice"
+                "rank {r} names cell {c}: off the grid, not one of the {}, or named twice",
+                nodes.what
             ));
         }
         rank_of_cell[i] = r as u32;
@@ -466,21 +540,13 @@ fn check(
             return Err(format!("edge {k} does not join two nodes"));
         }
         let c = if e.mid == NONE {
-            let (p, q) = (cell(e.a), cell(e.b));
-            let (dr, dc) = (
-                i64::from(q.row) - i64::from(p.row),
-                i64::from(q.col) - i64::from(p.col),
-            );
-            let diagonal = dr != 0 && dc != 0;
-            let legal = dr.abs() <= 1
-                && dc.abs() <= 1
-                && (!diagonal || (model.has_diagonals() && model.corner_ok(grid, p, dr, dc)));
-            if !legal {
+            let Some(c) = (nodes.original)(cell(e.a), cell(e.b)) else {
                 return Err(format!(
-                    "edge {k} joins cells that are not neighbours under the move model"
+                    "edge {k} joins cells that are not {}",
+                    nodes.neighbours
                 ));
-            }
-            if diagonal { DIAGONAL } else { STRAIGHT }
+            };
+            c
         } else {
             let (f, s) = (e.first as usize, e.second as usize);
             if e.mid as usize >= n || f >= k || s >= k {

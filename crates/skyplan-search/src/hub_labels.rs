@@ -206,6 +206,27 @@ impl HubLabels {
         (meet, read)
     }
 
+    /// The distance between ranks `a` and `b` (a merge of their labels, sorted by hub), or
+    /// `None` when they are not connected.
+    pub(crate) fn distance(&self, a: u32, b: u32) -> Option<u64> {
+        let (x, y) = (self.label(a), self.label(b));
+        let (mut i, mut j) = (0, 0);
+        let mut best: Option<u64> = None;
+        while i < x.len() && j < y.len() {
+            match x[i].hub.cmp(&y[j].hub) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    let d = x[i].dist.saturating_add(y[j].dist);
+                    best = Some(best.map_or(d, |b| b.min(d)));
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+        best
+    }
+
     /// Appends the ranks of the upward path from `from` to its hub `hub` (without `from`),
     /// shortcuts unpacked; `None` if `hub` is not in the labels on the way (never for a hub a
     /// [`Self::meet`] returned).
@@ -267,6 +288,7 @@ mod tests {
                     let (meet, _) = labels.meet(&mut lq, &[(rs, 0)], &[(rt, 0)]);
                     let want = dijkstra_exact(&grid, s, t, model);
                     prop_assert_eq!(meet.map(|m| m.cost), want.map(|c| c.straight * STRAIGHT + c.diagonal * DIAGONAL), "{:?} → {:?}", s, t);
+                    prop_assert_eq!(labels.distance(rs, rt), meet.map(|m| m.cost));
                     let Some(m) = meet else { continue };
                     let mut up = vec![rs];
                     let mut down = vec![rt];

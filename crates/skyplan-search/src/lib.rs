@@ -43,6 +43,7 @@ mod open;
 pub mod oracle;
 mod queue;
 mod subgoal;
+pub mod subgoal_file;
 pub mod table_file;
 mod theta;
 
