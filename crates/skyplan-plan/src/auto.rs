@@ -31,13 +31,15 @@ pub const CH_QUERIES: u64 = 250;
 
 /// The mean free run (cells) above [`CH_MAX_RUN`] and at most this where, on large maps, the
 /// subgoal graph answers fastest: corridors a few cells wide keep few convex corners (the
-/// generated 4-cell maze, mean run 7.7: 7,234 subgoals among 209,242 free cells) and each
-/// sees only the corners near it, so the graph builds in ≈ 50 ms and a query is two small
-/// floods, a hierarchy search and the walk (≈ 50–70 µs against JPS+'s 0.3–0.4 ms there). On
-/// open ground (den312d 9.1 is small; Paris 19.6, Boston 39.7, the 32-cell maze 48.2) the
-/// corners see far, the graph is dense and JPS+ is faster. Wider corridors (the 8-cell maze,
-/// 15.9) gain less than the build costs over a thousand queries.
-pub const SUBGOAL_MAX_RUN: f64 = 12.0;
+/// generated 4-cell maze, mean run 7.7: 7,234 subgoals among 209,242 free cells; the 8-cell
+/// one, 15.9: 2,231) and each sees only the corners near it, so the graph builds in ≈ 50–60
+/// ms and a query reads a few hundred hub label entries and walks the path (25 µs against
+/// JPS+'s 330 µs on the 4-cell maze, 17 against 100 µs on the 8-cell one; 8-cell rooms, 9.2:
+/// 14 against 230 µs after a 0.7 s build). On open ground (den312d 9.1 is small; Paris 19.6,
+/// Boston 39.7, the 32-cell maze 48.2) and on rooms 16 cells wide (18.3: 2.6 s to build) the
+/// corners see far and the graph is dense: it pays only over tens of thousands of queries,
+/// or saved ([`pick_with_subgoal_graph`]).
+pub const SUBGOAL_MAX_RUN: f64 = 16.0;
 
 /// The mean free run (cells) up to which a subgoal graph at hand (loaded from a file, or kept
 /// from earlier queries) answers faster than JPS+, when it has hub labels and every cell's
@@ -442,7 +444,7 @@ mod tests {
     /// The generated MovingAI-shaped mazes (`skyplan map maze`, 512 × 512, seed 1) and what
     /// `auto` picks for 1,000 queries there: measured fastest including preprocessing
     /// (docs/BENCHMARKS.md, "Generated mazes"): CH on 1- and 2-cell corridors, the subgoal graph
-    /// on 4, JPS+ on 8 (where CH's 4–12 s build pays only after ≈ 13,000 queries or never).
+    /// on 4 and 8 (where CH's 4–12 s build pays only after ≈ 13,000 queries or never).
     #[test]
     fn on_generated_mazes_auto_picks_what_was_measured_fastest_for_1000_queries() {
         use skyplan_map::maze::{MazeSpec, generate};
@@ -450,7 +452,7 @@ mod tests {
             (1, PlannerId::Ch),
             (2, PlannerId::Ch),
             (4, PlannerId::Subgoal),
-            (8, PlannerId::JpsPlus),
+            (8, PlannerId::Subgoal),
         ] {
             let spec = MazeSpec {
                 width: 512,
