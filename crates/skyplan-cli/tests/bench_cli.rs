@@ -200,72 +200,50 @@ fn saved_then_benched(
     rows
 }
 
-/// A subgoal graph saved by `scen` serves `subgoal` and `auto` in `bench --preprocess` on a
-/// large map of scattered obstacles: `auto` picks the graph at hand (no build) over the JPS+
-/// its rule gives for 150 queries, both find the A* cost of every query, and both report the
-/// one load. Given to another map, or as another kind of file to `ch`, it is refused by name.
+/// A contraction hierarchy or a subgoal graph saved by `scen` serves its planner and `auto` in
+/// `bench --preprocess` on a large map of scattered obstacles: `auto` reports it picked what is
+/// at hand (over the JPS+ its rule gives for 150 queries), both find the A* cost of every query,
+/// and both report the one load as their preparation (nothing built again). Given to another
+/// map, the file is refused, naming it and what it was built for.
 #[test]
-fn a_saved_subgoal_graph_serves_subgoal_and_auto_in_bench() {
+fn a_saved_hierarchy_or_subgoal_graph_serves_its_planner_and_auto_in_bench() {
     let dir = tempfile::tempdir().unwrap();
     let map = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../data/movingai/random512-40-5.map"
     );
-    let rows = saved_then_benched(
-        dir.path(),
-        (map, "subgoal", "r.sg"),
-        "auto,subgoal,astar",
-        &["auto (subgoal)", "subgoal", "astar"],
-        150,
-    );
-    assert_eq!(rows[0]["precompute_ms"], rows[1]["precompute_ms"]);
-    let den = DEN312D;
-    let out = cmd(
-        dir.path(),
-        &format!("bench --map {den} --scen {den}.scen --planners subgoal --preprocess r.sg"),
-    )
-    .output()
-    .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains(
-            "--preprocess r.sg: subgoal graph file: contraction hierarchy was built for a 512 × 512 grid"
+    for (planner, file, refusal) in [
+        (
+            "ch",
+            "r.ch",
+            "--preprocess r.ch: contraction hierarchy was built for a 512 × 512 grid",
         ),
-        "{err}"
-    );
-}
-
-/// A contraction hierarchy saved by `scen` serves `ch` and `auto` in `bench --preprocess` on a
-/// map of scattered obstacles: `auto` reports it picked the hierarchy, both find the A* cost of
-/// every scenario, and both report the one load as their preparation (nothing built again).
-#[test]
-fn a_saved_hierarchy_serves_ch_and_auto_in_bench() {
-    let dir = tempfile::tempdir().unwrap();
-    let map = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../data/movingai/random512-40-5.map"
-    );
-    let rows = saved_then_benched(
-        dir.path(),
-        (map, "ch", "r.ch"),
-        "auto,ch,astar",
-        &["auto (ch)", "ch", "astar"],
-        150,
-    );
-    assert_eq!(rows[0]["precompute_ms"], rows[1]["precompute_ms"]);
-    // Given to another map, the hierarchy is refused, naming the file.
-    let den = DEN312D;
-    let out = cmd(
-        dir.path(),
-        &format!("bench --map {den} --scen {den}.scen --planners ch --preprocess r.ch"),
-    )
-    .output()
-    .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("--preprocess r.ch: contraction hierarchy was built for a 512 × 512 grid"),
-        "{err}"
-    );
+        (
+            "subgoal",
+            "r.sg",
+            "--preprocess r.sg: subgoal graph file: contraction hierarchy was built for a 512 × 512 grid",
+        ),
+    ] {
+        let auto = format!("auto ({planner})");
+        let rows = saved_then_benched(
+            dir.path(),
+            (map, planner, file),
+            &format!("auto,{planner},astar"),
+            &[&auto, planner, "astar"],
+            150,
+        );
+        assert_eq!(rows[0]["precompute_ms"], rows[1]["precompute_ms"]);
+        let den = DEN312D;
+        let out = cmd(
+            dir.path(),
+            &format!(
+                "bench --map {den} --scen {den}.scen --planners {planner} --preprocess {file}"
+            ),
+        )
+        .output()
+        .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(refusal), "{err}");
+    }
 }
