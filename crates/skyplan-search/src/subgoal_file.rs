@@ -162,6 +162,23 @@ mod tests {
         }
     }
 
+    /// Every single flipped bit anywhere in the file is refused (magic, version, move model,
+    /// grid size and checksum, counts, body checksum, body), never a panic or a wrong graph.
+    #[test]
+    fn every_flipped_bit_is_refused() {
+        let (_, bytes) = saved();
+        for at in 0..bytes.len() {
+            for bit in [0x01u8, 0x80] {
+                let mut damaged = bytes.clone();
+                damaged[at] ^= bit;
+                assert!(
+                    SubgoalGraph::read_from(&damaged[..], grid()).is_err(),
+                    "byte {at} bit {bit:#x}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn damaged_foreign_and_other_files_are_refused_by_name() {
         let (graph, bytes) = saved();
