@@ -540,7 +540,7 @@ impl SubgoalGraph {
 
     /// Entries of the hub labels (0 when queries search the hierarchy instead).
     pub fn label_entries(&self) -> usize {
-        self.labels.as_ref().map_or(0, |l| l.entries.len())
+        self.labels.as_ref().map_or(0, HubLabels::entries)
     }
 
     /// True if queries read hub labels from kept roots (no search, no flood): the fast case.
