@@ -372,6 +372,6 @@ fn a_saved_jps_plus_table_with_landmarks_serves_auto() {
     refused(
         run(&["--preprocess".as_ref(), noise.as_os_str()]),
         &noise,
-        "not a saved JPS+ table, contraction hierarchy or first-move table",
+        "not a saved JPS+ table, contraction hierarchy, subgoal graph or first-move table",
     );
 }
