@@ -421,12 +421,13 @@ impl SubgoalGraph {
         if model != MoveModel::Octile {
             return Err(SubgoalError::MoveModel);
         }
-        let floods = Floods::run(&grid, deadline, keep)?;
+        let mut floods = Floods::run(&grid, deadline, keep)?;
         let n = floods.rc_of_node.len();
+        // The hierarchy keeps the node cells (the graph needs them no more).
         let ch = ContractionHierarchy::build_graph(
             Arc::clone(&grid),
             model,
-            floods.node_cells.clone(),
+            std::mem::take(&mut floods.node_cells),
             &floods.pairs,
             deadline,
         )

@@ -75,9 +75,10 @@ impl SubgoalGraph {
         if got < 16 || &head != MAGIC {
             return Err(SubgoalFileError::NotASubgoalGraph);
         }
-        let floods = Floods::run(&grid, None, KEEP_ALL).map_err(SubgoalFileError::Graph)?;
-        let mut pairs: Vec<(u32, u32, u64)> = floods.pairs.clone();
-        pairs.sort_unstable();
+        let mut floods = Floods::run(&grid, None, KEEP_ALL).map_err(SubgoalFileError::Graph)?;
+        // Sorted for the look-ups below (the graph needs only their number).
+        floods.pairs.sort_unstable();
+        let pairs = &floods.pairs;
         let node_cells = &floods.node_cells;
         let cols = grid.cols() as usize;
         let node_of = |cell: skyplan_cspace::Cell| {
