@@ -527,7 +527,10 @@ fn check(
         return Err("the arcs' offsets are not increasing from 0 to the arc count".into());
     }
     // Every edge's cost, from its two ends (original moves) or its halves (shortcuts).
-    let max_cost = (n as u64).saturating_mul(DIAGONAL);
+    // A shortest path moves through each free cell at most once (the subgoal graph's nodes
+    // are fewer than the cells its edges cross).
+    let free = (grid.len() - grid.blocked_count()) as u64;
+    let max_cost = free.saturating_mul(DIAGONAL);
     let cols = u64::from(grid.cols());
     let cell = |rank: u32| {
         let i = u64::from(cell_of_rank[rank as usize]);

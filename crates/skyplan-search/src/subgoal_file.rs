@@ -132,6 +132,37 @@ mod tests {
         (graph, bytes)
     }
 
+    /// A corridor with two blocks far apart: four subgoals whose hops are much longer than the
+    /// graph has nodes, so its shortcuts cost more than a path through every node once (a
+    /// bound the file's check once took from the node count).
+    #[test]
+    fn a_graph_of_few_subgoals_and_long_hops_loads() {
+        let row = |blocked: &[usize]| -> String {
+            (0..60)
+                .map(|c| if blocked.contains(&c) { '#' } else { '.' })
+                .collect()
+        };
+        let text = [row(&[]), row(&[5, 54]), row(&[]), row(&[30]), row(&[])].join("\n");
+        let grid = Arc::new(Grid2::from_ascii(&text).unwrap());
+        let graph = SubgoalGraph::build(Arc::clone(&grid), MoveModel::Octile).unwrap();
+        assert!(
+            graph
+                .hierarchy()
+                .edges
+                .iter()
+                .any(|e| e.mid != crate::contraction::NONE)
+        );
+        let mut bytes = Vec::new();
+        graph.write_to(&mut bytes).unwrap();
+        let loaded = SubgoalGraph::read_from(&bytes[..], Arc::clone(&grid)).unwrap();
+        let (a, b) = (Cell::new(2, 0), Cell::new(2, 59));
+        let mut q = SubgoalQuery::new();
+        assert_eq!(
+            loaded.search(&mut q, a, b).unwrap().cells,
+            graph.search(&mut q, a, b).unwrap().cells
+        );
+    }
+
     #[test]
     fn a_saved_graph_loads_and_answers_every_query_as_built() {
         let (built, bytes) = saved();
