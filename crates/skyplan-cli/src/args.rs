@@ -88,9 +88,11 @@ pub struct FleetArgs {
     /// only shifting its departure.
     #[arg(long)]
     pub space_time: bool,
-    /// With --space-time: each flight's search around the others gives up this many
-    /// milliseconds after the flight's planning started; the flight is then `timed_out` and
-    /// nothing is reserved for it [default: no deadline].
+    /// With --space-time: each flight's answer is due this many milliseconds after its planning
+    /// started. Its search around the others proves the earliest arrival over the first half,
+    /// then heads for the goal (the report says how much sooner the flight could arrive at
+    /// most), and gives up at four-fifths: the flight is then `timed_out` and nothing is
+    /// reserved for it [default: no deadline: every arrival proven the earliest].
     #[arg(long, value_name = "MS", requires = "space_time", value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub deadline_ms: Option<u64>,
     /// Map: FCND colliders .csv (as `plan`; a map with a geodetic home) [default: the bundled city].
@@ -472,9 +474,9 @@ pub struct BenchArgs {
     /// With --fleet: also run on this PostgreSQL server (postgres://USER@HOST:PORT/DATABASE; a fresh database is made per run).
     #[arg(long, value_name = "URL", requires = "fleet")]
     pub airspace: Option<String>,
-    /// With --fleet: the space-time run's flights give up their search around the others this
-    /// many milliseconds after their planning started (`timed_out`), as `fleet --deadline-ms`
-    /// [default: no deadline].
+    /// With --fleet: the space-time run's flights' answers are due this many milliseconds after
+    /// their planning started, as `fleet --deadline-ms` (proving the earliest arrival over the
+    /// first half, `timed_out` past four-fifths) [default: no deadline].
     #[arg(long, value_name = "MS", requires = "fleet", value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub deadline_ms: Option<u64>,
     /// With --replan: hidden buildings per flight.

@@ -294,7 +294,7 @@ fn totals(s: &Summary, conflicts: usize) -> String {
     format!(
         "flights:   {} missions, {} accepted ({:.1} %), {} refused, {} without a route, {} timed out\n\
          delay:     mean {:.1} s, p95 {:.0} s (accepted flights' departures)\n\
-         arrival:   mean {:.1} s, p95 {:.0} s later than alone; {} hovering, {} detoured\n\
+         arrival:   mean {:.1} s, p95 {:.0} s later than alone; {} hovering, {} detoured{}\n\
          latency:   plan and reserve p50 {:.1} ms, p99 {:.1} ms\n\
          checked:   {:.1} stored intents per request (max {})\n\
          conflicts: {conflicts} (every pair of stored intents, exact 4D test)\n",
@@ -310,11 +310,25 @@ fn totals(s: &Summary, conflicts: usize) -> String {
         s.arrival_delay_p95_s,
         s.hovering,
         s.detoured,
+        unproven(s),
         s.latency_p50_ms,
         s.latency_p99_ms,
         s.checked_mean,
         s.checked_max,
     )
+}
+
+/// The flights whose earliest arrival the search did not prove (stopped by its deadline), if
+/// any: "; N not proven earliest (at most G s earlier possible, mean)".
+fn unproven(s: &Summary) -> String {
+    if s.unproven == 0 {
+        String::new()
+    } else {
+        format!(
+            "; {} not proven earliest (could arrive at most {:.1} s sooner, mean)",
+            s.unproven, s.arrival_gap_mean_s
+        )
+    }
 }
 
 /// One run of `bench --fleet`.
@@ -437,11 +451,12 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
     );
     let _ = writeln!(
         out,
-        "{:<9} {:<26} {:>8} {:>9} {:>10} {:>9} {:>11} {:>11} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9}",
+        "{:<9} {:<26} {:>8} {:>9} {:>8} {:>10} {:>9} {:>11} {:>11} {:>8} {:>8} {:>8} {:>8} {:>8} {:>9}",
         "store",
         "mode",
         "planned",
         "timed out",
+        "unproven",
         "delay avg",
         "delay p95",
         "arrive +avg",
@@ -457,11 +472,12 @@ fn bench_table(map: &str, flights: usize, seed: u64, runs: &[BenchRun]) -> Strin
         let s = &r.summary;
         let _ = writeln!(
             out,
-            "{:<9} {:<26} {:>7.1}% {:>9} {:>8.1} s {:>7.0} s {:>9.1} s {:>9.0} s {:>8} {:>8} {:>8.1} {:>8.1} {:>8.1} {:>9}",
+            "{:<9} {:<26} {:>7.1}% {:>9} {:>8} {:>8.1} s {:>7.0} s {:>9.1} s {:>9.0} s {:>8} {:>8} {:>8.1} {:>8.1} {:>8.1} {:>9}",
             r.store,
             r.label(),
             100.0 * s.share_planned,
             s.timed_out,
+            s.unproven,
             s.delay_mean_s,
             s.delay_p95_s,
             s.arrival_delay_mean_s,

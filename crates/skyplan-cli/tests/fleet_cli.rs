@@ -167,11 +167,14 @@ fn the_space_time_search_hovers_and_goes_around_and_accepts_more() {
         hovered > 0 && detoured > 0,
         "{hovered} hovered, {detoured} detoured: the test proves nothing"
     );
-    // Each arrives no earlier than alone, and its departure is within its window.
+    // Each arrives no earlier than alone, its departure is within its window, and without a
+    // deadline its arrival is proven the earliest.
     for f in &accepted {
         assert!(f["arrival_delay_s"].as_f64().expect("arrival delay") >= -1e-6);
         assert!(f["delay_s"].as_f64().expect("delay") <= 900.0);
+        assert_eq!(f["arrival_gap_s"].as_f64(), Some(0.0));
     }
+    assert_eq!(r["summary"]["unproven"].as_u64(), Some(0));
     // A deadline of a millisecond from each flight's start: searches longer than that stop,
     // their flights `timed_out` with nothing stored.
     let (hurried, stored) = run(&["--space-time", "--deadline-ms", "1"], "hurried");
@@ -195,6 +198,20 @@ fn the_space_time_search_hovers_and_goes_around_and_accepts_more() {
     assert_eq!(
         Some(stored.len() as u64),
         hurried["summary"]["accepted"].as_u64()
+    );
+    // The accepted ones each say how much sooner they could arrive at most; the totals count
+    // those not proven the earliest.
+    let gaps: Vec<f64> = hurried["flights"]
+        .as_array()
+        .expect("flights")
+        .iter()
+        .filter(|f| f["status"] == "accepted")
+        .map(|f| f["arrival_gap_s"].as_f64().expect("a gap"))
+        .collect();
+    assert!(gaps.iter().all(|&g| g >= 0.0));
+    assert_eq!(
+        hurried["summary"]["unproven"].as_u64(),
+        Some(gaps.iter().filter(|&&g| g > 0.0).count() as u64)
     );
     let (shifted, _) = run(&[], "shift");
     let count = |r: &Value| r["summary"]["accepted"].as_u64().expect("accepted");

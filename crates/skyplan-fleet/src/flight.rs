@@ -163,8 +163,13 @@ pub struct FlightRequest {
     pub step_ms: i64,
     /// How its volumes are made.
     pub volumes: VolumeOptions,
-    /// When a search for its route around the others gives up
-    /// ([`ReserveError::Deadline`]); `None`: never (only its budget of states stops it).
+    /// When the answer is due, for a search of its route around the others
+    /// ([`crate::reserve_space_time`]): the search proves the earliest arrival over the first
+    /// [`crate::space_time::EXACT_SHARE`] of the time left, then heads for the goal (the
+    /// flight's `arrival_gap_s` bounds what that may cost), and gives up
+    /// ([`ReserveError::Deadline`]) at [`crate::space_time::SEARCH_SHARE`] of it, leaving the
+    /// rest for checking and storing the route. `None`: the search proves the earliest arrival
+    /// and only its budget of states stops it.
     pub deadline: Option<std::time::Instant>,
 }
 

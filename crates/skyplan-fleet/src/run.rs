@@ -140,6 +140,10 @@ pub struct FlightRecord {
     /// Seconds later at the goal than in an empty sky leaving at the window's start
     /// (accepted flights, space-time search; the delay with the other modes).
     pub arrival_delay_s: Option<f64>,
+    /// At most this many seconds later at the goal than the earliest arrival possible
+    /// (accepted flights, space-time search): 0 unless its deadline stopped the search proving
+    /// the earliest arrival part way.
+    pub arrival_gap_s: Option<f64>,
     /// The intents that blocked it (refused flights), sorted by id.
     pub blocking: Vec<IntentRef>,
     /// Why there is no route (`no_route`).
@@ -224,6 +228,7 @@ fn fly_mission_in(
         hover_s: None,
         detour_m: None,
         arrival_delay_s: None,
+        arrival_gap_s: None,
         blocking: Vec::new(),
         message: None,
         plan_ms,
@@ -354,6 +359,7 @@ fn space_time(
         record.hover_s = Some(r.hover_s);
         record.detour_m = Some(r.detour_m);
         record.arrival_delay_s = Some(r.arrival_delay_s);
+        record.arrival_gap_s = Some(r.arrival_gap_s);
         record.route_ne = r.route_nea.iter().map(|p| (p[0], p[1])).collect();
         (r.intent, r.departure, r.delay_ms)
     })
@@ -438,6 +444,11 @@ pub struct Summary {
     pub arrival_delay_mean_s: f64,
     /// Its 95th percentile, seconds.
     pub arrival_delay_p95_s: f64,
+    /// Accepted flights whose search did not prove their arrival the earliest (its deadline
+    /// stopped the proof part way: [`FlightRecord::arrival_gap_s`]).
+    pub unproven: usize,
+    /// Their mean bound on how much earlier they could arrive, seconds (0 with none).
+    pub arrival_gap_mean_s: f64,
     /// Accepted flights that hover on the way.
     pub hovering: usize,
     /// Accepted flights whose route is more than a metre longer than alone.
@@ -463,6 +474,11 @@ impl Summary {
             .collect();
         let delays: Vec<f64> = accepted.iter().filter_map(|r| r.delay_s).collect();
         let arrivals: Vec<f64> = accepted.iter().filter_map(|r| r.arrival_delay_s).collect();
+        let gaps: Vec<f64> = accepted
+            .iter()
+            .filter_map(|r| r.arrival_gap_s)
+            .filter(|&g| g > 0.0)
+            .collect();
         let latency: Vec<f64> = records.iter().map(|r| r.latency_ms).collect();
         let planned: Vec<&FlightRecord> = records
             .iter()
@@ -514,6 +530,8 @@ impl Summary {
             delay_p95_s: percentile(&delays, 95.0),
             arrival_delay_mean_s: mean(&arrivals),
             arrival_delay_p95_s: percentile(&arrivals, 95.0),
+            unproven: gaps.len(),
+            arrival_gap_mean_s: mean(&gaps),
             hovering: accepted
                 .iter()
                 .filter(|r| r.hover_s.is_some_and(|h| h > 0.0))
@@ -625,6 +643,7 @@ mod tests {
             hover_s: None,
             detour_m: None,
             arrival_delay_s: (status == Status::Accepted).then_some(k as f64),
+            arrival_gap_s: None,
             blocking: Vec::new(),
             message: None,
             plan_ms: 0.0,

@@ -132,10 +132,19 @@ pub struct SippQuery {
     /// When to give up, if ever ([`SippError::Deadline`]): the clock is read every
     /// [`DEADLINE_EVERY`] states.
     pub deadline: Option<std::time::Instant>,
+    /// Until when the search proves the earliest arrival, if not to the end: past this
+    /// instant it heads for the goal, its open states ordered by the arrival plus
+    /// [`HEADLONG_WEIGHT`] times the bound on the time left, and the route found may arrive
+    /// later than the earliest ([`SippPath::earliest_bound_s`] says by how much at most).
+    pub exact_until: Option<std::time::Instant>,
 }
 
+/// How much the search weighs the time left against the time spent once it stops proving
+/// the earliest arrival ([`SippQuery::exact_until`]).
+pub const HEADLONG_WEIGHT: f64 = 10.0;
+
 /// How many states the search takes between two looks at the clock (a look costs about as
-/// much as a state).
+/// much as a state); the first look is at the first state.
 pub const DEADLINE_EVERY: usize = 256;
 
 /// A cell of the route and when the flight is in it.
@@ -156,9 +165,18 @@ pub struct SippPath {
     pub cells: Vec<TimedCell>,
     /// States taken from the queue.
     pub expansions: usize,
+    /// No route arrives before this, seconds: the arrival itself when the search proved it
+    /// the earliest, else what was proven when it stopped proving
+    /// ([`SippQuery::exact_until`]).
+    pub earliest_bound_s: f64,
 }
 
 impl SippPath {
+    /// Whether the arrival is proven the earliest.
+    pub fn proven_earliest(&self) -> bool {
+        self.arrival_s() <= self.earliest_bound_s + HORIZON_TOLERANCE_S
+    }
+
     /// The departure, seconds.
     pub fn departure_s(&self) -> f64 {
         self.cells.first().map_or(0.0, |c| c.arrive_s)
@@ -237,6 +255,12 @@ impl Queued {
             node,
         })
     }
+}
+
+/// The time whose [`total_key`] is `key`, as bits.
+fn untotal_key(key: u64) -> u64 {
+    let bits = (key ^ (1 << 63)) as i64;
+    (bits ^ ((((bits >> 63) as u64) >> 1) as i64)) as u64
 }
 
 /// `x` as an unsigned integer in [`f64::total_cmp`]'s order.
@@ -336,6 +360,7 @@ impl SafeCache {
 ///     start: Cell::new(0, 0), goal: Cell::new(0, 4), cell_s: 1.0,
 ///     latest_departure_s: 0.0, horizon_s: 100.0, diagonals: true, max_expansions: 10_000,
 ///     deadline: None,
+///     exact_until: None,
 /// };
 /// let mut timeline = |c: Cell| if c.col == 2 { vec![Interval { start_s: 0.0, end_s: 10.0 }] } else { vec![] };
 /// let path = sipp(&grid, &q, &mut timeline)?;
@@ -399,7 +424,11 @@ fn sipp_with(
     let moves = moves(q.diagonals);
     let free = |r: i64, c: i64| grid.is_free_at(r, c);
     let mut expansions = 0;
-    while let Some(Reverse(Queued { node, .. })) = open.pop() {
+    // The weight on the time left: 1 while the search proves the earliest arrival.
+    let mut weight = 1.0;
+    // No route arrives before this (the smallest `f` open when the proof stopped).
+    let mut earliest_bound_s = f64::INFINITY;
+    while let Some(Reverse(Queued { node, f, .. })) = open.pop() {
         // The entry's arrival, as pushed.
         let g = nodes[node as usize].arrive_s;
         let (cell, interval) = (nodes[node as usize].cell, nodes[node as usize].interval);
@@ -412,16 +441,40 @@ fn sipp_with(
             ground_waits(&mut cells, q.latest_departure_s, &mut |c| {
                 safe.of(grid, c, timeline).to_vec()
             });
-            return Ok(SippPath { cells, expansions });
+            return Ok(SippPath {
+                cells,
+                expansions,
+                earliest_bound_s: earliest_bound_s.min(g),
+            });
         }
         if expansions > q.max_expansions {
             return Err(SippError::Budget(q.max_expansions));
         }
-        if let Some(deadline) = q.deadline
-            && expansions % DEADLINE_EVERY == 0
-            && std::time::Instant::now() >= deadline
-        {
-            return Err(SippError::Deadline(expansions));
+        if expansions % DEADLINE_EVERY == 1 && (q.deadline.is_some() || q.exact_until.is_some()) {
+            let now = std::time::Instant::now();
+            if q.deadline.is_some_and(|d| now >= d) {
+                return Err(SippError::Deadline(expansions));
+            }
+            if weight == 1.0 && q.exact_until.is_some_and(|t| now >= t) {
+                // Stop proving: what is proven is the smallest `f` open, this state's.
+                earliest_bound_s = f64::from_bits(untotal_key(f));
+                weight = HEADLONG_WEIGHT;
+                open.push(Reverse(Queued {
+                    node,
+                    f,
+                    later_first: !total_key(g),
+                }));
+                let entries = std::mem::take(&mut open).into_vec();
+                for Reverse(e) in entries {
+                    let n = &nodes[e.node as usize];
+                    if !n.stale {
+                        let (a, c) = (n.arrive_s, n.cell);
+                        open.push(Queued::new(a + weight * h(c), a, e.node));
+                    }
+                }
+                expansions -= 1;
+                continue;
+            }
         }
         let here_end = safe.of(grid, cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
@@ -474,7 +527,7 @@ fn sipp_with(
                     nodes[known as usize].stale = true;
                 }
                 safe.best[first + k] = (id, arrive);
-                open.push(Queued::new(arrive + h_next, arrive, id));
+                open.push(Queued::new(arrive + weight * h_next, arrive, id));
             }
         }
     }
@@ -757,6 +810,7 @@ mod tests {
                 diagonals,
                 max_expansions: 1_000,
                 deadline: None,
+                exact_until: None,
             };
             // Dijkstra from the goal, f64 lengths, over a sorted list (small grids).
             let mut dist = vec![f64::INFINITY; grid.len()];
@@ -835,6 +889,7 @@ mod tests {
                 diagonals: rng.random_bool(0.5),
                 max_expansions: 1_000_000,
                 deadline: None,
+                exact_until: None,
             };
             let mut timeline = |c: Cell| blocked[grid.index(c)].clone();
             let a = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance);
@@ -897,6 +952,7 @@ mod tests {
             diagonals: true,
             max_expansions: 1_000_000,
             deadline: None,
+            exact_until: None,
         };
         // The goal is blocked for a long while: the search fans out over the whole grid.
         let mut timeline = |c: Cell| {
@@ -917,7 +973,7 @@ mod tests {
         };
         assert_eq!(
             sipp(&grid, &passed, &mut timeline),
-            Err(SippError::Deadline(DEADLINE_EVERY))
+            Err(SippError::Deadline(1))
         );
     }
 
@@ -943,6 +999,7 @@ mod tests {
             diagonals: true,
             max_expansions: 1000,
             deadline: None,
+            exact_until: None,
         };
         // No window: it hovers short of the blocked cell.
         let air = sipp(&grid, &q(0.0), &mut timeline).expect("a route");

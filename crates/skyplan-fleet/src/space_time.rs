@@ -61,6 +61,25 @@ pub const SEARCH_CELL_M: f64 = 4.0;
 /// The search's budget of states.
 pub const MAX_EXPANSIONS: usize = 4_000_000;
 
+/// With a deadline ([`FlightRequest::deadline`]), the share of the time left to it that the
+/// search spends proving the earliest arrival; after that it heads for the goal
+/// ([`SippQuery::exact_until`]).
+pub const EXACT_SHARE: f64 = 0.5;
+/// With a deadline, the share of the time left to it after which the search gives up: the
+/// rest is for checking and storing the route found.
+pub const SEARCH_SHARE: f64 = 0.8;
+
+/// The instant `share` of the way from now to `deadline`, if there is one.
+fn share_of_time_left(
+    deadline: Option<std::time::Instant>,
+    share: f64,
+) -> Option<std::time::Instant> {
+    deadline.map(|d| {
+        let now = std::time::Instant::now();
+        now + d.saturating_duration_since(now).mul_f64(share)
+    })
+}
+
 /// A flight reserved along a space-time route.
 #[derive(Debug, Clone)]
 pub struct SpaceTimeFlight {
@@ -77,6 +96,10 @@ pub struct SpaceTimeFlight {
     /// Seconds later at the goal than the same search's route in an empty sky, leaving at
     /// the window's start.
     pub arrival_delay_s: f64,
+    /// At most this many seconds later at the goal than the earliest arrival possible: 0 when
+    /// the search proved its arrival the earliest, which it does unless a deadline made it stop
+    /// proving part way ([`SippQuery::exact_until`]).
+    pub arrival_gap_s: f64,
     /// The empty sky's shortest route on the same grid, metres (cell centre to cell centre).
     pub alone_m: f64,
     /// The route flown: corners and hover points, `[north_m, east_m, alt_m]`.
@@ -95,12 +118,14 @@ pub struct SpaceTimeFlight {
 
 impl SpaceTimeFlight {
     /// What the search did, as the HTTP API and Python report it: `hover_s`, `detour_m`,
-    /// `arrival_delay_s` and `route_ne` (`[north_m, east_m]` corners and hover points).
+    /// `arrival_delay_s`, `arrival_gap_s` and `route_ne` (`[north_m, east_m]` corners and hover
+    /// points).
     pub fn search_json(&self) -> serde_json::Value {
         serde_json::json!({
             "hover_s": self.hover_s,
             "detour_m": self.detour_m,
             "arrival_delay_s": self.arrival_delay_s,
+            "arrival_gap_s": self.arrival_gap_s,
             "route_ne": self.route_nea.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>(),
         })
     }
@@ -1291,7 +1316,8 @@ fn space_time_inner(
         horizon_s,
         diagonals: true,
         max_expansions: MAX_EXPANSIONS,
-        deadline: request.deadline,
+        deadline: share_of_time_left(request.deadline, SEARCH_SHARE),
+        exact_until: share_of_time_left(request.deadline, EXACT_SHARE),
     };
     // The shortest route on the same grid in an empty sky (JPS): what the delay and the
     // detour are measured against.
@@ -1424,6 +1450,11 @@ fn space_time_inner(
                     // Never below the empty sky's: a negative value is rounding.
                     detour_m: ((flown - alone_cells) * cell_m).max(0.0),
                     arrival_delay_s: (found.arrival_s() - alone_cells * cell_s).max(0.0),
+                    arrival_gap_s: if found.proven_earliest() {
+                        0.0
+                    } else {
+                        found.arrival_s() - found.earliest_bound_s
+                    },
                     alone_m: alone_cells * cell_m,
                     route_nea,
                     path: timed_path,

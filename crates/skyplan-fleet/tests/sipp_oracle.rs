@@ -7,7 +7,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use skyplan_cspace::{Cell, Grid2, GridFrame};
-use skyplan_fleet::sipp::{Interval, SippError, SippQuery, sipp};
+use skyplan_fleet::sipp::{Interval, SippError, SippPath, SippQuery, sipp};
 
 /// Blocked `[a, b]` (ms) per cell.
 type Blocked = Vec<Vec<(i64, i64)>>;
@@ -69,28 +69,88 @@ fn oracle(
     None
 }
 
+/// The route moves between 4-neighbours in one second each and keeps out of every blocked
+/// time, moving and waiting.
+fn keeps_out(grid: &Grid2, blocked: &Blocked, path: &SippPath, case: usize) {
+    let blocked_s = |c: Cell| {
+        blocked[grid.index(c)]
+            .iter()
+            .map(|&(x, y)| (x as f64 / 1000.0, y as f64 / 1000.0))
+    };
+    for w in path.cells.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let (t0, t1) = (a.leave_s, b.arrive_s);
+        assert!(
+            (t1 - t0 - 1.0).abs() < 1e-9,
+            "case {case}: a move takes 1 s"
+        );
+        assert_eq!(
+            a.cell.row.abs_diff(b.cell.row) + a.cell.col.abs_diff(b.cell.col),
+            1,
+            "case {case}: a move to a neighbour"
+        );
+        assert!(!grid.is_blocked(b.cell), "case {case}: into a building");
+        for c in [a.cell, b.cell] {
+            for (x, y) in blocked_s(c) {
+                assert!(
+                    t1 < x || t0 > y,
+                    "case {case}: moves through a blocked time"
+                );
+            }
+        }
+        for (x, y) in blocked_s(a.cell) {
+            assert!(
+                a.leave_s < x || a.arrive_s > y,
+                "case {case}: waits in a blocked time"
+            );
+        }
+    }
+}
+
+/// A random grid of up to `max_side` cells a side, start at its first cell and goal at its
+/// last, with up to two blocked times per cell of whole seconds under 12 s.
+fn random_case(rng: &mut ChaCha8Rng, max_side: u32) -> (Grid2, Blocked) {
+    let (rows, cols) = (rng.random_range(2..max_side), rng.random_range(2..max_side));
+    let mut cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.15)).collect();
+    cells[0] = false;
+    cells[(rows * cols - 1) as usize] = false;
+    let grid = Grid2::new(rows, cols, cells, GridFrame::default()).expect("grid");
+    let blocked: Blocked = (0..grid.len())
+        .map(|_| {
+            (0..rng.random_range(0..3))
+                .map(|_| {
+                    let a = rng.random_range(0..12i64);
+                    (a * MS, (a + rng.random_range(0..4i64)) * MS)
+                })
+                .collect()
+        })
+        .collect();
+    (grid, blocked)
+}
+
+/// The blocked times of `blocked` as the search's timeline.
+fn timeline_of<'a>(
+    grid: &'a Grid2,
+    blocked: &'a Blocked,
+) -> impl FnMut(Cell) -> Vec<Interval> + 'a {
+    |c: Cell| {
+        blocked[grid.index(c)]
+            .iter()
+            .map(|&(a, b)| Interval {
+                start_s: a as f64 / 1000.0,
+                end_s: b as f64 / 1000.0,
+            })
+            .collect()
+    }
+}
+
 #[test]
 fn earliest_arrival_equals_a_time_expanded_sweep() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let (mut compared, mut waited, mut unreachable) = (0, 0, 0);
     for case in 0..40 {
-        let (rows, cols) = (rng.random_range(2..6u32), rng.random_range(2..6u32));
-        let mut cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.15)).collect();
-        let start = 0usize;
-        let goal = (rows * cols - 1) as usize;
-        cells[start] = false;
-        cells[goal] = false;
-        let grid = Grid2::new(rows, cols, cells, GridFrame::default()).expect("grid");
-        let blocked: Blocked = (0..grid.len())
-            .map(|_| {
-                (0..rng.random_range(0..3))
-                    .map(|_| {
-                        let a = rng.random_range(0..12i64);
-                        (a * MS, (a + rng.random_range(0..4i64)) * MS)
-                    })
-                    .collect()
-            })
-            .collect();
+        let (grid, blocked) = random_case(&mut rng, 6);
+        let (start, goal) = (0, grid.len() - 1);
         let latest_s = rng.random_range(0..4i64);
         let horizon_s = 30;
         let q = SippQuery {
@@ -102,16 +162,9 @@ fn earliest_arrival_equals_a_time_expanded_sweep() {
             diagonals: false,
             max_expansions: 1_000_000,
             deadline: None,
+            exact_until: None,
         };
-        let mut timeline = |c: Cell| {
-            blocked[grid.index(c)]
-                .iter()
-                .map(|&(a, b)| Interval {
-                    start_s: a as f64 / 1000.0,
-                    end_s: b as f64 / 1000.0,
-                })
-                .collect()
-        };
+        let mut timeline = timeline_of(&grid, &blocked);
         let found = sipp(&grid, &q, &mut timeline);
         let truth = oracle(&grid, &blocked, start, goal, latest_s * MS, horizon_s * MS);
         match (found, truth) {
@@ -121,31 +174,7 @@ fn earliest_arrival_equals_a_time_expanded_sweep() {
                     (got - t_ms as f64 / 1000.0).abs() < 1e-6,
                     "case {case}: SIPP arrives at {got} s, the sweep at {t_ms} ms"
                 );
-                // The route itself keeps out of every blocked time.
-                for w in path.cells.windows(2) {
-                    let (a, b) = (w[0], w[1]);
-                    let (t0, t1) = (a.leave_s, b.arrive_s);
-                    assert!(
-                        (t1 - t0 - 1.0).abs() < 1e-9,
-                        "case {case}: a move takes 1 s"
-                    );
-                    for c in [a.cell, b.cell] {
-                        for &(x, y) in &blocked[grid.index(c)] {
-                            let (x, y) = (x as f64 / 1000.0, y as f64 / 1000.0);
-                            assert!(
-                                t1 < x || t0 > y,
-                                "case {case}: moves through a blocked time"
-                            );
-                        }
-                    }
-                    for &(x, y) in &blocked[grid.index(a.cell)] {
-                        let (x, y) = (x as f64 / 1000.0, y as f64 / 1000.0);
-                        assert!(
-                            a.leave_s < x || a.arrive_s > y,
-                            "case {case}: waits in a blocked time"
-                        );
-                    }
-                }
+                keeps_out(&grid, &blocked, &path, case);
                 assert!(path.departure_s() <= latest_s as f64 + 1e-9);
                 // The horizon is a hard bound, and a tight one: at the earliest arrival the
                 // same route is found, half a second earlier none.
@@ -189,5 +218,70 @@ fn earliest_arrival_equals_a_time_expanded_sweep() {
     assert!(
         compared >= 20 && unreachable >= 1 && waited >= 5,
         "{compared} {unreachable} {waited}"
+    );
+}
+
+/// A search that stops proving the earliest arrival at once (its `exact_until` passed) and
+/// heads for the goal: a route exactly when the sweep finds one, keeping out of every blocked
+/// time, never before the sweep's earliest arrival, with a bound never above it; "proven" only
+/// when it is the earliest.
+#[test]
+fn a_search_that_stops_proving_still_finds_a_safe_route_and_bounds_its_cost() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let (mut compared, mut later, mut unreachable) = (0, 0, 0);
+    for case in 0..60 {
+        let (grid, blocked) = random_case(&mut rng, 9);
+        let (start, goal) = (0, grid.len() - 1);
+        let latest_s = rng.random_range(0..4i64);
+        let horizon_s = 30;
+        let q = SippQuery {
+            start: grid.cell(start),
+            goal: grid.cell(goal),
+            cell_s: 1.0,
+            latest_departure_s: latest_s as f64,
+            horizon_s: horizon_s as f64,
+            diagonals: false,
+            max_expansions: 1_000_000,
+            deadline: None,
+            exact_until: Some(std::time::Instant::now()),
+        };
+        let mut timeline = timeline_of(&grid, &blocked);
+        let found = sipp(&grid, &q, &mut timeline);
+        let truth = oracle(&grid, &blocked, start, goal, latest_s * MS, horizon_s * MS);
+        match (found, truth) {
+            (Ok(path), Some(t_ms)) => {
+                let earliest = t_ms as f64 / 1000.0;
+                keeps_out(&grid, &blocked, &path, case);
+                assert!(path.departure_s() <= latest_s as f64 + 1e-9);
+                assert!(path.arrival_s() <= horizon_s as f64 + 1e-6);
+                assert!(
+                    path.arrival_s() >= earliest - 1e-6,
+                    "case {case}: arrives at {} s, before the earliest {earliest} s",
+                    path.arrival_s()
+                );
+                assert!(
+                    path.earliest_bound_s <= earliest + 1e-6,
+                    "case {case}: bound {} s above the earliest {earliest} s",
+                    path.earliest_bound_s
+                );
+                assert_eq!(
+                    path.proven_earliest(),
+                    path.arrival_s() <= path.earliest_bound_s + 1e-6
+                );
+                if path.proven_earliest() {
+                    assert!((path.arrival_s() - earliest).abs() < 1e-6, "case {case}");
+                }
+                later += usize::from(path.arrival_s() > earliest + 1e-6);
+                compared += 1;
+            }
+            (Err(SippError::NoRoute { .. }), None) => unreachable += 1,
+            (found, truth) => panic!("case {case}: SIPP {found:?}, the sweep {truth:?}"),
+        }
+    }
+    eprintln!("compared {compared}, later than the earliest {later}, unreachable {unreachable}");
+    // Both outcomes, and routes the weighted search found later than the earliest.
+    assert!(
+        compared >= 30 && unreachable >= 1 && later >= 3,
+        "{compared} {later} {unreachable}"
     );
 }

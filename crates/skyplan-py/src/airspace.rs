@@ -135,12 +135,15 @@ impl Airspace {
     /// the flight keeps clear of stored intents of equal or higher priority. `search`:
     /// `"departure"` moves the planned route's departure to the earliest free one of the
     /// window; `"space_time"` re-plans the route around the others (hovering, detours, a later
-    /// departure; the earliest arrival). `deadline_ms` (with `"space_time"`): that search gives
-    /// up this many milliseconds after the call, raising `Timeout` with nothing reserved.
+    /// departure; the earliest arrival). `deadline_ms` (with `"space_time"`): the answer is due
+    /// this many milliseconds after the call; the search proves the earliest arrival over the
+    /// first half of that time, then heads for the goal (`arrival_gap_s` bounds what that may
+    /// cost), and at four-fifths gives up, raising `Timeout` with nothing reserved.
     ///
     /// Returns a dict: `intent` (as stored), `departure`, `delay_s`, `duration_s`, `timing`,
     /// `nearby_intents`, `plan` (a `Plan`: the route in an empty sky), and with
     /// `search="space_time"` also `space_time` (`hover_s`, `detour_m`, `arrival_delay_s`,
+    /// `arrival_gap_s`: at most how much sooner it could arrive, 0 when proven the earliest,
     /// `route_ne`). Raises `Conflict` (its `conflicts`: the blocking intents' `(id, version)`)
     /// when no departure of the window is free, the planning errors as `Planner.plan` does,
     /// `BadInput` for a bad departure, priority, owner or search.
@@ -291,9 +294,10 @@ impl Airspace {
     /// `priority`, `owner`). `mode`: `"shift"` (departures moved), `"space_time"` (routes
     /// re-planned around the others) or `"reject_on_conflict"` (the baseline). `start`: what
     /// departures in seconds count from (RFC 3339; default: now rounded up to the next minute).
-    /// `deadline_ms` (with `"space_time"`): a flight's search around the others gives up this
-    /// many milliseconds after its planning started; the flight is then `timed_out`, nothing
-    /// reserved.
+    /// `deadline_ms` (with `"space_time"`): a flight's answer is due this many milliseconds after
+    /// its planning started; its search proves the earliest arrival over the first half, then
+    /// heads for the goal (the record's `arrival_gap_s` bounds what that may cost), and at
+    /// four-fifths gives up: the flight is then `timed_out`, nothing reserved.
     ///
     /// Returns a dict: `flights` (one record per mission, as the CLI's JSON report), `summary`
     /// (share planned, delays, latency, intents checked) and `conflicts` (pairs of stored
