@@ -65,6 +65,8 @@ def test_reserve_shifts_or_replans_and_nothing_stored_intersects(city):
     replanned = air.reserve(city, {"earliest": at(0), "latest": at(1800)}, owner="c", search="space_time")
     st = replanned["space_time"]
     assert replanned["timing"] == "space_time" and st["arrival_delay_s"] > 0
+    # Without a deadline the arrival is proven the earliest.
+    assert st["arrival_gap_s"] == 0.0
     assert len(st["route_ne"]) >= 2
     # A deadline already passed: the search (hundreds of states on this route) stops at its
     # first look at the clock, raising Timeout, and nothing is stored.
