@@ -144,29 +144,51 @@ fn timeline_of<'a>(
     }
 }
 
+/// A query on a random grid ([`random_case`]) from its first cell to its last, with moves of
+/// one second, a latest departure of 0 to 3 s and a horizon of 30 s.
+fn random_query(
+    rng: &mut ChaCha8Rng,
+    max_side: u32,
+    exact_until: Option<std::time::Instant>,
+) -> (Grid2, Blocked, SippQuery) {
+    let (grid, blocked) = random_case(rng, max_side);
+    let q = SippQuery {
+        start: grid.cell(0),
+        goal: grid.cell(grid.len() - 1),
+        cell_s: 1.0,
+        latest_departure_s: rng.random_range(0..4i64) as f64,
+        horizon_s: 30.0,
+        diagonals: false,
+        max_expansions: 1_000_000,
+        deadline: None,
+        exact_until,
+    };
+    (grid, blocked, q)
+}
+
+/// The sweep's earliest arrival for `q` (ms).
+fn sweep(grid: &Grid2, blocked: &Blocked, q: &SippQuery) -> Option<i64> {
+    let ms = |s: f64| (s * 1000.0).round() as i64;
+    oracle(
+        grid,
+        blocked,
+        grid.index(q.start),
+        grid.index(q.goal),
+        ms(q.latest_departure_s),
+        ms(q.horizon_s),
+    )
+}
+
 #[test]
 fn earliest_arrival_equals_a_time_expanded_sweep() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let (mut compared, mut waited, mut unreachable) = (0, 0, 0);
     for case in 0..40 {
-        let (grid, blocked) = random_case(&mut rng, 6);
-        let (start, goal) = (0, grid.len() - 1);
-        let latest_s = rng.random_range(0..4i64);
-        let horizon_s = 30;
-        let q = SippQuery {
-            start: grid.cell(start),
-            goal: grid.cell(goal),
-            cell_s: 1.0,
-            latest_departure_s: latest_s as f64,
-            horizon_s: horizon_s as f64,
-            diagonals: false,
-            max_expansions: 1_000_000,
-            deadline: None,
-            exact_until: None,
-        };
+        let (grid, blocked, q) = random_query(&mut rng, 6, None);
+        let latest_s = q.latest_departure_s;
         let mut timeline = timeline_of(&grid, &blocked);
         let found = sipp(&grid, &q, &mut timeline);
-        let truth = oracle(&grid, &blocked, start, goal, latest_s * MS, horizon_s * MS);
+        let truth = sweep(&grid, &blocked, &q);
         match (found, truth) {
             (Ok(path), Some(t_ms)) => {
                 let got = path.arrival_s();
@@ -175,7 +197,7 @@ fn earliest_arrival_equals_a_time_expanded_sweep() {
                     "case {case}: SIPP arrives at {got} s, the sweep at {t_ms} ms"
                 );
                 keeps_out(&grid, &blocked, &path, case);
-                assert!(path.departure_s() <= latest_s as f64 + 1e-9);
+                assert!(path.departure_s() <= latest_s + 1e-9);
                 // The horizon is a hard bound, and a tight one: at the earliest arrival the
                 // same route is found, half a second earlier none.
                 let t_s = t_ms as f64 / 1000.0;
@@ -230,30 +252,17 @@ fn a_search_that_stops_proving_still_finds_a_safe_route_and_bounds_its_cost() {
     let mut rng = ChaCha8Rng::seed_from_u64(8);
     let (mut compared, mut later, mut unreachable) = (0, 0, 0);
     for case in 0..60 {
-        let (grid, blocked) = random_case(&mut rng, 9);
-        let (start, goal) = (0, grid.len() - 1);
-        let latest_s = rng.random_range(0..4i64);
-        let horizon_s = 30;
-        let q = SippQuery {
-            start: grid.cell(start),
-            goal: grid.cell(goal),
-            cell_s: 1.0,
-            latest_departure_s: latest_s as f64,
-            horizon_s: horizon_s as f64,
-            diagonals: false,
-            max_expansions: 1_000_000,
-            deadline: None,
-            exact_until: Some(std::time::Instant::now()),
-        };
+        let (grid, blocked, q) = random_query(&mut rng, 9, Some(std::time::Instant::now()));
+        let (latest_s, horizon_s) = (q.latest_departure_s, q.horizon_s);
         let mut timeline = timeline_of(&grid, &blocked);
         let found = sipp(&grid, &q, &mut timeline);
-        let truth = oracle(&grid, &blocked, start, goal, latest_s * MS, horizon_s * MS);
+        let truth = sweep(&grid, &blocked, &q);
         match (found, truth) {
             (Ok(path), Some(t_ms)) => {
                 let earliest = t_ms as f64 / 1000.0;
                 keeps_out(&grid, &blocked, &path, case);
-                assert!(path.departure_s() <= latest_s as f64 + 1e-9);
-                assert!(path.arrival_s() <= horizon_s as f64 + 1e-6);
+                assert!(path.departure_s() <= latest_s + 1e-9);
+                assert!(path.arrival_s() <= horizon_s + 1e-6);
                 assert!(
                     path.arrival_s() >= earliest - 1e-6,
                     "case {case}: arrives at {} s, before the earliest {earliest} s",
