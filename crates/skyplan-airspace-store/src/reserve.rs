@@ -37,10 +37,10 @@ pub enum ReserveError {
     /// The store failed.
     #[error(transparent)]
     Store(StoreError),
-    /// The request's deadline passed while its route around the others was searched for:
-    /// nothing was reserved.
+    /// The search for a route around the others gave up, with none found, to answer by the
+    /// request's deadline: nothing was reserved.
     #[error(
-        "the search for a route around the other flights reached the deadline after {states} states; nothing was reserved"
+        "the search for a route around the other flights gave up to answer by the deadline, after {states} states; nothing was reserved"
     )]
     Deadline {
         /// States the search took from its queue.

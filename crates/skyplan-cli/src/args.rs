@@ -89,10 +89,11 @@ pub struct FleetArgs {
     #[arg(long)]
     pub space_time: bool,
     /// With --space-time: each flight's answer is due this many milliseconds after its planning
-    /// started. Its search around the others proves the earliest arrival over the first half,
-    /// then heads for the goal (the report says how much sooner the flight could arrive at
-    /// most), and gives up at four-fifths: the flight is then `timed_out` and nothing is
-    /// reserved for it [default: no deadline: every arrival proven the earliest].
+    /// started. Its search around the others proves the earliest arrival over half the time
+    /// left when it starts, then heads for the goal (the report says how much sooner the
+    /// flight could arrive at most), and gives up at four-fifths of it: the flight is then
+    /// `timed_out` and nothing is reserved for it [default: no deadline: every arrival proven
+    /// the earliest].
     #[arg(long, value_name = "MS", requires = "space_time", value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub deadline_ms: Option<u64>,
     /// Map: FCND colliders .csv (as `plan`; a map with a geodetic home) [default: the bundled city].
@@ -475,8 +476,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "URL", requires = "fleet")]
     pub airspace: Option<String>,
     /// With --fleet: the space-time run's flights' answers are due this many milliseconds after
-    /// their planning started, as `fleet --deadline-ms` (proving the earliest arrival over the
-    /// first half, `timed_out` past four-fifths) [default: no deadline].
+    /// their planning started, as `fleet --deadline-ms` (proving the earliest arrival over half
+    /// the time left when the search starts, `timed_out` past four-fifths of it) [default: no
+    /// deadline].
     #[arg(long, value_name = "MS", requires = "fleet", value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
     pub deadline_ms: Option<u64>,
     /// With --replan: hidden buildings per flight.

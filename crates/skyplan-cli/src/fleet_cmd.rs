@@ -319,7 +319,7 @@ fn totals(s: &Summary, conflicts: usize) -> String {
 }
 
 /// The flights whose earliest arrival the search did not prove (stopped by its deadline), if
-/// any: "; N not proven earliest (at most G s earlier possible, mean)".
+/// any: "; N not proven earliest (could arrive at most G s sooner, mean)".
 fn unproven(s: &Summary) -> String {
     if s.unproven == 0 {
         String::new()

@@ -75,7 +75,9 @@ pub struct RunOptions {
     /// How volumes are made.
     pub volumes: VolumeOptions,
     /// With [`Mode::SpaceTime`]: how long after a flight's start (its planning included) its
-    /// search around the others gives up ([`Status::TimedOut`]); `None`: never.
+    /// answer is due ([`crate::FlightRequest::deadline`]: its search proves the earliest
+    /// arrival over half the time left, then heads for the goal, and gives up at four-fifths,
+    /// [`Status::TimedOut`]); `None`: never, every arrival proven the earliest.
     pub search_deadline: Option<std::time::Duration>,
 }
 
@@ -101,8 +103,8 @@ pub enum Status {
     Refused,
     /// No route (the planner's failure is the record's message).
     NoRoute,
-    /// Planned, but its search around the others passed the run's deadline (the record's
-    /// message says after how many states); nothing reserved.
+    /// Planned, but its search around the others gave up before the run's deadline, with no
+    /// route found (the record's message says after how many states); nothing reserved.
     TimedOut,
 }
 

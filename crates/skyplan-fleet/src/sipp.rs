@@ -11,7 +11,9 @@
 //! earliest arrival per state makes the search exact: with an admissible heuristic (the
 //! shortest distance to the goal over the grid's free cells at full speed, blind to the blocked
 //! times, from a backward search resumed as needed) the first goal state taken from the queue
-//! is the earliest arrival over all routes on the grid's moves and all waits.
+//! is the earliest arrival over all routes on the grid's moves and all waits. A search given
+//! [`SippQuery::exact_until`] may stop proving that part way and head for the goal instead; its
+//! answer then says how much sooner a route could arrive at most.
 
 use skyplan_cspace::{Cell, Grid2};
 use std::cmp::Reverse;
@@ -129,8 +131,8 @@ pub struct SippQuery {
     pub diagonals: bool,
     /// Most states taken from the queue before giving up.
     pub max_expansions: usize,
-    /// When to give up, if ever ([`SippError::Deadline`]): the clock is read every
-    /// [`DEADLINE_EVERY`] states.
+    /// When to give up, if ever ([`SippError::Deadline`]): the clock is read at the first state
+    /// and then every [`DEADLINE_EVERY`] states (also with only `exact_until` set).
     pub deadline: Option<std::time::Instant>,
     /// Until when the search proves the earliest arrival, if not to the end: past this
     /// instant it heads for the goal, its open states ordered by the arrival plus
@@ -345,7 +347,8 @@ impl SafeCache {
     }
 }
 
-/// The earliest arrival at `q.goal` from `q.start`, leaving at a time in
+/// The earliest arrival (unless [`SippQuery::exact_until`] stops the proof: see
+/// [`SippPath::earliest_bound_s`]) at `q.goal` from `q.start`, leaving at a time in
 /// `[0, q.latest_departure_s]` (waiting before departure costs nothing and occupies nothing),
 /// over the free cells of `grid` and the safe intervals `timeline` gives. Of the routes that
 /// arrive first, the one found waits on the ground rather than in the air where the window
@@ -373,7 +376,7 @@ pub fn sipp(
     q: &SippQuery,
     timeline: &mut dyn Timeline,
 ) -> Result<SippPath, SippError> {
-    sipp_with(grid, q, timeline, Bound::GridDistance)
+    sipp_with(grid, q, timeline, Bound::GridDistance, None)
 }
 
 /// The lower bound on the time to the goal that orders [`sipp_with`]'s queue.
@@ -386,11 +389,14 @@ enum Bound {
     Octile,
 }
 
+/// [`sipp`] with the bound `bound`, and (for the tests) the proof stopped at the
+/// `stop_proving_at`-th state as at [`SippQuery::exact_until`].
 fn sipp_with(
     grid: &Grid2,
     q: &SippQuery,
     timeline: &mut dyn Timeline,
     bound: Bound,
+    stop_proving_at: Option<usize>,
 ) -> Result<SippPath, SippError> {
     for (which, cell) in [("start", q.start), ("goal", q.goal)] {
         if !grid.contains(cell) || grid.is_blocked(cell) {
@@ -450,31 +456,35 @@ fn sipp_with(
         if expansions > q.max_expansions {
             return Err(SippError::Budget(q.max_expansions));
         }
-        if expansions % DEADLINE_EVERY == 1 && (q.deadline.is_some() || q.exact_until.is_some()) {
-            let now = std::time::Instant::now();
-            if q.deadline.is_some_and(|d| now >= d) {
-                return Err(SippError::Deadline(expansions));
-            }
-            if weight == 1.0 && q.exact_until.is_some_and(|t| now >= t) {
-                // Stop proving: what is proven is the smallest `f` open, this state's.
-                earliest_bound_s = f64::from_bits(untotal_key(f));
-                weight = HEADLONG_WEIGHT;
-                open.push(Reverse(Queued {
-                    node,
-                    f,
-                    later_first: !total_key(g),
-                }));
-                let entries = std::mem::take(&mut open).into_vec();
-                for Reverse(e) in entries {
-                    let n = &nodes[e.node as usize];
-                    if !n.stale {
-                        let (a, c) = (n.arrive_s, n.cell);
-                        open.push(Queued::new(a + weight * h(c), a, e.node));
-                    }
+        let look =
+            expansions % DEADLINE_EVERY == 1 && (q.deadline.is_some() || q.exact_until.is_some());
+        let now = look.then(std::time::Instant::now);
+        if let Some(now) = now
+            && q.deadline.is_some_and(|d| now >= d)
+        {
+            return Err(SippError::Deadline(expansions));
+        }
+        let stop_proving = stop_proving_at == Some(expansions)
+            || now.is_some_and(|now| q.exact_until.is_some_and(|t| now >= t));
+        if weight == 1.0 && stop_proving {
+            // Stop proving: what is proven is the smallest `f` open, this state's.
+            earliest_bound_s = f64::from_bits(untotal_key(f));
+            weight = HEADLONG_WEIGHT;
+            open.push(Reverse(Queued {
+                node,
+                f,
+                later_first: !total_key(g),
+            }));
+            let entries = std::mem::take(&mut open).into_vec();
+            for Reverse(e) in entries {
+                let n = &nodes[e.node as usize];
+                if !n.stale {
+                    let (a, c) = (n.arrive_s, n.cell);
+                    open.push(Queued::new(a + weight * h(c), a, e.node));
                 }
-                expansions -= 1;
-                continue;
             }
+            expansions -= 1;
+            continue;
         }
         let here_end = safe.of(grid, cell, timeline)[interval as usize].end_s;
         let (r, c) = (i64::from(cell.row), i64::from(cell.col));
@@ -892,8 +902,8 @@ mod tests {
                 exact_until: None,
             };
             let mut timeline = |c: Cell| blocked[grid.index(c)].clone();
-            let a = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance);
-            let b = sipp_with(&grid, &q, &mut timeline, Bound::Octile);
+            let a = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance, None);
+            let b = sipp_with(&grid, &q, &mut timeline, Bound::Octile, None);
             match (&a, &b) {
                 (Ok(a), Ok(b)) => {
                     assert!(
@@ -1011,6 +1021,129 @@ mod tests {
         // Too short a window for the whole wait: it stays in the air.
         let short = sipp(&grid, &q(5.0), &mut timeline).expect("a route");
         assert!((short.arrival_s() - 13.001).abs() < 1e-9 && short.hover_s() > 0.0);
+    }
+
+    /// The route moves between neighbours (no corner cutting, each move its length over the
+    /// speed), starts within the window, ends by the horizon, and each cell it occupies — from
+    /// the move into it starting to the move out of it ending — is safe over all of it.
+    fn assert_safe_route(
+        grid: &Grid2,
+        blocked: &[Vec<Interval>],
+        q: &SippQuery,
+        path: &SippPath,
+        case: usize,
+    ) {
+        let cells = &path.cells;
+        assert_eq!(cells.first().map(|c| c.cell), Some(q.start), "case {case}");
+        assert_eq!(cells.last().map(|c| c.cell), Some(q.goal), "case {case}");
+        assert!(path.departure_s() >= 0.0 && path.departure_s() <= q.latest_departure_s + 1e-9);
+        assert!(path.arrival_s() <= q.horizon_s + 1e-6, "case {case}");
+        for w in cells.windows(2) {
+            let (a, b) = (w[0].cell, w[1].cell);
+            let (dr, dc) = (
+                i64::from(b.row) - i64::from(a.row),
+                i64::from(b.col) - i64::from(a.col),
+            );
+            assert!(
+                dr.abs() <= 1 && dc.abs() <= 1 && (dr, dc) != (0, 0),
+                "case {case}"
+            );
+            let diagonal = dr != 0 && dc != 0;
+            assert!(!diagonal || q.diagonals, "case {case}");
+            let (r, c) = (i64::from(a.row), i64::from(a.col));
+            assert!(
+                grid.is_free_at(r + dr, c + dc),
+                "case {case}: into a blocked cell"
+            );
+            assert!(
+                !diagonal || (grid.is_free_at(r + dr, c) && grid.is_free_at(r, c + dc)),
+                "case {case}: cuts a corner"
+            );
+            let len = if diagonal {
+                std::f64::consts::SQRT_2
+            } else {
+                1.0
+            };
+            assert!(
+                (w[1].arrive_s - w[0].leave_s - len * q.cell_s).abs() < 1e-9,
+                "case {case}: a move's time"
+            );
+        }
+        for (j, c) in cells.iter().enumerate() {
+            let from = if j == 0 {
+                c.arrive_s
+            } else {
+                cells[j - 1].leave_s
+            };
+            let to = cells.get(j + 1).map_or(c.arrive_s, |n| n.arrive_s);
+            let safe = safe_intervals(&merge_intervals(blocked[grid.index(c.cell)].clone()));
+            assert!(
+                within(&safe, from, to),
+                "case {case}: cell {j} occupied over [{from}, {to}] outside its safe intervals"
+            );
+        }
+    }
+
+    /// The proof stopped at every state of the exact search in turn (and once past its end):
+    /// a route exactly when the exact search has one, safe, never before the earliest arrival,
+    /// with a bound never above it, "proven" only when it is the earliest; no route when there
+    /// is none.
+    #[test]
+    fn stopping_the_proof_at_any_state_gives_a_safe_route_and_a_true_bound() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        let (mut runs, mut later, mut mid_search) = (0, 0, 0);
+        for case in 0..300 {
+            let (grid, blocked, free) = random_case(&mut rng);
+            if free.len() < 2 {
+                continue;
+            }
+            let q = SippQuery {
+                start: free[rng.random_range(0..free.len())],
+                goal: free[rng.random_range(0..free.len())],
+                cell_s: rng.random_range(0.3..1.5),
+                latest_departure_s: rng.random_range(0.0..4.0),
+                horizon_s: rng.random_range(5.0..40.0),
+                diagonals: rng.random_bool(0.5),
+                max_expansions: 1_000_000,
+                deadline: None,
+                exact_until: None,
+            };
+            let mut timeline = |c: Cell| blocked[grid.index(c)].clone();
+            let exact = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance, None);
+            let states = match &exact {
+                Ok(p) => p.expansions,
+                Err(SippError::NoRoute { expansions, .. }) => *expansions,
+                Err(e) => panic!("case {case}: {e}"),
+            };
+            for k in 1..=states + 1 {
+                let got = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance, Some(k));
+                runs += 1;
+                match (&exact, got) {
+                    (Ok(e), Ok(p)) => {
+                        let earliest = e.arrival_s();
+                        assert_safe_route(&grid, &blocked, &q, &p, case);
+                        assert!(p.arrival_s() >= earliest - 1e-9, "case {case}, k {k}");
+                        assert!(
+                            p.earliest_bound_s <= earliest + 1e-9,
+                            "case {case}, k {k}: bound {} above the earliest {earliest}",
+                            p.earliest_bound_s
+                        );
+                        if p.proven_earliest() {
+                            assert!((p.arrival_s() - earliest).abs() < 1e-9, "case {case}");
+                        } else {
+                            later += 1;
+                            mid_search += usize::from(k > 1);
+                        }
+                    }
+                    (Err(SippError::NoRoute { .. }), Err(SippError::NoRoute { .. })) => {}
+                    (e, g) => panic!("case {case}, k {k}: exact {e:?}, stopped {g:?}"),
+                }
+            }
+        }
+        assert!(
+            runs > 2000 && later > 100 && mid_search > 50,
+            "{runs} runs, {later} later, {mid_search} stopped mid-search"
+        );
     }
 
     #[test]

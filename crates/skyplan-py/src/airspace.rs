@@ -136,8 +136,8 @@ impl Airspace {
     /// `"departure"` moves the planned route's departure to the earliest free one of the
     /// window; `"space_time"` re-plans the route around the others (hovering, detours, a later
     /// departure; the earliest arrival). `deadline_ms` (with `"space_time"`): the answer is due
-    /// this many milliseconds after the call; the search proves the earliest arrival over the
-    /// first half of that time, then heads for the goal (`arrival_gap_s` bounds what that may
+    /// this many milliseconds after the call; the search proves the earliest arrival over half
+    /// the time left when it starts, then heads for the goal (`arrival_gap_s` bounds what that may
     /// cost), and at four-fifths gives up, raising `Timeout` with nothing reserved.
     ///
     /// Returns a dict: `intent` (as stored), `departure`, `delay_s`, `duration_s`, `timing`,
@@ -295,8 +295,8 @@ impl Airspace {
     /// re-planned around the others) or `"reject_on_conflict"` (the baseline). `start`: what
     /// departures in seconds count from (RFC 3339; default: now rounded up to the next minute).
     /// `deadline_ms` (with `"space_time"`): a flight's answer is due this many milliseconds after
-    /// its planning started; its search proves the earliest arrival over the first half, then
-    /// heads for the goal (the record's `arrival_gap_s` bounds what that may cost), and at
+    /// its planning started; its search proves the earliest arrival over half the time left
+    /// when it starts, then heads for the goal (the record's `arrival_gap_s` bounds what that may cost), and at
     /// four-fifths gives up: the flight is then `timed_out`, nothing reserved.
     ///
     /// Returns a dict: `flights` (one record per mission, as the CLI's JSON report), `summary`

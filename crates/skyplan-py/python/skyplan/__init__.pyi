@@ -241,7 +241,7 @@ class Airspace:
     ) -> Dict[str, Any]:
         """Plans with ``planner`` and reserves the flight as a new intent (``search``:
         ``"departure"`` or ``"space_time"``, the latter within ``deadline_ms`` if given, proving
-        the earliest arrival over its first half and then heading for the goal, else
+        the earliest arrival over half the time left and then heading for the goal, else
         :class:`Timeout`); raises :class:`Conflict` when no way is free."""
     def intents(self) -> List[Dict[str, Any]]: ...
     def get(self, id: str) -> Optional[Dict[str, Any]]: ...
@@ -258,6 +258,6 @@ class Airspace:
     ) -> Dict[str, Any]:
         """Plans and reserves ``missions`` in order (``mode``: ``"shift"``, ``"space_time"`` or
         ``"reject_on_conflict"``; ``deadline_ms``: with ``"space_time"``, when a flight's answer
-        is due: its search proves the earliest arrival over the first half, then heads for the
-        goal, and gives up at four-fifths, the flight ``timed_out``); the report as
+        is due: its search proves the earliest arrival over half the time left, then heads for
+        the goal, and gives up at four-fifths, the flight ``timed_out``); the report as
         ``skyplan fleet --json`` writes it."""
