@@ -1316,8 +1316,9 @@ fn space_time_inner(
         horizon_s,
         diagonals: true,
         max_expansions: MAX_EXPANSIONS,
-        deadline: share_of_time_left(request.deadline, SEARCH_SHARE),
-        exact_until: share_of_time_left(request.deadline, EXACT_SHARE),
+        // Set for each search, from the time then left.
+        deadline: None,
+        exact_until: None,
     };
     // The shortest route on the same grid in an empty sky (JPS): what the delay and the
     // detour are measured against.
@@ -1385,6 +1386,12 @@ fn space_time_inner(
             band,
             window: &window_ms,
             zone_times: &zone_times,
+        };
+        // Each search (a retry too) splits the time left when it starts.
+        let query = SippQuery {
+            deadline: share_of_time_left(request.deadline, SEARCH_SHARE),
+            exact_until: share_of_time_left(request.deadline, EXACT_SHARE),
+            ..query
         };
         let found = match sipp(&searched, &query, &mut timeline) {
             Ok(found) => found,
