@@ -796,6 +796,22 @@ mod tests {
         (grid, blocked, free)
     }
 
+    /// A query between two of `free` (possibly the same) with a random speed, latest
+    /// departure, horizon and moves.
+    fn random_query(rng: &mut rand_chacha::ChaCha8Rng, free: &[Cell]) -> SippQuery {
+        SippQuery {
+            start: free[rng.random_range(0..free.len())],
+            goal: free[rng.random_range(0..free.len())],
+            cell_s: rng.random_range(0.3..1.5),
+            latest_departure_s: rng.random_range(0.0..4.0),
+            horizon_s: rng.random_range(5.0..40.0),
+            diagonals: rng.random_bool(0.5),
+            max_expansions: 1_000_000,
+            deadline: None,
+            exact_until: None,
+        }
+    }
+
     /// The grid-distance bound against an independent Dijkstra over the true move lengths: never
     /// above the true distance, within 41 / (29 √2) of it, infinite exactly where the goal is
     /// cut off.
@@ -890,17 +906,7 @@ mod tests {
             if free.len() < 2 {
                 continue;
             }
-            let q = SippQuery {
-                start: free[rng.random_range(0..free.len())],
-                goal: free[rng.random_range(0..free.len())],
-                cell_s: rng.random_range(0.3..1.5),
-                latest_departure_s: rng.random_range(0.0..4.0),
-                horizon_s: rng.random_range(5.0..40.0),
-                diagonals: rng.random_bool(0.5),
-                max_expansions: 1_000_000,
-                deadline: None,
-                exact_until: None,
-            };
+            let q = random_query(&mut rng, &free);
             let mut timeline = |c: Cell| blocked[grid.index(c)].clone();
             let a = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance, None);
             let b = sipp_with(&grid, &q, &mut timeline, Bound::Octile, None);
@@ -1097,17 +1103,7 @@ mod tests {
             if free.len() < 2 {
                 continue;
             }
-            let q = SippQuery {
-                start: free[rng.random_range(0..free.len())],
-                goal: free[rng.random_range(0..free.len())],
-                cell_s: rng.random_range(0.3..1.5),
-                latest_departure_s: rng.random_range(0.0..4.0),
-                horizon_s: rng.random_range(5.0..40.0),
-                diagonals: rng.random_bool(0.5),
-                max_expansions: 1_000_000,
-                deadline: None,
-                exact_until: None,
-            };
+            let q = random_query(&mut rng, &free);
             let mut timeline = |c: Cell| blocked[grid.index(c)].clone();
             let exact = sipp_with(&grid, &q, &mut timeline, Bound::GridDistance, None);
             let states = match &exact {
